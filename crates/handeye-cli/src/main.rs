@@ -1,0 +1,2 @@
+//! The `handeye` command-line tool.
+fn main() {}

@@ -1,0 +1,149 @@
+//! Error metrics: against a known X (simulation) and the A X − X B residuals (real data).
+//!
+//! SPEC sec. 2. Rotation error `‖R̂ − R‖_F` (the paper's), also as the angle of R̂ᵀR in degrees;
+//! relative translation error `‖t − t̂‖ / ‖t‖`; rmsR = `‖R̂ − R‖_F / 3` (RMS of the 9 entries).
+
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::motion::MotionPair;
+use crate::pose::{Transform, rotation_matrix};
+
+/// Smallest ‖t‖ used as a divisor in relative translation errors (an X with zero translation
+/// would otherwise divide by zero).
+const MIN_NORM: f64 = 1e-300;
+
+/// Errors of an estimate X̂ against the true X.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TruthErrors {
+    /// `‖R̂ − R‖_F` (the paper's rotation error).
+    pub rot_fro: f64,
+    /// Angle of R̂ᵀR, degrees.
+    pub rot_deg: f64,
+    /// `‖t − t̂‖ / ‖t‖` (the paper's relative translation error).
+    pub trans_rel: f64,
+}
+
+impl TruthErrors {
+    /// rmsR of the paper: the RMS of the 9 entries of R̂ − R, `‖R̂ − R‖_F / 3`.
+    pub fn rms_r(&self) -> f64 {
+        self.rot_fro / 3.0
+    }
+
+    /// rmsT of the paper: the relative translation error.
+    pub fn rms_t(&self) -> f64 {
+        self.trans_rel
+    }
+}
+
+/// Errors of `estimate` against `truth` (both X, in the same frame).
+///
+/// # Example
+/// ```
+/// use handeye::{Transform, metrics::errors_against_truth};
+/// use nalgebra::Vector3;
+/// let x = Transform::new(Vector3::new(0.0, 0.0, 1.0), Vector3::zeros());
+/// let e = errors_against_truth(&x, &x);
+/// assert_eq!(e.rot_fro, 0.0);
+/// assert_eq!(e.trans_rel, 0.0);
+/// ```
+pub fn errors_against_truth(estimate: &Transform, truth: &Transform) -> TruthErrors {
+    let r_hat = rotation_matrix(estimate);
+    let r = rotation_matrix(truth);
+    let t_hat = estimate.translation.vector;
+    let t = truth.translation.vector;
+    TruthErrors {
+        rot_fro: (r_hat - r).norm(),
+        rot_deg: estimate.rotation.angle_to(&truth.rotation).to_degrees(),
+        trans_rel: (t - t_hat).norm() / t.norm().max(MIN_NORM),
+    }
+}
+
+/// The residual of one motion pair under X: ΔR = R_a R_x − R_x R_b and
+/// ΔT = R_a t_x + t_a − R_x t_b − t_x (the paper's sec. 4.2, `A X − X B`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotionResidual {
+    /// ΔR, the rotation block of A X − X B.
+    pub delta_r: Matrix3<f64>,
+    /// ΔT, the translation column of A X − X B (input length units).
+    pub delta_t: Vector3<f64>,
+    /// Angle between R_a R_x and R_x R_b, degrees.
+    pub rotation_deg: f64,
+}
+
+impl MotionResidual {
+    /// The residual of motion pair `m` under `x`.
+    pub fn of(m: &MotionPair, x: &Transform) -> Self {
+        let r_x = rotation_matrix(x);
+        let r_a = rotation_matrix(&m.a);
+        let r_b = rotation_matrix(&m.b);
+        let t_x = x.translation.vector;
+        let ax = r_a * r_x;
+        let xb = r_x * r_b;
+        Self {
+            delta_r: ax - xb,
+            delta_t: r_a * t_x + m.a.translation.vector - r_x * m.b.translation.vector - t_x,
+            rotation_deg: (m.a.rotation * x.rotation).angle_to(&(x.rotation * m.b.rotation)).to_degrees(),
+        }
+    }
+}
+
+/// The paper's residual form of rmsR and rmsT (SPEC sec. 2), used when no ground truth exists.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResidualRms {
+    /// RMS of all ΔR entries.
+    pub rms_r: f64,
+    /// RMS of all ΔT entries divided by ‖t̂_x‖ (unit-free like the relative translation error).
+    pub rms_t: f64,
+}
+
+/// rmsR and rmsT of the residuals of `motions` under `x` (SPEC sec. 2, residual form).
+pub fn residual_rms(motions: &[MotionPair], x: &Transform) -> ResidualRms {
+    let mut sum_r = 0.0;
+    let mut sum_t = 0.0;
+    for m in motions {
+        let res = MotionResidual::of(m, x);
+        sum_r += res.delta_r.norm_squared();
+        sum_t += res.delta_t.norm_squared();
+    }
+    let n = motions.len().max(1) as f64;
+    ResidualRms {
+        rms_r: (sum_r / (9.0 * n)).sqrt(),
+        rms_t: (sum_t / (3.0 * n)).sqrt() / x.translation.vector.norm().max(MIN_NORM),
+    }
+}
+
+/// Residual summary with units, as `handeye calibrate` reports it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ResidualSummary {
+    /// RMS over the motions of the angle between R_a R_x and R_x R_b, degrees.
+    pub rotation_deg_rms: f64,
+    /// RMS over the motions of ‖ΔT_k‖, input length units.
+    pub translation_rms: f64,
+    /// The largest rotation residual, degrees.
+    pub rotation_deg_max: f64,
+    /// The largest ‖ΔT_k‖, input length units.
+    pub translation_max: f64,
+}
+
+/// Summarises the A X − X B residuals of `motions` under `x`.
+pub fn residual_summary(motions: &[MotionPair], x: &Transform) -> ResidualSummary {
+    let mut s = ResidualSummary {
+        rotation_deg_rms: 0.0,
+        translation_rms: 0.0,
+        rotation_deg_max: 0.0,
+        translation_max: 0.0,
+    };
+    for m in motions {
+        let res = MotionResidual::of(m, x);
+        let t = res.delta_t.norm();
+        s.rotation_deg_rms += res.rotation_deg * res.rotation_deg;
+        s.translation_rms += t * t;
+        s.rotation_deg_max = s.rotation_deg_max.max(res.rotation_deg);
+        s.translation_max = s.translation_max.max(t);
+    }
+    let n = motions.len().max(1) as f64;
+    s.rotation_deg_rms = (s.rotation_deg_rms / n).sqrt();
+    s.translation_rms = (s.translation_rms / n).sqrt();
+    s
+}

@@ -1,0 +1,214 @@
+//! Rigid transforms and SO(3) helpers: the conventions every other module relies on.
+//!
+//! A transform is a [`Transform`] (`nalgebra::Isometry3<f64>`) named `a_from_b`: it maps
+//! b-coordinates into frame a (`p_a = a_from_b * p_b`), so products chain visibly:
+//! `a_from_c = a_from_b * b_from_c`.
+
+use nalgebra::{Isometry3, Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
+
+use crate::error::TransformProblem;
+
+/// A rigid transform `a_from_b` (rotation then translation): `p_a = R p_b + t`.
+pub type Transform = Isometry3<f64>;
+
+/// Largest deviation of `RᵀR` from the identity (max entry) accepted for a rotation read from data.
+pub const ORTHONORMAL_TOL: f64 = 1e-6;
+
+/// Largest deviation of a quaternion's norm from 1 that input normalises silently; further is refused.
+pub const QUATERNION_NORM_TOL: f64 = 1e-3;
+
+/// Rotations smaller than this (radians) have no defined axis (SPEC sec. 1).
+pub const NO_AXIS_ANGLE: f64 = 1e-12;
+
+/// Builds a transform from a rotation matrix that is already a rotation (not checked) and a translation.
+pub fn transform_from_parts(rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Transform {
+    let rotation = Rotation3::from_matrix_unchecked(*rotation);
+    Isometry3::from_parts(
+        Translation3::from(*translation),
+        UnitQuaternion::from_rotation_matrix(&rotation),
+    )
+}
+
+/// The rotation matrix of a transform.
+pub fn rotation_matrix(a_from_b: &Transform) -> Matrix3<f64> {
+    *a_from_b.rotation.to_rotation_matrix().matrix()
+}
+
+/// Checks that `m` is a rotation: orthonormal within [`ORTHONORMAL_TOL`], det > 0, all finite.
+pub fn check_rotation(m: &Matrix3<f64>) -> Result<(), TransformProblem> {
+    if m.iter().any(|v| !v.is_finite()) {
+        return Err(TransformProblem::NotFinite);
+    }
+    let deviation = (m.transpose() * m - Matrix3::identity()).abs().max();
+    if deviation > ORTHONORMAL_TOL {
+        return Err(TransformProblem::NotOrthonormal { deviation });
+    }
+    if m.determinant() < 0.0 {
+        return Err(TransformProblem::Reflection);
+    }
+    Ok(())
+}
+
+/// Reads a homogeneous 4×4 matrix (row-major, last row `0 0 0 1`) as a transform, refusing
+/// anything that is not a rigid transform.
+pub fn transform_from_matrix4(m: &Matrix4<f64>) -> Result<Transform, TransformProblem> {
+    if m.iter().any(|v| !v.is_finite()) {
+        return Err(TransformProblem::NotFinite);
+    }
+    let last = m.row(3);
+    if (last[0].abs() + last[1].abs() + last[2].abs() + (last[3] - 1.0).abs()) > ORTHONORMAL_TOL {
+        return Err(TransformProblem::BadLastRow);
+    }
+    let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
+    check_rotation(&r)?;
+    let t: Vector3<f64> = m.fixed_view::<3, 1>(0, 3).into_owned();
+    // Re-project so that a rotation orthonormal only to 1e-6 becomes exact.
+    Ok(transform_from_parts(&proj_so3(&r), &t))
+}
+
+/// Builds a transform from a translation and a quaternion given as `[x, y, z, w]` (file order).
+/// A quaternion whose norm is within [`QUATERNION_NORM_TOL`] of 1 is normalised; others are refused.
+pub fn transform_from_xyz_quat_xyzw(
+    translation: [f64; 3],
+    quaternion_xyzw: [f64; 4],
+) -> Result<Transform, TransformProblem> {
+    if translation.iter().chain(quaternion_xyzw.iter()).any(|v| !v.is_finite()) {
+        return Err(TransformProblem::NotFinite);
+    }
+    let [x, y, z, w] = quaternion_xyzw;
+    // nalgebra's constructor takes w first.
+    let q = Quaternion::new(w, x, y, z);
+    let norm = q.norm();
+    if (norm - 1.0).abs() > QUATERNION_NORM_TOL {
+        return Err(TransformProblem::QuaternionNorm { norm });
+    }
+    Ok(Isometry3::from_parts(
+        Translation3::new(translation[0], translation[1], translation[2]),
+        UnitQuaternion::from_quaternion(q),
+    ))
+}
+
+/// The quaternion of a transform in file order `[x, y, z, w]`, with `w ≥ 0`.
+pub fn quaternion_xyzw(a_from_b: &Transform) -> [f64; 4] {
+    let q = a_from_b.rotation.quaternion();
+    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+    [s * q.i, s * q.j, s * q.k, s * q.w]
+}
+
+/// Nearest rotation to `m` in the Frobenius norm: `U diag(1, 1, det(UVᵀ)) Vᵀ` (SPEC sec. 3).
+pub fn proj_so3(m: &Matrix3<f64>) -> Matrix3<f64> {
+    let svd = m.svd(true, true);
+    // Both factors were requested, so they are present.
+    let (u, v_t) = match (svd.u, svd.v_t) {
+        (Some(u), Some(v_t)) => (u, v_t),
+        _ => return Matrix3::identity(),
+    };
+    let d = (u * v_t).determinant().signum();
+    u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * v_t
+}
+
+/// The skew-symmetric matrix `[v]×` with `[v]× w = v × w`.
+pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
+}
+
+/// Exponential map of so(3): the rotation `exp([w]×)` of angle `‖w‖` about `w`.
+pub fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
+    *Rotation3::new(*w).matrix()
+}
+
+/// Axis–angle of a rotation matrix (Rodrigues), robust near 0 and near π.
+///
+/// Returns the angle θ ∈ [0, π] and the unit axis, or `None` for the axis when θ < [`NO_AXIS_ANGLE`]
+/// (SPEC sec. 1). Near θ = π the axis comes from the symmetric part of R, its sign matched to the
+/// skew part.
+pub fn axis_angle(r: &Matrix3<f64>) -> (f64, Option<Vector3<f64>>) {
+    // sin θ · k from the skew part, cos θ from the trace: atan2 is accurate over the whole range.
+    let s = 0.5 * Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]);
+    let c = ((r.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
+    let sin = s.norm();
+    let theta = sin.atan2(c);
+    if theta < NO_AXIS_ANGLE {
+        return (theta, None);
+    }
+    if c > -0.5 {
+        // Away from π the skew part determines the axis well.
+        return (theta, Some(s / sin));
+    }
+    // Near π: R + Rᵀ = 2 cos θ I + 2 (1 − cos θ) k kᵀ; take the largest column of k kᵀ.
+    let kk = (r + r.transpose() - Matrix3::identity() * (2.0 * c)) / (2.0 * (1.0 - c));
+    let i = (0..3)
+        .max_by(|&a, &b| kk[(a, a)].total_cmp(&kk[(b, b)]))
+        .unwrap_or(0);
+    let mut k: Vector3<f64> = kk.column(i).into_owned();
+    k /= k.norm();
+    if k.dot(&s) < 0.0 {
+        k = -k;
+    }
+    (theta, Some(k))
+}
+
+/// Logarithm of a rotation: the rotation vector θ·k (zero for the identity).
+pub fn log_so3(r: &Matrix3<f64>) -> Vector3<f64> {
+    match axis_angle(r) {
+        (theta, Some(k)) => k * theta,
+        (_, None) => Vector3::zeros(),
+    }
+}
+
+/// Angle in radians between two unit axes, `acos(k₁·k₂)` ∈ [0, π] (SPEC sec. 1); 0 when either
+/// axis is undefined, so that a rotation with no axis fails every axis test.
+pub fn axis_angle_between(k1: Option<&Vector3<f64>>, k2: Option<&Vector3<f64>>) -> f64 {
+    match (k1, k2) {
+        (Some(a), Some(b)) => a.dot(b).clamp(-1.0, 1.0).acos(),
+        _ => 0.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axis_angle_round_trips_over_the_whole_range() {
+        for &theta in &[1e-9, 1e-3, 0.5, 2.0, 3.0, 3.14159, std::f64::consts::PI] {
+            let k = Vector3::new(0.3, -0.5, 0.8).normalize();
+            let r = exp_so3(&(k * theta));
+            let (t, axis) = axis_angle(&r);
+            assert!((t - theta).abs() < 1e-9, "theta {theta} gave {t}");
+            let axis = axis.expect("axis");
+            if theta < std::f64::consts::PI {
+                assert!((axis - k).norm() < 1e-6, "theta {theta}: axis {axis:?}");
+            } else {
+                assert!((axis.dot(&k).abs() - 1.0).abs() < 1e-9);
+            }
+        }
+        assert!(axis_angle(&Matrix3::identity()).1.is_none());
+    }
+
+    #[test]
+    fn proj_so3_returns_a_rotation() {
+        let m = Matrix3::new(1.0, 0.01, 0.0, -0.02, 0.99, 0.0, 0.0, 0.003, 1.01);
+        let r = proj_so3(&m);
+        assert!(check_rotation(&r).is_ok());
+        assert!((r - m).norm() < 0.05);
+    }
+
+    #[test]
+    fn refuses_non_rotations() {
+        let mut m = Matrix4::identity();
+        m[(0, 0)] = -1.0;
+        assert_eq!(transform_from_matrix4(&m), Err(TransformProblem::Reflection));
+        m[(0, 0)] = 1.1;
+        assert!(matches!(
+            transform_from_matrix4(&m),
+            Err(TransformProblem::NotOrthonormal { .. })
+        ));
+        m[(0, 0)] = f64::NAN;
+        assert_eq!(transform_from_matrix4(&m), Err(TransformProblem::NotFinite));
+        assert!(matches!(
+            transform_from_xyz_quat_xyzw([0.0; 3], [0.0, 0.0, 0.0, 0.9]),
+            Err(TransformProblem::QuaternionNorm { .. })
+        ));
+    }
+}

@@ -1,0 +1,11 @@
+//! Placeholder while the solver is written.
+
+use crate::error::Result;
+use crate::motion::MotionPair;
+use crate::solve::Calibration;
+
+/// Not yet implemented.
+pub fn daniilidis(motions: &[MotionPair]) -> Result<Calibration> {
+    let _ = motions;
+    todo!()
+}

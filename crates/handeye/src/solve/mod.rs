@@ -1,0 +1,296 @@
+//! Batch solvers of A X = X B: one function per classical method, and [`solve`] to pick one by name.
+//!
+//! Every solver takes motion pairs (A_k, B_k) (see [`crate::MotionPair`]) and returns a
+//! [`Calibration`], or an [`Error`] when the motions cannot determine X. Before any method runs,
+//! [`check_motions`] refuses fewer than two motions, rotations that are all ≈ 0 and rotation axes
+//! that are all parallel; every result carries the conditioning of Andreff's rotation system, the
+//! same measure for every method.
+
+mod andreff;
+mod andreff_joint;
+mod daniilidis;
+mod horaud;
+mod park;
+mod refine;
+mod rotation_system;
+mod tsai;
+
+use std::fmt;
+use std::str::FromStr;
+
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+
+pub use andreff::andreff;
+pub use andreff_joint::andreff_joint;
+pub use daniilidis::daniilidis;
+pub use horaud::horaud;
+pub use park::park;
+pub use refine::{RefineOptions, Refinement, Termination, refine, refine_from};
+pub use rotation_system::{RotationSolution, RotationSystem};
+pub use tsai::{TsaiOptions, tsai, tsai_with};
+
+use crate::error::{Degeneracy, Error, Result};
+use crate::motion::{MotionFeatures, MotionPair};
+use crate::pose::{Transform, rotation_matrix};
+
+/// Below this conditioning (second-smallest over largest singular value of Andreff's rotation
+/// system) a solve is refused as degenerate.
+///
+/// The system is solved through its 9×9 normal matrix, whose smallest eigenvalues are only known to
+/// about 1e-16 of the largest: their square roots, the singular values, to about 1e-8. Exactly
+/// parallel axes therefore show a conditioning near 1e-8, never 0, and the refusal sits above that
+/// floor.
+pub const REFUSE_CONDITIONING: f64 = 1e-6;
+
+/// Below this conditioning a solve succeeds with a [`Warning::WeakConditioning`]: the rotation of X
+/// about one direction rests on little information (axes a few tenths of a degree apart).
+pub const WARN_CONDITIONING: f64 = 1e-2;
+
+/// Motions whose rotations are all below this angle (radians) are refused: their axes, and so X,
+/// are not determined.
+pub const REFUSE_ANGLE: f64 = 1e-6;
+
+/// When the largest rotation of the motions is below this angle (radians, 2°), a solve succeeds
+/// with a [`Warning::SmallRotations`]: noise in the poses is amplified into X.
+pub const WARN_ANGLE: f64 = 2.0 * std::f64::consts::PI / 180.0;
+
+/// The classical solvers, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Andreff et al., two-step Kronecker form (the paper's solver).
+    Andreff,
+    /// Andreff et al., simultaneous 12-unknown form (OpenCV's `CALIB_HAND_EYE_ANDREFF`).
+    AndreffJoint,
+    /// Tsai and Lenz (OpenCV's `CALIB_HAND_EYE_TSAI`).
+    Tsai,
+    /// Park and Martin (OpenCV's `CALIB_HAND_EYE_PARK`).
+    Park,
+    /// Horaud and Dornaika (OpenCV's `CALIB_HAND_EYE_HORAUD`).
+    Horaud,
+    /// Daniilidis, dual quaternions (OpenCV's `CALIB_HAND_EYE_DANIILIDIS`).
+    Daniilidis,
+    /// Levenberg–Marquardt on all motions, started from `andreff`.
+    Refine,
+}
+
+impl Method {
+    /// Every method, in the order they are listed to users.
+    pub const ALL: [Method; 7] = [
+        Method::Andreff,
+        Method::AndreffJoint,
+        Method::Tsai,
+        Method::Park,
+        Method::Horaud,
+        Method::Daniilidis,
+        Method::Refine,
+    ];
+
+    /// The name used on the command line and in output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Andreff => "andreff",
+            Self::AndreffJoint => "andreff-joint",
+            Self::Tsai => "tsai",
+            Self::Park => "park",
+            Self::Horaud => "horaud",
+            Self::Daniilidis => "daniilidis",
+            Self::Refine => "refine",
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Method::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| Error::InvalidParameter {
+            name: "method",
+            message: format!(
+                "unknown method `{s}`; one of andreff, andreff-joint, tsai, park, horaud, daniilidis, refine"
+            ),
+        })
+    }
+}
+
+/// A caution attached to a successful solve.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Warning {
+    /// The rotation system is weakly conditioned (axes close to parallel).
+    WeakConditioning {
+        /// Second-smallest over largest singular value of the rotation system.
+        conditioning: f64,
+    },
+    /// All rotations are small, so noise is amplified.
+    SmallRotations {
+        /// The largest rotation angle among the motions, degrees.
+        largest_deg: f64,
+    },
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::WeakConditioning { conditioning } => write!(
+                f,
+                "weakly conditioned rotation system ({conditioning:.2e}): the rotation axes are nearly parallel; rotate about other axes"
+            ),
+            Self::SmallRotations { largest_deg } => write!(
+                f,
+                "all rotations are small (largest {largest_deg:.2}°): noise is amplified; use rotations of 10° or more"
+            ),
+        }
+    }
+}
+
+/// The result of a batch solve.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    /// X, the solution of A X = X B: `gripper_from_camera` for eye-in-hand motions,
+    /// `base_from_camera` for eye-to-hand motions (see [`crate::Setup`]).
+    pub x: Transform,
+    /// The method that produced X.
+    pub method: Method,
+    /// Number of motion pairs used.
+    pub motions: usize,
+    /// Second-smallest over largest singular value of Andreff's rotation system (1 is ideal).
+    pub conditioning: f64,
+    /// Cautions about the data; empty when none.
+    pub warnings: Vec<Warning>,
+}
+
+/// What [`check_motions`] learned about the motions: enough to solve, with cautions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MotionCheck {
+    /// Conditioning of Andreff's rotation system.
+    pub conditioning: f64,
+    /// Andreff's rotation R_x from the same system (step 1 of [`andreff`]).
+    pub andreff_rotation: Matrix3<f64>,
+    /// Cautions about the data.
+    pub warnings: Vec<Warning>,
+}
+
+/// Refuses motion sets that cannot determine X, and says how well they determine it.
+///
+/// Errors: [`Error::TooFewMotions`] below two motions, [`Error::Degenerate`] when every rotation is
+/// below [`REFUSE_ANGLE`] or the conditioning is below [`REFUSE_CONDITIONING`] (parallel axes).
+pub fn check_motions(motions: &[MotionPair]) -> Result<MotionCheck> {
+    if motions.len() < 2 {
+        return Err(Error::TooFewMotions { got: motions.len(), need: 2 });
+    }
+    let mut system = RotationSystem::default();
+    let mut largest = 0.0_f64;
+    for m in motions {
+        system.add(&rotation_matrix(&m.a), &rotation_matrix(&m.b));
+        largest = largest.max(MotionFeatures::of(&m.a).angle);
+    }
+    let RotationSolution { r_x: andreff_rotation, conditioning } = system.solve();
+    if largest < REFUSE_ANGLE {
+        return Err(Error::Degenerate {
+            reason: Degeneracy::SmallRotations { largest_deg: largest.to_degrees() },
+            conditioning,
+        });
+    }
+    if conditioning < REFUSE_CONDITIONING {
+        let reason = Degeneracy::ParallelAxes {
+            largest_axis_angle_deg: largest_axis_angle(motions).to_degrees(),
+        };
+        return Err(Error::Degenerate { reason, conditioning });
+    }
+    let mut warnings = Vec::new();
+    if conditioning < WARN_CONDITIONING {
+        warnings.push(Warning::WeakConditioning { conditioning });
+    }
+    if largest < WARN_ANGLE {
+        warnings.push(Warning::SmallRotations { largest_deg: largest.to_degrees() });
+    }
+    Ok(MotionCheck { conditioning, andreff_rotation, warnings })
+}
+
+/// The largest angle between the rotation axes of any two motions, radians, treating k and −k
+/// as the same line (∈ [0, π/2]).
+fn largest_axis_angle(motions: &[MotionPair]) -> f64 {
+    let axes: Vec<Vector3<f64>> =
+        motions.iter().filter_map(|m| MotionFeatures::of(&m.a).axis).collect();
+    let mut largest = 0.0_f64;
+    for (i, a) in axes.iter().enumerate() {
+        for b in &axes[i + 1..] {
+            largest = largest.max(a.dot(b).abs().min(1.0).acos());
+        }
+    }
+    largest
+}
+
+/// Solves A X = X B with the given method.
+///
+/// # Example
+/// ```
+/// use handeye::{Method, MotionPair, Transform, solve};
+/// use nalgebra::{Translation3, UnitQuaternion, Vector3};
+/// let x = Transform::from_parts(Translation3::new(0.1, 0.0, 0.05), UnitQuaternion::from_euler_angles(0.1, 0.2, 0.3));
+/// let a1 = Transform::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.5, 0.0, 0.0));
+/// let a2 = Transform::new(Vector3::new(-0.2, 0.1, 0.4), Vector3::new(0.0, 0.4, 0.1));
+/// let motions: Vec<_> = [a1, a2].iter().map(|a| MotionPair { a: *a, b: x.inverse() * a * x }).collect();
+/// let cal = solve(Method::Park, &motions)?;
+/// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
+/// # Ok::<(), handeye::Error>(())
+/// ```
+pub fn solve(method: Method, motions: &[MotionPair]) -> Result<Calibration> {
+    match method {
+        Method::Andreff => andreff(motions),
+        Method::AndreffJoint => andreff_joint(motions),
+        Method::Tsai => tsai(motions),
+        Method::Park => park(motions),
+        Method::Horaud => horaud(motions),
+        Method::Daniilidis => daniilidis(motions),
+        Method::Refine => refine(motions).map(|r| r.calibration),
+    }
+}
+
+/// Least-squares translation of X given its rotation: the stacked
+/// (I − R_a) t_x = t_a − R_x t_b over all motions, solved through its 3×3 normal equations.
+///
+/// Returns `None` when the 3×3 system is singular (all axes parallel).
+pub fn translation_least_squares(motions: &[MotionPair], r_x: &Matrix3<f64>) -> Option<Vector3<f64>> {
+    let mut normal = Matrix3::zeros();
+    let mut rhs = Vector3::zeros();
+    for m in motions {
+        let c = Matrix3::identity() - rotation_matrix(&m.a);
+        let d = m.a.translation.vector - r_x * m.b.translation.vector;
+        normal += c.transpose() * c;
+        rhs += c.transpose() * d;
+    }
+    normal.lu().solve(&rhs).filter(|t| t.iter().all(|v| v.is_finite()))
+}
+
+/// Wraps a solved rotation and translation into a [`Calibration`] carrying the motion check.
+pub(crate) fn finish(
+    method: Method,
+    motions: usize,
+    check: MotionCheck,
+    r_x: &Matrix3<f64>,
+    t_x: &Vector3<f64>,
+) -> Calibration {
+    Calibration {
+        x: crate::pose::transform_from_parts(r_x, t_x),
+        method,
+        motions,
+        conditioning: check.conditioning,
+        warnings: check.warnings,
+    }
+}
+
+/// The error returned when a method's own linear system turns out singular after the motion check
+/// passed (possible only at the edge of the refusal thresholds).
+pub(crate) fn singular(conditioning: f64) -> Error {
+    Error::Degenerate { reason: Degeneracy::IllConditioned, conditioning }
+}
