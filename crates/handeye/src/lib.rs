@@ -1,7 +1,7 @@
 //! Online hand–eye calibration with adaptive motion selection, and the classical AX = XB solvers.
 //!
 //! # Conventions
-//! - **Transforms** are [`Transform`] (`nalgebra::Isometry3<f64>`) named `a_from_b` (T_a_b): the pose
+//! - **Transforms** are [`Transform`] (`nalgebra::IsometryMatrix3<f64>`: rotation matrix and translation) named `a_from_b` (T_a_b): the pose
 //!   of frame b in frame a, mapping b-coordinates into a (`p_a = a_from_b * p_b`), so products chain
 //!   visibly: `a_from_c = a_from_b * b_from_c`.
 //! - **Robot pose** Q_i = `base_from_gripper` (OpenCV: `R/t_gripper2base`). **Camera observation**
@@ -24,7 +24,9 @@
 mod error;
 pub mod metrics;
 mod motion;
+pub mod online;
 pub mod pose;
+pub mod select;
 pub mod solve;
 
 pub use error::{Degeneracy, Error, Result, TransformProblem};

@@ -3,7 +3,7 @@
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
-use crate::pose::{NO_AXIS_ANGLE, Transform};
+use crate::pose::{Transform, axis_angle};
 
 /// Where the camera is mounted; decides which robot pose enters the gripper motion A.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -145,16 +145,9 @@ pub struct MotionFeatures {
 }
 
 impl MotionFeatures {
-    /// Features of a motion `a_from_b`.
-    ///
-    /// θ and k are read from the unit quaternion (w, v): θ = 2 atan2(‖v‖, |w|), k = sign(w) v/‖v‖.
-    /// This is the Rodrigues axis–angle of SPEC sec. 1, well conditioned near 0 and near π alike.
+    /// Features of a motion `a_from_b`: θ and k by Rodrigues' formula ([`axis_angle`]).
     pub fn of(motion: &Transform) -> Self {
-        let q = motion.rotation.quaternion();
-        let v = Vector3::new(q.i, q.j, q.k);
-        let sin_half = v.norm();
-        let angle = 2.0 * sin_half.atan2(q.w.abs());
-        let axis = (angle >= NO_AXIS_ANGLE).then(|| v * (q.w.signum() / sin_half));
+        let (angle, axis) = axis_angle(motion.rotation.matrix());
         Self { angle, axis, translation_norm: motion.translation.vector.norm() }
     }
 

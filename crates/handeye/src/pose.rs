@@ -1,15 +1,23 @@
 //! Rigid transforms and SO(3) helpers: the conventions every other module relies on.
 //!
-//! A transform is a [`Transform`] (`nalgebra::Isometry3<f64>`) named `a_from_b`: it maps
+//! A transform is a [`Transform`] (`nalgebra::IsometryMatrix3<f64>`: a rotation matrix and a
+//! translation) named `a_from_b`: it maps
 //! b-coordinates into frame a (`p_a = a_from_b * p_b`), so products chain visibly:
 //! `a_from_c = a_from_b * b_from_c`.
 
-use nalgebra::{Isometry3, Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{IsometryMatrix3, Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 use crate::error::TransformProblem;
 
 /// A rigid transform `a_from_b` (rotation then translation): `p_a = R p_b + t`.
-pub type Transform = Isometry3<f64>;
+///
+/// The rotation is stored as a matrix: the solvers work on matrices, and inverse and products are
+/// then exact transposes and plain matrix products, as in OpenCV and in the paper's equations.
+pub type Transform = IsometryMatrix3<f64>;
+
+/// Rotations read from files whose deviation from orthonormality is below this are kept exactly as
+/// given; larger deviations (up to [`ORTHONORMAL_TOL`]) are projected onto SO(3).
+const KEEP_AS_GIVEN_TOL: f64 = 1e-12;
 
 /// Largest deviation of `RᵀR` from the identity (max entry) accepted for a rotation read from data.
 pub const ORTHONORMAL_TOL: f64 = 1e-6;
@@ -22,16 +30,15 @@ pub const NO_AXIS_ANGLE: f64 = 1e-12;
 
 /// Builds a transform from a rotation matrix that is already a rotation (not checked) and a translation.
 pub fn transform_from_parts(rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Transform {
-    let rotation = Rotation3::from_matrix_unchecked(*rotation);
-    Isometry3::from_parts(
+    IsometryMatrix3::from_parts(
         Translation3::from(*translation),
-        UnitQuaternion::from_rotation_matrix(&rotation),
+        Rotation3::from_matrix_unchecked(*rotation),
     )
 }
 
 /// The rotation matrix of a transform.
 pub fn rotation_matrix(a_from_b: &Transform) -> Matrix3<f64> {
-    *a_from_b.rotation.to_rotation_matrix().matrix()
+    *a_from_b.rotation.matrix()
 }
 
 /// Checks that `m` is a rotation: orthonormal within [`ORTHONORMAL_TOL`], det > 0, all finite.
@@ -39,7 +46,7 @@ pub fn check_rotation(m: &Matrix3<f64>) -> Result<(), TransformProblem> {
     if m.iter().any(|v| !v.is_finite()) {
         return Err(TransformProblem::NotFinite);
     }
-    let deviation = (m.transpose() * m - Matrix3::identity()).abs().max();
+    let deviation = orthonormality_deviation(m);
     if deviation > ORTHONORMAL_TOL {
         return Err(TransformProblem::NotOrthonormal { deviation });
     }
@@ -62,8 +69,9 @@ pub fn transform_from_matrix4(m: &Matrix4<f64>) -> Result<Transform, TransformPr
     let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
     check_rotation(&r)?;
     let t: Vector3<f64> = m.fixed_view::<3, 1>(0, 3).into_owned();
-    // Re-project so that a rotation orthonormal only to 1e-6 becomes exact.
-    Ok(transform_from_parts(&proj_so3(&r), &t))
+    // A rotation orthonormal only to 1e-6 is projected; one exact to rounding is kept bit for bit.
+    let r = if orthonormality_deviation(&r) > KEEP_AS_GIVEN_TOL { proj_so3(&r) } else { r };
+    Ok(transform_from_parts(&r, &t))
 }
 
 /// Builds a transform from a translation and a quaternion given as `[x, y, z, w]` (file order).
@@ -82,26 +90,31 @@ pub fn transform_from_xyz_quat_xyzw(
     if (norm - 1.0).abs() > QUATERNION_NORM_TOL {
         return Err(TransformProblem::QuaternionNorm { norm });
     }
-    Ok(Isometry3::from_parts(
+    Ok(IsometryMatrix3::from_parts(
         Translation3::new(translation[0], translation[1], translation[2]),
-        UnitQuaternion::from_quaternion(q),
+        UnitQuaternion::from_quaternion(q).to_rotation_matrix(),
     ))
 }
 
 /// The quaternion of a transform in file order `[x, y, z, w]`, with `w ≥ 0`.
 pub fn quaternion_xyzw(a_from_b: &Transform) -> [f64; 4] {
-    let q = a_from_b.rotation.quaternion();
+    let q = UnitQuaternion::from_rotation_matrix(&a_from_b.rotation);
     let s = if q.w < 0.0 { -1.0 } else { 1.0 };
     [s * q.i, s * q.j, s * q.k, s * q.w]
 }
 
+/// Largest entry of |RᵀR − I|.
+fn orthonormality_deviation(m: &Matrix3<f64>) -> f64 {
+    (m.transpose() * m - Matrix3::identity()).abs().max()
+}
+
 /// Nearest rotation to `m` in the Frobenius norm: `U diag(1, 1, det(UVᵀ)) Vᵀ` (SPEC sec. 3).
 pub fn proj_so3(m: &Matrix3<f64>) -> Matrix3<f64> {
-    let svd = m.svd(true, true);
-    // Both factors were requested, so they are present.
-    let (u, v_t) = match (svd.u, svd.v_t) {
-        (Some(u), Some(v_t)) => (u, v_t),
-        _ => return Matrix3::identity(),
+    // A finite 3×3 SVD converges in a few sweeps; the cap only guards against NaN input, for
+    // which the result is NaN too.
+    let Some((u, v_t)) = m.try_svd(true, true, f64::EPSILON, 1000).and_then(|svd| svd.u.zip(svd.v_t))
+    else {
+        return Matrix3::from_element(f64::NAN);
     };
     let d = (u * v_t).determinant().signum();
     u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * v_t

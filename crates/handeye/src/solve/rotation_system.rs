@@ -3,7 +3,8 @@
 use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 
-use crate::pose::proj_so3;
+use crate::motion::MotionPair;
+use crate::pose::{proj_so3, rotation_matrix};
 
 /// A 9×9 matrix.
 type Matrix9 = SMatrix<f64, 9, 9>;
@@ -82,10 +83,38 @@ impl RotationSystem {
     /// Solves for R_x (SPEC sec. 3, `andreff`): the eigenvector of the smallest eigenvalue of `M`
     /// is vec(R_x) up to scale; its sign is chosen so that det > 0, then it is projected onto SO(3)
     /// with `U diag(1, 1, det(UVᵀ)) Vᵀ`.
+    ///
+    /// Through the normal matrix the null vector carries a rounding error of order ε·κ² (κ the
+    /// inverse of the conditioning); [`Self::solve_refined`] removes it when the motions are at hand.
     pub fn solve(&self) -> RotationSolution {
+        self.solve_with(|_| None)
+    }
+
+    /// As [`Self::solve`], followed by one step of iterative refinement of the null vector against
+    /// the stacked rows `K_k v` of `motions` (the motions this system was built from): the
+    /// correction δ ⊥ v minimising ‖K (v + δ)‖ is taken from the eigen-decomposition of `M`, with
+    /// the residual `Kᵀ K v` evaluated motion by motion. This brings the error down to the ε·κ of
+    /// an SVD of the stacked 9m×9 matrix, at O(m) cost and no extra memory.
+    pub fn solve_refined(&self, motions: &[MotionPair]) -> RotationSolution {
+        self.solve_with(|v| Some(stacked_gradient(motions, v)))
+    }
+
+    /// The solve, with an optional gradient `Σ K_kᵀ K_k v` for the refinement step.
+    fn solve_with(&self, gradient: impl Fn(&SVector<f64, 9>) -> Option<SVector<f64, 9>>) -> RotationSolution {
         let eigen = SymmetricEigen::new(self.normal);
         let smallest = eigen.eigenvalues.imin();
-        let v: SVector<f64, 9> = eigen.eigenvectors.column(smallest).into_owned();
+        let mut v: SVector<f64, 9> = eigen.eigenvectors.column(smallest).into_owned();
+        if let Some(g) = gradient(&v) {
+            let mut delta = SVector::<f64, 9>::zeros();
+            for k in (0..9).filter(|&k| k != smallest) {
+                let lambda = eigen.eigenvalues[k];
+                if lambda > 0.0 {
+                    let u = eigen.eigenvectors.column(k);
+                    delta -= u * (u.dot(&g) / lambda);
+                }
+            }
+            v = (v + delta).normalize();
+        }
         // Row-major vec: v = (r11, r12, r13, r21, …).
         let mut m = Matrix3::new(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
         if m.determinant() < 0.0 {
@@ -93,6 +122,30 @@ impl RotationSystem {
         }
         RotationSolution { r_x: proj_so3(&m), conditioning: conditioning_of(&eigen.eigenvalues) }
     }
+}
+
+/// `Σ_k K_kᵀ K_k v` evaluated row block by row block: with V the 3×3 matrix of v (row-major),
+/// `K v = vec(V − R_a V R_bᵀ)` and `Kᵀ w = vec(W − R_aᵀ W R_b)`.
+fn stacked_gradient(motions: &[MotionPair], v: &SVector<f64, 9>) -> SVector<f64, 9> {
+    let v_m = Matrix3::new(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
+    let mut g = Matrix3::zeros();
+    for m in motions {
+        let r_a = rotation_matrix(&m.a);
+        let r_b = rotation_matrix(&m.b);
+        let w = v_m - r_a * v_m * r_b.transpose();
+        g += w - r_a.transpose() * w * r_b;
+    }
+    SVector::<f64, 9>::from_row_slice(&[
+        g[(0, 0)],
+        g[(0, 1)],
+        g[(0, 2)],
+        g[(1, 0)],
+        g[(1, 1)],
+        g[(1, 2)],
+        g[(2, 0)],
+        g[(2, 1)],
+        g[(2, 2)],
+    ])
 }
 
 /// √(λ₂ / λ_max) from the eigenvalues of the normal matrix, λ₂ the second smallest.

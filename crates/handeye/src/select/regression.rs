@@ -1,0 +1,144 @@
+//! The paper's cubic polynomial regression (sec. 3.2, Eq. (2)–(5)) and its threshold predictions
+//! (Algorithms I–III), as SPEC sec. 4.4 fixes them.
+
+use nalgebra::{Matrix3, Vector3};
+
+/// Above this 2-norm condition number of the scaled matrix L of Eq. (3) the fit gives nothing.
+pub const MAX_CONDITION: f64 = 1e14;
+
+/// Iteration cap of the 3×3 SVD that measures the condition number.
+const SVD_ITERATIONS: usize = 1000;
+
+/// Fits Eq. (2), y = b₀ + b₁x + b₂x² + b₃x³, to four points by least squares and evaluates it at
+/// `x_new` (Eq. (5)).
+///
+/// x is scaled by max|x| and y by max|y| (the paper's "normalised"; a scale of 0 counts as 1); the
+/// centred normal equations of Eq. (3) give b₁..b₃ (solved by LU with partial pivoting), b₀ comes
+/// from the means, and the value at `x_new / max|x|` is scaled back by max|y|. Returns `None` when
+/// Eq. (3) is singular: its condition number (2-norm, on the scaled L) is above [`MAX_CONDITION`] or
+/// not finite.
+///
+/// # Example
+/// ```
+/// use handeye::select::fit;
+/// // Four points on y = 1 + 2x − x³ are fitted exactly.
+/// let x = [0.1, 0.2, 0.4, 0.8];
+/// let y = x.map(|v: f64| 1.0 + 2.0 * v - v.powi(3));
+/// let at = fit(&x, &y, 0.5).unwrap();
+/// assert!((at - (1.0 + 1.0 - 0.125)).abs() < 1e-9);
+/// ```
+pub fn fit(x: &[f64; 4], y: &[f64; 4], x_new: f64) -> Option<f64> {
+    if !(x.iter().chain(y).all(|v| v.is_finite()) && x_new.is_finite()) {
+        return None;
+    }
+    let sx = scale_of(x);
+    let sy = scale_of(y);
+    let (l, mean_p) = centred_moments(x);
+    let ys = y.map(|v| v / sy);
+    let mean_y = ys.iter().sum::<f64>() / 4.0;
+    // L_p0 = Σ (x^p − x̄_p)(y − ȳ).
+    let mut l0 = Vector3::zeros();
+    for (xs, y) in x.iter().map(|v| v / sx).zip(ys) {
+        l0 += (powers(xs) - mean_p) * (y - mean_y);
+    }
+    let condition = condition_of(&l)?;
+    if !condition.is_finite() || condition > MAX_CONDITION {
+        return None;
+    }
+    let b = l.lu().solve(&l0)?;
+    let b0 = mean_y - b.dot(&mean_p);
+    let u = x_new / sx;
+    let value = (b0 + b[0] * u + b[1] * u * u + b[2] * u * u * u) * sy;
+    value.is_finite().then_some(value)
+}
+
+/// The 2-norm condition number of Eq. (3)'s matrix L for these x values (after scaling by
+/// max|x|): how much the fit can amplify rounding. Infinite when L is singular.
+pub fn fit_condition(x: &[f64; 4]) -> f64 {
+    if !x.iter().all(|v| v.is_finite()) {
+        return f64::INFINITY;
+    }
+    condition_of(&centred_moments(x).0).unwrap_or(f64::INFINITY)
+}
+
+/// (x, x², x³) of one scaled x value.
+fn powers(v: f64) -> Vector3<f64> {
+    Vector3::new(v, v * v, v * v * v)
+}
+
+/// Eq. (3)'s L_pq = Σ (x^p − x̄_p)(x^q − x̄_q) on x scaled by max|x|, and the means x̄₁, x̄₂, x̄₃.
+fn centred_moments(x: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>) {
+    let sx = scale_of(x);
+    let p = x.map(|v| powers(v / sx));
+    let mean = p.iter().sum::<Vector3<f64>>() / 4.0;
+    let mut l = Matrix3::zeros();
+    for v in &p {
+        let c = v - mean;
+        l += c * c.transpose();
+    }
+    (l, mean)
+}
+
+/// σ_max / σ_min of a 3×3 matrix; `None` if the SVD does not converge.
+fn condition_of(l: &Matrix3<f64>) -> Option<f64> {
+    let sv = l.try_svd(false, false, f64::EPSILON, SVD_ITERATIONS)?.singular_values;
+    Some(sv.max() / sv.min())
+}
+
+/// max|v|, or 1 when it is 0.
+fn scale_of(v: &[f64; 4]) -> f64 {
+    let m = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if m == 0.0 { 1.0 } else { m }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Matrix4;
+
+    /// Eq. (4) solved directly: the 4×4 Vandermonde system interpolates four distinct points, and
+    /// least squares with four coefficients on four points is the same interpolation.
+    fn direct(x: &[f64; 4], y: &[f64; 4], x_new: f64) -> f64 {
+        let v = Matrix4::from_fn(|r, c| x[r].powi(c as i32));
+        let b = v.lu().solve(&nalgebra::Vector4::from(*y)).unwrap();
+        (0..4).map(|c| b[c] * x_new.powi(c as i32)).sum()
+    }
+
+    #[test]
+    fn matches_a_direct_four_by_four_solve() {
+        let cases = [
+            ([0.01, 0.02, 0.015, 0.03], [0.5, 0.55, 0.6, 0.52], 0.001),
+            ([0.2, 0.35, 0.1, 0.4], [0.07, 0.066, 0.08, 0.05], 0.05),
+            ([3.0, 1.0, 2.0, 5.0], [10.0, 12.0, 11.0, 9.0], 4.0),
+        ];
+        for (x, y, x_new) in cases {
+            let ours = fit(&x, &y, x_new).unwrap();
+            let reference = direct(&x, &y, x_new);
+            assert!((ours - reference).abs() <= 1e-8 * reference.abs().max(1.0), "{ours} vs {reference}");
+        }
+    }
+
+    #[test]
+    fn constant_records_return_the_constant() {
+        // Lock-in (SPEC sec. 4.4): equal y values fit a constant, whatever x is.
+        let y = [0.3; 4];
+        let at = fit(&[0.01, 0.02, 0.03, 0.05], &y, 0.001).unwrap();
+        assert!((at - 0.3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn singular_inputs_give_nothing() {
+        // All x equal: L is zero.
+        assert_eq!(fit(&[0.1; 4], &[1.0, 2.0, 3.0, 4.0], 0.1), None);
+        // Only two distinct x values: L has rank 1.
+        assert_eq!(fit(&[0.1, 0.1, 0.2, 0.2], &[1.0, 2.0, 3.0, 4.0], 0.1), None);
+        // Non-finite input.
+        assert_eq!(fit(&[f64::NAN, 0.1, 0.2, 0.3], &[1.0, 2.0, 3.0, 4.0], 0.1), None);
+    }
+
+    #[test]
+    fn zero_scales_count_as_one() {
+        let at = fit(&[0.0, 1.0, 2.0, 3.0], &[0.0; 4], 1.5).unwrap();
+        assert_eq!(at, 0.0);
+    }
+}
