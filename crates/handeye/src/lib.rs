@@ -27,6 +27,7 @@ mod motion;
 pub mod online;
 pub mod pose;
 pub mod select;
+pub mod sim;
 pub mod solve;
 
 pub use error::{Degeneracy, Error, Result, TransformProblem};
