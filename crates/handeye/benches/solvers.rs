@@ -1,0 +1,25 @@
+//! Every batch solver at 2, 10, 100 and 1,000 motions on the paper's simulated data (fixed seed).
+//!
+//! `cargo bench -p handeye --bench solvers`
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use handeye::sim::{SimConfig, simulate};
+use handeye::{Method, Pairing, Setup, motion_pairs, solve};
+use std::hint::black_box;
+
+fn solvers(c: &mut Criterion) {
+    let mut group = c.benchmark_group("solve");
+    for motions in [2usize, 10, 100, 1000] {
+        let sim = simulate(&SimConfig { poses: motions + 1, ..SimConfig::default() }, 42, 0);
+        let pairs = motion_pairs(&sim.poses, Pairing::Consecutive, Setup::EyeInHand);
+        for method in Method::ALL {
+            group.bench_with_input(BenchmarkId::new(method.name(), motions), &pairs, |b, pairs| {
+                b.iter(|| solve(method, black_box(pairs)))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, solvers);
+criterion_main!(benches);
