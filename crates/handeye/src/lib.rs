@@ -22,6 +22,7 @@
 #![deny(missing_docs)]
 
 mod error;
+pub mod experiment;
 pub mod metrics;
 mod motion;
 pub mod online;
