@@ -30,6 +30,7 @@ pub mod pose;
 pub mod select;
 pub mod sim;
 pub mod solve;
+pub mod sync;
 
 pub use error::{Degeneracy, Error, Result, TransformProblem};
 pub use motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};

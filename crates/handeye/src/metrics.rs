@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::motion::MotionPair;
-use crate::pose::{Transform, rotation_matrix};
+use crate::pose::{Transform, rotation_angle_between, rotation_matrix};
 
 /// Smallest ‖t‖ used as a divisor in relative translation errors (an X with zero translation
 /// would otherwise divide by zero).
@@ -54,7 +54,7 @@ pub fn errors_against_truth(estimate: &Transform, truth: &Transform) -> TruthErr
     let t = truth.translation.vector;
     TruthErrors {
         rot_fro: (r_hat - r).norm(),
-        rot_deg: estimate.rotation.angle_to(&truth.rotation).to_degrees(),
+        rot_deg: rotation_angle_between(&estimate.rotation, &truth.rotation).to_degrees(),
         trans_rel: (t - t_hat).norm() / t.norm().max(MIN_NORM),
     }
 }
@@ -83,7 +83,7 @@ impl MotionResidual {
         Self {
             delta_r: ax - xb,
             delta_t: r_a * t_x + m.a.translation.vector - r_x * m.b.translation.vector - t_x,
-            rotation_deg: (m.a.rotation * x.rotation).angle_to(&(x.rotation * m.b.rotation)).to_degrees(),
+            rotation_deg: rotation_angle_between(&(m.a.rotation * x.rotation), &(x.rotation * m.b.rotation)).to_degrees(),
         }
     }
 }

@@ -161,6 +161,13 @@ pub fn axis_angle(r: &Matrix3<f64>) -> (f64, Option<Vector3<f64>>) {
     (theta, Some(k))
 }
 
+/// The angle in radians of the rotation between two rotations, `∠(R₁ᵀ R₂)` ∈ [0, π], accurate
+/// for tiny angles too (nalgebra's `angle_to` takes an acos that gives NaN or loses all digits
+/// near 0).
+pub fn rotation_angle_between(r1: &nalgebra::Rotation3<f64>, r2: &nalgebra::Rotation3<f64>) -> f64 {
+    axis_angle(&(r1.matrix().transpose() * r2.matrix())).0
+}
+
 /// Logarithm of a rotation: the rotation vector θ·k (zero for the identity).
 pub fn log_so3(r: &Matrix3<f64>) -> Vector3<f64> {
     match axis_angle(r) {
