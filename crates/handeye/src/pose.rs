@@ -109,7 +109,43 @@ fn orthonormality_deviation(m: &Matrix3<f64>) -> f64 {
 }
 
 /// Nearest rotation to `m` in the Frobenius norm: `U diag(1, 1, det(UVᵀ)) Vᵀ` (SPEC sec. 3).
+///
+/// When det(m) > 0 this is the orthogonal polar factor of m, computed by Higham's scaled Newton
+/// iteration `X ← ½(γX + X⁻ᵀ/γ)` (quadratic convergence, a few 3×3 inverses: an order of magnitude
+/// cheaper than an SVD, and as accurate); otherwise, or if the iteration does not settle, by SVD.
 pub fn proj_so3(m: &Matrix3<f64>) -> Matrix3<f64> {
+    if m.determinant() > 0.0
+        && let Some(r) = polar_newton(m)
+    {
+        return r;
+    }
+    proj_so3_svd(m)
+}
+
+/// Orthogonal polar factor by the scaled Newton iteration; `None` if it does not converge.
+fn polar_newton(m: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let mut x = *m;
+    for _ in 0..POLAR_ITERATIONS {
+        let inv_t = x.try_inverse()?.transpose();
+        // Frobenius-norm scaling γ = (‖X⁻¹‖_F / ‖X‖_F)^½ speeds up the first steps.
+        let gamma = (inv_t.norm() / x.norm()).sqrt();
+        let next = (x * gamma + inv_t / gamma) * 0.5;
+        let change = (next - x).abs().max();
+        x = next;
+        if change <= 4.0 * f64::EPSILON {
+            // One more unscaled step polishes the last bits.
+            let inv_t = x.try_inverse()?.transpose();
+            return Some((x + inv_t) * 0.5);
+        }
+    }
+    None
+}
+
+/// Iteration cap of [`polar_newton`] (it needs about 5 from a near-rotation, 10 from far).
+const POLAR_ITERATIONS: usize = 30;
+
+/// Nearest rotation by SVD: `U diag(1, 1, det(UVᵀ)) Vᵀ`.
+fn proj_so3_svd(m: &Matrix3<f64>) -> Matrix3<f64> {
     // A finite 3×3 SVD converges in a few sweeps; the cap only guards against NaN input, for
     // which the result is NaN too.
     let Some((u, v_t)) = m.try_svd(true, true, f64::EPSILON, 1000).and_then(|svd| svd.u.zip(svd.v_t))
@@ -212,6 +248,18 @@ mod tests {
         let r = proj_so3(&m);
         assert!(check_rotation(&r).is_ok());
         assert!((r - m).norm() < 0.05);
+    }
+
+    #[test]
+    fn newton_and_svd_projections_agree() {
+        for k in 0..50 {
+            let f = k as f64;
+            let m = exp_so3(&Vector3::new(0.3 * f, -0.2 * f, 0.1)) * (0.2 + 0.1 * f)
+                + Matrix3::from_fn(|i, j| 0.05 * ((i * 3 + j) as f64 + f).sin());
+            let a = proj_so3(&m);
+            let b = proj_so3_svd(&m);
+            assert!((a - b).abs().max() < 1e-13, "case {k}: {}", (a - b).abs().max());
+        }
     }
 
     #[test]
