@@ -23,6 +23,7 @@
 
 mod error;
 pub mod experiment;
+pub mod io;
 pub mod metrics;
 mod motion;
 pub mod online;

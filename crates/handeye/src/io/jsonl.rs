@@ -1,0 +1,135 @@
+//! Pose pairs as JSON Lines: one object per line with a robot pose, a camera pose and an optional
+//! `stamp`.
+
+use std::io::BufRead;
+
+use serde_json::{Map, Value};
+
+use crate::error::{Error, Result};
+use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, parse_error, transform_from_json};
+use crate::motion::PosePair;
+use crate::pose::Transform;
+
+/// Streaming reader of JSON Lines pose pairs (blank lines and `#` comments are skipped).
+pub struct JsonlPairs<R: BufRead> {
+    input: R,
+    source: String,
+    line: usize,
+    buffer: String,
+}
+
+impl<R: BufRead> JsonlPairs<R> {
+    /// A reader of `input`, named `source` in messages.
+    pub fn new(input: R, source: &str) -> Self {
+        Self { input, source: source.to_string(), line: 0, buffer: String::new() }
+    }
+}
+
+impl<R: BufRead> Iterator for JsonlPairs<R> {
+    type Item = Result<StampedPosePair>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            self.buffer.clear();
+            self.line += 1;
+            match self.input.read_line(&mut self.buffer) {
+                Ok(0) => return None,
+                Ok(_) => {}
+                Err(e) => return Some(Err(Error::Io { file: self.source.clone(), source: e })),
+            }
+            let text = self.buffer.trim();
+            if text.is_empty() || text.starts_with('#') {
+                continue;
+            }
+            return Some(parse_pose_line(text, &self.source, self.line));
+        }
+    }
+}
+
+/// Parses one JSON Lines record: exactly one of `base_from_gripper` / `gripper_from_base`, exactly
+/// one of `camera_from_target` / `target_from_camera`, and an optional numeric `stamp`.
+pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedPosePair> {
+    let value: Value = serde_json::from_str(text)
+        .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
+    let Value::Object(object) = value else {
+        return Err(parse_error(source, line, "-", "expected a JSON object per line"));
+    };
+    let stamp = match object.get("stamp") {
+        None | Some(Value::Null) => None,
+        Some(v) => Some(v.as_f64().filter(|s| s.is_finite()).ok_or_else(|| {
+            parse_error(source, line, "stamp", format!("expected a finite number of seconds, found {v}"))
+        })?),
+    };
+    let base_from_gripper = frame(&object, &ROBOT_FRAMES, source, line)?;
+    let camera_from_target = frame(&object, &CAMERA_FRAMES, source, line)?;
+    Ok(StampedPosePair { line, stamp, pose: PosePair { base_from_gripper, camera_from_target } })
+}
+
+/// Reads the one transform of a pair of alternative names, inverting when the file gives the
+/// other direction.
+fn frame(object: &Map<String, Value>, names: &[(&str, bool); 2], source: &str, line: usize) -> Result<Transform> {
+    let present: Vec<_> = names.iter().filter(|(n, _)| object.contains_key(*n)).collect();
+    let &&(name, inverted) = match present.as_slice() {
+        [one] => one,
+        [] => {
+            return Err(parse_error(source, line, format!("{}|{}", names[0].0, names[1].0), format!("missing: give `{}` or `{}`", names[0].0, names[1].0)));
+        }
+        _ => {
+            return Err(parse_error(source, line, names[0].0, format!("both `{}` and `{}` given: give one", names[0].0, names[1].0)));
+        }
+    };
+    let t = transform_from_json(&object[name]).map_err(|p| {
+        let field = if p.field.is_empty() { name.to_string() } else if p.field.starts_with('[') { format!("{name}{}", p.field) } else { format!("{name}.{}", p.field) };
+        parse_error(source, line, field, p.message)
+    })?;
+    Ok(if inverted { t.inverse() } else { t })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const I: &str = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+
+    fn read(text: &str) -> Vec<Result<StampedPosePair>> {
+        JsonlPairs::new(text.as_bytes(), "t.jsonl").collect()
+    }
+
+    #[test]
+    fn reads_both_directions_and_skips_blank_lines() {
+        let text = format!(
+            "{{\"stamp\": 1.5, \"base_from_gripper\": {I}, \"camera_from_target\": {I}}}\n\n# comment\n{{\"gripper_from_base\": {{\"translation\": [1,0,0], \"quaternion_xyzw\": [0,0,0,1]}}, \"target_from_camera\": {I}}}\n"
+        );
+        let r: Vec<_> = read(&text).into_iter().map(|r| r.unwrap()).collect();
+        assert_eq!(r.len(), 2);
+        assert_eq!(r[0].stamp, Some(1.5));
+        assert_eq!(r[1].line, 4);
+        // gripper_from_base translated by +1 in x: base_from_gripper by −1.
+        assert_eq!(r[1].pose.base_from_gripper.translation.vector.x, -1.0);
+    }
+
+    #[test]
+    fn bad_records_name_line_and_field() {
+        let bad_rot = "[[1,0,0,0],[0,1,0,0],[0,0,2,0],[0,0,0,1]]";
+        let cases = [
+            ("{not json".to_string(), "-"),
+            (format!("{{\"camera_from_target\": {I}}}"), "base_from_gripper|gripper_from_base"),
+            (format!("{{\"base_from_gripper\": {I}, \"gripper_from_base\": {I}, \"camera_from_target\": {I}}}"), "base_from_gripper"),
+            (format!("{{\"base_from_gripper\": {bad_rot}, \"camera_from_target\": {I}}}"), "base_from_gripper"),
+            (format!("{{\"base_from_gripper\": {I}, \"camera_from_target\": [[1,0,0,0],[0,1,0,0],[0,0,1,\"NaN\"],[0,0,0,1]]}}"), "camera_from_target[2][3]"),
+            (format!("{{\"stamp\": \"x\", \"base_from_gripper\": {I}, \"camera_from_target\": {I}}}"), "stamp"),
+        ];
+        for (text, field) in cases {
+            let input = format!("\n{text}\n");
+            let r = read(&input);
+            match &r[0] {
+                Err(Error::Parse { file, line, field: f, .. }) => {
+                    assert_eq!(file, "t.jsonl");
+                    assert_eq!(*line, 2);
+                    assert_eq!(f, field, "{text}");
+                }
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+    }
+}
