@@ -1,0 +1,62 @@
+//! `handeye experiment`: the paper's simulated experiments (SPEC sec. 6), with tables and figures.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args as ClapArgs;
+use handeye::experiment::{Experiment, ExperimentConfig, markdown_table, run_experiment};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::figures::{write_figures, write_text};
+
+/// Options of `handeye experiment`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Which experiment.
+    #[arg(value_parser = ["accuracy", "adaptability", "realtime", "all"])]
+    which: String,
+    /// Number of series (default: the paper's, 20 / 100 / 50).
+    #[arg(long)]
+    series: Option<usize>,
+    /// Seed of the run.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Directory for the tables (Markdown, JSON) and figures (SVG, PNG).
+    #[arg(long, default_value = "results")]
+    out: PathBuf,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let experiments: Vec<Experiment> =
+        if args.which == "all" { Experiment::ALL.to_vec() } else { vec![args.which.parse()?] };
+    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    for experiment in experiments {
+        let mut config = ExperimentConfig::for_experiment(experiment);
+        config.seed = args.seed;
+        if let Some(n) = args.series {
+            config.series = n;
+        }
+        let bar = ProgressBar::new(config.series as u64);
+        if !std::io::stderr().is_terminal() {
+            bar.set_draw_target(ProgressDrawTarget::hidden());
+        }
+        bar.set_style(
+            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} series")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        bar.set_message(experiment.name());
+        let report = run_experiment(experiment, &config, || bar.inc(1))?;
+        bar.finish_and_clear();
+        let table = markdown_table(&report);
+        println!("{table}");
+        let stem = args.out.join(experiment.name());
+        write_text(&stem.with_extension("md"), &table)?;
+        write_text(&stem.with_extension("json"), &(serde_json::to_string_pretty(&report)? + "\n"))?;
+        for path in write_figures(&report, &args.out)? {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}

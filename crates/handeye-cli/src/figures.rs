@@ -1,0 +1,184 @@
+//! Figures of the experiments (the paper's Fig. 2, Fig. 3 and a Table I chart), as SVG and PNG.
+//!
+//! Text is drawn with an embedded DejaVu Sans (assets/, Bitstream Vera licence), so no system font
+//! library is needed.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use anyhow::{Context, Result, anyhow};
+use handeye::experiment::{Experiment, ExperimentReport, MethodSummary};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// The embedded font.
+static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static REGISTER: Once = Once::new();
+
+/// Figure size in pixels (SVG units).
+const SIZE: (u32, u32) = (1000, 420);
+
+/// One curve: a label, its values and its colour.
+struct Curve<'a> {
+    label: &'a str,
+    values: Vec<f64>,
+    color: RGBColor,
+    dotted: bool,
+}
+
+/// Writes the experiment's figure(s) into `dir` as SVG and PNG; returns the files written.
+pub fn write_figures(report: &ExperimentReport, dir: &Path) -> Result<Vec<PathBuf>> {
+    REGISTER.call_once(|| {
+        // A font that does not parse leaves text undrawn; the figures are still written.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+    let stem = match report.experiment {
+        Experiment::Accuracy => "fig2_accuracy",
+        Experiment::Adaptability => "fig3_adaptability",
+        Experiment::Realtime => "table1_realtime",
+    };
+    let svg = dir.join(format!("{stem}.svg"));
+    let png = dir.join(format!("{stem}.png"));
+    draw(report, SVGBackend::new(&svg, SIZE).into_drawing_area())?;
+    draw(report, BitMapBackend::new(&png, SIZE).into_drawing_area())?;
+    Ok(vec![svg, png])
+}
+
+/// Draws the figure of `report` on any backend.
+fn draw<DB: DrawingBackend>(report: &ExperimentReport, root: DrawingArea<DB, Shift>) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+    let per = |name: &str, f: fn(&handeye::experiment::SeriesResult) -> f64| -> Vec<f64> {
+        report.method(name).map(|m| m.per_series.iter().map(f).collect()).unwrap_or_default()
+    };
+    let curve = |label, name: &'static str, f, color, dotted| Curve { label, values: per(name, f), color, dotted };
+    match report.experiment {
+        Experiment::Accuracy => {
+            let (left, right) = root.split_horizontally(SIZE.0 / 2);
+            let rot = |r: &handeye::experiment::SeriesResult| r.rot_fro;
+            let trans = |r: &handeye::experiment::SeriesResult| r.trans_rel;
+            lines(
+                &left,
+                "(a) mean rotation error ‖R̂ − R‖_F per series",
+                &[curve("conventional (O)", "conventional", rot, RED, false), curve("adaptive (*)", "adaptive", rot, BLUE, true)],
+            )?;
+            lines(
+                &right,
+                "(b) mean ‖t − t̂‖/‖t‖ per series",
+                &[
+                    curve("conventional (O)", "conventional", trans, RED, false),
+                    curve("adaptive (*)", "adaptive", trans, BLUE, true),
+                ],
+            )?;
+        }
+        Experiment::Adaptability => {
+            let n = |r: &handeye::experiment::SeriesResult| r.calibrations as f64;
+            lines(
+                &root,
+                "calibrations per series",
+                &[curve("adaptive (O)", "adaptive", n, BLUE, false), curve("fixed thresholds (*)", "fixed", n, RED, true)],
+            )?;
+        }
+        Experiment::Realtime => {
+            let methods: Vec<&MethodSummary> = ["adaptive", "optimal"].iter().filter_map(|m| report.method(m)).collect();
+            let areas = root.split_evenly((1, 3));
+            let panels: [(&str, fn(&MethodSummary) -> f64); 3] = [
+                ("time per calibration (µs)", |m| m.time_per_calibration_s * 1e6),
+                ("mean ‖R̂ − R‖_F", |m| m.rot_fro_mean),
+                ("mean ‖t − t̂‖/‖t‖", |m| m.trans_rel_mean),
+            ];
+            for (area, (title, f)) in areas.iter().zip(panels) {
+                bars(area, title, &methods.iter().map(|m| (m.method.as_str(), f(m))).collect::<Vec<_>>())?;
+            }
+        }
+    }
+    root.present().map_err(|e| anyhow!("{e}"))?;
+    Ok(())
+}
+
+/// A line chart of per-series values.
+fn lines<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, title: &str, curves: &[Curve<'_>]) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let n = curves.iter().map(|c| c.values.len()).max().unwrap_or(0).max(1);
+    let top = curves.iter().flat_map(|c| c.values.iter().copied()).filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+    let top = if top > 0.0 { top * 1.1 } else { 1.0 };
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(1f64..n as f64, 0f64..top)
+        .map_err(|e| anyhow!("{e}"))?;
+    chart
+        .configure_mesh()
+        .x_desc("series")
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|e| anyhow!("{e}"))?;
+    for c in curves {
+        let points: Vec<(f64, f64)> =
+            c.values.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(i, v)| (i as f64 + 1.0, *v)).collect();
+        let color = c.color;
+        let style = if c.dotted { color.stroke_width(1) } else { color.stroke_width(2) };
+        chart
+            .draw_series(LineSeries::new(points.clone(), style))
+            .map_err(|e| anyhow!("{e}"))?
+            .label(c.label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        if c.dotted {
+            chart.draw_series(points.iter().map(|p| Cross::new(*p, 4, color))).map_err(|e| anyhow!("{e}"))?;
+        } else {
+            chart.draw_series(points.iter().map(|p| Circle::new(*p, 3, color))).map_err(|e| anyhow!("{e}"))?;
+        }
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 13))
+        .draw()
+        .map_err(|e| anyhow!("{e}"))?;
+    Ok(())
+}
+
+/// A bar chart of one value per method.
+fn bars<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, title: &str, values: &[(&str, f64)]) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let top = values.iter().map(|v| v.1).filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+    let top = if top > 0.0 { top * 1.2 } else { 1.0 };
+    let names: Vec<String> = values.iter().map(|v| v.0.to_string()).collect();
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 16))
+        .margin(12)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0..values.len(), 0f64..top)
+        .map_err(|e| anyhow!("{e}"))?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(values.len())
+        .x_label_formatter(&|i| names.get(*i).cloned().unwrap_or_default())
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|e| anyhow!("{e}"))?;
+    let colors = [BLUE, GREEN];
+    chart
+        .draw_series(values.iter().enumerate().map(|(i, (_, v))| {
+            let c = colors[i % colors.len()];
+            Rectangle::new([(i, 0.0), (i + 1, if v.is_finite() { *v } else { 0.0 })], c.mix(0.6).filled())
+        }))
+        .map_err(|e| anyhow!("{e}"))?;
+    Ok(())
+}
+
+/// Writes a file, naming it in the error.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+}

@@ -1,0 +1,124 @@
+//! Where the pose pairs come from: a pose-pair file (or stdin), or two timestamped streams.
+
+use std::io::BufRead;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args as ClapArgs;
+use handeye::io::{Format, PoseReader, StampedPosePair, read_pose_file, read_stamped_poses};
+use handeye::sync::{OffsetOptions, StampedPose, SyncOptions, estimate_time_offset, pair_streams};
+use handeye::{PosePair, Setup};
+
+/// Input options shared by `calibrate` and `online`.
+#[derive(ClapArgs, Debug, Clone)]
+pub struct InputArgs {
+    /// Pose-pair file (JSON Lines or CSV; `-` for standard input). Not with --robot/--camera.
+    #[arg(value_name = "INPUT", required_unless_present = "robot")]
+    pub input: Option<PathBuf>,
+    /// Format of INPUT.
+    #[arg(long, default_value = "auto", value_parser = ["auto", "jsonl", "csv"])]
+    pub format: String,
+    /// Robot stream `t x y z qx qy qz qw` (base_from_gripper), ethz-asl / TUM layout.
+    #[arg(long, requires = "camera", conflicts_with = "input")]
+    pub robot: Option<PathBuf>,
+    /// Camera stream `t x y z qx qy qz qw` (target_from_camera), paired with --robot.
+    #[arg(long, requires = "robot")]
+    pub camera: Option<PathBuf>,
+    /// Camera clock minus robot clock, seconds, or `auto` to estimate it from the angular speeds.
+    #[arg(long, default_value = "0")]
+    pub time_offset: String,
+    /// Drop camera samples in gaps of the robot stream longer than this, seconds.
+    #[arg(long, default_value_t = 0.1)]
+    pub max_gap: f64,
+    /// Camera on the gripper (X = gripper_from_camera) or fixed (X = base_from_camera).
+    #[arg(long, default_value = "eye-in-hand", value_parser = ["eye-in-hand", "eye-to-hand"])]
+    pub setup: String,
+}
+
+impl InputArgs {
+    /// The setup.
+    pub fn setup(&self) -> Setup {
+        if self.setup == "eye-to-hand" { Setup::EyeToHand } else { Setup::EyeInHand }
+    }
+
+    fn format(&self) -> Result<Format> {
+        Ok(self.format.parse::<Format>()?)
+    }
+}
+
+/// Pose pairs from two streams, with what the pairing did.
+pub struct Synced {
+    /// The pairs.
+    pub pairs: Vec<StampedPosePair>,
+    /// Offset used, seconds.
+    pub time_offset: f64,
+}
+
+/// Reads and pairs the two streams of `args`.
+pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
+    let (Some(robot), Some(camera)) = (&args.robot, &args.camera) else {
+        return Ok(None);
+    };
+    let robot = read_stamped_poses(robot)?;
+    // The camera file holds target_from_camera; the pairs hold camera_from_target.
+    let camera: Vec<StampedPose> = read_stamped_poses(camera)?
+        .into_iter()
+        .map(|s| StampedPose { stamp: s.stamp, pose: s.pose.inverse() })
+        .collect();
+    let time_offset = if args.time_offset == "auto" {
+        let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default())?;
+        eprintln!("time offset: {:.4} s (correlation of angular speeds {:.3})", e.offset, e.correlation);
+        e.offset
+    } else {
+        args.time_offset.parse::<f64>().ok().filter(|v| v.is_finite()).with_context(|| {
+            format!("--time-offset: expected `auto` or seconds, found `{}`", args.time_offset)
+        })?
+    };
+    let s = pair_streams(&robot, &camera, &SyncOptions { time_offset, max_gap: args.max_gap });
+    if s.dropped_outside + s.dropped_gap > 0 {
+        eprintln!(
+            "dropped {} camera sample(s) outside the robot stream and {} in gaps longer than {} s",
+            s.dropped_outside, s.dropped_gap, args.max_gap
+        );
+    }
+    let pairs = s
+        .pairs
+        .iter()
+        .zip(&s.stamps)
+        .enumerate()
+        .map(|(k, (p, t))| StampedPosePair { line: k + 1, stamp: Some(*t), pose: *p })
+        .collect();
+    Ok(Some(Synced { pairs, time_offset }))
+}
+
+/// All pose pairs of the input (a batch solve), and the time offset used for streams.
+pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Option<f64>)> {
+    if let Some(s) = synced(args)? {
+        return Ok((s.pairs.iter().map(|p| p.pose).collect(), Some(s.time_offset)));
+    }
+    let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
+    if path.as_os_str() == "-" {
+        let stdin = std::io::stdin().lock();
+        let mut pairs = Vec::new();
+        for r in PoseReader::new(stdin, "-", args.format()?)? {
+            pairs.push(r?.pose);
+        }
+        return Ok((pairs, None));
+    }
+    Ok((read_pose_file(&path, args.format()?)?.pairs, None))
+}
+
+/// A record stream for `online`: from stdin, a file, or paired streams.
+pub fn records(args: &InputArgs) -> Result<(Box<dyn Iterator<Item = handeye::Result<StampedPosePair>>>, Option<f64>)> {
+    if let Some(s) = synced(args)? {
+        return Ok((Box::new(s.pairs.into_iter().map(Ok)), Some(s.time_offset)));
+    }
+    let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
+    let reader: Box<dyn BufRead> = if path.as_os_str() == "-" {
+        Box::new(std::io::BufReader::new(std::io::stdin()))
+    } else {
+        Box::new(handeye::io::open(&path)?)
+    };
+    let source = path.display().to_string();
+    Ok((Box::new(PoseReader::new(reader, &source, args.format()?)?), None))
+}

@@ -1,0 +1,156 @@
+//! `handeye online`: the online calibrator on a stream, one JSON line per calibration.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::Args as ClapArgs;
+use handeye::io::read_truth;
+use handeye::online::{ErrorSource, Event, OnlineCalibrator, OnlineConfig};
+use handeye::select::{AdaptiveParams, Selection};
+use serde_json::{Map, Value, json};
+
+use crate::input::{InputArgs, records};
+use crate::output::{insert_transform, print_line};
+
+/// Options of `handeye online`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    input: InputArgs,
+    /// Motion selection: the paper's adaptive thresholds, Shi et al.'s fixed ones, or none (the
+    /// conventional method).
+    #[arg(long, default_value = "adaptive", value_parser = ["adaptive", "fixed", "none"])]
+    selection: String,
+    /// Estimator: `paper` (Andreff on the two selected motions).
+    #[arg(long, default_value = "paper", value_parser = ["paper"])]
+    estimator: String,
+    /// Also refine over the last five selected motions (the paper's optimal method).
+    #[arg(long)]
+    optimal: bool,
+    /// Source of rmsR/rmsT: the AX − XB residuals, or the true X (needs --truth).
+    #[arg(long, default_value = "residual", value_parser = ["residual", "truth"])]
+    error_source: String,
+    /// Truth file (the true X), for --error-source truth.
+    #[arg(long)]
+    truth: Option<PathBuf>,
+    /// What to do with a bad line: report it and skip it, or stop (exit 2).
+    #[arg(long, default_value = "skip", value_parser = ["skip", "stop"])]
+    on_bad_line: String,
+    /// N of Eq. (1): motions averaged for the initial thresholds.
+    #[arg(long, default_value_t = 5)]
+    n_init: usize,
+    /// Candidates tried before the thresholds are relaxed.
+    #[arg(long, default_value_t = 5)]
+    interval: usize,
+    /// Relaxation factor of sin α₀ and β₀.
+    #[arg(long, default_value_t = 0.9)]
+    relax_down: f64,
+    /// Relaxation factor of d₀.
+    #[arg(long, default_value_t = 1.1)]
+    relax_up: f64,
+    /// Exploration factor after calibrations 1–3.
+    #[arg(long, default_value_t = 1.1)]
+    explore: f64,
+    /// Required rotation accuracy rmsRMax.
+    #[arg(long, default_value_t = 0.001)]
+    rms_r_max: f64,
+    /// Required translation accuracy rmsTMax.
+    #[arg(long, default_value_t = 0.05)]
+    rms_t_max: f64,
+    /// Floor of a predicted sin α₀ (default sin 15°).
+    #[arg(long, default_value_t = 15f64.to_radians().sin())]
+    alpha_min: f64,
+    /// Floor of a predicted β₀, degrees.
+    #[arg(long, default_value_t = 3.0)]
+    beta_min_deg: f64,
+    /// Ceiling of a predicted d₀, in the input's length unit (0.1 m; use 100 for millimetres).
+    #[arg(long, default_value_t = 0.1)]
+    d_max: f64,
+    /// Opt-in remedy for thresholds that lock when their four records are equal.
+    #[arg(long)]
+    unfreeze: bool,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let truth = args.truth.as_ref().map(|p| read_truth(p)).transpose()?;
+    let setup = args.input.setup();
+    if let Some(t) = &truth
+        && t.frame != setup.x_frame()
+    {
+        bail!("the truth file gives `{}` but --setup {} needs `{}`", t.frame, setup.name(), setup.x_frame());
+    }
+    let config = OnlineConfig {
+        setup,
+        selection: args.selection.parse::<Selection>()?,
+        params: AdaptiveParams {
+            n_init: args.n_init,
+            interval: args.interval,
+            relax_down: args.relax_down,
+            relax_up: args.relax_up,
+            explore: args.explore,
+            rms_r_max: args.rms_r_max,
+            rms_t_max: args.rms_t_max,
+            alpha_min: args.alpha_min,
+            beta_min: args.beta_min_deg.to_radians(),
+            d_max: args.d_max,
+            unfreeze: args.unfreeze,
+        },
+        error_source: if args.error_source == "truth" { ErrorSource::Truth } else { ErrorSource::Residual },
+        truth: truth.map(|t| t.x),
+        optimal: args.optimal,
+    };
+    let mut calibrator = OnlineCalibrator::new(config)?;
+    let (records, time_offset) = records(&args.input)?;
+    let mut skipped = 0;
+    for record in records {
+        let record = match record {
+            Ok(r) => r,
+            Err(e) if args.on_bad_line == "skip" && matches!(e, handeye::Error::Parse { .. }) => {
+                eprintln!("skipped: {e}");
+                skipped += 1;
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        };
+        for event in calibrator.push(&record.pose)? {
+            print_line(&event_json(&event, time_offset))?;
+        }
+    }
+    eprintln!(
+        "{} calibration(s) from {} pose(s){}; last X: {}",
+        calibrator.calibrations(),
+        calibrator.poses(),
+        if skipped > 0 { format!(", {skipped} bad line(s) skipped") } else { String::new() },
+        calibrator.last_x().map_or("none".to_string(), |x| {
+            let t = x.translation.vector;
+            format!("t = [{:.6}, {:.6}, {:.6}], rotation {:.4}°", t.x, t.y, t.z, x.rotation.angle().to_degrees())
+        })
+    );
+    Ok(())
+}
+
+/// One event as its JSON line (SPEC sec. 7).
+pub fn event_json(e: &Event, time_offset: Option<f64>) -> Value {
+    let mut out = Map::new();
+    out.insert("calibration".into(), json!(e.calibration));
+    out.insert("poses".into(), json!(e.poses));
+    if let Some(t) = e.thresholds {
+        out.insert("thresholds".into(), json!({"sin_alpha": t.sin_alpha, "beta": t.beta, "d": t.d}));
+    }
+    out.insert("rms_r".into(), json!(e.rms.rms_r));
+    out.insert("rms_t".into(), json!(e.rms.rms_t));
+    insert_transform(&mut out, &e.x);
+    if let Some(o) = &e.optimal {
+        let mut opt = Map::new();
+        insert_transform(&mut opt, &o.x);
+        opt.insert("number".into(), json!(o.number));
+        opt.insert("motions".into(), json!(o.motions));
+        out.insert("optimal".into(), Value::Object(opt));
+    }
+    out.insert("seconds".into(), json!(e.seconds));
+    if let Some(t) = time_offset {
+        out.insert("time_offset_s".into(), json!(t));
+    }
+    Value::Object(out)
+}

@@ -1,0 +1,47 @@
+//! Output helpers shared by the commands: transforms as JSON, exit codes.
+
+use std::io::Write;
+
+use handeye::io::TransformJson;
+use handeye::{Error, Transform};
+use serde_json::{Map, Value, json};
+
+/// Exit code 2: bad input.
+pub const BAD_INPUT: u8 = 2;
+/// Exit code 3: X cannot be determined from valid input.
+pub const DEGENERATE: u8 = 3;
+
+/// The exit code for an error: 2 for bad input, 3 for degenerate data, 1 otherwise.
+pub fn exit_code(e: &anyhow::Error) -> u8 {
+    match e.downcast_ref::<Error>() {
+        Some(Error::Degenerate { .. } | Error::TooFewMotions { .. }) => DEGENERATE,
+        Some(_) => BAD_INPUT,
+        None => 1,
+    }
+}
+
+/// Inserts `translation`, `quaternion_xyzw` and `matrix` of `t` into a JSON object.
+pub fn insert_transform(object: &mut Map<String, Value>, t: &Transform) {
+    let j = TransformJson::from(t);
+    object.insert("translation".into(), json!(j.translation));
+    object.insert("quaternion_xyzw".into(), json!(j.quaternion_xyzw));
+    object.insert("matrix".into(), json!(j.matrix));
+}
+
+/// Prints one JSON document (pretty) to stdout.
+pub fn print_json(v: &Value) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    serde_json::to_writer_pretty(&mut out, v)?;
+    writeln!(out)?;
+    Ok(())
+}
+
+/// Prints one JSON line to stdout and flushes it, so that a reader at the other end of a pipe sees
+/// it at once.
+pub fn print_line(v: &Value) -> anyhow::Result<()> {
+    let mut out = std::io::stdout().lock();
+    serde_json::to_writer(&mut out, v)?;
+    writeln!(out)?;
+    out.flush()?;
+    Ok(())
+}

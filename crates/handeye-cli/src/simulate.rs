@@ -1,0 +1,68 @@
+//! `handeye simulate`: a series of the paper's protocol as JSON Lines, and its truth.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Args as ClapArgs;
+use handeye::io::{Truth, truth_json};
+use handeye::sim::{SimConfig, simulate};
+use serde_json::json;
+
+/// Options of `handeye simulate`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Number of poses.
+    #[arg(long, default_value_t = 200)]
+    poses: usize,
+    /// Seed of the run.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Series number within the run (each has its own generator).
+    #[arg(long, default_value_t = 0)]
+    series: u64,
+    /// Motion preset: the paper's small steps, or large motions (60° steps, 50 mm standoff).
+    #[arg(long, default_value = "paper", value_parser = ["paper", "large"])]
+    preset: String,
+    /// Without measurement noise.
+    #[arg(long)]
+    noise_free: bool,
+    /// Output file (JSON Lines: `base_from_gripper`, `camera_from_target` as 4×4, `stamp`).
+    #[arg(long)]
+    out: PathBuf,
+    /// Truth file to write (the true X and the target pose).
+    #[arg(long)]
+    truth: Option<PathBuf>,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let base = if args.preset == "large" { SimConfig::large_motions() } else { SimConfig::default() };
+    let mut config = SimConfig { poses: args.poses, ..base };
+    if args.noise_free {
+        config = config.noise_free();
+    }
+    let s = simulate(&config, args.seed, args.series);
+    let file = std::fs::File::create(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    for (k, p) in s.poses.iter().enumerate() {
+        let m = |t: &handeye::Transform| {
+            let h = t.to_homogeneous();
+            (0..4).map(|r| (0..4).map(|c| h[(r, c)]).collect::<Vec<_>>()).collect::<Vec<_>>()
+        };
+        let line = json!({"stamp": k as f64, "base_from_gripper": m(&p.base_from_gripper), "camera_from_target": m(&p.camera_from_target)});
+        writeln!(w, "{line}")?;
+    }
+    w.flush()?;
+    if let Some(path) = &args.truth {
+        let truth = Truth {
+            x: s.gripper_from_camera,
+            frame: "gripper_from_camera".into(),
+            target: Some(("base_from_target".into(), s.base_from_target)),
+        };
+        std::fs::write(path, serde_json::to_string_pretty(&truth_json(&truth))? + "\n")
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    eprintln!("wrote {} poses (millimetres) to {}", s.poses.len(), args.out.display());
+    Ok(())
+}
