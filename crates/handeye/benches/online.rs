@@ -10,13 +10,31 @@ use handeye::{PosePair, Transform, andreff};
 use std::hint::black_box;
 
 fn push(c: &mut Criterion) {
-    let sim = simulate(&SimConfig { poses: 1000, ..SimConfig::default() }, 42, 0);
+    let sim = simulate(
+        &SimConfig {
+            poses: 1000,
+            ..SimConfig::default()
+        },
+        42,
+        0,
+    );
     // Thresholds no motion can meet (β₀ above any rotation, no relaxation in reach): every push
     // searches and none calibrates.
-    let params = AdaptiveParams { d_max: 100.0, interval: usize::MAX / 2, ..AdaptiveParams::default() };
-    let config = OnlineConfig { selection: Selection::Adaptive, params, ..OnlineConfig::default() };
+    let params = AdaptiveParams {
+        d_max: 100.0,
+        interval: usize::MAX / 2,
+        ..AdaptiveParams::default()
+    };
+    let config = OnlineConfig {
+        selection: Selection::Adaptive,
+        params,
+        ..OnlineConfig::default()
+    };
     let mut warm = OnlineCalibrator::new(config).unwrap();
-    let still = PosePair { base_from_gripper: Transform::identity(), camera_from_target: Transform::identity() };
+    let still = PosePair {
+        base_from_gripper: Transform::identity(),
+        camera_from_target: Transform::identity(),
+    };
     for _ in 0..6 {
         warm.push(&still).unwrap();
     }
@@ -28,10 +46,19 @@ fn push(c: &mut Criterion) {
             black_box(cal.push(black_box(&sim.poses[k])).unwrap())
         })
     });
-    let pairs = handeye::motion_pairs(&sim.poses[..3], handeye::Pairing::Consecutive, handeye::Setup::EyeInHand);
-    c.bench_function("calibration/andreff_two_motions", |b| b.iter(|| andreff(black_box(&pairs))));
+    let pairs = handeye::motion_pairs(
+        &sim.poses[..3],
+        handeye::Pairing::Consecutive,
+        handeye::Setup::EyeInHand,
+    );
+    c.bench_function("calibration/andreff_two_motions", |b| {
+        b.iter(|| andreff(black_box(&pairs)))
+    });
     c.bench_function("push/conventional_every_pose", |b| {
-        let config = OnlineConfig { selection: Selection::None, ..OnlineConfig::default() };
+        let config = OnlineConfig {
+            selection: Selection::None,
+            ..OnlineConfig::default()
+        };
         let mut cal = OnlineCalibrator::new(config).unwrap();
         let mut k = 0;
         b.iter(|| {

@@ -10,12 +10,21 @@ use std::hint::black_box;
 fn solvers(c: &mut Criterion) {
     let mut group = c.benchmark_group("solve");
     for motions in [2usize, 10, 100, 1000] {
-        let sim = simulate(&SimConfig { poses: motions + 1, ..SimConfig::default() }, 42, 0);
+        let sim = simulate(
+            &SimConfig {
+                poses: motions + 1,
+                ..SimConfig::default()
+            },
+            42,
+            0,
+        );
         let pairs = motion_pairs(&sim.poses, Pairing::Consecutive, Setup::EyeInHand);
         for method in Method::ALL {
-            group.bench_with_input(BenchmarkId::new(method.name(), motions), &pairs, |b, pairs| {
-                b.iter(|| solve(method, black_box(pairs)))
-            });
+            group.bench_with_input(
+                BenchmarkId::new(method.name(), motions),
+                &pairs,
+                |b, pairs| b.iter(|| solve(method, black_box(pairs))),
+            );
         }
     }
     group.finish();

@@ -7,7 +7,10 @@ use handeye::experiment::{Experiment, ExperimentConfig, markdown_table, run_expe
 fn main() -> Result<(), handeye::Error> {
     for experiment in Experiment::ALL {
         let mut config = ExperimentConfig::for_experiment(experiment);
-        config.series = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(config.series);
+        config.series = std::env::args()
+            .nth(1)
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(config.series);
         config.batch = std::env::var("NO_BATCH").is_err();
         let report = run_experiment(experiment, &config, || {})?;
         println!("{}", markdown_table(&report));

@@ -75,7 +75,9 @@ impl fmt::Display for Degeneracy {
                 f,
                 "all rotations are too small (largest {largest_deg:.3}°): move the gripper through larger rotations"
             ),
-            Self::ParallelAxes { largest_axis_angle_deg } => write!(
+            Self::ParallelAxes {
+                largest_axis_angle_deg,
+            } => write!(
                 f,
                 "all rotation axes are nearly parallel (at most {largest_axis_angle_deg:.3}° apart): rotate about at least two clearly different axes"
             ),
@@ -92,7 +94,9 @@ impl fmt::Display for Degeneracy {
 #[non_exhaustive]
 pub enum Error {
     /// Fewer motions than the method needs.
-    #[error("{got} motion(s) given, at least {need} needed: record more poses (each motion joins two poses)")]
+    #[error(
+        "{got} motion(s) given, at least {need} needed: record more poses (each motion joins two poses)"
+    )]
     TooFewMotions {
         /// Motions given.
         got: usize,

@@ -37,7 +37,11 @@ pub enum Experiment {
 
 impl Experiment {
     /// All three, in the paper's order.
-    pub const ALL: [Experiment; 3] = [Experiment::Accuracy, Experiment::Adaptability, Experiment::Realtime];
+    pub const ALL: [Experiment; 3] = [
+        Experiment::Accuracy,
+        Experiment::Adaptability,
+        Experiment::Realtime,
+    ];
 
     /// The name used on the command line and in file names.
     pub fn name(self) -> &'static str {
@@ -69,8 +73,16 @@ impl Experiment {
     /// The online methods the experiment compares (batch solvers come as reference rows).
     pub fn online_methods(self) -> &'static [OnlineMethod] {
         match self {
-            Self::Accuracy => &[OnlineMethod::Conventional, OnlineMethod::Fixed, OnlineMethod::Adaptive],
-            Self::Adaptability => &[OnlineMethod::Adaptive, OnlineMethod::Fixed, OnlineMethod::Conventional],
+            Self::Accuracy => &[
+                OnlineMethod::Conventional,
+                OnlineMethod::Fixed,
+                OnlineMethod::Adaptive,
+            ],
+            Self::Adaptability => &[
+                OnlineMethod::Adaptive,
+                OnlineMethod::Fixed,
+                OnlineMethod::Conventional,
+            ],
             Self::Realtime => &[OnlineMethod::Adaptive, OnlineMethod::Optimal],
         }
     }
@@ -86,10 +98,15 @@ impl FromStr for Experiment {
     type Err = Error;
 
     fn from_str(s: &str) -> Result<Self> {
-        Experiment::ALL.into_iter().find(|e| e.name() == s).ok_or_else(|| Error::InvalidParameter {
-            name: "experiment",
-            message: format!("unknown experiment `{s}`; one of accuracy, adaptability, realtime"),
-        })
+        Experiment::ALL
+            .into_iter()
+            .find(|e| e.name() == s)
+            .ok_or_else(|| Error::InvalidParameter {
+                name: "experiment",
+                message: format!(
+                    "unknown experiment `{s}`; one of accuracy, adaptability, realtime"
+                ),
+            })
     }
 }
 
@@ -140,8 +157,14 @@ impl ExperimentConfig {
         Self {
             series: experiment.default_series(),
             seed: 1,
-            sim: SimConfig { poses: experiment.default_poses(), ..SimConfig::default() },
-            params: AdaptiveParams { d_max: 100.0, ..AdaptiveParams::default() },
+            sim: SimConfig {
+                poses: experiment.default_poses(),
+                ..SimConfig::default()
+            },
+            params: AdaptiveParams {
+                d_max: 100.0,
+                ..AdaptiveParams::default()
+            },
             batch: true,
         }
     }
@@ -220,23 +243,38 @@ pub fn run_experiment(
         .into_par_iter()
         .map(|s| {
             let sim = simulate(&config.sim, config.seed, s as u64);
-            let mut row: Vec<SeriesResult> =
-                online.iter().map(|m| run_online(*m, &sim, &config.params)).collect::<Result<_>>()?;
+            let mut row: Vec<SeriesResult> = online
+                .iter()
+                .map(|m| run_online(*m, &sim, &config.params))
+                .collect::<Result<_>>()?;
             row.extend(batch.iter().map(|m| run_batch(*m, &sim)));
             progress();
             Ok(row)
         })
         .collect::<Result<_>>()?;
-    let names = online.iter().map(|m| (m.name().to_string(), false)).chain(batch.iter().map(|m| (m.name().to_string(), true)));
+    let names = online
+        .iter()
+        .map(|m| (m.name().to_string(), false))
+        .chain(batch.iter().map(|m| (m.name().to_string(), true)));
     let methods = names
         .enumerate()
-        .map(|(k, (method, is_batch))| summarise(method, is_batch, rows.iter().map(|r| r[k]).collect()))
+        .map(|(k, (method, is_batch))| {
+            summarise(method, is_batch, rows.iter().map(|r| r[k]).collect())
+        })
         .collect();
-    Ok(ExperimentReport { experiment, config: *config, methods })
+    Ok(ExperimentReport {
+        experiment,
+        config: *config,
+        methods,
+    })
 }
 
 /// One online method on one series, errors against the true X.
-fn run_online(method: OnlineMethod, sim: &SimSeries, params: &AdaptiveParams) -> Result<SeriesResult> {
+fn run_online(
+    method: OnlineMethod,
+    sim: &SimSeries,
+    params: &AdaptiveParams,
+) -> Result<SeriesResult> {
     let selection = match method {
         OnlineMethod::Conventional => Selection::None,
         OnlineMethod::Fixed => Selection::Fixed,
@@ -252,7 +290,10 @@ fn run_online(method: OnlineMethod, sim: &SimSeries, params: &AdaptiveParams) ->
     };
     let events = run_series(config, &sim.poses)?;
     let estimates: Vec<(crate::Transform, f64)> = if method == OnlineMethod::Optimal {
-        events.iter().filter_map(|e| e.optimal.map(|o| (o.x, o.seconds))).collect()
+        events
+            .iter()
+            .filter_map(|e| e.optimal.map(|o| (o.x, o.seconds)))
+            .collect()
     } else {
         events.iter().map(|e| (e.x, e.seconds)).collect()
     };
@@ -272,7 +313,13 @@ fn run_batch(method: Method, sim: &SimSeries) -> SeriesResult {
 /// Mean errors of a list of estimates (with their times).
 fn mean_errors(estimates: &[(crate::Transform, f64)], sim: &SimSeries) -> SeriesResult {
     let n = estimates.len();
-    let mut r = SeriesResult { calibrations: n, rot_fro: 0.0, rot_deg: 0.0, trans_rel: 0.0, seconds: 0.0 };
+    let mut r = SeriesResult {
+        calibrations: n,
+        rot_fro: 0.0,
+        rot_deg: 0.0,
+        trans_rel: 0.0,
+        seconds: 0.0,
+    };
     for (x, seconds) in estimates {
         let e = errors_against_truth(x, &sim.gripper_from_camera);
         r.rot_fro += e.rot_fro;
@@ -291,7 +338,11 @@ fn mean_errors(estimates: &[(crate::Transform, f64)], sim: &SimSeries) -> Series
 fn summarise(method: String, batch: bool, per_series: Vec<SeriesResult>) -> MethodSummary {
     let with: Vec<&SeriesResult> = per_series.iter().filter(|r| r.calibrations > 0).collect();
     let mean_of = |f: fn(&SeriesResult) -> f64| {
-        if with.is_empty() { f64::NAN } else { with.iter().map(|r| f(r)).sum::<f64>() / with.len() as f64 }
+        if with.is_empty() {
+            f64::NAN
+        } else {
+            with.iter().map(|r| f(r)).sum::<f64>() / with.len() as f64
+        }
     };
     let mut counts: Vec<usize> = per_series.iter().map(|r| r.calibrations).collect();
     counts.sort_unstable();
@@ -312,7 +363,11 @@ fn summarise(method: String, batch: bool, per_series: Vec<SeriesResult>) -> Meth
         rot_fro_mean: mean_of(|r| r.rot_fro),
         rot_deg_mean: mean_of(|r| r.rot_deg),
         trans_rel_mean: mean_of(|r| r.trans_rel),
-        time_per_calibration_s: if total == 0 { f64::NAN } else { seconds / total as f64 },
+        time_per_calibration_s: if total == 0 {
+            f64::NAN
+        } else {
+            seconds / total as f64
+        },
         per_series,
     }
 }
@@ -321,13 +376,14 @@ fn summarise(method: String, batch: bool, per_series: Vec<SeriesResult>) -> Meth
 pub fn markdown_table(report: &ExperimentReport) -> String {
     let mut out = format!(
         "### {} ({} series × {} poses, seed {})\n\n| method | series with calibration | calibrations (mean / median) | ‖ΔR‖_F | rotation (°) | t_rel | time per calibration (µs) |\n|---|---|---|---|---|---|---|\n",
-        report.experiment,
-        report.config.series,
-        report.config.sim.poses,
-        report.config.seed
+        report.experiment, report.config.series, report.config.sim.poses, report.config.seed
     );
     for m in &report.methods {
-        let name = if m.batch { format!("batch `{}` (all poses)", m.method) } else { format!("**{}**", m.method) };
+        let name = if m.batch {
+            format!("batch `{}` (all poses)", m.method)
+        } else {
+            format!("**{}**", m.method)
+        };
         out += &format!(
             "| {name} | {}/{} | {:.2} / {:.1} | {:.4} | {:.3} | {:.4} | {:.2} |\n",
             m.series_with_calibration,

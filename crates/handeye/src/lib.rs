@@ -37,5 +37,6 @@ pub use error::{Degeneracy, Error, Result, TransformProblem};
 pub use motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
 pub use pose::Transform;
 pub use solve::{
-    Calibration, Method, Warning, andreff, andreff_joint, daniilidis, horaud, park, refine, solve, tsai,
+    Calibration, Method, Warning, andreff, andreff_joint, daniilidis, horaud, park, refine, solve,
+    tsai,
 };

@@ -83,7 +83,11 @@ impl MotionResidual {
         Self {
             delta_r: ax - xb,
             delta_t: r_a * t_x + m.a.translation.vector - r_x * m.b.translation.vector - t_x,
-            rotation_deg: rotation_angle_between(&(m.a.rotation * x.rotation), &(x.rotation * m.b.rotation)).to_degrees(),
+            rotation_deg: rotation_angle_between(
+                &(m.a.rotation * x.rotation),
+                &(x.rotation * m.b.rotation),
+            )
+            .to_degrees(),
         }
     }
 }

@@ -81,7 +81,10 @@ impl MotionPair {
 
     /// The motion pair with both motions reversed (A⁻¹, B⁻¹); it satisfies the same equation.
     pub fn inverse(&self) -> Self {
-        Self { a: self.a.inverse(), b: self.b.inverse() }
+        Self {
+            a: self.a.inverse(),
+            b: self.b.inverse(),
+        }
     }
 }
 
@@ -120,7 +123,11 @@ pub fn motion_pairs(poses: &[PosePair], pairing: Pairing, setup: Setup) -> Vec<M
     let mut out = Vec::with_capacity(pairing.motion_count(poses.len()));
     match pairing {
         Pairing::Consecutive => {
-            out.extend(poses.windows(2).map(|w| MotionPair::between(setup, &w[0], &w[1])));
+            out.extend(
+                poses
+                    .windows(2)
+                    .map(|w| MotionPair::between(setup, &w[0], &w[1])),
+            );
         }
         Pairing::All => {
             for (i, pi) in poses.iter().enumerate() {
@@ -148,7 +155,11 @@ impl MotionFeatures {
     /// Features of a motion `a_from_b`: θ and k by Rodrigues' formula ([`axis_angle`]).
     pub fn of(motion: &Transform) -> Self {
         let (angle, axis) = axis_angle(motion.rotation.matrix());
-        Self { angle, axis, translation_norm: motion.translation.vector.norm() }
+        Self {
+            angle,
+            axis,
+            translation_norm: motion.translation.vector.norm(),
+        }
     }
 
     /// The angle ∠(k₁, k₂) between this motion's axis and another's, radians (0 if either has none).

@@ -181,7 +181,10 @@ impl OnlineCalibrator {
         check_finite(pose)?;
         self.poses += 1;
         let selections = self.selector.offer(self.poses, pose);
-        Ok(selections.into_iter().filter_map(|s| self.calibrate(&s)).collect())
+        Ok(selections
+            .into_iter()
+            .filter_map(|s| self.calibrate(&s))
+            .collect())
     }
 
     /// Step 14 of the Main Algorithm: Andreff on (A', A''), the errors, the threshold update.
@@ -198,7 +201,11 @@ impl OnlineCalibrator {
         let seconds = started.elapsed().as_secs_f64();
         self.calibrations += 1;
         self.last_x = Some(x);
-        let optimal = self.config.optimal.then(|| self.optimal(selected)).flatten();
+        let optimal = self
+            .config
+            .optimal
+            .then(|| self.optimal(selected))
+            .flatten();
         Some(Event {
             calibration: self.calibrations,
             poses: selected.poses,
@@ -216,11 +223,17 @@ impl OnlineCalibrator {
         match (self.config.error_source, self.config.truth) {
             (ErrorSource::Truth, Some(truth)) => {
                 let e = errors_against_truth(x, &truth);
-                Rms { rms_r: e.rms_r(), rms_t: e.rms_t() }
+                Rms {
+                    rms_r: e.rms_r(),
+                    rms_t: e.rms_t(),
+                }
             }
             _ => {
                 let r = residual_rms(pair, x);
-                Rms { rms_r: r.rms_r, rms_t: r.rms_t }
+                Rms {
+                    rms_r: r.rms_r,
+                    rms_t: r.rms_t,
+                }
             }
         }
     }
@@ -261,7 +274,11 @@ impl OnlineCalibrator {
 /// Refuses a pose pair with a NaN or infinite entry.
 fn check_finite(pose: &PosePair) -> Result<()> {
     let finite = |t: &Transform| {
-        t.translation.vector.iter().chain(t.rotation.matrix().iter()).all(|v| v.is_finite())
+        t.translation
+            .vector
+            .iter()
+            .chain(t.rotation.matrix().iter())
+            .all(|v| v.is_finite())
     };
     for (what, t) in [
         ("base_from_gripper", &pose.base_from_gripper),

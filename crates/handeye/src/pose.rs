@@ -5,7 +5,9 @@
 //! b-coordinates into frame a (`p_a = a_from_b * p_b`), so products chain visibly:
 //! `a_from_c = a_from_b * b_from_c`.
 
-use nalgebra::{IsometryMatrix3, Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{
+    IsometryMatrix3, Matrix3, Matrix4, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3,
+};
 
 use crate::error::TransformProblem;
 
@@ -70,7 +72,11 @@ pub fn transform_from_matrix4(m: &Matrix4<f64>) -> Result<Transform, TransformPr
     check_rotation(&r)?;
     let t: Vector3<f64> = m.fixed_view::<3, 1>(0, 3).into_owned();
     // A rotation orthonormal only to 1e-6 is projected; one exact to rounding is kept bit for bit.
-    let r = if orthonormality_deviation(&r) > KEEP_AS_GIVEN_TOL { proj_so3(&r) } else { r };
+    let r = if orthonormality_deviation(&r) > KEEP_AS_GIVEN_TOL {
+        proj_so3(&r)
+    } else {
+        r
+    };
     Ok(transform_from_parts(&r, &t))
 }
 
@@ -80,7 +86,11 @@ pub fn transform_from_xyz_quat_xyzw(
     translation: [f64; 3],
     quaternion_xyzw: [f64; 4],
 ) -> Result<Transform, TransformProblem> {
-    if translation.iter().chain(quaternion_xyzw.iter()).any(|v| !v.is_finite()) {
+    if translation
+        .iter()
+        .chain(quaternion_xyzw.iter())
+        .any(|v| !v.is_finite())
+    {
         return Err(TransformProblem::NotFinite);
     }
     let [x, y, z, w] = quaternion_xyzw;
@@ -148,7 +158,9 @@ const POLAR_ITERATIONS: usize = 30;
 fn proj_so3_svd(m: &Matrix3<f64>) -> Matrix3<f64> {
     // A finite 3×3 SVD converges in a few sweeps; the cap only guards against NaN input, for
     // which the result is NaN too.
-    let Some((u, v_t)) = m.try_svd(true, true, f64::EPSILON, 1000).and_then(|svd| svd.u.zip(svd.v_t))
+    let Some((u, v_t)) = m
+        .try_svd(true, true, f64::EPSILON, 1000)
+        .and_then(|svd| svd.u.zip(svd.v_t))
     else {
         return Matrix3::from_element(f64::NAN);
     };
@@ -173,7 +185,12 @@ pub fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
 /// skew part.
 pub fn axis_angle(r: &Matrix3<f64>) -> (f64, Option<Vector3<f64>>) {
     // sin θ · k from the skew part, cos θ from the trace: atan2 is accurate over the whole range.
-    let s = 0.5 * Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]);
+    let s = 0.5
+        * Vector3::new(
+            r[(2, 1)] - r[(1, 2)],
+            r[(0, 2)] - r[(2, 0)],
+            r[(1, 0)] - r[(0, 1)],
+        );
     let c = ((r.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
     let sin = s.norm();
     let theta = sin.atan2(c);
@@ -258,7 +275,11 @@ mod tests {
                 + Matrix3::from_fn(|i, j| 0.05 * ((i * 3 + j) as f64 + f).sin());
             let a = proj_so3(&m);
             let b = proj_so3_svd(&m);
-            assert!((a - b).abs().max() < 1e-13, "case {k}: {}", (a - b).abs().max());
+            assert!(
+                (a - b).abs().max() < 1e-13,
+                "case {k}: {}",
+                (a - b).abs().max()
+            );
         }
     }
 
@@ -266,7 +287,10 @@ mod tests {
     fn refuses_non_rotations() {
         let mut m = Matrix4::identity();
         m[(0, 0)] = -1.0;
-        assert_eq!(transform_from_matrix4(&m), Err(TransformProblem::Reflection));
+        assert_eq!(
+            transform_from_matrix4(&m),
+            Err(TransformProblem::Reflection)
+        );
         m[(0, 0)] = 1.1;
         assert!(matches!(
             transform_from_matrix4(&m),

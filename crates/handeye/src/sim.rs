@@ -58,12 +58,22 @@ impl Default for SimConfig {
 impl SimConfig {
     /// Large motions: 60° RMS steps, 30 mm, no orientation pull, 50 mm standoff (SPEC sec. 5).
     pub fn large_motions() -> Self {
-        Self { step_rotation_deg: 60.0, step_translation: 30.0, pull: 0.0, standoff: 50.0, ..Self::default() }
+        Self {
+            step_rotation_deg: 60.0,
+            step_translation: 30.0,
+            pull: 0.0,
+            standoff: 50.0,
+            ..Self::default()
+        }
     }
 
     /// The same series without noise.
     pub fn noise_free(self) -> Self {
-        Self { rotation_noise: 0.0, translation_noise: 0.0, ..self }
+        Self {
+            rotation_noise: 0.0,
+            translation_noise: 0.0,
+            ..self
+        }
     }
 }
 
@@ -106,7 +116,11 @@ pub fn simulate(config: &SimConfig, seed: u64, series: u64) -> SimSeries {
 
     let rot_sigma = config.step_rotation_deg.to_radians() / 3f64.sqrt();
     let trans_sigma = config.step_translation / 3f64.sqrt();
-    let mut r = r_nom * exp_so3(&gaussian(&mut rng, config.initial_rotation_deg.to_radians() / 3f64.sqrt()));
+    let mut r = r_nom
+        * exp_so3(&gaussian(
+            &mut rng,
+            config.initial_rotation_deg.to_radians() / 3f64.sqrt(),
+        ));
     let mut p = c + gaussian(&mut rng, config.initial_translation / 3f64.sqrt());
     let mut clean = Vec::with_capacity(config.poses);
     for k in 0..config.poses {
@@ -121,16 +135,27 @@ pub fn simulate(config: &SimConfig, seed: u64, series: u64) -> SimSeries {
         let target_from_camera = target_from_base * base_from_gripper * x;
         clean.push((base_from_gripper, target_from_camera));
     }
-    let noisy_q: Vec<Transform> =
-        clean.iter().map(|(q, _)| add_noise(&mut rng, q, config)).collect();
-    let noisy_p: Vec<Transform> =
-        clean.iter().map(|(_, pc)| add_noise(&mut rng, pc, config)).collect();
+    let noisy_q: Vec<Transform> = clean
+        .iter()
+        .map(|(q, _)| add_noise(&mut rng, q, config))
+        .collect();
+    let noisy_p: Vec<Transform> = clean
+        .iter()
+        .map(|(_, pc)| add_noise(&mut rng, pc, config))
+        .collect();
     let poses = noisy_q
         .into_iter()
         .zip(noisy_p)
-        .map(|(q, pc)| PosePair { base_from_gripper: q, camera_from_target: pc.inverse() })
+        .map(|(q, pc)| PosePair {
+            base_from_gripper: q,
+            camera_from_target: pc.inverse(),
+        })
         .collect();
-    SimSeries { poses, gripper_from_camera: x, base_from_target }
+    SimSeries {
+        poses,
+        gripper_from_camera: x,
+        base_from_target,
+    }
 }
 
 /// A rotation drawn uniformly from SO(3) (a normalised Gaussian quaternion).
@@ -141,7 +166,9 @@ pub fn random_rotation(rng: &mut impl Rng) -> Matrix3<f64> {
         StandardNormal.sample(rng),
         StandardNormal.sample(rng),
     );
-    *nalgebra::UnitQuaternion::from_quaternion(q).to_rotation_matrix().matrix()
+    *nalgebra::UnitQuaternion::from_quaternion(q)
+        .to_rotation_matrix()
+        .matrix()
 }
 
 /// X: uniform rotation; translation of uniform direction and length U(lo, hi).
@@ -153,7 +180,11 @@ fn random_x(rng: &mut impl Rng, (lo, hi): (f64, f64)) -> Transform {
             break v.normalize();
         }
     };
-    let len = if hi > lo { rng.random_range(lo..hi) } else { lo };
+    let len = if hi > lo {
+        rng.random_range(lo..hi)
+    } else {
+        lo
+    };
     transform_from_parts(&r, &(dir * len))
 }
 
@@ -164,7 +195,10 @@ fn target_in_front(base_from_gripper: &Transform, x: &Transform, standoff: f64) 
     let centre = base_from_camera * nalgebra::Point3::new(0.0, 0.0, standoff);
     let flip = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
     let r = base_from_camera.rotation.matrix() * flip;
-    Transform::from_parts(Translation3::from(centre.coords), nalgebra::Rotation3::from_matrix_unchecked(r))
+    Transform::from_parts(
+        Translation3::from(centre.coords),
+        nalgebra::Rotation3::from_matrix_unchecked(r),
+    )
 }
 
 /// A vector of independent N(0, σ²) components.

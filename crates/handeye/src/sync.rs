@@ -37,7 +37,10 @@ pub struct SyncOptions {
 
 impl Default for SyncOptions {
     fn default() -> Self {
-        Self { time_offset: 0.0, max_gap: 0.1 }
+        Self {
+            time_offset: 0.0,
+            max_gap: 0.1,
+        }
     }
 }
 
@@ -84,7 +87,11 @@ pub fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Lookup {
     if span > max_gap {
         return Lookup::Gap;
     }
-    let s = if span > 0.0 { (t - a.stamp) / span } else { 0.0 };
+    let s = if span > 0.0 {
+        (t - a.stamp) / span
+    } else {
+        0.0
+    };
     let qa = UnitQuaternion::from_rotation_matrix(&a.pose.rotation);
     let mut qb = UnitQuaternion::from_rotation_matrix(&b.pose.rotation);
     // q and −q are the same rotation: take the one on qa's side, so slerp takes the short way.
@@ -92,21 +99,37 @@ pub fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Lookup {
         qb = UnitQuaternion::new_unchecked(-qb.into_inner());
     }
     let q = qa.slerp(&qb, s);
-    let p = a.pose.translation.vector.lerp(&b.pose.translation.vector, s);
+    let p = a
+        .pose
+        .translation
+        .vector
+        .lerp(&b.pose.translation.vector, s);
     Lookup::Pose(transform_from_parts(q.to_rotation_matrix().matrix(), &p))
 }
 
 /// Pairs each camera sample (`camera_from_target`) with the robot pose (`base_from_gripper`)
 /// interpolated at its stamp. Both streams must be sorted by stamp.
-pub fn pair_streams(robot: &[StampedPose], camera: &[StampedPose], options: &SyncOptions) -> Synced {
-    let mut out = Synced { stamps: Vec::new(), pairs: Vec::new(), dropped_outside: 0, dropped_gap: 0 };
+pub fn pair_streams(
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+    options: &SyncOptions,
+) -> Synced {
+    let mut out = Synced {
+        stamps: Vec::new(),
+        pairs: Vec::new(),
+        dropped_outside: 0,
+        dropped_gap: 0,
+    };
     for c in camera {
         match interpolate(robot, c.stamp - options.time_offset, options.max_gap) {
             Lookup::Outside => out.dropped_outside += 1,
             Lookup::Gap => out.dropped_gap += 1,
             Lookup::Pose(base_from_gripper) => {
                 out.stamps.push(c.stamp);
-                out.pairs.push(PosePair { base_from_gripper, camera_from_target: c.pose });
+                out.pairs.push(PosePair {
+                    base_from_gripper,
+                    camera_from_target: c.pose,
+                });
             }
         }
     }
@@ -125,7 +148,10 @@ pub struct OffsetOptions {
 
 impl Default for OffsetOptions {
     fn default() -> Self {
-        Self { max_offset: 1.0, step: 0.0 }
+        Self {
+            max_offset: 1.0,
+            step: 0.0,
+        }
     }
 }
 
@@ -148,11 +174,20 @@ pub fn estimate_time_offset(
     camera: &[StampedPose],
     options: &OffsetOptions,
 ) -> Result<OffsetEstimate> {
-    let bad = |message: &str| Err(Error::InvalidParameter { name: "time_offset", message: message.to_string() });
+    let bad = |message: &str| {
+        Err(Error::InvalidParameter {
+            name: "time_offset",
+            message: message.to_string(),
+        })
+    };
     if robot.len() < 4 || camera.len() < 4 {
         return bad("too few samples to estimate a time offset (need at least 4 in each stream)");
     }
-    let step = if options.step > 0.0 { options.step } else { median_period(camera) / 2.0 };
+    let step = if options.step > 0.0 {
+        options.step
+    } else {
+        median_period(camera) / 2.0
+    };
     if !(step.is_finite() && step > 0.0) {
         return bad("camera stamps do not increase");
     }
@@ -174,7 +209,9 @@ pub fn estimate_time_offset(
         }
     }
     let Some((lag, score)) = best else {
-        return bad("the streams overlap too little, or neither rotates, within the offsets searched");
+        return bad(
+            "the streams overlap too little, or neither rotates, within the offsets searched",
+        );
     };
     // Parabolic refinement through the neighbouring scores.
     let k = (lag + max_lag) as usize;
@@ -187,12 +224,19 @@ pub fn estimate_time_offset(
             offset += 0.5 * (l - r) / denom * step;
         }
     }
-    Ok(OffsetEstimate { offset, correlation: score })
+    Ok(OffsetEstimate {
+        offset,
+        correlation: score,
+    })
 }
 
 /// Median difference of consecutive stamps.
 fn median_period(s: &[StampedPose]) -> f64 {
-    let mut d: Vec<f64> = s.windows(2).map(|w| w[1].stamp - w[0].stamp).filter(|d| *d > 0.0).collect();
+    let mut d: Vec<f64> = s
+        .windows(2)
+        .map(|w| w[1].stamp - w[0].stamp)
+        .filter(|d| *d > 0.0)
+        .collect();
     if d.is_empty() {
         return f64::NAN;
     }
@@ -267,7 +311,11 @@ mod tests {
     fn trajectory(t: f64) -> (Transform, Transform) {
         let q = Transform::new(
             Vector3::new(0.3 * (0.7 * t).sin(), 0.2 * (1.1 * t).cos(), 0.5),
-            Vector3::new(0.6 * (0.9 * t).sin(), 0.4 * (1.7 * t).sin(), 0.3 * (0.5 * t).cos()),
+            Vector3::new(
+                0.6 * (0.9 * t).sin(),
+                0.4 * (1.7 * t).sin(),
+                0.3 * (0.5 * t).cos(),
+            ),
         );
         let x = Transform::new(Vector3::new(0.05, 0.0, 0.1), Vector3::new(0.1, 0.2, 0.3));
         let base_from_target = Transform::new(Vector3::new(0.0, 0.0, -0.5), Vector3::zeros());
@@ -277,12 +325,18 @@ mod tests {
     fn streams(offset: f64) -> (Vec<StampedPose>, Vec<StampedPose>) {
         let robot = (0..3000).map(|k| {
             let t = k as f64 * 0.01;
-            StampedPose { stamp: t, pose: trajectory(t).0 }
+            StampedPose {
+                stamp: t,
+                pose: trajectory(t).0,
+            }
         });
         // The camera samples at 30 Hz; its clock reads robot time + offset.
         let camera = (0..800).map(|k| {
             let t = 1.0 + k as f64 / 30.0;
-            StampedPose { stamp: t + offset, pose: trajectory(t).1 }
+            StampedPose {
+                stamp: t + offset,
+                pose: trajectory(t).1,
+            }
         });
         (robot.collect(), camera.collect())
     }
@@ -295,8 +349,11 @@ mod tests {
         for (t, p) in synced.stamps.iter().zip(&synced.pairs) {
             let truth = trajectory(*t).0;
             // Linear interpolation over 10 ms of a smooth motion.
-            assert!((p.base_from_gripper.translation.vector - truth.translation.vector).norm() < 1e-4);
-            let e = crate::pose::rotation_angle_between(&p.base_from_gripper.rotation, &truth.rotation);
+            assert!(
+                (p.base_from_gripper.translation.vector - truth.translation.vector).norm() < 1e-4
+            );
+            let e =
+                crate::pose::rotation_angle_between(&p.base_from_gripper.rotation, &truth.rotation);
             assert!(e < 1e-4, "t {t}: rotation off by {e}");
         }
     }
@@ -306,9 +363,19 @@ mod tests {
         let (mut robot, camera) = streams(0.0);
         robot.retain(|s| !(10.0..10.5).contains(&s.stamp));
         let synced = pair_streams(&robot, &camera, &SyncOptions::default());
-        assert!(synced.dropped_gap >= 14 && synced.dropped_gap <= 16, "{}", synced.dropped_gap);
-        let late = [StampedPose { stamp: 100.0, pose: Transform::identity() }];
-        assert_eq!(pair_streams(&robot, &late, &SyncOptions::default()).dropped_outside, 1);
+        assert!(
+            synced.dropped_gap >= 14 && synced.dropped_gap <= 16,
+            "{}",
+            synced.dropped_gap
+        );
+        let late = [StampedPose {
+            stamp: 100.0,
+            pose: Transform::identity(),
+        }];
+        assert_eq!(
+            pair_streams(&robot, &late, &SyncOptions::default()).dropped_outside,
+            1
+        );
     }
 
     #[test]
@@ -316,14 +383,23 @@ mod tests {
         for offset in [-0.37, 0.0, 0.137, 0.5] {
             let (robot, camera) = streams(offset);
             let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default()).unwrap();
-            assert!((e.offset - offset).abs() < 1.0 / 30.0, "offset {offset}: estimated {}", e.offset);
+            assert!(
+                (e.offset - offset).abs() < 1.0 / 30.0,
+                "offset {offset}: estimated {}",
+                e.offset
+            );
             assert!(e.correlation > 0.9);
         }
     }
 
     #[test]
     fn a_still_stream_has_no_offset() {
-        let still: Vec<_> = (0..100).map(|k| StampedPose { stamp: k as f64 * 0.01, pose: Transform::identity() }).collect();
+        let still: Vec<_> = (0..100)
+            .map(|k| StampedPose {
+                stamp: k as f64 * 0.01,
+                pose: Transform::identity(),
+            })
+            .collect();
         assert!(estimate_time_offset(&still, &still, &OffsetOptions::default()).is_err());
     }
 }

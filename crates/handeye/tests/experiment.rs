@@ -5,17 +5,27 @@ use handeye::experiment::{Experiment, ExperimentConfig, run_experiment};
 use serde_json::Value;
 
 fn run(experiment: Experiment, series: usize) -> Value {
-    let config = ExperimentConfig { series, ..ExperimentConfig::for_experiment(experiment) };
+    let config = ExperimentConfig {
+        series,
+        ..ExperimentConfig::for_experiment(experiment)
+    };
     let report = run_experiment(experiment, &config, || {}).expect("experiment");
     serde_json::to_value(&report).expect("serialisable")
 }
 
 fn method<'a>(report: &'a Value, name: &str) -> &'a Value {
-    report["methods"].as_array().unwrap().iter().find(|m| m["method"] == name).unwrap_or_else(|| panic!("{name}"))
+    report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["method"] == name)
+        .unwrap_or_else(|| panic!("{name}"))
 }
 
 fn num(m: &Value, key: &str) -> f64 {
-    m[key].as_f64().unwrap_or_else(|| panic!("{key} in {}", m["method"]))
+    m[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} in {}", m["method"]))
 }
 
 #[test]
@@ -70,9 +80,18 @@ fn realtime_adaptive_is_fast_and_optimal_is_at_least_as_accurate() {
 
 #[test]
 fn results_do_not_depend_on_the_number_of_threads() {
-    let config = ExperimentConfig { series: 6, ..ExperimentConfig::for_experiment(Experiment::Accuracy) };
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+    let config = ExperimentConfig {
+        series: 6,
+        ..ExperimentConfig::for_experiment(Experiment::Accuracy)
+    };
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let three = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap();
     let strip = |v: Value| {
         // Times differ from run to run; everything else must be identical.
         let mut v = v;
@@ -84,7 +103,11 @@ fn results_do_not_depend_on_the_number_of_threads() {
         }
         v
     };
-    let a = one.install(|| serde_json::to_value(run_experiment(Experiment::Accuracy, &config, || {}).unwrap()).unwrap());
-    let b = three.install(|| serde_json::to_value(run_experiment(Experiment::Accuracy, &config, || {}).unwrap()).unwrap());
+    let a = one.install(|| {
+        serde_json::to_value(run_experiment(Experiment::Accuracy, &config, || {}).unwrap()).unwrap()
+    });
+    let b = three.install(|| {
+        serde_json::to_value(run_experiment(Experiment::Accuracy, &config, || {}).unwrap()).unwrap()
+    });
     assert_eq!(strip(a), strip(b));
 }

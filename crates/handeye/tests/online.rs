@@ -11,7 +11,10 @@ use nalgebra::Vector3;
 fn config(selection: Selection, truth: Transform, optimal: bool) -> OnlineConfig {
     OnlineConfig {
         selection,
-        params: AdaptiveParams { d_max: 100.0, ..AdaptiveParams::default() },
+        params: AdaptiveParams {
+            d_max: 100.0,
+            ..AdaptiveParams::default()
+        },
         error_source: ErrorSource::Truth,
         truth: Some(truth),
         optimal,
@@ -36,7 +39,14 @@ fn timeless(events: &[Event]) -> Vec<Event> {
 
 #[test]
 fn a_restored_calibrator_continues_exactly() {
-    let s = simulate(&SimConfig { poses: 300, ..SimConfig::default() }, 11, 0);
+    let s = simulate(
+        &SimConfig {
+            poses: 300,
+            ..SimConfig::default()
+        },
+        11,
+        0,
+    );
     for selection in [Selection::None, Selection::Fixed, Selection::Adaptive] {
         let cfg = config(selection, s.gripper_from_camera, true);
         let all = timeless(&run_series(cfg, &s.poses).unwrap());
@@ -53,22 +63,40 @@ fn a_restored_calibrator_continues_exactly() {
             for p in &s.poses[k..] {
                 events.extend(restored.push(p).unwrap());
             }
-            assert_eq!(timeless(&events), all, "{selection} restored after pose {k}");
+            assert_eq!(
+                timeless(&events),
+                all,
+                "{selection} restored after pose {k}"
+            );
         }
     }
 }
 
 /// A gripper that keeps moving, cheaply, for long streams.
 fn endless_walk(n: usize) -> impl Iterator<Item = PosePair> {
-    let x = Transform::new(Vector3::new(20.0, -30.0, 40.0), Vector3::new(0.3, -0.2, 0.5));
+    let x = Transform::new(
+        Vector3::new(20.0, -30.0, 40.0),
+        Vector3::new(0.3, -0.2, 0.5),
+    );
     let target = Transform::new(Vector3::new(0.0, 0.0, 500.0), Vector3::new(3.0, 0.0, 0.0));
     (0..n).map(move |k| {
         let t = k as f64;
         let q = Transform::new(
-            Vector3::new((t * 0.37).sin() * 20.0, (t * 0.23).cos() * 20.0, (t * 0.11).sin() * 10.0),
-            Vector3::new((t * 0.71).sin() * 0.4, (t * 0.53).cos() * 0.4, (t * 0.29).sin() * 0.4),
+            Vector3::new(
+                (t * 0.37).sin() * 20.0,
+                (t * 0.23).cos() * 20.0,
+                (t * 0.11).sin() * 10.0,
+            ),
+            Vector3::new(
+                (t * 0.71).sin() * 0.4,
+                (t * 0.53).cos() * 0.4,
+                (t * 0.29).sin() * 0.4,
+            ),
         );
-        PosePair { base_from_gripper: q, camera_from_target: (target.inverse() * q * x).inverse() }
+        PosePair {
+            base_from_gripper: q,
+            camera_from_target: (target.inverse() * q * x).inverse(),
+        }
     })
 }
 
@@ -85,8 +113,16 @@ fn numbers_in(v: &serde_json::Value) -> usize {
 #[test]
 fn memory_stays_constant_over_a_million_poses() {
     for selection in [Selection::None, Selection::Fixed, Selection::Adaptive] {
-        let cfg = OnlineConfig { selection, optimal: true, ..config(selection, Transform::identity(), true) };
-        let cfg = OnlineConfig { error_source: ErrorSource::Residual, truth: None, ..cfg };
+        let cfg = OnlineConfig {
+            selection,
+            optimal: true,
+            ..config(selection, Transform::identity(), true)
+        };
+        let cfg = OnlineConfig {
+            error_source: ErrorSource::Residual,
+            truth: None,
+            ..cfg
+        };
         let mut c = OnlineCalibrator::new(cfg).unwrap();
         let mut sizes = Vec::new();
         for (k, p) in endless_walk(1_000_000).enumerate() {
@@ -95,10 +131,18 @@ fn memory_stays_constant_over_a_million_poses() {
                 sizes.push(numbers_in(&serde_json::to_value(&c).unwrap()));
             }
         }
-        assert!(c.calibrations() > 100, "{selection}: {} calibrations", c.calibrations());
+        assert!(
+            c.calibrations() > 100,
+            "{selection}: {} calibrations",
+            c.calibrations()
+        );
         // The state holds only fixed-size records: the number of values it serialises does not
         // grow with the stream.
-        assert_eq!(sizes[0], sizes[1], "{selection}: state grew from {} to {} numbers", sizes[0], sizes[1]);
+        assert_eq!(
+            sizes[0], sizes[1],
+            "{selection}: state grew from {} to {} numbers",
+            sizes[0], sizes[1]
+        );
     }
 }
 
@@ -106,15 +150,29 @@ fn memory_stays_constant_over_a_million_poses() {
 fn thresholds_relax_after_interval_failed_candidates() {
     let pose = |axis_angle: Vector3<f64>, x: f64| {
         let q = Transform::new(Vector3::new(x, 0.0, 0.0), axis_angle);
-        PosePair { base_from_gripper: q, camera_from_target: q.inverse() }
+        PosePair {
+            base_from_gripper: q,
+            camera_from_target: q.inverse(),
+        }
     };
-    let params = AdaptiveParams { d_max: 100.0, ..AdaptiveParams::default() };
-    let mut c = OnlineCalibrator::new(OnlineConfig { params, ..OnlineConfig::default() }).unwrap();
+    let params = AdaptiveParams {
+        d_max: 100.0,
+        ..AdaptiveParams::default()
+    };
+    let mut c = OnlineCalibrator::new(OnlineConfig {
+        params,
+        ..OnlineConfig::default()
+    })
+    .unwrap();
     // Poses 1–5 rotate about alternating axes (so Eq. (1) gives positive thresholds); pose 5 is
     // unrotated, and so is every later pose, at the same place: every A' candidate has θ' = 0
     // (fails β₀) and d' = 0 (passes d₀).
     for k in 0..4 {
-        let a = if k % 2 == 0 { Vector3::new(0.2, 0.0, 0.0) } else { Vector3::new(0.0, 0.2, 0.0) };
+        let a = if k % 2 == 0 {
+            Vector3::new(0.2, 0.0, 0.0)
+        } else {
+            Vector3::new(0.0, 0.2, 0.0)
+        };
         c.push(&pose(a, k as f64)).unwrap();
     }
     c.push(&pose(Vector3::zeros(), 4.0)).unwrap();
@@ -123,33 +181,59 @@ fn thresholds_relax_after_interval_failed_candidates() {
         c.push(&pose(Vector3::zeros(), 4.0)).unwrap();
         trace.push(c.thresholds().unwrap());
     }
-    let beta0 = trace[0].beta / if params.interval == 1 { params.relax_down } else { 1.0 };
+    let beta0 = trace[0].beta
+        / if params.interval == 1 {
+            params.relax_down
+        } else {
+            1.0
+        };
     for (n, t) in trace.iter().enumerate() {
         // Candidate i = 6 + n; start = 6, so after candidates 10, 15, 20 and 25 (i − start + 1 =
         // interval) β₀ is relaxed once more, and d₀ never is.
         let relaxations = (n + 1) / params.interval;
         let expected = beta0 * params.relax_down.powi(relaxations as i32);
-        assert!((t.beta - expected).abs() <= 1e-12 * beta0, "candidate {}: β₀ {} expected {expected}", n + 6, t.beta);
-        assert_eq!(t.d, trace[0].d, "d₀ must not move: every translation passes");
-        assert_eq!(t.sin_alpha, trace[0].sin_alpha, "sin α₀ is not tested while searching A'");
+        assert!(
+            (t.beta - expected).abs() <= 1e-12 * beta0,
+            "candidate {}: β₀ {} expected {expected}",
+            n + 6,
+            t.beta
+        );
+        assert_eq!(
+            t.d, trace[0].d,
+            "d₀ must not move: every translation passes"
+        );
+        assert_eq!(
+            t.sin_alpha, trace[0].sin_alpha,
+            "sin α₀ is not tested while searching A'"
+        );
     }
     assert_eq!(c.calibrations(), 0);
 }
 
 #[test]
 fn equal_records_lock_a_threshold_unless_unfrozen() {
-    let t = Thresholds { sin_alpha: 0.5, beta: 0.1, d: 10.0 };
+    let t = Thresholds {
+        sin_alpha: 0.5,
+        beta: 0.1,
+        d: 10.0,
+    };
     let records: [Record; 4] = std::array::from_fn(|n| Record {
         thresholds: t,
         rms_r: 0.001 * (n + 1) as f64,
         rms_t: 0.01 * (n + 2) as f64,
     });
-    let faithful = AdaptiveParams { d_max: 100.0, ..AdaptiveParams::default() };
+    let faithful = AdaptiveParams {
+        d_max: 100.0,
+        ..AdaptiveParams::default()
+    };
     let locked = predict(&records, t, &faithful);
     assert!((locked.sin_alpha - t.sin_alpha).abs() < 1e-12);
     assert!((locked.beta - t.beta).abs() < 1e-12);
     assert!((locked.d - t.d).abs() < 1e-9);
-    let remedy = AdaptiveParams { unfreeze: true, ..faithful };
+    let remedy = AdaptiveParams {
+        unfreeze: true,
+        ..faithful
+    };
     let moved = predict(&records, t, &remedy);
     assert!((moved.sin_alpha - t.sin_alpha * 1.1).abs() < 1e-12);
     assert!((moved.beta - t.beta * 1.1).abs() < 1e-12);
@@ -169,8 +253,16 @@ fn adaptive_selection_beats_the_conventional_method() {
                 (acc.0 + err.rot_fro / n, acc.1 + err.trans_rel / n)
             })
         };
-        let c = run_series(config(Selection::None, sim.gripper_from_camera, false), &sim.poses).unwrap();
-        let a = run_series(config(Selection::Adaptive, sim.gripper_from_camera, false), &sim.poses).unwrap();
+        let c = run_series(
+            config(Selection::None, sim.gripper_from_camera, false),
+            &sim.poses,
+        )
+        .unwrap();
+        let a = run_series(
+            config(Selection::Adaptive, sim.gripper_from_camera, false),
+            &sim.poses,
+        )
+        .unwrap();
         if a.is_empty() {
             continue;
         }
@@ -182,13 +274,27 @@ fn adaptive_selection_beats_the_conventional_method() {
     }
     assert!(series >= 4);
     println!("conventional {conv:?}, adaptive {adapt:?} over {series} series");
-    assert!(adapt.0 < 0.5 * conv.0, "rotation: adaptive {} vs conventional {}", adapt.0, conv.0);
-    assert!(adapt.1 < 0.5 * conv.1, "translation: adaptive {} vs conventional {}", adapt.1, conv.1);
+    assert!(
+        adapt.0 < 0.5 * conv.0,
+        "rotation: adaptive {} vs conventional {}",
+        adapt.0,
+        conv.0
+    );
+    assert!(
+        adapt.1 < 0.5 * conv.1,
+        "translation: adaptive {} vs conventional {}",
+        adapt.1,
+        conv.1
+    );
 }
 
 #[test]
 fn truth_error_source_needs_a_truth() {
-    let cfg = OnlineConfig { error_source: ErrorSource::Truth, truth: None, ..OnlineConfig::default() };
+    let cfg = OnlineConfig {
+        error_source: ErrorSource::Truth,
+        truth: None,
+        ..OnlineConfig::default()
+    };
     assert!(OnlineCalibrator::new(cfg).is_err());
 }
 

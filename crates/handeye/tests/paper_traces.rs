@@ -36,7 +36,11 @@ fn sensitivity(records: &[Record; 4], params: &AdaptiveParams) -> f64 {
                 _ => r[n].thresholds.d *= 1.0 + h,
             }
             let p = predict(&r, r[3].thresholds, params);
-            for (a, b) in [(p.sin_alpha, base.sin_alpha), (p.beta, base.beta), (p.d, base.d)] {
+            for (a, b) in [
+                (p.sin_alpha, base.sin_alpha),
+                (p.beta, base.beta),
+                (p.d, base.d),
+            ] {
                 worst = worst.max(relative(a, b) / h);
             }
         }
@@ -71,7 +75,10 @@ fn series() -> Vec<Series> {
         .filter_map(|n| n.strip_suffix(".expected.json").map(str::to_string))
         .collect();
     names.sort();
-    assert!(names.len() >= 4, "expected the four fixture series, found {names:?}");
+    assert!(
+        names.len() >= 4,
+        "expected the four fixture series, found {names:?}"
+    );
     names
         .into_iter()
         .map(|name| {
@@ -88,13 +95,20 @@ fn series() -> Vec<Series> {
                     }
                 })
                 .collect();
-            let truth: Value =
-                serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{name}.truth.json"))).unwrap())
-                    .unwrap();
-            let expected =
-                serde_json::from_str(&std::fs::read_to_string(dir.join(format!("{name}.expected.json"))).unwrap())
-                    .unwrap();
-            Series { name, poses, truth: transform(&truth["gripper_from_camera"]["matrix"]), expected }
+            let truth: Value = serde_json::from_str(
+                &std::fs::read_to_string(dir.join(format!("{name}.truth.json"))).unwrap(),
+            )
+            .unwrap();
+            let expected = serde_json::from_str(
+                &std::fs::read_to_string(dir.join(format!("{name}.expected.json"))).unwrap(),
+            )
+            .unwrap();
+            Series {
+                name,
+                poses,
+                truth: transform(&truth["gripper_from_camera"]["matrix"]),
+                expected,
+            }
         })
         .collect()
 }
@@ -141,7 +155,9 @@ fn run(s: &Series, selection: Selection, optimal: bool) -> Vec<Event> {
 fn x_difference(x: &Transform, expected: &Value) -> f64 {
     let e = matrix(expected);
     let m = x.to_homogeneous();
-    let rot = (m.fixed_view::<3, 3>(0, 0) - e.fixed_view::<3, 3>(0, 0)).abs().max();
+    let rot = (m.fixed_view::<3, 3>(0, 0) - e.fixed_view::<3, 3>(0, 0))
+        .abs()
+        .max();
     let t_norm = e.fixed_view::<3, 1>(0, 3).norm();
     let trans = (m.fixed_view::<3, 1>(0, 3) - e.fixed_view::<3, 1>(0, 3)).norm() / t_norm;
     rot.max(trans)
@@ -180,16 +196,27 @@ fn check_events(s: &Series, method: &str, events: &[Event], with_thresholds: boo
                 // prediction (rms values and earlier thresholds), plus the solve's own ε·κ.
                 let records: [Record; 4] = std::array::from_fn(|n| record_of(&expected[k - 4 + n]));
                 let inputs = worst_rms.max(worst_threshold);
-                1e-9 + SOLVE_EPS * condition(&records) + 2.0 * sensitivity(&records, &params(&s.expected).0) * inputs
+                1e-9 + SOLVE_EPS * condition(&records)
+                    + 2.0 * sensitivity(&records, &params(&s.expected).0) * inputs
             };
             for (ours, key) in [(t.sin_alpha, "sin_alpha"), (t.beta, "beta"), (t.d, "d")] {
                 let d = relative(ours, xt[key].as_f64().unwrap());
-                assert!(d <= tol, "{} {method} #{}: threshold {key} differs by {d:e} (allowed {tol:e})", s.name, e.calibration);
+                assert!(
+                    d <= tol,
+                    "{} {method} #{}: threshold {key} differs by {d:e} (allowed {tol:e})",
+                    s.name,
+                    e.calibration
+                );
                 worst_threshold = worst_threshold.max(d);
             }
             for (ours, key) in [(e.rms.rms_r, "rms_r"), (e.rms.rms_t, "rms_t")] {
                 let d = relative(ours, x[key].as_f64().unwrap());
-                assert!(d <= 1e-11, "{} {method} #{}: {key} differs by {d:e}", s.name, e.calibration);
+                assert!(
+                    d <= 1e-11,
+                    "{} {method} #{}: {key} differs by {d:e}",
+                    s.name,
+                    e.calibration
+                );
                 worst_rms = worst_rms.max(d);
             }
         }
@@ -244,11 +271,18 @@ fn optimal_reproduces_the_fixtures() {
             let diff = (o.x.to_homogeneous() - e).abs().max() / e.abs().max();
             worst = worst.max(diff);
         }
-        assert!(worst <= 2e-6, "{}: optimal X differs by {worst:e} of its largest entry", s.name);
-        println!("{} optimal: {} results, worst X difference {worst:.2e} of the largest entry", s.name, ours.len());
+        assert!(
+            worst <= 2e-6,
+            "{}: optimal X differs by {worst:e} of its largest entry",
+            s.name
+        );
+        println!(
+            "{} optimal: {} results, worst X difference {worst:.2e} of the largest entry",
+            s.name,
+            ours.len()
+        );
     }
 }
-
 
 fn record_of(e: &Value) -> Record {
     let t = &e["thresholds"];
@@ -278,17 +312,32 @@ fn prediction_reproduces_the_fixture_thresholds() {
             let predicted = predict(&records, records[3].thresholds, &params);
             let next = record_of(&events[k + 1]).thresholds;
             for (p, e, factor, key) in [
-                (predicted.sin_alpha, next.sin_alpha, params.relax_down, "sin_alpha"),
+                (
+                    predicted.sin_alpha,
+                    next.sin_alpha,
+                    params.relax_down,
+                    "sin_alpha",
+                ),
                 (predicted.beta, next.beta, params.relax_down, "beta"),
                 (predicted.d, next.d, params.relax_up, "d"),
             ] {
                 let steps = ((e / p).ln() / factor.ln()).round();
-                assert!(steps >= 0.0, "{} #{}: {key} moved against relaxation", s.name, k + 2);
+                assert!(
+                    steps >= 0.0,
+                    "{} #{}: {key} moved against relaxation",
+                    s.name,
+                    k + 2
+                );
                 let d = relative(p * factor.powf(steps), e);
                 // A backward-stable solve of Eq. (3) is accurate to about ε·κ(L): two correct
                 // implementations that round differently differ by that much.
                 let tol = 1e-9 + SOLVE_EPS * condition(&records);
-                assert!(d <= tol, "{} #{}: predicted {key} differs by {d:e} (allowed {tol:e})", s.name, k + 2);
+                assert!(
+                    d <= tol,
+                    "{} #{}: predicted {key} differs by {d:e} (allowed {tol:e})",
+                    s.name,
+                    k + 2
+                );
             }
             checked += 1;
         }
@@ -317,7 +366,11 @@ fn the_regression_amplifies_rounding() {
                         r[n].rms_t *= 1.0 + 1e-13;
                     }
                     let p = predict(&r, records[3].thresholds, &params);
-                    for (a, b) in [(p.sin_alpha, base.sin_alpha), (p.beta, base.beta), (p.d, base.d)] {
+                    for (a, b) in [
+                        (p.sin_alpha, base.sin_alpha),
+                        (p.beta, base.beta),
+                        (p.d, base.d),
+                    ] {
                         worst = worst.max(relative(a, b) / 1e-13);
                     }
                 }

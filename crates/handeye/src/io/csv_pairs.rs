@@ -32,7 +32,10 @@ pub struct CsvPairs<R: BufRead> {
 impl<R: BufRead> CsvPairs<R> {
     /// Reads the header of `input` (named `source` in messages) and finds the pose columns.
     pub fn new(input: R, source: &str) -> Result<Self> {
-        let mut reader = csv::ReaderBuilder::new().trim(csv::Trim::All).comment(Some(b'#')).from_reader(input);
+        let mut reader = csv::ReaderBuilder::new()
+            .trim(csv::Trim::All)
+            .comment(Some(b'#'))
+            .from_reader(input);
         let header = reader
             .headers()
             .map_err(|e| parse_error(source, 1, "-", format!("cannot read the CSV header: {e}")))?
@@ -40,22 +43,47 @@ impl<R: BufRead> CsvPairs<R> {
         let names: Vec<&str> = header.iter().collect();
         let known = |n: &str| {
             n == "stamp"
-                || ROBOT_FRAMES.iter().chain(&CAMERA_FRAMES).any(|(f, _)| SUFFIXES.iter().any(|s| n == format!("{f}_{s}")))
+                || ROBOT_FRAMES
+                    .iter()
+                    .chain(&CAMERA_FRAMES)
+                    .any(|(f, _)| SUFFIXES.iter().any(|s| n == format!("{f}_{s}")))
         };
         if let Some(unknown) = names.iter().find(|n| !known(n)) {
-            return Err(parse_error(source, 1, *unknown, "unknown column: expected `stamp` and `<frame>_x … <frame>_qw` with frame base_from_gripper, gripper_from_base, camera_from_target or target_from_camera"));
+            return Err(parse_error(
+                source,
+                1,
+                *unknown,
+                "unknown column: expected `stamp` and `<frame>_x … <frame>_qw` with frame base_from_gripper, gripper_from_base, camera_from_target or target_from_camera",
+            ));
         }
         let stamp = names.iter().position(|n| *n == "stamp");
         let robot = pose_columns(&names, &ROBOT_FRAMES, source)?;
         let camera = pose_columns(&names, &CAMERA_FRAMES, source)?;
-        Ok(Self { reader, source: source.to_string(), stamp, robot, camera, record: csv::StringRecord::new() })
+        Ok(Self {
+            reader,
+            source: source.to_string(),
+            stamp,
+            robot,
+            camera,
+            record: csv::StringRecord::new(),
+        })
     }
 
     fn parse(&self, line: usize) -> Result<StampedPosePair> {
-        let stamp = self.stamp.map(|k| self.number(k, "stamp", line)).transpose()?;
+        let stamp = self
+            .stamp
+            .map(|k| self.number(k, "stamp", line))
+            .transpose()?;
         let base_from_gripper = self.pose(&self.robot, line)?;
         let camera_from_target = self.pose(&self.camera, line)?;
-        Ok(StampedPosePair { line, stamp, pose: PosePair { base_from_gripper, camera_from_target } })
+        Ok(StampedPosePair {
+            line,
+            stamp,
+            pose: PosePair {
+                base_from_gripper,
+                camera_from_target,
+            },
+        })
     }
 
     fn number(&self, column: usize, field: &str, line: usize) -> Result<f64> {
@@ -63,7 +91,14 @@ impl<R: BufRead> CsvPairs<R> {
         text.parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
-            .ok_or_else(|| parse_error(&self.source, line, field, format!("expected a finite number, found `{text}`")))
+            .ok_or_else(|| {
+                parse_error(
+                    &self.source,
+                    line,
+                    field,
+                    format!("expected a finite number, found `{text}`"),
+                )
+            })
     }
 
     fn pose(&self, p: &PoseColumns, line: usize) -> Result<Transform> {
@@ -78,23 +113,56 @@ impl<R: BufRead> CsvPairs<R> {
 }
 
 /// Finds the 7 columns of exactly one of two alternative frame names.
-fn pose_columns(names: &[&str], frames: &[(&'static str, bool); 2], source: &str) -> Result<PoseColumns> {
+fn pose_columns(
+    names: &[&str],
+    frames: &[(&'static str, bool); 2],
+    source: &str,
+) -> Result<PoseColumns> {
     let mut found = Vec::new();
     for &(frame, inverted) in frames {
-        let columns: Vec<Option<usize>> =
-            SUFFIXES.iter().map(|s| names.iter().position(|n| *n == format!("{frame}_{s}"))).collect();
+        let columns: Vec<Option<usize>> = SUFFIXES
+            .iter()
+            .map(|s| names.iter().position(|n| *n == format!("{frame}_{s}")))
+            .collect();
         if columns.iter().any(Option::is_some) {
             let mut out = [0; 7];
             for (k, c) in columns.iter().enumerate() {
-                out[k] = c.ok_or_else(|| parse_error(source, 1, format!("{frame}_{}", SUFFIXES[k]), "missing column"))?;
+                out[k] = c.ok_or_else(|| {
+                    parse_error(
+                        source,
+                        1,
+                        format!("{frame}_{}", SUFFIXES[k]),
+                        "missing column",
+                    )
+                })?;
             }
-            found.push(PoseColumns { name: frame, columns: out, inverted });
+            found.push(PoseColumns {
+                name: frame,
+                columns: out,
+                inverted,
+            });
         }
     }
     match found.len() {
         1 => Ok(found.remove(0)),
-        0 => Err(parse_error(source, 1, format!("{}_x", frames[0].0), format!("missing: give the `{}_*` or `{}_*` columns", frames[0].0, frames[1].0))),
-        _ => Err(parse_error(source, 1, frames[0].0, format!("both `{}_*` and `{}_*` columns given: give one", frames[0].0, frames[1].0))),
+        0 => Err(parse_error(
+            source,
+            1,
+            format!("{}_x", frames[0].0),
+            format!(
+                "missing: give the `{}_*` or `{}_*` columns",
+                frames[0].0, frames[1].0
+            ),
+        )),
+        _ => Err(parse_error(
+            source,
+            1,
+            frames[0].0,
+            format!(
+                "both `{}_*` and `{}_*` columns given: give one",
+                frames[0].0, frames[1].0
+            ),
+        )),
     }
 }
 
@@ -112,7 +180,9 @@ impl<R: BufRead> Iterator for CsvPairs<R> {
             Err(e) => {
                 let line = e.position().map_or(line, |p| p.line() as usize);
                 let message = match e.kind() {
-                    csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+                    csv::ErrorKind::UnequalLengths {
+                        expected_len, len, ..
+                    } => {
                         format!("{len} columns where the header has {expected_len}")
                     }
                     _ => e.to_string(),
@@ -136,7 +206,8 @@ mod tests {
 
     #[test]
     fn reads_rows() {
-        let text = format!("{HEADER}\n0.5,1,2,3,0,0,0,1,0,0,1,0,0,0,1\n1.0,1,2,3,0,0,0,1,0,0,2,0,0,0,1\n");
+        let text =
+            format!("{HEADER}\n0.5,1,2,3,0,0,0,1,0,0,1,0,0,0,1\n1.0,1,2,3,0,0,0,1,0,0,2,0,0,0,1\n");
         let r = read(&text).unwrap();
         let first = r[0].as_ref().unwrap();
         assert_eq!(first.stamp, Some(0.5));
@@ -148,7 +219,9 @@ mod tests {
 
     fn field_of(e: &Error) -> (usize, String) {
         match e {
-            Error::Parse { line, field, file, .. } => {
+            Error::Parse {
+                line, field, file, ..
+            } => {
                 assert_eq!(file, "p.csv");
                 (*line, field.clone())
             }
@@ -158,13 +231,24 @@ mod tests {
 
     #[test]
     fn bad_rows_name_line_and_field() {
-        let text = format!("{HEADER}\n0.5,1,2,3,0,0,0,1,0,0,1,0,0,0,1\n0.6,1,2,3,0,0,0,1,0,0,1,0,0,0\n0.7,1,2,x,0,0,0,1,0,0,1,0,0,0,1\n0.8,1,2,3,0,0,0,2,0,0,1,0,0,0,1\n0.9,1,2,3,0,0,0,1,0,0,1,0,0,0,NaN\n");
+        let text = format!(
+            "{HEADER}\n0.5,1,2,3,0,0,0,1,0,0,1,0,0,0,1\n0.6,1,2,3,0,0,0,1,0,0,1,0,0,0\n0.7,1,2,x,0,0,0,1,0,0,1,0,0,0,1\n0.8,1,2,3,0,0,0,2,0,0,1,0,0,0,1\n0.9,1,2,3,0,0,0,1,0,0,1,0,0,0,NaN\n"
+        );
         let r = read(&text).unwrap();
         assert!(r[0].is_ok());
         assert_eq!(field_of(r[1].as_ref().unwrap_err()), (3, "-".to_string()));
-        assert_eq!(field_of(r[2].as_ref().unwrap_err()), (4, "base_from_gripper_z".to_string()));
-        assert_eq!(field_of(r[3].as_ref().unwrap_err()), (5, "base_from_gripper_q".to_string()));
-        assert_eq!(field_of(r[4].as_ref().unwrap_err()), (6, "target_from_camera_qw".to_string()));
+        assert_eq!(
+            field_of(r[2].as_ref().unwrap_err()),
+            (4, "base_from_gripper_z".to_string())
+        );
+        assert_eq!(
+            field_of(r[3].as_ref().unwrap_err()),
+            (5, "base_from_gripper_q".to_string())
+        );
+        assert_eq!(
+            field_of(r[4].as_ref().unwrap_err()),
+            (6, "target_from_camera_qw".to_string())
+        );
     }
 
     #[test]

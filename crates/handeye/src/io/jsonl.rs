@@ -21,7 +21,12 @@ pub struct JsonlPairs<R: BufRead> {
 impl<R: BufRead> JsonlPairs<R> {
     /// A reader of `input`, named `source` in messages.
     pub fn new(input: R, source: &str) -> Self {
-        Self { input, source: source.to_string(), line: 0, buffer: String::new() }
+        Self {
+            input,
+            source: source.to_string(),
+            line: 0,
+            buffer: String::new(),
+        }
     }
 }
 
@@ -35,7 +40,12 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
             match self.input.read_line(&mut self.buffer) {
                 Ok(0) => return None,
                 Ok(_) => {}
-                Err(e) => return Some(Err(Error::Io { file: self.source.clone(), source: e })),
+                Err(e) => {
+                    return Some(Err(Error::Io {
+                        file: self.source.clone(),
+                        source: e,
+                    }));
+                }
             }
             let text = self.buffer.trim();
             if text.is_empty() || text.starts_with('#') {
@@ -52,34 +62,75 @@ pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedP
     let value: Value = serde_json::from_str(text)
         .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
     let Value::Object(object) = value else {
-        return Err(parse_error(source, line, "-", "expected a JSON object per line"));
+        return Err(parse_error(
+            source,
+            line,
+            "-",
+            "expected a JSON object per line",
+        ));
     };
     let stamp = match object.get("stamp") {
         None | Some(Value::Null) => None,
         Some(v) => Some(v.as_f64().filter(|s| s.is_finite()).ok_or_else(|| {
-            parse_error(source, line, "stamp", format!("expected a finite number of seconds, found {v}"))
+            parse_error(
+                source,
+                line,
+                "stamp",
+                format!("expected a finite number of seconds, found {v}"),
+            )
         })?),
     };
     let base_from_gripper = frame(&object, &ROBOT_FRAMES, source, line)?;
     let camera_from_target = frame(&object, &CAMERA_FRAMES, source, line)?;
-    Ok(StampedPosePair { line, stamp, pose: PosePair { base_from_gripper, camera_from_target } })
+    Ok(StampedPosePair {
+        line,
+        stamp,
+        pose: PosePair {
+            base_from_gripper,
+            camera_from_target,
+        },
+    })
 }
 
 /// Reads the one transform of a pair of alternative names, inverting when the file gives the
 /// other direction.
-fn frame(object: &Map<String, Value>, names: &[(&str, bool); 2], source: &str, line: usize) -> Result<Transform> {
-    let present: Vec<_> = names.iter().filter(|(n, _)| object.contains_key(*n)).collect();
+fn frame(
+    object: &Map<String, Value>,
+    names: &[(&str, bool); 2],
+    source: &str,
+    line: usize,
+) -> Result<Transform> {
+    let present: Vec<_> = names
+        .iter()
+        .filter(|(n, _)| object.contains_key(*n))
+        .collect();
     let &&(name, inverted) = match present.as_slice() {
         [one] => one,
         [] => {
-            return Err(parse_error(source, line, format!("{}|{}", names[0].0, names[1].0), format!("missing: give `{}` or `{}`", names[0].0, names[1].0)));
+            return Err(parse_error(
+                source,
+                line,
+                format!("{}|{}", names[0].0, names[1].0),
+                format!("missing: give `{}` or `{}`", names[0].0, names[1].0),
+            ));
         }
         _ => {
-            return Err(parse_error(source, line, names[0].0, format!("both `{}` and `{}` given: give one", names[0].0, names[1].0)));
+            return Err(parse_error(
+                source,
+                line,
+                names[0].0,
+                format!("both `{}` and `{}` given: give one", names[0].0, names[1].0),
+            ));
         }
     };
     let t = transform_from_json(&object[name]).map_err(|p| {
-        let field = if p.field.is_empty() { name.to_string() } else if p.field.starts_with('[') { format!("{name}{}", p.field) } else { format!("{name}.{}", p.field) };
+        let field = if p.field.is_empty() {
+            name.to_string()
+        } else if p.field.starts_with('[') {
+            format!("{name}{}", p.field)
+        } else {
+            format!("{name}.{}", p.field)
+        };
         parse_error(source, line, field, p.message)
     })?;
     Ok(if inverted { t.inverse() } else { t })
@@ -113,17 +164,43 @@ mod tests {
         let bad_rot = "[[1,0,0,0],[0,1,0,0],[0,0,2,0],[0,0,0,1]]";
         let cases = [
             ("{not json".to_string(), "-"),
-            (format!("{{\"camera_from_target\": {I}}}"), "base_from_gripper|gripper_from_base"),
-            (format!("{{\"base_from_gripper\": {I}, \"gripper_from_base\": {I}, \"camera_from_target\": {I}}}"), "base_from_gripper"),
-            (format!("{{\"base_from_gripper\": {bad_rot}, \"camera_from_target\": {I}}}"), "base_from_gripper"),
-            (format!("{{\"base_from_gripper\": {I}, \"camera_from_target\": [[1,0,0,0],[0,1,0,0],[0,0,1,\"NaN\"],[0,0,0,1]]}}"), "camera_from_target[2][3]"),
-            (format!("{{\"stamp\": \"x\", \"base_from_gripper\": {I}, \"camera_from_target\": {I}}}"), "stamp"),
+            (
+                format!("{{\"camera_from_target\": {I}}}"),
+                "base_from_gripper|gripper_from_base",
+            ),
+            (
+                format!(
+                    "{{\"base_from_gripper\": {I}, \"gripper_from_base\": {I}, \"camera_from_target\": {I}}}"
+                ),
+                "base_from_gripper",
+            ),
+            (
+                format!("{{\"base_from_gripper\": {bad_rot}, \"camera_from_target\": {I}}}"),
+                "base_from_gripper",
+            ),
+            (
+                format!(
+                    "{{\"base_from_gripper\": {I}, \"camera_from_target\": [[1,0,0,0],[0,1,0,0],[0,0,1,\"NaN\"],[0,0,0,1]]}}"
+                ),
+                "camera_from_target[2][3]",
+            ),
+            (
+                format!(
+                    "{{\"stamp\": \"x\", \"base_from_gripper\": {I}, \"camera_from_target\": {I}}}"
+                ),
+                "stamp",
+            ),
         ];
         for (text, field) in cases {
             let input = format!("\n{text}\n");
             let r = read(&input);
             match &r[0] {
-                Err(Error::Parse { file, line, field: f, .. }) => {
+                Err(Error::Parse {
+                    file,
+                    line,
+                    field: f,
+                    ..
+                }) => {
                     assert_eq!(file, "t.jsonl");
                     assert_eq!(*line, 2);
                     assert_eq!(f, field, "{text}");

@@ -21,14 +21,16 @@ use crate::motion::PosePair;
 
 pub use csv_pairs::CsvPairs;
 pub use jsonl::{JsonlPairs, parse_pose_line};
-pub use stamped::{read_stamped_poses, parse_stamped_poses};
+pub use stamped::{parse_stamped_poses, read_stamped_poses};
 pub use transform::{CONSISTENCY_TOL, FieldProblem, TransformJson, transform_from_json};
 pub use truth::{Truth, read_truth, truth_json};
 
 /// The names a pose may have in a file, and whether the file's transform is the inverse of ours.
-pub(crate) const ROBOT_FRAMES: [(&str, bool); 2] = [("base_from_gripper", false), ("gripper_from_base", true)];
+pub(crate) const ROBOT_FRAMES: [(&str, bool); 2] =
+    [("base_from_gripper", false), ("gripper_from_base", true)];
 /// See [`ROBOT_FRAMES`].
-pub(crate) const CAMERA_FRAMES: [(&str, bool); 2] = [("camera_from_target", false), ("target_from_camera", true)];
+pub(crate) const CAMERA_FRAMES: [(&str, bool); 2] =
+    [("camera_from_target", false), ("target_from_camera", true)];
 
 /// Pose-pair file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -50,7 +52,10 @@ impl FromStr for Format {
             "auto" => Ok(Self::Auto),
             "jsonl" | "json" => Ok(Self::Jsonl),
             "csv" => Ok(Self::Csv),
-            _ => Err(Error::InvalidParameter { name: "format", message: format!("unknown format `{s}`; one of auto, jsonl, csv") }),
+            _ => Err(Error::InvalidParameter {
+                name: "format",
+                message: format!("unknown format `{s}`; one of auto, jsonl, csv"),
+            }),
         }
     }
 }
@@ -122,12 +127,21 @@ fn detect<R: BufRead>(input: &mut R, source: &str) -> Result<Format> {
         return Ok(Format::Csv);
     }
     loop {
-        let buffer = input.fill_buf().map_err(|e| Error::Io { file: source.to_string(), source: e })?;
+        let buffer = input.fill_buf().map_err(|e| Error::Io {
+            file: source.to_string(),
+            source: e,
+        })?;
         if buffer.is_empty() {
             return Ok(Format::Jsonl);
         }
         match buffer.iter().position(|b| !b.is_ascii_whitespace()) {
-            Some(k) => return Ok(if buffer[k] == b'{' || buffer[k] == b'#' { Format::Jsonl } else { Format::Csv }),
+            Some(k) => {
+                return Ok(if buffer[k] == b'{' || buffer[k] == b'#' {
+                    Format::Jsonl
+                } else {
+                    Format::Csv
+                });
+            }
             None => {
                 let n = buffer.len();
                 input.consume(n);
@@ -138,13 +152,20 @@ fn detect<R: BufRead>(input: &mut R, source: &str) -> Result<Format> {
 
 /// Opens a file for reading, naming it in the error.
 pub fn open(path: &Path) -> Result<BufReader<File>> {
-    File::open(path).map(BufReader::new).map_err(|e| Error::Io { file: path.display().to_string(), source: e })
+    File::open(path).map(BufReader::new).map_err(|e| Error::Io {
+        file: path.display().to_string(),
+        source: e,
+    })
 }
 
 /// Reads a whole pose-pair file; errors on the first bad record, or with fewer than 2 poses.
 pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     let source = path.display().to_string();
-    let mut series = PoseSeries { pairs: Vec::new(), stamps: Vec::new(), lines: Vec::new() };
+    let mut series = PoseSeries {
+        pairs: Vec::new(),
+        stamps: Vec::new(),
+        lines: Vec::new(),
+    };
     for record in PoseReader::new(open(path)?, &source, format)? {
         let r = record?;
         series.pairs.push(r.pose);
@@ -156,13 +177,26 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
             file: source,
             line: 0,
             field: "-".to_string(),
-            message: format!("{} pose pair(s): at least 2 are needed to make a motion", series.pairs.len()),
+            message: format!(
+                "{} pose pair(s): at least 2 are needed to make a motion",
+                series.pairs.len()
+            ),
         });
     }
     Ok(series)
 }
 
 /// Builds an [`Error::Parse`].
-pub(crate) fn parse_error(file: &str, line: usize, field: impl Into<String>, message: impl Into<String>) -> Error {
-    Error::Parse { file: file.to_string(), line, field: field.into(), message: message.into() }
+pub(crate) fn parse_error(
+    file: &str,
+    line: usize,
+    field: impl Into<String>,
+    message: impl Into<String>,
+) -> Error {
+    Error::Parse {
+        file: file.to_string(),
+        line,
+        field: field.into(),
+        message: message.into(),
+    }
 }

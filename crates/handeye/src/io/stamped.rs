@@ -14,7 +14,10 @@ const FIELDS: [&str; 8] = ["t", "x", "y", "z", "qx", "qy", "qz", "qw"];
 /// Reads a stream file (see [`parse_stamped_poses`]).
 pub fn read_stamped_poses(path: &Path) -> Result<Vec<StampedPose>> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io { file: file.clone(), source: e })?;
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        file: file.clone(),
+        source: e,
+    })?;
     parse_stamped_poses(&text, &file)
 }
 
@@ -28,27 +31,54 @@ pub fn parse_stamped_poses(text: &str, source: &str) -> Result<Vec<StampedPose>>
         if content.is_empty() {
             continue;
         }
-        let parts: Vec<&str> = content.split(|c: char| c == ',' || c.is_whitespace()).filter(|s| !s.is_empty()).collect();
+        let parts: Vec<&str> = content
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|s| !s.is_empty())
+            .collect();
         if parts.len() != 8 {
-            return Err(parse_error(source, line, "-", format!("{} values, expected 8: t x y z qx qy qz qw", parts.len())));
+            return Err(parse_error(
+                source,
+                line,
+                "-",
+                format!("{} values, expected 8: t x y z qx qy qz qw", parts.len()),
+            ));
         }
         let mut v = [0.0; 8];
         for (i, p) in parts.iter().enumerate() {
-            v[i] = p.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                parse_error(source, line, FIELDS[i], format!("expected a finite number, found `{p}`"))
-            })?;
+            v[i] = p
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    parse_error(
+                        source,
+                        line,
+                        FIELDS[i],
+                        format!("expected a finite number, found `{p}`"),
+                    )
+                })?;
         }
         if let Some(last) = out.last()
             && v[0] < last.stamp
         {
-            return Err(parse_error(source, line, "t", format!("time goes backwards ({} after {})", v[0], last.stamp)));
+            return Err(parse_error(
+                source,
+                line,
+                "t",
+                format!("time goes backwards ({} after {})", v[0], last.stamp),
+            ));
         }
         let pose = transform_from_xyz_quat_xyzw([v[1], v[2], v[3]], [v[4], v[5], v[6], v[7]])
             .map_err(|e| parse_error(source, line, "qx..qw", e.to_string()))?;
         out.push(StampedPose { stamp: v[0], pose });
     }
     if out.len() < 2 {
-        return Err(parse_error(source, 0, "-", format!("{} pose(s) in the stream: at least 2 are needed", out.len())));
+        return Err(parse_error(
+            source,
+            0,
+            "-",
+            format!("{} pose(s) in the stream: at least 2 are needed", out.len()),
+        ));
     }
     Ok(out)
 }
@@ -59,16 +89,30 @@ mod tests {
 
     #[test]
     fn reads_comma_and_space_separated_streams() {
-        let a = parse_stamped_poses("# t x y z qx qy qz qw\n1.0, 0, 0, 0, 0, 0, 0, 1\n2.0, 1, 0, 0, 0, 0, 0, 1\n", "a").unwrap();
+        let a = parse_stamped_poses(
+            "# t x y z qx qy qz qw\n1.0, 0, 0, 0, 0, 0, 0, 1\n2.0, 1, 0, 0, 0, 0, 0, 1\n",
+            "a",
+        )
+        .unwrap();
         let b = parse_stamped_poses("1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n", "b").unwrap();
         assert_eq!(a, b);
     }
 
     #[test]
     fn bad_lines_name_line_and_field() {
-        let check = |text: &str, line: usize, field: &str| match parse_stamped_poses(text, "s.csv") {
-            Err(Error::Parse { line: l, field: f, file, .. }) => {
-                assert_eq!((l, f.as_str(), file.as_str()), (line, field, "s.csv"), "{text}");
+        let check = |text: &str, line: usize, field: &str| match parse_stamped_poses(text, "s.csv")
+        {
+            Err(Error::Parse {
+                line: l,
+                field: f,
+                file,
+                ..
+            }) => {
+                assert_eq!(
+                    (l, f.as_str(), file.as_str()),
+                    (line, field, "s.csv"),
+                    "{text}"
+                );
             }
             other => panic!("{text}: {other:?}"),
         };

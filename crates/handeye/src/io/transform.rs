@@ -5,7 +5,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::error::TransformProblem;
-use crate::pose::{Transform, quaternion_xyzw, transform_from_matrix4, transform_from_xyz_quat_xyzw};
+use crate::pose::{
+    Transform, quaternion_xyzw, transform_from_matrix4, transform_from_xyz_quat_xyzw,
+};
 
 /// Largest entry difference accepted between `matrix` and `translation`/`quaternion_xyzw` when both
 /// are given.
@@ -47,7 +49,10 @@ pub struct FieldProblem {
 
 impl FieldProblem {
     fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
-        Self { field: field.into(), message: message.into() }
+        Self {
+            field: field.into(),
+            message: message.into(),
+        }
     }
 }
 
@@ -65,22 +70,34 @@ pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
         Value::Object(o) => {
             let from_matrix = o
                 .get("matrix")
-                .map(|m| matrix_from_json(m, "matrix").and_then(|m| Ok(transform_from_matrix4(&m)?)))
+                .map(|m| {
+                    matrix_from_json(m, "matrix").and_then(|m| Ok(transform_from_matrix4(&m)?))
+                })
                 .transpose()?;
             let from_parts = match (o.get("translation"), o.get("quaternion_xyzw")) {
                 (Some(t), Some(q)) => {
                     let t = numbers::<3>(t, "translation")?;
                     let q = numbers::<4>(q, "quaternion_xyzw")?;
                     Some(transform_from_xyz_quat_xyzw(t, q).map_err(|p| {
-                        let field = if matches!(p, TransformProblem::QuaternionNorm { .. }) { "quaternion_xyzw" } else { "" };
+                        let field = if matches!(p, TransformProblem::QuaternionNorm { .. }) {
+                            "quaternion_xyzw"
+                        } else {
+                            ""
+                        };
                         FieldProblem::new(field, p.to_string())
                     })?)
                 }
                 (Some(_), None) if from_matrix.is_none() => {
-                    return Err(FieldProblem::new("quaternion_xyzw", "missing (needed with `translation`)"));
+                    return Err(FieldProblem::new(
+                        "quaternion_xyzw",
+                        "missing (needed with `translation`)",
+                    ));
                 }
                 (None, Some(_)) if from_matrix.is_none() => {
-                    return Err(FieldProblem::new("translation", "missing (needed with `quaternion_xyzw`)"));
+                    return Err(FieldProblem::new(
+                        "translation",
+                        "missing (needed with `quaternion_xyzw`)",
+                    ));
                 }
                 _ => None,
             };
@@ -99,19 +116,24 @@ pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
                 )),
             }
         }
-        _ => Err(FieldProblem::new("", "expected a 4×4 array or an object with `matrix` or `translation` + `quaternion_xyzw`")),
+        _ => Err(FieldProblem::new(
+            "",
+            "expected a 4×4 array or an object with `matrix` or `translation` + `quaternion_xyzw`",
+        )),
     }
 }
 
 /// A 4×4 row-major array of numbers.
 fn matrix_from_json(v: &Value, field: &str) -> Result<Matrix4<f64>, FieldProblem> {
-    let rows = v.as_array().filter(|r| r.len() == 4).ok_or_else(|| FieldProblem::new(field, "expected 4 rows of 4 numbers"))?;
+    let rows = v
+        .as_array()
+        .filter(|r| r.len() == 4)
+        .ok_or_else(|| FieldProblem::new(field, "expected 4 rows of 4 numbers"))?;
     let mut m = Matrix4::zeros();
     for (r, row) in rows.iter().enumerate() {
-        let row = row
-            .as_array()
-            .filter(|c| c.len() == 4)
-            .ok_or_else(|| FieldProblem::new(format!("{field}[{r}]"), "expected a row of 4 numbers"))?;
+        let row = row.as_array().filter(|c| c.len() == 4).ok_or_else(|| {
+            FieldProblem::new(format!("{field}[{r}]"), "expected a row of 4 numbers")
+        })?;
         for (c, x) in row.iter().enumerate() {
             m[(r, c)] = number(x, &format!("{field}[{r}][{c}]"))?;
         }
@@ -121,7 +143,10 @@ fn matrix_from_json(v: &Value, field: &str) -> Result<Matrix4<f64>, FieldProblem
 
 /// An array of exactly N numbers.
 fn numbers<const N: usize>(v: &Value, field: &str) -> Result<[f64; N], FieldProblem> {
-    let a = v.as_array().filter(|a| a.len() == N).ok_or_else(|| FieldProblem::new(field, format!("expected {N} numbers")))?;
+    let a = v
+        .as_array()
+        .filter(|a| a.len() == N)
+        .ok_or_else(|| FieldProblem::new(field, format!("expected {N} numbers")))?;
     let mut out = [0.0; N];
     for (k, x) in a.iter().enumerate() {
         out[k] = number(x, &format!("{field}[{k}]"))?;
@@ -131,8 +156,14 @@ fn numbers<const N: usize>(v: &Value, field: &str) -> Result<[f64; N], FieldProb
 
 /// A finite number.
 fn number(v: &Value, field: &str) -> Result<f64, FieldProblem> {
-    let x = v.as_f64().ok_or_else(|| FieldProblem::new(field, format!("expected a number, found {v}")))?;
-    if x.is_finite() { Ok(x) } else { Err(FieldProblem::new(field, "not a finite number")) }
+    let x = v
+        .as_f64()
+        .ok_or_else(|| FieldProblem::new(field, format!("expected a number, found {v}")))?;
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(FieldProblem::new(field, "not a finite number"))
+    }
 }
 
 #[cfg(test)]
@@ -142,12 +173,18 @@ mod tests {
 
     #[test]
     fn reads_every_form_and_round_trips() {
-        let t = Transform::new(nalgebra::Vector3::new(1.0, 2.0, 3.0), nalgebra::Vector3::new(0.1, -0.2, 0.3));
+        let t = Transform::new(
+            nalgebra::Vector3::new(1.0, 2.0, 3.0),
+            nalgebra::Vector3::new(0.1, -0.2, 0.3),
+        );
         let j = serde_json::to_value(TransformJson::from(&t)).unwrap();
         let full = transform_from_json(&j).unwrap();
         assert!((full.to_homogeneous() - t.to_homogeneous()).abs().max() < 1e-12);
         let only_matrix = transform_from_json(&json!({"matrix": j["matrix"]})).unwrap();
-        let only_parts = transform_from_json(&json!({"translation": j["translation"], "quaternion_xyzw": j["quaternion_xyzw"]})).unwrap();
+        let only_parts = transform_from_json(
+            &json!({"translation": j["translation"], "quaternion_xyzw": j["quaternion_xyzw"]}),
+        )
+        .unwrap();
         let bare = transform_from_json(&j["matrix"]).unwrap();
         for x in [only_matrix, only_parts, bare] {
             assert!((x.to_homogeneous() - t.to_homogeneous()).abs().max() < 1e-12);
@@ -159,11 +196,15 @@ mod tests {
         let mut m = json!([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]);
         m[1][2] = json!("x");
         assert_eq!(transform_from_json(&m).unwrap_err().field, "[1][2]");
-        let e = transform_from_json(&json!({"matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]})).unwrap_err();
+        let e = transform_from_json(&json!({"matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]}))
+            .unwrap_err();
         assert_eq!(e.field, "matrix");
         let e = transform_from_json(&json!({"translation": [0, 0, 0]})).unwrap_err();
         assert_eq!(e.field, "quaternion_xyzw");
-        let e = transform_from_json(&json!({"translation": [0, 0, 0], "quaternion_xyzw": [0, 0, 0, 2]})).unwrap_err();
+        let e = transform_from_json(
+            &json!({"translation": [0, 0, 0], "quaternion_xyzw": [0, 0, 0, 2]}),
+        )
+        .unwrap_err();
         assert_eq!(e.field, "quaternion_xyzw");
         let e = transform_from_json(&json!({
             "matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]],
@@ -171,7 +212,13 @@ mod tests {
         }))
         .unwrap_err();
         assert!(e.message.contains("disagree"));
-        let e = transform_from_json(&json!([[2, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])).unwrap_err();
+        let e = transform_from_json(&json!([
+            [2, 0, 0, 0],
+            [0, 1, 0, 0],
+            [0, 0, 1, 0],
+            [0, 0, 0, 1]
+        ]))
+        .unwrap_err();
         assert!(e.message.contains("orthonormal"));
     }
 }

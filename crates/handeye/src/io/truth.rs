@@ -22,14 +22,22 @@ pub struct Truth {
 /// Reads a truth file.
 pub fn read_truth(path: &Path) -> Result<Truth> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io { file: file.clone(), source: e })?;
-    let value: Value = serde_json::from_str(&text).map_err(|e| parse_error(&file, e.line(), "-", format!("malformed JSON: {e}")))?;
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        file: file.clone(),
+        source: e,
+    })?;
+    let value: Value = serde_json::from_str(&text)
+        .map_err(|e| parse_error(&file, e.line(), "-", format!("malformed JSON: {e}")))?;
     let get = |name: &str| -> Result<Option<Transform>> {
         value
             .get(name)
             .map(|v| {
                 transform_from_json(v).map_err(|p| {
-                    let field = if p.field.is_empty() { name.to_string() } else { format!("{name}.{}", p.field) };
+                    let field = if p.field.is_empty() {
+                        name.to_string()
+                    } else {
+                        format!("{name}.{}", p.field)
+                    };
                     parse_error(&file, 0, field, p.message)
                 })
             })
@@ -38,14 +46,25 @@ pub fn read_truth(path: &Path) -> Result<Truth> {
     let (frame, x) = match (get("gripper_from_camera")?, get("base_from_camera")?) {
         (Some(x), None) => ("gripper_from_camera", x),
         (None, Some(x)) => ("base_from_camera", x),
-        _ => return Err(parse_error(&file, 0, "gripper_from_camera|base_from_camera", "give exactly one of `gripper_from_camera` and `base_from_camera`")),
+        _ => {
+            return Err(parse_error(
+                &file,
+                0,
+                "gripper_from_camera|base_from_camera",
+                "give exactly one of `gripper_from_camera` and `base_from_camera`",
+            ));
+        }
     };
     let target = match (get("base_from_target")?, get("gripper_from_target")?) {
         (Some(t), _) => Some(("base_from_target".to_string(), t)),
         (None, Some(t)) => Some(("gripper_from_target".to_string(), t)),
         _ => None,
     };
-    Ok(Truth { x, frame: frame.to_string(), target })
+    Ok(Truth {
+        x,
+        frame: frame.to_string(),
+        target,
+    })
 }
 
 /// The JSON of a truth file.

@@ -62,7 +62,11 @@ impl AdaptiveSelector {
             params,
             stats: InitialStats::default(),
             phase: Phase::Initial { previous: None },
-            thresholds: Thresholds { sin_alpha: 0.0, beta: 0.0, d: 0.0 },
+            thresholds: Thresholds {
+                sin_alpha: 0.0,
+                beta: 0.0,
+                d: 0.0,
+            },
             start: 0,
             calibrations: 0,
             records: VecDeque::with_capacity(RECORDS),
@@ -101,12 +105,21 @@ impl AdaptiveSelector {
             self.stats.add(gripper_motion(self.setup, &previous, pose));
         }
         if self.stats.motions() < self.params.n_init {
-            self.phase = Phase::Initial { previous: Some(*pose) };
+            self.phase = Phase::Initial {
+                previous: Some(*pose),
+            };
             return;
         }
         let means = self.stats.means();
-        self.thresholds = Thresholds { sin_alpha: means.sin_alpha, beta: means.beta, d: means.d };
-        let anchor = Numbered { number: number - 1, pose: previous.unwrap_or(*pose) };
+        self.thresholds = Thresholds {
+            sin_alpha: means.sin_alpha,
+            beta: means.beta,
+            d: means.d,
+        };
+        let anchor = Numbered {
+            number: number - 1,
+            pose: previous.unwrap_or(*pose),
+        };
         // Step 2: i ← N + 1, start ← N + 1.
         self.start = number;
         self.phase = Phase::First { anchor };
@@ -122,11 +135,17 @@ impl AdaptiveSelector {
         if rotation_ok && translation_ok {
             // Step 5 → 8: A' found; the search for A'' starts at j = i + 1.
             let first = FirstMotion {
-                end: Numbered { number: i, pose: *pose },
+                end: Numbered {
+                    number: i,
+                    pose: *pose,
+                },
                 motion: MotionPair::between(self.setup, &anchor.pose, pose),
                 features: f,
             };
-            self.phase = Phase::Second { anchor: anchor.number, first };
+            self.phase = Phase::Second {
+                anchor: anchor.number,
+                first,
+            };
             self.start = i + 1;
             return;
         }
@@ -167,7 +186,14 @@ impl AdaptiveSelector {
             };
             self.phase = Phase::Second {
                 anchor: first.end.number,
-                first: FirstMotion { end: Numbered { number: j, pose: *pose }, motion: second, features: f },
+                first: FirstMotion {
+                    end: Numbered {
+                        number: j,
+                        pose: *pose,
+                    },
+                    motion: second,
+                    features: f,
+                },
             };
             self.start = j + 1;
             return Some(selected);
@@ -196,7 +222,11 @@ impl AdaptiveSelector {
         if self.records.len() == RECORDS {
             self.records.pop_front();
         }
-        self.records.push_back(Record { thresholds: self.thresholds, rms_r, rms_t });
+        self.records.push_back(Record {
+            thresholds: self.thresholds,
+            rms_r,
+            rms_t,
+        });
         if self.calibrations >= RECORDS {
             self.predict();
         } else {
@@ -215,7 +245,11 @@ impl AdaptiveSelector {
 
     /// Sec. 3.2: new thresholds from the last four records.
     fn predict(&mut self) {
-        let mut records = [Record { thresholds: self.thresholds, rms_r: 0.0, rms_t: 0.0 }; RECORDS];
+        let mut records = [Record {
+            thresholds: self.thresholds,
+            rms_r: 0.0,
+            rms_t: 0.0,
+        }; RECORDS];
         for (slot, r) in records.iter_mut().zip(&self.records) {
             *slot = *r;
         }
@@ -231,7 +265,11 @@ impl AdaptiveSelector {
 /// max(beta_min, min(π, (3β₁ + β₂)/4)) with β₁ = fit(rmsR, β₀, x_R), β₂ = fit(rmsT, β₀, x_T).
 /// III: d₀ ← min(d_max, fit(rmsT, d₀, x_T)) when positive. A threshold whose fit gives nothing (a
 /// singular Eq. (3)) keeps its current value.
-pub fn predict(records: &[Record; RECORDS], current: Thresholds, params: &AdaptiveParams) -> Thresholds {
+pub fn predict(
+    records: &[Record; RECORDS],
+    current: Thresholds,
+    params: &AdaptiveParams,
+) -> Thresholds {
     let column = |f: fn(&Record) -> f64| records.map(|r| f(&r));
     let rms_r = column(|r| r.rms_r);
     let rms_t = column(|r| r.rms_t);
@@ -248,7 +286,9 @@ pub fn predict(records: &[Record; RECORDS], current: Thresholds, params: &Adapti
     }
     // Algorithm II: β₀ from rmsR and rmsT, weighted 3:1.
     if let (Some(b1), Some(b2)) = (fit(&rms_r, &beta, x_r), fit(&rms_t, &beta, x_t)) {
-        t.beta = params.beta_min.max(((3.0 * b1 + b2) / 4.0).min(std::f64::consts::PI));
+        t.beta = params
+            .beta_min
+            .max(((3.0 * b1 + b2) / 4.0).min(std::f64::consts::PI));
     }
     // Algorithm III: d₀ from rmsT.
     if let Some(v) = fit(&rms_t, &d, x_t).filter(|v| *v > 0.0) {

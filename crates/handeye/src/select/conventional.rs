@@ -17,12 +17,18 @@ pub struct ConventionalSelector {
 impl ConventionalSelector {
     /// A fresh selector.
     pub fn new(setup: Setup) -> Self {
-        Self { setup, before: [None, None] }
+        Self {
+            setup,
+            before: [None, None],
+        }
     }
 
     /// Offers the next pose; from the third pose on, selects the last two motions.
     pub fn offer(&mut self, number: usize, pose: &PosePair) -> Option<Selected> {
-        let current = Numbered { number, pose: *pose };
+        let current = Numbered {
+            number,
+            pose: *pose,
+        };
         let selected = match self.before {
             [Some(a), Some(i)] => Some(Selected {
                 poses: [a.number, i.number, number],

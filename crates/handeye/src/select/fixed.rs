@@ -68,10 +68,17 @@ impl FixedSelector {
             return Vec::new();
         }
         let means = self.stats.means();
-        self.thresholds = Some(FixedThresholds { alpha: means.alpha, beta: means.beta, d: means.d });
+        self.thresholds = Some(FixedThresholds {
+            alpha: means.alpha,
+            beta: means.beta,
+            d: means.d,
+        });
         // Steps 1–2: anchor Q_1, then search the buffered poses 2..n_init+1 in order.
         let window = std::mem::take(&mut self.window);
-        self.anchor = Some(Numbered { number: 1, pose: window[0] });
+        self.anchor = Some(Numbered {
+            number: 1,
+            pose: window[0],
+        });
         window
             .iter()
             .enumerate()
@@ -83,7 +90,10 @@ impl FixedSelector {
     /// Steps 2–13 for one new pose.
     fn search(&mut self, number: usize, pose: &PosePair) -> Option<Selected> {
         let t = self.thresholds?;
-        let current = Numbered { number, pose: *pose };
+        let current = Numbered {
+            number,
+            pose: *pose,
+        };
         match self.first {
             None => {
                 // Steps 2–5: A' = Q_1⁻¹ Q_i until θ' ≥ β₀ and ‖t'_a‖ ≤ d₀.
@@ -111,7 +121,11 @@ impl FixedSelector {
                 let second = MotionPair::between(self.setup, &first.end.pose, pose);
                 // Steps 11–13: calibrate, then A' ← A'', the anchor becomes i, i ← j.
                 self.anchor = Some(first.end);
-                self.first = Some(FirstMotion { end: current, motion: second, features: f });
+                self.first = Some(FirstMotion {
+                    end: current,
+                    motion: second,
+                    features: f,
+                });
                 Some(Selected {
                     poses: [anchor.number, first.end.number, number],
                     first: first.motion,

@@ -135,11 +135,17 @@ impl AdaptiveParams {
     /// Checks every parameter's range.
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &'static str, message: &str| {
-            Err(Error::InvalidParameter { name, message: message.to_string() })
+            Err(Error::InvalidParameter {
+                name,
+                message: message.to_string(),
+            })
         };
         let positive = |v: f64| v.is_finite() && v > 0.0;
         if self.n_init < 2 {
-            return bad("n_init", "must be at least 2 (Eq. (1) averages the angle between consecutive axes)");
+            return bad(
+                "n_init",
+                "must be at least 2 (Eq. (1) averages the angle between consecutive axes)",
+            );
         }
         if self.interval < 1 {
             return bad("interval", "must be at least 1");

@@ -81,7 +81,9 @@ fn centred_moments(x: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>) {
 
 /// σ_max / σ_min of a 3×3 matrix; `None` if the SVD does not converge.
 fn condition_of(l: &Matrix3<f64>) -> Option<f64> {
-    let sv = l.try_svd(false, false, f64::EPSILON, SVD_ITERATIONS)?.singular_values;
+    let sv = l
+        .try_svd(false, false, f64::EPSILON, SVD_ITERATIONS)?
+        .singular_values;
     Some(sv.max() / sv.min())
 }
 
@@ -114,7 +116,10 @@ mod tests {
         for (x, y, x_new) in cases {
             let ours = fit(&x, &y, x_new).unwrap();
             let reference = direct(&x, &y, x_new);
-            assert!((ours - reference).abs() <= 1e-8 * reference.abs().max(1.0), "{ours} vs {reference}");
+            assert!(
+                (ours - reference).abs() <= 1e-8 * reference.abs().max(1.0),
+                "{ours} vs {reference}"
+            );
         }
     }
 
@@ -133,7 +138,10 @@ mod tests {
         // Only two distinct x values: L has rank 1.
         assert_eq!(fit(&[0.1, 0.1, 0.2, 0.2], &[1.0, 2.0, 3.0, 4.0], 0.1), None);
         // Non-finite input.
-        assert_eq!(fit(&[f64::NAN, 0.1, 0.2, 0.3], &[1.0, 2.0, 3.0, 4.0], 0.1), None);
+        assert_eq!(
+            fit(&[f64::NAN, 0.1, 0.2, 0.3], &[1.0, 2.0, 3.0, 4.0], 0.1),
+            None
+        );
     }
 
     #[test]

@@ -2,7 +2,9 @@
 
 use crate::error::Result;
 use crate::motion::MotionPair;
-use crate::solve::{Calibration, Method, check_motions, finish, singular, translation_least_squares};
+use crate::solve::{
+    Calibration, Method, check_motions, finish, singular, translation_least_squares,
+};
 
 /// Andreff et al.'s two-step linear solution of A X = X B.
 ///
@@ -31,6 +33,7 @@ use crate::solve::{Calibration, Method, check_motions, finish, singular, transla
 pub fn andreff(motions: &[MotionPair]) -> Result<Calibration> {
     let check = check_motions(motions)?;
     let r_x = check.andreff_rotation;
-    let t_x = translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
+    let t_x =
+        translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
     Ok(finish(Method::Andreff, motions.len(), check, &r_x, &t_x))
 }

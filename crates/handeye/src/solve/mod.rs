@@ -10,7 +10,9 @@ mod andreff;
 mod andreff_joint;
 mod daniilidis;
 mod horaud;
+mod least_squares;
 mod park;
+mod quaternion;
 mod refine;
 mod rotation_system;
 mod tsai;
@@ -185,7 +187,10 @@ pub struct MotionCheck {
 /// below [`REFUSE_ANGLE`] or the conditioning is below [`REFUSE_CONDITIONING`] (parallel axes).
 pub fn check_motions(motions: &[MotionPair]) -> Result<MotionCheck> {
     if motions.len() < 2 {
-        return Err(Error::TooFewMotions { got: motions.len(), need: 2 });
+        return Err(Error::TooFewMotions {
+            got: motions.len(),
+            need: 2,
+        });
     }
     let mut system = RotationSystem::default();
     let mut largest = 0.0_f64;
@@ -193,10 +198,15 @@ pub fn check_motions(motions: &[MotionPair]) -> Result<MotionCheck> {
         system.add(&rotation_matrix(&m.a), &rotation_matrix(&m.b));
         largest = largest.max(MotionFeatures::of(&m.a).angle);
     }
-    let RotationSolution { r_x: andreff_rotation, conditioning } = system.solve_refined(motions);
+    let RotationSolution {
+        r_x: andreff_rotation,
+        conditioning,
+    } = system.solve_refined(motions);
     if largest < REFUSE_ANGLE {
         return Err(Error::Degenerate {
-            reason: Degeneracy::SmallRotations { largest_deg: largest.to_degrees() },
+            reason: Degeneracy::SmallRotations {
+                largest_deg: largest.to_degrees(),
+            },
             conditioning,
         });
     }
@@ -204,23 +214,34 @@ pub fn check_motions(motions: &[MotionPair]) -> Result<MotionCheck> {
         let reason = Degeneracy::ParallelAxes {
             largest_axis_angle_deg: largest_axis_angle(motions).to_degrees(),
         };
-        return Err(Error::Degenerate { reason, conditioning });
+        return Err(Error::Degenerate {
+            reason,
+            conditioning,
+        });
     }
     let mut warnings = Vec::new();
     if conditioning < WARN_CONDITIONING {
         warnings.push(Warning::WeakConditioning { conditioning });
     }
     if largest < WARN_ANGLE {
-        warnings.push(Warning::SmallRotations { largest_deg: largest.to_degrees() });
+        warnings.push(Warning::SmallRotations {
+            largest_deg: largest.to_degrees(),
+        });
     }
-    Ok(MotionCheck { conditioning, andreff_rotation, warnings })
+    Ok(MotionCheck {
+        conditioning,
+        andreff_rotation,
+        warnings,
+    })
 }
 
 /// The largest angle between the rotation axes of any two motions, radians, treating k and −k
 /// as the same line (∈ [0, π/2]).
 fn largest_axis_angle(motions: &[MotionPair]) -> f64 {
-    let axes: Vec<Vector3<f64>> =
-        motions.iter().filter_map(|m| MotionFeatures::of(&m.a).axis).collect();
+    let axes: Vec<Vector3<f64>> = motions
+        .iter()
+        .filter_map(|m| MotionFeatures::of(&m.a).axis)
+        .collect();
     let mut largest = 0.0_f64;
     for (i, a) in axes.iter().enumerate() {
         for b in &axes[i + 1..] {
@@ -260,30 +281,17 @@ pub fn solve(method: Method, motions: &[MotionPair]) -> Result<Calibration> {
 /// (I − R_a) t_x = t_a − R_x t_b over all motions, solved through its 3×3 normal equations.
 ///
 /// Returns `None` when the 3×3 system is singular (all axes parallel).
-pub fn translation_least_squares(motions: &[MotionPair], r_x: &Matrix3<f64>) -> Option<Vector3<f64>> {
+pub fn translation_least_squares(
+    motions: &[MotionPair],
+    r_x: &Matrix3<f64>,
+) -> Option<Vector3<f64>> {
     // Rows C_k = I − R_a and right-hand sides d_k = t_a − R_x t_b.
-    let rows = |m: &MotionPair| {
-        let c = Matrix3::identity() - rotation_matrix(&m.a);
-        (c, m.a.translation.vector - r_x * m.b.translation.vector)
-    };
-    let mut normal = Matrix3::zeros();
-    let mut rhs = Vector3::zeros();
-    for m in motions {
-        let (c, d) = rows(m);
-        normal += c.transpose() * c;
-        rhs += c.transpose() * d;
-    }
-    let lu = normal.lu();
-    let mut t = lu.solve(&rhs)?;
-    // One step of iterative refinement with residuals d − C t from the stacked rows: brings the
-    // normal equations' ε·κ² error down to the ε·κ of a QR solve.
-    let mut correction = Vector3::zeros();
-    for m in motions {
-        let (c, d) = rows(m);
-        correction += c.transpose() * (d - c * t);
-    }
-    t += lu.solve(&correction)?;
-    t.iter().all(|v| v.is_finite()).then_some(t)
+    least_squares::least_squares_3(motions, |m| {
+        (
+            Matrix3::identity() - rotation_matrix(&m.a),
+            m.a.translation.vector - r_x * m.b.translation.vector,
+        )
+    })
 }
 
 /// Wraps a solved rotation and translation into a [`Calibration`] carrying the motion check.
@@ -306,5 +314,8 @@ pub(crate) fn finish(
 /// The error returned when a method's own linear system turns out singular after the motion check
 /// passed (possible only at the edge of the refusal thresholds).
 pub(crate) fn singular(conditioning: f64) -> Error {
-    Error::Degenerate { reason: Degeneracy::IllConditioned, conditioning }
+    Error::Degenerate {
+        reason: Degeneracy::IllConditioned,
+        conditioning,
+    }
 }

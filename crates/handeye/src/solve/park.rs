@@ -1,11 +1,52 @@
-//! Placeholder while the solver is written.
+//! Park and Martin's solver, as OpenCV's `CALIB_HAND_EYE_PARK` computes it.
+
+use nalgebra::Matrix3;
 
 use crate::error::Result;
 use crate::motion::MotionPair;
-use crate::solve::Calibration;
+use crate::pose::{log_so3, proj_so3, rotation_matrix};
+use crate::solve::{
+    Calibration, Method, check_motions, finish, singular, translation_least_squares,
+};
 
-/// Not yet implemented.
+/// Park and Martin's solution on the Euclidean group.
+///
+/// With α = log R_a and β = log R_b (rotation vectors), `M = Σ β αᵀ` and
+/// `R_x = (MᵀM)^(−1/2) Mᵀ` (the orthogonal polar factor of Mᵀ, Eq. (22); with two motions M has
+/// rank 2 and the nearest rotation to Mᵀ is taken); t_x by least squares of
+/// the stacked `(I − R_a) t_x = t_a − R_x t_b`.
+///
+/// # References
+/// F. C. Park, B. J. Martin, "Robot sensor calibration: solving AX = XB on the Euclidean group",
+/// IEEE Trans. Robotics and Automation 10(5), 1994.
+///
+/// # Example
+/// ```
+/// use handeye::{MotionPair, Transform, park};
+/// use nalgebra::{Rotation3, Translation3, Vector3};
+/// let x = Transform::from_parts(Translation3::new(0.1, 0.0, 0.05), Rotation3::from_euler_angles(0.1, 0.2, 0.3));
+/// let a1 = Transform::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.5, 0.0, 0.0));
+/// let a2 = Transform::new(Vector3::new(-0.2, 0.1, 0.4), Vector3::new(0.0, 0.4, 0.1));
+/// let motions: Vec<_> = [a1, a2].iter().map(|a| MotionPair { a: *a, b: x.inverse() * a * x }).collect();
+/// let cal = park(&motions)?;
+/// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
+/// # Ok::<(), handeye::Error>(())
+/// ```
 pub fn park(motions: &[MotionPair]) -> Result<Calibration> {
-    let _ = motions;
-    todo!()
+    let check = check_motions(motions)?;
+    let mut m = Matrix3::zeros();
+    for motion in motions {
+        let alpha = log_so3(&rotation_matrix(&motion.a));
+        let beta = log_so3(&rotation_matrix(&motion.b));
+        m += beta * alpha.transpose();
+    }
+    // (MᵀM)^(−1/2) Mᵀ is the orthogonal polar factor of Mᵀ; `proj_so3` computes it, and also
+    // covers two motions (M of rank 2, where MᵀM is singular) and keeps det = +1.
+    let r_x = proj_so3(&m.transpose());
+    if !r_x.iter().all(|v| v.is_finite()) {
+        return Err(singular(check.conditioning));
+    }
+    let t_x =
+        translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
+    Ok(finish(Method::Park, motions.len(), check, &r_x, &t_x))
 }

@@ -160,7 +160,11 @@ impl Problem<'_> {
 }
 
 /// ΔR and ΔT of one motion at (R_x, t_x).
-fn residual(m: &MotionPair, r_x: &Matrix3<f64>, t_x: &Vector3<f64>) -> (Matrix3<f64>, Vector3<f64>) {
+fn residual(
+    m: &MotionPair,
+    r_x: &Matrix3<f64>,
+    t_x: &Vector3<f64>,
+) -> (Matrix3<f64>, Vector3<f64>) {
     let r_a = rotation_matrix(&m.a);
     let r_b = rotation_matrix(&m.b);
     let dr = r_a * r_x - r_x * r_b;
@@ -217,15 +221,26 @@ fn block_scales(motions: &[MotionPair], r_x: &Matrix3<f64>, t_x: &Vector3<f64>) 
         st += dt.norm_squared();
     }
     let n = motions.len().max(1) as f64;
-    [(sr / (9.0 * n)).sqrt().max(MIN_BLOCK_RMS), (st / (3.0 * n)).sqrt().max(MIN_BLOCK_RMS)]
+    [
+        (sr / (9.0 * n)).sqrt().max(MIN_BLOCK_RMS),
+        (st / (3.0 * n)).sqrt().max(MIN_BLOCK_RMS),
+    ]
 }
 
 /// Levenberg–Marquardt with Nielsen's damping update.
-fn run(motions: &[MotionPair], start: &Transform, check: MotionCheck, options: &RefineOptions) -> Refinement {
+fn run(
+    motions: &[MotionPair],
+    start: &Transform,
+    check: MotionCheck,
+    options: &RefineOptions,
+) -> Refinement {
     let mut r_x = rotation_matrix(start);
     let mut t_x = start.translation.vector;
     let scales = block_scales(motions, &r_x, &t_x);
-    let problem = Problem { motions, weights: [1.0 / scales[0], 1.0 / scales[1]] };
+    let problem = Problem {
+        motions,
+        weights: [1.0 / scales[0], 1.0 / scales[1]],
+    };
 
     let mut lin = problem.linearise(&r_x, &t_x);
     let initial_cost = lin.cost;
@@ -301,13 +316,20 @@ fn run(motions: &[MotionPair], start: &Transform, check: MotionCheck, options: &
 /// Covariance of (δ, t): `s² (JᵀJ)⁻¹` of the problem weighted by the final block RMS values, with
 /// `s² = Σr² / (N − 6)` for N residuals (Gauss–Newton with each block's noise estimated from its
 /// own residuals).
-fn covariance(motions: &[MotionPair], r_x: &Matrix3<f64>, t_x: &Vector3<f64>) -> Option<Matrix6<f64>> {
+fn covariance(
+    motions: &[MotionPair],
+    r_x: &Matrix3<f64>,
+    t_x: &Vector3<f64>,
+) -> Option<Matrix6<f64>> {
     let residuals = 12 * motions.len();
     if residuals <= 6 {
         return None;
     }
     let scales = block_scales(motions, r_x, t_x);
-    let weighted = Problem { motions, weights: [1.0 / scales[0], 1.0 / scales[1]] };
+    let weighted = Problem {
+        motions,
+        weights: [1.0 / scales[0], 1.0 / scales[1]],
+    };
     let lin = weighted.linearise(r_x, t_x);
     let s2 = 2.0 * lin.cost / (residuals - 6) as f64;
     lin.jtj.try_inverse().map(|inv| inv * s2)

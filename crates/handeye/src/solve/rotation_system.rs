@@ -24,7 +24,10 @@ pub struct RotationSystem {
 
 impl Default for RotationSystem {
     fn default() -> Self {
-        Self { normal: Matrix9::zeros(), motions: 0 }
+        Self {
+            normal: Matrix9::zeros(),
+            motions: 0,
+        }
     }
 }
 
@@ -100,7 +103,10 @@ impl RotationSystem {
     }
 
     /// The solve, with an optional gradient `Σ K_kᵀ K_k v` for the refinement step.
-    fn solve_with(&self, gradient: impl Fn(&SVector<f64, 9>) -> Option<SVector<f64, 9>>) -> RotationSolution {
+    fn solve_with(
+        &self,
+        gradient: impl Fn(&SVector<f64, 9>) -> Option<SVector<f64, 9>>,
+    ) -> RotationSolution {
         let eigen = SymmetricEigen::new(self.normal);
         let smallest = eigen.eigenvalues.imin();
         let mut v: SVector<f64, 9> = eigen.eigenvectors.column(smallest).into_owned();
@@ -120,7 +126,10 @@ impl RotationSystem {
         if m.determinant() < 0.0 {
             m = -m;
         }
-        RotationSolution { r_x: proj_so3(&m), conditioning: conditioning_of(&eigen.eigenvalues) }
+        RotationSolution {
+            r_x: proj_so3(&m),
+            conditioning: conditioning_of(&eigen.eigenvalues),
+        }
     }
 }
 

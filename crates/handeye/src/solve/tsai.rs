@@ -1,20 +1,99 @@
-//! Placeholder while the solver is written.
+//! Tsai and Lenz's solver, as OpenCV's `CALIB_HAND_EYE_TSAI` computes it.
 
-use crate::error::Result;
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
 use crate::motion::MotionPair;
-use crate::solve::Calibration;
+use crate::pose::{rotation_matrix, skew};
+use crate::solve::least_squares::least_squares_3;
+use crate::solve::quaternion::{quaternion_of, rotation_of_vector_part};
+use crate::solve::{
+    Calibration, Method, check_motions, finish, singular, translation_least_squares,
+};
 
-/// Options of Tsai–Lenz.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct TsaiOptions {}
+/// Options of [`tsai_with`]; `Default` gives the values on each field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct TsaiOptions {
+    /// Drop the motions whose gripper rotation has 2·sin(θ/2) outside [0.3, 1.7] (θ below about
+    /// 17° or above about 116°), as OpenCV 4.14's Tsai does before solving. Default `false`.
+    pub opencv_filter: bool,
+}
 
-/// Not yet implemented.
+/// Range of 2·sin(θ/2) kept by the OpenCV motion filter.
+const FILTER_RANGE: (f64, f64) = (0.3, 1.7);
+
+/// Tsai and Lenz's two-step solution with the modified Rodrigues vector P = 2 sin(θ/2) k.
+///
+/// Eq. (12): `[P_g + P_c]× P'_cg = P_c − P_g` in least squares over all motions; Eq. (14):
+/// `P_cg = 2 P'_cg / √(1 + |P'_cg|²)` gives R_x; Eq. (15): `(R_g − I) t_x = R_x t_c − t_g` in
+/// least squares. The quaternion of each rotation is read with OpenCV's sign convention so that the
+/// same motions give OpenCV's answer.
+///
+/// # References
+/// R. Y. Tsai, R. K. Lenz, "A new technique for fully autonomous and efficient 3D robotics
+/// hand/eye calibration", IEEE Trans. Robotics and Automation 5(3), 1989.
+///
+/// # Example
+/// ```
+/// use handeye::{MotionPair, Transform, tsai};
+/// use nalgebra::{Rotation3, Translation3, Vector3};
+/// let x = Transform::from_parts(Translation3::new(0.1, 0.0, 0.05), Rotation3::from_euler_angles(0.1, 0.2, 0.3));
+/// let a1 = Transform::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.5, 0.0, 0.0));
+/// let a2 = Transform::new(Vector3::new(-0.2, 0.1, 0.4), Vector3::new(0.0, 0.4, 0.1));
+/// let motions: Vec<_> = [a1, a2].iter().map(|a| MotionPair { a: *a, b: x.inverse() * a * x }).collect();
+/// let cal = tsai(&motions)?;
+/// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
+/// # Ok::<(), handeye::Error>(())
+/// ```
 pub fn tsai(motions: &[MotionPair]) -> Result<Calibration> {
     tsai_with(motions, &TsaiOptions::default())
 }
 
-/// Not yet implemented.
+/// [`tsai`] with options.
 pub fn tsai_with(motions: &[MotionPair], options: &TsaiOptions) -> Result<Calibration> {
-    let _ = (motions, options);
-    todo!()
+    let kept: Vec<MotionPair>;
+    let motions = if options.opencv_filter {
+        kept = motions
+            .iter()
+            .copied()
+            .filter(|m| in_filter_range(&rotation_matrix(&m.a)))
+            .collect();
+        if kept.len() < 2 {
+            return Err(Error::TooFewMotions {
+                got: kept.len(),
+                need: 2,
+            });
+        }
+        &kept[..]
+    } else {
+        motions
+    };
+    let check = check_motions(motions)?;
+    // Eq. (12), stacked over the motions.
+    let p_prime = least_squares_3(motions, |m| {
+        let p_g = modified_rodrigues(&rotation_matrix(&m.a));
+        let p_c = modified_rodrigues(&rotation_matrix(&m.b));
+        (skew(&(p_g + p_c)), p_c - p_g)
+    })
+    .ok_or_else(|| singular(check.conditioning))?;
+    // Eq. (14): back to a unit-quaternion vector part, then to R_x.
+    let p_cg = p_prime * (2.0 / (1.0 + p_prime.norm_squared()).sqrt());
+    let r_x: Matrix3<f64> = rotation_of_vector_part(&(p_cg / 2.0));
+    // Eq. (15).
+    let t_x =
+        translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
+    Ok(finish(Method::Tsai, motions.len(), check, &r_x, &t_x))
+}
+
+/// P = 2 sin(θ/2) k = twice the vector part of the rotation's quaternion.
+fn modified_rodrigues(r: &Matrix3<f64>) -> Vector3<f64> {
+    let q = quaternion_of(r);
+    Vector3::new(q[1], q[2], q[3]) * 2.0
+}
+
+/// Whether a rotation passes OpenCV's motion filter.
+fn in_filter_range(r: &Matrix3<f64>) -> bool {
+    let p = modified_rodrigues(r).norm();
+    (FILTER_RANGE.0..=FILTER_RANGE.1).contains(&p)
 }

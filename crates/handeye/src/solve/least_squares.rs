@@ -1,0 +1,44 @@
+//! Stacked linear least squares through accumulated normal equations, with one step of iterative
+//! refinement: constant memory however many motions, and the accuracy of a QR solve.
+
+use nalgebra::{SMatrix, SVector};
+
+use crate::motion::MotionPair;
+
+/// Defines a least-squares solver for R-row blocks in N unknowns (nalgebra's LU needs concrete
+/// sizes).
+macro_rules! stacked {
+    ($name:ident, $r:literal, $n:literal) => {
+        /// Solves `min Σ_k ‖C_k x − d_k‖²` over the motions, where `rows(m)` gives the block `C_k`
+        /// and the vector `d_k` of one motion.
+        ///
+        /// The normal equations `(Σ CᵀC) x = Σ Cᵀd` are solved by LU, then corrected once with
+        /// the residuals `d − C x` evaluated block by block: the normal equations' ε·κ² error
+        /// becomes the ε·κ of an orthogonal factorisation. `None` when the normal matrix is
+        /// singular.
+        pub fn $name(
+            motions: &[MotionPair],
+            rows: impl Fn(&MotionPair) -> (SMatrix<f64, $r, $n>, SVector<f64, $r>),
+        ) -> Option<SVector<f64, $n>> {
+            let mut normal = SMatrix::<f64, $n, $n>::zeros();
+            let mut rhs = SVector::<f64, $n>::zeros();
+            for m in motions {
+                let (c, d) = rows(m);
+                normal += c.transpose() * c;
+                rhs += c.transpose() * d;
+            }
+            let lu = normal.lu();
+            let mut x = lu.solve(&rhs)?;
+            let mut correction = SVector::<f64, $n>::zeros();
+            for m in motions {
+                let (c, d) = rows(m);
+                correction += c.transpose() * (d - c * x);
+            }
+            x += lu.solve(&correction)?;
+            x.iter().all(|v| v.is_finite()).then_some(x)
+        }
+    };
+}
+
+stacked!(least_squares_3, 3, 3);
+stacked!(least_squares_12, 12, 12);

@@ -1,0 +1,86 @@
+//! The quaternion conventions of OpenCV's hand–eye code, which the quaternion-based methods
+//! (Tsai, Horaud, Daniilidis) must follow to give OpenCV's answers on noisy data: the sign of a
+//! quaternion read from a matrix depends on which of its four branches is taken.
+
+use nalgebra::{Matrix3, Vector3, Vector4};
+
+use crate::pose::skew;
+
+/// Quaternion (w, x, y, z) of a rotation matrix by the four-branch method (Shepperd's): the
+/// branch of the largest of trace, R₀₀, R₁₁, R₂₂ decides the sign, as in OpenCV's `rot2quat`.
+pub fn quaternion_of(r: &Matrix3<f64>) -> Vector4<f64> {
+    let (m00, m01, m02) = (r[(0, 0)], r[(0, 1)], r[(0, 2)]);
+    let (m10, m11, m12) = (r[(1, 0)], r[(1, 1)], r[(1, 2)]);
+    let (m20, m21, m22) = (r[(2, 0)], r[(2, 1)], r[(2, 2)]);
+    let trace = m00 + m11 + m22;
+    if trace > 0.0 {
+        let s = (trace + 1.0).sqrt() * 2.0;
+        Vector4::new(0.25 * s, (m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s)
+    } else if m00 > m11 && m00 > m22 {
+        let s = (1.0 + m00 - m11 - m22).sqrt() * 2.0;
+        Vector4::new((m21 - m12) / s, 0.25 * s, (m01 + m10) / s, (m02 + m20) / s)
+    } else if m11 > m22 {
+        let s = (1.0 + m11 - m00 - m22).sqrt() * 2.0;
+        Vector4::new((m02 - m20) / s, (m01 + m10) / s, 0.25 * s, (m12 + m21) / s)
+    } else {
+        let s = (1.0 + m22 - m00 - m11).sqrt() * 2.0;
+        Vector4::new((m10 - m01) / s, (m02 + m20) / s, (m12 + m21) / s, 0.25 * s)
+    }
+}
+
+/// Rotation matrix of a unit quaternion (w, x, y, z).
+pub fn rotation_of(q: &Vector4<f64>) -> Matrix3<f64> {
+    let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
+    Matrix3::new(
+        1.0 - 2.0 * y * y - 2.0 * z * z,
+        2.0 * x * y - 2.0 * z * w,
+        2.0 * x * z + 2.0 * y * w,
+        2.0 * x * y + 2.0 * z * w,
+        1.0 - 2.0 * x * x - 2.0 * z * z,
+        2.0 * y * z - 2.0 * x * w,
+        2.0 * x * z - 2.0 * y * w,
+        2.0 * y * z + 2.0 * x * w,
+        1.0 - 2.0 * x * x - 2.0 * y * y,
+    )
+}
+
+/// Rotation of the vector part q = sin(θ/2) k of a unit quaternion with w = +√(1 − |q|²):
+/// `(1 − 2|q|²) I + 2 q qᵀ + 2 w [q]×`.
+pub fn rotation_of_vector_part(q: &Vector3<f64>) -> Matrix3<f64> {
+    let p = q.norm_squared();
+    let w = (1.0 - p).max(0.0).sqrt();
+    Matrix3::identity() * (1.0 - 2.0 * p) + q * q.transpose() * 2.0 + skew(q) * (2.0 * w)
+}
+
+/// Hamilton product s ⊗ t of quaternions (w, x, y, z).
+pub fn multiply(s: &Vector4<f64>, t: &Vector4<f64>) -> Vector4<f64> {
+    Vector4::new(
+        s[0] * t[0] - s[1] * t[1] - s[2] * t[2] - s[3] * t[3],
+        s[0] * t[1] + s[1] * t[0] + s[2] * t[3] - s[3] * t[2],
+        s[0] * t[2] - s[1] * t[3] + s[2] * t[0] + s[3] * t[1],
+        s[0] * t[3] + s[1] * t[2] - s[2] * t[1] + s[3] * t[0],
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pose::exp_so3;
+
+    #[test]
+    fn round_trips_in_every_branch() {
+        for w in [
+            Vector3::new(0.1, 0.2, 0.3),
+            Vector3::new(3.0, 0.1, 0.0),
+            Vector3::new(0.0, 3.0, 0.1),
+            Vector3::new(0.1, 0.0, 3.0),
+        ] {
+            let r = exp_so3(&w);
+            let q = quaternion_of(&r);
+            assert!((q.norm() - 1.0).abs() < 1e-12);
+            assert!((rotation_of(&q) - r).abs().max() < 1e-12);
+            let v = Vector3::new(q[1], q[2], q[3]) * q[0].signum();
+            assert!((rotation_of_vector_part(&v) - r).abs().max() < 1e-12);
+        }
+    }
+}
