@@ -25,15 +25,26 @@ pub struct Args {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let method: Method = args.method.parse()?;
-    let pairing = if args.pairs == "all" { Pairing::All } else { Pairing::Consecutive };
+    let pairing = if args.pairs == "all" {
+        Pairing::All
+    } else {
+        Pairing::Consecutive
+    };
     let setup = args.input.setup();
     let (poses, time_offset) = read_all(&args.input)?;
     if poses.len() < 2 {
         return Err(Error::Parse {
-            file: args.input.input.as_ref().map_or("-".into(), |p| p.display().to_string()),
+            file: args
+                .input
+                .input
+                .as_ref()
+                .map_or("-".into(), |p| p.display().to_string()),
             line: 0,
             field: "-".into(),
-            message: format!("{} pose pair(s): at least 2 are needed to make a motion", poses.len()),
+            message: format!(
+                "{} pose pair(s): at least 2 are needed to make a motion",
+                poses.len()
+            ),
         }
         .into());
     }
@@ -57,7 +68,16 @@ pub fn run(args: Args) -> Result<()> {
         }),
     );
     out.insert("conditioning".into(), json!(calibration.conditioning));
-    out.insert("warnings".into(), json!(calibration.warnings.iter().map(|w| w.to_string()).collect::<Vec<_>>()));
+    out.insert(
+        "warnings".into(),
+        json!(
+            calibration
+                .warnings
+                .iter()
+                .map(|w| w.to_string())
+                .collect::<Vec<_>>()
+        ),
+    );
     if let Some(t) = time_offset {
         out.insert("time_offset_s".into(), json!(t));
     }

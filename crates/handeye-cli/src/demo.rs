@@ -24,7 +24,14 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let sim = simulate(&SimConfig { poses: args.poses, ..SimConfig::default() }, args.seed, 0);
+    let sim = simulate(
+        &SimConfig {
+            poses: args.poses,
+            ..SimConfig::default()
+        },
+        args.seed,
+        0,
+    );
     let truth = sim.gripper_from_camera;
     println!(
         "Simulated robot stream: {} poses (the paper's protocol: 5° / 10 mm random steps, 0.1% rotation and 1% translation noise).",
@@ -38,18 +45,39 @@ pub fn run(args: Args) -> Result<()> {
         t.y,
         t.z
     );
-    println!("| method | calibrations | mean rotation error (°) | mean translation error (%) | final X: rotation error (°), translation error (%) | time per calibration (µs) |");
+    println!(
+        "| method | calibrations | mean rotation error (°) | mean translation error (%) | final X: rotation error (°), translation error (%) | time per calibration (µs) |"
+    );
     println!("|---|---|---|---|---|---|");
     for (name, selection, error_source) in [
-        ("conventional (no selection)", Selection::None, ErrorSource::Residual),
-        ("fixed thresholds (Shi et al.)", Selection::Fixed, ErrorSource::Residual),
-        ("adaptive, thresholds from errors vs truth (the paper's simulation)", Selection::Adaptive, ErrorSource::Truth),
-        ("adaptive, thresholds from AX − XB residuals (as on real data)", Selection::Adaptive, ErrorSource::Residual),
+        (
+            "conventional (no selection)",
+            Selection::None,
+            ErrorSource::Residual,
+        ),
+        (
+            "fixed thresholds (Shi et al.)",
+            Selection::Fixed,
+            ErrorSource::Residual,
+        ),
+        (
+            "adaptive, thresholds from errors vs truth (the paper's simulation)",
+            Selection::Adaptive,
+            ErrorSource::Truth,
+        ),
+        (
+            "adaptive, thresholds from AX − XB residuals (as on real data)",
+            Selection::Adaptive,
+            ErrorSource::Residual,
+        ),
     ] {
         let config = OnlineConfig {
             setup: Setup::EyeInHand,
             selection,
-            params: AdaptiveParams { d_max: 100.0, ..AdaptiveParams::default() },
+            params: AdaptiveParams {
+                d_max: 100.0,
+                ..AdaptiveParams::default()
+            },
             error_source,
             truth: Some(truth),
             optimal: false,
@@ -65,14 +93,32 @@ pub fn run(args: Args) -> Result<()> {
                 seconds += e.seconds;
             }
         }
-        let last = calibrator.last_x().map(|x| errors_against_truth(&x, &truth));
+        let last = calibrator
+            .last_x()
+            .map(|x| errors_against_truth(&x, &truth));
         let d = n.max(1) as f64;
         println!(
             "| {name} | {n} | {} | {} | {} | {} |",
-            if n > 0 { format!("{:.3}", rot / d) } else { "–".into() },
-            if n > 0 { format!("{:.1}", 100.0 * trans / d) } else { "–".into() },
-            last.map_or("–".into(), |e| format!("{:.3}, {:.1}", e.rot_deg, 100.0 * e.trans_rel)),
-            if n > 0 { format!("{:.1}", 1e6 * seconds / d) } else { "–".into() },
+            if n > 0 {
+                format!("{:.3}", rot / d)
+            } else {
+                "–".into()
+            },
+            if n > 0 {
+                format!("{:.1}", 100.0 * trans / d)
+            } else {
+                "–".into()
+            },
+            last.map_or("–".into(), |e| format!(
+                "{:.3}, {:.1}",
+                e.rot_deg,
+                100.0 * e.trans_rel
+            )),
+            if n > 0 {
+                format!("{:.1}", 1e6 * seconds / d)
+            } else {
+                "–".into()
+            },
         );
     }
     let motions = motion_pairs(&sim.poses, Pairing::Consecutive, Setup::EyeInHand);
@@ -89,6 +135,8 @@ pub fn run(args: Args) -> Result<()> {
         100.0 * e.trans_rel,
         1e6 * elapsed
     );
-    println!("\nErrors are against the true X: rotation angle of R̂ᵀR, and ‖t − t̂‖/‖t‖. Try `handeye experiment all` for the paper's full comparison.");
+    println!(
+        "\nErrors are against the true X: rotation angle of R̂ᵀR, and ‖t − t̂‖/‖t‖. Try `handeye experiment all` for the paper's full comparison."
+    );
     Ok(())
 }

@@ -29,9 +29,13 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let experiments: Vec<Experiment> =
-        if args.which == "all" { Experiment::ALL.to_vec() } else { vec![args.which.parse()?] };
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    let experiments: Vec<Experiment> = if args.which == "all" {
+        Experiment::ALL.to_vec()
+    } else {
+        vec![args.which.parse()?]
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
     for experiment in experiments {
         let mut config = ExperimentConfig::for_experiment(experiment);
         config.seed = args.seed;
@@ -53,7 +57,10 @@ pub fn run(args: Args) -> Result<()> {
         println!("{table}");
         let stem = args.out.join(experiment.name());
         write_text(&stem.with_extension("md"), &table)?;
-        write_text(&stem.with_extension("json"), &(serde_json::to_string_pretty(&report)? + "\n"))?;
+        write_text(
+            &stem.with_extension("json"),
+            &(serde_json::to_string_pretty(&report)? + "\n"),
+        )?;
         for path in write_figures(&report, &args.out)? {
             eprintln!("wrote {}", path.display());
         }

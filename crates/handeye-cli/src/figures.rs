@@ -15,6 +15,9 @@ use plotters::prelude::*;
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
+/// A number read off a method's summary.
+type Metric = fn(&MethodSummary) -> f64;
+
 /// Figure size in pixels (SVG units).
 const SIZE: (u32, u32) = (1000, 420);
 
@@ -51,9 +54,17 @@ where
 {
     root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
     let per = |name: &str, f: fn(&handeye::experiment::SeriesResult) -> f64| -> Vec<f64> {
-        report.method(name).map(|m| m.per_series.iter().map(f).collect()).unwrap_or_default()
+        report
+            .method(name)
+            .map(|m| m.per_series.iter().map(f).collect())
+            .unwrap_or_default()
     };
-    let curve = |label, name: &'static str, f, color, dotted| Curve { label, values: per(name, f), color, dotted };
+    let curve = |label, name: &'static str, f, color, dotted| Curve {
+        label,
+        values: per(name, f),
+        color,
+        dotted,
+    };
     match report.experiment {
         Experiment::Accuracy => {
             let (left, right) = root.split_horizontally(SIZE.0 / 2);
@@ -62,7 +73,10 @@ where
             lines(
                 &left,
                 "(a) mean rotation error ‖R̂ − R‖_F per series",
-                &[curve("conventional (O)", "conventional", rot, RED, false), curve("adaptive (*)", "adaptive", rot, BLUE, true)],
+                &[
+                    curve("conventional (O)", "conventional", rot, RED, false),
+                    curve("adaptive (*)", "adaptive", rot, BLUE, true),
+                ],
             )?;
             lines(
                 &right,
@@ -78,19 +92,34 @@ where
             lines(
                 &root,
                 "calibrations per series",
-                &[curve("adaptive (O)", "adaptive", n, BLUE, false), curve("fixed thresholds (*)", "fixed", n, RED, true)],
+                &[
+                    curve("adaptive (O)", "adaptive", n, BLUE, false),
+                    curve("fixed thresholds (*)", "fixed", n, RED, true),
+                ],
             )?;
         }
         Experiment::Realtime => {
-            let methods: Vec<&MethodSummary> = ["adaptive", "optimal"].iter().filter_map(|m| report.method(m)).collect();
+            let methods: Vec<&MethodSummary> = ["adaptive", "optimal"]
+                .iter()
+                .filter_map(|m| report.method(m))
+                .collect();
             let areas = root.split_evenly((1, 3));
-            let panels: [(&str, fn(&MethodSummary) -> f64); 3] = [
-                ("time per calibration (µs)", |m| m.time_per_calibration_s * 1e6),
+            let panels: [(&str, Metric); 3] = [
+                ("time per calibration (µs)", |m| {
+                    m.time_per_calibration_s * 1e6
+                }),
                 ("mean ‖R̂ − R‖_F", |m| m.rot_fro_mean),
                 ("mean ‖t − t̂‖/‖t‖", |m| m.trans_rel_mean),
             ];
             for (area, (title, f)) in areas.iter().zip(panels) {
-                bars(area, title, &methods.iter().map(|m| (m.method.as_str(), f(m))).collect::<Vec<_>>())?;
+                bars(
+                    area,
+                    title,
+                    &methods
+                        .iter()
+                        .map(|m| (m.method.as_str(), f(m)))
+                        .collect::<Vec<_>>(),
+                )?;
             }
         }
     }
@@ -99,12 +128,25 @@ where
 }
 
 /// A line chart of per-series values.
-fn lines<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, title: &str, curves: &[Curve<'_>]) -> Result<()>
+fn lines<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    curves: &[Curve<'_>],
+) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
-    let n = curves.iter().map(|c| c.values.len()).max().unwrap_or(0).max(1);
-    let top = curves.iter().flat_map(|c| c.values.iter().copied()).filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+    let n = curves
+        .iter()
+        .map(|c| c.values.len())
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    let top = curves
+        .iter()
+        .flat_map(|c| c.values.iter().copied())
+        .filter(|v| v.is_finite())
+        .fold(0.0_f64, f64::max);
     let top = if top > 0.0 { top * 1.1 } else { 1.0 };
     let mut chart = ChartBuilder::on(area)
         .caption(title, ("sans-serif", 18))
@@ -120,19 +162,32 @@ where
         .draw()
         .map_err(|e| anyhow!("{e}"))?;
     for c in curves {
-        let points: Vec<(f64, f64)> =
-            c.values.iter().enumerate().filter(|(_, v)| v.is_finite()).map(|(i, v)| (i as f64 + 1.0, *v)).collect();
+        let points: Vec<(f64, f64)> = c
+            .values
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| v.is_finite())
+            .map(|(i, v)| (i as f64 + 1.0, *v))
+            .collect();
         let color = c.color;
-        let style = if c.dotted { color.stroke_width(1) } else { color.stroke_width(2) };
+        let style = if c.dotted {
+            color.stroke_width(1)
+        } else {
+            color.stroke_width(2)
+        };
         chart
             .draw_series(LineSeries::new(points.clone(), style))
             .map_err(|e| anyhow!("{e}"))?
             .label(c.label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
         if c.dotted {
-            chart.draw_series(points.iter().map(|p| Cross::new(*p, 4, color))).map_err(|e| anyhow!("{e}"))?;
+            chart
+                .draw_series(points.iter().map(|p| Cross::new(*p, 4, color)))
+                .map_err(|e| anyhow!("{e}"))?;
         } else {
-            chart.draw_series(points.iter().map(|p| Circle::new(*p, 3, color))).map_err(|e| anyhow!("{e}"))?;
+            chart
+                .draw_series(points.iter().map(|p| Circle::new(*p, 3, color)))
+                .map_err(|e| anyhow!("{e}"))?;
         }
     }
     chart
@@ -146,11 +201,19 @@ where
 }
 
 /// A bar chart of one value per method.
-fn bars<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, title: &str, values: &[(&str, f64)]) -> Result<()>
+fn bars<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    values: &[(&str, f64)],
+) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
-    let top = values.iter().map(|v| v.1).filter(|v| v.is_finite()).fold(0.0_f64, f64::max);
+    let top = values
+        .iter()
+        .map(|v| v.1)
+        .filter(|v| v.is_finite())
+        .fold(0.0_f64, f64::max);
     let top = if top > 0.0 { top * 1.2 } else { 1.0 };
     let names: Vec<String> = values.iter().map(|v| v.0.to_string()).collect();
     let mut chart = ChartBuilder::on(area)
@@ -172,7 +235,10 @@ where
     chart
         .draw_series(values.iter().enumerate().map(|(i, (_, v))| {
             let c = colors[i % colors.len()];
-            Rectangle::new([(i, 0.0), (i + 1, if v.is_finite() { *v } else { 0.0 })], c.mix(0.6).filled())
+            Rectangle::new(
+                [(i, 0.0), (i + 1, if v.is_finite() { *v } else { 0.0 })],
+                c.mix(0.6).filled(),
+            )
         }))
         .map_err(|e| anyhow!("{e}"))?;
     Ok(())

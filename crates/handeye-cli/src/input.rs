@@ -38,7 +38,11 @@ pub struct InputArgs {
 impl InputArgs {
     /// The setup.
     pub fn setup(&self) -> Setup {
-        if self.setup == "eye-to-hand" { Setup::EyeToHand } else { Setup::EyeInHand }
+        if self.setup == "eye-to-hand" {
+            Setup::EyeToHand
+        } else {
+            Setup::EyeInHand
+        }
     }
 
     fn format(&self) -> Result<Format> {
@@ -63,18 +67,38 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
     // The camera file holds target_from_camera; the pairs hold camera_from_target.
     let camera: Vec<StampedPose> = read_stamped_poses(camera)?
         .into_iter()
-        .map(|s| StampedPose { stamp: s.stamp, pose: s.pose.inverse() })
+        .map(|s| StampedPose {
+            stamp: s.stamp,
+            pose: s.pose.inverse(),
+        })
         .collect();
     let time_offset = if args.time_offset == "auto" {
         let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default())?;
-        eprintln!("time offset: {:.4} s (correlation of angular speeds {:.3})", e.offset, e.correlation);
+        eprintln!(
+            "time offset: {:.4} s (correlation of angular speeds {:.3})",
+            e.offset, e.correlation
+        );
         e.offset
     } else {
-        args.time_offset.parse::<f64>().ok().filter(|v| v.is_finite()).with_context(|| {
-            format!("--time-offset: expected `auto` or seconds, found `{}`", args.time_offset)
-        })?
+        args.time_offset
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .with_context(|| {
+                format!(
+                    "--time-offset: expected `auto` or seconds, found `{}`",
+                    args.time_offset
+                )
+            })?
     };
-    let s = pair_streams(&robot, &camera, &SyncOptions { time_offset, max_gap: args.max_gap });
+    let s = pair_streams(
+        &robot,
+        &camera,
+        &SyncOptions {
+            time_offset,
+            max_gap: args.max_gap,
+        },
+    );
     if s.dropped_outside + s.dropped_gap > 0 {
         eprintln!(
             "dropped {} camera sample(s) outside the robot stream and {} in gaps longer than {} s",
@@ -86,7 +110,11 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
         .iter()
         .zip(&s.stamps)
         .enumerate()
-        .map(|(k, (p, t))| StampedPosePair { line: k + 1, stamp: Some(*t), pose: *p })
+        .map(|(k, (p, t))| StampedPosePair {
+            line: k + 1,
+            stamp: Some(*t),
+            pose: *p,
+        })
         .collect();
     Ok(Some(Synced { pairs, time_offset }))
 }
@@ -94,7 +122,10 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
 /// All pose pairs of the input (a batch solve), and the time offset used for streams.
 pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Option<f64>)> {
     if let Some(s) = synced(args)? {
-        return Ok((s.pairs.iter().map(|p| p.pose).collect(), Some(s.time_offset)));
+        return Ok((
+            s.pairs.iter().map(|p| p.pose).collect(),
+            Some(s.time_offset),
+        ));
     }
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
     if path.as_os_str() == "-" {
@@ -108,8 +139,11 @@ pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Option<f64>)> {
     Ok((read_pose_file(&path, args.format()?)?.pairs, None))
 }
 
+/// Pose pairs one at a time, each with its place, or the error of a bad record.
+pub type Records = Box<dyn Iterator<Item = handeye::Result<StampedPosePair>>>;
+
 /// A record stream for `online`: from stdin, a file, or paired streams.
-pub fn records(args: &InputArgs) -> Result<(Box<dyn Iterator<Item = handeye::Result<StampedPosePair>>>, Option<f64>)> {
+pub fn records(args: &InputArgs) -> Result<(Records, Option<f64>)> {
     if let Some(s) = synced(args)? {
         return Ok((Box::new(s.pairs.into_iter().map(Ok)), Some(s.time_offset)));
     }
@@ -120,5 +154,8 @@ pub fn records(args: &InputArgs) -> Result<(Box<dyn Iterator<Item = handeye::Res
         Box::new(handeye::io::open(&path)?)
     };
     let source = path.display().to_string();
-    Ok((Box::new(PoseReader::new(reader, &source, args.format()?)?), None))
+    Ok((
+        Box::new(PoseReader::new(reader, &source, args.format()?)?),
+        None,
+    ))
 }

@@ -78,7 +78,12 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(t) = &truth
         && t.frame != setup.x_frame()
     {
-        bail!("the truth file gives `{}` but --setup {} needs `{}`", t.frame, setup.name(), setup.x_frame());
+        bail!(
+            "the truth file gives `{}` but --setup {} needs `{}`",
+            t.frame,
+            setup.name(),
+            setup.x_frame()
+        );
     }
     let config = OnlineConfig {
         setup,
@@ -96,7 +101,11 @@ pub fn run(args: Args) -> Result<()> {
             d_max: args.d_max,
             unfreeze: args.unfreeze,
         },
-        error_source: if args.error_source == "truth" { ErrorSource::Truth } else { ErrorSource::Residual },
+        error_source: if args.error_source == "truth" {
+            ErrorSource::Truth
+        } else {
+            ErrorSource::Residual
+        },
         truth: truth.map(|t| t.x),
         optimal: args.optimal,
     };
@@ -121,10 +130,20 @@ pub fn run(args: Args) -> Result<()> {
         "{} calibration(s) from {} pose(s){}; last X: {}",
         calibrator.calibrations(),
         calibrator.poses(),
-        if skipped > 0 { format!(", {skipped} bad line(s) skipped") } else { String::new() },
+        if skipped > 0 {
+            format!(", {skipped} bad line(s) skipped")
+        } else {
+            String::new()
+        },
         calibrator.last_x().map_or("none".to_string(), |x| {
             let t = x.translation.vector;
-            format!("t = [{:.6}, {:.6}, {:.6}], rotation {:.4}°", t.x, t.y, t.z, x.rotation.angle().to_degrees())
+            format!(
+                "t = [{:.6}, {:.6}, {:.6}], rotation {:.4}°",
+                t.x,
+                t.y,
+                t.z,
+                x.rotation.angle().to_degrees()
+            )
         })
     );
     Ok(())
@@ -136,7 +155,10 @@ pub fn event_json(e: &Event, time_offset: Option<f64>) -> Value {
     out.insert("calibration".into(), json!(e.calibration));
     out.insert("poses".into(), json!(e.poses));
     if let Some(t) = e.thresholds {
-        out.insert("thresholds".into(), json!({"sin_alpha": t.sin_alpha, "beta": t.beta, "d": t.d}));
+        out.insert(
+            "thresholds".into(),
+            json!({"sin_alpha": t.sin_alpha, "beta": t.beta, "d": t.d}),
+        );
     }
     out.insert("rms_r".into(), json!(e.rms.rms_r));
     out.insert("rms_t".into(), json!(e.rms.rms_t));

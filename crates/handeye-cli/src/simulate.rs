@@ -37,18 +37,28 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let base = if args.preset == "large" { SimConfig::large_motions() } else { SimConfig::default() };
-    let mut config = SimConfig { poses: args.poses, ..base };
+    let base = if args.preset == "large" {
+        SimConfig::large_motions()
+    } else {
+        SimConfig::default()
+    };
+    let mut config = SimConfig {
+        poses: args.poses,
+        ..base
+    };
     if args.noise_free {
         config = config.noise_free();
     }
     let s = simulate(&config, args.seed, args.series);
-    let file = std::fs::File::create(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    let file = std::fs::File::create(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut w = std::io::BufWriter::new(file);
     for (k, p) in s.poses.iter().enumerate() {
         let m = |t: &handeye::Transform| {
             let h = t.to_homogeneous();
-            (0..4).map(|r| (0..4).map(|c| h[(r, c)]).collect::<Vec<_>>()).collect::<Vec<_>>()
+            (0..4)
+                .map(|r| (0..4).map(|c| h[(r, c)]).collect::<Vec<_>>())
+                .collect::<Vec<_>>()
         };
         let line = json!({"stamp": k as f64, "base_from_gripper": m(&p.base_from_gripper), "camera_from_target": m(&p.camera_from_target)});
         writeln!(w, "{line}")?;
@@ -60,9 +70,16 @@ pub fn run(args: Args) -> Result<()> {
             frame: "gripper_from_camera".into(),
             target: Some(("base_from_target".into(), s.base_from_target)),
         };
-        std::fs::write(path, serde_json::to_string_pretty(&truth_json(&truth))? + "\n")
-            .with_context(|| format!("cannot write {}", path.display()))?;
+        std::fs::write(
+            path,
+            serde_json::to_string_pretty(&truth_json(&truth))? + "\n",
+        )
+        .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    eprintln!("wrote {} poses (millimetres) to {}", s.poses.len(), args.out.display());
+    eprintln!(
+        "wrote {} poses (millimetres) to {}",
+        s.poses.len(),
+        args.out.display()
+    );
     Ok(())
 }

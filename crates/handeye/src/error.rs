@@ -66,6 +66,12 @@ pub enum Degeneracy {
     },
     /// The rotation system is too ill-conditioned to trust (conditioning given).
     IllConditioned,
+    /// The gripper motions (nearly) do not translate, which the simultaneous form needs to fix
+    /// the scale of R_x.
+    NoTranslation {
+        /// The largest gripper translation among the motions, input units.
+        largest: f64,
+    },
 }
 
 impl fmt::Display for Degeneracy {
@@ -80,6 +86,10 @@ impl fmt::Display for Degeneracy {
             } => write!(
                 f,
                 "all rotation axes are nearly parallel (at most {largest_axis_angle_deg:.3}° apart): rotate about at least two clearly different axes"
+            ),
+            Self::NoTranslation { largest } => write!(
+                f,
+                "the gripper barely translates (largest motion {largest:.3e}): the simultaneous form cannot fix the scale of the rotation; use `andreff` or another method"
             ),
             Self::IllConditioned => write!(
                 f,

@@ -244,7 +244,15 @@ mod tests {
 
     #[test]
     fn axis_angle_round_trips_over_the_whole_range() {
-        for &theta in &[1e-9, 1e-3, 0.5, 2.0, 3.0, 3.14159, std::f64::consts::PI] {
+        for &theta in &[
+            1e-9,
+            1e-3,
+            0.5,
+            2.0,
+            3.0,
+            std::f64::consts::PI - 1e-5,
+            std::f64::consts::PI,
+        ] {
             let k = Vector3::new(0.3, -0.5, 0.8).normalize();
             let r = exp_so3(&(k * theta));
             let (t, axis) = axis_angle(&r);

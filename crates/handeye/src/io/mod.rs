@@ -88,7 +88,7 @@ pub enum PoseReader<R: BufRead> {
     /// JSON Lines.
     Jsonl(JsonlPairs<R>),
     /// CSV.
-    Csv(CsvPairs<R>),
+    Csv(Box<CsvPairs<R>>),
 }
 
 impl<R: BufRead> PoseReader<R> {
@@ -100,7 +100,7 @@ impl<R: BufRead> PoseReader<R> {
             f => f,
         };
         Ok(match format {
-            Format::Csv => Self::Csv(CsvPairs::new(input, source)?),
+            Format::Csv => Self::Csv(Box::new(CsvPairs::new(input, source)?)),
             _ => Self::Jsonl(JsonlPairs::new(input, source)),
         })
     }

@@ -27,6 +27,8 @@ pub struct Record {
 }
 
 /// Where the Main Algorithm is.
+// The phases live inline (no box): the calibrator's state stays one allocation-free value.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 enum Phase {
     /// Step 1: averaging the first N motions (Eq. (1)); holds the previous pose.

@@ -2,7 +2,7 @@
 
 use nalgebra::{Matrix3, SMatrix, SVector};
 
-use crate::error::Result;
+use crate::error::{Degeneracy, Error, Result};
 use crate::motion::MotionPair;
 use crate::pose::{proj_so3, rotation_matrix};
 use crate::solve::least_squares::least_squares_12;
@@ -34,9 +34,17 @@ pub fn andreff_joint(motions: &[MotionPair]) -> Result<Calibration> {
     let x = least_squares_12(motions, rows).ok_or_else(|| singular(check.conditioning))?;
     let raw = Matrix3::new(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]);
     let det = raw.determinant();
-    // OpenCV refuses |det| below single-precision epsilon as a failed normalisation.
-    if !(det.abs() >= f64::from(f32::EPSILON)) {
-        return Err(singular(check.conditioning));
+    // The scale of vec(R_x) is fixed only by the gripper translations (the right-hand side); with
+    // none, the solution is 0. OpenCV refuses |det| below single-precision epsilon likewise.
+    if det.is_nan() || det.abs() < f64::from(f32::EPSILON) {
+        let largest = motions
+            .iter()
+            .map(|m| m.a.translation.vector.norm())
+            .fold(0.0, f64::max);
+        return Err(Error::Degenerate {
+            reason: Degeneracy::NoTranslation { largest },
+            conditioning: check.conditioning,
+        });
     }
     let r_x = proj_so3(&(raw * det.signum()));
     let t_x = x.fixed_rows::<3>(9).into_owned();

@@ -14,7 +14,8 @@ use crate::solve::{Calibration, Method, check_motions, finish, singular};
 /// `[a − b, [a + b]×, 0, 0; a' − b', [a' + b']×, a − b, [a + b]×]`, with a, a' (b, b') the vector
 /// parts of the dual quaternion of A (B). X lies in the span of the two right singular vectors
 /// of the smallest singular values (found from the 8×8 normal matrix); Eqs. (34)–(35) fix the
-/// combination that is a unit dual quaternion.
+/// combination that is a unit dual quaternion (solved in a form that stays finite where OpenCV's
+/// divides by zero).
 ///
 /// # References
 /// K. Daniilidis, "Hand-eye calibration using dual quaternions", IJRR 18(3), 1999.
@@ -46,22 +47,31 @@ pub fn daniilidis(motions: &[MotionPair]) -> Result<Calibration> {
     let v7: SVector<f64, 8> = eigen.eigenvectors.column(order[0]).into_owned();
     let (u1, w1) = split(&v6);
     let (u2, w2) = split(&v7);
-    // Eq. (34): λ₁/λ₂ = s solves a s² + b s + c = 0 so that the real part is orthogonal to the dual.
+    // Eq. (34): (λ₁, λ₂) makes the real part orthogonal to the dual part:
+    // a λ₁² + b λ₁λ₂ + c λ₂² = 0. Its two root directions are taken by the stable quadratic formula,
+    // in λ₁/λ₂ or λ₂/λ₁ whichever has the larger leading coefficient (OpenCV divides by a, which
+    // fails when the solution lies along v7).
     let a = u1.dot(&w1);
     let b = u1.dot(&w2) + u2.dot(&w1);
     let c = u2.dot(&w2);
-    let root = (b * b - 4.0 * a * c).sqrt();
-    let s1 = (-b + root) / (2.0 * a);
-    let s2 = (-b - root) / (2.0 * a);
-    // Eq. (35): of the two, the one that gives the larger norm of the real part.
-    let norm = |s: f64| s * s * u1.dot(&u1) + 2.0 * s * u1.dot(&u2) + u2.dot(&u2);
-    let (s, value) = if norm(s1) > norm(s2) {
-        (s1, norm(s1))
+    let root = (b * b - 4.0 * a * c).max(0.0).sqrt();
+    let q = -0.5 * (b + root.copysign(b));
+    let directions = if a.abs() >= c.abs() {
+        [(q / a, 1.0), (c / q, 1.0)]
     } else {
-        (s2, norm(s2))
+        [(1.0, q / c), (1.0, a / q)]
     };
-    let lambda2 = (1.0 / value).sqrt();
-    let lambda1 = s * lambda2;
+    // Eq. (35): of the two, the one whose real part is longer (for unit (λ₁, λ₂), so that a
+    // direction along v7 with its vanishing real part is not mistaken for the answer), scaled to a
+    // unit real part.
+    let norm = |(l1, l2): (f64, f64)| (u1 * l1 + u2 * l2).norm_squared() / (l1 * l1 + l2 * l2);
+    let best = if norm(directions[0]) >= norm(directions[1]) {
+        directions[0]
+    } else {
+        directions[1]
+    };
+    let scale = 1.0 / (u1 * best.0 + u2 * best.1).norm();
+    let (lambda1, lambda2) = (best.0 * scale, best.1 * scale);
     let dual = v6 * lambda1 + v7 * lambda2;
     if !dual.iter().all(|v| v.is_finite()) {
         return Err(singular(check.conditioning));

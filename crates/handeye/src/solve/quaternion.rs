@@ -1,14 +1,24 @@
-//! The quaternion conventions of OpenCV's hand–eye code, which the quaternion-based methods
-//! (Tsai, Horaud, Daniilidis) must follow to give OpenCV's answers on noisy data: the sign of a
-//! quaternion read from a matrix depends on which of its four branches is taken.
+//! Quaternions for the quaternion-based methods (Tsai, Horaud, Daniilidis).
+//!
+//! OpenCV reads a quaternion from a matrix by four branches and keeps whatever sign the branch
+//! gives; for rotations above 120° (trace < 0) the scalar part can come out negative for A and
+//! positive for B, and the methods, which need the same sign on both sides, then return a wrong X.
+//! Here the same branches are used (for the same rounding) and the sign is then made canonical,
+//! w ≥ 0: identical to OpenCV wherever OpenCV is right.
 
 use nalgebra::{Matrix3, Vector3, Vector4};
 
 use crate::pose::skew;
 
-/// Quaternion (w, x, y, z) of a rotation matrix by the four-branch method (Shepperd's): the
-/// branch of the largest of trace, R₀₀, R₁₁, R₂₂ decides the sign, as in OpenCV's `rot2quat`.
+/// Quaternion (w, x, y, z), w ≥ 0, of a rotation matrix by the four-branch method of OpenCV's
+/// `rot2quat` (Shepperd's).
 pub fn quaternion_of(r: &Matrix3<f64>) -> Vector4<f64> {
+    let q = branch_quaternion(r);
+    if q[0] < 0.0 { -q } else { q }
+}
+
+/// The four-branch quaternion with the sign its branch gives.
+fn branch_quaternion(r: &Matrix3<f64>) -> Vector4<f64> {
     let (m00, m01, m02) = (r[(0, 0)], r[(0, 1)], r[(0, 2)]);
     let (m10, m11, m12) = (r[(1, 0)], r[(1, 1)], r[(1, 2)]);
     let (m20, m21, m22) = (r[(2, 0)], r[(2, 1)], r[(2, 2)]);
@@ -79,7 +89,8 @@ mod tests {
             let q = quaternion_of(&r);
             assert!((q.norm() - 1.0).abs() < 1e-12);
             assert!((rotation_of(&q) - r).abs().max() < 1e-12);
-            let v = Vector3::new(q[1], q[2], q[3]) * q[0].signum();
+            assert!(q[0] >= 0.0);
+            let v = Vector3::new(q[1], q[2], q[3]);
             assert!((rotation_of_vector_part(&v) - r).abs().max() < 1e-12);
         }
     }

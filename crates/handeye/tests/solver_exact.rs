@@ -1,0 +1,165 @@
+//! Every solver on noise-free data over random poses (proptest): X recovered to 1e-9, both setups,
+//! both pairings; and degenerate data refused with the reason.
+
+use handeye::pose::{exp_so3, transform_from_parts};
+use handeye::{
+    Degeneracy, Error, Method, MotionPair, Pairing, PosePair, Setup, Transform, motion_pairs, solve,
+};
+use nalgebra::Vector3;
+use proptest::prelude::*;
+
+fn transform(r: [f64; 3], t: [f64; 3]) -> Transform {
+    transform_from_parts(&exp_so3(&Vector3::from(r)), &Vector3::from(t))
+}
+
+prop_compose! {
+    /// A rigid transform with a rotation of up to about 170° and a translation of up to 1.
+    fn any_transform()(r in prop::array::uniform3(-1.7f64..1.7), t in prop::array::uniform3(-1.0f64..1.0)) -> Transform {
+        transform(r, t)
+    }
+}
+
+prop_compose! {
+    /// A robot pose whose motions from the previous one are generic (rotations of 10°–80°).
+    fn robot_pose()(axis in prop::array::uniform3(-1.0f64..1.0), angle in 0.2f64..1.4, t in prop::array::uniform3(0.1f64..1.0)) -> Transform {
+        let a = Vector3::from(axis);
+        let a = if a.norm() < 1e-3 { Vector3::x() } else { a.normalize() };
+        transform_from_parts(&exp_so3(&(a * angle)), &Vector3::from(t))
+    }
+}
+
+/// Poses of a noise-free recording for the setup (X: gripper_from_camera or base_from_camera;
+/// fixed: base_from_target or gripper_from_target).
+fn recording(setup: Setup, x: &Transform, fixed: &Transform, robot: &[Transform]) -> Vec<PosePair> {
+    robot
+        .iter()
+        .map(|base_from_gripper| {
+            let camera_from_target = match setup {
+                Setup::EyeInHand => (base_from_gripper * x).inverse() * fixed,
+                Setup::EyeToHand => x.inverse() * base_from_gripper * fixed,
+            };
+            PosePair {
+                base_from_gripper: *base_from_gripper,
+                camera_from_target,
+            }
+        })
+        .collect()
+}
+
+fn errors(x: &Transform, truth: &Transform) -> (f64, f64) {
+    let r = (x.rotation.matrix() - truth.rotation.matrix()).norm();
+    // Absolute: the scene spans about 1 unit (poses and X translations up to 1).
+    let t = (x.translation.vector - truth.translation.vector).norm();
+    (r, t)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+    #[test]
+    fn every_solver_recovers_x_from_noise_free_data(
+        x in any_transform(),
+        fixed in any_transform(),
+        robot in prop::collection::vec(robot_pose(), 3..8),
+        eye_to_hand in any::<bool>(),
+        all_pairs in any::<bool>(),
+    ) {
+        let setup = if eye_to_hand { Setup::EyeToHand } else { Setup::EyeInHand };
+        let pairing = if all_pairs { Pairing::All } else { Pairing::Consecutive };
+        let motions = motion_pairs(&recording(setup, &x, &fixed, &robot), pairing, setup);
+        // Random poses can make two consecutive motions nearly parallel; skip what the solvers
+        // rightly refuse or flag.
+        let check = handeye::solve::check_motions(&motions);
+        prop_assume!(check.as_ref().is_ok_and(|c| c.conditioning > 0.05));
+        for method in Method::ALL {
+            let got = solve(method, &motions).map_err(|e| TestCaseError::fail(format!("{method}: {e}")))?;
+            let (er, et) = errors(&got.x, &x);
+            prop_assert!(er <= 1e-9 && et <= 1e-9, "{} {method}: rotation {er:e}, translation {et:e}", setup.name());
+        }
+    }
+}
+
+fn about_axis(axis: Vector3<f64>, angles: &[f64]) -> Vec<MotionPair> {
+    let x = transform([0.3, -0.2, 0.5], [0.1, 0.2, 0.3]);
+    angles
+        .iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let a = transform_from_parts(
+                &exp_so3(&(axis.normalize() * *a)),
+                &Vector3::new(k as f64, 0.5, 0.2),
+            );
+            MotionPair {
+                a,
+                b: x.inverse() * a * x,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn degenerate_data_is_refused_with_the_reason() {
+    for method in Method::ALL {
+        let one = about_axis(Vector3::x(), &[0.5]);
+        assert!(
+            matches!(
+                solve(method, &one),
+                Err(Error::TooFewMotions { got: 1, need: 2 })
+            ),
+            "{method}"
+        );
+        let parallel = about_axis(Vector3::new(1.0, 2.0, 3.0), &[0.3, 0.7, -0.4]);
+        assert!(
+            matches!(
+                solve(method, &parallel),
+                Err(Error::Degenerate {
+                    reason: Degeneracy::ParallelAxes { .. },
+                    ..
+                })
+            ),
+            "{method}: {:?}",
+            solve(method, &parallel)
+        );
+        let still = about_axis(Vector3::x(), &[0.0, 0.0, 0.0]);
+        assert!(
+            matches!(
+                solve(method, &still),
+                Err(Error::Degenerate {
+                    reason: Degeneracy::SmallRotations { .. },
+                    ..
+                })
+            ),
+            "{method}"
+        );
+    }
+    let e = solve(Method::Andreff, &about_axis(Vector3::z(), &[0.3, 0.7]))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("parallel") && e.contains("rotate about"), "{e}");
+}
+
+#[test]
+fn weak_data_succeeds_with_warnings() {
+    // Axes 0.2° apart: solvable, but flagged.
+    let x = transform([0.3, -0.2, 0.5], [0.1, 0.2, 0.3]);
+    let motions: Vec<MotionPair> = [Vector3::new(1.0, 0.0, 0.0), Vector3::new(1.0, 0.0035, 0.0)]
+        .iter()
+        .map(|axis| {
+            let a = transform_from_parts(
+                &exp_so3(&(axis.normalize() * 0.5)),
+                &Vector3::new(0.3, 0.5, 0.2),
+            );
+            MotionPair {
+                a,
+                b: x.inverse() * a * x,
+            }
+        })
+        .collect();
+    let c = solve(Method::Andreff, &motions).unwrap();
+    assert!(
+        c.warnings
+            .iter()
+            .any(|w| matches!(w, handeye::Warning::WeakConditioning { .. })),
+        "{:?}",
+        c
+    );
+}
