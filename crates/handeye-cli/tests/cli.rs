@@ -1,0 +1,401 @@
+//! The command line end to end.
+
+use std::path::{Path, PathBuf};
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn testdata(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../testdata")
+        .join(rel)
+}
+
+fn handeye() -> Command {
+    Command::cargo_bin("handeye").unwrap()
+}
+
+fn matrix(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+        .collect()
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Runs and returns (exit code, stdout, stderr).
+fn run(cmd: &mut Command) -> (i32, String, String) {
+    let out = cmd.output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr,
+    )
+}
+
+#[test]
+fn calibrate_recovers_the_truth_of_the_exact_fixture() {
+    let input = testdata("opencv/opencv_eye-in-hand_exact_10_11.jsonl");
+    let expected: Value = serde_json::from_str(
+        &std::fs::read_to_string(testdata(
+            "opencv/opencv_eye-in-hand_exact_10_11.expected.json",
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    for method in [
+        "andreff",
+        "andreff-joint",
+        "tsai",
+        "park",
+        "horaud",
+        "daniilidis",
+        "refine",
+    ] {
+        let (code, out, err) =
+            run(handeye().args(["calibrate", input.to_str().unwrap(), "--method", method]));
+        assert_eq!(code, 0, "{method}: {err}");
+        let v: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["method"], method);
+        assert_eq!(v["setup"], "eye-in-hand");
+        assert_eq!(v["frame"], "gripper_from_camera");
+        assert_eq!(v["motions"], 9);
+        for key in ["translation", "quaternion_xyzw", "conditioning", "warnings"] {
+            assert!(!v[key].is_null(), "{key}");
+        }
+        assert!(v["residual"]["rotation_deg_rms"].as_f64().unwrap() < 1e-6);
+        assert!(v["residual"]["units"].as_str().unwrap().contains("degrees"));
+        let d = max_diff(&matrix(&v["matrix"]), &matrix(&expected["truth"]["matrix"]));
+        assert!(d < 1e-9, "{method}: {d:e}");
+    }
+}
+
+#[test]
+fn calibrate_eye_to_hand_and_all_pairs_match_opencv() {
+    let input = testdata("opencv/opencv_eye-to-hand_noisy_10_13.jsonl");
+    let expected: Value = serde_json::from_str(
+        &std::fs::read_to_string(testdata(
+            "opencv/opencv_eye-to-hand_noisy_10_13.expected.json",
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    let (code, out, err) = run(handeye().args([
+        "calibrate",
+        input.to_str().unwrap(),
+        "--setup",
+        "eye-to-hand",
+        "--pairs",
+        "all",
+        "--method",
+        "park",
+    ]));
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["frame"], "base_from_camera");
+    assert_eq!(v["motions"], 45);
+    let d = max_diff(
+        &matrix(&v["matrix"]),
+        &matrix(&expected["opencv"]["park"]["matrix"]),
+    );
+    assert!(d < 1e-6, "{d:e}");
+}
+
+/// The exact fixture rewritten as CSV with quaternions (and the camera direction inverted).
+fn fixture_as_csv(dir: &Path) -> PathBuf {
+    use handeye::io::{Format, read_pose_file};
+    use handeye::pose::quaternion_xyzw;
+    let series = read_pose_file(
+        &testdata("opencv/opencv_eye-in-hand_exact_10_11.jsonl"),
+        Format::Auto,
+    )
+    .unwrap();
+    let mut text = String::from("stamp");
+    for f in ["base_from_gripper", "target_from_camera"] {
+        for s in ["x", "y", "z", "qx", "qy", "qz", "qw"] {
+            text += &format!(",{f}_{s}");
+        }
+    }
+    text.push('\n');
+    for (k, p) in series.pairs.iter().enumerate() {
+        text += &format!("{k}");
+        for t in [p.base_from_gripper, p.camera_from_target.inverse()] {
+            let v = t.translation.vector;
+            let q = quaternion_xyzw(&t);
+            text += &format!(
+                ",{},{},{},{},{},{},{}",
+                v.x, v.y, v.z, q[0], q[1], q[2], q[3]
+            );
+        }
+        text.push('\n');
+    }
+    let path = dir.join("poses.csv");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn calibrate_reads_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = fixture_as_csv(dir.path());
+    let (code, out, err) = run(handeye().args(["calibrate", csv.to_str().unwrap()]));
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let expected: Value = serde_json::from_str(
+        &std::fs::read_to_string(testdata(
+            "opencv/opencv_eye-in-hand_exact_10_11.expected.json",
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    assert!(max_diff(&matrix(&v["matrix"]), &matrix(&expected["truth"]["matrix"])) < 1e-9);
+}
+
+const I: &str = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+
+fn good_line(k: usize) -> String {
+    // Rotations about alternating axes, so that two motions determine X.
+    let (c, s) = ((0.3 * k as f64).cos(), (0.3 * k as f64).sin());
+    let r = if k % 2 == 0 {
+        format!("[[1,0,0,{k}],[0,{c},{},0],[0,{s},{c},0],[0,0,0,1]]", -s)
+    } else {
+        format!("[[{c},0,{s},0],[0,1,0,{k}],[{},0,{c},0],[0,0,0,1]]", -s)
+    };
+    format!("{{\"base_from_gripper\": {r}, \"camera_from_target\": {I}}}")
+}
+
+#[test]
+fn bad_input_exits_2_naming_file_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "malformed.jsonl",
+            format!("{}\n{{\"base_from_gripper\": [1, 2\n", good_line(0)),
+            "2",
+            "-",
+        ),
+        (
+            "rotation.jsonl",
+            format!(
+                "{}\n{{\"base_from_gripper\": [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], \"camera_from_target\": {I}}}\n",
+                good_line(0)
+            ),
+            "2",
+            "base_from_gripper",
+        ),
+        (
+            "nan.jsonl",
+            format!(
+                "{}\n{}\n{{\"base_from_gripper\": [[1,0,0,\"NaN\"],[0,1,0,0],[0,0,1,0],[0,0,0,1]], \"camera_from_target\": {I}}}\n",
+                good_line(0),
+                good_line(1)
+            ),
+            "3",
+            "base_from_gripper[0][3]",
+        ),
+        (
+            "missing.jsonl",
+            format!("{}\n{{\"base_from_gripper\": {I}}}\n", good_line(0)),
+            "2",
+            "camera_from_target",
+        ),
+        ("one.jsonl", format!("{}\n", good_line(0)), "0", "-"),
+    ];
+    for (name, text, line, field) in cases {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let (code, _, err) = run(handeye().args(["calibrate", path.to_str().unwrap()]));
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(
+            err.contains(name) && err.contains(&format!(":{line}:")) && err.contains(field),
+            "{name}: {err}"
+        );
+    }
+    let (code, _, err) = run(handeye().args([
+        "calibrate",
+        dir.path().join("one.jsonl").to_str().unwrap(),
+        "--method",
+        "magic",
+    ]));
+    assert_eq!(code, 2, "{err}");
+    let (code, _, err) = run(handeye().args(["calibrate", "no/such/file.jsonl"]));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no/such/file.jsonl"));
+}
+
+#[test]
+fn degenerate_input_exits_3_with_what_to_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("one_axis.jsonl");
+    let text: String = (0..5)
+        .map(|k| {
+            let (c, s) = ((0.3 * k as f64).cos(), (0.3 * k as f64).sin());
+            format!("{{\"base_from_gripper\": [[{c},{},0,{k}],[{s},{c},0,0],[0,0,1,0],[0,0,0,1]], \"camera_from_target\": {I}}}\n", -s)
+        })
+        .collect();
+    std::fs::write(&path, text).unwrap();
+    let (code, _, err) = run(handeye().args(["calibrate", path.to_str().unwrap()]));
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("parallel") && err.contains("rotate about"),
+        "{err}"
+    );
+}
+
+/// The paper fixture's adaptive events, from the CLI reading standard input.
+#[test]
+fn online_reproduces_the_paper_fixture_from_stdin() {
+    let input = std::fs::read_to_string(testdata("paper/series_2007_000_200.jsonl")).unwrap();
+    let expected: Value = serde_json::from_str(
+        &std::fs::read_to_string(testdata("paper/series_2007_000_200.expected.json")).unwrap(),
+    )
+    .unwrap();
+    let truth = testdata("paper/series_2007_000_200.truth.json");
+    for (selection, key) in [
+        ("adaptive", "adaptive"),
+        ("fixed", "fixed"),
+        ("none", "conventional"),
+    ] {
+        let (code, out, err) = run(handeye()
+            .args([
+                "online",
+                "-",
+                "--selection",
+                selection,
+                "--error-source",
+                "truth",
+                "--d-max",
+                "100",
+                "--truth",
+            ])
+            .arg(&truth)
+            .write_stdin(input.clone()));
+        assert_eq!(code, 0, "{err}");
+        let events: Vec<Value> = out
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        let expected = expected[key].as_array().unwrap();
+        assert_eq!(events.len(), expected.len(), "{selection}");
+        for (e, x) in events.iter().zip(expected) {
+            assert_eq!(e["poses"], x["poses"]);
+            // Rotation entries absolutely, translation relative to its length (mm, and large
+            // for the conventional method's poor calibrations).
+            let (a, b) = (matrix(&e["matrix"]), matrix(&x["matrix"]));
+            let rot = [0, 1, 2, 4, 5, 6, 8, 9, 10]
+                .iter()
+                .map(|&k| (a[k] - b[k]).abs())
+                .fold(0.0, f64::max);
+            let dt: f64 = [3, 7, 11]
+                .iter()
+                .map(|&k| (a[k] - b[k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let nt: f64 = [3, 7, 11].iter().map(|&k| b[k].powi(2)).sum::<f64>().sqrt();
+            let d = rot.max(dt / nt);
+            assert!(d < 1e-9, "{selection} {}: {d:e}", e["poses"]);
+            assert_eq!(e["thresholds"].is_null(), selection != "adaptive");
+            assert!(e["rms_r"].is_number());
+        }
+        assert!(err.contains("calibration(s) from 200 pose(s)"), "{err}");
+    }
+}
+
+#[test]
+fn online_skips_or_stops_at_a_bad_line() {
+    let mut lines: Vec<String> =
+        std::fs::read_to_string(testdata("paper/series_2007_000_200.jsonl"))
+            .unwrap()
+            .lines()
+            .map(str::to_string)
+            .collect();
+    lines.insert(50, "{\"oops\": 1}".to_string());
+    let input = lines.join("\n");
+    let (code, out, err) = run(handeye()
+        .args(["online", "-", "--d-max", "100"])
+        .write_stdin(input.clone()));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("-:51:") && err.contains("1 bad line(s) skipped"),
+        "{err}"
+    );
+    assert!(!out.is_empty());
+    let (code, _, err) = run(handeye()
+        .args(["online", "-", "--d-max", "100", "--on-bad-line", "stop"])
+        .write_stdin(input));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("-:51:"), "{err}");
+}
+
+#[test]
+fn simulate_then_calibrate_round_trips() {
+    let dir = tempfile::tempdir().unwrap();
+    let poses = dir.path().join("sim.jsonl");
+    let truth = dir.path().join("truth.json");
+    let (code, _, err) = run(handeye()
+        .args([
+            "simulate",
+            "--poses",
+            "50",
+            "--seed",
+            "3",
+            "--noise-free",
+            "--out",
+        ])
+        .arg(&poses)
+        .arg("--truth")
+        .arg(&truth));
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) =
+        run(handeye().args(["calibrate", poses.to_str().unwrap(), "--method", "tsai"]));
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let t: Value = serde_json::from_str(&std::fs::read_to_string(&truth).unwrap()).unwrap();
+    assert!(
+        max_diff(
+            &matrix(&v["matrix"]),
+            &matrix(&t["gripper_from_camera"]["matrix"])
+        ) < 1e-8
+    );
+}
+
+#[test]
+fn experiment_writes_tables_and_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let (code, out, err) = run(handeye()
+        .args(["experiment", "all", "--series", "3", "--out"])
+        .arg(dir.path()));
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("| **adaptive** |"));
+    for f in [
+        "accuracy.md",
+        "accuracy.json",
+        "adaptability.json",
+        "realtime.json",
+        "fig2_accuracy.svg",
+        "fig2_accuracy.png",
+        "fig3_adaptability.svg",
+        "table1_realtime.png",
+    ] {
+        let meta = std::fs::metadata(dir.path().join(f)).unwrap_or_else(|_| panic!("{f} missing"));
+        assert!(meta.len() > 100, "{f} is empty");
+    }
+    let svg = std::fs::read_to_string(dir.path().join("fig2_accuracy.svg")).unwrap();
+    assert!(svg.contains("conventional"));
+}
+
+#[test]
+fn demo_runs_without_files() {
+    let (code, out, err) = run(handeye().args(["demo", "--poses", "200"]));
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("adaptive") && out.contains("conventional") && out.contains("True X"));
+}
