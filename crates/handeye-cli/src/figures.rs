@@ -72,7 +72,7 @@ where
             let trans = |r: &handeye::experiment::SeriesResult| r.trans_rel;
             lines(
                 &left,
-                "(a) mean rotation error ‖R̂ − R‖_F per series",
+                "(a) mean rotation error ‖R_est − R‖_F per series",
                 &[
                     curve("conventional (O)", "conventional", rot, RED, false),
                     curve("adaptive (*)", "adaptive", rot, BLUE, true),
@@ -80,7 +80,7 @@ where
             )?;
             lines(
                 &right,
-                "(b) mean ‖t − t̂‖/‖t‖ per series",
+                "(b) mean ‖t − t_est‖ / ‖t‖ per series",
                 &[
                     curve("conventional (O)", "conventional", trans, RED, false),
                     curve("adaptive (*)", "adaptive", trans, BLUE, true),
@@ -108,8 +108,8 @@ where
                 ("time per calibration (µs)", |m| {
                     m.time_per_calibration_s * 1e6
                 }),
-                ("mean ‖R̂ − R‖_F", |m| m.rot_fro_mean),
-                ("mean ‖t − t̂‖/‖t‖", |m| m.trans_rel_mean),
+                ("mean ‖R_est − R‖_F", |m| m.rot_fro_mean),
+                ("mean ‖t − t_est‖ / ‖t‖", |m| m.trans_rel_mean),
             ];
             for (area, (title, f)) in areas.iter().zip(panels) {
                 bars(

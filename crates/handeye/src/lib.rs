@@ -40,3 +40,8 @@ pub use solve::{
     Calibration, Method, Warning, andreff, andreff_joint, daniilidis, horaud, park, refine, solve,
     tsai,
 };
+
+/// The README's Rust examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct ReadmeDoctests;
