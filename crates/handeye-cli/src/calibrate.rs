@@ -2,7 +2,8 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::metrics::residual_summary;
+use handeye::metrics::{gate_outliers, quality_report, residual_summary};
+use handeye::solve::{TsaiOptions, tsai_with};
 use handeye::{Error, Method, Pairing, motion_pairs, solve};
 use serde_json::{Map, Value, json};
 
@@ -20,7 +21,23 @@ pub struct Args {
     /// Motions from consecutive poses, or from every pair i < j (as OpenCV does).
     #[arg(long, default_value = "consecutive", value_parser = ["consecutive", "all"])]
     pairs: String,
+    /// Leave out motion pairs whose robot and camera rotation angles differ by more than
+    /// --outlier-deg (they must be equal for a rigid X).
+    #[arg(long)]
+    reject_outliers: bool,
+    /// Outlier threshold on |θ_A − θ_B|, degrees.
+    #[arg(long, default_value_t = 3.0)]
+    outlier_deg: f64,
+    /// Drop OpenCV's Tsai motions with 2·sin(θ/2) outside [0.3, 1.7] (with --method tsai).
+    #[arg(long)]
+    tsai_opencv_filter: bool,
+    /// Output: the JSON object, or a ROS-style YAML (translation {x,y,z}, rotation {x,y,z,w}).
+    #[arg(long, default_value = "json", value_parser = ["json", "yaml"])]
+    output: String,
 }
+
+/// Per-motion details are listed up to this many motions.
+const MAX_PER_MOTION: usize = 10_000;
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
@@ -48,9 +65,25 @@ pub fn run(args: Args) -> Result<()> {
         }
         .into());
     }
-    let motions = motion_pairs(&poses, pairing, setup);
-    let calibration = solve(method, &motions)?;
+    let all_motions = motion_pairs(&poses, pairing, setup);
+    let (kept, outliers) = gate_outliers(&all_motions, args.outlier_deg);
+    let motions = if args.reject_outliers {
+        kept
+    } else {
+        all_motions
+    };
+    let calibration = if method == Method::Tsai && args.tsai_opencv_filter {
+        tsai_with(
+            &motions,
+            &TsaiOptions {
+                opencv_filter: true,
+            },
+        )?
+    } else {
+        solve(method, &motions)?
+    };
     let residual = residual_summary(&motions, &calibration.x);
+    let quality = quality_report(&motions, &calibration.x);
     let mut out = Map::new();
     out.insert("method".into(), json!(method.name()));
     out.insert("setup".into(), json!(setup.name()));
@@ -68,21 +101,74 @@ pub fn run(args: Args) -> Result<()> {
         }),
     );
     out.insert("conditioning".into(), json!(calibration.conditioning));
+    let per_motion = if quality.per_motion.len() <= MAX_PER_MOTION {
+        json!(quality.per_motion)
+    } else {
+        Value::Null
+    };
     out.insert(
-        "warnings".into(),
-        json!(
-            calibration
-                .warnings
-                .iter()
-                .map(|w| w.to_string())
-                .collect::<Vec<_>>()
-        ),
+        "quality".into(),
+        json!({
+            "axis_spread_deg": quality.axis_spread_deg,
+            "rotation_range_deg": quality.rotation_range_deg,
+            "rotation_std_deg": quality.rotation_std_deg,
+            "translation_std": quality.translation_std,
+            "outliers": {
+                "threshold_deg": args.outlier_deg,
+                "count": outliers.len(),
+                "rejected": args.reject_outliers,
+                "motions": outliers,
+            },
+            "per_motion": per_motion,
+        }),
     );
+    let mut warnings: Vec<String> = calibration.warnings.iter().map(|w| w.to_string()).collect();
+    let rejected = args.reject_outliers;
+    warnings.extend(
+        quality
+            .warnings
+            .iter()
+            .filter(|w| !(rejected && w.contains("--reject-outliers")))
+            .cloned(),
+    );
+    if rejected && !outliers.is_empty() {
+        eprintln!(
+            "rejected {} outlier motion pair(s) of {}",
+            outliers.len(),
+            outliers.len() + motions.len()
+        );
+    }
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    out.insert("warnings".into(), json!(warnings));
     if let Some(t) = time_offset {
         out.insert("time_offset_s".into(), json!(t));
     }
-    for w in &calibration.warnings {
-        eprintln!("warning: {w}");
+    if args.output == "yaml" {
+        print!("{}", ros_yaml(&out, setup.x_frame(), &calibration.x));
+        return Ok(());
     }
     print_json(&Value::Object(out))
+}
+
+/// The result as ROS-style YAML (easy_handeye / tf conventions: translation, rotation x y z w).
+fn ros_yaml(out: &Map<String, Value>, frame: &str, x: &handeye::Transform) -> String {
+    let t = x.translation.vector;
+    let q = handeye::pose::quaternion_xyzw(x);
+    format!(
+        "# handeye calibrate: method {}, setup {}\nframe: {frame}\ntranslation: {{x: {}, y: {}, z: {}}}\nrotation: {{x: {}, y: {}, z: {}, w: {}}}\nresidual: {{rotation_deg_rms: {}, translation_rms: {}}}\nmotions: {}\n",
+        out["method"].as_str().unwrap_or(""),
+        out["setup"].as_str().unwrap_or(""),
+        t.x,
+        t.y,
+        t.z,
+        q[0],
+        q[1],
+        q[2],
+        q[3],
+        out["residual"]["rotation_deg_rms"],
+        out["residual"]["translation_rms"],
+        out["motions"],
+    )
 }

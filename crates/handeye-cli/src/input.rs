@@ -5,18 +5,21 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
-use handeye::io::{Format, PoseReader, StampedPosePair, read_pose_file, read_stamped_poses};
+use handeye::io::{
+    Format, PoseReader, StampedPosePair, detect_file_format, read_pose_file, read_stamped_poses,
+};
 use handeye::sync::{OffsetOptions, StampedPose, SyncOptions, estimate_time_offset, pair_streams};
 use handeye::{PosePair, Setup};
 
 /// Input options shared by `calibrate` and `online`.
 #[derive(ClapArgs, Debug, Clone)]
 pub struct InputArgs {
-    /// Pose-pair file (JSON Lines or CSV; `-` for standard input). Not with --robot/--camera.
+    /// Pose-pair file (JSON Lines, CSV, OpenCV-YAML pairs, moveit JSON; a directory of ViSP pose
+    /// files; `-` for standard input). Not with --robot/--camera.
     #[arg(value_name = "INPUT", required_unless_present = "robot")]
     pub input: Option<PathBuf>,
     /// Format of INPUT.
-    #[arg(long, default_value = "auto", value_parser = ["auto", "jsonl", "csv"])]
+    #[arg(long, default_value = "auto", value_parser = ["auto", "jsonl", "csv", "opencv-yaml", "moveit", "visp"])]
     pub format: String,
     /// Robot stream `t x y z qx qy qz qw` (base_from_gripper), ethz-asl / TUM layout.
     #[arg(long, requires = "camera", conflicts_with = "input")]
@@ -63,9 +66,21 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
     let (Some(robot), Some(camera)) = (&args.robot, &args.camera) else {
         return Ok(None);
     };
-    let robot = read_stamped_poses(robot)?;
+    let robot_stream = read_stamped_poses(robot)?;
+    let camera_stream = read_stamped_poses(camera)?;
+    for (name, s) in [(robot, &robot_stream), (camera, &camera_stream)] {
+        if s.reordered > 0 {
+            eprintln!(
+                "{}: {} sample(s) out of time order, put in order",
+                name.display(),
+                s.reordered
+            );
+        }
+    }
+    let robot = robot_stream.poses;
     // The camera file holds target_from_camera; the pairs hold camera_from_target.
-    let camera: Vec<StampedPose> = read_stamped_poses(camera)?
+    let camera: Vec<StampedPose> = camera_stream
+        .poses
         .into_iter()
         .map(|s| StampedPose {
             stamp: s.stamp,
@@ -148,6 +163,23 @@ pub fn records(args: &InputArgs) -> Result<(Records, Option<f64>)> {
         return Ok((Box::new(s.pairs.into_iter().map(Ok)), Some(s.time_offset)));
     }
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
+    if path.as_os_str() != "-" {
+        let format = match args.format()? {
+            Format::Auto => detect_file_format(&path)?,
+            f => f,
+        };
+        if matches!(format, Format::OpencvYaml | Format::Moveit | Format::Visp) {
+            let series = read_pose_file(&path, format)?;
+            let records = series.pairs.into_iter().enumerate().map(|(k, pose)| {
+                Ok(StampedPosePair {
+                    line: k + 1,
+                    stamp: None,
+                    pose,
+                })
+            });
+            return Ok((Box::new(records.collect::<Vec<_>>().into_iter()), None));
+        }
+    }
     let reader: Box<dyn BufRead> = if path.as_os_str() == "-" {
         Box::new(std::io::BufReader::new(std::io::stdin()))
     } else {

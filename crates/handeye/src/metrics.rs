@@ -151,3 +151,144 @@ pub fn residual_summary(motions: &[MotionPair], x: &Transform) -> ResidualSummar
     s.translation_rms = (s.translation_rms / n).sqrt();
     s
 }
+
+/// The difference of the rotation angles of A and B in degrees. It is 0 for a rigid X (A and B are
+/// conjugate), so a large one marks a bad pair: a wrong timestamp, a misdetected target.
+pub fn angle_gap_deg(m: &MotionPair) -> f64 {
+    let a = crate::motion::MotionFeatures::of(&m.a).angle;
+    let b = crate::motion::MotionFeatures::of(&m.b).angle;
+    (a - b).abs().to_degrees()
+}
+
+/// Splits motion pairs into those whose A and B angles agree within `threshold_deg` and the
+/// indices of the others (outliers).
+pub fn gate_outliers(motions: &[MotionPair], threshold_deg: f64) -> (Vec<MotionPair>, Vec<usize>) {
+    let mut kept = Vec::with_capacity(motions.len());
+    let mut outliers = Vec::new();
+    for (k, m) in motions.iter().enumerate() {
+        if angle_gap_deg(m) > threshold_deg {
+            outliers.push(k);
+        } else {
+            kept.push(*m);
+        }
+    }
+    (kept, outliers)
+}
+
+/// One motion pair in a [`QualityReport`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MotionQuality {
+    /// Rotation residual: angle between R_a R_x and R_x R_b, degrees.
+    pub rotation_deg: f64,
+    /// Translation residual ‖ΔT‖, input units.
+    pub translation: f64,
+    /// Rotation angle of A, degrees.
+    pub angle_deg: f64,
+    /// |θ_A − θ_B|, degrees (0 for consistent data).
+    pub angle_gap_deg: f64,
+}
+
+/// How good a calibration is, and why: residuals, the spread of the data, an uncertainty estimate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct QualityReport {
+    /// RMS and worst of the residuals.
+    pub residual: ResidualSummary,
+    /// Per motion pair, in input order.
+    pub per_motion: Vec<MotionQuality>,
+    /// Largest angle between a motion's rotation axis (as a line) and the dominant axis, degrees:
+    /// small means nearly parallel axes, which leave X's rotation about that axis weak.
+    pub axis_spread_deg: f64,
+    /// Smallest and largest rotation angle of the motions, degrees.
+    pub rotation_range_deg: [f64; 2],
+    /// One-sigma uncertainty of X's rotation (largest axis), degrees, from the Jacobian of the
+    /// residuals (Gauss–Newton covariance with the noise estimated from the residuals).
+    pub rotation_std_deg: Option<f64>,
+    /// One-sigma uncertainty of X's translation (largest axis), input units.
+    pub translation_std: Option<f64>,
+    /// Cautions in plain words.
+    pub warnings: Vec<String>,
+}
+
+/// Axis spread below which the report warns, degrees.
+pub const WARN_AXIS_SPREAD_DEG: f64 = 8.0;
+/// Rotation residual RMS above which the report warns about frame directions, degrees.
+pub const WARN_RESIDUAL_DEG: f64 = 5.0;
+
+/// The quality report of X over the motion pairs it was solved from.
+pub fn quality_report(motions: &[MotionPair], x: &Transform) -> QualityReport {
+    let per_motion: Vec<MotionQuality> = motions
+        .iter()
+        .map(|m| {
+            let r = MotionResidual::of(m, x);
+            MotionQuality {
+                rotation_deg: r.rotation_deg,
+                translation: r.delta_t.norm(),
+                angle_deg: crate::motion::MotionFeatures::of(&m.a).angle.to_degrees(),
+                angle_gap_deg: angle_gap_deg(m),
+            }
+        })
+        .collect();
+    let residual = residual_summary(motions, x);
+    let axis_spread_deg = axis_spread(motions).to_degrees();
+    let angles = per_motion.iter().map(|m| m.angle_deg);
+    let rotation_range_deg = [
+        angles.clone().fold(f64::INFINITY, f64::min),
+        angles.fold(0.0, f64::max),
+    ];
+    let covariance = crate::solve::covariance_at(motions, x);
+    let largest = |block: Matrix3<f64>| block.symmetric_eigenvalues().max().max(0.0).sqrt();
+    let rotation_std_deg =
+        covariance.map(|c| largest(c.fixed_view::<3, 3>(0, 0).into_owned()).to_degrees());
+    let translation_std = covariance.map(|c| largest(c.fixed_view::<3, 3>(3, 3).into_owned()));
+    let mut warnings = Vec::new();
+    if axis_spread_deg < WARN_AXIS_SPREAD_DEG {
+        warnings.push(format!(
+            "all rotation axes within {axis_spread_deg:.1}° of one direction: rotate about another axis"
+        ));
+    }
+    if residual.rotation_deg_rms > WARN_RESIDUAL_DEG {
+        warnings.push(format!(
+            "rotation residuals of {:.1}° RMS: check the directions of the poses (`--setup`, `base_from_gripper` vs `gripper_from_base`, `camera_from_target` vs `target_from_camera`) or reject outliers",
+            residual.rotation_deg_rms
+        ));
+    }
+    let gaps = per_motion.iter().filter(|m| m.angle_gap_deg > 3.0).count();
+    if gaps > 0 {
+        warnings.push(format!(
+            "{gaps} motion pair(s) whose robot and camera rotation angles differ by more than 3°: bad timestamps or detections; try `--reject-outliers`"
+        ));
+    }
+    QualityReport {
+        residual,
+        per_motion,
+        axis_spread_deg,
+        rotation_range_deg,
+        rotation_std_deg,
+        translation_std,
+        warnings,
+    }
+}
+
+/// Largest angle between a motion axis (as a line) and the dominant axis of Σ θ² k kᵀ, radians.
+fn axis_spread(motions: &[MotionPair]) -> f64 {
+    let mut scatter = Matrix3::zeros();
+    let features: Vec<_> = motions
+        .iter()
+        .map(|m| crate::motion::MotionFeatures::of(&m.a))
+        .collect();
+    for f in &features {
+        if let Some(k) = f.axis {
+            scatter += k * k.transpose() * (f.angle * f.angle);
+        }
+    }
+    let eigen = scatter.symmetric_eigen();
+    let dominant: Vector3<f64> = eigen
+        .eigenvectors
+        .column(eigen.eigenvalues.imax())
+        .into_owned();
+    features
+        .iter()
+        .filter_map(|f| f.axis)
+        .map(|k| k.dot(&dominant).abs().min(1.0).acos())
+        .fold(0.0, f64::max)
+}

@@ -7,6 +7,7 @@
 
 mod csv_pairs;
 mod jsonl;
+mod peer;
 mod stamped;
 mod transform;
 mod truth;
@@ -21,6 +22,7 @@ use crate::motion::PosePair;
 
 pub use csv_pairs::CsvPairs;
 pub use jsonl::{JsonlPairs, parse_pose_line};
+pub use peer::{read_moveit_json, read_opencv_yaml, read_visp_dir, read_visp_pose};
 pub use stamped::{parse_stamped_poses, read_stamped_poses};
 pub use transform::{CONSISTENCY_TOL, FieldProblem, TransformJson, transform_from_json};
 pub use truth::{Truth, read_truth, truth_json};
@@ -42,6 +44,12 @@ pub enum Format {
     Jsonl,
     /// CSV with a header naming `<frame>_x … <frame>_qw` columns.
     Csv,
+    /// OpenCV-YAML pairs `T1_i` / `T2_i` (camodocal).
+    OpencvYaml,
+    /// moveit_calibration's sample JSON (a list of matrix pairs).
+    Moveit,
+    /// A directory of ViSP `pose_fPe_*.yaml` / `pose_cPo_*.yaml` files.
+    Visp,
 }
 
 impl FromStr for Format {
@@ -101,7 +109,15 @@ impl<R: BufRead> PoseReader<R> {
         };
         Ok(match format {
             Format::Csv => Self::Csv(Box::new(CsvPairs::new(input, source)?)),
-            _ => Self::Jsonl(JsonlPairs::new(input, source)),
+            Format::Jsonl => Self::Jsonl(JsonlPairs::new(input, source)),
+            other => {
+                return Err(Error::InvalidParameter {
+                    name: "format",
+                    message: format!(
+                        "{other:?} files are read whole (`calibrate`, or `online FILE`), not streamed"
+                    ),
+                });
+            }
         })
     }
 }
@@ -161,6 +177,22 @@ pub fn open(path: &Path) -> Result<BufReader<File>> {
 /// Reads a whole pose-pair file; errors on the first bad record, or with fewer than 2 poses.
 pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     let source = path.display().to_string();
+    let format = match format {
+        Format::Auto => detect_file_format(path)?,
+        f => f,
+    };
+    let text = || {
+        std::fs::read_to_string(path).map_err(|e| Error::Io {
+            file: source.clone(),
+            source: e,
+        })
+    };
+    match format {
+        Format::OpencvYaml => return peer::read_opencv_yaml(&text()?, &source),
+        Format::Moveit => return peer::read_moveit_json(&text()?, &source),
+        Format::Visp => return peer::read_visp_dir(path),
+        _ => {}
+    }
     let mut series = PoseSeries {
         pairs: Vec::new(),
         stamps: Vec::new(),
@@ -184,6 +216,36 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
         });
     }
     Ok(series)
+}
+
+/// The format of a file for [`Format::Auto`]: a directory is ViSP, `%YAML` or
+/// `!!opencv-matrix` content is OpenCV YAML, a JSON list is moveit; otherwise decided per record
+/// ([`Format::Auto`] again, for the streaming reader).
+pub fn detect_file_format(path: &Path) -> Result<Format> {
+    if path.is_dir() {
+        return Ok(Format::Visp);
+    }
+    let mut head = [0u8; 4096];
+    let n = {
+        use std::io::Read;
+        let mut f = File::open(path).map_err(|e| Error::Io {
+            file: path.display().to_string(),
+            source: e,
+        })?;
+        f.read(&mut head).map_err(|e| Error::Io {
+            file: path.display().to_string(),
+            source: e,
+        })?
+    };
+    let text = String::from_utf8_lossy(&head[..n]);
+    let trimmed = text.trim_start();
+    if trimmed.starts_with("%YAML") || text.contains("!!opencv-matrix") {
+        Ok(Format::OpencvYaml)
+    } else if trimmed.starts_with('[') {
+        Ok(Format::Moveit)
+    } else {
+        Ok(Format::Auto)
+    }
 }
 
 /// Builds an [`Error::Parse`].

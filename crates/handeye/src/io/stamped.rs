@@ -12,7 +12,7 @@ use crate::sync::StampedPose;
 const FIELDS: [&str; 8] = ["t", "x", "y", "z", "qx", "qy", "qz", "qw"];
 
 /// Reads a stream file (see [`parse_stamped_poses`]).
-pub fn read_stamped_poses(path: &Path) -> Result<Vec<StampedPose>> {
+pub fn read_stamped_poses(path: &Path) -> Result<StampedStream> {
     let file = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
         file: file.clone(),
@@ -21,10 +21,12 @@ pub fn read_stamped_poses(path: &Path) -> Result<Vec<StampedPose>> {
     parse_stamped_poses(&text, &file)
 }
 
-/// Parses a stream. Stamps must not decrease (equal stamps are kept: the later sample wins in
-/// interpolation). Errors name the line and the field (`t`, `x` … `qw`).
-pub fn parse_stamped_poses(text: &str, source: &str) -> Result<Vec<StampedPose>> {
+/// Parses a stream. Samples out of time order (real recordings have them) are put in order, the
+/// later line first among equal stamps, and counted in the result. Errors name the line and the
+/// field (`t`, `x` … `qw`).
+pub fn parse_stamped_poses(text: &str, source: &str) -> Result<StampedStream> {
     let mut out: Vec<StampedPose> = Vec::new();
+    let mut reordered = 0usize;
     for (k, raw) in text.lines().enumerate() {
         let line = k + 1;
         let content = raw.split('#').next().unwrap_or("").trim();
@@ -58,15 +60,8 @@ pub fn parse_stamped_poses(text: &str, source: &str) -> Result<Vec<StampedPose>>
                     )
                 })?;
         }
-        if let Some(last) = out.last()
-            && v[0] < last.stamp
-        {
-            return Err(parse_error(
-                source,
-                line,
-                "t",
-                format!("time goes backwards ({} after {})", v[0], last.stamp),
-            ));
+        if out.last().is_some_and(|last| v[0] < last.stamp) {
+            reordered += 1;
         }
         let pose = transform_from_xyz_quat_xyzw([v[1], v[2], v[3]], [v[4], v[5], v[6], v[7]])
             .map_err(|e| parse_error(source, line, "qx..qw", e.to_string()))?;
@@ -80,7 +75,20 @@ pub fn parse_stamped_poses(text: &str, source: &str) -> Result<Vec<StampedPose>>
             format!("{} pose(s) in the stream: at least 2 are needed", out.len()),
         ));
     }
-    Ok(out)
+    out.sort_by(|a, b| a.stamp.total_cmp(&b.stamp));
+    Ok(StampedStream {
+        poses: out,
+        reordered,
+    })
+}
+
+/// A parsed stream.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StampedStream {
+    /// The samples in time order.
+    pub poses: Vec<StampedPose>,
+    /// How many samples came before an earlier stamp in the file and were moved.
+    pub reordered: usize,
 }
 
 #[cfg(test)]
@@ -96,6 +104,17 @@ mod tests {
         .unwrap();
         let b = parse_stamped_poses("1.0 0 0 0 0 0 0 1\n2.0 1 0 0 0 0 0 1\n", "b").unwrap();
         assert_eq!(a, b);
+    }
+
+    #[test]
+    fn out_of_order_samples_are_sorted_and_counted() {
+        let s = parse_stamped_poses("2 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n3 0 0 0 0 0 0 1\n", "s")
+            .unwrap();
+        assert_eq!(s.reordered, 1);
+        assert_eq!(
+            s.poses.iter().map(|p| p.stamp).collect::<Vec<_>>(),
+            vec![1.0, 2.0, 3.0]
+        );
     }
 
     #[test]
@@ -119,7 +138,7 @@ mod tests {
         check("1 0 0 0 0 0 0 1\n2 0 0 0 0 0 1\n", 2, "-");
         check("1 0 0 0 0 0 0 1\n2 0 0 zz 0 0 0 1\n", 2, "z");
         check("1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 3\n", 2, "qx..qw");
-        check("2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", 2, "t");
+        check("1 0 0 0 0 0 0 1\nx 0 0 0 0 0 0 1\n", 2, "t");
         check("1 0 0 0 0 0 0 1\n", 0, "-");
     }
 }

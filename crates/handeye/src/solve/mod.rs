@@ -28,7 +28,7 @@ pub use andreff_joint::andreff_joint;
 pub use daniilidis::daniilidis;
 pub use horaud::horaud;
 pub use park::park;
-pub use refine::{RefineOptions, Refinement, Termination, refine, refine_from};
+pub use refine::{RefineOptions, Refinement, Termination, covariance_at, refine, refine_from};
 pub use rotation_system::{RotationSolution, RotationSystem};
 pub use tsai::{TsaiOptions, tsai, tsai_with};
 

@@ -313,6 +313,12 @@ fn run(
     }
 }
 
+/// Covariance of X's parameters (rotation increment of R_x exp([δ]×) in radians, then t_x) at a
+/// given X, as [`Refinement::covariance`]: the uncertainty of a solution from its residuals.
+pub fn covariance_at(motions: &[MotionPair], x: &Transform) -> Option<Matrix6<f64>> {
+    covariance(motions, &rotation_matrix(x), &x.translation.vector)
+}
+
 /// Covariance of (δ, t): `s² (JᵀJ)⁻¹` of the problem weighted by the final block RMS values, with
 /// `s² = Σr² / (N − 6)` for N residuals (Gauss–Newton with each block's noise estimated from its
 /// own residuals).
