@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::metrics::{gate_outliers, quality_report, residual_summary};
+use handeye::metrics::{find_outliers, quality_report, remove_outliers, residual_summary};
 use handeye::solve::{TsaiOptions, tsai_with};
 use handeye::{Error, Method, Pairing, motion_pairs, solve};
 use serde_json::{Map, Value, json};
@@ -65,13 +65,11 @@ pub fn run(args: Args) -> Result<()> {
         }
         .into());
     }
-    let all_motions = motion_pairs(&poses, pairing, setup);
-    let (kept, outliers) = gate_outliers(&all_motions, args.outlier_deg);
-    let motions = if args.reject_outliers {
-        kept
-    } else {
-        all_motions
-    };
+    let mut motions = motion_pairs(&poses, pairing, setup);
+    let outliers = find_outliers(&motions, args.outlier_deg);
+    if args.reject_outliers {
+        remove_outliers(&mut motions, &outliers);
+    }
     let calibration = if method == Method::Tsai && args.tsai_opencv_filter {
         tsai_with(
             &motions,
@@ -83,7 +81,7 @@ pub fn run(args: Args) -> Result<()> {
         solve(method, &motions)?
     };
     let residual = residual_summary(&motions, &calibration.x);
-    let quality = quality_report(&motions, &calibration.x);
+    let quality = quality_report(&motions, &calibration.x, MAX_PER_MOTION);
     let mut out = Map::new();
     out.insert("method".into(), json!(method.name()));
     out.insert("setup".into(), json!(setup.name()));
@@ -101,7 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         }),
     );
     out.insert("conditioning".into(), json!(calibration.conditioning));
-    let per_motion = if quality.per_motion.len() <= MAX_PER_MOTION {
+    let per_motion = if motions.len() <= MAX_PER_MOTION {
         json!(quality.per_motion)
     } else {
         Value::Null

@@ -7,14 +7,24 @@ use assert_cmd::Command;
 use serde_json::Value;
 
 fn real(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/real").join(rel)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../testdata/real")
+        .join(rel)
 }
 
 fn run(args: &[&str]) -> (i32, String, String) {
-    let out = Command::cargo_bin("handeye").unwrap().args(args).output().unwrap();
+    let out = Command::cargo_bin("handeye")
+        .unwrap()
+        .args(args)
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(!err.contains("panicked"), "{err}");
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into_owned(), err)
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        err,
+    )
 }
 
 fn calibrate(args: &[&str]) -> Value {
@@ -33,27 +43,52 @@ fn ethz_streams_calibrate_and_run_online() {
     let v = calibrate(&["--robot", r, "--camera", c, "--method", "refine"]);
     assert!(v["motions"].as_u64().unwrap() > 1000);
     // Both streams agree on one X: rotation residuals a fraction of a degree, translations mm.
-    assert!(v["residual"]["rotation_deg_rms"].as_f64().unwrap() < 0.5, "{}", v["residual"]);
-    assert!(v["residual"]["translation_rms"].as_f64().unwrap() < 0.01, "{}", v["residual"]);
+    assert!(
+        v["residual"]["rotation_deg_rms"].as_f64().unwrap() < 0.5,
+        "{}",
+        v["residual"]
+    );
+    assert!(
+        v["residual"]["translation_rms"].as_f64().unwrap() < 0.01,
+        "{}",
+        v["residual"]
+    );
     assert_eq!(v["time_offset_s"], 0.0);
     let (code, out, err) = run(&["online", "--robot", r, "--camera", c, "--d-max", "0.1"]);
     assert_eq!(code, 0, "{err}");
-    let events: Vec<Value> = out.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let events: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     assert!(!events.is_empty(), "{err}");
-    assert!(events.iter().all(|e| e["time_offset_s"] == 0.0 && e["matrix"].is_array()));
+    assert!(
+        events
+            .iter()
+            .all(|e| e["time_offset_s"] == 0.0 && e["matrix"].is_array())
+    );
 }
 
 #[test]
 fn a_known_clock_offset_is_recovered_within_a_camera_period() {
     let robot = real("ethz-asl/robot_arm_sim_B_H.csv");
     let camera_text = std::fs::read_to_string(real("ethz-asl/robot_arm_sim_W_E.csv")).unwrap();
-    let stamps: Vec<f64> = camera_text.lines().filter_map(|l| l.split(',').next()?.trim().parse().ok()).collect();
+    let stamps: Vec<f64> = camera_text
+        .lines()
+        .filter_map(|l| l.split(',').next()?.trim().parse().ok())
+        .collect();
     let mut periods: Vec<f64> = stamps.windows(2).map(|w| w[1] - w[0]).collect();
     periods.sort_by(f64::total_cmp);
     let period = periods[periods.len() / 2];
     let dir = tempfile::tempdir().unwrap();
     // The recording's own offset, then the same camera stream shifted by a known amount.
-    let base = calibrate(&["--robot", robot.to_str().unwrap(), "--camera", real("ethz-asl/robot_arm_sim_W_E.csv").to_str().unwrap(), "--time-offset", "auto"]);
+    let base = calibrate(&[
+        "--robot",
+        robot.to_str().unwrap(),
+        "--camera",
+        real("ethz-asl/robot_arm_sim_W_E.csv").to_str().unwrap(),
+        "--time-offset",
+        "auto",
+    ]);
     let own = base["time_offset_s"].as_f64().unwrap();
     for shift in [0.25, -0.4] {
         let shifted: String = camera_text
@@ -65,9 +100,19 @@ fn a_known_clock_offset_is_recovered_within_a_camera_period() {
             .collect();
         let path = dir.path().join("shifted.csv");
         std::fs::write(&path, shifted).unwrap();
-        let v = calibrate(&["--robot", robot.to_str().unwrap(), "--camera", path.to_str().unwrap(), "--time-offset", "auto"]);
+        let v = calibrate(&[
+            "--robot",
+            robot.to_str().unwrap(),
+            "--camera",
+            path.to_str().unwrap(),
+            "--time-offset",
+            "auto",
+        ]);
         let found = v["time_offset_s"].as_f64().unwrap();
-        assert!((found - own - shift).abs() < period, "shift {shift}: found {found}, own {own}, period {period}");
+        assert!(
+            (found - own - shift).abs() < period,
+            "shift {shift}: found {found}, own {own}, period {period}"
+        );
         assert!(v["residual"]["rotation_deg_rms"].as_f64().unwrap() < 0.5);
     }
 }
@@ -80,22 +125,52 @@ fn camodocal_outliers_are_found_and_rejecting_them_lowers_the_residuals() {
     let without = calibrate(&[f, "--setup", "eye-to-hand", "--reject-outliers"]);
     let outliers = &with["quality"]["outliers"];
     assert!(outliers["count"].as_u64().unwrap() >= 3, "{outliers}");
-    assert!(with["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("--reject-outliers")));
-    assert_eq!(without["motions"].as_u64().unwrap() + outliers["count"].as_u64().unwrap(), with["motions"].as_u64().unwrap());
+    assert!(
+        with["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("--reject-outliers"))
+    );
+    assert_eq!(
+        without["motions"].as_u64().unwrap() + outliers["count"].as_u64().unwrap(),
+        with["motions"].as_u64().unwrap()
+    );
     for key in ["rotation_deg_rms", "translation_rms"] {
-        let (a, b) = (with["residual"][key].as_f64().unwrap(), without["residual"][key].as_f64().unwrap());
+        let (a, b) = (
+            with["residual"][key].as_f64().unwrap(),
+            without["residual"][key].as_f64().unwrap(),
+        );
         assert!(b < 0.7 * a, "{key}: {a} with outliers, {b} without");
     }
     // The wrong setup is inconsistent, and says so.
     let wrong = calibrate(&[f]);
     assert!(wrong["residual"]["rotation_deg_rms"].as_f64().unwrap() > 20.0);
-    assert!(wrong["warnings"].as_array().unwrap().iter().any(|w| w.as_str().unwrap().contains("directions")));
+    assert!(
+        wrong["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("directions"))
+    );
 }
 
 #[test]
 fn results_can_be_written_as_ros_yaml() {
-    let (code, out, err) = run(&["calibrate", real("camodocal/TransformPairsInput.yml").to_str().unwrap(), "--setup", "eye-to-hand", "--output", "yaml"]);
+    let (code, out, err) = run(&[
+        "calibrate",
+        real("camodocal/TransformPairsInput.yml").to_str().unwrap(),
+        "--setup",
+        "eye-to-hand",
+        "--output",
+        "yaml",
+    ]);
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("frame: base_from_camera"));
-    assert!(out.contains("translation: {x: ") && out.contains("rotation: {x: ") && out.contains(", w: "), "{out}");
+    assert!(
+        out.contains("translation: {x: ")
+            && out.contains("rotation: {x: ")
+            && out.contains(", w: "),
+        "{out}"
+    );
 }

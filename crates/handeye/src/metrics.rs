@@ -160,19 +160,29 @@ pub fn angle_gap_deg(m: &MotionPair) -> f64 {
     (a - b).abs().to_degrees()
 }
 
-/// Splits motion pairs into those whose A and B angles agree within `threshold_deg` and the
-/// indices of the others (outliers).
-pub fn gate_outliers(motions: &[MotionPair], threshold_deg: f64) -> (Vec<MotionPair>, Vec<usize>) {
-    let mut kept = Vec::with_capacity(motions.len());
-    let mut outliers = Vec::new();
-    for (k, m) in motions.iter().enumerate() {
-        if angle_gap_deg(m) > threshold_deg {
-            outliers.push(k);
-        } else {
-            kept.push(*m);
+/// The indices of the motion pairs whose A and B rotation angles differ by more than
+/// `threshold_deg` (outliers).
+pub fn find_outliers(motions: &[MotionPair], threshold_deg: f64) -> Vec<usize> {
+    motions
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| angle_gap_deg(m) > threshold_deg)
+        .map(|(k, _)| k)
+        .collect()
+}
+
+/// Removes the motion pairs at `outliers` (sorted indices, as [`find_outliers`] gives them).
+pub fn remove_outliers(motions: &mut Vec<MotionPair>, outliers: &[usize]) {
+    let mut next = outliers.iter().peekable();
+    let mut k = 0;
+    motions.retain(|_| {
+        let drop = next.peek() == Some(&&k);
+        if drop {
+            next.next();
         }
-    }
-    (kept, outliers)
+        k += 1;
+        !drop
+    });
 }
 
 /// One motion pair in a [`QualityReport`].
@@ -193,7 +203,7 @@ pub struct MotionQuality {
 pub struct QualityReport {
     /// RMS and worst of the residuals.
     pub residual: ResidualSummary,
-    /// Per motion pair, in input order.
+    /// Per motion pair, in input order (empty above the limit given to [`quality_report`]).
     pub per_motion: Vec<MotionQuality>,
     /// Largest angle between a motion's rotation axis (as a line) and the dominant axis, degrees:
     /// small means nearly parallel axes, which leave X's rotation about that axis weak.
@@ -214,9 +224,14 @@ pub const WARN_AXIS_SPREAD_DEG: f64 = 8.0;
 /// Rotation residual RMS above which the report warns about frame directions, degrees.
 pub const WARN_RESIDUAL_DEG: f64 = 5.0;
 
-/// The quality report of X over the motion pairs it was solved from.
-pub fn quality_report(motions: &[MotionPair], x: &Transform) -> QualityReport {
-    let per_motion: Vec<MotionQuality> = motions
+/// The quality report of X over the motion pairs it was solved from. Per-motion entries are kept
+/// for at most `max_per_motion` motions (the summary covers all of them).
+pub fn quality_report(
+    motions: &[MotionPair],
+    x: &Transform,
+    max_per_motion: usize,
+) -> QualityReport {
+    let per_motion_all: Vec<MotionQuality> = motions
         .iter()
         .map(|m| {
             let r = MotionResidual::of(m, x);
@@ -230,7 +245,7 @@ pub fn quality_report(motions: &[MotionPair], x: &Transform) -> QualityReport {
         .collect();
     let residual = residual_summary(motions, x);
     let axis_spread_deg = axis_spread(motions).to_degrees();
-    let angles = per_motion.iter().map(|m| m.angle_deg);
+    let angles = per_motion_all.iter().map(|m| m.angle_deg);
     let rotation_range_deg = [
         angles.clone().fold(f64::INFINITY, f64::min),
         angles.fold(0.0, f64::max),
@@ -252,7 +267,15 @@ pub fn quality_report(motions: &[MotionPair], x: &Transform) -> QualityReport {
             residual.rotation_deg_rms
         ));
     }
-    let gaps = per_motion.iter().filter(|m| m.angle_gap_deg > 3.0).count();
+    let gaps = per_motion_all
+        .iter()
+        .filter(|m| m.angle_gap_deg > 3.0)
+        .count();
+    let per_motion = if per_motion_all.len() <= max_per_motion {
+        per_motion_all
+    } else {
+        Vec::new()
+    };
     if gaps > 0 {
         warnings.push(format!(
             "{gaps} motion pair(s) whose robot and camera rotation angles differ by more than 3°: bad timestamps or detections; try `--reject-outliers`"
