@@ -4,6 +4,7 @@
 //! Exit codes: 0 success, 2 bad input (file, line and field named), 3 valid input from which X
 //! cannot be determined.
 
+mod bench;
 mod calibrate;
 mod demo;
 mod experiment;
@@ -38,6 +39,8 @@ enum Command {
     Experiment(experiment::Args),
     /// Simulate a stream, calibrate it online three ways and compare with the true X.
     Demo(demo::Args),
+    /// Time every solver and the online calibrator in-process.
+    Bench(bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -48,6 +51,7 @@ fn main() -> ExitCode {
         Command::Simulate(a) => simulate::run(a),
         Command::Experiment(a) => experiment::run(a),
         Command::Demo(a) => demo::run(a),
+        Command::Bench(a) => bench::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,235 @@
+//! `handeye bench`: every solver timed in-process, on simulated data or on given files, and the
+//! online calibrator's throughput. For speed comparisons run side by side in one process run
+//! (see bench/compare_opencv.sh); the criterion benches in crates/handeye/benches are the
+//! statistically careful ones.
+
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use clap::Args as ClapArgs;
+use handeye::io::{Format, read_pose_file, read_truth};
+use handeye::metrics::errors_against_truth;
+use handeye::online::{OnlineCalibrator, OnlineConfig};
+use handeye::select::AdaptiveParams;
+use handeye::sim::{SimConfig, simulate};
+use handeye::{Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
+use serde_json::{Value, json};
+
+use crate::output::print_json;
+
+/// Options of `handeye bench`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// Pose counts of the simulated datasets (ignored with --input).
+    #[arg(long, value_delimiter = ',', default_values_t = [10usize, 50, 200, 1000])]
+    poses: Vec<usize>,
+    /// Pairings to time.
+    #[arg(long, value_delimiter = ',', default_values = ["consecutive", "all"])]
+    pairs: Vec<String>,
+    /// Methods to time.
+    #[arg(long, value_delimiter = ',', default_values = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
+    methods: Vec<String>,
+    /// Pose files to time instead of simulated data (each may have a `<stem>.truth.json` beside
+    /// it, or give --truth per file in the same order).
+    #[arg(long)]
+    input: Vec<PathBuf>,
+    /// Truth files for the errors of --input datasets, in the same order.
+    #[arg(long)]
+    truth: Vec<PathBuf>,
+    /// Least wall time spent timing each case, seconds.
+    #[arg(long, default_value_t = 0.3)]
+    min_time: f64,
+    /// Print the JSON only (no table on stderr).
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// One dataset: its name, poses and true X if known.
+struct Dataset {
+    name: String,
+    poses: Vec<PosePair>,
+    truth: Option<Transform>,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let datasets = datasets(&args)?;
+    let methods: Vec<Method> = args
+        .methods
+        .iter()
+        .map(|m| m.parse())
+        .collect::<handeye::Result<_>>()?;
+    let budget = Duration::from_secs_f64(args.min_time);
+    let mut rows = Vec::new();
+    for d in &datasets {
+        for pairs in &args.pairs {
+            let pairing = if pairs == "all" {
+                Pairing::All
+            } else {
+                Pairing::Consecutive
+            };
+            for &method in &methods {
+                // A call includes building the motions from the poses, as OpenCV's does.
+                let call = || solve(method, &motion_pairs(&d.poses, pairing, Setup::EyeInHand));
+                let result = call();
+                let (median, calls) = time(|| black_box(call()).is_ok(), budget);
+                let errors = match (&result, &d.truth) {
+                    (Ok(c), Some(t)) => {
+                        let e = errors_against_truth(&c.x, t);
+                        json!({"rotation_deg": e.rot_deg, "translation_rel": e.trans_rel})
+                    }
+                    _ => Value::Null,
+                };
+                rows.push(json!({
+                    "dataset": d.name,
+                    "poses": d.poses.len(),
+                    "pairs": pairs,
+                    "method": method.name(),
+                    "median_s": median,
+                    "calls": calls,
+                    "error": errors,
+                    "failed": result.err().map(|e| e.to_string()),
+                }));
+            }
+        }
+    }
+    let online = online_throughput(budget)?;
+    if !args.quiet {
+        eprintln!("| dataset | poses | pairs | method | median per call | calls |");
+        eprintln!("|---|---|---|---|---|---|");
+        for r in &rows {
+            eprintln!(
+                "| {} | {} | {} | {} | {:.2} µs | {} |",
+                r["dataset"].as_str().unwrap_or(""),
+                r["poses"],
+                r["pairs"].as_str().unwrap_or(""),
+                r["method"].as_str().unwrap_or(""),
+                r["median_s"].as_f64().unwrap_or(f64::NAN) * 1e6,
+                r["calls"]
+            );
+        }
+        eprintln!(
+            "online push: {:.1} million poses/s without calibration; a calibration event in {:.2} µs",
+            online["push_per_s"].as_f64().unwrap_or(0.0) / 1e6,
+            online["calibration_s"].as_f64().unwrap_or(f64::NAN) * 1e6
+        );
+    }
+    print_json(&json!({"solvers": rows, "online": online}))
+}
+
+/// The datasets: the given files, or simulated series.
+fn datasets(args: &Args) -> Result<Vec<Dataset>> {
+    if args.input.is_empty() {
+        return Ok(args
+            .poses
+            .iter()
+            .map(|&n| {
+                let s = simulate(
+                    &SimConfig {
+                        poses: n,
+                        ..SimConfig::default()
+                    },
+                    42,
+                    n as u64,
+                );
+                Dataset {
+                    name: format!("sim{n}"),
+                    poses: s.poses,
+                    truth: Some(s.gripper_from_camera),
+                }
+            })
+            .collect());
+    }
+    args.input
+        .iter()
+        .enumerate()
+        .map(|(k, path)| {
+            let poses = read_pose_file(path, Format::Auto)?.pairs;
+            let beside = path.with_extension("truth.json");
+            let truth_path = args
+                .truth
+                .get(k)
+                .cloned()
+                .or_else(|| beside.exists().then_some(beside));
+            let truth = truth_path.map(|p| read_truth(&p)).transpose()?.map(|t| t.x);
+            let name = path
+                .file_stem()
+                .map_or("input".into(), |s| s.to_string_lossy().into_owned());
+            Ok(Dataset { name, poses, truth })
+        })
+        .collect()
+}
+
+/// Median seconds per call over batches, and the number of calls timed.
+fn time(mut f: impl FnMut() -> bool, budget: Duration) -> (f64, usize) {
+    // Calibrate a batch size that takes about 10 ms.
+    let started = Instant::now();
+    let mut batch = 1usize;
+    loop {
+        let t = Instant::now();
+        for _ in 0..batch {
+            f();
+        }
+        if t.elapsed() > Duration::from_millis(10) || batch > 1 << 24 {
+            break;
+        }
+        batch *= 2;
+    }
+    let mut samples = Vec::new();
+    let mut calls = 0;
+    while samples.len() < 5 || started.elapsed() < budget {
+        let t = Instant::now();
+        for _ in 0..batch {
+            f();
+        }
+        samples.push(t.elapsed().as_secs_f64() / batch as f64);
+        calls += batch;
+        if samples.len() >= 1000 {
+            break;
+        }
+    }
+    samples.sort_by(f64::total_cmp);
+    (samples[samples.len() / 2], calls)
+}
+
+/// Poses per second through `push` without calibrations, and the time of one calibration event.
+fn online_throughput(budget: Duration) -> Result<Value> {
+    let s = simulate(
+        &SimConfig {
+            poses: 1000,
+            ..SimConfig::default()
+        },
+        42,
+        0,
+    );
+    // Thresholds nothing meets and relaxation out of reach: every push searches, none calibrates.
+    let params = AdaptiveParams {
+        d_max: 100.0,
+        interval: usize::MAX / 2,
+        ..AdaptiveParams::default()
+    };
+    let mut quiet = OnlineCalibrator::new(OnlineConfig {
+        params,
+        ..OnlineConfig::default()
+    })?;
+    let still = PosePair {
+        base_from_gripper: Transform::identity(),
+        camera_from_target: Transform::identity(),
+    };
+    for _ in 0..6 {
+        quiet.push(&still)?;
+    }
+    let mut k = 0;
+    let (push, _) = time(
+        || {
+            k = (k + 1) % s.poses.len();
+            quiet.push(&s.poses[k]).is_ok_and(|e| e.is_empty())
+        },
+        budget,
+    );
+    let pairs = motion_pairs(&s.poses[..3], Pairing::Consecutive, Setup::EyeInHand);
+    let (calibration, _) = time(|| handeye::andreff(black_box(&pairs)).is_ok(), budget);
+    Ok(json!({"push_s": push, "push_per_s": 1.0 / push, "calibration_s": calibration}))
+}
