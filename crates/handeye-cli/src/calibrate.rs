@@ -4,7 +4,7 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::metrics::{find_outliers, quality_report, remove_outliers, residual_summary};
 use handeye::solve::{TsaiOptions, tsai_with};
-use handeye::{Error, Method, Pairing, motion_pairs, solve};
+use handeye::{AllPairs, Error, Method, MotionSource, Pairing, Setup, motion_pairs, solve};
 use serde_json::{Map, Value, json};
 
 use crate::input::{InputArgs, read_all};
@@ -65,23 +65,41 @@ pub fn run(args: Args) -> Result<()> {
         }
         .into());
     }
+    if pairing == Pairing::All && !args.reject_outliers {
+        // All pairs are made on the fly: memory stays O(poses), not O(poses²).
+        let source = AllPairs::new(&poses, setup);
+        let outliers = find_outliers(&source, args.outlier_deg);
+        return report(&args, method, setup, &source, outliers, time_offset);
+    }
     let mut motions = motion_pairs(&poses, pairing, setup);
     let outliers = find_outliers(&motions, args.outlier_deg);
     if args.reject_outliers {
         remove_outliers(&mut motions, &outliers);
     }
+    report(&args, method, setup, &motions, outliers, time_offset)
+}
+
+/// Solves X from the motions and prints the result with its quality report.
+fn report(
+    args: &Args,
+    method: Method,
+    setup: Setup,
+    motions: &(impl MotionSource + ?Sized),
+    outliers: Vec<usize>,
+    time_offset: Option<f64>,
+) -> Result<()> {
     let calibration = if method == Method::Tsai && args.tsai_opencv_filter {
         tsai_with(
-            &motions,
+            motions,
             &TsaiOptions {
                 opencv_filter: true,
             },
         )?
     } else {
-        solve(method, &motions)?
+        solve(method, motions)?
     };
-    let residual = residual_summary(&motions, &calibration.x);
-    let quality = quality_report(&motions, &calibration.x, MAX_PER_MOTION);
+    let residual = residual_summary(motions, &calibration.x);
+    let quality = quality_report(motions, &calibration.x, MAX_PER_MOTION);
     let mut out = Map::new();
     out.insert("method".into(), json!(method.name()));
     out.insert("setup".into(), json!(setup.name()));
@@ -99,7 +117,7 @@ pub fn run(args: Args) -> Result<()> {
         }),
     );
     out.insert("conditioning".into(), json!(calibration.conditioning));
-    let per_motion = if motions.len() <= MAX_PER_MOTION {
+    let per_motion = if motions.count() <= MAX_PER_MOTION {
         json!(quality.per_motion)
     } else {
         Value::Null
@@ -133,7 +151,7 @@ pub fn run(args: Args) -> Result<()> {
         eprintln!(
             "rejected {} outlier motion pair(s) of {}",
             outliers.len(),
-            outliers.len() + motions.len()
+            outliers.len() + motions.count()
         );
     }
     for w in &warnings {

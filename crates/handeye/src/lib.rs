@@ -34,7 +34,9 @@ pub mod solve;
 pub mod sync;
 
 pub use error::{Degeneracy, Error, Result, TransformProblem};
-pub use motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
+pub use motion::{
+    AllPairs, MotionFeatures, MotionPair, MotionSource, Pairing, PosePair, Setup, motion_pairs,
+};
 pub use pose::Transform;
 pub use solve::{
     Calibration, Method, Warning, andreff, andreff_joint, daniilidis, horaud, park, refine, solve,

@@ -6,7 +6,7 @@
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::motion::MotionPair;
+use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{Transform, rotation_angle_between, rotation_matrix};
 
 /// Smallest ‖t‖ used as a divisor in relative translation errors (an X with zero translation
@@ -102,15 +102,15 @@ pub struct ResidualRms {
 }
 
 /// rmsR and rmsT of the residuals of `motions` under `x` (SPEC sec. 2, residual form).
-pub fn residual_rms(motions: &[MotionPair], x: &Transform) -> ResidualRms {
+pub fn residual_rms(motions: &(impl MotionSource + ?Sized), x: &Transform) -> ResidualRms {
     let mut sum_r = 0.0;
     let mut sum_t = 0.0;
-    for m in motions {
+    motions.for_each_motion(|m| {
         let res = MotionResidual::of(m, x);
         sum_r += res.delta_r.norm_squared();
         sum_t += res.delta_t.norm_squared();
-    }
-    let n = motions.len().max(1) as f64;
+    });
+    let n = motions.count().max(1) as f64;
     ResidualRms {
         rms_r: (sum_r / (9.0 * n)).sqrt(),
         rms_t: (sum_t / (3.0 * n)).sqrt() / x.translation.vector.norm().max(MIN_NORM),
@@ -131,22 +131,22 @@ pub struct ResidualSummary {
 }
 
 /// Summarises the A X − X B residuals of `motions` under `x`.
-pub fn residual_summary(motions: &[MotionPair], x: &Transform) -> ResidualSummary {
+pub fn residual_summary(motions: &(impl MotionSource + ?Sized), x: &Transform) -> ResidualSummary {
     let mut s = ResidualSummary {
         rotation_deg_rms: 0.0,
         translation_rms: 0.0,
         rotation_deg_max: 0.0,
         translation_max: 0.0,
     };
-    for m in motions {
+    motions.for_each_motion(|m| {
         let res = MotionResidual::of(m, x);
         let t = res.delta_t.norm();
         s.rotation_deg_rms += res.rotation_deg * res.rotation_deg;
         s.translation_rms += t * t;
         s.rotation_deg_max = s.rotation_deg_max.max(res.rotation_deg);
         s.translation_max = s.translation_max.max(t);
-    }
-    let n = motions.len().max(1) as f64;
+    });
+    let n = motions.count().max(1) as f64;
     s.rotation_deg_rms = (s.rotation_deg_rms / n).sqrt();
     s.translation_rms = (s.translation_rms / n).sqrt();
     s
@@ -162,13 +162,16 @@ pub fn angle_gap_deg(m: &MotionPair) -> f64 {
 
 /// The indices of the motion pairs whose A and B rotation angles differ by more than
 /// `threshold_deg` (outliers).
-pub fn find_outliers(motions: &[MotionPair], threshold_deg: f64) -> Vec<usize> {
-    motions
-        .iter()
-        .enumerate()
-        .filter(|(_, m)| angle_gap_deg(m) > threshold_deg)
-        .map(|(k, _)| k)
-        .collect()
+pub fn find_outliers(motions: &(impl MotionSource + ?Sized), threshold_deg: f64) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut k = 0;
+    motions.for_each_motion(|m| {
+        if angle_gap_deg(m) > threshold_deg {
+            out.push(k);
+        }
+        k += 1;
+    });
+    out
 }
 
 /// Removes the motion pairs at `outliers` (sorted indices, as [`find_outliers`] gives them).
@@ -227,29 +230,31 @@ pub const WARN_RESIDUAL_DEG: f64 = 5.0;
 /// The quality report of X over the motion pairs it was solved from. Per-motion entries are kept
 /// for at most `max_per_motion` motions (the summary covers all of them).
 pub fn quality_report(
-    motions: &[MotionPair],
+    motions: &(impl MotionSource + ?Sized),
     x: &Transform,
     max_per_motion: usize,
 ) -> QualityReport {
-    let per_motion_all: Vec<MotionQuality> = motions
-        .iter()
-        .map(|m| {
-            let r = MotionResidual::of(m, x);
-            MotionQuality {
-                rotation_deg: r.rotation_deg,
-                translation: r.delta_t.norm(),
-                angle_deg: crate::motion::MotionFeatures::of(&m.a).angle.to_degrees(),
-                angle_gap_deg: angle_gap_deg(m),
-            }
-        })
-        .collect();
+    let keep = motions.count() <= max_per_motion;
+    let mut per_motion = Vec::new();
+    let (mut smallest, mut largest, mut gaps) = (f64::INFINITY, 0.0_f64, 0usize);
+    motions.for_each_motion(|m| {
+        let r = MotionResidual::of(m, x);
+        let q = MotionQuality {
+            rotation_deg: r.rotation_deg,
+            translation: r.delta_t.norm(),
+            angle_deg: crate::motion::MotionFeatures::of(&m.a).angle.to_degrees(),
+            angle_gap_deg: angle_gap_deg(m),
+        };
+        smallest = smallest.min(q.angle_deg);
+        largest = largest.max(q.angle_deg);
+        gaps += usize::from(q.angle_gap_deg > 3.0);
+        if keep {
+            per_motion.push(q);
+        }
+    });
     let residual = residual_summary(motions, x);
     let axis_spread_deg = axis_spread(motions).to_degrees();
-    let angles = per_motion_all.iter().map(|m| m.angle_deg);
-    let rotation_range_deg = [
-        angles.clone().fold(f64::INFINITY, f64::min),
-        angles.fold(0.0, f64::max),
-    ];
+    let rotation_range_deg = [smallest, largest];
     let covariance = crate::solve::covariance_at(motions, x);
     let largest = |block: Matrix3<f64>| block.symmetric_eigenvalues().max().max(0.0).sqrt();
     let rotation_std_deg =
@@ -267,15 +272,6 @@ pub fn quality_report(
             residual.rotation_deg_rms
         ));
     }
-    let gaps = per_motion_all
-        .iter()
-        .filter(|m| m.angle_gap_deg > 3.0)
-        .count();
-    let per_motion = if per_motion_all.len() <= max_per_motion {
-        per_motion_all
-    } else {
-        Vec::new()
-    };
     if gaps > 0 {
         warnings.push(format!(
             "{gaps} motion pair(s) whose robot and camera rotation angles differ by more than 3°: bad timestamps or detections; try `--reject-outliers`"
@@ -293,25 +289,24 @@ pub fn quality_report(
 }
 
 /// Largest angle between a motion axis (as a line) and the dominant axis of Σ θ² k kᵀ, radians.
-fn axis_spread(motions: &[MotionPair]) -> f64 {
+pub(crate) fn axis_spread(motions: &(impl MotionSource + ?Sized)) -> f64 {
     let mut scatter = Matrix3::zeros();
-    let features: Vec<_> = motions
-        .iter()
-        .map(|m| crate::motion::MotionFeatures::of(&m.a))
-        .collect();
-    for f in &features {
+    motions.for_each_motion(|m| {
+        let f = crate::motion::MotionFeatures::of(&m.a);
         if let Some(k) = f.axis {
             scatter += k * k.transpose() * (f.angle * f.angle);
         }
-    }
+    });
     let eigen = scatter.symmetric_eigen();
     let dominant: Vector3<f64> = eigen
         .eigenvectors
         .column(eigen.eigenvalues.imax())
         .into_owned();
-    features
-        .iter()
-        .filter_map(|f| f.axis)
-        .map(|k| k.dot(&dominant).abs().min(1.0).acos())
-        .fold(0.0, f64::max)
+    let mut spread = 0.0_f64;
+    motions.for_each_motion(|m| {
+        if let Some(k) = crate::motion::MotionFeatures::of(&m.a).axis {
+            spread = spread.max(k.dot(&dominant).abs().min(1.0).acos());
+        }
+    });
+    spread
 }

@@ -167,3 +167,121 @@ impl MotionFeatures {
         crate::pose::axis_angle_between(self.axis.as_ref(), other.axis.as_ref())
     }
 }
+
+/// A set of motion pairs that the solvers can go through as often as they need, without
+/// necessarily storing them: a slice of [`MotionPair`]s, or [`AllPairs`], which makes the
+/// n(n − 1)/2 motions of every pose pair on the fly in constant memory.
+pub trait MotionSource {
+    /// Number of motion pairs.
+    fn count(&self) -> usize;
+
+    /// Calls `f` on every motion pair, in order.
+    fn for_each_motion(&self, f: impl FnMut(&MotionPair));
+}
+
+impl MotionSource for [MotionPair] {
+    fn count(&self) -> usize {
+        self.len()
+    }
+
+    fn for_each_motion(&self, f: impl FnMut(&MotionPair)) {
+        self.iter().for_each(f);
+    }
+}
+
+impl MotionSource for Vec<MotionPair> {
+    fn count(&self) -> usize {
+        self.len()
+    }
+
+    fn for_each_motion(&self, f: impl FnMut(&MotionPair)) {
+        self.iter().for_each(f);
+    }
+}
+
+impl<const N: usize> MotionSource for [MotionPair; N] {
+    fn count(&self) -> usize {
+        N
+    }
+
+    fn for_each_motion(&self, f: impl FnMut(&MotionPair)) {
+        self.iter().for_each(f);
+    }
+}
+
+/// The motions of every pose pair i < j ([`Pairing::All`], built as OpenCV builds them), made on
+/// the fly: memory O(n) instead of O(n²), the same motions in the same order as
+/// `motion_pairs(poses, Pairing::All, setup)`.
+#[derive(Debug, Clone)]
+pub struct AllPairs {
+    /// Q_k and Q_k⁻¹ of each pose.
+    hand: Vec<(Transform, Transform)>,
+    /// P_k⁻¹ = `camera_from_target` and P_k of each pose.
+    camera: Vec<(Transform, Transform)>,
+}
+
+impl AllPairs {
+    /// The all-pairs motions of `poses`.
+    pub fn new(poses: &[PosePair], setup: Setup) -> Self {
+        Self {
+            hand: poses
+                .iter()
+                .map(|p| {
+                    let q = setup.hand_pose(&p.base_from_gripper);
+                    (q, q.inverse())
+                })
+                .collect(),
+            camera: poses
+                .iter()
+                .map(|p| (p.camera_from_target, p.camera_from_target.inverse()))
+                .collect(),
+        }
+    }
+}
+
+impl MotionSource for AllPairs {
+    fn count(&self) -> usize {
+        Pairing::All.motion_count(self.hand.len())
+    }
+
+    fn for_each_motion(&self, mut f: impl FnMut(&MotionPair)) {
+        for i in 0..self.hand.len() {
+            for j in i + 1..self.hand.len() {
+                // From pose j to pose i: A = Q_j⁻¹ Q_i, B = P_j⁻¹ P_i.
+                f(&MotionPair {
+                    a: self.hand[j].1 * self.hand[i].0,
+                    b: self.camera[j].0 * self.camera[i].1,
+                });
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{SimConfig, simulate};
+
+    #[test]
+    fn all_pairs_on_the_fly_equal_the_stored_ones() {
+        let s = simulate(
+            &SimConfig {
+                poses: 12,
+                ..SimConfig::default()
+            },
+            3,
+            0,
+        );
+        for setup in [Setup::EyeInHand, Setup::EyeToHand] {
+            let stored = motion_pairs(&s.poses, Pairing::All, setup);
+            let source = AllPairs::new(&s.poses, setup);
+            let mut made = Vec::new();
+            source.for_each_motion(|m| made.push(*m));
+            assert_eq!(source.count(), stored.len());
+            assert_eq!(made, stored);
+            let a = crate::solve::solve(crate::solve::Method::Tsai, &stored).unwrap();
+            let b = crate::solve::solve(crate::solve::Method::Tsai, &source).unwrap();
+            assert_eq!(a, b);
+        }
+    }
+}

@@ -1,7 +1,7 @@
 //! Andreff's linear solver in its two-step form, the one the paper uses.
 
 use crate::error::Result;
-use crate::motion::MotionPair;
+use crate::motion::MotionSource;
 use crate::solve::{
     Calibration, Method, check_motions, finish, singular, translation_least_squares,
 };
@@ -30,10 +30,10 @@ use crate::solve::{
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn andreff(motions: &[MotionPair]) -> Result<Calibration> {
+pub fn andreff(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
     let r_x = check.andreff_rotation;
     let t_x =
         translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
-    Ok(finish(Method::Andreff, motions.len(), check, &r_x, &t_x))
+    Ok(finish(Method::Andreff, motions.count(), check, &r_x, &t_x))
 }

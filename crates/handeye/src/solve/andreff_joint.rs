@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector};
 
 use crate::error::{Degeneracy, Error, Result};
-use crate::motion::MotionPair;
+use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{proj_so3, rotation_matrix};
 use crate::solve::least_squares::least_squares_12;
 use crate::solve::{Calibration, Method, check_motions, finish, singular};
@@ -29,7 +29,7 @@ use crate::solve::{Calibration, Method, check_motions, finish, singular};
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn andreff_joint(motions: &[MotionPair]) -> Result<Calibration> {
+pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
     let x = least_squares_12(motions, rows).ok_or_else(|| singular(check.conditioning))?;
     let raw = Matrix3::new(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]);
@@ -37,10 +37,8 @@ pub fn andreff_joint(motions: &[MotionPair]) -> Result<Calibration> {
     // The scale of vec(R_x) is fixed only by the gripper translations (the right-hand side); with
     // none, the solution is 0. OpenCV refuses |det| below single-precision epsilon likewise.
     if det.is_nan() || det.abs() < f64::from(f32::EPSILON) {
-        let largest = motions
-            .iter()
-            .map(|m| m.a.translation.vector.norm())
-            .fold(0.0, f64::max);
+        let mut largest = 0.0_f64;
+        motions.for_each_motion(|m| largest = largest.max(m.a.translation.vector.norm()));
         return Err(Error::Degenerate {
             reason: Degeneracy::NoTranslation { largest },
             conditioning: check.conditioning,
@@ -50,7 +48,7 @@ pub fn andreff_joint(motions: &[MotionPair]) -> Result<Calibration> {
     let t_x = x.fixed_rows::<3>(9).into_owned();
     Ok(finish(
         Method::AndreffJoint,
-        motions.len(),
+        motions.count(),
         check,
         &r_x,
         &t_x,

@@ -3,7 +3,7 @@
 use nalgebra::{SMatrix, SVector, SymmetricEigen, Vector3, Vector4};
 
 use crate::error::Result;
-use crate::motion::MotionPair;
+use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{rotation_matrix, skew};
 use crate::solve::quaternion::{multiply, quaternion_of, rotation_of};
 use crate::solve::{Calibration, Method, check_motions, finish, singular};
@@ -32,13 +32,13 @@ use crate::solve::{Calibration, Method, check_motions, finish, singular};
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn daniilidis(motions: &[MotionPair]) -> Result<Calibration> {
+pub fn daniilidis(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
     let mut normal = SMatrix::<f64, 8, 8>::zeros();
-    for m in motions {
+    motions.for_each_motion(|m| {
         let t = rows(m);
         normal += t.transpose() * t;
-    }
+    });
     let eigen = SymmetricEigen::new(normal);
     let mut order: [usize; 8] = std::array::from_fn(|k| k);
     order.sort_by(|&i, &j| eigen.eigenvalues[i].total_cmp(&eigen.eigenvalues[j]));
@@ -81,7 +81,13 @@ pub fn daniilidis(motions: &[MotionPair]) -> Result<Calibration> {
     let conjugate = Vector4::new(q[0], -q[1], -q[2], -q[3]);
     let t = multiply(&q_prime, &conjugate) * 2.0;
     let t_x = Vector3::new(t[1], t[2], t[3]);
-    Ok(finish(Method::Daniilidis, motions.len(), check, &r_x, &t_x))
+    Ok(finish(
+        Method::Daniilidis,
+        motions.count(),
+        check,
+        &r_x,
+        &t_x,
+    ))
 }
 
 /// The real and dual halves of an 8-vector.

@@ -3,7 +3,7 @@
 use nalgebra::{Matrix4, SymmetricEigen, Vector4};
 
 use crate::error::Result;
-use crate::motion::MotionPair;
+use crate::motion::MotionSource;
 use crate::pose::rotation_matrix;
 use crate::solve::quaternion::{quaternion_of, rotation_of};
 use crate::solve::{
@@ -32,14 +32,14 @@ use crate::solve::{
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn horaud(motions: &[MotionPair]) -> Result<Calibration> {
+pub fn horaud(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
     let mut a = Matrix4::zeros();
-    for m in motions {
+    motions.for_each_motion(|m| {
         let d = left(&quaternion_of(&rotation_matrix(&m.a)))
             - right(&quaternion_of(&rotation_matrix(&m.b)));
         a += d.transpose() * d;
-    }
+    });
     let eigen = SymmetricEigen::new(a);
     let q: Vector4<f64> = eigen
         .eigenvectors
@@ -51,7 +51,7 @@ pub fn horaud(motions: &[MotionPair]) -> Result<Calibration> {
     let r_x = rotation_of(&q.normalize());
     let t_x =
         translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
-    Ok(finish(Method::Horaud, motions.len(), check, &r_x, &t_x))
+    Ok(finish(Method::Horaud, motions.count(), check, &r_x, &t_x))
 }
 
 /// Q(r): the matrix of left multiplication, r ⊗ q = Q(r) q.

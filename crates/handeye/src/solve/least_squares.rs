@@ -3,7 +3,7 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::motion::MotionPair;
+use crate::motion::{MotionPair, MotionSource};
 
 /// Defines a least-squares solver for R-row blocks in N unknowns (nalgebra's LU needs concrete
 /// sizes).
@@ -17,23 +17,23 @@ macro_rules! stacked {
         /// becomes the ε·κ of an orthogonal factorisation. `None` when the normal matrix is
         /// singular.
         pub fn $name(
-            motions: &[MotionPair],
+            motions: &(impl MotionSource + ?Sized),
             rows: impl Fn(&MotionPair) -> (SMatrix<f64, $r, $n>, SVector<f64, $r>),
         ) -> Option<SVector<f64, $n>> {
             let mut normal = SMatrix::<f64, $n, $n>::zeros();
             let mut rhs = SVector::<f64, $n>::zeros();
-            for m in motions {
+            motions.for_each_motion(|m| {
                 let (c, d) = rows(m);
                 normal += c.transpose() * c;
                 rhs += c.transpose() * d;
-            }
+            });
             let lu = normal.lu();
             let mut x = lu.solve(&rhs)?;
             let mut correction = SVector::<f64, $n>::zeros();
-            for m in motions {
+            motions.for_each_motion(|m| {
                 let (c, d) = rows(m);
                 correction += c.transpose() * (d - c * x);
-            }
+            });
             x += lu.solve(&correction)?;
             x.iter().all(|v| v.is_finite()).then_some(x)
         }

@@ -33,7 +33,7 @@ pub use rotation_system::{RotationSolution, RotationSystem};
 pub use tsai::{TsaiOptions, tsai, tsai_with};
 
 use crate::error::{Degeneracy, Error, Result};
-use crate::motion::{MotionFeatures, MotionPair};
+use crate::motion::{MotionFeatures, MotionSource};
 use crate::pose::{Transform, rotation_matrix};
 
 /// Below this conditioning (second-smallest over largest singular value of Andreff's rotation
@@ -185,19 +185,19 @@ pub struct MotionCheck {
 ///
 /// Errors: [`Error::TooFewMotions`] below two motions, [`Error::Degenerate`] when every rotation is
 /// below [`REFUSE_ANGLE`] or the conditioning is below [`REFUSE_CONDITIONING`] (parallel axes).
-pub fn check_motions(motions: &[MotionPair]) -> Result<MotionCheck> {
-    if motions.len() < 2 {
+pub fn check_motions(motions: &(impl MotionSource + ?Sized)) -> Result<MotionCheck> {
+    if motions.count() < 2 {
         return Err(Error::TooFewMotions {
-            got: motions.len(),
+            got: motions.count(),
             need: 2,
         });
     }
     let mut system = RotationSystem::default();
     let mut largest = 0.0_f64;
-    for m in motions {
+    motions.for_each_motion(|m| {
         system.add(&rotation_matrix(&m.a), &rotation_matrix(&m.b));
         largest = largest.max(MotionFeatures::of(&m.a).angle);
-    }
+    });
     let RotationSolution {
         r_x: andreff_rotation,
         conditioning,
@@ -212,7 +212,7 @@ pub fn check_motions(motions: &[MotionPair]) -> Result<MotionCheck> {
     }
     if conditioning < REFUSE_CONDITIONING {
         let reason = Degeneracy::ParallelAxes {
-            largest_axis_angle_deg: largest_axis_angle(motions).to_degrees(),
+            largest_axis_angle_deg: 2.0 * crate::metrics::axis_spread(motions).to_degrees(),
         };
         return Err(Error::Degenerate {
             reason,
@@ -235,22 +235,6 @@ pub fn check_motions(motions: &[MotionPair]) -> Result<MotionCheck> {
     })
 }
 
-/// The largest angle between the rotation axes of any two motions, radians, treating k and −k
-/// as the same line (∈ [0, π/2]).
-fn largest_axis_angle(motions: &[MotionPair]) -> f64 {
-    let axes: Vec<Vector3<f64>> = motions
-        .iter()
-        .filter_map(|m| MotionFeatures::of(&m.a).axis)
-        .collect();
-    let mut largest = 0.0_f64;
-    for (i, a) in axes.iter().enumerate() {
-        for b in &axes[i + 1..] {
-            largest = largest.max(a.dot(b).abs().min(1.0).acos());
-        }
-    }
-    largest
-}
-
 /// Solves A X = X B with the given method.
 ///
 /// # Example
@@ -265,7 +249,7 @@ fn largest_axis_angle(motions: &[MotionPair]) -> f64 {
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn solve(method: Method, motions: &[MotionPair]) -> Result<Calibration> {
+pub fn solve(method: Method, motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     match method {
         Method::Andreff => andreff(motions),
         Method::AndreffJoint => andreff_joint(motions),
@@ -282,7 +266,7 @@ pub fn solve(method: Method, motions: &[MotionPair]) -> Result<Calibration> {
 ///
 /// Returns `None` when the 3×3 system is singular (all axes parallel).
 pub fn translation_least_squares(
-    motions: &[MotionPair],
+    motions: &(impl MotionSource + ?Sized),
     r_x: &Matrix3<f64>,
 ) -> Option<Vector3<f64>> {
     // Rows C_k = I − R_a and right-hand sides d_k = t_a − R_x t_b.

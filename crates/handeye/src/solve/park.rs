@@ -3,7 +3,7 @@
 use nalgebra::Matrix3;
 
 use crate::error::Result;
-use crate::motion::MotionPair;
+use crate::motion::MotionSource;
 use crate::pose::{log_so3, proj_so3, rotation_matrix};
 use crate::solve::{
     Calibration, Method, check_motions, finish, singular, translation_least_squares,
@@ -32,14 +32,14 @@ use crate::solve::{
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn park(motions: &[MotionPair]) -> Result<Calibration> {
+pub fn park(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
     let mut m = Matrix3::zeros();
-    for motion in motions {
+    motions.for_each_motion(|motion| {
         let alpha = log_so3(&rotation_matrix(&motion.a));
         let beta = log_so3(&rotation_matrix(&motion.b));
         m += beta * alpha.transpose();
-    }
+    });
     // (MᵀM)^(−1/2) Mᵀ is the orthogonal polar factor of Mᵀ; `proj_so3` computes it, and also
     // covers two motions (M of rank 2, where MᵀM is singular) and keeps det = +1.
     let r_x = proj_so3(&m.transpose());
@@ -48,5 +48,5 @@ pub fn park(motions: &[MotionPair]) -> Result<Calibration> {
     }
     let t_x =
         translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
-    Ok(finish(Method::Park, motions.len(), check, &r_x, &t_x))
+    Ok(finish(Method::Park, motions.count(), check, &r_x, &t_x))
 }

@@ -4,7 +4,7 @@ use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
-use crate::motion::MotionPair;
+use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts};
 use crate::solve::{Calibration, Method, MotionCheck, andreff, check_motions};
 
@@ -97,7 +97,7 @@ pub struct Refinement {
 /// assert!((r.calibration.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn refine(motions: &[MotionPair]) -> Result<Refinement> {
+pub fn refine(motions: &(impl MotionSource + ?Sized)) -> Result<Refinement> {
     let start = andreff(motions)?;
     let check = MotionCheck {
         conditioning: start.conditioning,
@@ -109,7 +109,7 @@ pub fn refine(motions: &[MotionPair]) -> Result<Refinement> {
 
 /// Refines X over all motions from a given start.
 pub fn refine_from(
-    motions: &[MotionPair],
+    motions: &(impl MotionSource + ?Sized),
     start: &Transform,
     options: &RefineOptions,
 ) -> Result<Refinement> {
@@ -118,8 +118,8 @@ pub fn refine_from(
 }
 
 /// The problem's current state: X and the weights of the two residual blocks.
-struct Problem<'a> {
-    motions: &'a [MotionPair],
+struct Problem<'a, M: MotionSource + ?Sized> {
+    motions: &'a M,
     /// 1 / (start RMS of ΔR entries), 1 / (start RMS of ΔT entries).
     weights: [f64; 2],
 }
@@ -131,15 +131,15 @@ struct Linearisation {
     cost: f64,
 }
 
-impl Problem<'_> {
+impl<M: MotionSource + ?Sized> Problem<'_, M> {
     /// Weighted cost ½Σr² at (R, t).
     fn cost(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>) -> f64 {
         let mut sum = 0.0;
-        for m in self.motions {
+        self.motions.for_each_motion(|m| {
             let (dr, dt) = residual(m, r_x, t_x);
             sum += (self.weights[0] * self.weights[0]) * dr.norm_squared()
                 + (self.weights[1] * self.weights[1]) * dt.norm_squared();
-        }
+        });
         0.5 * sum
     }
 
@@ -148,13 +148,13 @@ impl Problem<'_> {
         let mut jtj = Matrix6::zeros();
         let mut jtr = Vector6::zeros();
         let mut cost = 0.0;
-        for m in self.motions {
+        self.motions.for_each_motion(|m| {
             let (dr, dt) = residual(m, r_x, t_x);
             let (j, r) = jacobian(m, r_x, &dr, &dt, self.weights);
             jtj += j.transpose() * j;
             jtr += j.transpose() * r;
             cost += 0.5 * r.norm_squared();
-        }
+        });
         Linearisation { jtj, jtr, cost }
     }
 }
@@ -213,14 +213,18 @@ fn jacobian(
 }
 
 /// Block weights from the start: 1 / RMS of the ΔR entries and 1 / RMS of the ΔT entries.
-fn block_scales(motions: &[MotionPair], r_x: &Matrix3<f64>, t_x: &Vector3<f64>) -> [f64; 2] {
+fn block_scales(
+    motions: &(impl MotionSource + ?Sized),
+    r_x: &Matrix3<f64>,
+    t_x: &Vector3<f64>,
+) -> [f64; 2] {
     let (mut sr, mut st) = (0.0, 0.0);
-    for m in motions {
+    motions.for_each_motion(|m| {
         let (dr, dt) = residual(m, r_x, t_x);
         sr += dr.norm_squared();
         st += dt.norm_squared();
-    }
-    let n = motions.len().max(1) as f64;
+    });
+    let n = motions.count().max(1) as f64;
     [
         (sr / (9.0 * n)).sqrt().max(MIN_BLOCK_RMS),
         (st / (3.0 * n)).sqrt().max(MIN_BLOCK_RMS),
@@ -229,7 +233,7 @@ fn block_scales(motions: &[MotionPair], r_x: &Matrix3<f64>, t_x: &Vector3<f64>) 
 
 /// Levenberg–Marquardt with Nielsen's damping update.
 fn run(
-    motions: &[MotionPair],
+    motions: &(impl MotionSource + ?Sized),
     start: &Transform,
     check: MotionCheck,
     options: &RefineOptions,
@@ -300,7 +304,7 @@ fn run(
         calibration: Calibration {
             x: transform_from_parts(&r_x, &t_x),
             method: Method::Refine,
-            motions: motions.len(),
+            motions: motions.count(),
             conditioning: check.conditioning,
             warnings: check.warnings,
         },
@@ -315,7 +319,10 @@ fn run(
 
 /// Covariance of X's parameters (rotation increment of R_x exp([δ]×) in radians, then t_x) at a
 /// given X, as [`Refinement::covariance`]: the uncertainty of a solution from its residuals.
-pub fn covariance_at(motions: &[MotionPair], x: &Transform) -> Option<Matrix6<f64>> {
+pub fn covariance_at(
+    motions: &(impl MotionSource + ?Sized),
+    x: &Transform,
+) -> Option<Matrix6<f64>> {
     covariance(motions, &rotation_matrix(x), &x.translation.vector)
 }
 
@@ -323,11 +330,11 @@ pub fn covariance_at(motions: &[MotionPair], x: &Transform) -> Option<Matrix6<f6
 /// `s² = Σr² / (N − 6)` for N residuals (Gauss–Newton with each block's noise estimated from its
 /// own residuals).
 fn covariance(
-    motions: &[MotionPair],
+    motions: &(impl MotionSource + ?Sized),
     r_x: &Matrix3<f64>,
     t_x: &Vector3<f64>,
 ) -> Option<Matrix6<f64>> {
-    let residuals = 12 * motions.len();
+    let residuals = 12 * motions.count();
     if residuals <= 6 {
         return None;
     }

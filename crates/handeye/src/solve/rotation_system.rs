@@ -3,7 +3,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 
-use crate::motion::MotionPair;
+use crate::motion::MotionSource;
 use crate::pose::{proj_so3, rotation_matrix};
 
 /// A 9×9 matrix.
@@ -98,7 +98,7 @@ impl RotationSystem {
     /// correction δ ⊥ v minimising ‖K (v + δ)‖ is taken from the eigen-decomposition of `M`, with
     /// the residual `Kᵀ K v` evaluated motion by motion. This brings the error down to the ε·κ of
     /// an SVD of the stacked 9m×9 matrix, at O(m) cost and no extra memory.
-    pub fn solve_refined(&self, motions: &[MotionPair]) -> RotationSolution {
+    pub fn solve_refined(&self, motions: &(impl MotionSource + ?Sized)) -> RotationSolution {
         self.solve_with(|v| Some(stacked_gradient(motions, v)))
     }
 
@@ -135,15 +135,18 @@ impl RotationSystem {
 
 /// `Σ_k K_kᵀ K_k v` evaluated row block by row block: with V the 3×3 matrix of v (row-major),
 /// `K v = vec(V − R_a V R_bᵀ)` and `Kᵀ w = vec(W − R_aᵀ W R_b)`.
-fn stacked_gradient(motions: &[MotionPair], v: &SVector<f64, 9>) -> SVector<f64, 9> {
+fn stacked_gradient(
+    motions: &(impl MotionSource + ?Sized),
+    v: &SVector<f64, 9>,
+) -> SVector<f64, 9> {
     let v_m = Matrix3::new(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
     let mut g = Matrix3::zeros();
-    for m in motions {
+    motions.for_each_motion(|m| {
         let r_a = rotation_matrix(&m.a);
         let r_b = rotation_matrix(&m.b);
         let w = v_m - r_a * v_m * r_b.transpose();
         g += w - r_a.transpose() * w * r_b;
-    }
+    });
     SVector::<f64, 9>::from_row_slice(&[
         g[(0, 0)],
         g[(0, 1)],

@@ -4,7 +4,7 @@ use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::motion::MotionPair;
+use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{rotation_matrix, skew};
 use crate::solve::least_squares::least_squares_3;
 use crate::solve::quaternion::{quaternion_of, rotation_of_vector_part};
@@ -46,29 +46,35 @@ const FILTER_RANGE: (f64, f64) = (0.3, 1.7);
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn tsai(motions: &[MotionPair]) -> Result<Calibration> {
+pub fn tsai(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     tsai_with(motions, &TsaiOptions::default())
 }
 
 /// [`tsai`] with options.
-pub fn tsai_with(motions: &[MotionPair], options: &TsaiOptions) -> Result<Calibration> {
-    let kept: Vec<MotionPair>;
-    let motions = if options.opencv_filter {
-        kept = motions
-            .iter()
-            .copied()
-            .filter(|m| in_filter_range(&rotation_matrix(&m.a)))
-            .collect();
-        if kept.len() < 2 {
-            return Err(Error::TooFewMotions {
-                got: kept.len(),
-                need: 2,
-            });
+pub fn tsai_with(
+    motions: &(impl MotionSource + ?Sized),
+    options: &TsaiOptions,
+) -> Result<Calibration> {
+    if !options.opencv_filter {
+        return solve_tsai(motions);
+    }
+    let mut kept: Vec<MotionPair> = Vec::new();
+    motions.for_each_motion(|m| {
+        if in_filter_range(&rotation_matrix(&m.a)) {
+            kept.push(*m);
         }
-        &kept[..]
-    } else {
-        motions
-    };
+    });
+    if kept.len() < 2 {
+        return Err(Error::TooFewMotions {
+            got: kept.len(),
+            need: 2,
+        });
+    }
+    solve_tsai(&kept)
+}
+
+/// Eqs. (12)–(15) on the motions.
+fn solve_tsai(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
     // Eq. (12), stacked over the motions.
     let p_prime = least_squares_3(motions, |m| {
@@ -83,7 +89,7 @@ pub fn tsai_with(motions: &[MotionPair], options: &TsaiOptions) -> Result<Calibr
     // Eq. (15).
     let t_x =
         translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
-    Ok(finish(Method::Tsai, motions.len(), check, &r_x, &t_x))
+    Ok(finish(Method::Tsai, motions.count(), check, &r_x, &t_x))
 }
 
 /// P = 2 sin(θ/2) k = twice the vector part of the rotation's quaternion.
