@@ -81,6 +81,7 @@ pub fn run(args: Args) -> Result<()> {
             error_source,
             truth: Some(truth),
             optimal: false,
+            ..OnlineConfig::default()
         };
         let mut calibrator = OnlineCalibrator::new(config)?;
         let (mut n, mut rot, mut trans, mut seconds) = (0usize, 0.0, 0.0, 0.0);

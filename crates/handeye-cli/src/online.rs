@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
-use handeye::online::{ErrorSource, Event, OnlineCalibrator, OnlineConfig};
+use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig};
 use handeye::select::{AdaptiveParams, Selection};
 use serde_json::{Map, Value, json};
 
@@ -21,8 +21,9 @@ pub struct Args {
     /// conventional method).
     #[arg(long, default_value = "adaptive", value_parser = ["adaptive", "fixed", "none"])]
     selection: String,
-    /// Estimator: `paper` (Andreff on the two selected motions).
-    #[arg(long, default_value = "paper", value_parser = ["paper"])]
+    /// Estimator: `paper` (Andreff on the two selected motions of each calibration) or
+    /// `accumulate` (every selected motion since the last detected change of X).
+    #[arg(long, default_value = "paper", value_parser = ["paper", "accumulate"])]
     estimator: String,
     /// Also refine over the last five selected motions (the paper's optimal method).
     #[arg(long)]
@@ -108,6 +109,12 @@ pub fn run(args: Args) -> Result<()> {
         },
         truth: truth.map(|t| t.x),
         optimal: args.optimal,
+        estimator: if args.estimator == "accumulate" {
+            Estimator::Accumulate
+        } else {
+            Estimator::Paper
+        },
+        ..OnlineConfig::default()
     };
     let mut calibrator = OnlineCalibrator::new(config)?;
     let (records, time_offset) = records(&args.input)?;
@@ -122,7 +129,12 @@ pub fn run(args: Args) -> Result<()> {
             }
             Err(e) => return Err(e.into()),
         };
-        for event in calibrator.push(&record.pose)? {
+        let events = calibrator.push(&record.pose)?;
+        if let Some(pose) = calibrator.change_detected() {
+            print_line(&json!({"change": pose}))?;
+            eprintln!("change of X detected at pose {pose}: accumulation restarted");
+        }
+        for event in events {
             print_line(&event_json(&event, time_offset))?;
         }
     }
@@ -162,7 +174,21 @@ pub fn event_json(e: &Event, time_offset: Option<f64>) -> Value {
     }
     out.insert("rms_r".into(), json!(e.rms.rms_r));
     out.insert("rms_t".into(), json!(e.rms.rms_t));
-    insert_transform(&mut out, &e.x);
+    match &e.accumulated {
+        Some(a) => {
+            // The accumulated X is the event's transform; the paper's two-motion X is kept apart.
+            insert_transform(&mut out, &a.x);
+            out.insert("estimator".into(), json!("accumulate"));
+            out.insert(
+                "accumulated".into(),
+                json!({"poses": a.poses, "conditioning": a.conditioning, "noise_rotation_deg": a.noise[0], "noise_translation": a.noise[1], "last_change": a.change_at}),
+            );
+            let mut paper = Map::new();
+            insert_transform(&mut paper, &e.x);
+            out.insert("paper".into(), Value::Object(paper));
+        }
+        None => insert_transform(&mut out, &e.x),
+    }
     if let Some(o) = &e.optimal {
         let mut opt = Map::new();
         insert_transform(&mut opt, &o.x);

@@ -69,4 +69,33 @@ fn push(c: &mut Criterion) {
 }
 
 criterion_group!(benches, push);
-criterion_main!(benches);
+
+fn accumulator(c: &mut Criterion) {
+    use handeye::accumulate::PoseAccumulator;
+    let sim = simulate(
+        &SimConfig {
+            poses: 1000,
+            ..SimConfig::default()
+        },
+        42,
+        0,
+    );
+    c.bench_function("accumulate/add_pose", |b| {
+        let mut acc = PoseAccumulator::new(handeye::Setup::EyeInHand);
+        let mut k = 0;
+        b.iter(|| {
+            k = (k + 1) % sim.poses.len();
+            acc.add(black_box(&sim.poses[k]));
+        })
+    });
+    let mut acc = PoseAccumulator::new(handeye::Setup::EyeInHand);
+    for p in &sim.poses {
+        acc.add(p);
+    }
+    c.bench_function("accumulate/estimate", |b| {
+        b.iter(|| black_box(&acc).estimate())
+    });
+}
+
+criterion_group!(accumulate_benches, accumulator);
+criterion_main!(benches, accumulate_benches);

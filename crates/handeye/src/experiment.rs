@@ -181,7 +181,8 @@ pub struct SeriesResult {
     pub rot_deg: f64,
     /// Mean ‖t − t̂‖ / ‖t‖.
     pub trans_rel: f64,
-    /// Total time spent in calibrations, seconds.
+    /// Median time of one calibration in this series, seconds (NaN without any). A median, so that
+    /// a context switch during one calibration does not dominate.
     pub seconds: f64,
 }
 
@@ -206,7 +207,7 @@ pub struct MethodSummary {
     pub rot_deg_mean: f64,
     /// The same for ‖t − t̂‖ / ‖t‖.
     pub trans_rel_mean: f64,
-    /// Total calibration time over total calibrations, seconds.
+    /// Median over the series of their median time per calibration, seconds.
     pub time_per_calibration_s: f64,
     /// Per-series results, in series order.
     pub per_series: Vec<SeriesResult>,
@@ -287,6 +288,7 @@ fn run_online(
         error_source: ErrorSource::Truth,
         truth: Some(sim.gripper_from_camera),
         optimal: method == OnlineMethod::Optimal,
+        ..OnlineConfig::default()
     };
     let events = run_series(config, &sim.poses)?;
     let estimates: Vec<(crate::Transform, f64)> = if method == OnlineMethod::Optimal {
@@ -320,13 +322,15 @@ fn mean_errors(estimates: &[(crate::Transform, f64)], sim: &SimSeries) -> Series
         trans_rel: 0.0,
         seconds: 0.0,
     };
-    for (x, seconds) in estimates {
+    for (x, _) in estimates {
         let e = errors_against_truth(x, &sim.gripper_from_camera);
         r.rot_fro += e.rot_fro;
         r.rot_deg += e.rot_deg;
         r.trans_rel += e.trans_rel;
-        r.seconds += seconds;
     }
+    let mut times: Vec<f64> = estimates.iter().map(|e| e.1).collect();
+    times.sort_by(f64::total_cmp);
+    r.seconds = times.get(times.len() / 2).copied().unwrap_or(f64::NAN);
     let d = if n == 0 { f64::NAN } else { n as f64 };
     r.rot_fro /= d;
     r.rot_deg /= d;
@@ -352,7 +356,12 @@ fn summarise(method: String, batch: bool, per_series: Vec<SeriesResult>) -> Meth
         n if n % 2 == 1 => counts[n / 2] as f64,
         n => (counts[n / 2 - 1] + counts[n / 2]) as f64 / 2.0,
     };
-    let seconds: f64 = per_series.iter().map(|r| r.seconds).sum();
+    let mut times: Vec<f64> = per_series
+        .iter()
+        .map(|r| r.seconds)
+        .filter(|t| t.is_finite())
+        .collect();
+    times.sort_by(f64::total_cmp);
     MethodSummary {
         method,
         batch,
@@ -363,11 +372,7 @@ fn summarise(method: String, batch: bool, per_series: Vec<SeriesResult>) -> Meth
         rot_fro_mean: mean_of(|r| r.rot_fro),
         rot_deg_mean: mean_of(|r| r.rot_deg),
         trans_rel_mean: mean_of(|r| r.trans_rel),
-        time_per_calibration_s: if total == 0 {
-            f64::NAN
-        } else {
-            seconds / total as f64
-        },
+        time_per_calibration_s: times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
         per_series,
     }
 }

@@ -21,6 +21,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod accumulate;
 mod error;
 pub mod experiment;
 pub mod io;

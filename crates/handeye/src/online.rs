@@ -12,6 +12,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use crate::accumulate::{ChangeDetector, ChangeOptions, Estimate, PoseAccumulator};
 use crate::error::{Error, Result};
 use crate::metrics::{errors_against_truth, residual_rms};
 use crate::motion::{MotionPair, PosePair, Setup};
@@ -49,7 +50,42 @@ pub struct OnlineConfig {
     pub truth: Option<Transform>,
     /// Also run the optimal method (sec. 4.5). Default false.
     pub optimal: bool,
+    /// Which estimate events carry besides the paper's two-motion X. Default `Paper` (none).
+    pub estimator: Estimator,
+    /// The change detector of the accumulating estimator. Default: [`ChangeOptions::default`].
+    pub change: ChangeOptions,
 }
+
+/// The estimator behind the selection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Estimator {
+    /// The paper: Andreff on the two selected motions of each calibration.
+    #[default]
+    Paper,
+    /// Normal equations over every pair of poses since the last detected change of X, updated in
+    /// O(1) per pose ([`crate::accumulate`]); the selection policy still decides when events are
+    /// emitted, but every pose contributes.
+    Accumulate,
+}
+
+/// The accumulating estimator's X at one calibration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct AccumulatedEstimate {
+    /// X from every pair of poses since the start or the last change.
+    pub x: Transform,
+    /// Poses it rests on.
+    pub poses: usize,
+    /// Conditioning of its rotation system.
+    pub conditioning: f64,
+    /// RMS residual of the motions under X so far: rotation in degrees, translation in input units.
+    pub noise: [f64; 2],
+    /// Pose number of the last declared change of X (accumulation restarted there), if any.
+    pub change_at: Option<usize>,
+}
+
+/// Poses between refreshes of the accumulated X used by the change detector.
+const REFRESH: usize = 10;
 
 /// rmsR and rmsT of a calibration, from the configured [`ErrorSource`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -92,6 +128,8 @@ pub struct Event {
     pub seconds: f64,
     /// The optimal method's X, when enabled and five motions have been selected.
     pub optimal: Option<OptimalEstimate>,
+    /// The accumulating estimator's X, with `Estimator::Accumulate`.
+    pub accumulated: Option<AccumulatedEstimate>,
 }
 
 /// The online calibrator (see the module documentation).
@@ -121,6 +159,13 @@ pub struct OnlineCalibrator {
     window: VecDeque<([usize; 2], MotionPair)>,
     optimal_results: usize,
     last_x: Option<Transform>,
+    accumulator: PoseAccumulator,
+    detector: ChangeDetector,
+    /// The last `lag` poses and the accumulated X last refreshed (accumulate estimator).
+    recent: VecDeque<PosePair>,
+    current: Option<Estimate>,
+    last_change: Option<usize>,
+    changed_now: bool,
 }
 
 impl OnlineCalibrator {
@@ -141,6 +186,12 @@ impl OnlineCalibrator {
             window: VecDeque::with_capacity(OPTIMAL_WINDOW + 1),
             optimal_results: 0,
             last_x: None,
+            accumulator: PoseAccumulator::new(config.setup),
+            detector: ChangeDetector::new(config.change),
+            recent: VecDeque::with_capacity(config.change.lag + 1),
+            current: None,
+            last_change: None,
+            changed_now: false,
         })
     }
 
@@ -180,6 +231,9 @@ impl OnlineCalibrator {
     pub fn push(&mut self, pose: &PosePair) -> Result<Vec<Event>> {
         check_finite(pose)?;
         self.poses += 1;
+        if self.config.estimator == Estimator::Accumulate {
+            self.update_accumulator(pose);
+        }
         let selections = self.selector.offer(self.poses, pose);
         Ok(selections
             .into_iter()
@@ -206,6 +260,9 @@ impl OnlineCalibrator {
             .optimal
             .then(|| self.optimal(selected))
             .flatten();
+        let accumulated = (self.config.estimator == Estimator::Accumulate)
+            .then(|| self.accumulate())
+            .flatten();
         Some(Event {
             calibration: self.calibrations,
             poses: selected.poses,
@@ -215,7 +272,61 @@ impl OnlineCalibrator {
             conditioning: calibration.conditioning,
             seconds,
             optimal,
+            accumulated,
         })
+    }
+
+    /// The accumulating estimator, per pose: test the motion from the pose `lag` poses earlier
+    /// against the current X (CUSUM on its residual), restart after a change, add the pose.
+    fn update_accumulator(&mut self, pose: &PosePair) {
+        self.changed_now = false;
+        if self.recent.len() == self.config.change.lag.max(1)
+            && let (Some(earlier), Some(current)) = (self.recent.front(), self.current)
+        {
+            let m = MotionPair::between(self.config.setup, earlier, pose);
+            if self.detector.observe(&m, &current.x) {
+                self.accumulator.reset();
+                self.recent.clear();
+                self.current = None;
+                self.last_change = Some(self.poses);
+                self.changed_now = true;
+            }
+        }
+        self.accumulator.add(pose);
+        if self.recent.len() == self.config.change.lag.max(1) {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(*pose);
+        if self.current.is_none() || self.accumulator.poses() % REFRESH == 0 {
+            self.current = self.accumulator.estimate();
+        }
+    }
+
+    /// The accumulated estimate now, for an event.
+    fn accumulate(&mut self) -> Option<AccumulatedEstimate> {
+        let estimate = self.accumulator.estimate()?;
+        self.current = Some(estimate);
+        let (noise_r, noise_t) = self.detector.noise_level();
+        Some(AccumulatedEstimate {
+            x: estimate.x,
+            poses: estimate.poses,
+            conditioning: estimate.conditioning,
+            noise: [noise_r.to_degrees(), noise_t],
+            change_at: self.last_change,
+        })
+    }
+
+    /// The accumulating estimator's current X (every pair of poses since the last change), at
+    /// any time; `None` before three poses or with the paper's estimator.
+    pub fn accumulated(&self) -> Option<Estimate> {
+        (self.config.estimator == Estimator::Accumulate)
+            .then(|| self.accumulator.estimate())
+            .flatten()
+    }
+
+    /// The pose number of a change of X declared by the last `push`, if it declared one.
+    pub fn change_detected(&self) -> Option<usize> {
+        self.changed_now.then_some(self.poses)
     }
 
     /// rmsR and rmsT of `x` from the configured source.

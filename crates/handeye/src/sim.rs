@@ -36,6 +36,21 @@ pub struct SimConfig {
     pub rotation_noise: f64,
     /// Relative amplitude of the uniform translation noise (t + a·‖t‖·u). Default 0.01.
     pub translation_noise: f64,
+    /// A change of X during the series (a bumped camera). Default none.
+    pub jump: Option<Jump>,
+}
+
+/// A change of X at a given pose: from pose `at` (from 1) on, X becomes X·Δ with Δ a rotation of
+/// `rotation_deg` about a random axis and a translation of length `translation` in a random
+/// direction.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Jump {
+    /// First pose (from 1) taken with the new X.
+    pub at: usize,
+    /// Rotation of the change, degrees.
+    pub rotation_deg: f64,
+    /// Translation of the change, input units (mm).
+    pub translation: f64,
 }
 
 impl Default for SimConfig {
@@ -51,6 +66,7 @@ impl Default for SimConfig {
             x_translation: (50.0, 150.0),
             rotation_noise: 0.001,
             translation_noise: 0.01,
+            jump: None,
         }
     }
 }
@@ -86,6 +102,8 @@ pub struct SimSeries {
     pub gripper_from_camera: Transform,
     /// The true target pose W = `base_from_target`.
     pub base_from_target: Transform,
+    /// The true X after the jump, when the configuration has one.
+    pub gripper_from_camera_after: Option<Transform>,
 }
 
 /// The generator of series `series` of a run with seed `seed`.
@@ -113,6 +131,17 @@ pub fn simulate(config: &SimConfig, seed: u64, series: u64) -> SimSeries {
     let c = Vector3::zeros();
     let base_from_target = target_in_front(&transform_from_parts(&r_nom, &c), &x, config.standoff);
     let target_from_base = base_from_target.inverse();
+    // The jump's random draws come after everything else, so a series with a jump shares its
+    // walk and noise-free X with the same series without one.
+    let mut jump_rng = series_rng(seed ^ 0x6A75_6D70, series);
+    let x_after = config.jump.map(|j| {
+        let axis = gaussian(&mut jump_rng, 1.0).normalize();
+        let dir = gaussian(&mut jump_rng, 1.0).normalize();
+        x * transform_from_parts(
+            &exp_so3(&(axis * j.rotation_deg.to_radians())),
+            &(dir * j.translation),
+        )
+    });
 
     let rot_sigma = config.step_rotation_deg.to_radians() / 3f64.sqrt();
     let trans_sigma = config.step_translation / 3f64.sqrt();
@@ -132,7 +161,11 @@ pub fn simulate(config: &SimConfig, seed: u64, series: u64) -> SimSeries {
             p = p + v - (p - c) * config.pull;
         }
         let base_from_gripper = transform_from_parts(&r, &p);
-        let target_from_camera = target_from_base * base_from_gripper * x;
+        let x_now = match (config.jump, x_after) {
+            (Some(j), Some(after)) if k + 1 >= j.at => after,
+            _ => x,
+        };
+        let target_from_camera = target_from_base * base_from_gripper * x_now;
         clean.push((base_from_gripper, target_from_camera));
     }
     let noisy_q: Vec<Transform> = clean
@@ -155,6 +188,7 @@ pub fn simulate(config: &SimConfig, seed: u64, series: u64) -> SimSeries {
         poses,
         gripper_from_camera: x,
         base_from_target,
+        gripper_from_camera_after: x_after,
     }
 }
 

@@ -67,6 +67,12 @@ impl RotationSystem {
         self.motions += 1;
     }
 
+    /// A system from an already accumulated normal matrix (symmetric, positive semi-definite) of
+    /// `motions` motion pairs.
+    pub fn from_normal(normal: SMatrix<f64, 9, 9>, motions: usize) -> Self {
+        Self { normal, motions }
+    }
+
     /// Number of motion pairs added.
     pub fn motions(&self) -> usize {
         self.motions

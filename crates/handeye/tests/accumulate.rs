@@ -1,0 +1,142 @@
+//! The accumulating estimator and its change detection (issue 7's claims, on SPEC sec. 5 data).
+
+use handeye::metrics::errors_against_truth;
+use handeye::online::{Estimator, OnlineCalibrator, OnlineConfig};
+use handeye::select::AdaptiveParams;
+use handeye::sim::{Jump, SimConfig, simulate};
+use handeye::{Method, Pairing, Setup, motion_pairs, solve};
+
+fn calibrator() -> OnlineCalibrator {
+    let config = OnlineConfig {
+        params: AdaptiveParams {
+            d_max: 100.0,
+            ..AdaptiveParams::default()
+        },
+        estimator: Estimator::Accumulate,
+        ..OnlineConfig::default()
+    };
+    OnlineCalibrator::new(config).unwrap()
+}
+
+#[test]
+fn the_running_estimate_matches_the_best_batch_solve_and_beats_the_paper_tenfold() {
+    let (mut acc, mut batch, mut paper) = ((0.0, 0.0), (0.0, 0.0), (0.0, 0.0));
+    for s in 0..10 {
+        let sim = simulate(&SimConfig::default(), 21, s);
+        let mut c = calibrator();
+        let (mut pr, mut pt, mut n) = (0.0, 0.0, 0.0);
+        for p in &sim.poses {
+            for e in c.push(p).unwrap() {
+                let err = errors_against_truth(&e.x, &sim.gripper_from_camera);
+                (pr, pt, n) = (pr + err.rot_fro, pt + err.trans_rel, n + 1.0);
+            }
+        }
+        let e = errors_against_truth(&c.accumulated().unwrap().x, &sim.gripper_from_camera);
+        acc = (acc.0 + e.rot_fro, acc.1 + e.trans_rel);
+        let best = Method::ALL
+            .iter()
+            .map(|m| {
+                let x = solve(
+                    *m,
+                    &motion_pairs(&sim.poses, Pairing::All, Setup::EyeInHand),
+                )
+                .unwrap()
+                .x;
+                let e = errors_against_truth(&x, &sim.gripper_from_camera);
+                (e.rot_fro, e.trans_rel)
+            })
+            .fold((f64::INFINITY, f64::INFINITY), |a, b| {
+                (a.0.min(b.0), a.1.min(b.1))
+            });
+        batch = (batch.0 + best.0, batch.1 + best.1);
+        paper = (paper.0 + pr / n, paper.1 + pt / n);
+    }
+    println!(
+        "accumulate {acc:?}, best batch {batch:?}, paper adaptive {paper:?} (sums over 10 series)"
+    );
+    assert!(acc.0 <= 1.5 * batch.0 && acc.1 <= 1.5 * batch.1);
+    assert!(10.0 * acc.0 <= paper.0 && 10.0 * acc.1 <= paper.1);
+}
+
+#[test]
+fn a_one_degree_five_millimetre_jump_is_detected_within_30_poses() {
+    let series = 60;
+    let (mut detected, mut delays) = (0, Vec::new());
+    for s in 0..series {
+        let jump = Jump {
+            at: 120,
+            rotation_deg: 1.0,
+            translation: 5.0,
+        };
+        let sim = simulate(
+            &SimConfig {
+                poses: 300,
+                jump: Some(jump),
+                ..SimConfig::default()
+            },
+            5,
+            s,
+        );
+        let mut c = calibrator();
+        let mut first = None;
+        for (k, p) in sim.poses.iter().enumerate() {
+            c.push(p).unwrap();
+            if let Some(at) = c.change_detected() {
+                assert!(
+                    at >= jump.at,
+                    "series {s}: false alarm at pose {at} (k {k})"
+                );
+                first.get_or_insert(at);
+            }
+        }
+        if let Some(at) = first
+            && at < jump.at + 30
+        {
+            detected += 1;
+            delays.push(at - jump.at);
+        }
+        // After the jump the estimate converges to the new X.
+        let after = sim.gripper_from_camera_after.unwrap();
+        let e = errors_against_truth(&c.accumulated().unwrap().x, &after);
+        if first.is_some() {
+            assert!(
+                e.rot_deg < 0.3 && e.trans_rel < 0.1,
+                "series {s}: after the jump {e:?}"
+            );
+        }
+    }
+    delays.sort_unstable();
+    println!(
+        "detected {detected}/{series}, median delay {:?} poses",
+        delays.get(delays.len() / 2)
+    );
+    assert!(
+        detected as f64 >= 0.95 * series as f64,
+        "{detected}/{series}"
+    );
+}
+
+#[test]
+fn stationary_data_gives_fewer_than_one_false_alarm_per_100000_poses() {
+    let mut alarms = 0;
+    let mut poses = 0;
+    for s in 0..100 {
+        let sim = simulate(
+            &SimConfig {
+                poses: 1000,
+                ..SimConfig::default()
+            },
+            77,
+            s,
+        );
+        let mut c = calibrator();
+        for p in &sim.poses {
+            c.push(p).unwrap();
+            alarms += usize::from(c.change_detected().is_some());
+        }
+        poses += sim.poses.len();
+    }
+    println!("{alarms} false alarms in {poses} poses");
+    assert!(poses >= 100_000);
+    assert_eq!(alarms, 0);
+}
