@@ -399,3 +399,69 @@ fn demo_runs_without_files() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("adaptive") && out.contains("conventional") && out.contains("True X"));
 }
+
+#[test]
+fn online_accumulate_reports_the_running_estimate_and_a_change() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("jump.jsonl");
+    // A simulated stream whose X jumps at pose 150, written as the CLI reads it.
+    let jump = handeye::sim::Jump {
+        at: 150,
+        rotation_deg: 2.0,
+        translation: 10.0,
+    };
+    let sim = handeye::sim::simulate(
+        &handeye::sim::SimConfig {
+            poses: 300,
+            jump: Some(jump),
+            ..Default::default()
+        },
+        3,
+        0,
+    );
+    let text: String = sim
+        .poses
+        .iter()
+        .map(|p| {
+            let m = |t: &handeye::Transform| {
+                let h = t.to_homogeneous();
+                (0..4).map(|r| (0..4).map(|c| h[(r, c)]).collect::<Vec<_>>()).collect::<Vec<_>>()
+            };
+            serde_json::json!({"base_from_gripper": m(&p.base_from_gripper), "camera_from_target": m(&p.camera_from_target)}).to_string() + "\n"
+        })
+        .collect();
+    std::fs::write(&path, text).unwrap();
+    let (code, out, err) = run(handeye().args([
+        "online",
+        path.to_str().unwrap(),
+        "--estimator",
+        "accumulate",
+        "--d-max",
+        "100",
+    ]));
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let change = lines
+        .iter()
+        .find_map(|l| l["change"].as_u64())
+        .expect("a change line");
+    assert!((150..180).contains(&change), "change at {change}");
+    let events: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["calibration"].is_number())
+        .collect();
+    assert!(
+        events
+            .iter()
+            .all(|e| e["estimator"] == "accumulate" && e["paper"]["matrix"].is_array())
+    );
+    assert!(
+        events.last().unwrap()["accumulated"]["poses"]
+            .as_u64()
+            .unwrap()
+            > 50
+    );
+}
