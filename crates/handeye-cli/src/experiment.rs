@@ -5,16 +5,19 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
-use handeye::experiment::{Experiment, ExperimentConfig, markdown_table, run_experiment};
+use handeye::experiment::{
+    Experiment, ExperimentConfig, TrackingConfig, markdown_table, run_experiment, run_tracking,
+    tracking_table,
+};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::figures::{write_figures, write_text};
+use crate::figures::{write_figures, write_text, write_tracking_figures};
 
 /// Options of `handeye experiment`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Which experiment.
-    #[arg(value_parser = ["accuracy", "adaptability", "realtime", "all"])]
+    #[arg(value_parser = ["accuracy", "adaptability", "realtime", "tracking", "all"])]
     which: String,
     /// Number of series (default: the paper's, 20 / 100 / 50).
     #[arg(long)]
@@ -29,10 +32,10 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let experiments: Vec<Experiment> = if args.which == "all" {
-        Experiment::ALL.to_vec()
-    } else {
-        vec![args.which.parse()?]
+    let experiments: Vec<Experiment> = match args.which.as_str() {
+        "all" => Experiment::ALL.to_vec(),
+        "tracking" => Vec::new(),
+        other => vec![other.parse()?],
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
@@ -62,6 +65,27 @@ pub fn run(args: Args) -> Result<()> {
             &(serde_json::to_string_pretty(&report)? + "\n"),
         )?;
         for path in write_figures(&report, &args.out)? {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    if args.which == "all" || args.which == "tracking" {
+        let mut config = TrackingConfig {
+            seed: args.seed,
+            ..TrackingConfig::default()
+        };
+        if let Some(n) = args.series {
+            config.series = n;
+        }
+        let report = run_tracking(&config, || {})?;
+        let table = tracking_table(&report);
+        println!("{table}");
+        let stem = args.out.join("tracking");
+        write_text(&stem.with_extension("md"), &table)?;
+        write_text(
+            &stem.with_extension("json"),
+            &(serde_json::to_string_pretty(&report)? + "\n"),
+        )?;
+        for path in write_tracking_figures(&report, &args.out)? {
             eprintln!("wrote {}", path.display());
         }
     }

@@ -248,3 +248,94 @@ where
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
 }
+
+/// The tracking experiment's figure: mean rotation and translation error against the poses seen,
+/// log scale, one curve per estimator.
+pub fn write_tracking_figures(
+    report: &handeye::experiment::TrackingReport,
+    dir: &Path,
+) -> Result<Vec<PathBuf>> {
+    REGISTER.call_once(|| {
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+    let svg = dir.join("fig_tracking.svg");
+    let png = dir.join("fig_tracking.png");
+    draw_tracking(report, SVGBackend::new(&svg, SIZE).into_drawing_area())?;
+    draw_tracking(report, BitMapBackend::new(&png, SIZE).into_drawing_area())?;
+    Ok(vec![svg, png])
+}
+
+fn draw_tracking<DB: DrawingBackend>(
+    report: &handeye::experiment::TrackingReport,
+    root: DrawingArea<DB, Shift>,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+    let (left, right) = root.split_horizontally(SIZE.0 / 2);
+    let colors = [BLUE, RED, MAGENTA, BLACK];
+    for (area, title, pick) in [
+        (&left, "mean ‖R_est − R‖_F vs poses seen", 0usize),
+        (&right, "mean ‖t − t_est‖ / ‖t‖ vs poses seen", 1usize),
+    ] {
+        let values = |c: &handeye::experiment::TrackingCurve| {
+            if pick == 0 {
+                c.rot_fro.clone()
+            } else {
+                c.trans_rel.clone()
+            }
+        };
+        let all: Vec<f64> = report
+            .curves
+            .iter()
+            .flat_map(values)
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .collect();
+        let (lo, hi) = all
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(a, b), v| (a.min(*v), b.max(*v)));
+        let (lo, hi) = if lo < hi {
+            (lo / 1.5, hi * 1.5)
+        } else {
+            (1e-4, 1.0)
+        };
+        let max_x = report.config.poses as f64;
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(30)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0f64..max_x, (lo..hi).log_scale())
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("poses")
+            .label_style(("sans-serif", 12))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        for (c, color) in report.curves.iter().zip(colors) {
+            let points: Vec<(f64, f64)> = c
+                .poses
+                .iter()
+                .zip(values(c))
+                .filter(|(_, v)| v.is_finite() && *v > 0.0)
+                .map(|(p, v)| (*p as f64, v))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(points, color.stroke_width(2)))
+                .map_err(|e| anyhow!("{e}"))?
+                .label(c.method.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 12))
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+    }
+    root.present().map_err(|e| anyhow!("{e}"))?;
+    Ok(())
+}

@@ -385,6 +385,8 @@ fn experiment_writes_tables_and_figures() {
         "fig2_accuracy.png",
         "fig3_adaptability.svg",
         "table1_realtime.png",
+        "tracking.md",
+        "fig_tracking.svg",
     ] {
         let meta = std::fs::metadata(dir.path().join(f)).unwrap_or_else(|_| panic!("{f} missing"));
         assert!(meta.len() > 100, "{f} is empty");

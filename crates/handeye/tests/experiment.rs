@@ -111,3 +111,27 @@ fn results_do_not_depend_on_the_number_of_threads() {
     });
     assert_eq!(strip(a), strip(b));
 }
+
+#[test]
+fn tracking_the_running_estimate_improves_and_jumps_are_caught() {
+    use handeye::experiment::{TrackingConfig, run_tracking};
+    let config = TrackingConfig {
+        series: 8,
+        ..TrackingConfig::default()
+    };
+    let report = run_tracking(&config, || {}).unwrap();
+    let curve = |name: &str| report.curves.iter().find(|c| c.method == name).unwrap();
+    let (acc, adaptive) = (curve("accumulate"), curve("adaptive"));
+    let last = acc.rot_fro.len() - 1;
+    // The running estimate keeps improving, and ends ten times better than the paper's.
+    assert!(acc.rot_fro[last] < 0.5 * acc.rot_fro[1]);
+    assert!(10.0 * acc.rot_fro[last] <= adaptive.rot_fro[last]);
+    assert!(10.0 * acc.trans_rel[last] <= adaptive.trans_rel[last]);
+    let one_degree = report
+        .detection
+        .iter()
+        .find(|d| d.rotation_deg == 1.0)
+        .unwrap();
+    assert!(one_degree.detected_within_30 >= 0.95);
+    assert!(report.detection.iter().all(|d| d.false_alarms == 0));
+}
