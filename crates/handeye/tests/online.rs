@@ -2,7 +2,7 @@
 //! rule, lock-in, and the paper's claim on simulated data.
 
 use handeye::metrics::errors_against_truth;
-use handeye::online::{ErrorSource, Event, OnlineCalibrator, OnlineConfig, run_series};
+use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, run_series};
 use handeye::select::{AdaptiveParams, Record, Selection, Thresholds, predict};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{PosePair, Transform};
@@ -118,9 +118,17 @@ fn memory_stays_constant_over_a_million_poses() {
             optimal: true,
             ..config(selection, Transform::identity(), true)
         };
+        // The adaptive run also carries the accumulating estimator (its all-pairs sums and the
+        // change detector's window are of fixed size too).
+        let estimator = if selection == Selection::Adaptive {
+            Estimator::Accumulate
+        } else {
+            Estimator::Paper
+        };
         let cfg = OnlineConfig {
             error_source: ErrorSource::Residual,
             truth: None,
+            estimator,
             ..cfg
         };
         let mut c = OnlineCalibrator::new(cfg).unwrap();
