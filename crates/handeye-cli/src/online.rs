@@ -181,7 +181,7 @@ pub fn event_json(e: &Event, time_offset: Option<f64>) -> Value {
             out.insert("estimator".into(), json!("accumulate"));
             out.insert(
                 "accumulated".into(),
-                json!({"poses": a.poses, "conditioning": a.conditioning, "noise_rotation_deg": a.noise[0], "noise_translation": a.noise[1], "last_change": a.change_at}),
+                json!({"poses": a.poses, "conditioning": a.conditioning, "noise_rotation_deg": a.noise[0], "noise_translation": a.noise[1], "uncertainty_rotation_deg": a.uncertainty.map(|u| u[0]), "uncertainty_translation": a.uncertainty.map(|u| u[1]), "last_change": a.change_at}),
             );
             let mut paper = Map::new();
             insert_transform(&mut paper, &e.x);

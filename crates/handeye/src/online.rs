@@ -78,8 +78,14 @@ pub struct AccumulatedEstimate {
     pub poses: usize,
     /// Conditioning of its rotation system.
     pub conditioning: f64,
-    /// RMS residual of the motions under X so far: rotation in degrees, translation in input units.
+    /// RMS residual of the tested motions under X so far: rotation in degrees, translation in
+    /// input units.
     pub noise: [f64; 2],
+    /// Uncertainty of X, as the expected size of its error: rotation in degrees, translation in
+    /// input units. Split-half estimate: the poses are dealt alternately to two more accumulators,
+    /// and half the difference of their estimates has the distribution of the full estimate's
+    /// error. `None` until both halves have an estimate.
+    pub uncertainty: Option<[f64; 2]>,
     /// Pose number of the last declared change of X (accumulation restarted there), if any.
     pub change_at: Option<usize>,
 }
@@ -160,6 +166,8 @@ pub struct OnlineCalibrator {
     optimal_results: usize,
     last_x: Option<Transform>,
     accumulator: PoseAccumulator,
+    /// Even- and odd-numbered poses apart, for the split-half uncertainty.
+    halves: [PoseAccumulator; 2],
     detector: ChangeDetector,
     /// The last `lag` poses and the accumulated X last refreshed (accumulate estimator).
     recent: VecDeque<PosePair>,
@@ -187,6 +195,10 @@ impl OnlineCalibrator {
             optimal_results: 0,
             last_x: None,
             accumulator: PoseAccumulator::new(config.setup),
+            halves: [
+                PoseAccumulator::new(config.setup),
+                PoseAccumulator::new(config.setup),
+            ],
             detector: ChangeDetector::new(config.change),
             recent: VecDeque::with_capacity(config.change.lag + 1),
             current: None,
@@ -286,6 +298,7 @@ impl OnlineCalibrator {
             let m = MotionPair::between(self.config.setup, earlier, pose);
             if self.detector.observe(&m, &current.x) {
                 self.accumulator.reset();
+                self.halves.iter_mut().for_each(PoseAccumulator::reset);
                 self.recent.clear();
                 self.current = None;
                 self.last_change = Some(self.poses);
@@ -293,6 +306,7 @@ impl OnlineCalibrator {
             }
         }
         self.accumulator.add(pose);
+        self.halves[self.accumulator.poses() % 2].add(pose);
         if self.recent.len() == self.config.change.lag.max(1) {
             self.recent.pop_front();
         }
@@ -307,11 +321,20 @@ impl OnlineCalibrator {
         let estimate = self.accumulator.estimate()?;
         self.current = Some(estimate);
         let (noise_r, noise_t) = self.detector.noise_level();
+        let uncertainty = match (self.halves[0].estimate(), self.halves[1].estimate()) {
+            (Some(a), Some(b)) => Some([
+                0.5 * crate::pose::rotation_angle_between(&a.x.rotation, &b.x.rotation)
+                    .to_degrees(),
+                0.5 * (a.x.translation.vector - b.x.translation.vector).norm(),
+            ]),
+            _ => None,
+        };
         Some(AccumulatedEstimate {
             x: estimate.x,
             poses: estimate.poses,
             conditioning: estimate.conditioning,
             noise: [noise_r.to_degrees(), noise_t],
+            uncertainty,
             change_at: self.last_change,
         })
     }

@@ -140,3 +140,34 @@ fn stationary_data_gives_fewer_than_one_false_alarm_per_100000_poses() {
     assert!(poses >= 100_000);
     assert_eq!(alarms, 0);
 }
+
+#[test]
+fn the_reported_uncertainty_matches_the_actual_error() {
+    // Split-half uncertainty against the true error, over series: the median ratio is near 1.
+    let mut ratios_r = Vec::new();
+    let mut ratios_t = Vec::new();
+    for s in 0..40 {
+        let sim = simulate(&SimConfig::default(), 31, s);
+        let mut c = calibrator();
+        let mut last = None;
+        for p in &sim.poses {
+            if let Some(e) = c.push(p).unwrap().last() {
+                last = e.accumulated;
+            }
+        }
+        let a = last.expect("an accumulated estimate");
+        let u = a.uncertainty.expect("an uncertainty");
+        let e = errors_against_truth(&a.x, &sim.gripper_from_camera);
+        ratios_r.push(e.rot_deg / u[0]);
+        ratios_t.push(e.trans_rel * sim.gripper_from_camera.translation.vector.norm() / u[1]);
+    }
+    for r in [&mut ratios_r, &mut ratios_t] {
+        r.sort_by(f64::total_cmp);
+    }
+    let (mr, mt) = (ratios_r[20], ratios_t[20]);
+    println!("median error/uncertainty: rotation {mr:.2}, translation {mt:.2}");
+    assert!(
+        (0.4..2.5).contains(&mr) && (0.4..2.5).contains(&mt),
+        "{mr} {mt}"
+    );
+}
