@@ -166,6 +166,14 @@ fn detect<R: BufRead>(input: &mut R, source: &str) -> Result<Format> {
     }
 }
 
+/// Reads a whole text file, naming it in the error.
+pub fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|e| Error::Io {
+        file: path.display().to_string(),
+        source: e,
+    })
+}
+
 /// Opens a file for reading, naming it in the error.
 pub fn open(path: &Path) -> Result<BufReader<File>> {
     File::open(path).map(BufReader::new).map_err(|e| Error::Io {
@@ -181,12 +189,7 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
         Format::Auto => detect_file_format(path)?,
         f => f,
     };
-    let text = || {
-        std::fs::read_to_string(path).map_err(|e| Error::Io {
-            file: source.clone(),
-            source: e,
-        })
-    };
+    let text = || read_text(path);
     match format {
         Format::OpencvYaml => return peer::read_opencv_yaml(&text()?, &source),
         Format::Moveit => return peer::read_moveit_json(&text()?, &source),

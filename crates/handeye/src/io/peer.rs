@@ -7,7 +7,7 @@ use nalgebra::{Matrix4, Vector3};
 use serde_json::Value;
 
 use crate::error::{Error, Result};
-use crate::io::{PoseSeries, parse_error, transform_from_json};
+use crate::io::{PoseSeries, parse_error, read_text, transform_from_json};
 use crate::motion::PosePair;
 use crate::pose::{Transform, exp_so3, transform_from_matrix4, transform_from_parts};
 
@@ -199,10 +199,7 @@ pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
 /// One ViSP pose file: `data:` followed by six numbers, as `- [v]` lines or one `[…]` list.
 pub fn read_visp_pose(path: &Path) -> Result<Transform> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        file: file.clone(),
-        source: e,
-    })?;
+    let text = read_text(path)?;
     let Some(at) = text.find("data:") else {
         return Err(parse_error(
             &file,

@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use crate::error::{Error, Result};
-use crate::io::parse_error;
+use crate::error::Result;
+use crate::io::{parse_error, read_text};
 use crate::pose::transform_from_xyz_quat_xyzw;
 use crate::sync::StampedPose;
 
@@ -14,10 +14,7 @@ const FIELDS: [&str; 8] = ["t", "x", "y", "z", "qx", "qy", "qz", "qw"];
 /// Reads a stream file (see [`parse_stamped_poses`]).
 pub fn read_stamped_poses(path: &Path) -> Result<StampedStream> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        file: file.clone(),
-        source: e,
-    })?;
+    let text = read_text(path)?;
     parse_stamped_poses(&text, &file)
 }
 

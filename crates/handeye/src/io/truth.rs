@@ -4,8 +4,8 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
-use crate::error::{Error, Result};
-use crate::io::{TransformJson, parse_error, transform_from_json};
+use crate::error::Result;
+use crate::io::{TransformJson, parse_error, read_text, transform_from_json};
 use crate::pose::Transform;
 
 /// The content of a truth file.
@@ -22,10 +22,7 @@ pub struct Truth {
 /// Reads a truth file.
 pub fn read_truth(path: &Path) -> Result<Truth> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        file: file.clone(),
-        source: e,
-    })?;
+    let text = read_text(path)?;
     let value: Value = serde_json::from_str(&text)
         .map_err(|e| parse_error(&file, e.line(), "-", format!("malformed JSON: {e}")))?;
     let get = |name: &str| -> Result<Option<Transform>> {
