@@ -91,6 +91,7 @@ pub struct StampedStream {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::Error;
 
     #[test]
     fn reads_comma_and_space_separated_streams() {
