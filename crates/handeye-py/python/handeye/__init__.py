@@ -1,0 +1,132 @@
+"""handeye: hand-eye calibration (AX = XB) from Python.
+
+Frames: ``base_from_gripper`` is the robot pose (OpenCV ``R/t_gripper2base``), ``camera_from_target``
+the camera's observation of the target (OpenCV ``R/t_target2cam``, what PnP returns). X is
+``gripper_from_camera`` (OpenCV ``cam2gripper``) for eye-in-hand, ``base_from_camera`` for
+eye-to-hand. Quaternions are not used here: 4x4 matrices, 3x3 rotations or 3-vector rotation vectors.
+
+Two faces:
+
+* ``calibrate_hand_eye(...)``: a drop-in for ``cv2.calibrateHandEye`` (same arguments, same
+  outputs), which raises ``ValueError`` on degenerate data instead of returning an identity.
+* ``calibrate(...)`` and ``OnlineCalibrator``: arrays of 4x4 transforms in, dicts out.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ._handeye import _OnlineCalibrator
+from ._handeye import calibrate as _calibrate
+
+__all__ = ["calibrate_hand_eye", "calibrate", "OnlineCalibrator", "METHODS"]
+
+#: OpenCV's constants (cv2.CALIB_HAND_EYE_*) and handeye's names.
+METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
+
+
+def _rotations(rs, name: str) -> np.ndarray:
+    """(N, 3, 3) rotations from 3x3 matrices or rotation vectors (3, (3,1) or (1,3)), vectorised."""
+    try:
+        a = np.asarray(rs, dtype=np.float64)
+    except ValueError as e:
+        raise ValueError(f"{name}: rotations of mixed shapes ({e})") from None
+    if a.ndim == 3 and a.shape[1:] == (3, 3):
+        return a
+    if a.ndim >= 2 and a.shape[0] > 0 and a[0].size == 3:
+        w = a.reshape(len(a), 3)
+        theta = np.linalg.norm(w, axis=1)
+        k = w / np.where(theta > 1e-300, theta, 1.0)[:, None]
+        kx = np.zeros((len(a), 3, 3))
+        kx[:, 0, 1], kx[:, 0, 2], kx[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+        kx[:, 1, 0], kx[:, 2, 0], kx[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+        s, c = np.sin(theta)[:, None, None], (1 - np.cos(theta))[:, None, None]
+        return np.eye(3) + s * kx + c * (kx @ kx)
+    raise ValueError(f"{name}: a rotation must be a 3x3 matrix or a rotation vector, got shape {a.shape[1:]}")
+
+
+def _homogeneous(rotations, translations, name: str) -> np.ndarray:
+    r = _rotations(rotations, name)
+    try:
+        t = np.asarray(translations, dtype=np.float64)
+    except ValueError as e:
+        raise ValueError(f"{name}: translations of mixed shapes ({e})") from None
+    if len(t) != len(r) or t.size != 3 * len(r):
+        raise ValueError(f"{name}: {len(r)} rotations need {len(r)} translations of 3 entries, got shape {t.shape}")
+    out = np.zeros((len(r), 4, 4))
+    out[:, :3, :3] = r
+    out[:, :3, 3] = t.reshape(len(r), 3)
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=0):
+    """Drop-in for ``cv2.calibrateHandEye``; returns ``(R_cam2gripper, t_cam2gripper)`` as (3,3) and
+    (3,1) arrays. ``method`` is an OpenCV constant (``cv2.CALIB_HAND_EYE_TSAI`` = 0, the default) or
+    a handeye name ("andreff", "tsai", "park", "horaud", "andreff-joint", "daniilidis", "refine").
+    Motions come from every pose pair, as in OpenCV. For eye-to-hand pass base2gripper poses, as
+    with OpenCV, and get cam2base. Raises ValueError on bad or degenerate input."""
+    name = METHODS.get(method, method) if isinstance(method, int) else method
+    if not isinstance(name, str):
+        raise ValueError(f"unknown method {method!r}")
+    g = _homogeneous(R_gripper2base, t_gripper2base, "gripper2base")
+    c = _homogeneous(R_target2cam, t_target2cam, "target2cam")
+    result = _calibrate(g, c, method=name, setup="eye-in-hand", pairs="all")
+    x = result["matrix"]
+    return x[:3, :3].copy(), x[:3, 3:4].copy()
+
+
+def calibrate(base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive") -> dict:
+    """Batch calibration from (N,4,4) arrays; returns a dict: ``matrix`` (X), ``frame``, ``method``,
+    ``setup``, ``motions``, ``conditioning``, ``residual`` (``rotation_deg_rms``,
+    ``translation_rms``) and ``warnings``."""
+    g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
+    c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
+    if g.ndim != 3 or c.ndim != 3:
+        raise ValueError("expected (N, 4, 4) arrays of transforms")
+    return _calibrate(g, c, method=method, setup=setup, pairs=pairs)
+
+
+class OnlineCalibrator:
+    """The online calibrator: ``push`` one pose pair at a time and get the calibrations it completes.
+
+    Keyword arguments: ``selection`` ("adaptive", "fixed", "none"), ``setup``, ``estimator``
+    ("paper", "accumulate"), ``error_source`` ("residual", "truth"), ``truth`` (4x4 X),
+    ``optimal`` and the adaptive parameters ``n_init, interval, relax_down, relax_up, explore,
+    rms_r_max, rms_t_max, alpha_min, beta_min_deg, d_max`` (``d_max`` in your length unit:
+    0.1 for metres), ``unfreeze``."""
+
+    def __init__(self, **params):
+        truth = params.pop("truth", None)
+        if truth is not None:
+            truth = np.ascontiguousarray(truth, dtype=np.float64)
+        self._inner = _OnlineCalibrator(truth=truth, **params)
+
+    def push(self, base_from_gripper, camera_from_target):
+        """Pushes one pose pair (4x4 arrays). Returns the event dict of the calibration it
+        completes, or None (the rare pose that completes several returns the list)."""
+        events = self._inner.push(
+            np.ascontiguousarray(base_from_gripper, dtype=np.float64),
+            np.ascontiguousarray(camera_from_target, dtype=np.float64),
+        )
+        if not events:
+            return None
+        return events[0] if len(events) == 1 else events
+
+    @property
+    def poses(self) -> int:
+        return self._inner.poses()
+
+    @property
+    def calibrations(self) -> int:
+        return self._inner.calibrations()
+
+    def state(self) -> str:
+        """The whole state as a JSON string."""
+        return self._inner.state()
+
+    @classmethod
+    def from_state(cls, state: str) -> "OnlineCalibrator":
+        """A calibrator that continues exactly where ``state()`` was taken."""
+        obj = cls.__new__(cls)
+        obj._inner = _OnlineCalibrator.from_state(state)
+        return obj

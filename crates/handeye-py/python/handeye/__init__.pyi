@@ -1,0 +1,35 @@
+"""Type stubs of handeye. Frames: base_from_gripper (OpenCV gripper2base), camera_from_target
+(target2cam); X = gripper_from_camera (cam2gripper) for eye-in-hand, base_from_camera for
+eye-to-hand."""
+from typing import Any, Sequence, Union
+
+import numpy as np
+import numpy.typing as npt
+
+METHODS: dict[int, str]
+
+def calibrate_hand_eye(
+    R_gripper2base: Sequence[npt.ArrayLike],
+    t_gripper2base: Sequence[npt.ArrayLike],
+    R_target2cam: Sequence[npt.ArrayLike],
+    t_target2cam: Sequence[npt.ArrayLike],
+    method: Union[int, str] = 0,
+) -> tuple[np.ndarray, np.ndarray]: ...
+def calibrate(
+    base_from_gripper: npt.ArrayLike,
+    camera_from_target: npt.ArrayLike,
+    method: str = "andreff",
+    setup: str = "eye-in-hand",
+    pairs: str = "consecutive",
+) -> dict[str, Any]: ...
+
+class OnlineCalibrator:
+    def __init__(self, **params: Any) -> None: ...
+    def push(self, base_from_gripper: npt.ArrayLike, camera_from_target: npt.ArrayLike) -> Union[dict[str, Any], list[dict[str, Any]], None]: ...
+    @property
+    def poses(self) -> int: ...
+    @property
+    def calibrations(self) -> int: ...
+    def state(self) -> str: ...
+    @classmethod
+    def from_state(cls, state: str) -> "OnlineCalibrator": ...

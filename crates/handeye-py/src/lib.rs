@@ -1,0 +1,277 @@
+//! Python bindings of handeye (module `handeye._handeye`; the public face is the `handeye` Python
+//! package beside it, which converts OpenCV-style inputs).
+//!
+//! Conventions: `base_from_gripper` (OpenCV `gripper2base`), `camera_from_target` (`target2cam`),
+//! X = `gripper_from_camera` (`cam2gripper`) for eye-in-hand, `base_from_camera` for eye-to-hand.
+
+use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig};
+use handeye::pose::transform_from_matrix4;
+use handeye::select::{AdaptiveParams, Selection};
+use handeye::{Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
+use nalgebra::Matrix4;
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// A library error as a Python `ValueError` with the library's message.
+fn value_error(e: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// A 4×4 transform from a numpy view, refusing non-rigid ones with `what` in the message.
+fn transform(m: ndarray_view::View<'_>, what: &str) -> PyResult<Transform> {
+    if m.shape() != [4, 4] {
+        return Err(value_error(format!(
+            "{what}: expected a 4×4 array, got shape {:?}",
+            m.shape()
+        )));
+    }
+    let mat = Matrix4::from_fn(|r, c| m[[r, c]]);
+    transform_from_matrix4(&mat).map_err(|p| value_error(format!("{what}: {p}")))
+}
+
+mod ndarray_view {
+    /// A 4×4 view of a numpy array.
+    pub type View<'a> = numpy::ndarray::ArrayView2<'a, f64>;
+}
+
+/// Pose pairs from (N, 4, 4) arrays of `base_from_gripper` and `camera_from_target`.
+fn poses(
+    base_from_gripper: &PyReadonlyArray3<'_, f64>,
+    camera_from_target: &PyReadonlyArray3<'_, f64>,
+) -> PyResult<Vec<PosePair>> {
+    let (g, c) = (base_from_gripper.as_array(), camera_from_target.as_array());
+    if g.shape() != c.shape() || g.shape()[1..] != [4, 4] {
+        return Err(value_error(format!(
+            "expected two (N, 4, 4) arrays of the same N, got {:?} and {:?}",
+            g.shape(),
+            c.shape()
+        )));
+    }
+    (0..g.shape()[0])
+        .map(|k| {
+            Ok(PosePair {
+                base_from_gripper: transform(
+                    g.index_axis(numpy::ndarray::Axis(0), k),
+                    &format!("base_from_gripper[{k}]"),
+                )?,
+                camera_from_target: transform(
+                    c.index_axis(numpy::ndarray::Axis(0), k),
+                    &format!("camera_from_target[{k}]"),
+                )?,
+            })
+        })
+        .collect()
+}
+
+fn matrix<'py>(py: Python<'py>, x: &Transform) -> Bound<'py, PyArray2<f64>> {
+    let h = x.to_homogeneous();
+    numpy::ndarray::Array2::from_shape_fn((4, 4), |(r, c)| h[(r, c)]).into_pyarray(py)
+}
+
+/// Batch calibration: returns a dict with `matrix` (4×4 X), `method`, `setup`, `frame`,
+/// `motions`, `conditioning`, `residual` (rotation_deg_rms, translation_rms) and `warnings`.
+#[pyfunction]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive"))]
+fn calibrate<'py>(
+    py: Python<'py>,
+    base_from_gripper: PyReadonlyArray3<'py, f64>,
+    camera_from_target: PyReadonlyArray3<'py, f64>,
+    method: &str,
+    setup: &str,
+    pairs: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let method: Method = method.parse().map_err(value_error)?;
+    let setup = parse_setup(setup)?;
+    let pairing = match pairs {
+        "consecutive" => Pairing::Consecutive,
+        "all" => Pairing::All,
+        other => {
+            return Err(value_error(format!(
+                "unknown pairs `{other}`; consecutive or all"
+            )));
+        }
+    };
+    let poses = poses(&base_from_gripper, &camera_from_target)?;
+    let motions = motion_pairs(&poses, pairing, setup);
+    let c = py
+        .allow_threads(|| solve(method, &motions))
+        .map_err(value_error)?;
+    let residual = handeye::metrics::residual_summary(&motions, &c.x);
+    let out = PyDict::new(py);
+    out.set_item("matrix", matrix(py, &c.x))?;
+    out.set_item("method", method.name())?;
+    out.set_item("setup", setup.name())?;
+    out.set_item("frame", setup.x_frame())?;
+    out.set_item("motions", c.motions)?;
+    out.set_item("conditioning", c.conditioning)?;
+    let r = PyDict::new(py);
+    r.set_item("rotation_deg_rms", residual.rotation_deg_rms)?;
+    r.set_item("translation_rms", residual.translation_rms)?;
+    out.set_item("residual", r)?;
+    out.set_item(
+        "warnings",
+        c.warnings.iter().map(|w| w.to_string()).collect::<Vec<_>>(),
+    )?;
+    Ok(out)
+}
+
+fn parse_setup(setup: &str) -> PyResult<Setup> {
+    match setup {
+        "eye-in-hand" => Ok(Setup::EyeInHand),
+        "eye-to-hand" => Ok(Setup::EyeToHand),
+        other => Err(value_error(format!(
+            "unknown setup `{other}`; eye-in-hand or eye-to-hand"
+        ))),
+    }
+}
+
+/// The online calibrator (see `handeye.OnlineCalibrator`).
+#[pyclass(name = "_OnlineCalibrator")]
+struct PyOnline {
+    inner: OnlineCalibrator,
+}
+
+#[pymethods]
+impl PyOnline {
+    #[new]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="paper", error_source="residual", truth=None, optimal=false, n_init=5, interval=5, relax_down=0.9, relax_up=1.1, explore=1.1, rms_r_max=0.001, rms_t_max=0.05, alpha_min=0.25881904510252074, beta_min_deg=3.0, d_max=0.1, unfreeze=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        selection: &str,
+        setup: &str,
+        estimator: &str,
+        error_source: &str,
+        truth: Option<PyReadonlyArray2<'_, f64>>,
+        optimal: bool,
+        n_init: usize,
+        interval: usize,
+        relax_down: f64,
+        relax_up: f64,
+        explore: f64,
+        rms_r_max: f64,
+        rms_t_max: f64,
+        alpha_min: f64,
+        beta_min_deg: f64,
+        d_max: f64,
+        unfreeze: bool,
+    ) -> PyResult<Self> {
+        let truth = truth
+            .map(|t| transform(t.as_array(), "truth"))
+            .transpose()?;
+        let config = OnlineConfig {
+            setup: parse_setup(setup)?,
+            selection: selection.parse::<Selection>().map_err(value_error)?,
+            params: AdaptiveParams {
+                n_init,
+                interval,
+                relax_down,
+                relax_up,
+                explore,
+                rms_r_max,
+                rms_t_max,
+                alpha_min,
+                beta_min: beta_min_deg.to_radians(),
+                d_max,
+                unfreeze,
+            },
+            error_source: match error_source {
+                "residual" => ErrorSource::Residual,
+                "truth" => ErrorSource::Truth,
+                other => {
+                    return Err(value_error(format!(
+                        "unknown error_source `{other}`; residual or truth"
+                    )));
+                }
+            },
+            truth,
+            optimal,
+            estimator: match estimator {
+                "paper" => Estimator::Paper,
+                "accumulate" => Estimator::Accumulate,
+                other => {
+                    return Err(value_error(format!(
+                        "unknown estimator `{other}`; paper or accumulate"
+                    )));
+                }
+            },
+            ..OnlineConfig::default()
+        };
+        Ok(Self {
+            inner: OnlineCalibrator::new(config).map_err(value_error)?,
+        })
+    }
+
+    /// Pushes one pose pair (4×4 arrays); returns the list of events it completes (usually empty).
+    fn push<'py>(
+        &mut self,
+        py: Python<'py>,
+        base_from_gripper: PyReadonlyArray2<'py, f64>,
+        camera_from_target: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let pose = PosePair {
+            base_from_gripper: transform(base_from_gripper.as_array(), "base_from_gripper")?,
+            camera_from_target: transform(camera_from_target.as_array(), "camera_from_target")?,
+        };
+        let events = self.inner.push(&pose).map_err(value_error)?;
+        events.iter().map(|e| event(py, e)).collect()
+    }
+
+    /// Poses pushed so far.
+    fn poses(&self) -> usize {
+        self.inner.poses()
+    }
+
+    /// Calibrations made so far.
+    fn calibrations(&self) -> usize {
+        self.inner.calibrations()
+    }
+
+    /// The whole state as JSON (restore with `from_state`).
+    fn state(&self) -> PyResult<String> {
+        serde_json::to_string(&self.inner).map_err(value_error)
+    }
+
+    /// A calibrator restored from `state()`.
+    #[staticmethod]
+    fn from_state(state: &str) -> PyResult<Self> {
+        Ok(Self {
+            inner: serde_json::from_str(state).map_err(value_error)?,
+        })
+    }
+}
+
+/// One event as a dict.
+fn event<'py>(py: Python<'py>, e: &Event) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("calibration", e.calibration)?;
+    d.set_item("poses", e.poses.to_vec())?;
+    if let Some(t) = e.thresholds {
+        let th = PyDict::new(py);
+        th.set_item("sin_alpha", t.sin_alpha)?;
+        th.set_item("beta", t.beta)?;
+        th.set_item("d", t.d)?;
+        d.set_item("thresholds", th)?;
+    }
+    d.set_item("rms_r", e.rms.rms_r)?;
+    d.set_item("rms_t", e.rms.rms_t)?;
+    d.set_item("matrix", matrix(py, &e.x))?;
+    d.set_item("seconds", e.seconds)?;
+    if let Some(o) = &e.optimal {
+        d.set_item("optimal", matrix(py, &o.x))?;
+    }
+    if let Some(a) = &e.accumulated {
+        d.set_item("accumulated", matrix(py, &a.x))?;
+        d.set_item("accumulated_poses", a.poses)?;
+    }
+    Ok(d)
+}
+
+/// The extension module.
+#[pymodule]
+fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(calibrate, m)?)?;
+    m.add_class::<PyOnline>()?;
+    Ok(())
+}

@@ -1,0 +1,132 @@
+"""handeye from Python: parity with cv2.calibrateHandEye, the paper fixtures, bad input."""
+import json
+import pathlib
+
+import cv2
+import numpy as np
+import pytest
+
+import handeye
+
+TESTDATA = pathlib.Path(__file__).resolve().parents[3] / "testdata"
+
+
+def random_problem(rng, n=10, noise=True):
+    """OpenCV's own test protocol (calib3d test_calibration_hand_eye.cpp), eye-in-hand."""
+
+    def pose(tmin, tmax, lo, hi):
+        axis = rng.uniform(-1, 1, 3)
+        theta = rng.uniform(tmin, tmax) * rng.choice([-1, 1])
+        r, _ = cv2.Rodrigues(axis * theta)
+        t = rng.uniform(lo, hi, 3) * rng.choice([-1, 1], 3)
+        return r, t
+
+    d = np.pi / 180
+    rx, tx = pose(10 * d, 50 * d, 0.05, 0.5)
+    rw, tw = pose(5 * d, 85 * d, 0.5, 3.5)
+    X = np.eye(4); X[:3, :3] = rx; X[:3, 3] = tx
+    W = np.eye(4); W[:3, :3] = rw; W[:3, 3] = tw
+    Rg, tg, Rc, tc = [], [], [], []
+    for _ in range(n):
+        r, t = pose(5 * d, 45 * d, 0.5, 1.5)
+        G = np.eye(4); G[:3, :3] = r; G[:3, 3] = t
+        C = np.linalg.inv(G @ X) @ W
+        if noise:
+            rv, _ = cv2.Rodrigues(C[:3, :3]); C[:3, :3], _ = cv2.Rodrigues(rv + rng.normal(0, 0.002, (3, 1)))
+            C[:3, 3] += rng.normal(0, 0.005, 3)
+            rv, _ = cv2.Rodrigues(G[:3, :3]); G[:3, :3], _ = cv2.Rodrigues(rv + rng.normal(0, 0.001, (3, 1)))
+            G[:3, 3] += rng.normal(0, 0.001, 3)
+        Rg.append(G[:3, :3].copy()); tg.append(G[:3, 3:4].copy())
+        rvec, _ = cv2.Rodrigues(C[:3, :3])
+        Rc.append(rvec); tc.append(C[:3, 3:4].copy())  # rotation vectors, as OpenCV accepts
+    return Rg, tg, Rc, tc, X
+
+
+METHODS = {
+    "park": cv2.CALIB_HAND_EYE_PARK,
+    "horaud": cv2.CALIB_HAND_EYE_HORAUD,
+    "andreff-joint": cv2.CALIB_HAND_EYE_ANDREFF,
+    "daniilidis": cv2.CALIB_HAND_EYE_DANIILIDIS,
+}
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_same_answers_as_opencv(seed):
+    rng = np.random.default_rng(seed)
+    Rg, tg, Rc, tc, _ = random_problem(rng)
+    for name, code in METHODS.items():
+        r_cv, t_cv = cv2.calibrateHandEye(Rg, tg, Rc, tc, method=code)
+        for m in (name, code):
+            r, t = handeye.calibrate_hand_eye(Rg, tg, Rc, tc, method=m)
+            assert r.shape == (3, 3) and t.shape == (3, 1)
+            assert np.abs(r - r_cv).max() <= 1e-6, name
+            assert np.abs(t - t_cv).max() <= 1e-6, name
+
+
+def test_noise_free_data_gives_the_truth_for_every_method():
+    rng = np.random.default_rng(7)
+    Rg, tg, Rc, tc, X = random_problem(rng, noise=False)
+    for m in ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"]:
+        r, t = handeye.calibrate_hand_eye(Rg, tg, Rc, tc, method=m)
+        assert np.abs(r - X[:3, :3]).max() < 1e-9, m
+        assert np.abs(t.ravel() - X[:3, 3]).max() < 1e-9, m
+
+
+def test_degenerate_data_raises_where_opencv_returns_garbage():
+    # All rotations about one axis.
+    Rg = [cv2.Rodrigues(np.array([0.0, 0.0, 0.2 * (k + 1)]))[0] for k in range(5)]
+    tg = [np.array([k, 0.0, 0.0]) for k in range(5)]
+    Rc = [r.T for r in Rg]
+    tc = [np.zeros(3) for _ in range(5)]
+    with pytest.raises(ValueError, match="parallel"):
+        handeye.calibrate_hand_eye(Rg, tg, Rc, tc, method="park")
+
+
+def test_bad_inputs_raise_and_never_crash():
+    eye = np.eye(4)
+    with pytest.raises(ValueError):
+        handeye.calibrate(np.stack([eye, eye]), np.stack([eye]))
+    bad = eye.copy(); bad[0, 0] = 2.0
+    with pytest.raises(ValueError, match="orthonormal"):
+        handeye.calibrate(np.stack([eye, bad, eye]), np.stack([eye, eye, eye]))
+    nan = eye.copy(); nan[0, 3] = np.nan
+    with pytest.raises(ValueError):
+        handeye.calibrate(np.stack([eye, nan, eye]), np.stack([eye, eye, eye]))
+    with pytest.raises(ValueError):
+        handeye.calibrate_hand_eye([np.eye(3)], [np.zeros(2)], [np.eye(3)], [np.zeros(3)])
+    with pytest.raises(ValueError):
+        handeye.calibrate(np.stack([eye] * 3), np.stack([eye] * 3), method="magic")
+    with pytest.raises(ValueError):
+        handeye.OnlineCalibrator(selection="magic")
+    c = handeye.OnlineCalibrator()
+    with pytest.raises(ValueError):
+        c.push(np.eye(3), eye)
+    assert c.poses == 0
+
+
+def load_series(name):
+    lines = (TESTDATA / "paper" / f"{name}.jsonl").read_text().splitlines()
+    poses = [json.loads(l) for l in lines if l.strip()]
+    q = np.array([p["base_from_gripper"] for p in poses])
+    c = np.array([np.linalg.inv(np.array(p["target_from_camera"])) for p in poses])
+    truth = np.array(json.loads((TESTDATA / "paper" / f"{name}.truth.json").read_text())["gripper_from_camera"]["matrix"])
+    expected = json.loads((TESTDATA / "paper" / f"{name}.expected.json").read_text())
+    return q, c, truth, expected
+
+
+def test_online_calibrator_reproduces_the_paper_fixture_and_resumes_from_state():
+    q, c, truth, expected = load_series("series_2007_000_200")
+    cal = handeye.OnlineCalibrator(selection="adaptive", error_source="truth", truth=truth, d_max=100.0)
+    events, resumed = [], None
+    for k in range(len(q)):
+        e = cal.push(q[k], c[k])
+        if e is not None:
+            events.append(e)
+        if k == 60:
+            resumed = handeye.OnlineCalibrator.from_state(cal.state())
+    assert [e["poses"] for e in events] == [x["poses"] for x in expected["adaptive"]]
+    for e, x in zip(events, expected["adaptive"]):
+        assert np.abs(e["matrix"] - np.array(x["matrix"])).max() < 1e-8
+    later = [resumed.push(q[k], c[k]) for k in range(61, len(q))]
+    later = [e for e in later if e is not None]
+    assert [e["poses"] for e in later] == [e["poses"] for e in events if e["poses"][2] > 61]
