@@ -73,7 +73,7 @@ fn matrix<'py>(py: Python<'py>, x: &Transform) -> Bound<'py, PyArray2<f64>> {
 /// Batch calibration: returns a dict with `matrix` (4×4 X), `method`, `setup`, `frame`,
 /// `motions`, `conditioning`, `residual` (rotation_deg_rms, translation_rms) and `warnings`.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive"))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false))]
 fn calibrate<'py>(
     py: Python<'py>,
     base_from_gripper: PyReadonlyArray3<'py, f64>,
@@ -81,6 +81,7 @@ fn calibrate<'py>(
     method: &str,
     setup: &str,
     pairs: &str,
+    tsai_opencv_filter: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method: Method = method.parse().map_err(value_error)?;
     let setup = parse_setup(setup)?;
@@ -96,7 +97,16 @@ fn calibrate<'py>(
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let motions = motion_pairs(&poses, pairing, setup);
     let c = py
-        .allow_threads(|| solve(method, &motions))
+        .allow_threads(|| {
+            if method == Method::Tsai && tsai_opencv_filter {
+                let options = handeye::solve::TsaiOptions {
+                    opencv_filter: true,
+                };
+                handeye::solve::tsai_with(&motions, &options)
+            } else {
+                solve(method, &motions)
+            }
+        })
         .map_err(value_error)?;
     let residual = handeye::metrics::residual_summary(&motions, &c.x);
     let out = PyDict::new(py);

@@ -63,14 +63,17 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     """Drop-in for ``cv2.calibrateHandEye``; returns ``(R_cam2gripper, t_cam2gripper)`` as (3,3) and
     (3,1) arrays. ``method`` is an OpenCV constant (``cv2.CALIB_HAND_EYE_TSAI`` = 0, the default) or
     a handeye name ("andreff", "tsai", "park", "horaud", "andreff-joint", "daniilidis", "refine").
-    Motions come from every pose pair, as in OpenCV. For eye-to-hand pass base2gripper poses, as
+    Motions come from every pose pair, as in OpenCV. With OpenCV's constant for Tsai, OpenCV's
+    motion filter is applied too (motions with 2·sin(θ/2) outside [0.3, 1.7] are dropped), so the
+    answer is OpenCV's; with the name "tsai" every motion is kept. For eye-to-hand pass base2gripper poses, as
     with OpenCV, and get cam2base. Raises ValueError on bad or degenerate input."""
     name = METHODS.get(method, method) if isinstance(method, int) else method
     if not isinstance(name, str):
         raise ValueError(f"unknown method {method!r}")
     g = _homogeneous(R_gripper2base, t_gripper2base, "gripper2base")
     c = _homogeneous(R_target2cam, t_target2cam, "target2cam")
-    result = _calibrate(g, c, method=name, setup="eye-in-hand", pairs="all")
+    opencv_tsai = isinstance(method, int) and name == "tsai"
+    result = _calibrate(g, c, method=name, setup="eye-in-hand", pairs="all", tsai_opencv_filter=opencv_tsai)
     x = result["matrix"]
     return x[:3, :3].copy(), x[:3, 3:4].copy()
 
