@@ -120,10 +120,17 @@ fn calibrate<'py>(
     r.set_item("rotation_deg_rms", residual.rotation_deg_rms)?;
     r.set_item("translation_rms", residual.translation_rms)?;
     out.set_item("residual", r)?;
-    out.set_item(
-        "warnings",
-        c.warnings.iter().map(|w| w.to_string()).collect::<Vec<_>>(),
-    )?;
+    let quality = handeye::metrics::quality_report(&motions, &c.x, 0);
+    let q = PyDict::new(py);
+    q.set_item("axis_spread_deg", quality.axis_spread_deg)?;
+    q.set_item("rotation_range_deg", quality.rotation_range_deg.to_vec())?;
+    q.set_item("rotation_std_deg", quality.rotation_std_deg)?;
+    q.set_item("translation_std", quality.translation_std)?;
+    q.set_item("outliers", handeye::metrics::find_outliers(&motions, 3.0))?;
+    out.set_item("quality", q)?;
+    let mut warnings: Vec<String> = c.warnings.iter().map(|w| w.to_string()).collect();
+    warnings.extend(quality.warnings);
+    out.set_item("warnings", warnings)?;
     Ok(out)
 }
 

@@ -74,6 +74,19 @@ def test_noise_free_data_gives_the_truth_for_every_method():
         assert np.abs(t.ravel() - X[:3, 3]).max() < 1e-9, m
 
 
+def test_calibrate_reports_quality():
+    rng = np.random.default_rng(11)
+    Rg, tg, Rc, tc, X = random_problem(rng, n=12)
+    g = np.array([np.block([[r, t.reshape(3, 1)], [np.zeros((1, 3)), np.ones((1, 1))]]) for r, t in zip(Rg, tg)])
+    c = np.array([np.block([[cv2.Rodrigues(r)[0], t.reshape(3, 1)], [np.zeros((1, 3)), np.ones((1, 1))]]) for r, t in zip(Rc, tc)])
+    result = handeye.calibrate(g, c, method="refine", pairs="all")
+    assert result["frame"] == "gripper_from_camera" and result["motions"] == 66
+    assert np.abs(result["matrix"][:3, :3] - X[:3, :3]).max() < 0.01
+    q = result["quality"]
+    assert q["axis_spread_deg"] > 20 and 0 < q["rotation_std_deg"] < 1 and q["translation_std"] > 0
+    assert result["residual"]["rotation_deg_rms"] < 1
+
+
 def test_degenerate_data_raises_where_opencv_returns_garbage():
     # All rotations about one axis.
     Rg = [cv2.Rodrigues(np.array([0.0, 0.0, 0.2 * (k + 1)]))[0] for k in range(5)]
