@@ -20,6 +20,20 @@ pub fn exit_code(e: &anyhow::Error) -> u8 {
     }
 }
 
+/// The message of an error and of its causes, each cause left out when the text before already
+/// says it (the library's errors print their source themselves).
+pub fn error_message(e: &anyhow::Error) -> String {
+    let mut message = e.to_string();
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !message.contains(&text) {
+            message.push_str(": ");
+            message.push_str(&text);
+        }
+    }
+    message
+}
+
 /// Inserts `translation`, `quaternion_xyzw` and `matrix` of `t` into a JSON object.
 pub fn insert_transform(object: &mut Map<String, Value>, t: &Transform) {
     let j = TransformJson::from(t);

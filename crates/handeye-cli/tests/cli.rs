@@ -232,6 +232,60 @@ fn bad_input_exits_2_naming_file_line_and_field() {
     assert!(err.contains("no/such/file.jsonl"));
 }
 
+/// Standard input has no extension: CSV is told from JSON Lines by its first character that is
+/// neither blank nor in a comment, and line numbers still count the comment lines.
+#[test]
+fn csv_on_stdin_after_comments_is_detected_and_lines_are_counted() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = std::fs::read_to_string(fixture_as_csv(dir.path())).unwrap();
+    let commented = format!("# exported by hand\r\n\r\n{}", csv.replace('\n', "\r\n"));
+    let (code, out, err) = run(handeye()
+        .args(["calibrate", "-"])
+        .write_stdin(commented.clone()));
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["motions"], 9);
+    // Break the fifth data row (line 2 + 1 + 5 = 8): a NaN in the last column.
+    let mut lines: Vec<String> = commented.split("\r\n").map(str::to_string).collect();
+    let row = lines[7].rsplit_once(',').unwrap().0.to_string();
+    lines[7] = format!("{row},NaN");
+    let (code, _, err) = run(handeye()
+        .args(["calibrate", "-"])
+        .write_stdin(lines.join("\r\n")));
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("-:8: field `target_from_camera_qw`"), "{err}");
+}
+
+#[test]
+fn every_offered_format_is_accepted_and_errors_are_said_once() {
+    let camodocal = testdata("real/camodocal/TransformPairsInput.yml");
+    let (code, out, err) = run(handeye()
+        .args(["calibrate", "--format", "opencv-yaml"])
+        .arg(&camodocal));
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert!(v["motions"].as_u64().unwrap() > 2);
+    let (code, _, err) = run(handeye().args(["calibrate", "no/such/file.jsonl"]));
+    assert_eq!(code, 2, "{err}");
+    assert_eq!(err.matches("No such file").count(), 1, "{err}");
+    // A line that is not UTF-8 is bad input on its line, skipped by `online`.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("binary.jsonl");
+    let mut bytes = format!("{}\n", good_line(0)).into_bytes();
+    bytes.extend_from_slice(b"\xff\xfe\n");
+    bytes.extend_from_slice(format!("{}\n", good_line(1)).as_bytes());
+    std::fs::write(&path, bytes).unwrap();
+    let (code, _, err) = run(handeye().arg("calibrate").arg(&path));
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("binary.jsonl:2: field `-`") && err.contains("UTF-8"),
+        "{err}"
+    );
+    let (code, _, err) = run(handeye().arg("online").arg(&path));
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("1 bad line(s) skipped"), "{err}");
+}
+
 #[test]
 fn degenerate_input_exits_3_with_what_to_do() {
     let dir = tempfile::tempdir().unwrap();

@@ -11,21 +11,33 @@ use crate::motion::PosePair;
 use crate::pose::Transform;
 
 /// Streaming reader of JSON Lines pose pairs (blank lines and `#` comments are skipped).
+///
+/// Yields one [`StampedPosePair`] per record as soon as its line has been read, or an
+/// [`Error::Parse`] naming the file, the line (from 1) and the field of a bad record, and then goes
+/// on with the next line. A read error of the input itself ([`Error::Io`]) ends the iteration.
 pub struct JsonlPairs<R: BufRead> {
     input: R,
     source: String,
     line: usize,
-    buffer: String,
+    buffer: Vec<u8>,
+    finished: bool,
 }
 
 impl<R: BufRead> JsonlPairs<R> {
     /// A reader of `input`, named `source` in messages.
     pub fn new(input: R, source: &str) -> Self {
+        Self::after_lines(input, source, 0)
+    }
+
+    /// A reader of `input` whose first `lines` lines have already been consumed: line numbers go
+    /// on from there.
+    pub(crate) fn after_lines(input: R, source: &str, lines: usize) -> Self {
         Self {
             input,
             source: source.to_string(),
-            line: 0,
-            buffer: String::new(),
+            line: lines,
+            buffer: Vec::new(),
+            finished: false,
         }
     }
 }
@@ -34,30 +46,48 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
     type Item = Result<StampedPosePair>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        loop {
+        while !self.finished {
             self.buffer.clear();
             self.line += 1;
-            match self.input.read_line(&mut self.buffer) {
-                Ok(0) => return None,
+            match self.input.read_until(b'\n', &mut self.buffer) {
+                Ok(0) => {
+                    self.finished = true;
+                    return None;
+                }
                 Ok(_) => {}
                 Err(e) => {
+                    // A failing input (a directory, a broken pipe) would fail again: stop here.
+                    self.finished = true;
                     return Some(Err(Error::Io {
                         file: self.source.clone(),
                         source: e,
                     }));
                 }
             }
-            let text = self.buffer.trim();
+            let Ok(text) = std::str::from_utf8(&self.buffer) else {
+                return Some(Err(parse_error(
+                    &self.source,
+                    self.line,
+                    "-",
+                    "the line is not valid UTF-8 text",
+                )));
+            };
+            let text = text.trim();
             if text.is_empty() || text.starts_with('#') {
                 continue;
             }
             return Some(parse_pose_line(text, &self.source, self.line));
         }
+        None
     }
 }
 
-/// Parses one JSON Lines record: exactly one of `base_from_gripper` / `gripper_from_base`, exactly
-/// one of `camera_from_target` / `target_from_camera`, and an optional numeric `stamp`.
+/// Parses one JSON Lines record (line number `line` of `source`): exactly one of
+/// `base_from_gripper` / `gripper_from_base`, exactly one of `camera_from_target` /
+/// `target_from_camera`, each a transform (SPEC sec. 7) or a bare 4×4 array, and an optional
+/// numeric `stamp` in seconds. The pair is returned in our directions (Q = `base_from_gripper`,
+/// `camera_from_target`), inverting what the file gives in the other direction. Other keys are
+/// ignored.
 pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedPosePair> {
     let value: Value = serde_json::from_str(text)
         .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;

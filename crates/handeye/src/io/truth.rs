@@ -1,12 +1,26 @@
 //! Truth files (SPEC sec. 7): the true X under its frame name, and optionally the target pose.
+//!
+//! ```json
+//! {"gripper_from_camera": {"translation": [...], "quaternion_xyzw": [...], "matrix": [...]},
+//!  "base_from_target": {...}}
+//! ```
+//! X is `gripper_from_camera` (eye-in-hand) or `base_from_camera` (eye-to-hand); the target pose,
+//! when given, is `base_from_target` (eye-in-hand: the target is fixed in the base) or
+//! `gripper_from_target` (eye-to-hand: the target rides on the gripper). Each is a transform in
+//! any input form of SPEC sec. 7.
 
 use std::path::Path;
 
 use serde_json::{Value, json};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::io::{TransformJson, parse_error, read_text, transform_from_json};
 use crate::pose::Transform;
+
+/// The names X may have in a truth file.
+const X_FRAMES: [&str; 2] = ["gripper_from_camera", "base_from_camera"];
+/// The names the target pose may have in a truth file.
+const TARGET_FRAMES: [&str; 2] = ["base_from_target", "gripper_from_target"];
 
 /// The content of a truth file.
 #[derive(Debug, Clone, PartialEq)]
@@ -19,12 +33,33 @@ pub struct Truth {
     pub target: Option<(String, Transform)>,
 }
 
-/// Reads a truth file.
+/// Reads a truth file; errors name the file, the line of the offending key and the field.
 pub fn read_truth(path: &Path) -> Result<Truth> {
-    let file = path.display().to_string();
-    let text = read_text(path)?;
-    let value: Value = serde_json::from_str(&text)
-        .map_err(|e| parse_error(&file, e.line(), "-", format!("malformed JSON: {e}")))?;
+    parse_truth(&read_text(path)?, &path.display().to_string())
+}
+
+/// Parses the text of a truth file, named `file` in messages.
+///
+/// # Example
+/// ```
+/// let text = r#"{"base_from_camera": [[1,0,0,0.5],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}"#;
+/// let truth = handeye::io::parse_truth(text, "truth.json")?;
+/// assert_eq!(truth.frame, "base_from_camera");
+/// assert_eq!(truth.x.translation.vector.x, 0.5);
+/// assert!(truth.target.is_none());
+/// # Ok::<(), handeye::Error>(())
+/// ```
+pub fn parse_truth(text: &str, file: &str) -> Result<Truth> {
+    let value: Value = serde_json::from_str(text)
+        .map_err(|e| parse_error(file, e.line(), "-", format!("malformed JSON: {e}")))?;
+    if !value.is_object() {
+        return Err(parse_error(
+            file,
+            1,
+            "-",
+            "expected a JSON object naming `gripper_from_camera` or `base_from_camera`",
+        ));
+    }
     let get = |name: &str| -> Result<Option<Transform>> {
         value
             .get(name)
@@ -32,43 +67,161 @@ pub fn read_truth(path: &Path) -> Result<Truth> {
                 transform_from_json(v).map_err(|p| {
                     let field = if p.field.is_empty() {
                         name.to_string()
+                    } else if p.field.starts_with('[') {
+                        format!("{name}{}", p.field)
                     } else {
                         format!("{name}.{}", p.field)
                     };
-                    parse_error(&file, 0, field, p.message)
+                    parse_error(file, line_of_key(text, name), field, p.message)
                 })
             })
             .transpose()
     };
-    let (frame, x) = match (get("gripper_from_camera")?, get("base_from_camera")?) {
-        (Some(x), None) => ("gripper_from_camera", x),
-        (None, Some(x)) => ("base_from_camera", x),
-        _ => {
-            return Err(parse_error(
-                &file,
-                0,
-                "gripper_from_camera|base_from_camera",
-                "give exactly one of `gripper_from_camera` and `base_from_camera`",
-            ));
+    let one_of = |names: [&str; 2]| -> Result<Option<(String, Transform)>> {
+        match (get(names[0])?, get(names[1])?) {
+            (Some(t), None) => Ok(Some((names[0].to_string(), t))),
+            (None, Some(t)) => Ok(Some((names[1].to_string(), t))),
+            (None, None) => Ok(None),
+            (Some(_), Some(_)) => Err(parse_error(
+                file,
+                line_of_key(text, names[1]),
+                names[1],
+                format!("both `{}` and `{}` given: give one", names[0], names[1]),
+            )),
         }
     };
-    let target = match (get("base_from_target")?, get("gripper_from_target")?) {
-        (Some(t), _) => Some(("base_from_target".to_string(), t)),
-        (None, Some(t)) => Some(("gripper_from_target".to_string(), t)),
-        _ => None,
-    };
-    Ok(Truth {
-        x,
-        frame: frame.to_string(),
-        target,
-    })
+    let (frame, x) = one_of(X_FRAMES)?.ok_or_else(|| {
+        parse_error(
+            file,
+            0,
+            X_FRAMES.join("|"),
+            format!("missing: give `{}` or `{}`", X_FRAMES[0], X_FRAMES[1]),
+        )
+    })?;
+    let target = one_of(TARGET_FRAMES)?;
+    Ok(Truth { x, frame, target })
 }
 
-/// The JSON of a truth file.
+/// The line (from 1) where `"key"` first appears in `text`, or 0 when it is not found.
+fn line_of_key(text: &str, key: &str) -> usize {
+    text.find(&format!("\"{key}\""))
+        .map_or(0, |at| 1 + text[..at].matches('\n').count())
+}
+
+/// The JSON of a truth file: X under its frame name, and the target pose when known, each as a
+/// full transform (translation, quaternion and matrix).
 pub fn truth_json(truth: &Truth) -> Value {
     let mut v = json!({ truth.frame.as_str(): TransformJson::from(&truth.x) });
     if let Some((name, t)) = &truth.target {
         v[name.as_str()] = json!(TransformJson::from(t));
     }
     v
+}
+
+/// Writes a truth file (pretty JSON, see [`truth_json`]).
+pub fn write_truth(path: &Path, truth: &Truth) -> Result<()> {
+    let io_error = |e: std::io::Error| Error::Io {
+        file: path.display().to_string(),
+        source: e,
+    };
+    let text = serde_json::to_string_pretty(&truth_json(truth))
+        .map_err(|e| io_error(std::io::Error::other(e)))?;
+    std::fs::write(path, text + "\n").map_err(io_error)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn field_and_line(e: Error) -> (usize, String) {
+        match e {
+            Error::Parse {
+                file, line, field, ..
+            } => {
+                assert_eq!(file, "t.json");
+                (line, field)
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn reads_the_paper_fixture() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../testdata/paper/series_2007_000_200.truth.json");
+        let truth = read_truth(&path).unwrap();
+        assert_eq!(truth.frame, "gripper_from_camera");
+        assert_eq!(truth.target.as_ref().unwrap().0, "base_from_target");
+        assert!((truth.x.translation.vector.x - 20.04194804110198).abs() < 1e-12);
+    }
+
+    #[test]
+    fn writes_what_it_reads() {
+        let truth = Truth {
+            x: Transform::new(Vector3::new(1.0, 2.0, 3.0), Vector3::new(0.3, 0.2, -0.1)),
+            frame: "base_from_camera".into(),
+            target: Some((
+                "gripper_from_target".into(),
+                Transform::new(Vector3::new(0.0, 0.0, 0.2), Vector3::new(0.0, 1.0, 0.0)),
+            )),
+        };
+        let dir = std::env::temp_dir().join(format!("handeye-truth-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("truth.json");
+        write_truth(&path, &truth).unwrap();
+        let back = read_truth(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(back.frame, truth.frame);
+        assert!(
+            (back.x.to_homogeneous() - truth.x.to_homogeneous())
+                .abs()
+                .max()
+                < 1e-12
+        );
+        let (name, t) = back.target.unwrap();
+        assert_eq!(name, "gripper_from_target");
+        let t0 = truth.target.unwrap().1;
+        assert!((t.to_homogeneous() - t0.to_homogeneous()).abs().max() < 1e-12);
+    }
+
+    #[test]
+    fn bad_files_name_line_and_field() {
+        let i = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+        let cases = [
+            ("{\n\"gripper_from_camera\": [1,\n".to_string(), 3, "-"),
+            ("[1, 2]".to_string(), 1, "-"),
+            (
+                "{\"base_from_target\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}".to_string(),
+                0,
+                "gripper_from_camera|base_from_camera",
+            ),
+            (
+                format!("{{\"gripper_from_camera\": {i},\n\"base_from_camera\": {i}}}"),
+                2,
+                "base_from_camera",
+            ),
+            (
+                "{\n\n\"gripper_from_camera\": [[1,0,0,0],[0,1,0,0],[0,0,2,0],[0,0,0,1]]}"
+                    .to_string(),
+                3,
+                "gripper_from_camera",
+            ),
+            (
+                "{\"gripper_from_camera\":\n {\"translation\": [0, 0, \"x\"], \"quaternion_xyzw\": [0,0,0,1]}}"
+                    .to_string(),
+                1,
+                "gripper_from_camera.translation[2]",
+            ),
+            (
+                format!("{{\"gripper_from_camera\": {i},\n\"gripper_from_target\": [[1,0]]}}"),
+                2,
+                "gripper_from_target",
+            ),
+        ];
+        for (text, line, field) in cases {
+            let e = parse_truth(&text, "t.json").unwrap_err();
+            assert_eq!(field_and_line(e), (line, field.to_string()), "{text}");
+        }
+    }
 }
