@@ -28,7 +28,8 @@ pub struct Args {
     /// Outlier threshold on |θ_A − θ_B|, degrees.
     #[arg(long, default_value_t = 3.0)]
     outlier_deg: f64,
-    /// Drop OpenCV's Tsai motions with 2·sin(θ/2) outside [0.3, 1.7] (with --method tsai).
+    /// Drop the motions OpenCV's Tsai drops: robot or camera rotation with 2·sin(θ/2) outside
+    /// [0.3, 1.7] (with --method tsai).
     #[arg(long)]
     tsai_opencv_filter: bool,
     /// Output: the JSON object, or a ROS-style YAML (translation {x,y,z}, rotation {x,y,z,w}).

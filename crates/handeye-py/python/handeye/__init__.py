@@ -64,7 +64,8 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     (3,1) arrays. ``method`` is an OpenCV constant (``cv2.CALIB_HAND_EYE_TSAI`` = 0, the default) or
     a handeye name ("andreff", "tsai", "park", "horaud", "andreff-joint", "daniilidis", "refine").
     Motions come from every pose pair, as in OpenCV. With OpenCV's constant for Tsai, OpenCV's
-    motion filter is applied too (motions with 2·sin(θ/2) outside [0.3, 1.7] are dropped), so the
+    motion filter is applied too (motions whose robot or camera rotation has 2·sin(θ/2) outside
+    [0.3, 1.7] are dropped), so the
     answer is OpenCV's; with the name "tsai" every motion is kept. For eye-to-hand pass base2gripper poses, as
     with OpenCV, and get cam2base. Raises ValueError on bad or degenerate input."""
     name = METHODS.get(method, method) if isinstance(method, int) else method

@@ -11,10 +11,11 @@ use crate::solve::{
 
 /// Park and Martin's solution on the Euclidean group.
 ///
-/// With α = log R_a and β = log R_b (rotation vectors), `M = Σ β αᵀ` and
-/// `R_x = (MᵀM)^(−1/2) Mᵀ` (the orthogonal polar factor of Mᵀ, Eq. (22); with two motions M has
-/// rank 2 and the nearest rotation to Mᵀ is taken); t_x by least squares of
-/// the stacked `(I − R_a) t_x = t_a − R_x t_b`.
+/// The paper's closed-form least-squares solution: with α = log R_a and β = log R_b (rotation
+/// vectors), `M = Σ β αᵀ` and `R_x = (MᵀM)^(−1/2) Mᵀ`, the orthogonal polar factor of Mᵀ (with
+/// two motions M has rank 2, OpenCV's (MᵀM)^(−1/2) does not exist, and the nearest rotation to
+/// Mᵀ is taken); then t_x by least squares of the stacked `(I − R_a) t_x = t_a − R_x t_b`, as
+/// OpenCV solves it.
 ///
 /// # References
 /// F. C. Park, B. J. Martin, "Robot sensor calibration: solving AX = XB on the Euclidean group",

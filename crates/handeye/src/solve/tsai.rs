@@ -9,14 +9,17 @@ use crate::pose::{rotation_matrix, skew};
 use crate::solve::least_squares::least_squares_3;
 use crate::solve::quaternion::{quaternion_of, rotation_of_vector_part};
 use crate::solve::{
-    Calibration, Method, check_motions, finish, singular, translation_least_squares,
+    Calibration, Method, MotionCheck, check_motions, finish, singular, translation_least_squares,
 };
 
 /// Options of [`tsai_with`]; `Default` gives the values on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct TsaiOptions {
-    /// Drop the motions whose gripper rotation has 2·sin(θ/2) outside [0.3, 1.7] (θ below about
-    /// 17° or above about 116°), as OpenCV 4.14's Tsai does before solving. Default `false`.
+    /// Drop the motions whose gripper rotation (A) or camera rotation (B) has 2·sin(θ/2) outside
+    /// [0.3, 1.7] (θ below about 17° or above about 116°), as OpenCV 4.14's Tsai does before
+    /// solving (its fix for OpenCV issue #24871). With fewer than two motions left the solve fails
+    /// with [`Error::TooFewMotions`], where OpenCV logs an error and returns the identity.
+    /// Default `false`.
     pub opencv_filter: bool,
 }
 
@@ -51,31 +54,59 @@ pub fn tsai(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
 }
 
 /// [`tsai`] with options.
+///
+/// With [`TsaiOptions::opencv_filter`] the motions outside OpenCV's range are dropped first and
+/// [`check_motions`] runs on the motions kept, so the result's `motions`, `conditioning` and
+/// warnings are theirs. When fewer than two are kept, degenerate input is reported as without
+/// the filter, other input as [`Error::TooFewMotions`] with the number kept.
+///
+/// # Example
+/// ```
+/// use handeye::solve::{TsaiOptions, tsai_with};
+/// use handeye::{MotionPair, Transform};
+/// use nalgebra::{Rotation3, Translation3, Vector3};
+/// let x = Transform::from_parts(Translation3::new(0.1, 0.0, 0.05), Rotation3::from_euler_angles(0.1, 0.2, 0.3));
+/// // 0.5 rad and 0.6 rad pass OpenCV's filter; 0.1 rad (2·sin(θ/2) = 0.1) does not.
+/// let a: Vec<Transform> = [Vector3::new(0.5, 0.0, 0.0), Vector3::new(0.0, 0.6, 0.0), Vector3::new(0.0, 0.0, 0.1)]
+///     .iter()
+///     .map(|r| Transform::new(Vector3::new(0.2, -0.1, 0.3), *r))
+///     .collect();
+/// let motions: Vec<_> = a.iter().map(|a| MotionPair { a: *a, b: x.inverse() * a * x }).collect();
+/// let cal = tsai_with(&motions, &TsaiOptions { opencv_filter: true })?;
+/// assert_eq!(cal.motions, 2);
+/// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
+/// # Ok::<(), handeye::Error>(())
+/// ```
 pub fn tsai_with(
     motions: &(impl MotionSource + ?Sized),
     options: &TsaiOptions,
 ) -> Result<Calibration> {
     if !options.opencv_filter {
-        return solve_tsai(motions);
+        let check = check_motions(motions)?;
+        return solve_tsai(motions, check);
     }
-    let mut kept: Vec<MotionPair> = Vec::new();
+    // OpenCV 4.14 keeps a motion only when both its gripper and its camera rotation are in range.
+    let mut kept: Vec<MotionPair> = Vec::with_capacity(motions.count());
     motions.for_each_motion(|m| {
-        if in_filter_range(&rotation_matrix(&m.a)) {
+        if in_filter_range(&rotation_matrix(&m.a)) && in_filter_range(&rotation_matrix(&m.b)) {
             kept.push(*m);
         }
     });
     if kept.len() < 2 {
+        // Degenerate input is reported as such (as without the filter); otherwise the filter
+        // left too little.
+        check_motions(motions)?;
         return Err(Error::TooFewMotions {
             got: kept.len(),
             need: 2,
         });
     }
-    solve_tsai(&kept)
+    let check = check_motions(kept.as_slice())?;
+    solve_tsai(kept.as_slice(), check)
 }
 
-/// Eqs. (12)–(15) on the motions.
-fn solve_tsai(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
-    let check = check_motions(motions)?;
+/// Eqs. (12)–(15) on motions that passed [`check_motions`].
+fn solve_tsai(motions: &(impl MotionSource + ?Sized), check: MotionCheck) -> Result<Calibration> {
     // Eq. (12), stacked over the motions.
     let p_prime = least_squares_3(motions, |m| {
         let p_g = modified_rodrigues(&rotation_matrix(&m.a));
@@ -98,7 +129,7 @@ fn modified_rodrigues(r: &Matrix3<f64>) -> Vector3<f64> {
     Vector3::new(q[1], q[2], q[3]) * 2.0
 }
 
-/// Whether a rotation passes OpenCV's motion filter.
+/// Whether a rotation passes OpenCV's motion filter: 2·sin(θ/2) in [0.3, 1.7].
 fn in_filter_range(r: &Matrix3<f64>) -> bool {
     let p = modified_rodrigues(r).norm();
     (FILTER_RANGE.0..=FILTER_RANGE.1).contains(&p)
