@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::metrics::{find_outliers, quality_report, remove_outliers, residual_summary};
+use handeye::metrics::{find_outliers, quality_report, remove_outliers};
 use handeye::solve::{TsaiOptions, tsai_with};
 use handeye::{AllPairs, Error, Method, MotionSource, Pairing, Setup, motion_pairs, solve};
 use serde_json::{Map, Value, json};
@@ -99,8 +99,8 @@ fn report(
     } else {
         solve(method, motions)?
     };
-    let residual = residual_summary(motions, &calibration.x);
     let quality = quality_report(motions, &calibration.x, MAX_PER_MOTION);
+    let residual = quality.residual;
     let mut out = Map::new();
     out.insert("method".into(), json!(method.name()));
     out.insert("setup".into(), json!(setup.name()));

@@ -1,7 +1,7 @@
 //! `handeye experiment`: the paper's simulated experiments (SPEC sec. 6), with tables and figures.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
@@ -57,16 +57,8 @@ pub fn run(args: Args) -> Result<()> {
         let report = run_experiment(experiment, &config, || bar.inc(1))?;
         bar.finish_and_clear();
         let table = markdown_table(&report);
-        println!("{table}");
-        let stem = args.out.join(experiment.name());
-        write_text(&stem.with_extension("md"), &table)?;
-        write_text(
-            &stem.with_extension("json"),
-            &(serde_json::to_string_pretty(&report)? + "\n"),
-        )?;
-        for path in write_figures(&report, &args.out)? {
-            eprintln!("wrote {}", path.display());
-        }
+        let figures = write_figures(&report, &args.out)?;
+        publish(&args.out, experiment.name(), &table, &report, &figures)?;
     }
     if args.which == "all" || args.which == "tracking" {
         let mut config = TrackingConfig {
@@ -78,16 +70,29 @@ pub fn run(args: Args) -> Result<()> {
         }
         let report = run_tracking(&config, || {})?;
         let table = tracking_table(&report);
-        println!("{table}");
-        let stem = args.out.join("tracking");
-        write_text(&stem.with_extension("md"), &table)?;
-        write_text(
-            &stem.with_extension("json"),
-            &(serde_json::to_string_pretty(&report)? + "\n"),
-        )?;
-        for path in write_tracking_figures(&report, &args.out)? {
-            eprintln!("wrote {}", path.display());
-        }
+        let figures = write_tracking_figures(&report, &args.out)?;
+        publish(&args.out, "tracking", &table, &report, &figures)?;
+    }
+    Ok(())
+}
+
+/// Prints the table and writes `<name>.md` and `<name>.json` beside the figures already written.
+fn publish(
+    out: &Path,
+    name: &str,
+    table: &str,
+    report: &impl serde::Serialize,
+    figures: &[PathBuf],
+) -> Result<()> {
+    println!("{table}");
+    let stem = out.join(name);
+    write_text(&stem.with_extension("md"), table)?;
+    write_text(
+        &stem.with_extension("json"),
+        &(serde_json::to_string_pretty(report)? + "\n"),
+    )?;
+    for path in figures {
+        eprintln!("wrote {}", path.display());
     }
     Ok(())
 }

@@ -118,7 +118,7 @@ pub fn residual_rms(motions: &(impl MotionSource + ?Sized), x: &Transform) -> Re
 }
 
 /// Residual summary with units, as `handeye calibrate` reports it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct ResidualSummary {
     /// RMS over the motions of the angle between R_a R_x and R_x R_b, degrees.
     pub rotation_deg_rms: f64,
@@ -132,24 +132,30 @@ pub struct ResidualSummary {
 
 /// Summarises the A X − X B residuals of `motions` under `x`.
 pub fn residual_summary(motions: &(impl MotionSource + ?Sized), x: &Transform) -> ResidualSummary {
-    let mut s = ResidualSummary {
-        rotation_deg_rms: 0.0,
-        translation_rms: 0.0,
-        rotation_deg_max: 0.0,
-        translation_max: 0.0,
-    };
+    let mut s = ResidualSummary::default();
     motions.for_each_motion(|m| {
         let res = MotionResidual::of(m, x);
-        let t = res.delta_t.norm();
-        s.rotation_deg_rms += res.rotation_deg * res.rotation_deg;
-        s.translation_rms += t * t;
-        s.rotation_deg_max = s.rotation_deg_max.max(res.rotation_deg);
-        s.translation_max = s.translation_max.max(t);
+        s.add(res.rotation_deg, res.delta_t.norm());
     });
-    let n = motions.count().max(1) as f64;
-    s.rotation_deg_rms = (s.rotation_deg_rms / n).sqrt();
-    s.translation_rms = (s.translation_rms / n).sqrt();
-    s
+    s.finish(motions.count())
+}
+
+impl ResidualSummary {
+    /// Adds one motion's residuals (sums of squares until [`Self::finish`]).
+    fn add(&mut self, rotation_deg: f64, translation: f64) {
+        self.rotation_deg_rms += rotation_deg * rotation_deg;
+        self.translation_rms += translation * translation;
+        self.rotation_deg_max = self.rotation_deg_max.max(rotation_deg);
+        self.translation_max = self.translation_max.max(translation);
+    }
+
+    /// Turns the sums of squares over `n` motions into RMS values.
+    fn finish(mut self, n: usize) -> Self {
+        let n = n.max(1) as f64;
+        self.rotation_deg_rms = (self.rotation_deg_rms / n).sqrt();
+        self.translation_rms = (self.translation_rms / n).sqrt();
+        self
+    }
 }
 
 /// The difference of the rotation angles of A and B in degrees. It is 0 for a rigid X (A and B are
@@ -237,14 +243,18 @@ pub fn quality_report(
     let keep = motions.count() <= max_per_motion;
     let mut per_motion = Vec::new();
     let (mut smallest, mut largest, mut gaps) = (f64::INFINITY, 0.0_f64, 0usize);
+    let mut residual = ResidualSummary::default();
     motions.for_each_motion(|m| {
         let r = MotionResidual::of(m, x);
+        let angle_a = crate::motion::MotionFeatures::of(&m.a).angle;
+        let angle_b = crate::motion::MotionFeatures::of(&m.b).angle;
         let q = MotionQuality {
             rotation_deg: r.rotation_deg,
             translation: r.delta_t.norm(),
-            angle_deg: crate::motion::MotionFeatures::of(&m.a).angle.to_degrees(),
-            angle_gap_deg: angle_gap_deg(m),
+            angle_deg: angle_a.to_degrees(),
+            angle_gap_deg: (angle_a - angle_b).abs().to_degrees(),
         };
+        residual.add(q.rotation_deg, q.translation);
         smallest = smallest.min(q.angle_deg);
         largest = largest.max(q.angle_deg);
         gaps += usize::from(q.angle_gap_deg > 3.0);
@@ -252,7 +262,7 @@ pub fn quality_report(
             per_motion.push(q);
         }
     });
-    let residual = residual_summary(motions, x);
+    let residual = residual.finish(motions.count());
     let axis_spread_deg = axis_spread(motions).to_degrees();
     let rotation_range_deg = [smallest, largest];
     let covariance = crate::solve::covariance_at(motions, x);

@@ -154,13 +154,7 @@ fn frame(
         }
     };
     let t = transform_from_json(&object[name]).map_err(|p| {
-        let field = if p.field.is_empty() {
-            name.to_string()
-        } else if p.field.starts_with('[') {
-            format!("{name}{}", p.field)
-        } else {
-            format!("{name}.{}", p.field)
-        };
+        let field = p.path_under(name);
         parse_error(source, line, field, p.message)
     })?;
     Ok(if inverted { t.inverse() } else { t })

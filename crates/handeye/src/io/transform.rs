@@ -48,6 +48,18 @@ pub struct FieldProblem {
 }
 
 impl FieldProblem {
+    /// The full field path of this problem inside the transform named `name`
+    /// (`name`, `name[1][2]` or `name.matrix[1][2]`).
+    pub fn path_under(&self, name: &str) -> String {
+        if self.field.is_empty() {
+            name.to_string()
+        } else if self.field.starts_with('[') {
+            format!("{name}{}", self.field)
+        } else {
+            format!("{name}.{}", self.field)
+        }
+    }
+
     fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
         Self {
             field: field.into(),

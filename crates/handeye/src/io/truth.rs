@@ -65,13 +65,7 @@ pub fn parse_truth(text: &str, file: &str) -> Result<Truth> {
             .get(name)
             .map(|v| {
                 transform_from_json(v).map_err(|p| {
-                    let field = if p.field.is_empty() {
-                        name.to_string()
-                    } else if p.field.starts_with('[') {
-                        format!("{name}{}", p.field)
-                    } else {
-                        format!("{name}.{}", p.field)
-                    };
+                    let field = p.path_under(name);
                     parse_error(file, line_of_key(text, name), field, p.message)
                 })
             })
