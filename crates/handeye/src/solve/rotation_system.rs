@@ -1,10 +1,11 @@
 //! Andreff's rotation system, accumulated as a 9×9 normal matrix.
 
-use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen};
+use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::motion::MotionSource;
 use crate::pose::{proj_so3, rotation_matrix};
+use crate::solve::symmetric::{SmallestEigen, smallest_eigen};
 
 /// A 9×9 matrix.
 type Matrix9 = SMatrix<f64, 9, 9>;
@@ -85,8 +86,7 @@ impl RotationSystem {
 
     /// Second-smallest over largest singular value of the stacked system (0 when empty).
     pub fn conditioning(&self) -> f64 {
-        let eigen = SymmetricEigen::new(self.normal);
-        conditioning_of(&eigen.eigenvalues)
+        smallest_eigen(&self.normal, |_| None).map_or(0.0, |e| conditioning_of(&e))
     }
 
     /// Solves for R_x (SPEC sec. 3, `andreff`): the eigenvector of the smallest eigenvalue of `M`
@@ -101,32 +101,29 @@ impl RotationSystem {
 
     /// As [`Self::solve`], followed by one step of iterative refinement of the null vector against
     /// the stacked rows `K_k v` of `motions` (the motions this system was built from): the
-    /// correction δ ⊥ v minimising ‖K (v + δ)‖ is taken from the eigen-decomposition of `M`, with
-    /// the residual `Kᵀ K v` evaluated motion by motion. This brings the error down to the ε·κ of
-    /// an SVD of the stacked 9m×9 matrix, at O(m) cost and no extra memory.
+    /// residual `g = Σ K_kᵀ K_k v` is evaluated motion by motion, and the correction δ ⊥ v solves
+    /// `(M − λ₁I) δ = −(I − v vᵀ) g` (a Newton step for the null vector). This brings the error
+    /// down to the ε·κ of an SVD of the stacked 9m×9 matrix, at O(m) cost and no extra memory.
     pub fn solve_refined(&self, motions: &(impl MotionSource + ?Sized)) -> RotationSolution {
         self.solve_with(|v| Some(stacked_gradient(motions, v)))
     }
 
-    /// The solve, with an optional gradient `Σ K_kᵀ K_k v` for the refinement step.
+    /// The solve, with an optional residual `Σ K_kᵀ K_k v` for the refinement step.
+    ///
+    /// The eigenvalues and the smallest eigenvector come from a solver that computes only the one
+    /// eigenvector and three eigenvalues needed (`solve::symmetric`). When the normal matrix is
+    /// not finite, R_x is NaN and the conditioning 0, so the motions are refused as degenerate.
     fn solve_with(
         &self,
-        gradient: impl Fn(&SVector<f64, 9>) -> Option<SVector<f64, 9>>,
+        residual: impl FnOnce(&SVector<f64, 9>) -> Option<SVector<f64, 9>>,
     ) -> RotationSolution {
-        let eigen = SymmetricEigen::new(self.normal);
-        let smallest = eigen.eigenvalues.imin();
-        let mut v: SVector<f64, 9> = eigen.eigenvectors.column(smallest).into_owned();
-        if let Some(g) = gradient(&v) {
-            let mut delta = SVector::<f64, 9>::zeros();
-            for k in (0..9).filter(|&k| k != smallest) {
-                let lambda = eigen.eigenvalues[k];
-                if lambda > 0.0 {
-                    let u = eigen.eigenvectors.column(k);
-                    delta -= u * (u.dot(&g) / lambda);
-                }
-            }
-            v = (v + delta).normalize();
-        }
+        let Some(eigen) = smallest_eigen(&self.normal, residual) else {
+            return RotationSolution {
+                r_x: Matrix3::from_element(f64::NAN),
+                conditioning: 0.0,
+            };
+        };
+        let v = eigen.vector;
         // Row-major vec: v = (r11, r12, r13, r21, …).
         let mut m = Matrix3::new(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
         if m.determinant() < 0.0 {
@@ -134,7 +131,7 @@ impl RotationSystem {
         }
         RotationSolution {
             r_x: proj_so3(&m),
-            conditioning: conditioning_of(&eigen.eigenvalues),
+            conditioning: conditioning_of(&eigen),
         }
     }
 }
@@ -167,12 +164,10 @@ fn stacked_gradient(
 }
 
 /// √(λ₂ / λ_max) from the eigenvalues of the normal matrix, λ₂ the second smallest.
-fn conditioning_of(eigenvalues: &SVector<f64, 9>) -> f64 {
-    let mut sorted: [f64; 9] = eigenvalues.as_slice().try_into().unwrap_or([0.0; 9]);
-    sorted.sort_by(f64::total_cmp);
-    let largest = sorted[8];
+fn conditioning_of(eigen: &SmallestEigen<9>) -> f64 {
+    let largest = eigen.largest;
     if largest.is_nan() || largest <= 0.0 {
         return 0.0;
     }
-    (sorted[1].max(0.0) / largest).sqrt()
+    (eigen.second.max(0.0) / largest).sqrt()
 }
