@@ -14,7 +14,7 @@ use handeye::metrics::errors_against_truth;
 use handeye::online::{OnlineCalibrator, OnlineConfig};
 use handeye::select::AdaptiveParams;
 use handeye::sim::{SimConfig, simulate};
-use handeye::{Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
+use handeye::{AllPairs, Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
 use serde_json::{Value, json};
 
 use crate::output::print_json;
@@ -71,8 +71,14 @@ pub fn run(args: Args) -> Result<()> {
                 Pairing::Consecutive
             };
             for &method in &methods {
-                // A call includes building the motions from the poses, as OpenCV's does.
-                let call = || solve(method, &motion_pairs(&d.poses, pairing, Setup::EyeInHand));
+                // A call includes building the motions from the poses, as OpenCV's does; all
+                // pairs are made on the fly, as `calibrate --pairs all` makes them.
+                let call = || match pairing {
+                    Pairing::All => solve(method, &AllPairs::new(&d.poses, Setup::EyeInHand)),
+                    Pairing::Consecutive => {
+                        solve(method, &motion_pairs(&d.poses, pairing, Setup::EyeInHand))
+                    }
+                };
                 let result = call();
                 let (median, calls) = time(|| black_box(call()).is_ok(), budget);
                 let errors = match (&result, &d.truth) {

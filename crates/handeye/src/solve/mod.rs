@@ -34,7 +34,7 @@ pub use rotation_system::{RotationSolution, RotationSystem};
 pub use tsai::{TsaiOptions, tsai, tsai_with};
 
 use crate::error::{Degeneracy, Error, Result};
-use crate::motion::{MotionFeatures, MotionSource};
+use crate::motion::MotionSource;
 use crate::pose::{Transform, rotation_matrix};
 
 /// Below this conditioning (second-smallest over largest singular value of Andreff's rotation
@@ -194,11 +194,17 @@ pub fn check_motions(motions: &(impl MotionSource + ?Sized)) -> Result<MotionChe
         });
     }
     let mut system = RotationSystem::default();
-    let mut largest = 0.0_f64;
+    // The largest rotation is the one with the smallest trace (θ = acos((tr − 1) / 2)): one
+    // comparison per motion, and one angle computed at the end.
+    let mut widest = Matrix3::identity();
     motions.for_each_motion(|m| {
-        system.add(&rotation_matrix(&m.a), &rotation_matrix(&m.b));
-        largest = largest.max(MotionFeatures::of(&m.a).angle);
+        let r_a = rotation_matrix(&m.a);
+        system.add(&r_a, &rotation_matrix(&m.b));
+        if r_a.trace() < widest.trace() {
+            widest = r_a;
+        }
     });
+    let largest = crate::pose::axis_angle(&widest).0;
     let RotationSolution {
         r_x: andreff_rotation,
         conditioning,
