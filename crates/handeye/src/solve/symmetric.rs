@@ -189,9 +189,11 @@ impl<const N: usize> Tridiagonal<N> {
         let mut smallest = None;
         for _ in 0..MAX_LAGUERRE_PASSES {
             let sums = sturm_sums(&d, &e2, [lanes[0].x, lanes[1].x]);
-            for (lane, sums) in lanes.iter_mut().zip(sums) {
+            for (i, (lane, sums)) in lanes.iter_mut().zip(sums).enumerate() {
                 if lane.step(sums).is_none() {
-                    if lane.x == optimistic && optimistic > low {
+                    // λ₁ below the optimistic start (a matrix that is not semi-definite): search
+                    // again from the Gershgorin bound.
+                    if i == 0 && smallest.is_none() && lane.x == optimistic && optimistic > low {
                         *lane = Laguerre::new(low, N, None, 0);
                     } else {
                         return None;
