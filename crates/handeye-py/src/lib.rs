@@ -7,7 +7,9 @@
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig};
 use handeye::pose::transform_from_matrix4;
 use handeye::select::{AdaptiveParams, Selection};
-use handeye::{Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
+use handeye::{
+    AllPairs, Method, MotionSource, Pairing, PosePair, Setup, Transform, motion_pairs, solve,
+};
 use nalgebra::Matrix4;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::exceptions::PyValueError;
@@ -71,9 +73,11 @@ fn matrix<'py>(py: Python<'py>, x: &Transform) -> Bound<'py, PyArray2<f64>> {
 }
 
 /// Batch calibration: returns a dict with `matrix` (4×4 X), `method`, `setup`, `frame`,
-/// `motions`, `conditioning`, `residual` (rotation_deg_rms, translation_rms) and `warnings`.
+/// `motions`, `conditioning`, and with `report` also `residual` (rotation_deg_rms,
+/// translation_rms), `quality` and `warnings`. All pairs are made on the fly (memory O(poses)).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false, report=true))]
+#[allow(clippy::too_many_arguments)]
 fn calibrate<'py>(
     py: Python<'py>,
     base_from_gripper: PyReadonlyArray3<'py, f64>,
@@ -82,33 +86,47 @@ fn calibrate<'py>(
     setup: &str,
     pairs: &str,
     tsai_opencv_filter: bool,
+    report: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let method: Method = method.parse().map_err(value_error)?;
     let setup = parse_setup(setup)?;
-    let pairing = match pairs {
-        "consecutive" => Pairing::Consecutive,
-        "all" => Pairing::All,
-        other => {
-            return Err(value_error(format!(
-                "unknown pairs `{other}`; consecutive or all"
-            )));
-        }
-    };
     let poses = poses(&base_from_gripper, &camera_from_target)?;
-    let motions = motion_pairs(&poses, pairing, setup);
+    let options = handeye::solve::TsaiOptions {
+        opencv_filter: tsai_opencv_filter,
+    };
+    match pairs {
+        "consecutive" => {
+            let motions = motion_pairs(&poses, Pairing::Consecutive, setup);
+            calibrated(py, &motions, method, setup, &options, report)
+        }
+        "all" => {
+            let motions = AllPairs::new(&poses, setup);
+            calibrated(py, &motions, method, setup, &options, report)
+        }
+        other => Err(value_error(format!(
+            "unknown pairs `{other}`; consecutive or all"
+        ))),
+    }
+}
+
+/// Solves X from `motions` and builds the result dict of [`calibrate`].
+fn calibrated<'py, M: MotionSource + Sync + ?Sized>(
+    py: Python<'py>,
+    motions: &M,
+    method: Method,
+    setup: Setup,
+    options: &handeye::solve::TsaiOptions,
+    report: bool,
+) -> PyResult<Bound<'py, PyDict>> {
     let c = py
         .allow_threads(|| {
-            if method == Method::Tsai && tsai_opencv_filter {
-                let options = handeye::solve::TsaiOptions {
-                    opencv_filter: true,
-                };
-                handeye::solve::tsai_with(&motions, &options)
+            if method == Method::Tsai {
+                handeye::solve::tsai_with(motions, options)
             } else {
-                solve(method, &motions)
+                solve(method, motions)
             }
         })
         .map_err(value_error)?;
-    let residual = handeye::metrics::residual_summary(&motions, &c.x);
     let out = PyDict::new(py);
     out.set_item("matrix", matrix(py, &c.x))?;
     out.set_item("method", method.name())?;
@@ -116,17 +134,20 @@ fn calibrate<'py>(
     out.set_item("frame", setup.x_frame())?;
     out.set_item("motions", c.motions)?;
     out.set_item("conditioning", c.conditioning)?;
+    if !report {
+        return Ok(out);
+    }
+    let quality = handeye::metrics::quality_report(motions, &c.x, 0);
     let r = PyDict::new(py);
-    r.set_item("rotation_deg_rms", residual.rotation_deg_rms)?;
-    r.set_item("translation_rms", residual.translation_rms)?;
+    r.set_item("rotation_deg_rms", quality.residual.rotation_deg_rms)?;
+    r.set_item("translation_rms", quality.residual.translation_rms)?;
     out.set_item("residual", r)?;
-    let quality = handeye::metrics::quality_report(&motions, &c.x, 0);
     let q = PyDict::new(py);
     q.set_item("axis_spread_deg", quality.axis_spread_deg)?;
     q.set_item("rotation_range_deg", quality.rotation_range_deg.to_vec())?;
     q.set_item("rotation_std_deg", quality.rotation_std_deg)?;
     q.set_item("translation_std", quality.translation_std)?;
-    q.set_item("outliers", handeye::metrics::find_outliers(&motions, 3.0))?;
+    q.set_item("outliers", handeye::metrics::find_outliers(motions, 3.0))?;
     out.set_item("quality", q)?;
     let mut warnings: Vec<String> = c.warnings.iter().map(|w| w.to_string()).collect();
     warnings.extend(quality.warnings);

@@ -74,7 +74,9 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     g = _homogeneous(R_gripper2base, t_gripper2base, "gripper2base")
     c = _homogeneous(R_target2cam, t_target2cam, "target2cam")
     opencv_tsai = isinstance(method, int) and name == "tsai"
-    result = _calibrate(g, c, method=name, setup="eye-in-hand", pairs="all", tsai_opencv_filter=opencv_tsai)
+    result = _calibrate(
+        g, c, method=name, setup="eye-in-hand", pairs="all", tsai_opencv_filter=opencv_tsai, report=False
+    )
     x = result["matrix"]
     return x[:3, :3].copy(), x[:3, 3:4].copy()
 
