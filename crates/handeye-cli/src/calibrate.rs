@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::metrics::{find_outliers, quality_report, remove_outliers};
+use handeye::metrics::{OUTLIER_DEG, find_outliers, quality_report, remove_outliers};
 use handeye::solve::{TsaiOptions, tsai_with};
 use handeye::{AllPairs, Error, Method, MotionSource, Pairing, Setup, motion_pairs, solve};
 use serde_json::{Map, Value, json};
@@ -26,7 +26,7 @@ pub struct Args {
     #[arg(long)]
     reject_outliers: bool,
     /// Outlier threshold on |θ_A − θ_B|, degrees.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = OUTLIER_DEG)]
     outlier_deg: f64,
     /// Drop the motions OpenCV's Tsai drops: robot or camera rotation with 2·sin(θ/2) outside
     /// [0.3, 1.7] (with --method tsai).
@@ -69,24 +69,26 @@ pub fn run(args: Args) -> Result<()> {
     if pairing == Pairing::All && !args.reject_outliers {
         // All pairs are made on the fly: memory stays O(poses), not O(poses²).
         let source = AllPairs::new(&poses, setup);
-        let outliers = find_outliers(&source, args.outlier_deg);
-        return report(&args, method, setup, &source, outliers, time_offset);
+        return report(&args, method, setup, &source, None, time_offset);
     }
     let mut motions = motion_pairs(&poses, pairing, setup);
-    let outliers = find_outliers(&motions, args.outlier_deg);
-    if args.reject_outliers {
+    let rejected = args.reject_outliers.then(|| {
+        let outliers = find_outliers(&motions, args.outlier_deg);
         remove_outliers(&mut motions, &outliers);
-    }
-    report(&args, method, setup, &motions, outliers, time_offset)
+        outliers
+    });
+    report(&args, method, setup, &motions, rejected, time_offset)
 }
 
-/// Solves X from the motions and prints the result with its quality report.
+/// Solves X from the motions and prints the result with its quality report. `rejected` holds the
+/// outliers already left out of `motions` (with `--reject-outliers`); otherwise the outliers are
+/// the report's.
 fn report(
     args: &Args,
     method: Method,
     setup: Setup,
     motions: &(impl MotionSource + ?Sized),
-    outliers: Vec<usize>,
+    rejected: Option<Vec<usize>>,
     time_offset: Option<f64>,
 ) -> Result<()> {
     let calibration = if method == Method::Tsai && args.tsai_opencv_filter {
@@ -99,7 +101,8 @@ fn report(
     } else {
         solve(method, motions)?
     };
-    let quality = quality_report(motions, &calibration.x, MAX_PER_MOTION);
+    let quality = quality_report(motions, &calibration.x, MAX_PER_MOTION, args.outlier_deg);
+    let outliers = rejected.as_ref().unwrap_or(&quality.outliers);
     let residual = quality.residual;
     let mut out = Map::new();
     out.insert("method".into(), json!(method.name()));
@@ -118,7 +121,8 @@ fn report(
         }),
     );
     out.insert("conditioning".into(), json!(calibration.conditioning));
-    let per_motion = if motions.count() <= MAX_PER_MOTION {
+    // The report keeps per-motion entries only up to MAX_PER_MOTION motions.
+    let per_motion = if quality.per_motion.len() == motions.count() {
         json!(quality.per_motion)
     } else {
         Value::Null
@@ -139,16 +143,11 @@ fn report(
             "per_motion": per_motion,
         }),
     );
+    // With --reject-outliers the motions kept have no outliers at the same threshold, so the
+    // report's outlier warning cannot appear.
     let mut warnings: Vec<String> = calibration.warnings.iter().map(|w| w.to_string()).collect();
-    let rejected = args.reject_outliers;
-    warnings.extend(
-        quality
-            .warnings
-            .iter()
-            .filter(|w| !(rejected && w.contains("--reject-outliers")))
-            .cloned(),
-    );
-    if rejected && !outliers.is_empty() {
+    warnings.extend(quality.warnings.iter().cloned());
+    if args.reject_outliers && !outliers.is_empty() {
         eprintln!(
             "rejected {} outlier motion pair(s) of {}",
             outliers.len(),

@@ -143,6 +143,24 @@ fn camodocal_outliers_are_found_and_rejecting_them_lowers_the_residuals() {
         );
         assert!(b < 0.7 * a, "{key}: {a} with outliers, {b} without");
     }
+    // The rejected motions are the ones reported, and the motions kept raise no outlier warning.
+    assert_eq!(
+        without["quality"]["outliers"]["motions"],
+        outliers["motions"]
+    );
+    let warns_outliers = |v: &serde_json::Value| {
+        v["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("--reject-outliers"))
+    };
+    assert!(!warns_outliers(&without));
+    // The report and its warning follow --outlier-deg.
+    let loose = calibrate(&[f, "--setup", "eye-to-hand", "--outlier-deg", "30"]);
+    let loose_count = loose["quality"]["outliers"]["count"].as_u64().unwrap();
+    assert!(loose_count < outliers["count"].as_u64().unwrap());
+    assert_eq!(warns_outliers(&loose), loose_count > 0);
     // The wrong setup is inconsistent, and says so.
     let wrong = calibrate(&[f]);
     assert!(wrong["residual"]["rotation_deg_rms"].as_f64().unwrap() > 20.0);

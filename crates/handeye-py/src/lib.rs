@@ -137,7 +137,7 @@ fn calibrated<'py, M: MotionSource + Sync + ?Sized>(
     if !report {
         return Ok(out);
     }
-    let quality = handeye::metrics::quality_report(motions, &c.x, 0);
+    let quality = handeye::metrics::quality_report(motions, &c.x, 0, handeye::metrics::OUTLIER_DEG);
     let r = PyDict::new(py);
     r.set_item("rotation_deg_rms", quality.residual.rotation_deg_rms)?;
     r.set_item("translation_rms", quality.residual.translation_rms)?;
@@ -147,7 +147,7 @@ fn calibrated<'py, M: MotionSource + Sync + ?Sized>(
     q.set_item("rotation_range_deg", quality.rotation_range_deg.to_vec())?;
     q.set_item("rotation_std_deg", quality.rotation_std_deg)?;
     q.set_item("translation_std", quality.translation_std)?;
-    q.set_item("outliers", handeye::metrics::find_outliers(motions, 3.0))?;
+    q.set_item("outliers", quality.outliers)?;
     out.set_item("quality", q)?;
     let mut warnings: Vec<String> = c.warnings.iter().map(|w| w.to_string()).collect();
     warnings.extend(quality.warnings);

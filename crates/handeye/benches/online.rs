@@ -5,19 +5,24 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use handeye::online::{OnlineCalibrator, OnlineConfig};
 use handeye::select::{AdaptiveParams, Selection};
-use handeye::sim::{SimConfig, simulate};
+use handeye::sim::{SimConfig, SimSeries, simulate};
 use handeye::{PosePair, Transform, andreff};
 use std::hint::black_box;
 
-fn push(c: &mut Criterion) {
-    let sim = simulate(
+/// The poses both benches run on: one simulated series of 1,000 poses (fixed seed).
+fn series() -> SimSeries {
+    simulate(
         &SimConfig {
             poses: 1000,
             ..SimConfig::default()
         },
         42,
         0,
-    );
+    )
+}
+
+fn push(c: &mut Criterion) {
+    let sim = series();
     // Thresholds no motion can meet (β₀ above any rotation, no relaxation in reach): every push
     // searches and none calibrates.
     let params = AdaptiveParams {
@@ -72,14 +77,7 @@ criterion_group!(benches, push);
 
 fn accumulator(c: &mut Criterion) {
     use handeye::accumulate::PoseAccumulator;
-    let sim = simulate(
-        &SimConfig {
-            poses: 1000,
-            ..SimConfig::default()
-        },
-        42,
-        0,
-    );
+    let sim = series();
     c.bench_function("accumulate/add_pose", |b| {
         let mut acc = PoseAccumulator::new(handeye::Setup::EyeInHand);
         let mut k = 0;

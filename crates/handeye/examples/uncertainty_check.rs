@@ -13,7 +13,7 @@ fn main() -> Result<(), handeye::Error> {
         let motions = motion_pairs(&sim.poses, Pairing::Consecutive, Setup::EyeInHand);
         let c = solve(Method::Refine, &motions)?;
         let e = errors_against_truth(&c.x, &sim.gripper_from_camera);
-        let q = quality_report(&motions, &c.x, 0);
+        let q = quality_report(&motions, &c.x, 0, handeye::metrics::OUTLIER_DEG);
         let t_err = e.trans_rel * sim.gripper_from_camera.translation.vector.norm();
         if let (Some(sr), Some(st)) = (q.rotation_std_deg, q.translation_std) {
             rot_z += (e.rot_deg / sr).powi(2);

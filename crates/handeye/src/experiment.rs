@@ -328,14 +328,22 @@ fn mean_errors(estimates: &[(crate::Transform, f64)], sim: &SimSeries) -> Series
         r.rot_deg += e.rot_deg;
         r.trans_rel += e.trans_rel;
     }
-    let mut times: Vec<f64> = estimates.iter().map(|e| e.1).collect();
-    times.sort_by(f64::total_cmp);
-    r.seconds = times.get(times.len() / 2).copied().unwrap_or(f64::NAN);
+    r.seconds = median(estimates.iter().map(|e| e.1).collect());
     let d = if n == 0 { f64::NAN } else { n as f64 };
     r.rot_fro /= d;
     r.rot_deg /= d;
     r.trans_rel /= d;
     r
+}
+
+/// The median of `values` (the mean of the middle two for an even count; NaN when empty).
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    match values.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => values[n / 2],
+        n => 0.5 * (values[n / 2 - 1] + values[n / 2]),
+    }
 }
 
 /// Aggregates one method's per-series results.
@@ -348,31 +356,23 @@ fn summarise(method: String, batch: bool, per_series: Vec<SeriesResult>) -> Meth
             with.iter().map(|r| f(r)).sum::<f64>() / with.len() as f64
         }
     };
-    let mut counts: Vec<usize> = per_series.iter().map(|r| r.calibrations).collect();
-    counts.sort_unstable();
-    let total: usize = counts.iter().sum();
-    let median = match counts.len() {
-        0 => f64::NAN,
-        n if n % 2 == 1 => counts[n / 2] as f64,
-        n => (counts[n / 2 - 1] + counts[n / 2]) as f64 / 2.0,
-    };
-    let mut times: Vec<f64> = per_series
+    let total: usize = per_series.iter().map(|r| r.calibrations).sum();
+    let times: Vec<f64> = per_series
         .iter()
         .map(|r| r.seconds)
         .filter(|t| t.is_finite())
         .collect();
-    times.sort_by(f64::total_cmp);
     MethodSummary {
         method,
         batch,
         series: per_series.len(),
         series_with_calibration: with.len(),
         calibrations_mean: total as f64 / per_series.len().max(1) as f64,
-        calibrations_median: median,
+        calibrations_median: median(per_series.iter().map(|r| r.calibrations as f64).collect()),
         rot_fro_mean: mean_of(|r| r.rot_fro),
         rot_deg_mean: mean_of(|r| r.rot_deg),
         trans_rel_mean: mean_of(|r| r.trans_rel),
-        time_per_calibration_s: times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
+        time_per_calibration_s: median(times),
         per_series,
     }
 }
@@ -495,9 +495,8 @@ pub struct TrackingReport {
 pub fn run_tracking(config: &TrackingConfig, progress: impl Fn() + Sync) -> Result<TrackingReport> {
     use crate::online::{Estimator, OnlineCalibrator};
     config.params.validate()?;
-    let checkpoints: Vec<usize> = (1..=config.poses / config.every.max(1))
-        .map(|k| k * config.every.max(1))
-        .collect();
+    let every = config.every.max(1);
+    let checkpoints: Vec<usize> = (1..=config.poses / every).map(|k| k * every).collect();
     let names = [
         "accumulate",
         "adaptive",
@@ -543,7 +542,7 @@ pub fn run_tracking(config: &TrackingConfig, progress: impl Fn() + Sync) -> Resu
                 if let Some(e) = conventional.push(p)?.last() {
                     last_conventional = Some(e.x);
                 }
-                if checkpoints.contains(&(k + 1)) {
+                if (k + 1) % every == 0 {
                     let batch = solve(
                         Method::Andreff,
                         &motion_pairs(&sim.poses[..=k], Pairing::Consecutive, Setup::EyeInHand),

@@ -212,6 +212,9 @@ pub struct MotionQuality {
 pub struct QualityReport {
     /// RMS and worst of the residuals.
     pub residual: ResidualSummary,
+    /// Indices of the motion pairs whose A and B rotation angles differ by more than the
+    /// threshold given to [`quality_report`] (as [`find_outliers`] gives them).
+    pub outliers: Vec<usize>,
     /// Per motion pair, in input order (empty above the limit given to [`quality_report`]).
     pub per_motion: Vec<MotionQuality>,
     /// Largest angle between a motion's rotation axis (as a line) and the dominant axis, degrees:
@@ -232,18 +235,24 @@ pub struct QualityReport {
 pub const WARN_AXIS_SPREAD_DEG: f64 = 8.0;
 /// Rotation residual RMS above which the report warns about frame directions, degrees.
 pub const WARN_RESIDUAL_DEG: f64 = 5.0;
+/// Default outlier threshold on |θ_A − θ_B|, degrees.
+pub const OUTLIER_DEG: f64 = 3.0;
 
 /// The quality report of X over the motion pairs it was solved from. Per-motion entries are kept
-/// for at most `max_per_motion` motions (the summary covers all of them).
+/// for at most `max_per_motion` motions (the summary covers all of them); motions whose A and B
+/// rotation angles differ by more than `outlier_deg` are listed as outliers.
 pub fn quality_report(
     motions: &(impl MotionSource + ?Sized),
     x: &Transform,
     max_per_motion: usize,
+    outlier_deg: f64,
 ) -> QualityReport {
     let keep = motions.count() <= max_per_motion;
     let mut per_motion = Vec::new();
-    let (mut smallest, mut largest, mut gaps) = (f64::INFINITY, 0.0_f64, 0usize);
+    let mut outliers = Vec::new();
+    let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
     let mut residual = ResidualSummary::default();
+    let mut index = 0;
     motions.for_each_motion(|m| {
         let r = MotionResidual::of(m, x);
         let angle_a = crate::motion::MotionFeatures::of(&m.a).angle;
@@ -257,7 +266,10 @@ pub fn quality_report(
         residual.add(q.rotation_deg, q.translation);
         smallest = smallest.min(q.angle_deg);
         largest = largest.max(q.angle_deg);
-        gaps += usize::from(q.angle_gap_deg > 3.0);
+        if q.angle_gap_deg > outlier_deg {
+            outliers.push(index);
+        }
+        index += 1;
         if keep {
             per_motion.push(q);
         }
@@ -282,13 +294,15 @@ pub fn quality_report(
             residual.rotation_deg_rms
         ));
     }
-    if gaps > 0 {
+    if !outliers.is_empty() {
         warnings.push(format!(
-            "{gaps} motion pair(s) whose robot and camera rotation angles differ by more than 3°: bad timestamps or detections; try `--reject-outliers`"
+            "{} motion pair(s) whose robot and camera rotation angles differ by more than {outlier_deg}°: bad timestamps or detections; try `--reject-outliers`",
+            outliers.len()
         ));
     }
     QualityReport {
         residual,
+        outliers,
         per_motion,
         axis_spread_deg,
         rotation_range_deg,

@@ -173,7 +173,6 @@ pub struct OnlineCalibrator {
     recent: VecDeque<PosePair>,
     current: Option<Estimate>,
     last_change: Option<usize>,
-    changed_now: bool,
 }
 
 impl OnlineCalibrator {
@@ -203,7 +202,6 @@ impl OnlineCalibrator {
             recent: VecDeque::with_capacity(config.change.lag + 1),
             current: None,
             last_change: None,
-            changed_now: false,
         })
     }
 
@@ -291,7 +289,6 @@ impl OnlineCalibrator {
     /// The accumulating estimator, per pose: test the motion from the pose `lag` poses earlier
     /// against the current X (CUSUM on its residual), restart after a change, add the pose.
     fn update_accumulator(&mut self, pose: &PosePair) {
-        self.changed_now = false;
         if self.recent.len() == self.config.change.lag.max(1)
             && let (Some(earlier), Some(current)) = (self.recent.front(), self.current)
         {
@@ -302,7 +299,6 @@ impl OnlineCalibrator {
                 self.recent.clear();
                 self.current = None;
                 self.last_change = Some(self.poses);
-                self.changed_now = true;
             }
         }
         self.accumulator.add(pose);
@@ -349,7 +345,7 @@ impl OnlineCalibrator {
 
     /// The pose number of a change of X declared by the last `push`, if it declared one.
     pub fn change_detected(&self) -> Option<usize> {
-        self.changed_now.then_some(self.poses)
+        self.last_change.filter(|&pose| pose == self.poses)
     }
 
     /// rmsR and rmsT of `x` from the configured source.
