@@ -265,8 +265,14 @@ mod tests {
                     let ours = acc.estimate().unwrap().x;
                     let d = (ours.to_homogeneous() - batch.to_homogeneous()).abs().max();
                     let scale = batch.translation.vector.norm().max(1.0);
+                    // Measured: ≤ 3e-14 of the scale eye-in-hand, ≤ 2e-12 eye-to-hand (these poses,
+                    // simulated eye-in-hand, make a poorly determined eye-to-hand system).
+                    let tolerance = match setup {
+                        Setup::EyeInHand => 1e-12,
+                        Setup::EyeToHand => 1e-10,
+                    };
                     assert!(
-                        d <= 1e-9 * scale,
+                        d <= tolerance * scale,
                         "{} after {} poses: {d:e}",
                         setup.name(),
                         k + 1
