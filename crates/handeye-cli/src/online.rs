@@ -22,7 +22,7 @@ pub struct Args {
     #[arg(long, default_value = "adaptive", value_parser = ["adaptive", "fixed", "none"])]
     selection: String,
     /// Estimator: `paper` (Andreff on the two selected motions of each calibration) or
-    /// `accumulate` (every selected motion since the last detected change of X).
+    /// `accumulate` (every pair of poses since the last detected change of X).
     #[arg(long, default_value = "paper", value_parser = ["paper", "accumulate"])]
     estimator: String,
     /// Also refine over the last five selected motions (the paper's optimal method).
@@ -38,34 +38,34 @@ pub struct Args {
     #[arg(long, default_value = "skip", value_parser = ["skip", "stop"])]
     on_bad_line: String,
     /// N of Eq. (1): motions averaged for the initial thresholds.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = AdaptiveParams::default().n_init)]
     n_init: usize,
     /// Candidates tried before the thresholds are relaxed.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = AdaptiveParams::default().interval)]
     interval: usize,
     /// Relaxation factor of sin α₀ and β₀.
-    #[arg(long, default_value_t = 0.9)]
+    #[arg(long, default_value_t = AdaptiveParams::default().relax_down)]
     relax_down: f64,
     /// Relaxation factor of d₀.
-    #[arg(long, default_value_t = 1.1)]
+    #[arg(long, default_value_t = AdaptiveParams::default().relax_up)]
     relax_up: f64,
     /// Exploration factor after calibrations 1–3.
-    #[arg(long, default_value_t = 1.1)]
+    #[arg(long, default_value_t = AdaptiveParams::default().explore)]
     explore: f64,
     /// Required rotation accuracy rmsRMax.
-    #[arg(long, default_value_t = 0.001)]
+    #[arg(long, default_value_t = AdaptiveParams::default().rms_r_max)]
     rms_r_max: f64,
     /// Required translation accuracy rmsTMax.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = AdaptiveParams::default().rms_t_max)]
     rms_t_max: f64,
     /// Floor of a predicted sin α₀ (default sin 15°).
-    #[arg(long, default_value_t = 15f64.to_radians().sin())]
+    #[arg(long, default_value_t = AdaptiveParams::default().alpha_min)]
     alpha_min: f64,
-    /// Floor of a predicted β₀, degrees.
-    #[arg(long, default_value_t = 3.0)]
-    beta_min_deg: f64,
+    /// Floor of a predicted β₀, degrees [default: 3, the library's default].
+    #[arg(long)]
+    beta_min_deg: Option<f64>,
     /// Ceiling of a predicted d₀, in the input's length unit (0.1 m; use 100 for millimetres).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = AdaptiveParams::default().d_max)]
     d_max: f64,
     /// Opt-in remedy for thresholds that lock when their four records are equal.
     #[arg(long)]
@@ -98,22 +98,16 @@ pub fn run(args: Args) -> Result<()> {
             rms_r_max: args.rms_r_max,
             rms_t_max: args.rms_t_max,
             alpha_min: args.alpha_min,
-            beta_min: args.beta_min_deg.to_radians(),
+            beta_min: args
+                .beta_min_deg
+                .map_or(AdaptiveParams::default().beta_min, f64::to_radians),
             d_max: args.d_max,
             unfreeze: args.unfreeze,
         },
-        error_source: if args.error_source == "truth" {
-            ErrorSource::Truth
-        } else {
-            ErrorSource::Residual
-        },
+        error_source: args.error_source.parse::<ErrorSource>()?,
         truth: truth.map(|t| t.x),
         optimal: args.optimal,
-        estimator: if args.estimator == "accumulate" {
-            Estimator::Accumulate
-        } else {
-            Estimator::Paper
-        },
+        estimator: args.estimator.parse::<Estimator>()?,
         ..OnlineConfig::default()
     };
     let mut calibrator = OnlineCalibrator::new(config)?;

@@ -174,7 +174,7 @@ struct PyOnline {
 #[pymethods]
 impl PyOnline {
     #[new]
-    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="paper", error_source="residual", truth=None, optimal=false, n_init=5, interval=5, relax_down=0.9, relax_up=1.1, explore=1.1, rms_r_max=0.001, rms_t_max=0.05, alpha_min=0.25881904510252074, beta_min_deg=3.0, d_max=0.1, unfreeze=false))]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="paper", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         selection: &str,
@@ -183,18 +183,20 @@ impl PyOnline {
         error_source: &str,
         truth: Option<PyReadonlyArray2<'_, f64>>,
         optimal: bool,
-        n_init: usize,
-        interval: usize,
-        relax_down: f64,
-        relax_up: f64,
-        explore: f64,
-        rms_r_max: f64,
-        rms_t_max: f64,
-        alpha_min: f64,
-        beta_min_deg: f64,
-        d_max: f64,
+        n_init: Option<usize>,
+        interval: Option<usize>,
+        relax_down: Option<f64>,
+        relax_up: Option<f64>,
+        explore: Option<f64>,
+        rms_r_max: Option<f64>,
+        rms_t_max: Option<f64>,
+        alpha_min: Option<f64>,
+        beta_min_deg: Option<f64>,
+        d_max: Option<f64>,
         unfreeze: bool,
     ) -> PyResult<Self> {
+        // A parameter left out takes the library's default.
+        let d = AdaptiveParams::default();
         let truth = truth
             .map(|t| transform(t.as_array(), "truth"))
             .transpose()?;
@@ -202,38 +204,22 @@ impl PyOnline {
             setup: parse_setup(setup)?,
             selection: selection.parse::<Selection>().map_err(value_error)?,
             params: AdaptiveParams {
-                n_init,
-                interval,
-                relax_down,
-                relax_up,
-                explore,
-                rms_r_max,
-                rms_t_max,
-                alpha_min,
-                beta_min: beta_min_deg.to_radians(),
-                d_max,
+                n_init: n_init.unwrap_or(d.n_init),
+                interval: interval.unwrap_or(d.interval),
+                relax_down: relax_down.unwrap_or(d.relax_down),
+                relax_up: relax_up.unwrap_or(d.relax_up),
+                explore: explore.unwrap_or(d.explore),
+                rms_r_max: rms_r_max.unwrap_or(d.rms_r_max),
+                rms_t_max: rms_t_max.unwrap_or(d.rms_t_max),
+                alpha_min: alpha_min.unwrap_or(d.alpha_min),
+                beta_min: beta_min_deg.map_or(d.beta_min, f64::to_radians),
+                d_max: d_max.unwrap_or(d.d_max),
                 unfreeze,
             },
-            error_source: match error_source {
-                "residual" => ErrorSource::Residual,
-                "truth" => ErrorSource::Truth,
-                other => {
-                    return Err(value_error(format!(
-                        "unknown error_source `{other}`; residual or truth"
-                    )));
-                }
-            },
+            error_source: error_source.parse::<ErrorSource>().map_err(value_error)?,
             truth,
             optimal,
-            estimator: match estimator {
-                "paper" => Estimator::Paper,
-                "accumulate" => Estimator::Accumulate,
-                other => {
-                    return Err(value_error(format!(
-                        "unknown estimator `{other}`; paper or accumulate"
-                    )));
-                }
-            },
+            estimator: estimator.parse::<Estimator>().map_err(value_error)?,
             ..OnlineConfig::default()
         };
         Ok(Self {

@@ -8,6 +8,7 @@
 //! (serde) so that a run can be saved and resumed.
 
 use std::collections::VecDeque;
+use std::str::FromStr;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -67,6 +68,54 @@ pub enum Estimator {
     /// O(1) per pose ([`crate::accumulate`]); the selection policy still decides when events are
     /// emitted, but every pose contributes.
     Accumulate,
+}
+
+impl ErrorSource {
+    /// The name used on the command line and in the Python bindings.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Truth => "truth",
+            Self::Residual => "residual",
+        }
+    }
+}
+
+impl FromStr for ErrorSource {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        [Self::Residual, Self::Truth]
+            .into_iter()
+            .find(|e| e.name() == s)
+            .ok_or_else(|| Error::InvalidParameter {
+                name: "error_source",
+                message: format!("unknown error source `{s}`; residual or truth"),
+            })
+    }
+}
+
+impl Estimator {
+    /// The name used on the command line and in the Python bindings.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Paper => "paper",
+            Self::Accumulate => "accumulate",
+        }
+    }
+}
+
+impl FromStr for Estimator {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        [Self::Paper, Self::Accumulate]
+            .into_iter()
+            .find(|e| e.name() == s)
+            .ok_or_else(|| Error::InvalidParameter {
+                name: "estimator",
+                message: format!("unknown estimator `{s}`; paper or accumulate"),
+            })
+    }
 }
 
 /// The accumulating estimator's X at one calibration.

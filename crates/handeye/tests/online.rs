@@ -320,3 +320,16 @@ fn a_non_finite_pose_is_refused_and_changes_nothing() {
     assert!(c.push(&bad).is_err());
     assert_eq!(c, before);
 }
+
+#[test]
+fn estimators_and_error_sources_parse_from_their_names() {
+    for e in [Estimator::Paper, Estimator::Accumulate] {
+        assert_eq!(e.name().parse::<Estimator>().unwrap(), e);
+    }
+    for e in [ErrorSource::Residual, ErrorSource::Truth] {
+        assert_eq!(e.name().parse::<ErrorSource>().unwrap(), e);
+    }
+    let unknown = "selected".parse::<Estimator>().unwrap_err().to_string();
+    assert!(unknown.contains("paper or accumulate"), "{unknown}");
+    assert!("exact".parse::<ErrorSource>().is_err());
+}
