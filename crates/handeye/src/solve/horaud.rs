@@ -5,7 +5,7 @@ use nalgebra::{Matrix4, SymmetricEigen, Vector4};
 use crate::error::Result;
 use crate::motion::MotionSource;
 use crate::pose::rotation_matrix;
-use crate::solve::quaternion::{quaternion_of, rotation_of};
+use crate::solve::quaternion::{motion_quaternions, rotation_of};
 use crate::solve::{
     Calibration, Method, check_motions, finish, singular, translation_least_squares,
 };
@@ -35,9 +35,13 @@ use crate::solve::{
 pub fn horaud(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
     let mut a = Matrix4::zeros();
+    // q_a ⊗ q_x = q_x ⊗ q_b holds for one sign of q_b only; at 180° (scalar parts 0) the matrix
+    // does not tell which, and the wrong one adds a row block that the true q_x does not satisfy.
+    // The sign is taken from Andreff's R_x (see `motion_quaternions`).
+    let r_x0 = check.andreff_rotation;
     motions.for_each_motion(|m| {
-        let d = left(&quaternion_of(&rotation_matrix(&m.a)))
-            - right(&quaternion_of(&rotation_matrix(&m.b)));
+        let (q_a, q_b) = motion_quaternions(&rotation_matrix(&m.a), &rotation_matrix(&m.b), &r_x0);
+        let d = left(&q_a) - right(&q_b);
         a += d.transpose() * d;
     });
     let eigen = SymmetricEigen::new(a);

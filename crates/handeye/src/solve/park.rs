@@ -1,6 +1,6 @@
 //! Park and Martin's solver, as OpenCV's `CALIB_HAND_EYE_PARK` computes it.
 
-use nalgebra::Matrix3;
+use nalgebra::{Matrix3, Vector3};
 
 use crate::error::Result;
 use crate::motion::MotionSource;
@@ -36,9 +36,17 @@ use crate::solve::{
 pub fn park(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
     let mut m = Matrix3::zeros();
+    // M = Σ β αᵀ (the paper's least-squares sum) rests on β = R_xᵀ α for every motion. At
+    // θ = 180° the logarithm is ±π k and the sign that a rotation matrix gives is rounding noise,
+    // so β may come out as −R_xᵀ α and pull M towards a wrong R_x: β takes the sign that agrees
+    // with Andreff's R_x.
+    let r_x0 = check.andreff_rotation;
     motions.for_each_motion(|motion| {
         let alpha = log_so3(&rotation_matrix(&motion.a));
-        let beta = log_so3(&rotation_matrix(&motion.b));
+        let mut beta = log_so3(&rotation_matrix(&motion.b));
+        if opposed(&alpha, &beta, &r_x0) {
+            beta = -beta;
+        }
         m += beta * alpha.transpose();
     });
     // (MᵀM)^(−1/2) Mᵀ is the orthogonal polar factor of Mᵀ; `proj_so3` computes it, and also
@@ -50,4 +58,18 @@ pub fn park(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let t_x =
         translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
     Ok(finish(Method::Park, motions.count(), check, &r_x, &t_x))
+}
+
+/// Whether the logarithms α of R_a and β of R_b are of opposite lifts: the unit quaternions
+/// (cos(θ/2), sin(θ/2) k) of α and of β are more than 90° apart in R⁴ once β's is carried into the
+/// gripper frame by the estimate `r_x` (the test of `quaternion::motion_quaternions`). The two
+/// scalar parts are cos(θ/2) of the same angle, so only angles near 180° (scalar parts near 0) can
+/// be opposed under any estimate within 90° of R_x; there −β is the same rotation as β.
+fn opposed(alpha: &Vector3<f64>, beta: &Vector3<f64>, r_x: &Matrix3<f64>) -> bool {
+    let (ta, tb) = (alpha.norm(), beta.norm());
+    if ta == 0.0 || tb == 0.0 {
+        return false;
+    }
+    let axes = beta.dot(&(r_x.transpose() * alpha)) / (ta * tb);
+    (0.5 * ta).cos() * (0.5 * tb).cos() + (0.5 * ta).sin() * (0.5 * tb).sin() * axes < 0.0
 }

@@ -5,16 +5,43 @@
 //! positive for B, and the methods, which need the same sign on both sides, then return a wrong X.
 //! Here the same branches are used (for the same rounding) and the sign is then made canonical,
 //! w ≥ 0: identical to OpenCV wherever OpenCV is right.
+//!
+//! The canonical sign is not enough at 180°. A motion pair needs q_b = q_x* ⊗ q_a ⊗ q_x (the
+//! scalar parts equal and b = R_xᵀ a), and at θ = 180° the scalar part w = cos(θ/2) is 0: what
+//! the matrices give is ±(rounding), its sign is noise, and "w ≥ 0" then picks the sign of q_a and
+//! q_b independently, half the time the wrong pair (−q_b satisfies q_a ⊗ q_x = −q_x ⊗ q_b, a
+//! different linear constraint, and one such motion pulls the least squares to a wrong X; on
+//! exact data it was 180° off). [`motion_quaternions`] takes the sign of q_b from the data
+//! instead: the one closer to the q_b that a first estimate of R_x predicts.
 
 use nalgebra::{Matrix3, Vector3, Vector4};
-
-use crate::pose::skew;
 
 /// Quaternion (w, x, y, z), w ≥ 0, of a rotation matrix by the four-branch method of OpenCV's
 /// `rot2quat` (Shepperd's).
 pub fn quaternion_of(r: &Matrix3<f64>) -> Vector4<f64> {
     let q = branch_quaternion(r);
     if q[0] < 0.0 { -q } else { q }
+}
+
+/// The quaternions (q_a, q_b) of a motion pair's rotations, with the signs that make
+/// q_a ⊗ q_x = q_x ⊗ q_b hold for the true X.
+///
+/// q_a is [`quaternion_of`] R_a (w ≥ 0). q_b is ±[`quaternion_of`] R_b, whichever is nearer (in
+/// R⁴) to q_x* ⊗ q_a ⊗ q_x = (w_a, R_xᵀ a) predicted by `r_x`, a first estimate of R_x (Andreff's
+/// rotation, which has no sign ambiguity). The two candidates are 180° apart as rotations of the
+/// pair, so any estimate within 90° of R_x chooses right. Away from 180° both scalar parts are
+/// clearly positive, the choice is the canonical w ≥ 0 one and OpenCV's answer is unchanged; it
+/// only differs when |w| is at rounding level, where w ≥ 0 is arbitrary.
+pub fn motion_quaternions(
+    r_a: &Matrix3<f64>,
+    r_b: &Matrix3<f64>,
+    r_x: &Matrix3<f64>,
+) -> (Vector4<f64>, Vector4<f64>) {
+    let q_a = quaternion_of(r_a);
+    let q_b = quaternion_of(r_b);
+    let predicted = r_x.transpose() * Vector3::new(q_a[1], q_a[2], q_a[3]);
+    let agreement = q_a[0] * q_b[0] + predicted.dot(&Vector3::new(q_b[1], q_b[2], q_b[3]));
+    (q_a, if agreement < 0.0 { -q_b } else { q_b })
 }
 
 /// The four-branch quaternion with the sign its branch gives.
@@ -54,14 +81,6 @@ pub fn rotation_of(q: &Vector4<f64>) -> Matrix3<f64> {
     )
 }
 
-/// Rotation of the vector part q = sin(θ/2) k of a unit quaternion with w = +√(1 − |q|²):
-/// `(1 − 2|q|²) I + 2 q qᵀ + 2 w [q]×`.
-pub fn rotation_of_vector_part(q: &Vector3<f64>) -> Matrix3<f64> {
-    let p = q.norm_squared();
-    let w = (1.0 - p).max(0.0).sqrt();
-    Matrix3::identity() * (1.0 - 2.0 * p) + q * q.transpose() * 2.0 + skew(q) * (2.0 * w)
-}
-
 /// Hamilton product s ⊗ t of quaternions (w, x, y, z).
 pub fn multiply(s: &Vector4<f64>, t: &Vector4<f64>) -> Vector4<f64> {
     Vector4::new(
@@ -90,8 +109,6 @@ mod tests {
             assert!((q.norm() - 1.0).abs() < 1e-12);
             assert!((rotation_of(&q) - r).abs().max() < 1e-12);
             assert!(q[0] >= 0.0);
-            let v = Vector3::new(q[1], q[2], q[3]);
-            assert!((rotation_of_vector_part(&v) - r).abs().max() < 1e-12);
         }
     }
 }

@@ -1,13 +1,13 @@
 //! Tsai and Lenz's solver, as OpenCV's `CALIB_HAND_EYE_TSAI` computes it.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{rotation_matrix, skew};
 use crate::solve::least_squares::least_squares_3;
-use crate::solve::quaternion::{quaternion_of, rotation_of_vector_part};
+use crate::solve::quaternion::{motion_quaternions, quaternion_of, rotation_of};
 use crate::solve::{
     Calibration, Method, MotionCheck, check_motions, finish, singular, translation_least_squares,
 };
@@ -30,8 +30,9 @@ const FILTER_RANGE: (f64, f64) = (0.3, 1.7);
 ///
 /// Eq. (12): `[P_g + P_c]× P'_cg = P_c − P_g` in least squares over all motions; Eq. (14):
 /// `P_cg = 2 P'_cg / √(1 + |P'_cg|²)` gives R_x; Eq. (15): `(R_g − I) t_x = R_x t_c − t_g` in
-/// least squares. The quaternion of each rotation is read with OpenCV's sign convention so that the
-/// same motions give OpenCV's answer.
+/// least squares. The quaternion of each rotation is read by OpenCV's branches so that the same
+/// motions give OpenCV's answer, with the sign of P_c made to agree with P_g (which OpenCV leaves
+/// to chance at 180°, see `solve_tsai`).
 ///
 /// # References
 /// R. Y. Tsai, R. K. Lenz, "A new technique for fully autonomous and efficient 3D robotics
@@ -107,26 +108,39 @@ pub fn tsai_with(
 
 /// Eqs. (12)–(15) on motions that passed [`check_motions`].
 fn solve_tsai(motions: &(impl MotionSource + ?Sized), check: MotionCheck) -> Result<Calibration> {
-    // Eq. (12), stacked over the motions.
+    // Eq. (12), stacked over the motions. It holds only when P_c is P_g seen from the camera,
+    // P_c = R_xᵀ P_g: the same angle and the same orientation of the axis. At θ = 180° the sign of
+    // the axis that a rotation matrix gives is arbitrary (2 sin(θ/2) k and −2 sin(θ/2) k are the
+    // same rotation), and a P_c of the other sign turns Eq. (12) into a false equation; so the
+    // sign of P_c is taken from Andreff's R_x (see `motion_quaternions`).
+    let r_x0 = check.andreff_rotation;
     let p_prime = least_squares_3(motions, |m| {
-        let p_g = modified_rodrigues(&rotation_matrix(&m.a));
-        let p_c = modified_rodrigues(&rotation_matrix(&m.b));
+        let (q_g, q_c) = motion_quaternions(&rotation_matrix(&m.a), &rotation_matrix(&m.b), &r_x0);
+        let p_g = vector_part(&q_g) * 2.0;
+        let p_c = vector_part(&q_c) * 2.0;
         (skew(&(p_g + p_c)), p_c - p_g)
     })
     .ok_or_else(|| singular(check.conditioning))?;
-    // Eq. (14): back to a unit-quaternion vector part, then to R_x.
-    let p_cg = p_prime * (2.0 / (1.0 + p_prime.norm_squared()).sqrt());
-    let r_x: Matrix3<f64> = rotation_of_vector_part(&(p_cg / 2.0));
+    // Eq. (14), P_cg = 2 P'_cg / √(1 + |P'_cg|²), written as the unit quaternion
+    // (1, P'_cg) / √(1 + |P'_cg|²) (P'_cg = tan(θ/2) k): the same rotation, without recovering
+    // cos(θ/2) as √(1 − |P_cg|²/4), which cancels and loses digits as θ_x nears 180°.
+    let q_x =
+        Vector4::new(1.0, p_prime.x, p_prime.y, p_prime.z) / (1.0 + p_prime.norm_squared()).sqrt();
+    let r_x: Matrix3<f64> = rotation_of(&q_x);
     // Eq. (15).
     let t_x =
         translation_least_squares(motions, &r_x).ok_or_else(|| singular(check.conditioning))?;
     Ok(finish(Method::Tsai, motions.count(), check, &r_x, &t_x))
 }
 
+/// The vector part of a quaternion (w, x, y, z).
+fn vector_part(q: &Vector4<f64>) -> Vector3<f64> {
+    Vector3::new(q[1], q[2], q[3])
+}
+
 /// P = 2 sin(θ/2) k = twice the vector part of the rotation's quaternion.
 fn modified_rodrigues(r: &Matrix3<f64>) -> Vector3<f64> {
-    let q = quaternion_of(r);
-    Vector3::new(q[1], q[2], q[3]) * 2.0
+    vector_part(&quaternion_of(r)) * 2.0
 }
 
 /// Whether a rotation passes OpenCV's motion filter: 2·sin(θ/2) in [0.3, 1.7].
