@@ -6,7 +6,8 @@ use crate::error::{Degeneracy, Error, Result};
 use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{proj_so3, rotation_matrix};
 use crate::solve::least_squares::least_squares_12;
-use crate::solve::{Calibration, Method, check_motions, finish, singular};
+use crate::solve::scale::{Scaled, length_scale, weighting_unit};
+use crate::solve::{Calibration, Method, REFUSE_CONDITIONING, check_motions, finish, singular};
 
 /// Andreff et al.'s linear solution with R_x and t_x as one 12-vector.
 ///
@@ -31,21 +32,53 @@ use crate::solve::{Calibration, Method, check_motions, finish, singular};
 /// ```
 pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
-    let x = least_squares_12(motions, rows).ok_or_else(|| singular(check.conditioning))?;
-    let raw = Matrix3::new(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]);
-    let det = raw.determinant();
-    // The scale of vec(R_x) is fixed only by the gripper translations (the right-hand side); with
-    // none, the solution is 0. OpenCV refuses |det| below single-precision epsilon likewise.
-    if det.is_nan() || det.abs() < f64::from(f32::EPSILON) {
+    // Eq. (10) stacks rotation rows (entries of order 1) on translation rows (entries of the
+    // order of the data's lengths, in the input's unit): in kilometres or micrometres its normal
+    // equations lose the smaller block entirely (X 1e-2 off at lengths ×1e8, t_x 100 % off at
+    // ×1e-8, on exact data). Within 2^10 of the input's unit it is solved as OpenCV solves it;
+    // beyond, in units that keep the two blocks within 2^10 of each other, and t_x scaled back
+    // (see `weighting_unit`).
+    let unit = weighting_unit(motions);
+    let scaled = Scaled::new(motions, unit);
+    // Eq. (10) has more solutions than X whenever the gripper translations are explained by
+    // rotations alone: t_a = 0 (eye-in-hand gripper turning about its own origin), or every
+    // motion a rotation about one point c, t_a = (I − R_a) c (then (s R_x, s t_x + (1 − s) c)
+    // solves it for every s). Least squares then returns the member of least norm, X or not
+    // (measured: t_x 0.6 for 0.37 in the input's unit, a refusal at ×1e-8). The system's own
+    // conditioning decides, with the threshold of the rotation system, measured in units of the
+    // data's own scale (where both blocks of rows are of order 1, so that it is unit-free).
+    let mut normal = SMatrix::<f64, 12, 12>::zeros();
+    Scaled::new(motions, length_scale(motions)).for_each_motion(|m| {
+        let (c, _) = rows(m);
+        normal += c.transpose() * c;
+    });
+    let eigenvalues = normal.symmetric_eigenvalues();
+    let joint_conditioning = (eigenvalues.min().max(0.0) / eigenvalues.max()).sqrt();
+    let no_translation = || {
         let mut largest = 0.0_f64;
         motions.for_each_motion(|m| largest = largest.max(m.a.translation.vector.norm()));
-        return Err(Error::Degenerate {
+        Error::Degenerate {
             reason: Degeneracy::NoTranslation { largest },
             conditioning: check.conditioning,
-        });
+        }
+    };
+    if joint_conditioning.is_nan() || joint_conditioning < REFUSE_CONDITIONING {
+        return Err(no_translation());
+    }
+    let x = least_squares_12(&scaled, rows).ok_or_else(|| singular(check.conditioning))?;
+    let raw = Matrix3::new(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]);
+    let det = raw.determinant();
+    // The scale of vec(R_x) is fixed only by the gripper translations t_a (the right-hand side of
+    // Eq. (10)); with none, the solution is 0. det(raw) = s³ for a solution s (R_x, t_x) is
+    // unit-free: it measures t_a against the rest of the system (camera translations, t_x) in
+    // the solve's units, so exact data gives det = 1 (or 0 without translation) at every scale,
+    // and the decision no longer flips with the unit once the normal equations stop losing the
+    // translation rows. OpenCV refuses |det| below single-precision epsilon likewise.
+    if det.is_nan() || det.abs() < f64::from(f32::EPSILON) {
+        return Err(no_translation());
     }
     let r_x = proj_so3(&(raw * det.signum()));
-    let t_x = x.fixed_rows::<3>(9).into_owned();
+    let t_x = x.fixed_rows::<3>(9) * unit;
     Ok(finish(
         Method::AndreffJoint,
         motions.count(),

@@ -1,11 +1,12 @@
 //! Daniilidis' dual-quaternion solver, as OpenCV's `CALIB_HAND_EYE_DANIILIDIS` computes it.
 
-use nalgebra::{SMatrix, SVector, SymmetricEigen, Vector3, Vector4};
+use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3, Vector4};
 
 use crate::error::Result;
 use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{rotation_matrix, skew};
-use crate::solve::quaternion::{multiply, quaternion_of, rotation_of};
+use crate::solve::quaternion::{motion_quaternions, multiply, rotation_of};
+use crate::solve::scale::{Scaled, weighting_unit};
 use crate::solve::{Calibration, Method, check_motions, finish, singular};
 
 /// Daniilidis' simultaneous solution with dual quaternions.
@@ -34,9 +35,16 @@ use crate::solve::{Calibration, Method, check_motions, finish, singular};
 /// ```
 pub fn daniilidis(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     let check = check_motions(motions)?;
+    // The rows of Eq. (31) mix the real parts (order 1) with the dual parts (order the data's
+    // lengths): in the input's unit the eigenvectors lose digits as lengths grow or shrink (1e-2
+    // at lengths ×1e8 on exact data). Within 2^10 of the input's unit it is solved as OpenCV
+    // solves it; beyond, in units that keep the two within 2^10 of each other, and t_x scaled
+    // back (see `weighting_unit`).
+    let unit = weighting_unit(motions);
+    let r_x0 = check.andreff_rotation;
     let mut normal = SMatrix::<f64, 8, 8>::zeros();
-    motions.for_each_motion(|m| {
-        let t = rows(m);
+    Scaled::new(motions, unit).for_each_motion(|m| {
+        let t = rows(m, &r_x0);
         normal += t.transpose() * t;
     });
     let eigen = SymmetricEigen::new(normal);
@@ -80,7 +88,7 @@ pub fn daniilidis(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration>
     let r_x = rotation_of(&q);
     let conjugate = Vector4::new(q[0], -q[1], -q[2], -q[3]);
     let t = multiply(&q_prime, &conjugate) * 2.0;
-    let t_x = Vector3::new(t[1], t[2], t[3]);
+    let t_x = Vector3::new(t[1], t[2], t[3]) * unit;
     Ok(finish(
         Method::Daniilidis,
         motions.count(),
@@ -98,17 +106,22 @@ fn split(v: &SVector<f64, 8>) -> (Vector4<f64>, Vector4<f64>) {
     )
 }
 
-/// Real part q and dual part q' = ½ (0, t) ⊗ q of a motion's dual quaternion.
-fn dual_quaternion(r: &nalgebra::Matrix3<f64>, t: &Vector3<f64>) -> (Vector4<f64>, Vector4<f64>) {
-    let q = quaternion_of(r);
-    let q_prime = multiply(&Vector4::new(0.0, t.x, t.y, t.z), &q) * 0.5;
-    (q, q_prime)
+/// The dual part q' = ½ (0, t) ⊗ q of a motion's dual quaternion with real part q.
+fn dual_part(q: &Vector4<f64>, t: &Vector3<f64>) -> Vector4<f64> {
+    multiply(&Vector4::new(0.0, t.x, t.y, t.z), q) * 0.5
 }
 
-/// The 6 rows of Eq. (31) for one motion.
-fn rows(m: &MotionPair) -> SMatrix<f64, 6, 8> {
-    let (qa, qa_) = dual_quaternion(&rotation_matrix(&m.a), &m.a.translation.vector);
-    let (qb, qb_) = dual_quaternion(&rotation_matrix(&m.b), &m.b.translation.vector);
+/// The 6 rows of Eq. (31) for one motion; `r_x0` is a first estimate of R_x.
+///
+/// Eq. (31) drops the scalar equations a₀ = b₀, a₀' = b₀' of the screw congruence theorem, which
+/// hold only for one sign of B's dual quaternion (q_b, q_b') relative to A's. Away from 180° the
+/// canonical w ≥ 0 of both real parts is that sign; at 180° (a₀ = b₀ = 0) it is rounding noise
+/// and the wrong sign gives six false rows. The sign of q_b (and with it q_b') is taken from
+/// `r_x0` (see `motion_quaternions`).
+fn rows(m: &MotionPair, r_x0: &Matrix3<f64>) -> SMatrix<f64, 6, 8> {
+    let (qa, qb) = motion_quaternions(&rotation_matrix(&m.a), &rotation_matrix(&m.b), r_x0);
+    let qa_ = dual_part(&qa, &m.a.translation.vector);
+    let qb_ = dual_part(&qb, &m.b.translation.vector);
     let vec = |q: &Vector4<f64>| Vector3::new(q[1], q[2], q[3]);
     let (a, b, a_, b_) = (vec(&qa), vec(&qb), vec(&qa_), vec(&qb_));
     let mut t = SMatrix::<f64, 6, 8>::zeros();

@@ -15,6 +15,7 @@ mod park;
 mod quaternion;
 mod refine;
 mod rotation_system;
+mod scale;
 mod symmetric;
 mod tsai;
 

@@ -6,9 +6,12 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts};
+use crate::solve::scale::{Scaled, length_scale};
 use crate::solve::{Calibration, Method, MotionCheck, andreff, check_motions};
 
 /// A start RMS below this counts as this, so that exact data does not divide by zero (SPEC sec. 3).
+/// For the ΔT block it is in units of the data's length scale (see `run`), not of the input: 1e-12
+/// of a kilometre and 1e-12 of a micrometre are the same floor relative to the data.
 const MIN_BLOCK_RMS: f64 = 1e-12;
 
 /// Levenberg–Marquardt settings; `Default` gives the values documented on each field.
@@ -238,8 +241,15 @@ fn run(
     check: MotionCheck,
     options: &RefineOptions,
 ) -> Refinement {
+    // Lengths are measured in the data's own unit (a power of two near its RMS translation): the
+    // tolerances below mix rotation (radians) with translation (the gradient's t entries carry
+    // 1/length, the step size adds |t_x| to 1, the ΔT floor is a length), so in the input's unit
+    // they would stop the solve early, or never, depending on whether the data is in kilometres
+    // or micrometres.
+    let unit = length_scale(motions);
+    let motions = &Scaled::new(motions, unit);
     let mut r_x = rotation_matrix(start);
-    let mut t_x = start.translation.vector;
+    let mut t_x = start.translation.vector / unit;
     let scales = block_scales(motions, &r_x, &t_x);
     let problem = Problem {
         motions,
@@ -299,10 +309,10 @@ fn run(
             }
         }
     }
-    let covariance = covariance(motions, &r_x, &t_x);
+    let covariance = covariance_scaled(motions, &r_x, &t_x, unit);
     Refinement {
         calibration: Calibration {
-            x: transform_from_parts(&r_x, &t_x),
+            x: transform_from_parts(&r_x, &(t_x * unit)),
             method: Method::Refine,
             motions: motions.count(),
             conditioning: check.conditioning,
@@ -312,7 +322,7 @@ fn run(
         final_cost: lin.cost,
         iterations,
         termination,
-        scales,
+        scales: [scales[0], scales[1] * unit],
         covariance,
     }
 }
@@ -323,7 +333,21 @@ pub fn covariance_at(
     motions: &(impl MotionSource + ?Sized),
     x: &Transform,
 ) -> Option<Matrix6<f64>> {
-    covariance(motions, &rotation_matrix(x), &x.translation.vector)
+    let unit = length_scale(motions);
+    let t_x = x.translation.vector / unit;
+    covariance_scaled(&Scaled::new(motions, unit), &rotation_matrix(x), &t_x, unit)
+}
+
+/// [`covariance`] of motions and a t_x given in units of `unit`, back in the input's unit.
+fn covariance_scaled(
+    motions: &(impl MotionSource + ?Sized),
+    r_x: &Matrix3<f64>,
+    t_x: &Vector3<f64>,
+    unit: f64,
+) -> Option<Matrix6<f64>> {
+    let units = Vector6::new(1.0, 1.0, 1.0, unit, unit, unit);
+    covariance(motions, r_x, t_x)
+        .map(|c| Matrix6::from_diagonal(&units) * c * Matrix6::from_diagonal(&units))
 }
 
 /// Covariance of (δ, t): `s² (JᵀJ)⁻¹` of the problem weighted by the final block RMS values, with
