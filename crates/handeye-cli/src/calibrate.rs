@@ -1,14 +1,18 @@
-//! `handeye calibrate`: one batch solve over a whole recording.
+//! `handeye calibrate`: one batch solve over a whole recording, with its uncertainty, or a refusal
+//! that says why and what to do.
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::metrics::{OUTLIER_DEG, find_outliers, quality_report, remove_outliers};
-use handeye::solve::{TsaiOptions, tsai_with};
-use handeye::{AllPairs, Error, Method, MotionSource, Pairing, Setup, motion_pairs, solve};
-use serde_json::{Map, Value, json};
+use handeye::calibration::{Fix, Options, Report, calibrate};
+use handeye::conventions::Reading;
+use handeye::metrics::OUTLIER_DEG;
+use handeye::solve::TsaiOptions;
+use handeye::uncertainty::REPLICATES;
+use handeye::{Error, Method, Pairing};
+use serde_json::Value;
 
 use crate::input::{InputArgs, read_all};
-use crate::output::{insert_transform, print_json};
+use crate::output::print_json;
 
 /// Options of `handeye calibrate`.
 #[derive(ClapArgs, Debug)]
@@ -21,13 +25,24 @@ pub struct Args {
     /// Motions from consecutive poses, or from every pair i < j (as OpenCV does).
     #[arg(long, default_value = "consecutive", value_parser = ["consecutive", "all"])]
     pairs: String,
-    /// Leave out motion pairs whose robot and camera rotation angles differ by more than
-    /// --outlier-deg (they must be equal for a rigid X).
+    /// Leave out the poses that disagree with the others (their motions' robot and camera
+    /// rotation angles or pitches differ beyond the data's own noise).
     #[arg(long)]
     reject_outliers: bool,
-    /// Outlier threshold on |θ_A − θ_B|, degrees.
+    /// A pose whose motions' robot and camera rotation angles differ by more than this (median,
+    /// degrees) is an outlier whatever the noise level.
     #[arg(long, default_value_t = OUTLIER_DEG)]
     outlier_deg: f64,
+    /// Read the input another way: `auto` applies a reading that fits far better when one is
+    /// found; `as-given` keeps the input as it is (a better reading is then a warning, not a
+    /// refusal); or one of robot-inverted, camera-inverted, both-inverted, robot-wxyz,
+    /// camera-wxyz, both-wxyz, robot-mm, camera-mm. Without it, a reading that fits far better
+    /// refuses the calibration (exit 3) and names the fix.
+    #[arg(long)]
+    fix: Option<String>,
+    /// Bootstrap replicates behind the reported uncertainty.
+    #[arg(long, default_value_t = REPLICATES)]
+    bootstrap: usize,
     /// Drop the motions OpenCV's Tsai drops: robot or camera rotation with 2·sin(θ/2) outside
     /// [0.3, 1.7] (with --method tsai).
     #[arg(long)]
@@ -37,19 +52,14 @@ pub struct Args {
     output: String,
 }
 
-/// Per-motion details are listed up to this many motions.
-const MAX_PER_MOTION: usize = 10_000;
+/// Fewest bootstrap replicates that give a usable one-sigma.
+const MIN_REPLICATES: usize = 8;
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let method: Method = args.method.parse()?;
-    let pairing = if args.pairs == "all" {
-        Pairing::All
-    } else {
-        Pairing::Consecutive
-    };
+    let options = options(&args)?;
     let setup = args.input.setup();
-    let (poses, time_offset) = read_all(&args.input)?;
+    let (poses, pose_names, time_offset) = read_all(&args.input)?;
     if poses.len() < 2 {
         return Err(Error::Parse {
             file: args
@@ -66,125 +76,83 @@ pub fn run(args: Args) -> Result<()> {
         }
         .into());
     }
-    if pairing == Pairing::All && !args.reject_outliers {
-        // All pairs are made on the fly: memory stays O(poses), not O(poses²).
-        let source = AllPairs::new(&poses, setup);
-        return report(&args, method, setup, &source, None, time_offset);
-    }
-    let mut motions = motion_pairs(&poses, pairing, setup);
-    let rejected = args.reject_outliers.then(|| {
-        let outliers = find_outliers(&motions, args.outlier_deg);
-        remove_outliers(&mut motions, &outliers);
-        outliers
-    });
-    report(&args, method, setup, &motions, rejected, time_offset)
-}
-
-/// Solves X from the motions and prints the result with its quality report. `rejected` holds the
-/// outliers already left out of `motions` (with `--reject-outliers`); otherwise the outliers are
-/// the report's.
-fn report(
-    args: &Args,
-    method: Method,
-    setup: Setup,
-    motions: &(impl MotionSource + ?Sized),
-    rejected: Option<Vec<usize>>,
-    time_offset: Option<f64>,
-) -> Result<()> {
-    let calibration = if method == Method::Tsai && args.tsai_opencv_filter {
-        tsai_with(
-            motions,
-            &TsaiOptions {
-                opencv_filter: true,
-            },
-        )?
-    } else {
-        solve(method, motions)?
-    };
-    let quality = quality_report(motions, &calibration.x, MAX_PER_MOTION, args.outlier_deg);
-    let outliers = rejected.as_ref().unwrap_or(&quality.outliers);
-    let residual = quality.residual;
-    let mut out = Map::new();
-    out.insert("method".into(), json!(method.name()));
-    out.insert("setup".into(), json!(setup.name()));
-    out.insert("frame".into(), json!(setup.x_frame()));
-    insert_transform(&mut out, &calibration.x);
-    out.insert("motions".into(), json!(calibration.motions));
-    out.insert(
-        "residual".into(),
-        json!({
-            "rotation_deg_rms": residual.rotation_deg_rms,
-            "translation_rms": residual.translation_rms,
-            "rotation_deg_max": residual.rotation_deg_max,
-            "translation_max": residual.translation_max,
-            "units": "rotation in degrees; translation in the input's length unit",
-        }),
-    );
-    out.insert("conditioning".into(), json!(calibration.conditioning));
-    // The report keeps per-motion entries only up to MAX_PER_MOTION motions.
-    let per_motion = if quality.per_motion.len() == motions.count() {
-        json!(quality.per_motion)
-    } else {
-        Value::Null
-    };
-    out.insert(
-        "quality".into(),
-        json!({
-            "axis_spread_deg": quality.axis_spread_deg,
-            "rotation_range_deg": quality.rotation_range_deg,
-            "rotation_std_deg": quality.rotation_std_deg,
-            "translation_std": quality.translation_std,
-            "outliers": {
-                "threshold_deg": args.outlier_deg,
-                "count": outliers.len(),
-                "rejected": args.reject_outliers,
-                "motions": outliers,
-            },
-            "per_motion": per_motion,
-        }),
-    );
-    // With --reject-outliers the motions kept have no outliers at the same threshold, so the
-    // report's outlier warning cannot appear.
-    let mut warnings: Vec<String> = calibration.warnings.iter().map(|w| w.to_string()).collect();
-    warnings.extend(quality.warnings.iter().cloned());
-    if args.reject_outliers && !outliers.is_empty() {
+    let report = calibrate(
+        &poses,
+        setup,
+        &Options {
+            pose_names,
+            ..options
+        },
+    )?;
+    if report.outliers.rejected && !report.outliers.poses.is_empty() {
         eprintln!(
-            "rejected {} outlier motion pair(s) of {}",
-            outliers.len(),
-            outliers.len() + motions.count()
+            "rejected {} outlier pose(s) of {}",
+            report.outliers.poses.len(),
+            report.outliers.poses.len() + report.poses
         );
     }
-    for w in &warnings {
+    for w in &report.warnings {
         eprintln!("warning: {w}");
     }
-    out.insert("warnings".into(), json!(warnings));
-    if let Some(t) = time_offset {
-        out.insert("time_offset_s".into(), json!(t));
-    }
     if args.output == "yaml" {
-        print!("{}", ros_yaml(&out, setup.x_frame(), &calibration.x));
+        print!("{}", ros_yaml(&report));
         return Ok(());
     }
-    print_json(&Value::Object(out))
+    let mut out = serde_json::to_value(&report)?;
+    if let (Some(t), Value::Object(o)) = (time_offset, &mut out) {
+        o.insert("time_offset_s".into(), t.into());
+    }
+    print_json(&out)
+}
+
+/// The library's options from the command line.
+fn options(args: &Args) -> Result<Options> {
+    if args.bootstrap < MIN_REPLICATES {
+        return Err(Error::InvalidParameter {
+            name: "bootstrap",
+            message: format!(
+                "at least {MIN_REPLICATES} replicates, got {}",
+                args.bootstrap
+            ),
+        }
+        .into());
+    }
+    let fix = match args.fix.as_deref() {
+        None => Fix::Refuse,
+        Some("auto") => Fix::Auto,
+        Some(name) => Fix::Read(name.parse::<Reading>()?),
+    };
+    Ok(Options {
+        method: args.method.parse::<Method>()?,
+        pairing: if args.pairs == "all" {
+            Pairing::All
+        } else {
+            Pairing::Consecutive
+        },
+        tsai: TsaiOptions {
+            opencv_filter: args.tsai_opencv_filter,
+        },
+        reject_outliers: args.reject_outliers,
+        outlier_deg: args.outlier_deg,
+        fix,
+        replicates: args.bootstrap,
+        pose_names: Vec::new(),
+    })
 }
 
 /// The result as ROS-style YAML (easy_handeye / tf conventions: translation, rotation x y z w).
-fn ros_yaml(out: &Map<String, Value>, frame: &str, x: &handeye::Transform) -> String {
-    let t = x.translation.vector;
-    let q = handeye::pose::quaternion_xyzw(x);
+fn ros_yaml(r: &Report) -> String {
+    let [tx, ty, tz] = r.x.translation;
+    let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
     format!(
-        "# handeye calibrate: method {}, setup {}\nframe: {frame}\ntranslation: {{x: {}, y: {}, z: {}}}\nrotation: {{x: {}, y: {}, z: {}, w: {}}}\nresidual: {{rotation_deg_rms: {}, translation_rms: {}}}\nmotions: {}\n",
-        out["method"].as_str().unwrap_or(""),
-        out["setup"].as_str().unwrap_or(""),
-        t.x,
-        t.y,
-        t.z,
-        q[0],
-        q[1],
-        q[2],
-        q[3],
-        out["residual"]["rotation_deg_rms"],
-        out["residual"]["translation_rms"],
-        out["motions"],
+        "# handeye calibrate: method {}, setup {}\nframe: {}\ntranslation: {{x: {tx}, y: {ty}, z: {tz}}}\nrotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\nuncertainty: {{rotation_deg: {}, translation: {}}}\nresidual: {{rotation_deg_rms: {}, translation_rms: {}}}\nmotions: {}\n",
+        r.method,
+        r.setup.name(),
+        r.frame,
+        r.uncertainty.rotation_deg,
+        r.uncertainty.translation,
+        r.residual.rotation_deg_rms,
+        r.residual.translation_rms,
+        r.motions,
     )
 }

@@ -134,24 +134,44 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
     Ok(Some(Synced { pairs, time_offset }))
 }
 
-/// All pose pairs of the input (a batch solve), and the time offset used for streams.
-pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Option<f64>)> {
+/// All pose pairs of the input (a batch solve), each pose's name for messages (`file:line`, or
+/// the camera stream's file and time stamp), and the time offset used for streams.
+pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Vec<String>, Option<f64>)> {
     if let Some(s) = synced(args)? {
+        let camera = args.camera.as_ref().map(|p| p.display().to_string());
+        let names = s
+            .pairs
+            .iter()
+            .map(|p| {
+                format!(
+                    "{} at t = {:.3} s",
+                    camera.as_deref().unwrap_or("camera"),
+                    p.stamp.unwrap_or(f64::NAN)
+                )
+            })
+            .collect();
         return Ok((
             s.pairs.iter().map(|p| p.pose).collect(),
+            names,
             Some(s.time_offset),
         ));
     }
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
+    let source = path.display().to_string();
+    let name = |line: usize| format!("{source}:{line}");
     if path.as_os_str() == "-" {
         let stdin = std::io::stdin().lock();
-        let mut pairs = Vec::new();
+        let (mut pairs, mut names) = (Vec::new(), Vec::new());
         for r in PoseReader::new(stdin, "-", args.format()?)? {
-            pairs.push(r?.pose);
+            let r = r?;
+            pairs.push(r.pose);
+            names.push(name(r.line));
         }
-        return Ok((pairs, None));
+        return Ok((pairs, names, None));
     }
-    Ok((read_pose_file(&path, args.format()?)?.pairs, None))
+    let series = read_pose_file(&path, args.format()?)?;
+    let names = series.lines.iter().map(|&l| name(l)).collect();
+    Ok((series.pairs, names, None))
 }
 
 /// Pose pairs one at a time, each with its place, or the error of a bad record.

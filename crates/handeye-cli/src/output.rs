@@ -14,7 +14,12 @@ pub const DEGENERATE: u8 = 3;
 /// The exit code for an error: 2 for bad input, 3 for degenerate data, 1 otherwise.
 pub fn exit_code(e: &anyhow::Error) -> u8 {
     match e.downcast_ref::<Error>() {
-        Some(Error::Degenerate { .. } | Error::TooFewMotions { .. }) => DEGENERATE,
+        Some(
+            Error::Degenerate { .. }
+            | Error::TooFewMotions { .. }
+            | Error::Misread { .. }
+            | Error::Outliers { .. },
+        ) => DEGENERATE,
         Some(_) => BAD_INPUT,
         None => 1,
     }

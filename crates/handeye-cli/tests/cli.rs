@@ -73,7 +73,12 @@ fn calibrate_recovers_the_truth_of_the_exact_fixture() {
             assert!(!v[key].is_null(), "{key}");
         }
         assert!(v["residual"]["rotation_deg_rms"].as_f64().unwrap() < 1e-6);
-        assert!(v["residual"]["units"].as_str().unwrap().contains("degrees"));
+        assert!(v["units"]["rotation"].as_str().unwrap().contains("degrees"));
+        // Noise-free: the bootstrap finds no uncertainty.
+        assert!(
+            v["uncertainty"]["rotation_deg"].as_f64().unwrap() < 1e-6,
+            "{method}"
+        );
         let d = max_diff(&matrix(&v["matrix"]), &matrix(&expected["truth"]["matrix"]));
         assert!(d < 1e-9, "{method}: {d:e}");
     }
@@ -260,7 +265,13 @@ fn csv_on_stdin_after_comments_is_detected_and_lines_are_counted() {
 fn every_offered_format_is_accepted_and_errors_are_said_once() {
     let camodocal = testdata("real/camodocal/TransformPairsInput.yml");
     let (code, out, err) = run(handeye()
-        .args(["calibrate", "--format", "opencv-yaml"])
+        .args([
+            "calibrate",
+            "--setup",
+            "eye-to-hand",
+            "--format",
+            "opencv-yaml",
+        ])
         .arg(&camodocal));
     assert_eq!(code, 0, "{err}");
     let v: Value = serde_json::from_str(&out).unwrap();

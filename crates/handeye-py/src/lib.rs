@@ -7,9 +7,7 @@
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig};
 use handeye::pose::transform_from_matrix4;
 use handeye::select::{AdaptiveParams, Selection};
-use handeye::{
-    AllPairs, Method, MotionSource, Pairing, PosePair, Setup, Transform, motion_pairs, solve,
-};
+use handeye::{Method, Pairing, PosePair, Setup, Transform};
 use nalgebra::Matrix4;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::exceptions::PyValueError;
@@ -72,13 +70,11 @@ fn matrix<'py>(py: Python<'py>, x: &Transform) -> Bound<'py, PyArray2<f64>> {
     numpy::ndarray::Array2::from_shape_fn((4, 4), |(r, c)| h[(r, c)]).into_pyarray(py)
 }
 
-/// Batch calibration: returns a dict with `matrix` (4×4 X), `method`, `setup`, `frame`,
-/// `motions`, `conditioning`, and with `report` also `residual` (rotation_deg_rms,
-/// translation_rms), `quality` and `warnings`. All pairs are made on the fly (memory O(poses)).
+/// X alone, as `calibrate_hand_eye` (the OpenCV drop-in) returns it: the 4×4 matrix. All pairs
+/// are made on the fly (memory O(poses)).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false, report=true))]
-#[allow(clippy::too_many_arguments)]
-fn calibrate<'py>(
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false))]
+fn solve_x<'py>(
     py: Python<'py>,
     base_from_gripper: PyReadonlyArray3<'py, f64>,
     camera_from_target: PyReadonlyArray3<'py, f64>,
@@ -86,73 +82,74 @@ fn calibrate<'py>(
     setup: &str,
     pairs: &str,
     tsai_opencv_filter: bool,
-    report: bool,
-) -> PyResult<Bound<'py, PyDict>> {
-    let method: Method = method.parse().map_err(value_error)?;
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let options = calibration_options(method, pairs, tsai_opencv_filter)?;
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
-    let options = handeye::solve::TsaiOptions {
-        opencv_filter: tsai_opencv_filter,
-    };
-    match pairs {
-        "consecutive" => {
-            let motions = motion_pairs(&poses, Pairing::Consecutive, setup);
-            calibrated(py, &motions, method, setup, &options, report)
-        }
-        "all" => {
-            let motions = AllPairs::new(&poses, setup);
-            calibrated(py, &motions, method, setup, &options, report)
-        }
-        other => Err(value_error(format!(
-            "unknown pairs `{other}`; consecutive or all"
-        ))),
-    }
+    let c = py
+        .allow_threads(|| handeye::calibration::solve_poses(&poses, setup, &options))
+        .map_err(value_error)?;
+    Ok(matrix(py, &c.x))
 }
 
-/// Solves X from `motions` and builds the result dict of [`calibrate`].
-fn calibrated<'py, M: MotionSource + Sync + ?Sized>(
+/// The whole batch calibration ([`handeye::calibration::calibrate`]): its report as JSON, the same
+/// object `handeye calibrate` prints (the Python layer parses it).
+#[pyfunction]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::uncertainty::REPLICATES))]
+#[allow(clippy::too_many_arguments)]
+fn calibrate_report<'py>(
     py: Python<'py>,
-    motions: &M,
-    method: Method,
-    setup: Setup,
-    options: &handeye::solve::TsaiOptions,
-    report: bool,
-) -> PyResult<Bound<'py, PyDict>> {
-    let c = py
-        .allow_threads(|| {
-            if method == Method::Tsai {
-                handeye::solve::tsai_with(motions, options)
-            } else {
-                solve(method, motions)
-            }
-        })
+    base_from_gripper: PyReadonlyArray3<'py, f64>,
+    camera_from_target: PyReadonlyArray3<'py, f64>,
+    method: &str,
+    setup: &str,
+    pairs: &str,
+    tsai_opencv_filter: bool,
+    reject_outliers: bool,
+    fix: Option<&str>,
+    bootstrap: usize,
+) -> PyResult<String> {
+    let options = handeye::calibration::Options {
+        reject_outliers,
+        fix: match fix {
+            None => handeye::calibration::Fix::Refuse,
+            Some("auto") => handeye::calibration::Fix::Auto,
+            Some(name) => handeye::calibration::Fix::Read(name.parse().map_err(value_error)?),
+        },
+        replicates: bootstrap.max(8),
+        ..calibration_options(method, pairs, tsai_opencv_filter)?
+    };
+    let setup = parse_setup(setup)?;
+    let poses = poses(&base_from_gripper, &camera_from_target)?;
+    let report = py
+        .allow_threads(|| handeye::calibration::calibrate(&poses, setup, &options))
         .map_err(value_error)?;
-    let out = PyDict::new(py);
-    out.set_item("matrix", matrix(py, &c.x))?;
-    out.set_item("method", method.name())?;
-    out.set_item("setup", setup.name())?;
-    out.set_item("frame", setup.x_frame())?;
-    out.set_item("motions", c.motions)?;
-    out.set_item("conditioning", c.conditioning)?;
-    if !report {
-        return Ok(out);
-    }
-    let quality = handeye::metrics::quality_report(motions, &c.x, 0, handeye::metrics::OUTLIER_DEG);
-    let r = PyDict::new(py);
-    r.set_item("rotation_deg_rms", quality.residual.rotation_deg_rms)?;
-    r.set_item("translation_rms", quality.residual.translation_rms)?;
-    out.set_item("residual", r)?;
-    let q = PyDict::new(py);
-    q.set_item("axis_spread_deg", quality.axis_spread_deg)?;
-    q.set_item("rotation_range_deg", quality.rotation_range_deg.to_vec())?;
-    q.set_item("rotation_std_deg", quality.rotation_std_deg)?;
-    q.set_item("translation_std", quality.translation_std)?;
-    q.set_item("outliers", quality.outliers)?;
-    out.set_item("quality", q)?;
-    let mut warnings: Vec<String> = c.warnings.iter().map(|w| w.to_string()).collect();
-    warnings.extend(quality.warnings);
-    out.set_item("warnings", warnings)?;
-    Ok(out)
+    serde_json::to_string(&report).map_err(value_error)
+}
+
+/// The method, pairing and Tsai options by name.
+fn calibration_options(
+    method: &str,
+    pairs: &str,
+    tsai_opencv_filter: bool,
+) -> PyResult<handeye::calibration::Options> {
+    let pairing = match pairs {
+        "consecutive" => Pairing::Consecutive,
+        "all" => Pairing::All,
+        other => {
+            return Err(value_error(format!(
+                "unknown pairs `{other}`; consecutive or all"
+            )));
+        }
+    };
+    Ok(handeye::calibration::Options {
+        method: method.parse::<Method>().map_err(value_error)?,
+        pairing,
+        tsai: handeye::solve::TsaiOptions {
+            opencv_filter: tsai_opencv_filter,
+        },
+        ..Default::default()
+    })
 }
 
 fn parse_setup(setup: &str) -> PyResult<Setup> {
@@ -295,7 +292,8 @@ fn event<'py>(py: Python<'py>, e: &Event) -> PyResult<Bound<'py, PyDict>> {
 /// The extension module.
 #[pymodule]
 fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add_function(wrap_pyfunction!(calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(solve_x, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
     m.add_class::<PyOnline>()?;
     Ok(())
 }

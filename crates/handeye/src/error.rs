@@ -72,6 +72,26 @@ pub enum Degeneracy {
         /// The largest gripper translation among the motions, input units.
         largest: f64,
     },
+    /// Under the data's own noise one direction of X moves beyond the refusal threshold
+    /// ([`crate::uncertainty`]): the motions do not determine it.
+    Undetermined {
+        /// The direction (rotation about `axis`, or translation along it).
+        part: crate::uncertainty::Part,
+        /// The direction, in X's reference frame.
+        axis: [f64; 3],
+        /// Its one-sigma: degrees for rotation, input units for translation.
+        sigma: f64,
+        /// The setup, which names X's reference frame.
+        setup: crate::motion::Setup,
+    },
+    /// Re-solving under the data's own noise was refused too often: X is at the edge of what the
+    /// motions determine.
+    Unstable {
+        /// Re-solves refused.
+        refused: usize,
+        /// Re-solves tried.
+        tried: usize,
+    },
 }
 
 impl fmt::Display for Degeneracy {
@@ -90,6 +110,24 @@ impl fmt::Display for Degeneracy {
             Self::NoTranslation { largest } => write!(
                 f,
                 "the gripper barely translates (largest motion {largest:.3e}): the simultaneous form cannot fix the scale of the rotation; use `andreff` or another method"
+            ),
+            Self::Undetermined {
+                part,
+                axis,
+                sigma,
+                setup,
+            } => f.write_str(&crate::uncertainty::advice(
+                *part,
+                &crate::uncertainty::Direction {
+                    axis: *axis,
+                    sigma: *sigma,
+                    verdict: crate::uncertainty::Verdict::Undetermined,
+                },
+                *setup,
+            )),
+            Self::Unstable { refused, tried } => write!(
+                f,
+                "{refused} of {tried} re-solves under the data's own noise were refused: X is at the edge of what these motions determine; add motions with larger rotations about different axes"
             ),
             Self::IllConditioned => write!(
                 f,
@@ -128,6 +166,19 @@ pub enum Error {
         what: String,
         /// What is wrong.
         problem: TransformProblem,
+    },
+    /// The poses fit far better read another way (inverted, another quaternion order, another
+    /// unit): the as-given reading would give a wrong X.
+    #[error("the input looks misread: {advice}")]
+    Misread {
+        /// What fits better, and the fix.
+        advice: String,
+    },
+    /// Poses that disagree with the others leave X undetermined.
+    #[error("X cannot be trusted: {advice}")]
+    Outliers {
+        /// What is undetermined, the outlier poses, and the fix.
+        advice: String,
     },
     /// Malformed input data, with its place.
     #[error("{file}:{line}: field `{field}`: {message}")]

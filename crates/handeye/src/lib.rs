@@ -22,6 +22,9 @@
 #![deny(missing_docs)]
 
 pub mod accumulate;
+pub mod calibration;
+pub mod consistency;
+pub mod conventions;
 mod error;
 pub mod experiment;
 pub mod io;
@@ -33,6 +36,7 @@ pub mod select;
 pub mod sim;
 pub mod solve;
 pub mod sync;
+pub mod uncertainty;
 
 pub use error::{Degeneracy, Error, Result, TransformProblem};
 pub use motion::{

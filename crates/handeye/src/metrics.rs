@@ -207,7 +207,8 @@ pub struct MotionQuality {
     pub angle_gap_deg: f64,
 }
 
-/// How good a calibration is, and why: residuals, the spread of the data, an uncertainty estimate.
+/// How good a calibration is, and why: residuals and the spread of the data (the uncertainty is
+/// [`crate::uncertainty`]'s).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct QualityReport {
     /// RMS and worst of the residuals.
@@ -222,11 +223,6 @@ pub struct QualityReport {
     pub axis_spread_deg: f64,
     /// Smallest and largest rotation angle of the motions, degrees.
     pub rotation_range_deg: [f64; 2],
-    /// One-sigma uncertainty of X's rotation (largest axis), degrees, from the Jacobian of the
-    /// residuals (Gauss–Newton covariance with the noise estimated from the residuals).
-    pub rotation_std_deg: Option<f64>,
-    /// One-sigma uncertainty of X's translation (largest axis), input units.
-    pub translation_std: Option<f64>,
     /// Cautions in plain words.
     pub warnings: Vec<String>,
 }
@@ -277,11 +273,6 @@ pub fn quality_report(
     let residual = residual.finish(motions.count());
     let axis_spread_deg = axis_spread(motions).to_degrees();
     let rotation_range_deg = [smallest, largest];
-    let covariance = crate::solve::covariance_at(motions, x);
-    let largest = |block: Matrix3<f64>| block.symmetric_eigenvalues().max().max(0.0).sqrt();
-    let rotation_std_deg =
-        covariance.map(|c| largest(c.fixed_view::<3, 3>(0, 0).into_owned()).to_degrees());
-    let translation_std = covariance.map(|c| largest(c.fixed_view::<3, 3>(3, 3).into_owned()));
     let mut warnings = Vec::new();
     if axis_spread_deg < WARN_AXIS_SPREAD_DEG {
         warnings.push(format!(
@@ -294,20 +285,12 @@ pub fn quality_report(
             residual.rotation_deg_rms
         ));
     }
-    if !outliers.is_empty() {
-        warnings.push(format!(
-            "{} motion pair(s) whose robot and camera rotation angles differ by more than {outlier_deg}°: bad timestamps or detections; try `--reject-outliers`",
-            outliers.len()
-        ));
-    }
     QualityReport {
         residual,
         outliers,
         per_motion,
         axis_spread_deg,
         rotation_range_deg,
-        rotation_std_deg,
-        translation_std,
         warnings,
     }
 }

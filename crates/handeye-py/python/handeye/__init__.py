@@ -13,10 +13,13 @@ Two faces:
 """
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 from ._handeye import _OnlineCalibrator
-from ._handeye import calibrate as _calibrate
+from ._handeye import calibrate_report as _calibrate_report
+from ._handeye import solve_x as _solve_x
 
 __all__ = ["calibrate_hand_eye", "calibrate", "OnlineCalibrator", "METHODS"]
 
@@ -74,22 +77,48 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     g = _homogeneous(R_gripper2base, t_gripper2base, "gripper2base")
     c = _homogeneous(R_target2cam, t_target2cam, "target2cam")
     opencv_tsai = isinstance(method, int) and name == "tsai"
-    result = _calibrate(
-        g, c, method=name, setup="eye-in-hand", pairs="all", tsai_opencv_filter=opencv_tsai, report=False
-    )
-    x = result["matrix"]
+    x = _solve_x(g, c, method=name, setup="eye-in-hand", pairs="all", tsai_opencv_filter=opencv_tsai)
     return x[:3, :3].copy(), x[:3, 3:4].copy()
 
 
-def calibrate(base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive") -> dict:
-    """Batch calibration from (N,4,4) arrays; returns a dict: ``matrix`` (X), ``frame``, ``method``,
-    ``setup``, ``motions``, ``conditioning``, ``residual`` (``rotation_deg_rms``,
-    ``translation_rms``) and ``warnings``."""
+def calibrate(
+    base_from_gripper,
+    camera_from_target,
+    method="andreff",
+    setup="eye-in-hand",
+    pairs="consecutive",
+    reject_outliers=False,
+    fix=None,
+    bootstrap=40,
+) -> dict:
+    """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
+    X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
+    dict: ``matrix`` (X, a (4,4) array), ``translation``, ``quaternion_xyzw``, ``frame``,
+    ``method``, ``setup``, ``poses``, ``motions``, ``conditioning``, ``uncertainty``
+    (``rotation_deg`` and ``translation``: one-sigma sizes of the error; ``weakest_rotation``,
+    ``weakest_translation``, ``covariance``), ``reading`` (the readings of the input tried),
+    ``outliers`` (poses that disagree with the others), ``residual``, ``quality`` and
+    ``warnings``. ``fix`` reads the input another way ("auto", "as-given", "robot-inverted",
+    "camera-inverted", "both-inverted", "robot-wxyz", "camera-wxyz", "both-wxyz", "robot-mm",
+    "camera-mm")."""
     g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
     c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
     if g.ndim != 3 or c.ndim != 3:
         raise ValueError("expected (N, 4, 4) arrays of transforms")
-    return _calibrate(g, c, method=method, setup=setup, pairs=pairs)
+    result = json.loads(
+        _calibrate_report(
+            g,
+            c,
+            method=method,
+            setup=setup,
+            pairs=pairs,
+            reject_outliers=reject_outliers,
+            fix=fix,
+            bootstrap=bootstrap,
+        )
+    )
+    result["matrix"] = np.array(result["matrix"], dtype=np.float64)
+    return result
 
 
 class OnlineCalibrator:

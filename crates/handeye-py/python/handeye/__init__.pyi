@@ -1,7 +1,7 @@
 """Type stubs of handeye. Frames: base_from_gripper (OpenCV gripper2base), camera_from_target
 (target2cam); X = gripper_from_camera (cam2gripper) for eye-in-hand, base_from_camera for
 eye-to-hand."""
-from typing import Any, Sequence, Union
+from typing import Optional, Any, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -21,6 +21,9 @@ def calibrate(
     method: str = "andreff",
     setup: str = "eye-in-hand",
     pairs: str = "consecutive",
+    reject_outliers: bool = False,
+    fix: Optional[str] = None,
+    bootstrap: int = 40,
 ) -> dict[str, Any]: ...
 
 class OnlineCalibrator:

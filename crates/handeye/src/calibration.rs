@@ -1,0 +1,495 @@
+//! A batch calibration that is right within the uncertainty it reports, or refused, or flagged.
+//!
+//! [`calibrate`] is what `handeye calibrate` and the Python `calibrate` run, and [`Report`] is what
+//! both print:
+//! 1. the readings a user may have meant are tried ([`crate::conventions`]): a reading that fits
+//!    far better refuses the as-given one ([`Error::Misread`]) unless [`Fix`] says otherwise;
+//! 2. poses that break the screw invariants are found ([`crate::consistency::pose_outliers`]) and,
+//!    with `reject_outliers`, left out;
+//! 3. the method solves X from the pairing's motions;
+//! 4. the bootstrap over the poses' own errors gives the uncertainty ([`crate::uncertainty`]); a
+//!    direction of X it leaves undetermined refuses the result ([`Degeneracy::Undetermined`]), a
+//!    weakly determined one is a warning naming it;
+//! 5. the residuals and the spread of the motions ([`crate::metrics::quality_report`]).
+
+use serde::{Deserialize, Serialize};
+
+use crate::accumulate::PoseAccumulator;
+use crate::consistency::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
+use crate::conventions::{Reading, ReadingCheck, check_readings};
+use crate::error::{Degeneracy, Error, Result};
+use crate::io::TransformJson;
+use crate::metrics::{MotionQuality, QualityReport, ResidualSummary, quality_report};
+use crate::motion::{AllPairs, MotionSource, Pairing, PosePair, Setup, motion_pairs};
+use crate::pose::Transform;
+use crate::solve::{
+    Calibration, Method, RefineOptions, TsaiOptions, refine_from, solve, tsai_with,
+};
+use crate::uncertainty::{Part, Uncertainty, Verdict, advice, bootstrap};
+
+/// Per-motion details are kept up to this many motions.
+const MAX_PER_MOTION: usize = 10_000;
+
+/// The median per-pose translation residual above which a warning is given, as a fraction of the
+/// scene's size (the RMS spread of the hand positions).
+pub const WARN_TRANSLATION_RESIDUAL: f64 = 0.05;
+
+/// What to do about a reading of the input that fits far better than the as-given one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Fix {
+    /// Refuse with the finding ([`Error::Misread`]).
+    #[default]
+    Refuse,
+    /// Read the input this way (no check); [`Reading::AsGiven`] keeps it as given and turns the
+    /// refusal into a warning.
+    Read(Reading),
+    /// Apply the better reading when one is found, and say so.
+    Auto,
+}
+
+/// How to calibrate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// The solver.
+    pub method: Method,
+    /// Which pose pairs become motions.
+    pub pairing: Pairing,
+    /// Tsai's options (with [`Method::Tsai`]).
+    pub tsai: TsaiOptions,
+    /// Leave out the outlier poses.
+    pub reject_outliers: bool,
+    /// A pose whose median rotation-angle gap is above this (degrees) is an outlier, whatever the
+    /// data's noise level.
+    pub outlier_deg: f64,
+    /// What to do about a better reading of the input.
+    pub fix: Fix,
+    /// Bootstrap replicates for the uncertainty.
+    pub replicates: usize,
+    /// How each pose is named in messages (e.g. `file:line`), by input index; `pose i` when
+    /// shorter than the input.
+    pub pose_names: Vec<String>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            method: Method::Andreff,
+            pairing: Pairing::Consecutive,
+            tsai: TsaiOptions::default(),
+            reject_outliers: false,
+            outlier_deg: crate::metrics::OUTLIER_DEG,
+            fix: Fix::Refuse,
+            replicates: crate::uncertainty::REPLICATES,
+            pose_names: Vec::new(),
+        }
+    }
+}
+
+/// One outlier pose in a [`Report`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OutlierPose {
+    /// Index in the input.
+    pub pose: usize,
+    /// Its name (`file:line` from the CLI).
+    pub name: String,
+    /// Median |θ_A − θ_B| of its motions, degrees.
+    pub angle_gap_deg: f64,
+    /// Median |k_A·t_A − k_B·t_B| of its motions, input units.
+    pub pitch_gap: f64,
+}
+
+/// The outliers in a [`Report`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Outliers {
+    /// The outlier poses.
+    pub poses: Vec<OutlierPose>,
+    /// Whether they were left out of the solve.
+    pub rejected: bool,
+    /// The angle-gap threshold used, degrees.
+    pub angle_threshold_deg: f64,
+    /// The pitch-gap threshold used, input units.
+    pub pitch_threshold: f64,
+}
+
+/// The readings tried, in a [`Report`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReadingReport {
+    /// The reading the result was solved under.
+    pub applied: Reading,
+    /// What the check found (absent when a reading was forced).
+    pub check: Option<ReadingCheck>,
+}
+
+/// The spread of the motions, in a [`Report`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Spread {
+    /// Largest angle between a motion's rotation axis and the dominant axis, degrees.
+    pub axis_spread_deg: f64,
+    /// Smallest and largest rotation angle of the motions, degrees.
+    pub rotation_range_deg: [f64; 2],
+    /// Per motion pair, in order (absent above 10,000 motions).
+    pub per_motion: Option<Vec<MotionQuality>>,
+}
+
+/// The units of a [`Report`]'s numbers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Units {
+    /// Rotations.
+    pub rotation: String,
+    /// Lengths.
+    pub length: String,
+}
+
+impl Default for Units {
+    fn default() -> Self {
+        Self {
+            rotation: "degrees where a name says _deg, radians in the covariance".into(),
+            length: "the input's length unit".into(),
+        }
+    }
+}
+
+/// The result of [`calibrate`]: X, how far to trust it, and why.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The solver.
+    pub method: Method,
+    /// The setup.
+    pub setup: Setup,
+    /// The pairing.
+    pub pairing: Pairing,
+    /// X's frame name (`gripper_from_camera` or `base_from_camera`).
+    pub frame: String,
+    /// X (`translation`, `quaternion_xyzw`, `matrix` in the JSON object itself).
+    #[serde(flatten)]
+    pub x: TransformJson,
+    /// Poses used.
+    pub poses: usize,
+    /// Motions used.
+    pub motions: usize,
+    /// Conditioning of Andreff's rotation system (1 is ideal).
+    pub conditioning: f64,
+    /// One-sigma uncertainty of X from the bootstrap over the poses' own errors.
+    pub uncertainty: Uncertainty,
+    /// The reading of the input.
+    pub reading: ReadingReport,
+    /// Poses that disagree with the others.
+    pub outliers: Outliers,
+    /// The A X − X B residuals over the motions (degrees; input units).
+    pub residual: ResidualSummary,
+    /// Median per-pose translation residual over the scene's size (unit-free).
+    pub translation_residual_rel: f64,
+    /// The spread of the motions.
+    pub quality: Spread,
+    /// Cautions in plain words, each with what to do.
+    pub warnings: Vec<String>,
+    /// The units of the numbers.
+    pub units: Units,
+    /// X as a transform (not serialised: `x` carries it).
+    #[serde(skip)]
+    pub transform: Transform,
+}
+
+/// Calibrates X from `poses` (see the module docs for the steps).
+///
+/// Errors: [`Error::Misread`] when another reading fits far better (and [`Fix::Refuse`]),
+/// [`Error::Degenerate`] when the motions do not determine X, [`Error::TooFewMotions`].
+pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
+    let mut warnings = Vec::new();
+    // The readings are judged on the poses that agree with the others, so that outliers do not
+    // make a mirror-image reading look better.
+    let agreeing = without(poses, &pose_outliers(poses, setup, options.outlier_deg));
+    let (applied, check) = choose_reading(&agreeing, setup, options.fix, &mut warnings)?;
+    let read = applied.apply(poses);
+    let found = pose_outliers(&read, setup, options.outlier_deg);
+    let used: Vec<PosePair> = if options.reject_outliers {
+        without(&read, &found)
+    } else {
+        read
+    };
+    let calibration = solve_poses(&used, setup, options)?;
+    let solve_x = |p: &[PosePair]| solve_replicate(p, setup, options);
+    // Translation verdicts are relative to the larger of the hand's spread and the camera's
+    // working distance: motions that barely translate (a wrist turning) still fix X's offset.
+    let scene = translation_scale(&used, setup).max(working_distance(&used));
+    let uncertainty = bootstrap(
+        &used,
+        setup,
+        &calibration.x,
+        &solve_x,
+        options.replicates,
+        scene,
+    );
+    let outliers = outlier_report(&found, options);
+    if let Err(e) = refuse_if_undetermined(&uncertainty, setup, calibration.conditioning) {
+        if outliers.poses.is_empty() || options.reject_outliers {
+            return Err(e);
+        }
+        return Err(Error::Outliers {
+            advice: format!("{e}; {}", outlier_warning(&outliers)),
+        });
+    }
+    let quality = quality_of(&used, setup, options.pairing, &calibration);
+    let residuals = PoseResiduals::at(&used, setup, &calibration.x);
+    let translation_residual_rel = residuals.median_translation() / scene.max(f64::MIN_POSITIVE);
+    warnings.extend(calibration.warnings.iter().map(|w| w.to_string()));
+    warnings.extend(quality.warnings.iter().cloned());
+    warn_weak(&uncertainty, setup, &mut warnings);
+    if translation_residual_rel > WARN_TRANSLATION_RESIDUAL {
+        warnings.push(format!(
+            "translation residuals of {:.1}% of the motion range (median per pose): check the units of both inputs and the time pairing",
+            100.0 * translation_residual_rel
+        ));
+    }
+    if !outliers.poses.is_empty() && !options.reject_outliers {
+        warnings.push(outlier_warning(&outliers));
+    }
+    Ok(Report {
+        method: options.method,
+        setup,
+        pairing: options.pairing,
+        frame: setup.x_frame().into(),
+        x: TransformJson::from(&calibration.x),
+        poses: used.len(),
+        motions: calibration.motions,
+        conditioning: calibration.conditioning,
+        uncertainty,
+        reading: ReadingReport { applied, check },
+        outliers,
+        residual: quality.residual,
+        translation_residual_rel,
+        quality: Spread {
+            axis_spread_deg: quality.axis_spread_deg,
+            rotation_range_deg: quality.rotation_range_deg,
+            per_motion: (quality.per_motion.len() == calibration.motions)
+                .then_some(quality.per_motion),
+        },
+        warnings,
+        units: Units::default(),
+        transform: calibration.x,
+    })
+}
+
+/// Solves X from the poses with the options' method and pairing.
+pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Calibration> {
+    match options.pairing {
+        Pairing::All => solve_motions(&AllPairs::new(poses, setup), options),
+        Pairing::Consecutive => {
+            solve_motions(&motion_pairs(poses, Pairing::Consecutive, setup), options)
+        }
+    }
+}
+
+/// Bootstrap replicates: the same method and pairing as [`solve_poses`], made cheaper where the
+/// answer is the same. All-pairs Andreff comes from the O(n) accumulated normal equations
+/// ([`PoseAccumulator`], equal to the batch solve to ~1e-12); refine starts from the replicate's own
+/// Andreff solution (never from X̂, which would hide a direction the data leave free) and takes at
+/// most [`REPLICATE_ITERATIONS`] steps.
+fn solve_replicate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Transform> {
+    match (options.method, options.pairing) {
+        (Method::Andreff, Pairing::All) => accumulated_andreff(poses, setup),
+        (Method::Refine, Pairing::All) => {
+            let start = accumulated_andreff(poses, setup)?;
+            refine_briefly(&AllPairs::new(poses, setup), &start)
+        }
+        (Method::Refine, Pairing::Consecutive) => {
+            let motions = motion_pairs(poses, Pairing::Consecutive, setup);
+            let start = crate::solve::andreff(&motions)?.x;
+            refine_briefly(&motions, &start)
+        }
+        _ => solve_poses(poses, setup, options).map(|c| c.x),
+    }
+}
+
+/// Levenberg–Marquardt steps a bootstrap replicate of `refine` takes from its Andreff start.
+const REPLICATE_ITERATIONS: usize = 4;
+
+fn refine_briefly(motions: &(impl MotionSource + ?Sized), start: &Transform) -> Result<Transform> {
+    let options = RefineOptions {
+        max_iterations: REPLICATE_ITERATIONS,
+        ..RefineOptions::default()
+    };
+    refine_from(motions, start, &options).map(|r| r.calibration.x)
+}
+
+/// All-pairs Andreff from the accumulated normal equations.
+fn accumulated_andreff(poses: &[PosePair], setup: Setup) -> Result<Transform> {
+    let mut acc = PoseAccumulator::new(setup);
+    poses.iter().for_each(|p| acc.add(p));
+    acc.estimate().map(|e| e.x).ok_or(Error::Degenerate {
+        reason: Degeneracy::IllConditioned,
+        conditioning: 0.0,
+    })
+}
+
+fn solve_motions(motions: &(impl MotionSource + ?Sized), options: &Options) -> Result<Calibration> {
+    if options.method == Method::Tsai {
+        tsai_with(motions, &options.tsai)
+    } else {
+        solve(options.method, motions)
+    }
+}
+
+/// The reading to solve under, and the check behind it.
+fn choose_reading(
+    poses: &[PosePair],
+    setup: Setup,
+    fix: Fix,
+    warnings: &mut Vec<String>,
+) -> Result<(Reading, Option<ReadingCheck>)> {
+    if let Fix::Read(r) = fix
+        && r != Reading::AsGiven
+    {
+        return Ok((r, None));
+    }
+    let check = check_readings(poses, setup);
+    let Some(advice) = check.advice(setup) else {
+        warnings.extend(check.size_warning(setup));
+        return Ok((Reading::AsGiven, Some(check)));
+    };
+    match (fix, check.better) {
+        (Fix::Auto, Some(better)) if check.unambiguous() => {
+            warnings.push(format!(
+                "read as {} (--fix auto): {advice}",
+                better.reading.name()
+            ));
+            Ok((better.reading, Some(check)))
+        }
+        (Fix::Read(_), _) => {
+            warnings.push(format!("kept as given (--fix as-given), but {advice}"));
+            Ok((Reading::AsGiven, Some(check)))
+        }
+        _ => Err(Error::Misread { advice }),
+    }
+}
+
+/// Median distance from the camera to the target, input units.
+fn working_distance(poses: &[PosePair]) -> f64 {
+    crate::consistency::median(
+        poses
+            .iter()
+            .map(|p| p.camera_from_target.translation.vector.norm())
+            .collect(),
+    )
+}
+
+/// The poses without the outliers.
+fn without(poses: &[PosePair], found: &PoseOutliers) -> Vec<PosePair> {
+    let bad = found.indices();
+    poses
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| bad.binary_search(i).is_err())
+        .map(|(_, p)| *p)
+        .collect()
+}
+
+/// Refuses a result whose uncertainty leaves a direction of X undetermined.
+fn refuse_if_undetermined(u: &Uncertainty, setup: Setup, conditioning: f64) -> Result<()> {
+    if u.verdict() != Verdict::Undetermined {
+        return Ok(());
+    }
+    let reason = if u.weakest_rotation.verdict == Verdict::Undetermined {
+        undetermined(Part::Rotation, &u.weakest_rotation, setup)
+    } else if u.weakest_translation.verdict == Verdict::Undetermined {
+        undetermined(Part::Translation, &u.weakest_translation, setup)
+    } else {
+        Degeneracy::Unstable {
+            refused: u.refused,
+            tried: u.refused + u.replicates,
+        }
+    };
+    Err(Error::Degenerate {
+        reason,
+        conditioning,
+    })
+}
+
+fn undetermined(part: Part, d: &crate::uncertainty::Direction, setup: Setup) -> Degeneracy {
+    Degeneracy::Undetermined {
+        part,
+        axis: d.axis,
+        sigma: d.sigma,
+        setup,
+    }
+}
+
+/// Warnings for weakly determined directions.
+fn warn_weak(u: &Uncertainty, setup: Setup, warnings: &mut Vec<String>) {
+    for (part, d) in [
+        (Part::Rotation, &u.weakest_rotation),
+        (Part::Translation, &u.weakest_translation),
+    ] {
+        if d.verdict == Verdict::Weak {
+            warnings.push(advice(part, d, setup));
+        }
+    }
+}
+
+/// The quality report over the pairing's motions.
+fn quality_of(
+    poses: &[PosePair],
+    setup: Setup,
+    pairing: Pairing,
+    c: &Calibration,
+) -> QualityReport {
+    let deg = crate::metrics::OUTLIER_DEG;
+    match pairing {
+        Pairing::All => quality_report(&AllPairs::new(poses, setup), &c.x, MAX_PER_MOTION, deg),
+        Pairing::Consecutive => quality_report(
+            &motion_pairs(poses, pairing, setup),
+            &c.x,
+            MAX_PER_MOTION,
+            deg,
+        ),
+    }
+}
+
+fn outlier_report(found: &PoseOutliers, options: &Options) -> Outliers {
+    Outliers {
+        poses: found
+            .poses
+            .iter()
+            .map(|g| OutlierPose {
+                pose: g.pose,
+                name: options
+                    .pose_names
+                    .get(g.pose)
+                    .cloned()
+                    .unwrap_or_else(|| format!("pose {}", g.pose)),
+                angle_gap_deg: g.angle_gap_deg,
+                pitch_gap: g.pitch_gap,
+            })
+            .collect(),
+        rejected: options.reject_outliers,
+        angle_threshold_deg: found.angle_threshold_deg,
+        pitch_threshold: found.pitch_threshold,
+    }
+}
+
+fn outlier_warning(o: &Outliers) -> String {
+    const SHOWN: usize = 5;
+    let listed: Vec<String> = o
+        .poses
+        .iter()
+        .take(SHOWN)
+        .map(|p| {
+            format!(
+                "{} (angle gap {:.2}°, pitch gap {:.3})",
+                p.name, p.angle_gap_deg, p.pitch_gap
+            )
+        })
+        .collect();
+    let more = o.poses.len().saturating_sub(SHOWN);
+    format!(
+        "{} pose(s) disagree with the others (a bad detection, a flipped target pose, a wrong time stamp or a typo): {}{}; pass `--reject-outliers` to leave them out",
+        o.poses.len(),
+        listed.join(", "),
+        if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        }
+    )
+}

@@ -1,0 +1,477 @@
+//! The readings of the input a user may have meant, tried against the data.
+//!
+//! The mistakes every hand–eye tool's users make are a pose given inverted under its name, the
+//! quaternion written `w, x, y, z` into `x, y, z, w` fields, and millimetres on one side and metres
+//! on the other. Each turns consistent data into data that no X fits. [`check_readings`] solves the
+//! data as given and under each other [`Reading`], measures how well each fits (the median per-pose
+//! residual, [`crate::consistency::PoseResiduals`]), and names a reading that fits far better.
+
+use std::fmt;
+use std::str::FromStr;
+
+use nalgebra::{Quaternion, UnitQuaternion};
+use serde::{Deserialize, Serialize};
+
+use crate::consistency::{PoseResiduals, median, translation_scale};
+use crate::error::{Error, Result};
+use crate::motion::{AllPairs, PosePair, Setup};
+use crate::pose::{Transform, exp_so3, transform_from_parts};
+use crate::solve::andreff;
+
+/// At most this many poses (spread evenly) are used to try each reading.
+const SAMPLE: usize = 60;
+
+/// A reading fits far better when one of its residuals is below this fraction of the as-given
+/// one and the other is not worse than [`NOT_WORSE`] times it.
+const FAR_BETTER: f64 = 0.2;
+/// See [`FAR_BETTER`].
+const NOT_WORSE: f64 = 1.5;
+/// The as-given reading is questioned only when its median rotation residual is above this
+/// (degrees) …
+const POOR_ROTATION_DEG: f64 = 0.5;
+/// … or its median translation residual above this fraction of the scene's size.
+const POOR_TRANSLATION: f64 = 0.02;
+
+/// X and Y sizes must differ by this factor for [`ReadingFit::plausible`] to tell.
+const SIZE_RATIO: f64 = 2.0;
+
+/// One way to read the poses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reading {
+    /// As the files name them.
+    AsGiven,
+    /// The robot poses are `gripper_from_base` (or the setup is the other one).
+    RobotInverted,
+    /// The camera poses are `target_from_camera`.
+    CameraInverted,
+    /// Both inverted.
+    BothInverted,
+    /// The robot quaternions were written `w, x, y, z` into `x, y, z, w` fields.
+    RobotWxyz,
+    /// The camera quaternions were written `w, x, y, z`.
+    CameraWxyz,
+    /// Both sides' quaternions were written `w, x, y, z`.
+    BothWxyz,
+    /// The robot translations are millimetres (the camera's metres): divided by 1000.
+    RobotMm,
+    /// The camera translations are millimetres (the robot's metres): divided by 1000.
+    CameraMm,
+}
+
+impl Reading {
+    /// Every reading, the as-given one first.
+    pub const ALL: [Reading; 9] = [
+        Reading::AsGiven,
+        Reading::RobotInverted,
+        Reading::CameraInverted,
+        Reading::BothInverted,
+        Reading::RobotWxyz,
+        Reading::CameraWxyz,
+        Reading::BothWxyz,
+        Reading::RobotMm,
+        Reading::CameraMm,
+    ];
+
+    /// The name on the command line (`--fix NAME`) and in output.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::AsGiven => "as-given",
+            Self::RobotInverted => "robot-inverted",
+            Self::CameraInverted => "camera-inverted",
+            Self::BothInverted => "both-inverted",
+            Self::RobotWxyz => "robot-wxyz",
+            Self::CameraWxyz => "camera-wxyz",
+            Self::BothWxyz => "both-wxyz",
+            Self::RobotMm => "robot-mm",
+            Self::CameraMm => "camera-mm",
+        }
+    }
+
+    /// What the reading means, in words.
+    pub fn meaning(self, setup: Setup) -> String {
+        let other = match setup {
+            Setup::EyeInHand => "eye-to-hand",
+            Setup::EyeToHand => "eye-in-hand",
+        };
+        match self {
+            Self::AsGiven => "the poses as given".into(),
+            Self::RobotInverted => format!(
+                "the robot poses inverted: either the file gives gripper_from_base under the name base_from_gripper, or the setup is {other} (then pass `--setup {other}`)"
+            ),
+            Self::CameraInverted => "the camera poses inverted: the file gives target_from_camera under the name camera_from_target (or the reverse)".into(),
+            Self::BothInverted => "both poses inverted: each file gives the inverse of the transform it names".into(),
+            Self::RobotWxyz => "the robot quaternions in the order w, x, y, z: handeye reads x, y, z, w".into(),
+            Self::CameraWxyz => "the camera quaternions in the order w, x, y, z: handeye reads x, y, z, w".into(),
+            Self::BothWxyz => "all quaternions in the order w, x, y, z: handeye reads x, y, z, w".into(),
+            Self::RobotMm => "the robot translations in millimetres and the camera's in metres".into(),
+            Self::CameraMm => "the camera translations in millimetres and the robot's in metres".into(),
+        }
+    }
+
+    /// The poses read this way.
+    pub fn apply(self, poses: &[PosePair]) -> Vec<PosePair> {
+        poses.iter().map(|p| self.apply_one(p)).collect()
+    }
+
+    fn apply_one(self, p: &PosePair) -> PosePair {
+        let (robot, camera) = (p.base_from_gripper, p.camera_from_target);
+        let (base_from_gripper, camera_from_target) = match self {
+            Self::AsGiven => (robot, camera),
+            Self::RobotInverted => (robot.inverse(), camera),
+            Self::CameraInverted => (robot, camera.inverse()),
+            Self::BothInverted => (robot.inverse(), camera.inverse()),
+            Self::RobotWxyz => (wxyz(&robot), camera),
+            Self::CameraWxyz => (robot, wxyz(&camera)),
+            Self::BothWxyz => (wxyz(&robot), wxyz(&camera)),
+            Self::RobotMm => (scaled(&robot, 1e-3), camera),
+            Self::CameraMm => (robot, scaled(&camera, 1e-3)),
+        };
+        PosePair {
+            base_from_gripper,
+            camera_from_target,
+        }
+    }
+}
+
+impl fmt::Display for Reading {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Reading {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Reading::ALL
+            .into_iter()
+            .find(|r| r.name() == s)
+            .ok_or_else(|| Error::InvalidParameter {
+                name: "fix",
+                message: format!(
+                    "unknown reading `{s}`; one of {}",
+                    Reading::ALL.map(Reading::name).join(", ")
+                ),
+            })
+    }
+}
+
+/// The rotation whose `x, y, z, w` fields held `w, x, y, z`: the stored quaternion
+/// (x', y', z', w') = (w, x, y, z), so the meant one is (x, y, z, w) = (y', z', w', x').
+fn wxyz(t: &Transform) -> Transform {
+    let q = UnitQuaternion::from_rotation_matrix(&t.rotation);
+    let (x, y, z, w) = (q.i, q.j, q.k, q.w);
+    let meant = UnitQuaternion::from_quaternion(Quaternion::new(x, y, z, w));
+    Transform::from_parts(t.translation, meant.to_rotation_matrix())
+}
+
+fn scaled(t: &Transform, s: f64) -> Transform {
+    let mut out = *t;
+    out.translation.vector *= s;
+    out
+}
+
+/// How well one reading fits.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ReadingFit {
+    /// The reading.
+    pub reading: Reading,
+    /// Median per-pose rotation residual, degrees.
+    pub rotation_deg: f64,
+    /// Median per-pose translation residual over the scene's size (RMS spread of the hand
+    /// positions), unit-free.
+    pub translation_rel: f64,
+    /// ‖t‖ of the X solved under this reading.
+    pub x_translation: f64,
+    /// ‖t‖ of the fixed frame Y (`base_from_target` eye-in-hand, `gripper_from_target`
+    /// eye-to-hand) under this reading.
+    pub y_translation: f64,
+}
+
+impl ReadingFit {
+    /// Whether this fit is far better than `given` (see [`FAR_BETTER`]).
+    fn far_better_than(&self, given: &ReadingFit) -> bool {
+        let poor =
+            given.rotation_deg > POOR_ROTATION_DEG || given.translation_rel > POOR_TRANSLATION;
+        let much = self.rotation_deg < FAR_BETTER * given.rotation_deg
+            || self.translation_rel < FAR_BETTER * given.translation_rel;
+        let not_worse = self.rotation_deg <= NOT_WORSE * given.rotation_deg
+            && self.translation_rel <= NOT_WORSE * given.translation_rel;
+        poor && much && not_worse
+    }
+
+    /// Whether X and Y have the sizes the setup makes likely: a camera on the gripper is nearer to
+    /// the gripper than the target is to the base (eye-in-hand), a fixed camera farther from the
+    /// base than the target is from the gripper (eye-to-hand). A reading and its mirror image
+    /// (robot inverted / camera inverted, as given / both inverted) fit equally well with X and Y
+    /// swapped (Q X P⁻¹ = Y is also Q⁻¹ Y P = X), so only this tells them apart.
+    ///
+    /// `Some(true)` when the sizes differ by at least [`SIZE_RATIO`] in the likely direction,
+    /// `Some(false)` when in the other, `None` when they are too alike to tell.
+    pub fn plausible(&self, setup: Setup) -> Option<bool> {
+        let (near, far) = match setup {
+            Setup::EyeInHand => (self.x_translation, self.y_translation),
+            Setup::EyeToHand => (self.y_translation, self.x_translation),
+        };
+        if far >= SIZE_RATIO * near {
+            Some(true)
+        } else if near >= SIZE_RATIO * far {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
+    /// Improvement score against `given` (smaller is better).
+    fn score(&self, given: &ReadingFit) -> f64 {
+        self.rotation_deg / given.rotation_deg.max(1e-300)
+            + self.translation_rel / given.translation_rel.max(1e-300)
+    }
+}
+
+/// What [`check_readings`] found.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReadingCheck {
+    /// The fit of the poses as given (`None` when they cannot be solved at all).
+    pub as_given: Option<ReadingFit>,
+    /// A reading that fits far better than the as-given one, if any: the best, the plausible one
+    /// first among equals ([`ReadingFit::plausible`]).
+    pub better: Option<ReadingFit>,
+    /// Other readings that fit about as well as `better` (its mirror image, typically).
+    pub also: Vec<ReadingFit>,
+}
+
+impl ReadingCheck {
+    /// The finding in words, with the fix, when a reading fits far better.
+    pub fn advice(&self, setup: Setup) -> Option<String> {
+        let (given, better) = (self.as_given?, self.better?);
+        let mut text = format!(
+            "the poses fit far better read as {} (median residual {:.2}° and {:.1}% of the motion range, against {:.2}° and {:.1}% as given): correct the input, or pass `--fix {}` to read it that way",
+            better.reading.meaning(setup),
+            better.rotation_deg,
+            100.0 * better.translation_rel,
+            given.rotation_deg,
+            100.0 * given.translation_rel,
+            better.reading.name(),
+        );
+        for other in &self.also {
+            text.push_str(&format!(
+                "; it fits as well read as {} (`--fix {}`), which gives an X of {} size for the {} setup",
+                other.reading.meaning(setup),
+                other.reading.name(),
+                match other.plausible(setup) {
+                    Some(true) => "a plausible",
+                    Some(false) => "an unlikely",
+                    None => "a possible",
+                },
+                setup.name(),
+            ));
+        }
+        Some(text)
+    }
+
+    /// Whether the better reading is the only one that fits (so `--fix auto` may apply it).
+    pub fn unambiguous(&self) -> bool {
+        self.better.is_some() && self.also.is_empty()
+    }
+
+    /// A warning when the as-given reading fits but gives X and Y implausible sizes for the setup:
+    /// both poses inverted fit exactly as well, with X and Y swapped.
+    pub fn size_warning(&self, setup: Setup) -> Option<String> {
+        let given = self.as_given?;
+        if self.better.is_some() || given.plausible(setup) != Some(false) {
+            return None;
+        }
+        let (x_is, y_is) = match setup {
+            Setup::EyeInHand => (
+                "the camera's distance from the gripper",
+                "the target's distance from the robot base",
+            ),
+            Setup::EyeToHand => (
+                "the camera's distance from the robot base",
+                "the target's distance from the gripper",
+            ),
+        };
+        Some(format!(
+            "X puts {x_is} at {:.3} and {y_is} at {:.3}, the reverse of what the {} setup usually has: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions (`--fix both-inverted` reads both inverted)",
+            given.x_translation,
+            given.y_translation,
+            setup.name(),
+        ))
+    }
+}
+
+/// Tries every [`Reading`] of `poses` and names one that fits far better than the as-given one.
+///
+/// Each reading is solved by Andreff over all pairs of at most 60 poses spread over the input, and
+/// judged by its median per-pose residuals; the millimetre readings are judged only by which side's
+/// translations are the larger (they fit equally well up to the unit of X).
+pub fn check_readings(poses: &[PosePair], setup: Setup) -> ReadingCheck {
+    let sample = spread(poses);
+    let fits: Vec<Option<ReadingFit>> = Reading::ALL
+        .iter()
+        .map(|&r| fit(&r.apply(&sample), setup, r))
+        .collect();
+    let as_given = fits[0];
+    let mm = mm_side(&sample, setup);
+    let Some(given) = as_given else {
+        return ReadingCheck {
+            as_given,
+            better: None,
+            also: Vec::new(),
+        };
+    };
+    let mut candidates: Vec<ReadingFit> = fits[1..]
+        .iter()
+        .flatten()
+        .filter(|f| !matches!(f.reading, Reading::RobotMm | Reading::CameraMm) || f.reading == mm)
+        .filter(|f| f.far_better_than(&given))
+        .copied()
+        .collect();
+    candidates.sort_by(|a, b| a.score(&given).total_cmp(&b.score(&given)));
+    // Readings within 2× of the best score fit as well: the plausible one leads.
+    let best = candidates.first().map_or(0.0, |f| f.score(&given));
+    candidates.retain(|f| f.score(&given) <= 2.0 * best + 1e-12);
+    candidates.sort_by_key(|f| match f.plausible(setup) {
+        Some(true) => 0,
+        None => 1,
+        Some(false) => 2,
+    });
+    let mut candidates = candidates.into_iter();
+    ReadingCheck {
+        as_given,
+        better: candidates.next(),
+        also: candidates.collect(),
+    }
+}
+
+/// The millimetre reading that makes sense: the side whose translations are the larger.
+fn mm_side(poses: &[PosePair], setup: Setup) -> Reading {
+    let robot = translation_scale(poses, setup);
+    let camera = poses
+        .iter()
+        .map(|p| p.camera_from_target.translation.vector.norm())
+        .sum::<f64>()
+        / poses.len().max(1) as f64;
+    if robot > camera {
+        Reading::RobotMm
+    } else {
+        Reading::CameraMm
+    }
+}
+
+/// At most [`SAMPLE`] poses spread evenly over the input.
+fn spread(poses: &[PosePair]) -> Vec<PosePair> {
+    if poses.len() <= SAMPLE {
+        return poses.to_vec();
+    }
+    (0..SAMPLE)
+        .map(|k| poses[k * (poses.len() - 1) / (SAMPLE - 1)])
+        .collect()
+}
+
+/// The fit of one reading, `None` when it cannot be solved.
+///
+/// Every measure is the same for a reading and its mirror image (X and Y swapped, see
+/// [`ReadingFit::plausible`]), so that only a real difference of fit can favour one: the rotation
+/// residual is an angle; the translation residual is the smaller of the medians measured in the
+/// target frame and in the camera frame (the mirror swaps the two), over the summed spreads of the
+/// hand positions of Q and of Q⁻¹ (the mirror swaps those too).
+fn fit(poses: &[PosePair], setup: Setup, reading: Reading) -> Option<ReadingFit> {
+    let x = andreff(&AllPairs::new(poses, setup)).ok()?.x;
+    let r = PoseResiduals::at(poses, setup, &x);
+    let in_camera_frame = median(
+        poses
+            .iter()
+            .zip(&r.residuals)
+            .map(|(p, (w, t))| {
+                let d = transform_from_parts(&exp_so3(w), t);
+                let c = p.camera_from_target;
+                (c * d.inverse() * c.inverse()).translation.vector.norm()
+            })
+            .collect(),
+    );
+    let other = match setup {
+        Setup::EyeInHand => Setup::EyeToHand,
+        Setup::EyeToHand => Setup::EyeInHand,
+    };
+    let scale =
+        (translation_scale(poses, setup) + translation_scale(poses, other)).max(f64::MIN_POSITIVE);
+    Some(ReadingFit {
+        reading,
+        rotation_deg: r.median_rotation_deg(),
+        translation_rel: r.median_translation().min(in_camera_frame) / scale,
+        x_translation: x.translation.vector.norm(),
+        y_translation: r.y.translation.vector.norm(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{SimConfig, simulate};
+
+    fn poses(seed: u64) -> Vec<PosePair> {
+        simulate(&SimConfig::large_motions(), seed, 0).poses
+    }
+
+    #[test]
+    fn wxyz_undoes_the_mistake() {
+        let t = Transform::new(
+            nalgebra::Vector3::zeros(),
+            nalgebra::Vector3::new(0.3, -0.2, 0.5),
+        );
+        let q = UnitQuaternion::from_rotation_matrix(&t.rotation);
+        // What a reader of x, y, z, w fields makes of w, x, y, z written into them.
+        let misread = UnitQuaternion::from_quaternion(Quaternion::new(q.k, q.w, q.i, q.j));
+        let read = Transform::from_parts(t.translation, misread.to_rotation_matrix());
+        let diff = wxyz(&read).to_homogeneous() - t.to_homogeneous();
+        assert!(diff.norm() < 1e-12, "{diff}");
+    }
+
+    #[test]
+    fn correct_data_raises_nothing() {
+        for seed in 0..5 {
+            let c = check_readings(&poses(seed), Setup::EyeInHand);
+            // (The simulation's target sits closer to the base than the camera to the gripper,
+            // so the size warning is tested on the realistic suite, tests/trust.rs.)
+            assert!(c.better.is_none(), "seed {seed}: {c:?}");
+        }
+    }
+
+    #[test]
+    fn each_mistake_is_named() {
+        for seed in 0..3 {
+            let good = poses(seed);
+            for mistake in [
+                Reading::RobotInverted,
+                Reading::CameraInverted,
+                Reading::BothInverted,
+            ] {
+                // Inverting is its own undoing. Robot and camera inverted mirror each other (the
+                // same fit with X and Y swapped): the true one must lead, the mirror follow.
+                let c = check_readings(&mistake.apply(&good), Setup::EyeInHand);
+                if mistake == Reading::BothInverted {
+                    // Fits exactly as given, with X and Y swapped: only sizes can tell.
+                    assert!(c.better.is_none(), "seed {seed}: {c:?}");
+                    continue;
+                }
+                // The simulation's X and Y have alike sizes, so either may lead.
+                let named: Vec<Reading> =
+                    c.better.iter().chain(&c.also).map(|f| f.reading).collect();
+                assert!(named.contains(&mistake), "seed {seed}: {c:?}");
+                assert!(!c.unambiguous(), "seed {seed}: {c:?}");
+            }
+            let mm: Vec<PosePair> = good
+                .iter()
+                .map(|p| PosePair {
+                    base_from_gripper: scaled(&p.base_from_gripper, 1e3),
+                    camera_from_target: p.camera_from_target,
+                })
+                .collect();
+            let c = check_readings(&mm, Setup::EyeInHand);
+            assert_eq!(c.better.map(|f| f.reading), Some(Reading::RobotMm), "{c:?}");
+        }
+    }
+}
