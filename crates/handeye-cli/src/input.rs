@@ -63,12 +63,12 @@ pub struct Synced {
 
 /// Reads and pairs the two streams of `args`.
 pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
-    let (Some(robot), Some(camera)) = (&args.robot, &args.camera) else {
+    let (Some(robot_path), Some(camera_path)) = (&args.robot, &args.camera) else {
         return Ok(None);
     };
-    let robot_stream = read_stamped_poses(robot)?;
-    let camera_stream = read_stamped_poses(camera)?;
-    for (name, s) in [(robot, &robot_stream), (camera, &camera_stream)] {
+    let robot_stream = read_stamped_poses(robot_path)?;
+    let camera_stream = read_stamped_poses(camera_path)?;
+    for (name, s) in [(robot_path, &robot_stream), (camera_path, &camera_stream)] {
         if s.reordered > 0 {
             eprintln!(
                 "{}: {} sample(s) out of time order, put in order",
@@ -88,7 +88,15 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
         })
         .collect();
     let time_offset = if args.time_offset == "auto" {
-        let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default())?;
+        let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default()).with_context(
+            || {
+                format!(
+                    "--time-offset auto on {} and {}",
+                    robot_path.display(),
+                    camera_path.display()
+                )
+            },
+        )?;
         eprintln!(
             "time offset: {:.4} s (correlation of angular speeds {:.3})",
             e.offset, e.correlation
@@ -119,6 +127,23 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
             "dropped {} camera sample(s) outside the robot stream and {} in gaps longer than {} s",
             s.dropped_outside, s.dropped_gap, args.max_gap
         );
+    }
+    if s.pairs.len() < 2 {
+        // The camera stamps decide the pairs: name that file (not `-`, there is no INPUT).
+        return Err(handeye::Error::Parse {
+            file: camera_path.display().to_string(),
+            line: 0,
+            field: "t".into(),
+            message: format!(
+                "{} camera sample(s) within the robot stream {} ({} outside it, {} in its gaps longer than {} s): at least 2 pose pairs are needed",
+                s.pairs.len(),
+                robot_path.display(),
+                s.dropped_outside,
+                s.dropped_gap,
+                args.max_gap
+            ),
+        }
+        .into());
     }
     let pairs = s
         .pairs

@@ -6,6 +6,7 @@ use std::io::BufRead;
 use serde_json::{Map, Value};
 
 use crate::error::{Error, Result};
+use crate::io::json_text::repeated_key;
 use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, parse_error, transform_from_json};
 use crate::motion::PosePair;
 use crate::pose::Transform;
@@ -87,7 +88,7 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
 /// `target_from_camera`, each a transform (SPEC sec. 7) or a bare 4×4 array, and an optional
 /// numeric `stamp` in seconds. The pair is returned in our directions (Q = `base_from_gripper`,
 /// `camera_from_target`), inverting what the file gives in the other direction. Other keys are
-/// ignored.
+/// ignored; a key repeated in one object is refused (a JSON parser keeps only one of the two).
 pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedPosePair> {
     let value: Value = serde_json::from_str(text)
         .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
@@ -99,6 +100,14 @@ pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedP
             "expected a JSON object per line",
         ));
     };
+    if let Some(repeated) = repeated_key(text) {
+        return Err(parse_error(
+            source,
+            line,
+            repeated.path.clone(),
+            repeated.message(),
+        ));
+    }
     let stamp = match object.get("stamp") {
         None | Some(Value::Null) => None,
         Some(v) => Some(v.as_f64().filter(|s| s.is_finite()).ok_or_else(|| {

@@ -6,6 +6,7 @@
 //! (`base_from_gripper`, `camera_from_target`) whichever direction the file gives.
 
 mod csv_pairs;
+mod json_text;
 mod jsonl;
 mod peer;
 mod stamped;
@@ -214,11 +215,24 @@ fn detect<R: BufRead>(input: &mut R, source: &str) -> Result<(Format, usize)> {
     }
 }
 
-/// Reads a whole text file, naming it in the error.
+/// Reads a whole text file, naming it in the error; text that is not UTF-8 is a parse error on
+/// the line of its first invalid byte.
 pub fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| Error::Io {
-        file: path.display().to_string(),
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| Error::Io {
+        file: file.clone(),
         source: e,
+    })?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        let column = 1 + valid.iter().rev().take_while(|&&b| b != b'\n').count();
+        parse_error(
+            &file,
+            line,
+            "-",
+            format!("not valid UTF-8 text (byte {column} of the line)"),
+        )
     })
 }
 
