@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use handeye::io::{
-    Format, PoseReader, StampedPosePair, detect_file_format, read_pose_file, read_stamped_poses,
+    Format, PoseReader, Projections, StampedPosePair, detect_file_format, read_pose_file,
+    read_stamped_poses,
 };
 use handeye::sync::{OffsetOptions, StampedPose, SyncOptions, estimate_time_offset, pair_streams};
 use handeye::{PosePair, Setup};
@@ -171,12 +172,43 @@ pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Option<f64>)> {
     if path.as_os_str() == "-" {
         let stdin = std::io::stdin().lock();
         let mut pairs = Vec::new();
-        for r in PoseReader::new(stdin, "-", args.format()?)? {
+        let mut reader = PoseReader::new(stdin, "-", args.format()?)?;
+        for r in reader.by_ref() {
             pairs.push(r?.pose);
         }
+        note("-", &reader.projections());
         return Ok((pairs, None));
     }
-    Ok((read_pose_file(&path, args.format()?)?.pairs, None))
+    let series = read_pose_file(&path, args.format()?)?;
+    note(&path.display().to_string(), &series.projections);
+    Ok((series.pairs, None))
+}
+
+/// Tells on stderr how many rotation matrices of `source` were projected onto SO(3), if any.
+fn note(source: &str, projections: &Projections) {
+    if let Some(note) = projections.note() {
+        eprintln!("{source}: {note}");
+    }
+}
+
+/// A streaming reader that tells its note (see [`note`]) when it ends.
+struct NotingReader {
+    reader: PoseReader<Box<dyn BufRead>>,
+    source: String,
+    told: bool,
+}
+
+impl Iterator for NotingReader {
+    type Item = handeye::Result<StampedPosePair>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let next = self.reader.next();
+        if next.is_none() && !self.told {
+            self.told = true;
+            note(&self.source, &self.reader.projections());
+        }
+        next
+    }
 }
 
 /// Pose pairs one at a time, each with its place, or the error of a bad record.
@@ -195,6 +227,7 @@ pub fn records(args: &InputArgs) -> Result<(Records, Option<f64>)> {
         };
         if matches!(format, Format::OpencvYaml | Format::Moveit | Format::Visp) {
             let series = read_pose_file(&path, format)?;
+            note(&path.display().to_string(), &series.projections);
             let records = series.pairs.into_iter().enumerate().map(|(k, pose)| {
                 Ok(StampedPosePair {
                     line: k + 1,
@@ -211,8 +244,13 @@ pub fn records(args: &InputArgs) -> Result<(Records, Option<f64>)> {
         Box::new(handeye::io::open(&path)?)
     };
     let source = path.display().to_string();
+    let reader = PoseReader::new(reader, &source, args.format()?)?;
     Ok((
-        Box::new(PoseReader::new(reader, &source, args.format()?)?),
+        Box::new(NotingReader {
+            reader,
+            source,
+            told: false,
+        }),
         None,
     ))
 }

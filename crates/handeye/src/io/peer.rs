@@ -9,9 +9,13 @@ use serde_json::Value;
 
 use crate::error::{Error, Result};
 use crate::io::json_text::{Step, line_of, path_name, repeated_key, steps};
-use crate::io::{FieldProblem, PoseSeries, parse_error, read_text, transform_from_json};
+use crate::io::{
+    FieldProblem, PoseSeries, Projections, parse_error, read_text, read_transform_json,
+};
 use crate::motion::PosePair;
-use crate::pose::{Transform, exp_so3, transform_from_matrix4, transform_from_parts};
+use crate::pose::{
+    ReadTransform, Transform, check_translation, exp_so3, read_matrix4, transform_from_parts,
+};
 
 /// Reads OpenCV-YAML pose pairs as camodocal writes them: `T1_i` and `T2_i`, each a 4×4
 /// `!!opencv-matrix`, for i = 0, 1, …
@@ -22,6 +26,7 @@ use crate::pose::{Transform, exp_so3, transform_from_matrix4, transform_from_par
 pub fn read_opencv_yaml(text: &str, file: &str) -> Result<PoseSeries> {
     let mut t1: Vec<YamlMatrix> = Vec::new();
     let mut t2: Vec<YamlMatrix> = Vec::new();
+    let mut projections = Projections::default();
     let lines: Vec<&str> = text.lines().collect();
     let mut k = 0;
     while k < lines.len() {
@@ -32,12 +37,13 @@ pub fn read_opencv_yaml(text: &str, file: &str) -> Result<PoseSeries> {
         let index: usize = key[3..]
             .parse()
             .map_err(|_| parse_error(file, k + 1, key, "expected `T1_<n>` or `T2_<n>`"))?;
-        let (transform, next) = yaml_matrix(&lines, k, key, file)?;
+        let (read, next) = yaml_matrix(&lines, k, key, file)?;
+        projections.add(&read);
         let m = YamlMatrix {
             index,
             line: k + 1,
             key: key.to_string(),
-            transform,
+            transform: read.transform,
         };
         if which == 1 {
             t1.push(m)
@@ -53,7 +59,7 @@ pub fn read_opencv_yaml(text: &str, file: &str) -> Result<PoseSeries> {
             camera_from_target: target_from_camera.inverse(),
         })
         .collect();
-    series(pairs, file)
+    series(pairs, file, projections)
 }
 
 /// One `T1_i` or `T2_i` matrix of an OpenCV-YAML file, with its place.
@@ -79,7 +85,7 @@ fn matrix_key(line: &str) -> Option<(u8, &str)> {
 
 /// The matrix whose key is on line `k` (from 0): the 16 numbers of its `data: [ … ]`, which may
 /// span lines, and the index of the line after it.
-fn yaml_matrix(lines: &[&str], k: usize, key: &str, file: &str) -> Result<(Transform, usize)> {
+fn yaml_matrix(lines: &[&str], k: usize, key: &str, file: &str) -> Result<(ReadTransform, usize)> {
     let field = format!("{key}.data");
     let mut j = k + 1;
     while j < lines.len() && !lines[j].contains("data:") {
@@ -120,7 +126,8 @@ fn yaml_matrix(lines: &[&str], k: usize, key: &str, file: &str) -> Result<(Trans
     }
     let mut m = Matrix4::zeros();
     for (n, (s, line)) in numbers.iter().enumerate() {
-        m[(n / 4, n % 4)] = s
+        let at = format!("{field}[{n}]");
+        let v = s
             .parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
@@ -128,13 +135,16 @@ fn yaml_matrix(lines: &[&str], k: usize, key: &str, file: &str) -> Result<(Trans
                 parse_error(
                     file,
                     *line,
-                    format!("{field}[{n}]"),
+                    at.clone(),
                     format!("expected a finite number, found `{s}`"),
                 )
             })?;
+        if n % 4 == 3 && n < 12 {
+            check_translation(v).map_err(|p| parse_error(file, *line, at, p.to_string()))?;
+        }
+        m[(n / 4, n % 4)] = v;
     }
-    let t =
-        transform_from_matrix4(&m).map_err(|p| parse_error(file, data_line, key, p.to_string()))?;
+    let t = read_matrix4(&m).map_err(|p| parse_error(file, data_line, key, p.to_string()))?;
     Ok((t, j))
 }
 
@@ -206,17 +216,28 @@ pub fn read_moveit_json(text: &str, file: &str) -> Result<PoseSeries> {
         )
     })?;
     let mut pairs = Vec::with_capacity(list.len());
+    let mut projections = Projections::default();
     for k in 0..list.len() {
+        let robot = moveit_matrix(&value, k, 0, text, file)?;
+        let camera = moveit_matrix(&value, k, 1, text, file)?;
+        projections.add(&robot);
+        projections.add(&camera);
         pairs.push(PosePair {
-            base_from_gripper: moveit_matrix(&value, k, 0, text, file)?,
-            camera_from_target: moveit_matrix(&value, k, 1, text, file)?,
+            base_from_gripper: robot.transform,
+            camera_from_target: camera.transform,
         });
     }
-    series(pairs, file)
+    series(pairs, file, projections)
 }
 
 /// Matrix `j` of pair `k` of a moveit file (`value` its parsed `text`).
-fn moveit_matrix(value: &Value, k: usize, j: usize, text: &str, file: &str) -> Result<Transform> {
+fn moveit_matrix(
+    value: &Value,
+    k: usize,
+    j: usize,
+    text: &str,
+    file: &str,
+) -> Result<ReadTransform> {
     let error = |field: String, message: String| {
         let line = line_of(text, &steps(&field)).unwrap_or(1);
         parse_error(file, line, field, message)
@@ -240,7 +261,7 @@ fn moveit_matrix(value: &Value, k: usize, j: usize, text: &str, file: &str) -> R
         Some(flat) => Value::Array(flat.chunks(4).map(|r| Value::Array(r.to_vec())).collect()),
         None => v.clone(),
     };
-    transform_from_json(&rows).map_err(|p| {
+    read_transform_json(&rows).map_err(|p| {
         // A flat matrix's [r][c] is its element 4r + c in the file.
         let inner = match steps(&p.field).as_slice() {
             [Step::Index(r), Step::Index(c), rest @ ..] if flat.is_some() => {
@@ -325,8 +346,11 @@ pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
             camera_from_target: read_visp_pose(&dir.join(camera_file))?,
         });
     }
-    series(pairs, &name)
+    series(pairs, &name, Projections::default())
 }
+
+/// Largest norm of a ViSP θu rotation vector accepted, radians (a full turn; ViSP writes θ ≤ π).
+const MAX_VISP_ANGLE: f64 = 2.0 * std::f64::consts::PI;
 
 /// File-name prefix of ViSP robot poses (`base_from_gripper`).
 const VISP_ROBOT: &str = "pose_fPe_";
@@ -426,12 +450,30 @@ pub fn read_visp_pose(path: &Path) -> Result<Transform> {
             ));
         }
     };
-    let rotation = exp_so3(&Vector3::new(ux, uy, uz));
+    for (k, v) in [tx, ty, tz].into_iter().enumerate() {
+        check_translation(v)
+            .map_err(|p| parse_error(&file, values[k].1, format!("data[{k}]"), p.to_string()))?;
+    }
+    let theta_u = Vector3::new(ux, uy, uz);
+    // ViSP writes θ in [0, π]; more than a full turn is not a rotation vector it wrote (and a
+    // huge one would give NaN sines).
+    if theta_u.norm().is_nan() || theta_u.norm() > MAX_VISP_ANGLE {
+        return Err(parse_error(
+            &file,
+            values[3].1,
+            "data[3..5]",
+            format!(
+                "θu of norm {:e} rad is more than a full turn: not a ViSP rotation vector",
+                theta_u.norm()
+            ),
+        ));
+    }
+    let rotation = exp_so3(&theta_u);
     Ok(transform_from_parts(&rotation, &Vector3::new(tx, ty, tz)))
 }
 
 /// Wraps pairs as a series, refusing fewer than 2.
-fn series(pairs: Vec<PosePair>, file: &str) -> Result<PoseSeries> {
+fn series(pairs: Vec<PosePair>, file: &str, projections: Projections) -> Result<PoseSeries> {
     if pairs.len() < 2 {
         return Err(parse_error(
             file,
@@ -448,6 +490,7 @@ fn series(pairs: Vec<PosePair>, file: &str) -> Result<PoseSeries> {
         pairs,
         stamps: vec![None; n],
         lines: vec![0; n],
+        projections,
     })
 }
 
