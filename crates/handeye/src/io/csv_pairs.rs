@@ -71,11 +71,15 @@ impl<R: BufRead> CsvPairs<R> {
                     .chain(&CAMERA_FRAMES)
                     .any(|(f, _)| SUFFIXES.iter().any(|s| n == format!("{f}_{s}")))
         };
-        if let Some(unknown) = names.iter().find(|n| !known(n)) {
+        if let Some(k) = names.iter().position(|n| !known(n)) {
+            let field = match names[k] {
+                "" => format!("column {}", k + 1),
+                name => name.to_string(),
+            };
             return Err(parse_error(
                 source,
                 header_line,
-                *unknown,
+                field,
                 "unknown column: expected `stamp` and `<frame>_x … <frame>_qw` with frame base_from_gripper, gripper_from_base, camera_from_target or target_from_camera",
             ));
         }
