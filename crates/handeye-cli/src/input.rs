@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use handeye::io::{
-    Format, PoseReader, StampedPosePair, detect_file_format, read_pose_file, read_stamped_poses,
+    Format, PoseReader, Projections, StampedPosePair, detect_file_format, read_pose_file,
+    read_stamped_poses,
 };
 use handeye::sync::{OffsetOptions, StampedPose, SyncOptions, estimate_time_offset, pair_streams};
 use handeye::{PosePair, Setup};
@@ -63,12 +64,12 @@ pub struct Synced {
 
 /// Reads and pairs the two streams of `args`.
 pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
-    let (Some(robot), Some(camera)) = (&args.robot, &args.camera) else {
+    let (Some(robot_path), Some(camera_path)) = (&args.robot, &args.camera) else {
         return Ok(None);
     };
-    let robot_stream = read_stamped_poses(robot)?;
-    let camera_stream = read_stamped_poses(camera)?;
-    for (name, s) in [(robot, &robot_stream), (camera, &camera_stream)] {
+    let robot_stream = read_stamped_poses(robot_path)?;
+    let camera_stream = read_stamped_poses(camera_path)?;
+    for (name, s) in [(robot_path, &robot_stream), (camera_path, &camera_stream)] {
         if s.reordered > 0 {
             eprintln!(
                 "{}: {} sample(s) out of time order, put in order",
@@ -88,7 +89,15 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
         })
         .collect();
     let time_offset = if args.time_offset == "auto" {
-        let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default())?;
+        let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default()).with_context(
+            || {
+                format!(
+                    "--time-offset auto on {} and {}",
+                    robot_path.display(),
+                    camera_path.display()
+                )
+            },
+        )?;
         eprintln!(
             "time offset: {:.4} s (correlation of angular speeds {:.3})",
             e.offset, e.correlation
@@ -119,6 +128,23 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
             "dropped {} camera sample(s) outside the robot stream and {} in gaps longer than {} s",
             s.dropped_outside, s.dropped_gap, args.max_gap
         );
+    }
+    if s.pairs.len() < 2 {
+        // The camera stamps decide the pairs: name that file (not `-`, there is no INPUT).
+        return Err(handeye::Error::Parse {
+            file: camera_path.display().to_string(),
+            line: 0,
+            field: "t".into(),
+            message: format!(
+                "{} camera sample(s) within the robot stream {} ({} outside it, {} in its gaps longer than {} s): at least 2 pose pairs are needed",
+                s.pairs.len(),
+                robot_path.display(),
+                s.dropped_outside,
+                s.dropped_gap,
+                args.max_gap
+            ),
+        }
+        .into());
     }
     let pairs = s
         .pairs
@@ -162,16 +188,46 @@ pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Vec<String>, Option<
     if path.as_os_str() == "-" {
         let stdin = std::io::stdin().lock();
         let (mut pairs, mut names) = (Vec::new(), Vec::new());
-        for r in PoseReader::new(stdin, "-", args.format()?)? {
+        let mut reader = PoseReader::new(stdin, "-", args.format()?)?;
+        for r in reader.by_ref() {
             let r = r?;
             pairs.push(r.pose);
             names.push(name(r.line));
         }
+        note("-", &reader.projections());
         return Ok((pairs, names, None));
     }
     let series = read_pose_file(&path, args.format()?)?;
+    note(&path.display().to_string(), &series.projections);
     let names = series.lines.iter().map(|&l| name(l)).collect();
     Ok((series.pairs, names, None))
+}
+
+/// Tells on stderr how many rotation matrices of `source` were projected onto SO(3), if any.
+fn note(source: &str, projections: &Projections) {
+    if let Some(note) = projections.note() {
+        eprintln!("{source}: {note}");
+    }
+}
+
+/// A streaming reader that tells its note (see [`note`]) when it ends.
+struct NotingReader {
+    reader: PoseReader<Box<dyn BufRead>>,
+    source: String,
+    told: bool,
+}
+
+impl Iterator for NotingReader {
+    type Item = handeye::Result<StampedPosePair>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let next = self.reader.next();
+        if next.is_none() && !self.told {
+            self.told = true;
+            note(&self.source, &self.reader.projections());
+        }
+        next
+    }
 }
 
 /// Pose pairs one at a time, each with its place, or the error of a bad record.
@@ -190,6 +246,7 @@ pub fn records(args: &InputArgs) -> Result<(Records, Option<f64>)> {
         };
         if matches!(format, Format::OpencvYaml | Format::Moveit | Format::Visp) {
             let series = read_pose_file(&path, format)?;
+            note(&path.display().to_string(), &series.projections);
             let records = series.pairs.into_iter().enumerate().map(|(k, pose)| {
                 Ok(StampedPosePair {
                     line: k + 1,
@@ -206,8 +263,13 @@ pub fn records(args: &InputArgs) -> Result<(Records, Option<f64>)> {
         Box::new(handeye::io::open(&path)?)
     };
     let source = path.display().to_string();
+    let reader = PoseReader::new(reader, &source, args.format()?)?;
     Ok((
-        Box::new(PoseReader::new(reader, &source, args.format()?)?),
+        Box::new(NotingReader {
+            reader,
+            source,
+            told: false,
+        }),
         None,
     ))
 }

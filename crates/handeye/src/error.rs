@@ -8,7 +8,8 @@ use std::fmt;
 pub enum TransformProblem {
     /// A NaN or infinite entry.
     NotFinite,
-    /// `RᵀR` differs from the identity by more than 1e-6 (the largest entry deviation is given).
+    /// `RᵀR` differs from the identity by more than
+    /// [`ORTHONORMAL_TOL`](crate::pose::ORTHONORMAL_TOL) (the largest entry deviation is given).
     NotOrthonormal {
         /// Largest absolute entry of `RᵀR − I`.
         deviation: f64,
@@ -22,10 +23,17 @@ pub enum TransformProblem {
         /// The norm found.
         norm: f64,
     },
-    /// Both a matrix and translation + quaternion were given and they differ by more than 1e-6.
+    /// Both a matrix and translation + quaternion were given and they differ by more than 1e-6 and
+    /// more than the matrix's deviation from orthonormality (the precision it was printed with).
     Inconsistent {
         /// Largest entry difference between the two.
         difference: f64,
+    },
+    /// A translation component beyond [`MAX_TRANSLATION`](crate::pose::MAX_TRANSLATION) in size:
+    /// not a length in any unit (a corrupt field), and one whose products could overflow.
+    ImplausibleTranslation {
+        /// The value found.
+        value: f64,
     },
 }
 
@@ -35,7 +43,8 @@ impl fmt::Display for TransformProblem {
             Self::NotFinite => write!(f, "contains a NaN or infinite value"),
             Self::NotOrthonormal { deviation } => write!(
                 f,
-                "rotation is not orthonormal (|RᵀR − I| reaches {deviation:.3e}, more than 1e-6)"
+                "rotation is not orthonormal (|RᵀR − I| reaches {deviation:.3e}, more than {:e}: beyond rounding when printed)",
+                crate::pose::ORTHONORMAL_TOL
             ),
             Self::Reflection => write!(f, "rotation has det < 0 (a reflection, not a rotation)"),
             Self::BadLastRow => write!(f, "last row of the 4×4 matrix is not [0, 0, 0, 1]"),
@@ -44,7 +53,12 @@ impl fmt::Display for TransformProblem {
             }
             Self::Inconsistent { difference } => write!(
                 f,
-                "`matrix` and `translation`/`quaternion_xyzw` disagree (by {difference:.3e}, more than 1e-6)"
+                "`matrix` and `translation`/`quaternion_xyzw` disagree (by {difference:.3e}, more than 1e-6 and more than the matrix's own rounding)"
+            ),
+            Self::ImplausibleTranslation { value } => write!(
+                f,
+                "translation {value:e} is not a plausible length in any unit (more than {:e} in size)",
+                crate::pose::MAX_TRANSLATION
             ),
         }
     }

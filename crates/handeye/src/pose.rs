@@ -19,13 +19,21 @@ pub type Transform = IsometryMatrix3<f64>;
 
 /// Rotations read from files whose deviation from orthonormality is below this are kept exactly as
 /// given; larger deviations (up to [`ORTHONORMAL_TOL`]) are projected onto SO(3).
-const KEEP_AS_GIVEN_TOL: f64 = 1e-12;
+pub const KEEP_AS_GIVEN_TOL: f64 = 1e-12;
 
 /// Largest deviation of `RᵀR` from the identity (max entry) accepted for a rotation read from data.
-pub const ORTHONORMAL_TOL: f64 = 1e-6;
+/// Rotations printed with 6 decimals (logs, copy-paste) deviate by about 1e-6, with 4 by 1e-4:
+/// such a matrix is orthonormal to the precision it was printed with, and is projected onto the
+/// nearest rotation. A larger deviation is not rounding and is refused.
+pub const ORTHONORMAL_TOL: f64 = 1e-3;
 
 /// Largest deviation of a quaternion's norm from 1 that input normalises silently; further is refused.
 pub const QUATERNION_NORM_TOL: f64 = 1e-3;
+
+/// Largest size of a translation component accepted from data, in any unit: a million kilometres
+/// in metres, a kilometre in micrometres. Beyond it a value is a corrupt field, and inverses and
+/// products of poses could overflow.
+pub const MAX_TRANSLATION: f64 = 1e9;
 
 /// Rotations smaller than this (radians) have no defined axis (SPEC sec. 1).
 pub const NO_AXIS_ANGLE: f64 = 1e-12;
@@ -49,55 +57,106 @@ pub fn check_rotation(m: &Matrix3<f64>) -> Result<(), TransformProblem> {
         return Err(TransformProblem::NotFinite);
     }
     let deviation = orthonormality_deviation(m);
-    if deviation > ORTHONORMAL_TOL {
+    // A NaN (entries whose squares overflow) is refused too.
+    if deviation.is_nan() || deviation > ORTHONORMAL_TOL {
         return Err(TransformProblem::NotOrthonormal { deviation });
     }
-    if m.determinant() < 0.0 {
+    if m.determinant() <= 0.0 {
         return Err(TransformProblem::Reflection);
     }
     Ok(())
 }
 
+/// Checks one translation component read from data: finite and at most [`MAX_TRANSLATION`] in size.
+pub fn check_translation(value: f64) -> Result<(), TransformProblem> {
+    if !value.is_finite() {
+        Err(TransformProblem::NotFinite)
+    } else if value.abs() > MAX_TRANSLATION {
+        Err(TransformProblem::ImplausibleTranslation { value })
+    } else {
+        Ok(())
+    }
+}
+
+/// A transform read from data, with how far from orthonormal its rotation matrix was as given
+/// (0 when it was given as a quaternion or a rotation vector).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReadTransform {
+    /// The transform; its rotation projected onto SO(3) when `deviation` exceeds
+    /// [`KEEP_AS_GIVEN_TOL`], else exactly as given.
+    pub transform: Transform,
+    /// Largest entry of `|RᵀR − I|` of the rotation as given.
+    pub deviation: f64,
+}
+
+impl ReadTransform {
+    /// Whether the rotation was projected onto SO(3) (orthonormal only to the precision it was
+    /// printed with).
+    pub fn projected(&self) -> bool {
+        self.deviation > KEEP_AS_GIVEN_TOL
+    }
+}
+
 /// Reads a homogeneous 4×4 matrix (row-major, last row `0 0 0 1`) as a transform, refusing
-/// anything that is not a rigid transform.
+/// anything that is not a rigid transform (see [`read_matrix4`]).
 pub fn transform_from_matrix4(m: &Matrix4<f64>) -> Result<Transform, TransformProblem> {
+    read_matrix4(m).map(|r| r.transform)
+}
+
+/// Reads a homogeneous 4×4 matrix (row-major, last row `0 0 0 1` within 1e-6) as a transform: a
+/// rotation orthonormal within [`ORTHONORMAL_TOL`] with det > 0, projected onto SO(3) unless exact
+/// to rounding, and a translation passing [`check_translation`].
+pub fn read_matrix4(m: &Matrix4<f64>) -> Result<ReadTransform, TransformProblem> {
     if m.iter().any(|v| !v.is_finite()) {
         return Err(TransformProblem::NotFinite);
     }
     let last = m.row(3);
-    if (last[0].abs() + last[1].abs() + last[2].abs() + (last[3] - 1.0).abs()) > ORTHONORMAL_TOL {
+    if (last[0].abs() + last[1].abs() + last[2].abs() + (last[3] - 1.0).abs()) > LAST_ROW_TOL {
         return Err(TransformProblem::BadLastRow);
     }
     let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
     check_rotation(&r)?;
     let t: Vector3<f64> = m.fixed_view::<3, 1>(0, 3).into_owned();
-    // A rotation orthonormal only to 1e-6 is projected; one exact to rounding is kept bit for bit.
-    let r = if orthonormality_deviation(&r) > KEEP_AS_GIVEN_TOL {
-        proj_so3(&r)
-    } else {
-        r
+    for v in t.iter() {
+        check_translation(*v)?;
+    }
+    let deviation = orthonormality_deviation(&r);
+    let read = ReadTransform {
+        transform: transform_from_parts(&r, &t),
+        deviation,
     };
-    Ok(transform_from_parts(&r, &t))
+    Ok(if read.projected() {
+        ReadTransform {
+            transform: transform_from_parts(&proj_so3(&r), &t),
+            ..read
+        }
+    } else {
+        read
+    })
 }
 
+/// Largest sum of the deviations of a 4×4 matrix's last row from `0 0 0 1`.
+const LAST_ROW_TOL: f64 = 1e-6;
+
 /// Builds a transform from a translation and a quaternion given as `[x, y, z, w]` (file order).
-/// A quaternion whose norm is within [`QUATERNION_NORM_TOL`] of 1 is normalised; others are refused.
+/// A quaternion whose norm is within [`QUATERNION_NORM_TOL`] of 1 is normalised; others are refused,
+/// as are translations failing [`check_translation`].
 pub fn transform_from_xyz_quat_xyzw(
     translation: [f64; 3],
     quaternion_xyzw: [f64; 4],
 ) -> Result<Transform, TransformProblem> {
-    if translation
-        .iter()
-        .chain(quaternion_xyzw.iter())
-        .any(|v| !v.is_finite())
-    {
+    if quaternion_xyzw.iter().any(|v| !v.is_finite()) {
         return Err(TransformProblem::NotFinite);
+    }
+    for v in translation {
+        check_translation(v)?;
     }
     let [x, y, z, w] = quaternion_xyzw;
     // nalgebra's constructor takes w first.
     let q = Quaternion::new(w, x, y, z);
     let norm = q.norm();
-    if (norm - 1.0).abs() > QUATERNION_NORM_TOL {
+    // A NaN norm is refused too.
+    if norm.is_nan() || (norm - 1.0).abs() > QUATERNION_NORM_TOL {
         return Err(TransformProblem::QuaternionNorm { norm });
     }
     Ok(IsometryMatrix3::from_parts(
@@ -310,5 +369,97 @@ mod tests {
             transform_from_xyz_quat_xyzw([0.0; 3], [0.0, 0.0, 0.0, 0.9]),
             Err(TransformProblem::QuaternionNorm { .. })
         ));
+    }
+
+    /// `r` with every entry rounded to `decimals` decimals, as a 4×4 with translation `t`.
+    fn printed(r: &Matrix3<f64>, t: f64, decimals: i32) -> Matrix4<f64> {
+        let scale = 10f64.powi(decimals);
+        let mut m = Matrix4::identity();
+        for i in 0..3 {
+            for j in 0..3 {
+                m[(i, j)] = (r[(i, j)] * scale).round() / scale;
+            }
+            m[(i, 3)] = t;
+        }
+        m
+    }
+
+    #[test]
+    fn rotations_rounded_when_printed_are_projected_and_others_refused() {
+        let r = exp_so3(&Vector3::new(0.4, -1.1, 2.3));
+        // Printed in full: kept bit for bit.
+        let exact =
+            read_matrix4(&transform_from_parts(&r, &Vector3::zeros()).to_homogeneous()).unwrap();
+        assert!(!exact.projected());
+        assert_eq!(exact.transform.rotation.matrix(), &r);
+        for decimals in [4, 6, 9] {
+            let read = read_matrix4(&printed(&r, 1.0, decimals)).unwrap();
+            let q = read.transform.rotation.matrix();
+            let half_unit = 0.5 * 10f64.powi(-decimals);
+            assert!(read.projected(), "{decimals}");
+            assert!(
+                read.deviation < 6.0 * half_unit,
+                "{decimals}: {}",
+                read.deviation
+            );
+            assert!(orthonormality_deviation(q) < 1e-15, "{decimals}");
+            // The nearest rotation is no further from the truth than the printed one.
+            assert!((q - r).abs().max() <= 2.0 * half_unit, "{decimals}");
+        }
+        // Two decimals are beyond rounding: refused with the deviation measured.
+        match read_matrix4(&printed(&r, 1.0, 2)) {
+            Err(TransformProblem::NotOrthonormal { deviation }) => assert!(deviation > 1e-3),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn absurd_values_are_refused_and_nothing_accepted_overflows() {
+        let r = exp_so3(&Vector3::new(0.4, -1.1, 2.3));
+        assert!(read_matrix4(&printed(&r, MAX_TRANSLATION, 6)).is_ok());
+        assert_eq!(
+            read_matrix4(&printed(&r, 1e308, 6)),
+            Err(TransformProblem::ImplausibleTranslation { value: 1e308 })
+        );
+        assert_eq!(
+            transform_from_xyz_quat_xyzw([0.0, -1.5e9, 0.0], [0.0, 0.0, 0.0, 1.0]),
+            Err(TransformProblem::ImplausibleTranslation { value: -1.5e9 })
+        );
+        // Entries whose products overflow (RᵀR holds inf − inf = NaN) are refused, not passed.
+        let mut m = Matrix4::identity();
+        m[(0, 0)] = 1e200;
+        m[(0, 1)] = 1e200;
+        m[(1, 0)] = -1e200;
+        m[(1, 1)] = 1e200;
+        assert!(matches!(
+            read_matrix4(&m),
+            Err(TransformProblem::NotOrthonormal { .. })
+        ));
+        assert!(matches!(
+            transform_from_xyz_quat_xyzw([0.0; 3], [1e200, 1e200, 0.0, 1.0]),
+            Err(TransformProblem::QuaternionNorm { .. })
+        ));
+        // What passes stays finite through inverses and products.
+        let a = read_matrix4(&printed(&r, MAX_TRANSLATION, 6))
+            .unwrap()
+            .transform;
+        let b =
+            transform_from_xyz_quat_xyzw([-MAX_TRANSLATION; 3], [0.1, 0.2, 0.3, 0.86f64.sqrt()])
+                .unwrap();
+        let chain = a.inverse() * b * a * b.inverse() * a;
+        assert!(chain.to_homogeneous().iter().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn quaternions_off_by_rounding_are_normalised_and_others_refused() {
+        let unit = [0.1, 0.2, 0.3, (1.0f64 - 0.14).sqrt()];
+        let scaled = |f: f64| unit.map(|v| v * f);
+        let a = transform_from_xyz_quat_xyzw([0.0; 3], unit).unwrap();
+        let b = transform_from_xyz_quat_xyzw([0.0; 3], scaled(1.0009)).unwrap();
+        assert!((a.to_homogeneous() - b.to_homogeneous()).abs().max() < 1e-15);
+        match transform_from_xyz_quat_xyzw([0.0; 3], scaled(1.002)) {
+            Err(TransformProblem::QuaternionNorm { norm }) => assert!((norm - 1.002).abs() < 1e-12),
+            other => panic!("{other:?}"),
+        }
     }
 }

@@ -4,9 +4,9 @@
 use std::io::BufRead;
 
 use crate::error::{Error, Result};
-use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, parse_error};
+use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error};
 use crate::motion::PosePair;
-use crate::pose::{Transform, transform_from_xyz_quat_xyzw};
+use crate::pose::{Transform, check_translation, transform_from_xyz_quat_xyzw};
 
 /// The column suffixes of one pose, in order.
 const SUFFIXES: [&str; 7] = ["x", "y", "z", "qx", "qy", "qz", "qw"];
@@ -71,11 +71,15 @@ impl<R: BufRead> CsvPairs<R> {
                     .chain(&CAMERA_FRAMES)
                     .any(|(f, _)| SUFFIXES.iter().any(|s| n == format!("{f}_{s}")))
         };
-        if let Some(unknown) = names.iter().find(|n| !known(n)) {
+        if let Some(k) = names.iter().position(|n| !known(n)) {
+            let field = match names[k] {
+                "" => format!("column {}", k + 1),
+                name => name.to_string(),
+            };
             return Err(parse_error(
                 source,
                 header_line,
-                *unknown,
+                field,
                 "unknown column: expected `stamp` and `<frame>_x … <frame>_qw` with frame base_from_gripper, gripper_from_base, camera_from_target or target_from_camera",
             ));
         }
@@ -117,7 +121,10 @@ impl<R: BufRead> CsvPairs<R> {
     fn parse(&self, line: usize) -> Result<StampedPosePair> {
         let stamp = self
             .stamp
-            .map(|k| self.number(k, "stamp", line))
+            .map(|k| {
+                let v = self.number(k, "stamp", line)?;
+                check_stamp(v).map_err(|m| parse_error(&self.source, line, "stamp", m))
+            })
             .transpose()?;
         let base_from_gripper = self.pose(&self.robot, line)?;
         let camera_from_target = self.pose(&self.camera, line)?;
@@ -149,7 +156,12 @@ impl<R: BufRead> CsvPairs<R> {
     fn pose(&self, p: &PoseColumns, line: usize) -> Result<Transform> {
         let mut v = [0.0; 7];
         for (k, (c, s)) in p.columns.iter().zip(SUFFIXES).enumerate() {
-            v[k] = self.number(*c, &format!("{}_{s}", p.name), line)?;
+            let field = format!("{}_{s}", p.name);
+            v[k] = self.number(*c, &field, line)?;
+            if k < 3 {
+                check_translation(v[k])
+                    .map_err(|e| parse_error(&self.source, line, field, e.to_string()))?;
+            }
         }
         let t = transform_from_xyz_quat_xyzw([v[0], v[1], v[2]], [v[3], v[4], v[5], v[6]])
             .map_err(|e| {

@@ -6,9 +6,13 @@ use std::io::BufRead;
 use serde_json::{Map, Value};
 
 use crate::error::{Error, Result};
-use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, parse_error, transform_from_json};
+use crate::io::json_text::repeated_key;
+use crate::io::{
+    CAMERA_FRAMES, Projections, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error,
+    read_transform_json,
+};
 use crate::motion::PosePair;
-use crate::pose::Transform;
+use crate::pose::ReadTransform;
 
 /// Streaming reader of JSON Lines pose pairs (blank lines and `#` comments are skipped).
 ///
@@ -21,6 +25,7 @@ pub struct JsonlPairs<R: BufRead> {
     line: usize,
     buffer: Vec<u8>,
     finished: bool,
+    projections: Projections,
 }
 
 impl<R: BufRead> JsonlPairs<R> {
@@ -38,7 +43,13 @@ impl<R: BufRead> JsonlPairs<R> {
             line: lines,
             buffer: Vec::new(),
             finished: false,
+            projections: Projections::default(),
         }
+    }
+
+    /// The rotation matrices projected onto SO(3) so far (see [`Projections`]).
+    pub fn projections(&self) -> Projections {
+        self.projections
     }
 }
 
@@ -76,7 +87,12 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
             if text.is_empty() || text.starts_with('#') {
                 continue;
             }
-            return Some(parse_pose_line(text, &self.source, self.line));
+            return Some(parse_record(
+                text,
+                &self.source,
+                self.line,
+                &mut self.projections,
+            ));
         }
         None
     }
@@ -87,8 +103,18 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
 /// `target_from_camera`, each a transform (SPEC sec. 7) or a bare 4×4 array, and an optional
 /// numeric `stamp` in seconds. The pair is returned in our directions (Q = `base_from_gripper`,
 /// `camera_from_target`), inverting what the file gives in the other direction. Other keys are
-/// ignored.
+/// ignored; a key repeated in one object is refused (a JSON parser keeps only one of the two).
 pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedPosePair> {
+    parse_record(text, source, line, &mut Projections::default())
+}
+
+/// [`parse_pose_line`], counting the rotation matrices projected onto SO(3) into `projections`.
+fn parse_record(
+    text: &str,
+    source: &str,
+    line: usize,
+    projections: &mut Projections,
+) -> Result<StampedPosePair> {
     let value: Value = serde_json::from_str(text)
         .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
     let Value::Object(object) = value else {
@@ -99,19 +125,28 @@ pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedP
             "expected a JSON object per line",
         ));
     };
+    if let Some(repeated) = repeated_key(text) {
+        return Err(parse_error(
+            source,
+            line,
+            repeated.path.clone(),
+            repeated.message(),
+        ));
+    }
     let stamp = match object.get("stamp") {
         None | Some(Value::Null) => None,
-        Some(v) => Some(v.as_f64().filter(|s| s.is_finite()).ok_or_else(|| {
-            parse_error(
-                source,
-                line,
-                "stamp",
-                format!("expected a finite number of seconds, found {v}"),
-            )
-        })?),
+        Some(v) => Some(
+            v.as_f64()
+                .ok_or_else(|| format!("expected a finite number of seconds, found {v}"))
+                .and_then(check_stamp)
+                .map_err(|message| parse_error(source, line, "stamp", message))?,
+        ),
     };
-    let base_from_gripper = frame(&object, &ROBOT_FRAMES, source, line)?;
-    let camera_from_target = frame(&object, &CAMERA_FRAMES, source, line)?;
+    let robot = frame(&object, &ROBOT_FRAMES, source, line)?;
+    let camera = frame(&object, &CAMERA_FRAMES, source, line)?;
+    projections.add(&robot);
+    projections.add(&camera);
+    let (base_from_gripper, camera_from_target) = (robot.transform, camera.transform);
     Ok(StampedPosePair {
         line,
         stamp,
@@ -129,7 +164,7 @@ fn frame(
     names: &[(&str, bool); 2],
     source: &str,
     line: usize,
-) -> Result<Transform> {
+) -> Result<ReadTransform> {
     let present: Vec<_> = names
         .iter()
         .filter(|(n, _)| object.contains_key(*n))
@@ -153,11 +188,18 @@ fn frame(
             ));
         }
     };
-    let t = transform_from_json(&object[name]).map_err(|p| {
+    let read = read_transform_json(&object[name]).map_err(|p| {
         let field = p.path_under(name);
         parse_error(source, line, field, p.message)
     })?;
-    Ok(if inverted { t.inverse() } else { t })
+    Ok(if inverted {
+        ReadTransform {
+            transform: read.transform.inverse(),
+            ..read
+        }
+    } else {
+        read
+    })
 }
 
 #[cfg(test)]
@@ -214,6 +256,30 @@ mod tests {
                 ),
                 "stamp",
             ),
+            (
+                format!(
+                    "{{\"stamp\": 1.7e18, \"base_from_gripper\": {I}, \"camera_from_target\": {I}}}"
+                ),
+                "stamp",
+            ),
+            (
+                format!(
+                    "{{\"base_from_gripper\": [[1,0,0,1e308],[0,1,0,0],[0,0,1,0],[0,0,0,1]], \"camera_from_target\": {I}}}"
+                ),
+                "base_from_gripper[0][3]",
+            ),
+            (
+                format!(
+                    "{{\"base_from_gripper\": {I}, \"camera_from_target\": {I}, \"base_from_gripper\": {I}}}"
+                ),
+                "base_from_gripper",
+            ),
+            (
+                format!(
+                    "{{\"base_from_gripper\": {{\"translation\": [0,0,0], \"quaternion_xyzw\": [0,0,0,1], \"translation\": [1,0,0]}}, \"camera_from_target\": {I}}}"
+                ),
+                "base_from_gripper.translation",
+            ),
         ];
         for (text, field) in cases {
             let input = format!("\n{text}\n");
@@ -232,5 +298,20 @@ mod tests {
                 other => panic!("{text}: {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn rounded_matrices_are_counted() {
+        let rounded = "[[0.36,0.48,-0.8,0],[-0.8,0.6,0,0],[0.48,0.64,0.6,0],[0,0,0,1]]";
+        let exact = "[[0.36,0.48,-0.8,0],[-0.8,0.6,0,0],[0.48,0.64,0.6,0],[0,0,0,1]]";
+        let slightly = rounded.replace("0.36", "0.360001");
+        let text = format!(
+            "{{\"base_from_gripper\": {exact}, \"camera_from_target\": {slightly}}}\n{{\"base_from_gripper\": {slightly}, \"camera_from_target\": {I}}}\n"
+        );
+        let mut reader = JsonlPairs::new(text.as_bytes(), "t.jsonl");
+        assert_eq!(reader.by_ref().filter(Result::is_ok).count(), 2);
+        let p = reader.projections();
+        assert_eq!(p.count, 2);
+        assert!(p.largest_deviation > 1e-7 && p.largest_deviation < 1e-6);
     }
 }

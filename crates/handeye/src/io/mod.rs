@@ -6,6 +6,7 @@
 //! (`base_from_gripper`, `camera_from_target`) whichever direction the file gives.
 
 mod csv_pairs;
+mod json_text;
 mod jsonl;
 mod peer;
 mod stamped;
@@ -19,12 +20,15 @@ use std::str::FromStr;
 
 use crate::error::{Error, Result};
 use crate::motion::PosePair;
+use crate::pose::ReadTransform;
 
 pub use csv_pairs::CsvPairs;
 pub use jsonl::{JsonlPairs, parse_pose_line};
 pub use peer::{read_moveit_json, read_opencv_yaml, read_visp_dir, read_visp_pose};
 pub use stamped::{parse_stamped_poses, read_stamped_poses};
-pub use transform::{CONSISTENCY_TOL, FieldProblem, TransformJson, transform_from_json};
+pub use transform::{
+    CONSISTENCY_TOL, FieldProblem, TransformJson, read_transform_json, transform_from_json,
+};
 pub use truth::{Truth, parse_truth, read_truth, truth_json, write_truth};
 
 /// The names a pose may have in a file, and whether the file's transform is the inverse of ours.
@@ -93,6 +97,51 @@ pub struct PoseSeries {
     pub stamps: Vec<Option<f64>>,
     /// Their line numbers.
     pub lines: Vec<usize>,
+    /// The rotation matrices that were orthonormal only to the precision they were printed with
+    /// and were projected onto the nearest rotation.
+    pub projections: Projections,
+}
+
+/// The rotation matrices of one input that were orthonormal only to the precision they were
+/// printed with (between [`KEEP_AS_GIVEN_TOL`](crate::pose::KEEP_AS_GIVEN_TOL) and
+/// [`ORTHONORMAL_TOL`](crate::pose::ORTHONORMAL_TOL)) and were projected onto the nearest rotation.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Projections {
+    /// How many matrices were projected.
+    pub count: usize,
+    /// The largest deviation `max |RᵀR − I|` among them.
+    pub largest_deviation: f64,
+}
+
+impl Projections {
+    /// Counts `read` when its rotation was projected.
+    pub fn add(&mut self, read: &ReadTransform) {
+        if read.projected() {
+            self.count += 1;
+            self.largest_deviation = self.largest_deviation.max(read.deviation);
+        }
+    }
+
+    /// The note to show for an input, or `None` when nothing was projected.
+    ///
+    /// # Example
+    /// ```
+    /// let p = handeye::io::Projections { count: 40, largest_deviation: 3.2e-6 };
+    /// assert_eq!(
+    ///     p.note().unwrap(),
+    ///     "40 rotation matrices orthonormal only to 3e-6 (rounded when printed): projected onto the nearest rotation"
+    /// );
+    /// ```
+    pub fn note(&self) -> Option<String> {
+        (self.count > 0).then(|| {
+            format!(
+                "{} rotation {} orthonormal only to {:.0e} (rounded when printed): projected onto the nearest rotation",
+                self.count,
+                if self.count == 1 { "matrix" } else { "matrices" },
+                self.largest_deviation
+            )
+        })
+    }
 }
 
 /// A streaming reader of pose pairs: one record at a time, so that a pipe can be processed as it
@@ -144,6 +193,17 @@ impl<R: BufRead> PoseReader<R> {
                 });
             }
         })
+    }
+}
+
+impl<R: BufRead> PoseReader<R> {
+    /// The rotation matrices projected onto SO(3) so far (see [`Projections`]).
+    pub fn projections(&self) -> Projections {
+        match self {
+            Self::Jsonl(r) => r.projections(),
+            // CSV gives quaternions only.
+            Self::Csv(_) => Projections::default(),
+        }
     }
 }
 
@@ -214,11 +274,24 @@ fn detect<R: BufRead>(input: &mut R, source: &str) -> Result<(Format, usize)> {
     }
 }
 
-/// Reads a whole text file, naming it in the error.
+/// Reads a whole text file, naming it in the error; text that is not UTF-8 is a parse error on
+/// the line of its first invalid byte.
 pub fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| Error::Io {
-        file: path.display().to_string(),
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| Error::Io {
+        file: file.clone(),
         source: e,
+    })?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        let column = 1 + valid.iter().rev().take_while(|&&b| b != b'\n').count();
+        parse_error(
+            &file,
+            line,
+            "-",
+            format!("not valid UTF-8 text (byte {column} of the line)"),
+        )
     })
 }
 
@@ -248,13 +321,16 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
         pairs: Vec::new(),
         stamps: Vec::new(),
         lines: Vec::new(),
+        projections: Projections::default(),
     };
-    for record in PoseReader::new(open(path)?, &source, format)? {
+    let mut reader = PoseReader::new(open(path)?, &source, format)?;
+    for record in reader.by_ref() {
         let r = record?;
         series.pairs.push(r.pose);
         series.stamps.push(r.stamp);
         series.lines.push(r.line);
     }
+    series.projections = reader.projections();
     if series.pairs.len() < 2 {
         return Err(Error::Parse {
             file: source,
@@ -296,6 +372,26 @@ pub fn detect_file_format(path: &Path) -> Result<Format> {
         Ok(Format::Moveit)
     } else {
         Ok(Format::Auto)
+    }
+}
+
+/// Largest size of a time stamp accepted, seconds: about 31,700 years (Unix time is near 1.7e9 s;
+/// stamps in milli- or nanoseconds are beyond it). Differences of stamps within it cannot overflow.
+pub const MAX_STAMP: f64 = 1e12;
+
+/// Checks a time stamp read from data: finite and at most [`MAX_STAMP`] in size; the message
+/// says why not.
+pub(crate) fn check_stamp(value: f64) -> std::result::Result<f64, String> {
+    if !value.is_finite() {
+        Err(format!(
+            "expected a finite number of seconds, found {value}"
+        ))
+    } else if value.abs() > MAX_STAMP {
+        Err(format!(
+            "stamp {value:e} is not a plausible time in seconds (more than {MAX_STAMP:e} in size: milli- or nanoseconds?)"
+        ))
+    } else {
+        Ok(value)
     }
 }
 

@@ -1,15 +1,21 @@
 //! The pose files of other calibration tools: OpenCV-YAML pairs (camodocal), moveit_calibration's
 //! sample JSON, and ViSP's `pose_fPe_*.yaml` / `pose_cPo_*.yaml`.
 
-use std::path::{Path, PathBuf};
+use std::collections::BTreeMap;
+use std::path::Path;
 
 use nalgebra::{Matrix4, Vector3};
 use serde_json::Value;
 
 use crate::error::{Error, Result};
-use crate::io::{PoseSeries, parse_error, read_text, transform_from_json};
+use crate::io::json_text::{Step, line_of, path_name, repeated_key, steps};
+use crate::io::{
+    FieldProblem, PoseSeries, Projections, parse_error, read_text, read_transform_json,
+};
 use crate::motion::PosePair;
-use crate::pose::{Transform, exp_so3, transform_from_matrix4, transform_from_parts};
+use crate::pose::{
+    ReadTransform, Transform, check_translation, exp_so3, read_matrix4, transform_from_parts,
+};
 
 /// Reads OpenCV-YAML pose pairs as camodocal writes them: `T1_i` and `T2_i`, each a 4×4
 /// `!!opencv-matrix`, for i = 0, 1, …
@@ -18,108 +24,189 @@ use crate::pose::{Transform, exp_so3, transform_from_matrix4, transform_from_par
 /// robot's `gripper_from_base` and `T2_i` as the camera's `target_from_camera`, the directions with
 /// which the file's own data agree on one X (`--setup eye-to-hand`).
 pub fn read_opencv_yaml(text: &str, file: &str) -> Result<PoseSeries> {
-    let mut t1: Vec<(usize, Transform)> = Vec::new();
-    let mut t2: Vec<(usize, Transform)> = Vec::new();
+    let mut t1: Vec<YamlMatrix> = Vec::new();
+    let mut t2: Vec<YamlMatrix> = Vec::new();
+    let mut projections = Projections::default();
     let lines: Vec<&str> = text.lines().collect();
     let mut k = 0;
     while k < lines.len() {
-        let line = lines[k].trim();
-        let key = line.split(':').next().unwrap_or("");
-        let which = if key.starts_with("T1_") {
-            Some(1)
-        } else if key.starts_with("T2_") {
-            Some(2)
-        } else {
-            None
-        };
-        let Some(which) = which else {
+        let Some((which, key)) = matrix_key(lines[k]) else {
             k += 1;
             continue;
         };
         let index: usize = key[3..]
             .parse()
             .map_err(|_| parse_error(file, k + 1, key, "expected `T1_<n>` or `T2_<n>`"))?;
-        let start = k + 1;
-        // Collect the numbers of `data: [ … ]`, which may span lines.
-        let mut j = k + 1;
-        while j < lines.len() && !lines[j].contains("data:") {
-            j += 1;
-        }
-        let mut body = String::new();
-        while j < lines.len() {
-            let l = lines[j];
-            body.push_str(l.split("data:").last().unwrap_or(l));
-            body.push(' ');
-            if l.contains(']') {
-                break;
-            }
-            j += 1;
-        }
-        let numbers: Vec<f64> = body
-            .trim()
-            .trim_start_matches('[')
-            .trim_end_matches(']')
-            .split(',')
-            .map(|s| s.trim().parse::<f64>())
-            .collect::<std::result::Result<_, _>>()
-            .map_err(|_| {
-                parse_error(
-                    file,
-                    start,
-                    format!("{key}.data"),
-                    "expected 16 numbers in `data: [...]`",
-                )
-            })?;
-        if numbers.len() != 16 {
-            return Err(parse_error(
-                file,
-                start,
-                format!("{key}.data"),
-                format!("{} numbers, expected 16 (a 4×4 matrix)", numbers.len()),
-            ));
-        }
-        let m = Matrix4::from_row_slice(&numbers);
-        let t =
-            transform_from_matrix4(&m).map_err(|p| parse_error(file, start, key, p.to_string()))?;
+        let (read, next) = yaml_matrix(&lines, k, key, file)?;
+        projections.add(&read);
+        let m = YamlMatrix {
+            index,
+            line: k + 1,
+            key: key.to_string(),
+            transform: read.transform,
+        };
         if which == 1 {
-            t1.push((index, t))
+            t1.push(m)
         } else {
-            t2.push((index, t))
+            t2.push(m)
         }
-        k = j + 1;
+        k = next;
     }
-    t1.sort_by_key(|(i, _)| *i);
-    t2.sort_by_key(|(i, _)| *i);
-    if t1.len() != t2.len() || t1.iter().zip(&t2).any(|(a, b)| a.0 != b.0) {
+    let pairs = pair_up(t1, t2, file)?
+        .into_iter()
+        .map(|(gripper_from_base, target_from_camera)| PosePair {
+            base_from_gripper: gripper_from_base.inverse(),
+            camera_from_target: target_from_camera.inverse(),
+        })
+        .collect();
+    series(pairs, file, projections)
+}
+
+/// One `T1_i` or `T2_i` matrix of an OpenCV-YAML file, with its place.
+struct YamlMatrix {
+    index: usize,
+    /// Line of its key, from 1.
+    line: usize,
+    key: String,
+    transform: Transform,
+}
+
+/// Which matrix (1 or 2) a line's key opens, and the key (`T1_3`).
+fn matrix_key(line: &str) -> Option<(u8, &str)> {
+    let key = line.trim().split(':').next().unwrap_or("");
+    if key.starts_with("T1_") {
+        Some((1, key))
+    } else if key.starts_with("T2_") {
+        Some((2, key))
+    } else {
+        None
+    }
+}
+
+/// The matrix whose key is on line `k` (from 0): the 16 numbers of its `data: [ … ]`, which may
+/// span lines, and the index of the line after it.
+fn yaml_matrix(lines: &[&str], k: usize, key: &str, file: &str) -> Result<(ReadTransform, usize)> {
+    let field = format!("{key}.data");
+    let mut j = k + 1;
+    while j < lines.len() && !lines[j].contains("data:") {
+        if matrix_key(lines[j]).is_some() {
+            break;
+        }
+        j += 1;
+    }
+    if j >= lines.len() || !lines[j].contains("data:") {
+        return Err(parse_error(file, k + 1, field, "missing `data: [...]`"));
+    }
+    // Each number with the line (from 1) it is on.
+    let mut numbers: Vec<(&str, usize)> = Vec::new();
+    let mut closed = false;
+    while j < lines.len() && !closed {
+        let l = lines[j];
+        let body = l.split("data:").last().unwrap_or(l);
+        closed = body.contains(']');
+        let body = body.split(']').next().unwrap_or("");
+        numbers.extend(
+            body.split(|c: char| c == ',' || c == '[' || c.is_whitespace())
+                .filter(|s| !s.is_empty())
+                .map(|s| (s, j + 1)),
+        );
+        j += 1;
+    }
+    let data_line = numbers.first().map_or(k + 2, |n| n.1);
+    if !closed || numbers.len() != 16 {
         return Err(parse_error(
             file,
-            0,
-            "T1_*/T2_*",
+            data_line,
+            field,
             format!(
-                "{} `T1_` and {} `T2_` matrices do not pair up by index",
-                t1.len(),
-                t2.len()
+                "{} numbers, expected 16 (a 4×4 matrix) in `data: [...]`",
+                numbers.len()
             ),
         ));
     }
-    let pairs = t1
-        .iter()
-        .zip(&t2)
-        .map(
-            |((_, gripper_from_base), (_, target_from_camera))| PosePair {
-                base_from_gripper: gripper_from_base.inverse(),
-                camera_from_target: target_from_camera.inverse(),
-            },
-        )
-        .collect();
-    series(pairs, file)
+    let mut m = Matrix4::zeros();
+    for (n, (s, line)) in numbers.iter().enumerate() {
+        let at = format!("{field}[{n}]");
+        let v = s
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| {
+                parse_error(
+                    file,
+                    *line,
+                    at.clone(),
+                    format!("expected a finite number, found `{s}`"),
+                )
+            })?;
+        if n % 4 == 3 && n < 12 {
+            check_translation(v).map_err(|p| parse_error(file, *line, at, p.to_string()))?;
+        }
+        m[(n / 4, n % 4)] = v;
+    }
+    let t = read_matrix4(&m).map_err(|p| parse_error(file, data_line, key, p.to_string()))?;
+    Ok((t, j))
+}
+
+/// Pairs `T1_i` with `T2_i` by index, refusing an index given twice or without its partner.
+fn pair_up(
+    mut t1: Vec<YamlMatrix>,
+    mut t2: Vec<YamlMatrix>,
+    file: &str,
+) -> Result<Vec<(Transform, Transform)>> {
+    for list in [&mut t1, &mut t2] {
+        list.sort_by_key(|m| (m.index, m.line));
+        if let Some(w) = list.windows(2).find(|w| w[0].index == w[1].index) {
+            return Err(parse_error(
+                file,
+                w[1].line,
+                w[1].key.clone(),
+                format!(
+                    "matrix index {} given twice (`{}` on line {} and `{}` here)",
+                    w[1].index, w[0].key, w[0].line, w[1].key
+                ),
+            ));
+        }
+    }
+    let partner = |m: &YamlMatrix, others: &[YamlMatrix], other: &str| {
+        if others.binary_search_by_key(&m.index, |o| o.index).is_ok() {
+            Ok(())
+        } else {
+            Err(parse_error(
+                file,
+                m.line,
+                m.key.clone(),
+                format!("no `{other}{}` to pair it with", m.index),
+            ))
+        }
+    };
+    for m in &t1 {
+        partner(m, &t2, "T2_")?;
+    }
+    for m in &t2 {
+        partner(m, &t1, "T1_")?;
+    }
+    Ok(t1
+        .into_iter()
+        .zip(t2)
+        .map(|(a, b)| (a.transform, b.transform))
+        .collect())
 }
 
 /// Reads moveit_calibration's sample JSON: a list of `[[4×4 effector in base], [4×4 object in
 /// camera]]` pairs (`base_from_gripper`, `camera_from_target`), each matrix as 4 rows or 16 numbers.
+/// Errors name the line of the offending value and its place (`[pair][matrix][row][column]`).
 pub fn read_moveit_json(text: &str, file: &str) -> Result<PoseSeries> {
     let value: Value = serde_json::from_str(text)
-        .map_err(|e| parse_error(file, e.line(), "-", format!("malformed JSON: {e}")))?;
+        .map_err(|e| parse_error(file, e.line().max(1), "-", format!("malformed JSON: {e}")))?;
+    if let Some(repeated) = repeated_key(text) {
+        return Err(parse_error(
+            file,
+            repeated.line,
+            repeated.path.clone(),
+            repeated.message(),
+        ));
+    }
     let list = value.as_array().ok_or_else(|| {
         parse_error(
             file,
@@ -129,54 +216,103 @@ pub fn read_moveit_json(text: &str, file: &str) -> Result<PoseSeries> {
         )
     })?;
     let mut pairs = Vec::with_capacity(list.len());
-    for (k, item) in list.iter().enumerate() {
-        let field = |j: usize, name: &str| -> Result<Transform> {
-            let v = item.get(j).ok_or_else(|| {
-                parse_error(
-                    file,
-                    0,
-                    format!("[{k}][{j}]"),
-                    format!("missing the {name} matrix"),
-                )
-            })?;
-            let v = match v.as_array() {
-                Some(flat) if flat.len() == 16 => {
-                    Value::Array(flat.chunks(4).map(|r| Value::Array(r.to_vec())).collect())
-                }
-                _ => v.clone(),
-            };
-            transform_from_json(&v)
-                .map_err(|p| parse_error(file, 0, format!("[{k}][{j}]{}", p.field), p.message))
-        };
+    let mut projections = Projections::default();
+    for k in 0..list.len() {
+        let robot = moveit_matrix(&value, k, 0, text, file)?;
+        let camera = moveit_matrix(&value, k, 1, text, file)?;
+        projections.add(&robot);
+        projections.add(&camera);
         pairs.push(PosePair {
-            base_from_gripper: field(0, "effector-in-base")?,
-            camera_from_target: field(1, "object-in-camera")?,
+            base_from_gripper: robot.transform,
+            camera_from_target: camera.transform,
         });
     }
-    series(pairs, file)
+    series(pairs, file, projections)
+}
+
+/// Matrix `j` of pair `k` of a moveit file (`value` its parsed `text`).
+fn moveit_matrix(
+    value: &Value,
+    k: usize,
+    j: usize,
+    text: &str,
+    file: &str,
+) -> Result<ReadTransform> {
+    let error = |field: String, message: String| {
+        let line = line_of(text, &steps(&field)).unwrap_or(1);
+        parse_error(file, line, field, message)
+    };
+    let pair = &value[k];
+    let Some(v) = pair
+        .as_array()
+        .filter(|p| p.len() == 2)
+        .and_then(|p| p.get(j))
+    else {
+        return Err(error(
+            format!("[{k}]"),
+            format!(
+                "expected a pair [effector_in_base, object_in_camera], found {}",
+                brief(pair)
+            ),
+        ));
+    };
+    let flat = v.as_array().filter(|flat| flat.len() == 16);
+    let rows = match flat {
+        Some(flat) => Value::Array(flat.chunks(4).map(|r| Value::Array(r.to_vec())).collect()),
+        None => v.clone(),
+    };
+    read_transform_json(&rows).map_err(|p| {
+        // A flat matrix's [r][c] is its element 4r + c in the file.
+        let inner = match steps(&p.field).as_slice() {
+            [Step::Index(r), Step::Index(c), rest @ ..] if flat.is_some() => {
+                let mut at = vec![Step::Index(4 * r + c)];
+                at.extend_from_slice(rest);
+                path_name(&at)
+            }
+            _ => p.field.clone(),
+        };
+        let inner = FieldProblem {
+            field: inner,
+            message: String::new(),
+        };
+        error(inner.path_under(&format!("[{k}][{j}]")), p.message)
+    })
+}
+
+/// A short form of a JSON value for messages.
+fn brief(v: &Value) -> String {
+    let text = v.to_string();
+    match text.char_indices().nth(40) {
+        Some((at, _)) => format!("{}…", &text[..at]),
+        None => text,
+    }
 }
 
 /// Reads a ViSP recording: the files `pose_fPe_<i>.yaml` (effector in the fixed frame,
 /// `base_from_gripper`) and `pose_cPo_<i>.yaml` (object in the camera, `camera_from_target`) of a
 /// directory, each a 6-vector `tx ty tz θux θuy θuz` (metres, radians), paired by index.
+///
+/// An index given twice (`pose_fPe_03.yaml` beside `pose_fPe_3.yaml`), a file of either kind
+/// without its partner, or an index that is not a number is refused, naming the files.
 pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
     let name = dir.display().to_string();
-    let entries = std::fs::read_dir(dir).map_err(|e| Error::Io {
+    let io_error = |e| Error::Io {
         file: name.clone(),
         source: e,
-    })?;
-    let mut robot: Vec<(usize, PathBuf)> = Vec::new();
-    for e in entries.flatten() {
-        let file = e.file_name().to_string_lossy().into_owned();
-        if let Some(index) = file
-            .strip_prefix("pose_fPe_")
-            .and_then(|s| s.strip_suffix(".yaml"))
-            .and_then(|s| s.parse().ok())
-        {
-            robot.push((index, e.path()));
-        }
+    };
+    let mut files: Vec<String> = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(io_error)? {
+        files.push(
+            entry
+                .map_err(io_error)?
+                .file_name()
+                .to_string_lossy()
+                .into_owned(),
+        );
     }
-    robot.sort();
+    files.sort();
+    let robot = visp_indices(&files, VISP_ROBOT, &name)?;
+    let camera = visp_indices(&files, VISP_CAMERA, &name)?;
     if robot.is_empty() {
         return Err(parse_error(
             &name,
@@ -185,15 +321,78 @@ pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
             "no ViSP robot pose files in this directory",
         ));
     }
+    for (index, file) in &camera {
+        if !robot.contains_key(index) {
+            return Err(parse_error(
+                &name,
+                0,
+                file.as_str(),
+                format!("no `{VISP_ROBOT}{index}.yaml` to pair it with"),
+            ));
+        }
+    }
     let mut pairs = Vec::with_capacity(robot.len());
-    for (index, path) in robot {
-        let camera = dir.join(format!("pose_cPo_{index}.yaml"));
+    for (index, file) in &robot {
+        let Some(camera_file) = camera.get(index) else {
+            return Err(parse_error(
+                &name,
+                0,
+                file.as_str(),
+                format!("no `{VISP_CAMERA}{index}.yaml` to pair it with"),
+            ));
+        };
         pairs.push(PosePair {
-            base_from_gripper: read_visp_pose(&path)?,
-            camera_from_target: read_visp_pose(&camera)?,
+            base_from_gripper: read_visp_pose(&dir.join(file))?,
+            camera_from_target: read_visp_pose(&dir.join(camera_file))?,
         });
     }
-    series(pairs, &name)
+    series(pairs, &name, Projections::default())
+}
+
+/// Largest norm of a ViSP θu rotation vector accepted, radians (a full turn; ViSP writes θ ≤ π).
+const MAX_VISP_ANGLE: f64 = 2.0 * std::f64::consts::PI;
+
+/// File-name prefix of ViSP robot poses (`base_from_gripper`).
+const VISP_ROBOT: &str = "pose_fPe_";
+/// File-name prefix of ViSP camera poses (`camera_from_target`).
+const VISP_CAMERA: &str = "pose_cPo_";
+
+/// The files `<prefix><index>.yaml` among `files` (sorted), by index; an index that is not a
+/// number, or one given twice, is refused.
+fn visp_indices(files: &[String], prefix: &str, dir: &str) -> Result<BTreeMap<usize, String>> {
+    let mut out: BTreeMap<usize, String> = BTreeMap::new();
+    for file in files {
+        let Some(digits) = file
+            .strip_prefix(prefix)
+            .and_then(|s| s.strip_suffix(".yaml"))
+        else {
+            continue;
+        };
+        let index = digits
+            .bytes()
+            .all(|b| b.is_ascii_digit())
+            .then(|| digits.parse::<usize>().ok())
+            .flatten()
+            .ok_or_else(|| {
+                parse_error(
+                    dir,
+                    0,
+                    file.as_str(),
+                    format!("expected `{prefix}<number>.yaml`: `{digits}` is not a pose number"),
+                )
+            })?;
+        if let Some(first) = out.insert(index, file.clone()) {
+            return Err(parse_error(
+                dir,
+                0,
+                file.as_str(),
+                format!(
+                    "pose {index} given twice: `{first}` and `{file}` (one would silently replace the other)"
+                ),
+            ));
+        }
+    }
+    Ok(out)
 }
 
 /// One ViSP pose file: `data:` followed by six numbers, as `- [v]` lines or one `[…]` list.
@@ -208,41 +407,73 @@ pub fn read_visp_pose(path: &Path) -> Result<Transform> {
             "missing `data:` (expected a ViSP vpPoseVector YAML)",
         ));
     };
-    let line = text[..at].lines().count().max(1);
-    let values: Vec<f64> = text[at + 5..]
-        .split(|c: char| c == '[' || c == ']' || c == ',' || c.is_whitespace())
-        .filter(|s| !s.is_empty() && *s != "-")
-        .map(|s| {
-            s.parse::<f64>().map_err(|_| {
-                parse_error(
+    let data_line = 1 + text[..at].matches('\n').count();
+    // Each value with the line (from 1) it is on.
+    let mut values: Vec<(f64, usize)> = Vec::new();
+    for (k, line) in text[at + 5..].split('\n').enumerate() {
+        let parts = line
+            .split(|c: char| c == '[' || c == ']' || c == ',' || c.is_whitespace())
+            .filter(|s| !s.is_empty() && *s != "-");
+        for s in parts {
+            let field = format!("data[{}]", values.len());
+            let v = s
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    parse_error(
+                        &file,
+                        data_line + k,
+                        field,
+                        format!("expected a finite number, found `{s}`"),
+                    )
+                })?;
+            if values.len() == 6 {
+                return Err(parse_error(
                     &file,
-                    line,
+                    data_line + k,
                     "data",
-                    format!("expected a number, found `{s}`"),
-                )
-            })
-        })
-        .collect::<Result<_>>()?;
-    if values.len() != 6 || values.iter().any(|v| !v.is_finite()) {
+                    "more than 6 values, expected tx ty tz θux θuy θuz",
+                ));
+            }
+            values.push((v, data_line + k));
+        }
+    }
+    let [tx, ty, tz, ux, uy, uz] = match values.as_slice() {
+        [a, b, c, d, e, f] => [a.0, b.0, c.0, d.0, e.0, f.0],
+        _ => {
+            return Err(parse_error(
+                &file,
+                data_line,
+                "data",
+                format!("{} values, expected 6: tx ty tz θux θuy θuz", values.len()),
+            ));
+        }
+    };
+    for (k, v) in [tx, ty, tz].into_iter().enumerate() {
+        check_translation(v)
+            .map_err(|p| parse_error(&file, values[k].1, format!("data[{k}]"), p.to_string()))?;
+    }
+    let theta_u = Vector3::new(ux, uy, uz);
+    // ViSP writes θ in [0, π]; more than a full turn is not a rotation vector it wrote (and a
+    // huge one would give NaN sines).
+    if theta_u.norm().is_nan() || theta_u.norm() > MAX_VISP_ANGLE {
         return Err(parse_error(
             &file,
-            line,
-            "data",
+            values[3].1,
+            "data[3..5]",
             format!(
-                "{} values, expected 6 finite: tx ty tz θux θuy θuz",
-                values.len()
+                "θu of norm {:e} rad is more than a full turn: not a ViSP rotation vector",
+                theta_u.norm()
             ),
         ));
     }
-    let rotation = exp_so3(&Vector3::new(values[3], values[4], values[5]));
-    Ok(transform_from_parts(
-        &rotation,
-        &Vector3::new(values[0], values[1], values[2]),
-    ))
+    let rotation = exp_so3(&theta_u);
+    Ok(transform_from_parts(&rotation, &Vector3::new(tx, ty, tz)))
 }
 
 /// Wraps pairs as a series, refusing fewer than 2.
-fn series(pairs: Vec<PosePair>, file: &str) -> Result<PoseSeries> {
+fn series(pairs: Vec<PosePair>, file: &str, projections: Projections) -> Result<PoseSeries> {
     if pairs.len() < 2 {
         return Err(parse_error(
             file,
@@ -259,6 +490,7 @@ fn series(pairs: Vec<PosePair>, file: &str) -> Result<PoseSeries> {
         pairs,
         stamps: vec![None; n],
         lines: vec![0; n],
+        projections,
     })
 }
 
@@ -282,7 +514,7 @@ mod tests {
             .replace("T1_0", "T2_0");
         match read_opencv_yaml(&format!("%YAML:1.0\n{good}{short}"), "p.yml") {
             Err(Error::Parse { line, field, .. }) => {
-                assert_eq!(line, 7);
+                assert_eq!(line, 11);
                 assert_eq!(field, "T2_0.data");
             }
             other => panic!("{other:?}"),
@@ -300,7 +532,7 @@ mod tests {
         let s = read_moveit_json(&format!("[[{i}, {flat}], [{flat}, {i}]]"), "m.json").unwrap();
         assert_eq!(s.pairs[0].camera_from_target.translation.vector.x, 1.0);
         assert!(
-            matches!(read_moveit_json(&format!("[[{i}]]"), "m.json"), Err(Error::Parse { field, .. }) if field == "[0][1]")
+            matches!(read_moveit_json(&format!("[[{i}]]"), "m.json"), Err(Error::Parse { field, line: 1, .. }) if field == "[0]")
         );
         assert!(matches!(
             read_moveit_json("{", "m.json"),
@@ -332,9 +564,119 @@ mod tests {
         match read_visp_dir(&dir) {
             Err(Error::Parse { file, field, .. }) => {
                 assert!(file.ends_with("pose_cPo_2.yaml"));
-                assert_eq!(field, "data");
+                assert_eq!(field, "data[4]");
             }
             other => panic!("{other:?}"),
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// (file, line, field) of a parse error.
+    fn place(r: Result<PoseSeries>) -> (String, usize, String) {
+        match r {
+            Err(Error::Parse {
+                file, line, field, ..
+            }) => (file, line, field),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    const YAML_BLOCK: &str = "   rows: 4\n   cols: 4\n   dt: d\n   data: [ 1., 0., 0., 0., 0., 1., 0., 0.,\n       0., 0., 1., 0., 0., 0., 0., 1. ]\n";
+
+    fn yaml(keys: &[&str]) -> String {
+        let blocks: String = keys
+            .iter()
+            .map(|k| format!("{k}: !!opencv-matrix\n{YAML_BLOCK}"))
+            .collect();
+        format!("%YAML:1.0\n{blocks}")
+    }
+
+    #[test]
+    fn yaml_errors_name_the_matrix_and_its_line() {
+        // Each block takes 6 lines after the header line.
+        let place_of = |keys: &[&str]| place(read_opencv_yaml(&yaml(keys), "p.yml"));
+        assert!(read_opencv_yaml(&yaml(&["T1_0", "T2_0", "T1_1", "T2_1"]), "p.yml").is_ok());
+        assert_eq!(
+            place_of(&["T1_0", "T2_0", "T1_1", "T2_1", "T1_2"]),
+            ("p.yml".into(), 26, "T1_2".into())
+        );
+        assert_eq!(
+            place_of(&["T1_3", "T2_3", "T1_03", "T2_1"]),
+            ("p.yml".into(), 14, "T1_03".into())
+        );
+        let bad_number =
+            yaml(&["T1_0", "T2_0"]).replacen("       0., 0., 1.,", "       0., 0., x,", 1);
+        assert_eq!(
+            place(read_opencv_yaml(&bad_number, "p.yml")),
+            ("p.yml".into(), 7, "T1_0.data[10]".into())
+        );
+        let no_data = yaml(&["T1_0", "T2_0"]).replacen("   data: [", "   dat: [", 1);
+        assert_eq!(
+            place(read_opencv_yaml(&no_data, "p.yml")),
+            ("p.yml".into(), 2, "T1_0.data".into())
+        );
+    }
+
+    #[test]
+    fn moveit_errors_name_the_line_of_the_value() {
+        let i = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+        let flat = "[1,0,0,0,\n 0,1,0,0,\n 0,0,1,0,\n 0,0,0,1]";
+        let two = format!("[\n [{i},\n  {flat}],\n [{i},\n  {i}]\n]\n");
+        assert!(read_moveit_json(&two, "m.json").is_ok());
+        let cases = [
+            (two.replacen("0,0,1,0,", "0,0,\"z\",0,", 1), 5, "[0][1][10]"),
+            (
+                two.replacen("[[1,0,0,0]", "[[2,0,0,0]", 2)
+                    .replacen("[[2,", "[[1,", 1),
+                7,
+                "[1][0]",
+            ),
+            (two.replacen("],\n [", "],\n [3], [", 1), 7, "[1]"),
+            (
+                two.replacen(
+                    "  [1,0,0,0,",
+                    "  {\"matrix\": 1,\n \"matrix\": 2}, [1,0,0,0,",
+                    1,
+                ),
+                4,
+                "[0][1].matrix",
+            ),
+            ("[\n\n [1, 2".to_string(), 3, "-"),
+        ];
+        for (text, line, field) in cases {
+            assert_eq!(
+                place(read_moveit_json(&text, "m.json")),
+                ("m.json".into(), line, field.into()),
+                "{text}"
+            );
+        }
+    }
+
+    #[test]
+    fn visp_refuses_a_pose_given_twice_or_alone() {
+        let dir = std::env::temp_dir().join(format!("handeye-visp2-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let pose = "rows: 6\ncols: 1\ndata: [0, 0, 1, 0, 0.3, 0]\n";
+        for k in 1..=3 {
+            for kind in ["fPe", "cPo"] {
+                std::fs::write(dir.join(format!("pose_{kind}_{k}.yaml")), pose).unwrap();
+            }
+        }
+        let name = dir.display().to_string();
+        assert_eq!(read_visp_dir(&dir).unwrap().pairs.len(), 3);
+        for (extra, field, says) in [
+            ("pose_fPe_03.yaml", "pose_fPe_3.yaml", "pose_fPe_03.yaml"),
+            ("pose_cPo_002.yaml", "pose_cPo_2.yaml", "pose_cPo_002.yaml"),
+            ("pose_cPo_4.yaml", "pose_cPo_4.yaml", "pose_fPe_4.yaml"),
+            ("pose_fPe_5.yaml", "pose_fPe_5.yaml", "pose_cPo_5.yaml"),
+            ("pose_fPe_x.yaml", "pose_fPe_x.yaml", "not a pose number"),
+        ] {
+            std::fs::write(dir.join(extra), pose).unwrap();
+            let e = read_visp_dir(&dir);
+            std::fs::remove_file(dir.join(extra)).unwrap();
+            let message = format!("{e:?}");
+            assert_eq!(place(e), (name.clone(), 0, field.into()), "{extra}");
+            assert!(message.contains(says), "{message}");
         }
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -4,8 +4,8 @@
 use std::path::Path;
 
 use crate::error::Result;
-use crate::io::{parse_error, read_text};
-use crate::pose::transform_from_xyz_quat_xyzw;
+use crate::io::{check_stamp, parse_error, read_text};
+use crate::pose::{check_translation, transform_from_xyz_quat_xyzw};
 use crate::sync::StampedPose;
 
 /// The field names of a stream line, for messages.
@@ -56,6 +56,11 @@ pub fn parse_stamped_poses(text: &str, source: &str) -> Result<StampedStream> {
                         format!("expected a finite number, found `{p}`"),
                     )
                 })?;
+        }
+        check_stamp(v[0]).map_err(|m| parse_error(source, line, "t", m))?;
+        for k in 1..4 {
+            check_translation(v[k])
+                .map_err(|e| parse_error(source, line, FIELDS[k], e.to_string()))?;
         }
         if out.last().is_some_and(|last| v[0] < last.stamp) {
             reordered += 1;

@@ -2,11 +2,12 @@
 
 use nalgebra::Matrix4;
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
+use serde_json::{Map, Value};
 
 use crate::error::TransformProblem;
 use crate::pose::{
-    Transform, quaternion_xyzw, transform_from_matrix4, transform_from_xyz_quat_xyzw,
+    ReadTransform, Transform, check_translation, quaternion_xyzw, read_matrix4,
+    transform_from_xyz_quat_xyzw,
 };
 
 /// Largest entry difference accepted between `matrix` and `translation`/`quaternion_xyzw` when both
@@ -75,53 +76,38 @@ impl From<TransformProblem> for FieldProblem {
 }
 
 /// Reads a transform from JSON: a bare 4×4 array, or an object with `matrix` and/or
-/// `translation` + `quaternion_xyzw` (both forms must then agree within [`CONSISTENCY_TOL`]).
+/// `translation` + `quaternion_xyzw` (both forms must then agree within [`CONSISTENCY_TOL`], or
+/// within the matrix's deviation from orthonormality when it was printed more coarsely).
 pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
+    read_transform_json(v).map(|r| r.transform)
+}
+
+/// As [`transform_from_json`], also telling how far from orthonormal a matrix was as given (its
+/// rotation is then projected onto SO(3), see [`read_matrix4`]).
+pub fn read_transform_json(v: &Value) -> Result<ReadTransform, FieldProblem> {
     match v {
-        Value::Array(_) => matrix_from_json(v, "").and_then(|m| Ok(transform_from_matrix4(&m)?)),
+        Value::Array(_) => Ok(read_matrix4(&matrix_from_json(v, "")?)?),
         Value::Object(o) => {
             let from_matrix = o
                 .get("matrix")
-                .map(|m| {
-                    matrix_from_json(m, "matrix").and_then(|m| Ok(transform_from_matrix4(&m)?))
-                })
+                .map(|m| Ok::<_, FieldProblem>(read_matrix4(&matrix_from_json(m, "matrix")?)?))
                 .transpose()?;
-            let from_parts = match (o.get("translation"), o.get("quaternion_xyzw")) {
-                (Some(t), Some(q)) => {
-                    let t = numbers::<3>(t, "translation")?;
-                    let q = numbers::<4>(q, "quaternion_xyzw")?;
-                    Some(transform_from_xyz_quat_xyzw(t, q).map_err(|p| {
-                        let field = if matches!(p, TransformProblem::QuaternionNorm { .. }) {
-                            "quaternion_xyzw"
-                        } else {
-                            ""
-                        };
-                        FieldProblem::new(field, p.to_string())
-                    })?)
-                }
-                (Some(_), None) if from_matrix.is_none() => {
-                    return Err(FieldProblem::new(
-                        "quaternion_xyzw",
-                        "missing (needed with `translation`)",
-                    ));
-                }
-                (None, Some(_)) if from_matrix.is_none() => {
-                    return Err(FieldProblem::new(
-                        "translation",
-                        "missing (needed with `quaternion_xyzw`)",
-                    ));
-                }
-                _ => None,
-            };
+            let from_parts = transform_from_parts_json(o, from_matrix.is_some())?;
             match (from_matrix, from_parts) {
                 (Some(a), Some(b)) => {
-                    let difference = (a.to_homogeneous() - b.to_homogeneous()).abs().max();
-                    if difference > CONSISTENCY_TOL {
+                    let difference = (a.transform.to_homogeneous() - b.to_homogeneous())
+                        .abs()
+                        .max();
+                    if difference > CONSISTENCY_TOL.max(a.deviation) {
                         return Err(TransformProblem::Inconsistent { difference }.into());
                     }
                     Ok(a)
                 }
-                (Some(a), None) | (None, Some(a)) => Ok(a),
+                (Some(a), None) => Ok(a),
+                (None, Some(b)) => Ok(ReadTransform {
+                    transform: b,
+                    deviation: 0.0,
+                }),
                 (None, None) => Err(FieldProblem::new(
                     "",
                     "a transform needs `matrix`, or `translation` and `quaternion_xyzw`",
@@ -135,7 +121,37 @@ pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
     }
 }
 
-/// A 4×4 row-major array of numbers.
+/// The transform of `translation` + `quaternion_xyzw`, if given; one without the other is an
+/// error unless a `matrix` is given (`has_matrix`).
+fn transform_from_parts_json(
+    o: &Map<String, Value>,
+    has_matrix: bool,
+) -> Result<Option<Transform>, FieldProblem> {
+    match (o.get("translation"), o.get("quaternion_xyzw")) {
+        (Some(t), Some(q)) => {
+            let t = numbers::<3>(t, "translation")?;
+            for (k, v) in t.iter().enumerate() {
+                check_translation(*v)
+                    .map_err(|p| FieldProblem::new(format!("translation[{k}]"), p.to_string()))?;
+            }
+            let q = numbers::<4>(q, "quaternion_xyzw")?;
+            Ok(Some(transform_from_xyz_quat_xyzw(t, q).map_err(|p| {
+                FieldProblem::new("quaternion_xyzw", p.to_string())
+            })?))
+        }
+        (Some(_), None) if !has_matrix => Err(FieldProblem::new(
+            "quaternion_xyzw",
+            "missing (needed with `translation`)",
+        )),
+        (None, Some(_)) if !has_matrix => Err(FieldProblem::new(
+            "translation",
+            "missing (needed with `quaternion_xyzw`)",
+        )),
+        _ => Ok(None),
+    }
+}
+
+/// A 4×4 row-major array of numbers; translation entries must pass [`check_translation`].
 fn matrix_from_json(v: &Value, field: &str) -> Result<Matrix4<f64>, FieldProblem> {
     let rows = v
         .as_array()
@@ -147,7 +163,11 @@ fn matrix_from_json(v: &Value, field: &str) -> Result<Matrix4<f64>, FieldProblem
             FieldProblem::new(format!("{field}[{r}]"), "expected a row of 4 numbers")
         })?;
         for (c, x) in row.iter().enumerate() {
-            m[(r, c)] = number(x, &format!("{field}[{r}][{c}]"))?;
+            let at = format!("{field}[{r}][{c}]");
+            m[(r, c)] = number(x, &at)?;
+            if c == 3 && r < 3 {
+                check_translation(m[(r, c)]).map_err(|p| FieldProblem::new(at, p.to_string()))?;
+            }
         }
     }
     Ok(m)
@@ -232,5 +252,54 @@ mod tests {
         ]))
         .unwrap_err();
         assert!(e.message.contains("orthonormal"));
+    }
+
+    #[test]
+    fn matrix_and_quaternion_rounded_alike_agree_and_different_ones_do_not() {
+        let t = Transform::new(
+            nalgebra::Vector3::new(0.1, 0.2, 0.3),
+            nalgebra::Vector3::new(0.7, -0.2, 1.9),
+        );
+        let j = TransformJson::from(&t);
+        let round = |v: f64| (v * 1e6).round() / 1e6;
+        let both = |q: [f64; 4]| {
+            json!({
+                "matrix": j.matrix.map(|r| r.map(round)),
+                "translation": j.translation.map(round),
+                "quaternion_xyzw": q.map(round),
+            })
+        };
+        let read = read_transform_json(&both(j.quaternion_xyzw)).unwrap();
+        assert!(read.projected());
+        assert!(
+            (read.transform.to_homogeneous() - t.to_homogeneous())
+                .abs()
+                .max()
+                < 2e-6
+        );
+        // A quaternion of a rotation 1e-3 rad away is another rotation, not rounding.
+        let other = Transform::new(
+            nalgebra::Vector3::new(0.1, 0.2, 0.3),
+            nalgebra::Vector3::new(0.7, -0.2, 1.901),
+        );
+        let e = read_transform_json(&both(quaternion_xyzw(&other))).unwrap_err();
+        assert!(e.message.contains("disagree"), "{e:?}");
+    }
+
+    #[test]
+    fn absurd_translations_name_their_entry() {
+        let mut m = json!([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]);
+        m[1][3] = json!(1e308);
+        let e = transform_from_json(&m).unwrap_err();
+        assert_eq!(e.field, "[1][3]");
+        assert!(
+            e.message.contains("1e308 is not a plausible length"),
+            "{e:?}"
+        );
+        let e = transform_from_json(
+            &json!({"translation": [0, -2e9, 0], "quaternion_xyzw": [0, 0, 0, 1]}),
+        )
+        .unwrap_err();
+        assert_eq!(e.field, "translation[1]");
     }
 }

@@ -14,6 +14,7 @@ use std::path::Path;
 use serde_json::{Value, json};
 
 use crate::error::{Error, Result};
+use crate::io::json_text::{line_of, repeated_key, steps};
 use crate::io::{TransformJson, parse_error, read_text, transform_from_json};
 use crate::pose::Transform;
 
@@ -33,7 +34,8 @@ pub struct Truth {
     pub target: Option<(String, Transform)>,
 }
 
-/// Reads a truth file; errors name the file, the line of the offending key and the field.
+/// Reads a truth file; errors name the file, the line of the offending value and the field. A key
+/// given twice in one object is refused.
 pub fn read_truth(path: &Path) -> Result<Truth> {
     parse_truth(&read_text(path)?, &path.display().to_string())
 }
@@ -60,13 +62,21 @@ pub fn parse_truth(text: &str, file: &str) -> Result<Truth> {
             "expected a JSON object naming `gripper_from_camera` or `base_from_camera`",
         ));
     }
+    if let Some(repeated) = repeated_key(text) {
+        return Err(parse_error(
+            file,
+            repeated.line,
+            repeated.path.clone(),
+            repeated.message(),
+        ));
+    }
     let get = |name: &str| -> Result<Option<Transform>> {
         value
             .get(name)
             .map(|v| {
                 transform_from_json(v).map_err(|p| {
                     let field = p.path_under(name);
-                    parse_error(file, line_of_key(text, name), field, p.message)
+                    parse_error(file, line_of_field(text, &field), field, p.message)
                 })
             })
             .transpose()
@@ -78,7 +88,7 @@ pub fn parse_truth(text: &str, file: &str) -> Result<Truth> {
             (None, None) => Ok(None),
             (Some(_), Some(_)) => Err(parse_error(
                 file,
-                line_of_key(text, names[1]),
+                line_of_field(text, names[1]),
                 names[1],
                 format!("both `{}` and `{}` given: give one", names[0], names[1]),
             )),
@@ -96,10 +106,10 @@ pub fn parse_truth(text: &str, file: &str) -> Result<Truth> {
     Ok(Truth { x, frame, target })
 }
 
-/// The line (from 1) where `"key"` first appears in `text`, or 0 when it is not found.
-fn line_of_key(text: &str, key: &str) -> usize {
-    text.find(&format!("\"{key}\""))
-        .map_or(0, |at| 1 + text[..at].matches('\n').count())
+/// The line (from 1) where the value of `field` (a path such as `gripper_from_camera.matrix[1]`)
+/// starts in `text`.
+fn line_of_field(text: &str, field: &str) -> usize {
+    line_of(text, &steps(field)).unwrap_or(1)
 }
 
 /// The JSON of a truth file: X under its frame name, and the target pose when known, each as a
@@ -204,13 +214,23 @@ mod tests {
             (
                 "{\"gripper_from_camera\":\n {\"translation\": [0, 0, \"x\"], \"quaternion_xyzw\": [0,0,0,1]}}"
                     .to_string(),
-                1,
+                2,
                 "gripper_from_camera.translation[2]",
             ),
             (
                 format!("{{\"gripper_from_camera\": {i},\n\"gripper_from_target\": [[1,0]]}}"),
                 2,
                 "gripper_from_target",
+            ),
+            (
+                format!("{{\"gripper_from_camera\": {i},\n\"base_from_target\": {{\"matrix\": {i},\n \"matrix\": {i}}}}}"),
+                3,
+                "base_from_target.matrix",
+            ),
+            (
+                format!("{{\"gripper_from_camera\": {i},\n\n\"gripper_from_camera\": {i}}}"),
+                3,
+                "gripper_from_camera",
             ),
         ];
         for (text, line, field) in cases {
