@@ -124,6 +124,35 @@ fn partners(n: usize, i: usize) -> impl Iterator<Item = usize> {
     (0..take).map(move |k| (i + 1 + (k * step + i % step.max(1)) % others.max(1)) % n)
 }
 
+/// How far the gripper's rotation axes spread beyond one direction, X-free: the second-largest over
+/// the largest eigenvalue of Σ θ² k kᵀ over the motions between up to 60 poses spread over the input
+/// (motions between distant poses are large, so noise hardly moves their axes; θ² weighs down the
+/// small ones whose axes noise does move). Near 0 when every rotation is about one axis: then X's
+/// rotation about that axis, and its translation along it, are not determined by any reading of
+/// the input.
+pub fn axis_scatter(poses: &[PosePair], setup: Setup) -> f64 {
+    const SAMPLE: usize = 60;
+    let n = poses.len();
+    let idx: Vec<usize> = if n <= SAMPLE {
+        (0..n).collect()
+    } else {
+        (0..SAMPLE).map(|k| k * (n - 1) / (SAMPLE - 1)).collect()
+    };
+    let mut scatter = Matrix3::zeros();
+    for (a, &i) in idx.iter().enumerate() {
+        for &j in &idx[a + 1..] {
+            let m = MotionPair::between(setup, &poses[i], &poses[j]);
+            let f = MotionFeatures::of(&m.a);
+            if let Some(k) = f.axis {
+                scatter += k * k.transpose() * (f.angle * f.angle);
+            }
+        }
+    }
+    let mut e: Vec<f64> = scatter.symmetric_eigenvalues().iter().copied().collect();
+    e.sort_by(|a, b| b.total_cmp(a));
+    if e[0] <= 0.0 { 0.0 } else { e[1].max(0.0) / e[0] }
+}
+
 /// Median of the values (upper middle), 0 for none.
 pub(crate) fn median(mut v: Vec<f64>) -> f64 {
     if v.is_empty() {
