@@ -330,7 +330,11 @@ fn check_error(e: &Error, files: &BTreeMap<String, usize>, tally: &mut Tally, wh
         Error::Io { file, source } => {
             assert!(files.contains_key(file), "{what}: names `{file}`: {e}");
             // Bad content (such as bytes that are not UTF-8) is a parse error on its line.
-            assert_ne!(source.kind(), std::io::ErrorKind::InvalidData, "{what}: {e}");
+            assert_ne!(
+                source.kind(),
+                std::io::ErrorKind::InvalidData,
+                "{what}: {e}"
+            );
             tally.io += 1;
         }
         other => panic!("{what}: not a parse or I/O error: {other:?}"),
