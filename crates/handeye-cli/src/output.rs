@@ -18,7 +18,7 @@ pub fn exit_code(e: &anyhow::Error) -> u8 {
             Error::Degenerate { .. }
             | Error::TooFewMotions { .. }
             | Error::Misread { .. }
-            | Error::Outliers { .. },
+            | Error::Untrusted { .. },
         ) => DEGENERATE,
         Some(_) => BAD_INPUT,
         None => 1,

@@ -160,15 +160,18 @@ fn camodocal_outliers_are_found_and_rejecting_them_lowers_the_residuals() {
         err.contains("--setup eye-to-hand") && err.contains("--fix robot-inverted"),
         "{err}"
     );
-    // Kept as given on request, it is a warning that says the same.
-    let kept = calibrate(&[f, "--fix", "as-given"]);
-    assert!(kept["residual"]["rotation_deg_rms"].as_f64().unwrap() > 20.0);
+    // Kept as given on request, its own noise leaves X undetermined, and the refusal says why.
+    let (code, _, err) = run(&["calibrate", f, "--fix", "as-given"]);
+    assert_eq!(code, 3, "{err}");
     assert!(
-        kept["warnings"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|w| w.as_str().unwrap().contains("--fix robot-inverted"))
+        err.contains("not determined") && err.contains("--fix robot-inverted"),
+        "{err}"
+    );
+    // The outlier is named by its place in the file.
+    let name = outliers[0]["name"].as_str().unwrap();
+    assert!(
+        name.contains("TransformPairsInput.yml:") && !name.ends_with(":0"),
+        "{name}"
     );
 }
 

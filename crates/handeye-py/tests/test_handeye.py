@@ -83,8 +83,20 @@ def test_calibrate_reports_quality():
     assert result["frame"] == "gripper_from_camera" and result["motions"] == 66
     assert np.abs(result["matrix"][:3, :3] - X[:3, :3]).max() < 0.01
     q = result["quality"]
-    assert q["axis_spread_deg"] > 20 and 0 < q["rotation_std_deg"] < 1 and q["translation_std"] > 0
+    assert q["axis_spread_deg"] > 20
+    # The same report as `handeye calibrate`: an honest one-sigma, the readings tried, outliers.
+    u = result["uncertainty"]
+    assert 0 < u["rotation_deg"] < 1 and u["translation"] > 0
+    rot_err = np.degrees(np.arccos(np.clip((np.trace(result["matrix"][:3, :3].T @ X[:3, :3]) - 1) / 2, -1, 1)))
+    assert rot_err < 4 * u["rotation_deg"]
+    assert result["reading"]["applied"] == "as-given" and result["outliers"]["poses"] == []
     assert result["residual"]["rotation_deg_rms"] < 1
+    # The robot poses inverted: refused with the fix, and read that way on request.
+    inverted = np.linalg.inv(g)
+    with pytest.raises(ValueError, match="--fix robot-inverted"):
+        handeye.calibrate(inverted, c, method="refine", pairs="all")
+    fixed = handeye.calibrate(inverted, c, method="refine", pairs="all", fix="robot-inverted")
+    assert np.abs(fixed["matrix"] - result["matrix"]).max() < 1e-9
 
 
 def test_degenerate_data_raises_where_opencv_returns_garbage():

@@ -223,11 +223,16 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     );
     let outliers = outlier_report(&found, options);
     if let Err(e) = refuse_if_undetermined(&uncertainty, setup, calibration.conditioning) {
-        if outliers.poses.is_empty() || options.reject_outliers {
+        // Say what in the input explains it: outliers kept, a better reading kept as given.
+        let mut why = warnings.clone();
+        if !outliers.poses.is_empty() && !options.reject_outliers {
+            why.push(outlier_warning(&outliers));
+        }
+        if why.is_empty() {
             return Err(e);
         }
-        return Err(Error::Outliers {
-            advice: format!("{e}; {}", outlier_warning(&outliers)),
+        return Err(Error::Untrusted {
+            advice: format!("{e}; {}", why.join("; ")),
         });
     }
     let quality = quality_of(&used, setup, options.pairing, &calibration);

@@ -120,7 +120,7 @@ fn pose_gap(poses: &[PosePair], setup: Setup, i: usize) -> PoseGap {
 fn partners(n: usize, i: usize) -> impl Iterator<Item = usize> {
     let others = n.saturating_sub(1);
     let take = others.min(PARTNERS);
-    let step = if take == 0 { 1 } else { others / take };
+    let step = others.checked_div(take).unwrap_or(1);
     (0..take).map(move |k| (i + 1 + (k * step + i % step.max(1)) % others.max(1)) % n)
 }
 
@@ -150,7 +150,11 @@ pub fn axis_scatter(poses: &[PosePair], setup: Setup) -> f64 {
     }
     let mut e: Vec<f64> = scatter.symmetric_eigenvalues().iter().copied().collect();
     e.sort_by(|a, b| b.total_cmp(a));
-    if e[0] <= 0.0 { 0.0 } else { e[1].max(0.0) / e[0] }
+    if e[0] <= 0.0 {
+        0.0
+    } else {
+        e[1].max(0.0) / e[0]
+    }
 }
 
 /// Median of the values (upper middle), 0 for none.
@@ -173,6 +177,9 @@ pub fn translation_scale(poses: &[PosePair], setup: Setup) -> f64 {
     median(hand.iter().map(|v| (v - centre).norm()).collect())
 }
 
+/// One pose's disagreement D_i as (rotation vector, radians; translation, input units).
+pub type PoseResidual = (Vector3<f64>, Vector3<f64>);
+
 /// Each pose's disagreement D_i = Y⁻¹ Y_i with the common fixed frame Y under a given X.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseResiduals {
@@ -180,7 +187,7 @@ pub struct PoseResiduals {
     /// a robust mean of the Y_i.
     pub y: Transform,
     /// D_i per pose as (rotation vector, radians; translation, input units), in the target frame.
-    pub residuals: Vec<(Vector3<f64>, Vector3<f64>)>,
+    pub residuals: Vec<PoseResidual>,
 }
 
 impl PoseResiduals {
@@ -237,7 +244,7 @@ impl PoseResiduals {
 }
 
 /// D = Y⁻¹ Y_i as (rotation vector, translation).
-fn residual(y: &Transform, yi: &Transform) -> (Vector3<f64>, Vector3<f64>) {
+fn residual(y: &Transform, yi: &Transform) -> PoseResidual {
     let d = y.inverse() * yi;
     (log_so3(d.rotation.matrix()), d.translation.vector)
 }
@@ -310,8 +317,20 @@ mod tests {
     #[test]
     fn residuals_vanish_under_the_true_x_without_noise() {
         let s = simulate(&SimConfig::default().noise_free(), 2, 0);
-        for setup in [Setup::EyeInHand] {
-            let r = PoseResiduals::at(&s.poses, setup, &s.gripper_from_camera);
+        // The same poses as eye-to-hand data: Q = gripper_from_base enters as the inverse.
+        let eye_to_hand: Vec<PosePair> = s
+            .poses
+            .iter()
+            .map(|p| PosePair {
+                base_from_gripper: p.base_from_gripper.inverse(),
+                camera_from_target: p.camera_from_target,
+            })
+            .collect();
+        for (setup, poses) in [
+            (Setup::EyeInHand, &s.poses),
+            (Setup::EyeToHand, &eye_to_hand),
+        ] {
+            let r = PoseResiduals::at(poses, setup, &s.gripper_from_camera);
             assert!(
                 r.median_rotation_deg() < 1e-10,
                 "{}",
@@ -319,7 +338,7 @@ mod tests {
             );
             assert!(r.median_translation() < 1e-10, "{}", r.median_translation());
             let rebuilt = r.camera_from_target_with(
-                &s.poses[3],
+                &poses[3],
                 setup,
                 &s.gripper_from_camera,
                 &r.residuals[3].0,

@@ -343,7 +343,9 @@ pub fn check_readings(poses: &[PosePair], setup: Setup) -> ReadingCheck {
         // A unit mix-up of 1000× leaves translation residuals of the size of the motions; a few
         // percent come from noise, or from motions that leave the translation free (a gripper
         // turning about one point fits any camera unit).
-        .filter(|f| !matches!(f.reading, Reading::RobotMm | Reading::CameraMm) || Some(f.reading) == mm)
+        .filter(|f| {
+            !matches!(f.reading, Reading::RobotMm | Reading::CameraMm) || Some(f.reading) == mm
+        })
         .filter(|f| f.far_better_than(&given))
         .copied()
         .collect();

@@ -188,10 +188,11 @@ pub enum Error {
         /// What fits better, and the fix.
         advice: String,
     },
-    /// Poses that disagree with the others leave X undetermined.
+    /// X is not determined, and the input shows why: outlier poses, or a reading of the input
+    /// that fits far better (kept by request).
     #[error("X cannot be trusted: {advice}")]
-    Outliers {
-        /// What is undetermined, the outlier poses, and the fix.
+    Untrusted {
+        /// What is undetermined, what the input shows, and the fix.
         advice: String,
     },
     /// Malformed input data, with its place.

@@ -191,6 +191,23 @@ pub fn estimate_time_offset(
     if !(step.is_finite() && step > 0.0) {
         return bad("camera stamps do not increase");
     }
+    // The grids are sized by the streams' time spans: a stamp far from the others (seconds among
+    // nanoseconds, a corrupt value) must not size an allocation.
+    let most = GRID_PER_SAMPLE * (robot.len() + camera.len());
+    for (name, s) in [("robot", robot), ("camera", camera)] {
+        let span = s[s.len() - 1].stamp - s[0].stamp;
+        let grid = span / step;
+        if grid.is_nan() || grid > most as f64 {
+            return Err(Error::InvalidParameter {
+                name: "time_offset",
+                message: format!(
+                    "the {name} stream's stamps span {span:.6e} s for {} samples taken every {:.3e} s or so: a stamp far from the others (milli- or nanoseconds among seconds?); fix the stamps or give --time-offset in seconds",
+                    s.len(),
+                    2.0 * step
+                ),
+            });
+        }
+    }
     let speed_r = angular_speed_grid(robot, step);
     let speed_c = angular_speed_grid(camera, step);
     let max_lag = (options.max_offset / step).ceil() as i64;
@@ -246,6 +263,9 @@ fn median_period(s: &[StampedPose]) -> f64 {
 
 /// Angular speed (rad/s) of a stream on a grid of `step` from its first stamp: the rotation angle
 /// between the (interpolated) poses at consecutive grid points, divided by `step`.
+/// Grid points allowed per stream sample in [`estimate_time_offset`].
+const GRID_PER_SAMPLE: usize = 64;
+
 fn angular_speed_grid(s: &[StampedPose], step: f64) -> Vec<f64> {
     let (t0, t1) = (s[0].stamp, s[s.len() - 1].stamp);
     let n = ((t1 - t0) / step).floor() as usize;
@@ -320,6 +340,17 @@ mod tests {
         let x = Transform::new(Vector3::new(0.05, 0.0, 0.1), Vector3::new(0.1, 0.2, 0.3));
         let base_from_target = Transform::new(Vector3::new(0.0, 0.0, -0.5), Vector3::zeros());
         (q, (base_from_target.inverse() * q * x).inverse())
+    }
+
+    #[test]
+    fn a_far_stamp_is_refused_not_allocated() {
+        for far in [1e11, 1.7e9, 1e300] {
+            let (mut robot, camera) = streams(0.02);
+            let last = robot.len() - 1;
+            robot[last].stamp = far;
+            let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default()).unwrap_err();
+            assert!(e.to_string().contains("far from the others"), "{e}");
+        }
     }
 
     fn streams(offset: f64) -> (Vec<StampedPose>, Vec<StampedPose>) {

@@ -18,7 +18,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::consistency::PoseResiduals;
+use crate::consistency::{PoseResidual, PoseResiduals};
 use crate::error::Result;
 use crate::motion::{PosePair, Setup};
 use crate::pose::{Transform, log_so3};
@@ -168,10 +168,10 @@ pub fn bootstrap(
 /// error); consecutive motions cancel most of them. Independent signs would break that and make
 /// the noise of small consecutive motions look far larger than it is; within a block the signs
 /// agree, so the cancellation stays. For independent errors a block changes nothing on average.
-fn block_length(residuals: &[(Vector3<f64>, Vector3<f64>)]) -> usize {
+fn block_length(residuals: &[PoseResidual]) -> usize {
     let n = residuals.len();
     let most = (n / 5).max(1);
-    let lag = |part: fn(&(Vector3<f64>, Vector3<f64>)) -> Vector3<f64>| {
+    let lag = |part: fn(&PoseResidual) -> Vector3<f64>| {
         let energy: f64 = residuals.iter().map(|r| part(r).norm_squared()).sum();
         if energy <= 0.0 {
             return 1;

@@ -124,7 +124,11 @@ fn the_uncertainty_holds_on_realistic_data() {
 #[test]
 fn degenerate_motion_is_refused_with_the_undetermined_direction() {
     // One joint moving, or two joints with parallel axes: every rotation axis is parallel.
-    let all = [entries("degenerate_single_joint"), entries("degenerate_parallel_axes")].concat();
+    let all = [
+        entries("degenerate_single_joint"),
+        entries("degenerate_parallel_axes"),
+    ]
+    .concat();
     assert!(all.len() >= 12);
     for e in &all {
         for options in pairings() {
@@ -141,9 +145,17 @@ fn degenerate_motion_is_refused_with_the_undetermined_direction() {
 
 #[test]
 fn correct_data_is_never_called_misread() {
-    for kind in ["noise_free", "nominal", "high_noise", "student_t", "pnp", "wrist_only"] {
+    for kind in [
+        "noise_free",
+        "nominal",
+        "high_noise",
+        "student_t",
+        "pnp",
+        "wrist_only",
+    ] {
         for e in entries(kind) {
-            let r = run(&e, &Options::default()).unwrap_or_else(|err| panic!("{}: {err}", e["file"]));
+            let r =
+                run(&e, &Options::default()).unwrap_or_else(|err| panic!("{}: {err}", e["file"]));
             assert_eq!(r.reading.applied, Reading::AsGiven, "{}", e["file"]);
             assert!(
                 r.warnings.iter().all(|w| !w.contains("--fix")),
@@ -195,9 +207,12 @@ fn every_mistake_is_refused_or_flagged_with_its_fix() {
                     r.warnings
                 );
             }
-            ("typo_x1000", Err(Error::Outliers { advice })) => {
+            ("typo_x1000", Err(Error::Untrusted { advice })) => {
                 let line = e["bad_lines"][0].as_u64().unwrap();
-                assert!(advice.contains(&format!("{file}:{line} ")), "{file}: {advice}");
+                assert!(
+                    advice.contains(&format!("{file}:{line} ")),
+                    "{file}: {advice}"
+                );
                 assert!(advice.contains("--reject-outliers"), "{advice}");
                 let rejected = run(
                     e,

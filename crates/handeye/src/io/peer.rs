@@ -52,14 +52,17 @@ pub fn read_opencv_yaml(text: &str, file: &str) -> Result<PoseSeries> {
         }
         k = next;
     }
-    let pairs = pair_up(t1, t2, file)?
+    let (pairs, lines) = pair_up(t1, t2, file)?
         .into_iter()
-        .map(|(gripper_from_base, target_from_camera)| PosePair {
-            base_from_gripper: gripper_from_base.inverse(),
-            camera_from_target: target_from_camera.inverse(),
+        .map(|(gripper_from_base, target_from_camera, line)| {
+            let pair = PosePair {
+                base_from_gripper: gripper_from_base.inverse(),
+                camera_from_target: target_from_camera.inverse(),
+            };
+            (pair, line)
         })
-        .collect();
-    series(pairs, file, projections)
+        .unzip();
+    series_at(pairs, lines, file, projections)
 }
 
 /// One `T1_i` or `T2_i` matrix of an OpenCV-YAML file, with its place.
@@ -153,7 +156,7 @@ fn pair_up(
     mut t1: Vec<YamlMatrix>,
     mut t2: Vec<YamlMatrix>,
     file: &str,
-) -> Result<Vec<(Transform, Transform)>> {
+) -> Result<Vec<(Transform, Transform, usize)>> {
     for list in [&mut t1, &mut t2] {
         list.sort_by_key(|m| (m.index, m.line));
         if let Some(w) = list.windows(2).find(|w| w[0].index == w[1].index) {
@@ -189,7 +192,7 @@ fn pair_up(
     Ok(t1
         .into_iter()
         .zip(t2)
-        .map(|(a, b)| (a.transform, b.transform))
+        .map(|(a, b)| (a.transform, b.transform, a.line))
         .collect())
 }
 
@@ -474,6 +477,17 @@ pub fn read_visp_pose(path: &Path) -> Result<Transform> {
 
 /// Wraps pairs as a series, refusing fewer than 2.
 fn series(pairs: Vec<PosePair>, file: &str, projections: Projections) -> Result<PoseSeries> {
+    let lines = vec![0; pairs.len()];
+    series_at(pairs, lines, file, projections)
+}
+
+/// [`series`] with each pair's line (of its first matrix), from 1.
+fn series_at(
+    pairs: Vec<PosePair>,
+    lines: Vec<usize>,
+    file: &str,
+    projections: Projections,
+) -> Result<PoseSeries> {
     if pairs.len() < 2 {
         return Err(parse_error(
             file,
@@ -489,7 +503,7 @@ fn series(pairs: Vec<PosePair>, file: &str, projections: Projections) -> Result<
     Ok(PoseSeries {
         pairs,
         stamps: vec![None; n],
-        lines: vec![0; n],
+        lines,
         projections,
     })
 }
