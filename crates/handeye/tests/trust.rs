@@ -247,3 +247,75 @@ fn the_truth_files_agree_with_the_manifest() {
         assert!(d.norm() < 1e-9, "{}", e["truth"]);
     }
 }
+
+mod readings {
+    use handeye::PosePair;
+    use handeye::conventions::{Reading, check_readings};
+    use handeye::sim::{SimConfig, simulate};
+    use handeye::{Setup, Transform};
+    use proptest::prelude::*;
+
+    /// The simulation's poses for either setup (eye-to-hand: the robot pose enters inverted).
+    fn poses(seed: u64, setup: Setup) -> Vec<PosePair> {
+        let s = simulate(&SimConfig::large_motions(), seed, 1);
+        s.poses
+            .iter()
+            .map(|p| PosePair {
+                base_from_gripper: setup.hand_pose(&p.base_from_gripper),
+                camera_from_target: p.camera_from_target,
+            })
+            .collect()
+    }
+
+    fn scaled(t: &Transform, s: f64) -> Transform {
+        let mut out = *t;
+        out.translation.vector *= s;
+        out
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        #[test]
+        fn well_posed_data_never_fire_the_check(seed in 0u64..1_000_000, eye_to_hand: bool) {
+            let setup = if eye_to_hand { Setup::EyeToHand } else { Setup::EyeInHand };
+            let c = check_readings(&poses(seed, setup), setup);
+            prop_assert!(c.better.is_none(), "{c:?}");
+        }
+
+        #[test]
+        fn inverted_and_scaled_inputs_always_fire_it(
+            seed in 0u64..1_000_000,
+            eye_to_hand: bool,
+            mistake in 0usize..4,
+        ) {
+            let setup = if eye_to_hand { Setup::EyeToHand } else { Setup::EyeInHand };
+            let good = poses(seed, setup);
+            let (bad, meant): (Vec<PosePair>, Reading) = match mistake {
+                0 => (Reading::RobotInverted.apply(&good), Reading::RobotInverted),
+                1 => (Reading::CameraInverted.apply(&good), Reading::CameraInverted),
+                2 => (
+                    good.iter()
+                        .map(|p| PosePair {
+                            base_from_gripper: scaled(&p.base_from_gripper, 1e3),
+                            camera_from_target: p.camera_from_target,
+                        })
+                        .collect(),
+                    Reading::RobotMm,
+                ),
+                _ => (
+                    good.iter()
+                        .map(|p| PosePair {
+                            base_from_gripper: p.base_from_gripper,
+                            camera_from_target: scaled(&p.camera_from_target, 1e3),
+                        })
+                        .collect(),
+                    Reading::CameraMm,
+                ),
+            };
+            let c = check_readings(&bad, setup);
+            let named: Vec<Reading> = c.better.iter().chain(&c.also).map(|f| f.reading).collect();
+            prop_assert!(named.contains(&meant), "{meant}: {c:?}");
+        }
+    }
+}
