@@ -4,7 +4,6 @@
 use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::calibration::{Fix, Options, Report, calibrate};
-use handeye::conventions::Reading;
 use handeye::metrics::OUTLIER_DEG;
 use handeye::solve::TsaiOptions;
 use handeye::uncertainty::REPLICATES;
@@ -119,8 +118,7 @@ fn options(args: &Args) -> Result<Options> {
     }
     let fix = match args.fix.as_deref() {
         None => Fix::Refuse,
-        Some("auto") => Fix::Auto,
-        Some(name) => Fix::Read(name.parse::<Reading>()?),
+        Some(name) => name.parse::<Fix>()?,
     };
     Ok(Options {
         method: args.method.parse::<Method>()?,

@@ -113,8 +113,7 @@ fn calibrate_report<'py>(
         reject_outliers,
         fix: match fix {
             None => handeye::calibration::Fix::Refuse,
-            Some("auto") => handeye::calibration::Fix::Auto,
-            Some(name) => handeye::calibration::Fix::Read(name.parse().map_err(value_error)?),
+            Some(name) => name.parse().map_err(value_error)?,
         },
         replicates: bootstrap.max(8),
         ..calibration_options(method, pairs, tsai_opencv_filter)?

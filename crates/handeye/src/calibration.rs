@@ -48,6 +48,18 @@ pub enum Fix {
     Auto,
 }
 
+impl std::str::FromStr for Fix {
+    type Err = Error;
+
+    /// `auto`, or a [`Reading`]'s name (`as-given`, `robot-inverted`, …).
+    fn from_str(s: &str) -> Result<Self> {
+        if s == "auto" {
+            return Ok(Fix::Auto);
+        }
+        s.parse::<Reading>().map(Fix::Read)
+    }
+}
+
 /// How to calibrate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Options {
