@@ -21,9 +21,11 @@ pub struct Args {
     /// Solver.
     #[arg(long, default_value = "andreff", value_parser = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
     method: String,
-    /// Motions from consecutive poses, or from every pair i < j (as OpenCV does).
-    #[arg(long, default_value = "consecutive", value_parser = ["consecutive", "all"])]
-    pairs: String,
+    /// Motions from consecutive poses, or from every pair i < j (as OpenCV does). Default:
+    /// consecutive for pose-pair files, all for two streams (`--robot/--camera`), whose
+    /// consecutive camera frames barely move.
+    #[arg(long, value_parser = ["consecutive", "all"])]
+    pairs: Option<String>,
     /// Leave out the poses that disagree with the others (their motions' robot and camera
     /// rotation angles or pitches differ beyond the data's own noise).
     #[arg(long)]
@@ -90,6 +92,12 @@ pub fn run(args: Args) -> Result<()> {
             report.outliers.poses.len() + report.poses
         );
     }
+    if args.pairs.is_none() && report.pairing == Pairing::All {
+        eprintln!(
+            "pairs: every pair of the {} stream samples (consecutive frames barely move; `--pairs consecutive` for the paper's pairing)",
+            report.poses
+        );
+    }
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
@@ -122,10 +130,13 @@ fn options(args: &Args) -> Result<Options> {
     };
     Ok(Options {
         method: args.method.parse::<Method>()?,
-        pairing: if args.pairs == "all" {
-            Pairing::All
-        } else {
-            Pairing::Consecutive
+        pairing: match args.pairs.as_deref() {
+            Some("all") => Pairing::All,
+            Some(_) => Pairing::Consecutive,
+            // Consecutive samples of a stream are a camera period apart: tiny motions whose
+            // noise dominates. Every pair of samples carries the information.
+            None if args.input.robot.is_some() => Pairing::All,
+            None => Pairing::Consecutive,
         },
         tsai: TsaiOptions {
             opencv_filter: args.tsai_opencv_filter,
