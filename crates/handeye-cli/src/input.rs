@@ -9,7 +9,9 @@ use handeye::io::{
     Format, PoseReader, Projections, StampedPosePair, detect_file_format, read_pose_file,
     read_stamped_poses,
 };
-use handeye::sync::{OffsetOptions, StampedPose, SyncOptions, estimate_time_offset, pair_streams};
+use handeye::sync::{
+    OffsetOptions, StampedPose, SyncOptions, estimate_time_offset, pair_streams, refine_time_offset,
+};
 use handeye::{PosePair, Setup};
 
 /// Input options shared by `calibrate` and `online`.
@@ -98,11 +100,12 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
                 )
             },
         )?;
+        let refined = refine_time_offset(&robot, &camera, args.setup(), e.offset, args.max_gap);
         eprintln!(
-            "time offset: {:.4} s (correlation of angular speeds {:.3})",
+            "time offset: {refined:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
             e.offset, e.correlation
         );
-        e.offset
+        refined
     } else {
         args.time_offset
             .parse::<f64>()

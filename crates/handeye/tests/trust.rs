@@ -319,3 +319,46 @@ mod readings {
         }
     }
 }
+
+#[test]
+fn the_clock_offset_is_found_to_a_few_milliseconds() {
+    use handeye::io::read_stamped_poses;
+    use handeye::sync::{OffsetOptions, StampedPose, estimate_time_offset, refine_time_offset};
+    let text = std::fs::read_to_string(suite().join("manifest.json")).unwrap();
+    let manifest: Value = serde_json::from_str(&text).unwrap();
+    let streams: Vec<&Value> = manifest["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["type"] == "stream_pair" && e["kind"] == "temporal")
+        .collect();
+    assert!(streams.len() >= 12);
+    let mut worst: f64 = 0.0;
+    for e in streams {
+        let read = |key: &str| read_stamped_poses(&suite().join(e[key].as_str().unwrap())).unwrap();
+        let robot = read("robot_file").poses;
+        // The camera file holds target_from_camera; the pairs hold camera_from_target.
+        let camera: Vec<StampedPose> = read("camera_file")
+            .poses
+            .into_iter()
+            .map(|s| StampedPose {
+                stamp: s.stamp,
+                pose: s.pose.inverse(),
+            })
+            .collect();
+        let truth = e["time_offset_s"].as_f64().unwrap();
+        let rough = estimate_time_offset(&robot, &camera, &OffsetOptions::default())
+            .unwrap()
+            .offset;
+        let fine = refine_time_offset(&robot, &camera, setup(e), rough, 0.1);
+        println!(
+            "{}: truth {:+.4} s, correlation {:+.1} ms off, refined {:+.1} ms off",
+            e["robot_file"],
+            truth,
+            1e3 * (rough - truth),
+            1e3 * (fine - truth)
+        );
+        worst = worst.max((fine - truth).abs());
+    }
+    assert!(worst < 0.003, "worst {:.1} ms", 1e3 * worst);
+}
