@@ -362,3 +362,43 @@ fn the_clock_offset_is_found_to_a_few_milliseconds() {
     }
     assert!(worst < 0.003, "worst {:.1} ms", 1e3 * worst);
 }
+
+#[test]
+fn outliers_are_named_and_rejecting_them_gives_x_within_its_uncertainty() {
+    // Random poses, planar-ambiguity flips and gross errors at 10–20%, both setups, three seeds.
+    let all = entries("outliers_");
+    assert!(all.len() >= 18);
+    let (mut found, mut planted, mut extra) = (0, 0, 0);
+    for e in &all {
+        let truly: Vec<u64> = e["outliers"]["indices"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|i| i.as_u64().unwrap())
+            .collect();
+        for options in pairings() {
+            let options = Options {
+                reject_outliers: true,
+                ..options
+            };
+            let r = run(e, &options).unwrap_or_else(|err| panic!("{}: {err}", e["file"]));
+            let flagged: Vec<u64> = r.outliers.poses.iter().map(|p| p.pose as u64).collect();
+            found += truly.iter().filter(|i| flagged.contains(i)).count();
+            planted += truly.len();
+            extra += flagged.iter().filter(|i| !truly.contains(i)).count();
+            let (a, b) = ratios(&r, &truth(e));
+            assert!(
+                a < 3.0 && b < 3.0,
+                "{} {:?}: {a:.2} {b:.2}",
+                e["file"],
+                options.pairing
+            );
+        }
+    }
+    println!("outliers found {found} of {planted}, {extra} good poses flagged");
+    assert!(found * 10 >= planted * 9, "found {found} of {planted}");
+    assert!(
+        extra * 10 <= planted,
+        "{extra} good poses flagged ({planted} planted)"
+    );
+}
