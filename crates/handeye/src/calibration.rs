@@ -190,7 +190,8 @@ pub struct Report {
     pub outliers: Outliers,
     /// The A X − X B residuals over the motions (degrees; input units).
     pub residual: ResidualSummary,
-    /// Median per-pose translation residual over the scene's size (unit-free).
+    /// Median per-pose translation residual over the scene's size (the larger of the hand's spread
+    /// and the camera's working distance), unit-free.
     pub translation_residual_rel: f64,
     /// The spread of the motions.
     pub quality: Spread,
@@ -211,10 +212,18 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     let mut warnings = Vec::new();
     // The readings are judged on the poses that agree with the others, so that outliers do not
     // make a mirror-image reading look better.
-    let agreeing = without(poses, &pose_outliers(poses, setup, options.outlier_deg));
-    let (applied, check) = choose_reading(&agreeing, setup, options.fix, &mut warnings)?;
+    let as_given = pose_outliers(poses, setup, options.outlier_deg);
+    let (applied, check) = choose_reading(
+        &without(poses, &as_given),
+        setup,
+        options.fix,
+        &mut warnings,
+    )?;
     let read = applied.apply(poses);
-    let found = pose_outliers(&read, setup, options.outlier_deg);
+    let found = match applied {
+        Reading::AsGiven => as_given,
+        _ => pose_outliers(&read, setup, options.outlier_deg),
+    };
     let used: Vec<PosePair> = if options.reject_outliers {
         without(&read, &found)
     } else {
@@ -234,19 +243,10 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         scene,
     );
     let outliers = outlier_report(&found, options);
-    if let Err(e) = refuse_if_undetermined(&uncertainty, setup, calibration.conditioning) {
-        // Say what in the input explains it: outliers kept, a better reading kept as given.
-        let mut why = warnings.clone();
-        if !outliers.poses.is_empty() && !options.reject_outliers {
-            why.push(outlier_warning(&outliers));
-        }
-        if why.is_empty() {
-            return Err(e);
-        }
-        return Err(Error::Untrusted {
-            advice: format!("{e}; {}", why.join("; ")),
-        });
-    }
+    let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
+        .then(|| outlier_warning(&outliers));
+    refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
+        .map_err(|e| explained(e, &warnings, kept_outliers.as_deref()))?;
     let quality = quality_of(&used, setup, options.pairing, &calibration);
     let residuals = PoseResiduals::at(&used, setup, &calibration.x);
     let translation_residual_rel = residuals.median_translation() / scene.max(f64::MIN_POSITIVE);
@@ -255,13 +255,11 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     warn_weak(&uncertainty, setup, &mut warnings);
     if translation_residual_rel > WARN_TRANSLATION_RESIDUAL {
         warnings.push(format!(
-            "translation residuals of {:.1}% of the motion range (median per pose): check the units of both inputs and the time pairing",
+            "translation residuals of {:.1}% of the scene's size (median per pose, against the hand's spread or the camera's distance): check the units of both inputs and the time pairing",
             100.0 * translation_residual_rel
         ));
     }
-    if !outliers.poses.is_empty() && !options.reject_outliers {
-        warnings.push(outlier_warning(&outliers));
-    }
+    warnings.extend(kept_outliers);
     Ok(Report {
         method: options.method,
         setup,
@@ -400,6 +398,22 @@ fn without(poses: &[PosePair], found: &PoseOutliers) -> Vec<PosePair> {
         .filter(|(i, _)| bad.binary_search(i).is_err())
         .map(|(_, p)| *p)
         .collect()
+}
+
+/// A refusal with what in the input explains it (outliers kept, a better reading kept as given),
+/// when anything does.
+fn explained(refusal: Error, warnings: &[String], kept_outliers: Option<&str>) -> Error {
+    let why: Vec<&str> = warnings
+        .iter()
+        .map(String::as_str)
+        .chain(kept_outliers)
+        .collect();
+    if why.is_empty() {
+        return refusal;
+    }
+    Error::Untrusted {
+        advice: format!("{refusal}; {}", why.join("; ")),
+    }
 }
 
 /// Refuses a result whose uncertainty leaves a direction of X undetermined.
