@@ -6,8 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use handeye::io::{
-    Format, PoseReader, Projections, StampedPosePair, detect_file_format, read_pose_file,
-    read_stamped_poses,
+    PoseInput, PoseReader, Projections, StampedPosePair, open_poses, read_stamped_poses,
 };
 use handeye::sync::{
     OffsetOptions, StampedPose, SyncOptions, estimate_time_offset, pair_streams, refine_time_offset,
@@ -51,8 +50,8 @@ impl InputArgs {
         }
     }
 
-    fn format(&self) -> Result<Format> {
-        Ok(self.format.parse::<Format>()?)
+    fn format(&self) -> Result<handeye::io::Format> {
+        Ok(self.format.parse()?)
     }
 }
 
@@ -188,22 +187,54 @@ pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Vec<String>, Option<
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
     let source = path.display().to_string();
     let name = |line: usize| format!("{source}:{line}");
+    let (mut pairs, mut names) = (Vec::new(), Vec::new());
+    let mut take = |r: StampedPosePair| {
+        pairs.push(r.pose);
+        names.push(name(r.line));
+    };
     if path.as_os_str() == "-" {
-        let stdin = std::io::stdin().lock();
-        let (mut pairs, mut names) = (Vec::new(), Vec::new());
-        let mut reader = PoseReader::new(stdin, "-", args.format()?)?;
+        let mut reader = PoseReader::new(std::io::stdin().lock(), "-", args.format()?)?;
+        preamble(&reader, "-");
         for r in reader.by_ref() {
-            let r = r?;
-            pairs.push(r.pose);
-            names.push(name(r.line));
+            take(r?);
         }
         note("-", &reader.projections());
-        return Ok((pairs, names, None));
+    } else {
+        match open_poses(&path, args.format()?)? {
+            PoseInput::Whole(series) => {
+                note(&source, &series.projections);
+                let names = series.lines.iter().map(|&l| name(l)).collect();
+                return Ok((series.pairs, names, None));
+            }
+            PoseInput::Stream(mut reader) => {
+                preamble(&reader, &source);
+                for r in reader.by_ref() {
+                    take(r?);
+                }
+                note(&source, &reader.projections());
+            }
+        }
     }
-    let series = read_pose_file(&path, args.format()?)?;
-    note(&path.display().to_string(), &series.projections);
-    let names = series.lines.iter().map(|&l| name(l)).collect();
-    Ok((series.pairs, names, None))
+    if pairs.len() < 2 {
+        return Err(handeye::Error::Parse {
+            file: source,
+            line: 0,
+            field: "-".to_string(),
+            message: format!(
+                "{} pose pair(s): at least 2 are needed to make a motion",
+                pairs.len()
+            ),
+        }
+        .into());
+    }
+    Ok((pairs, names, None))
+}
+
+/// Tells on stderr the lines skipped before the first record, if any was not blank nor a comment.
+fn preamble<R: BufRead>(reader: &PoseReader<R>, source: &str) {
+    if let Some(p) = reader.preamble() {
+        eprintln!("{source}: {}", p.note());
+    }
 }
 
 /// Tells on stderr how many rotation matrices of `source` were projected onto SO(3), if any.
@@ -214,13 +245,13 @@ fn note(source: &str, projections: &Projections) {
 }
 
 /// A streaming reader that tells its note (see [`note`]) when it ends.
-struct NotingReader {
-    reader: PoseReader<Box<dyn BufRead>>,
+struct NotingReader<R: BufRead> {
+    reader: PoseReader<R>,
     source: String,
     told: bool,
 }
 
-impl Iterator for NotingReader {
+impl<R: BufRead> Iterator for NotingReader<R> {
     type Item = handeye::Result<StampedPosePair>;
 
     fn next(&mut self) -> Option<Self::Item> {
@@ -236,20 +267,35 @@ impl Iterator for NotingReader {
 /// Pose pairs one at a time, each with its place, or the error of a bad record.
 pub type Records = Box<dyn Iterator<Item = handeye::Result<StampedPosePair>>>;
 
-/// A record stream for `online`: from stdin, a file, or paired streams.
-pub fn records(args: &InputArgs) -> Result<(Records, Option<f64>)> {
+/// A record stream for `online`: from stdin, a file, or paired streams, with the name of its
+/// source for messages. A file is opened once (a FIFO cannot be read twice).
+pub fn records(args: &InputArgs) -> Result<(Records, String, Option<f64>)> {
     if let Some(s) = synced(args)? {
-        return Ok((Box::new(s.pairs.into_iter().map(Ok)), Some(s.time_offset)));
+        let camera = args
+            .camera
+            .as_ref()
+            .map_or("camera".to_string(), |p| p.display().to_string());
+        return Ok((
+            Box::new(s.pairs.into_iter().map(Ok)),
+            camera,
+            Some(s.time_offset),
+        ));
     }
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
-    if path.as_os_str() != "-" {
-        let format = match args.format()? {
-            Format::Auto => detect_file_format(&path)?,
-            f => f,
+    let source = path.display().to_string();
+    if path.as_os_str() == "-" {
+        let reader = PoseReader::new(std::io::stdin().lock(), "-", args.format()?)?;
+        preamble(&reader, &source);
+        let records = NotingReader {
+            reader,
+            source: source.clone(),
+            told: false,
         };
-        if matches!(format, Format::OpencvYaml | Format::Moveit | Format::Visp) {
-            let series = read_pose_file(&path, format)?;
-            note(&path.display().to_string(), &series.projections);
+        return Ok((Box::new(records), source, None));
+    }
+    match open_poses(&path, args.format()?)? {
+        PoseInput::Whole(series) => {
+            note(&source, &series.projections);
             let records = series.pairs.into_iter().enumerate().map(|(k, pose)| {
                 Ok(StampedPosePair {
                     line: k + 1,
@@ -257,22 +303,20 @@ pub fn records(args: &InputArgs) -> Result<(Records, Option<f64>)> {
                     pose,
                 })
             });
-            return Ok((Box::new(records.collect::<Vec<_>>().into_iter()), None));
+            Ok((
+                Box::new(records.collect::<Vec<_>>().into_iter()),
+                source,
+                None,
+            ))
+        }
+        PoseInput::Stream(reader) => {
+            preamble(&reader, &source);
+            let records = NotingReader {
+                reader,
+                source: source.clone(),
+                told: false,
+            };
+            Ok((Box::new(records), source, None))
         }
     }
-    let reader: Box<dyn BufRead> = if path.as_os_str() == "-" {
-        Box::new(std::io::BufReader::new(std::io::stdin()))
-    } else {
-        Box::new(handeye::io::open(&path)?)
-    };
-    let source = path.display().to_string();
-    let reader = PoseReader::new(reader, &source, args.format()?)?;
-    Ok((
-        Box::new(NotingReader {
-            reader,
-            source,
-            told: false,
-        }),
-        None,
-    ))
 }

@@ -72,6 +72,9 @@ pub struct Args {
     unfreeze: bool,
 }
 
+/// Bad lines shown one by one before `online` shows only every 2^k-th.
+const SHOWN_BAD_LINES: usize = 100;
+
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let truth = args.truth.as_ref().map(|p| read_truth(p)).transpose()?;
@@ -111,19 +114,36 @@ pub fn run(args: Args) -> Result<()> {
         ..OnlineConfig::default()
     };
     let mut calibrator = OnlineCalibrator::new(config)?;
-    let (records, time_offset) = records(&args.input)?;
-    let mut skipped = 0;
+    let (records, source, time_offset) = records(&args.input)?;
+    let mut skipped: usize = 0;
     for record in records {
-        let record = match record {
-            Ok(r) => r,
+        // A pose the calibrator refuses is a bad line too, named by its place.
+        let pushed = record.and_then(|r| {
+            calibrator.push(&r.pose).map_err(|e| handeye::Error::Parse {
+                file: source.clone(),
+                line: r.line,
+                field: "-".to_string(),
+                message: e.to_string(),
+            })
+        });
+        let events = match pushed {
+            Ok(events) => events,
             Err(e) if args.on_bad_line == "skip" && matches!(e, handeye::Error::Parse { .. }) => {
-                eprintln!("skipped: {e}");
                 skipped += 1;
+                // Every bad line is counted; the first ones are shown, later ones sparsely, so
+                // that an endless bad stream cannot flood the terminal.
+                if skipped <= SHOWN_BAD_LINES || skipped.is_power_of_two() {
+                    eprintln!("skipped: {e}");
+                }
+                if skipped == SHOWN_BAD_LINES {
+                    eprintln!(
+                        "further bad lines are counted and shown only at the 2^k-th (the count is given at the end)"
+                    );
+                }
                 continue;
             }
             Err(e) => return Err(e.into()),
         };
-        let events = calibrator.push(&record.pose)?;
         if let Some(pose) = calibrator.change_detected() {
             print_line(&json!({"change": pose}))?;
             eprintln!("change of X detected at pose {pose}: accumulation restarted");

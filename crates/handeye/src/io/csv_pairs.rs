@@ -4,7 +4,8 @@
 use std::io::BufRead;
 
 use crate::error::{Error, Result};
-use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error};
+use crate::io::lines::{Line, Lines};
+use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error, too_long};
 use crate::motion::PosePair;
 use crate::pose::{Transform, check_translation, transform_from_xyz_quat_xyzw};
 
@@ -28,42 +29,87 @@ struct PoseColumns {
 /// [`Error::Parse`](crate::Error::Parse) naming the file, the line and the column, after which
 /// the next row is read. Blank lines and lines starting with `#` are skipped.
 pub struct CsvPairs<R: BufRead> {
-    reader: csv::Reader<CommentsAsBlank<R>>,
+    lines: Lines<R>,
     source: String,
-    /// Lines consumed before the reader started, added to the CSV reader's line numbers.
-    line_offset: usize,
     header: Vec<String>,
     stamp: Option<usize>,
     robot: PoseColumns,
     camera: PoseColumns,
-    record: csv::StringRecord,
-    finished: bool,
+    record: Vec<String>,
+}
+
+/// The fields of one line read as a CSV record (quotes allowed within the line, trimmed), or why
+/// not. Each line is read on its own, so that a stray quote costs its line only.
+fn split_line(line: &[u8]) -> std::result::Result<csv::ByteRecord, csv::Error> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .buffer_capacity(line.len() + 1)
+        .from_reader(line);
+    let mut record = csv::ByteRecord::new();
+    reader.read_byte_record(&mut record)?;
+    Ok(record)
 }
 
 impl<R: BufRead> CsvPairs<R> {
     /// Reads the header of `input` (named `source` in messages) and finds the pose columns.
     pub fn new(input: R, source: &str) -> Result<Self> {
-        Self::after_lines(input, source, 0)
+        Self::from_lines(Lines::new(input), source)
     }
 
-    /// As [`CsvPairs::new`] for an input whose first `lines` lines have already been consumed:
-    /// line numbers go on from there.
-    pub(crate) fn after_lines(input: R, source: &str, lines: usize) -> Result<Self> {
-        let mut reader = csv::ReaderBuilder::new()
-            .trim(csv::Trim::All)
-            .from_reader(CommentsAsBlank::new(input));
-        let header = reader.headers().cloned();
-        // The csv crate reports the header at line 1 whatever precedes it.
-        let header_line = lines + reader.get_ref().first_content_line.unwrap_or(1);
-        let header = header.map_err(|e| {
-            parse_error(
-                source,
-                header_line,
-                "-",
-                format!("cannot read the CSV header: {e}"),
-            )
-        })?;
-        let names: Vec<&str> = header.iter().collect();
+    /// As [`CsvPairs::new`], going on from `lines`: the header is the next line that is neither
+    /// blank nor a `#` comment.
+    pub(crate) fn from_lines(mut lines: Lines<R>, source: &str) -> Result<Self> {
+        let (header_line, names) = loop {
+            let (number, line) = match lines.next_line() {
+                None => {
+                    return Err(parse_error(
+                        source,
+                        1,
+                        "-",
+                        "cannot read the CSV header: the input is empty",
+                    ));
+                }
+                Some(Err(e)) => {
+                    return Err(Error::Io {
+                        file: source.to_string(),
+                        source: e,
+                    });
+                }
+                Some(Ok(l)) => l,
+            };
+            let text = match line {
+                Line::TooLong => return Err(too_long(source, number)),
+                Line::Text(t) => t,
+            };
+            match text.iter().find(|b| !b.is_ascii_whitespace()) {
+                None | Some(b'#') => continue,
+                Some(_) => {}
+            }
+            let record = split_line(text).map_err(|e| {
+                parse_error(
+                    source,
+                    number,
+                    "-",
+                    format!("cannot read the CSV header: {e}"),
+                )
+            })?;
+            let names = record
+                .iter()
+                .map(|f| String::from_utf8(f.to_vec()))
+                .collect::<std::result::Result<Vec<String>, _>>()
+                .map_err(|_| {
+                    parse_error(
+                        source,
+                        number,
+                        "-",
+                        "cannot read the CSV header: not valid UTF-8 text",
+                    )
+                })?;
+            break (number, names);
+        };
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
         let known = |n: &str| {
             n == "stamp"
                 || ROBOT_FRAMES
@@ -107,14 +153,12 @@ impl<R: BufRead> CsvPairs<R> {
         let camera = pose_columns(&names, &CAMERA_FRAMES, source, header_line)?;
         Ok(Self {
             source: source.to_string(),
-            line_offset: lines,
             header: names.iter().map(|n| n.to_string()).collect(),
             stamp,
             robot,
             camera,
-            record: csv::StringRecord::new(),
-            finished: false,
-            reader,
+            record: Vec::new(),
+            lines,
         })
     }
 
@@ -139,7 +183,7 @@ impl<R: BufRead> CsvPairs<R> {
     }
 
     fn number(&self, column: usize, field: &str, line: usize) -> Result<f64> {
-        let text = self.record.get(column).unwrap_or("");
+        let text = self.record.get(column).map_or("", String::as_str);
         text.parse::<f64>()
             .ok()
             .filter(|v| v.is_finite())
@@ -173,62 +217,6 @@ impl<R: BufRead> CsvPairs<R> {
                 )
             })?;
         Ok(if p.inverted { t.inverse() } else { t })
-    }
-}
-
-/// An input whose `#` comment lines are turned into blank lines (which the csv reader skips),
-/// passed on one line per read and counted.
-///
-/// One line per read keeps the reader streaming (a record is yielded as soon as its line has
-/// arrived) and makes [`CommentsAsBlank::lines`] the line number of the record just read: the
-/// csv crate's own positions are wrong after comment or blank lines and with CRLF endings.
-struct CommentsAsBlank<R> {
-    input: R,
-    line: Vec<u8>,
-    /// Bytes of `line` already handed out.
-    given: usize,
-    /// Lines read so far.
-    lines: usize,
-    /// The number of the first line that is neither blank nor a comment: the header's.
-    first_content_line: Option<usize>,
-}
-
-impl<R: BufRead> CommentsAsBlank<R> {
-    fn new(input: R) -> Self {
-        Self {
-            input,
-            line: Vec::new(),
-            given: 0,
-            lines: 0,
-            first_content_line: None,
-        }
-    }
-}
-
-impl<R: BufRead> std::io::Read for CommentsAsBlank<R> {
-    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
-        if self.given >= self.line.len() {
-            self.line.clear();
-            self.given = 0;
-            if self.input.read_until(b'\n', &mut self.line)? == 0 {
-                return Ok(0);
-            }
-            self.lines += 1;
-            match self.line.iter().find(|b| !b.is_ascii_whitespace()) {
-                Some(b'#') => {
-                    self.line.clear();
-                    self.line.push(b'\n');
-                }
-                Some(_) if self.first_content_line.is_none() => {
-                    self.first_content_line = Some(self.lines);
-                }
-                _ => {}
-            }
-        }
-        let n = out.len().min(self.line.len() - self.given);
-        out[..n].copy_from_slice(&self.line[self.given..self.given + n]);
-        self.given += n;
-        Ok(n)
     }
 }
 
@@ -291,48 +279,63 @@ impl<R: BufRead> Iterator for CsvPairs<R> {
     type Item = Result<StampedPosePair>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        if self.finished {
-            return None;
-        }
-        let mut record = std::mem::take(&mut self.record);
-        let outcome = self.reader.read_record(&mut record);
-        self.record = record;
-        // The input is handed to the csv reader one line per read, so the last line read is the
-        // record's (the csv crate's own line numbers go wrong after blank lines and with CRLF).
-        let line = self.line_offset + self.reader.get_ref().lines;
-        match outcome {
-            Ok(false) => {
-                self.finished = true;
-                None
+        loop {
+            let (number, line) = match self.lines.next_line()? {
+                Ok(l) => l,
+                // A failing input would fail again: the line reader ends here.
+                Err(e) => {
+                    return Some(Err(Error::Io {
+                        file: self.source.clone(),
+                        source: e,
+                    }));
+                }
+            };
+            let text = match line {
+                Line::TooLong => return Some(Err(too_long(&self.source, number))),
+                Line::Text(t) => t,
+            };
+            match text.iter().find(|b| !b.is_ascii_whitespace()) {
+                None | Some(b'#') => continue,
+                Some(_) => {}
             }
-            Ok(true) => Some(self.parse(line)),
-            Err(e) => {
-                let (field, message) = match e.kind() {
-                    csv::ErrorKind::UnequalLengths {
-                        expected_len, len, ..
-                    } => (
-                        "-".to_string(),
-                        format!("{len} columns where the header has {expected_len}"),
+            let fields = match split_line(text) {
+                Ok(f) => f,
+                Err(e) => {
+                    return Some(Err(parse_error(
+                        &self.source,
+                        number,
+                        "-",
+                        format!("not a CSV record: {e}"),
+                    )));
+                }
+            };
+            if fields.len() != self.header.len() {
+                return Some(Err(parse_error(
+                    &self.source,
+                    number,
+                    "-",
+                    format!(
+                        "{} columns where the header has {}",
+                        fields.len(),
+                        self.header.len()
                     ),
-                    csv::ErrorKind::Utf8 { err, .. } => (
-                        self.header
-                            .get(err.field())
-                            .cloned()
-                            .unwrap_or_else(|| "-".to_string()),
-                        "not valid UTF-8 text".to_string(),
-                    ),
-                    csv::ErrorKind::Io(io) => {
-                        // A failing input would fail again: stop here.
-                        self.finished = true;
-                        return Some(Err(Error::Io {
-                            file: self.source.clone(),
-                            source: std::io::Error::new(io.kind(), io.to_string()),
-                        }));
+                )));
+            }
+            self.record.clear();
+            for (k, f) in fields.iter().enumerate() {
+                match std::str::from_utf8(f) {
+                    Ok(t) => self.record.push(t.to_string()),
+                    Err(_) => {
+                        return Some(Err(parse_error(
+                            &self.source,
+                            number,
+                            self.header[k].clone(),
+                            "not valid UTF-8 text",
+                        )));
                     }
-                    _ => ("-".to_string(), e.to_string()),
-                };
-                Some(Err(parse_error(&self.source, line, field, message)))
+                }
             }
+            return Some(self.parse(number));
         }
     }
 }

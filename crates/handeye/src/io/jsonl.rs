@@ -7,9 +7,10 @@ use serde_json::{Map, Value};
 
 use crate::error::{Error, Result};
 use crate::io::json_text::repeated_key;
+use crate::io::lines::{Line, Lines};
 use crate::io::{
     CAMERA_FRAMES, Projections, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error,
-    read_transform_json,
+    read_transform_json, too_long,
 };
 use crate::motion::PosePair;
 use crate::pose::ReadTransform;
@@ -20,29 +21,22 @@ use crate::pose::ReadTransform;
 /// [`Error::Parse`] naming the file, the line (from 1) and the field of a bad record, and then goes
 /// on with the next line. A read error of the input itself ([`Error::Io`]) ends the iteration.
 pub struct JsonlPairs<R: BufRead> {
-    input: R,
+    lines: Lines<R>,
     source: String,
-    line: usize,
-    buffer: Vec<u8>,
-    finished: bool,
     projections: Projections,
 }
 
 impl<R: BufRead> JsonlPairs<R> {
     /// A reader of `input`, named `source` in messages.
     pub fn new(input: R, source: &str) -> Self {
-        Self::after_lines(input, source, 0)
+        Self::from_lines(Lines::new(input), source)
     }
 
-    /// A reader of `input` whose first `lines` lines have already been consumed: line numbers go
-    /// on from there.
-    pub(crate) fn after_lines(input: R, source: &str, lines: usize) -> Self {
+    /// A reader going on from `lines`.
+    pub(crate) fn from_lines(lines: Lines<R>, source: &str) -> Self {
         Self {
-            input,
+            lines,
             source: source.to_string(),
-            line: lines,
-            buffer: Vec::new(),
-            finished: false,
             projections: Projections::default(),
         }
     }
@@ -57,28 +51,26 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
     type Item = Result<StampedPosePair>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        while !self.finished {
-            self.buffer.clear();
-            self.line += 1;
-            match self.input.read_until(b'\n', &mut self.buffer) {
-                Ok(0) => {
-                    self.finished = true;
-                    return None;
-                }
-                Ok(_) => {}
+        loop {
+            let (number, line) = match self.lines.next_line()? {
+                Ok(l) => l,
+                // A failing input (a directory, a broken pipe) would fail again: the line reader
+                // ends here.
                 Err(e) => {
-                    // A failing input (a directory, a broken pipe) would fail again: stop here.
-                    self.finished = true;
                     return Some(Err(Error::Io {
                         file: self.source.clone(),
                         source: e,
                     }));
                 }
-            }
-            let Ok(text) = std::str::from_utf8(&self.buffer) else {
+            };
+            let text = match line {
+                Line::TooLong => return Some(Err(too_long(&self.source, number))),
+                Line::Text(t) => t,
+            };
+            let Ok(text) = std::str::from_utf8(text) else {
                 return Some(Err(parse_error(
                     &self.source,
-                    self.line,
+                    number,
                     "-",
                     "the line is not valid UTF-8 text",
                 )));
@@ -90,11 +82,10 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
             return Some(parse_record(
                 text,
                 &self.source,
-                self.line,
+                number,
                 &mut self.projections,
             ));
         }
-        None
     }
 }
 

@@ -8,22 +8,25 @@
 mod csv_pairs;
 mod json_text;
 mod jsonl;
+mod lines;
 mod peer;
 mod stamped;
 mod transform;
 mod truth;
 
 use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Chain, Cursor, Read};
 use std::path::Path;
 use std::str::FromStr;
 
 use crate::error::{Error, Result};
 use crate::motion::PosePair;
 use crate::pose::ReadTransform;
+use lines::{Line, Lines};
 
 pub use csv_pairs::CsvPairs;
 pub use jsonl::{JsonlPairs, parse_pose_line};
+pub use lines::MAX_LINE;
 pub use peer::{read_moveit_json, read_opencv_yaml, read_visp_dir, read_visp_pose};
 pub use stamped::{parse_stamped_poses, read_stamped_poses};
 pub use transform::{
@@ -146,44 +149,134 @@ impl Projections {
 
 /// A streaming reader of pose pairs: one record at a time, so that a pipe can be processed as it
 /// arrives. Yields `Err` for a bad record and goes on with the next one.
-pub enum PoseReader<R: BufRead> {
-    /// JSON Lines.
+///
+/// Lines are read with a bounded buffer ([`MAX_LINE`] bytes; a longer line is a bad line, skipped
+/// without being kept) and CSV lines are parsed one at a time (a stray quote costs its line only),
+/// so that no input can make the reader lose the stream or grow without bound.
+pub struct PoseReader<R: BufRead> {
+    inner: Inner<R>,
+    preamble: Option<Preamble>,
+}
+
+enum Inner<R: BufRead> {
     Jsonl(JsonlPairs<R>),
-    /// CSV.
     Csv(Box<CsvPairs<R>>),
+}
+
+/// Lines skipped before the first pose record (log lines of a driver, say), beyond blank and
+/// `#` comment lines.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Preamble {
+    /// Lines skipped in all, blank and comment lines included.
+    pub lines: usize,
+    /// Number of the first skipped line that is neither blank nor a comment.
+    pub first_line: usize,
+    /// Its text, shortened to 80 characters.
+    pub first: String,
+    /// Whether no pose record followed.
+    pub no_record: bool,
+}
+
+impl Preamble {
+    /// The message to show, once.
+    ///
+    /// # Example
+    /// ```
+    /// let p = handeye::io::Preamble {
+    ///     lines: 2, first_line: 1, first: "[INFO] started".into(), no_record: false,
+    /// };
+    /// assert_eq!(
+    ///     p.note(),
+    ///     "skipped 2 line(s) before the first pose record, the first not blank nor a comment at line 1: `[INFO] started`"
+    /// );
+    /// ```
+    pub fn note(&self) -> String {
+        format!(
+            "skipped {} line(s) {}, the first not blank nor a comment at line {}: `{}`",
+            self.lines,
+            if self.no_record {
+                "and found no pose record"
+            } else {
+                "before the first pose record"
+            },
+            self.first_line,
+            self.first
+        )
+    }
+}
+
+/// What a line before the first record is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Blank,
+    Jsonl,
+    CsvHeader,
+    Other,
+}
+
+fn kind_of(line: &Line<'_>) -> Kind {
+    let Line::Text(text) = line else {
+        return Kind::Other;
+    };
+    let trimmed = text.trim_ascii();
+    match trimmed.first() {
+        None | Some(b'#') => Kind::Blank,
+        Some(b'{') => Kind::Jsonl,
+        Some(_) => {
+            // A header: at least two fields, every one a name (`stamp`, `base_from_gripper_x`).
+            let name = |f: &[u8]| {
+                let f = f.trim_ascii();
+                let f = f
+                    .strip_prefix(b"\"")
+                    .and_then(|f| f.strip_suffix(b"\""))
+                    .unwrap_or(f);
+                f.first()
+                    .is_some_and(|b| b.is_ascii_alphabetic() || *b == b'_')
+                    && f.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_')
+            };
+            if trimmed.contains(&b',') && trimmed.split(|b| *b == b',').all(name) {
+                Kind::CsvHeader
+            } else {
+                Kind::Other
+            }
+        }
+    }
 }
 
 impl<R: BufRead> PoseReader<R> {
     /// A reader of `input`, named `source` in messages. With [`Format::Auto`] the format is taken
-    /// from the extension of `source`, else from the content: the first character that is not
-    /// blank and not in a `#` comment line is `{` for JSON Lines, anything else for CSV. Line
-    /// numbers in records and errors count every line of the input, the skipped ones included.
+    /// from the extension of `source`, else from the first line that looks like a record: `{` for
+    /// JSON Lines, a CSV header (names separated by commas) for CSV. A UTF-8 byte order mark and
+    /// the lines before the first record-looking line (blank, `#` comments, a driver's log lines)
+    /// are skipped: see [`PoseReader::preamble`]. Line numbers in records and errors count every
+    /// line of the input, the skipped ones included.
     ///
     /// # Example
     /// ```
     /// use handeye::io::{Format, PoseReader};
-    /// let text = "# recorded by hand\n\
+    /// let text = "\u{feff}[INFO] robot driver started\n# recorded by hand\n\
     ///     {\"base_from_gripper\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]], \
     ///      \"target_from_camera\": {\"translation\": [0,0,1], \"quaternion_xyzw\": [0,0,0,1]}}\n";
-    /// let records: Vec<_> = PoseReader::new(text.as_bytes(), "-", Format::Auto)?
-    ///     .collect::<Result<_, _>>()?;
-    /// assert_eq!(records[0].line, 2);
+    /// let mut reader = PoseReader::new(text.as_bytes(), "-", Format::Auto)?;
+    /// assert_eq!(reader.preamble().unwrap().lines, 2);
+    /// let records: Vec<_> = reader.by_ref().collect::<Result<_, _>>()?;
+    /// assert_eq!(records[0].line, 3);
     /// // target_from_camera is inverted into camera_from_target.
     /// assert_eq!(records[0].pose.camera_from_target.translation.vector.z, -1.0);
     /// # Ok::<(), handeye::Error>(())
     /// ```
-    pub fn new(mut input: R, source: &str, format: Format) -> Result<Self> {
-        let (format, skipped_lines) = match format {
-            Format::Auto => detect(&mut input, source)?,
-            f => (f, 0),
-        };
-        Ok(match format {
-            Format::Csv => Self::Csv(Box::new(CsvPairs::after_lines(
-                input,
-                source,
-                skipped_lines,
-            )?)),
-            Format::Jsonl => Self::Jsonl(JsonlPairs::after_lines(input, source, skipped_lines)),
+    pub fn new(input: R, source: &str, format: Format) -> Result<Self> {
+        let lower = source.to_ascii_lowercase();
+        let format = match format {
+            Format::Auto
+                if lower.ends_with(".jsonl")
+                    || lower.ends_with(".json")
+                    || lower.ends_with(".ndjson") =>
+            {
+                Format::Jsonl
+            }
+            Format::Auto if lower.ends_with(".csv") => Format::Csv,
+            Format::Auto | Format::Jsonl | Format::Csv => format,
             other => {
                 return Err(Error::InvalidParameter {
                     name: "format",
@@ -192,17 +285,81 @@ impl<R: BufRead> PoseReader<R> {
                     ),
                 });
             }
-        })
+        };
+        let mut lines = Lines::new(input);
+        let mut skipped = 0;
+        let mut preamble: Option<Preamble> = None;
+        let decided = loop {
+            let (number, line) = match lines.next_line() {
+                None => break None,
+                Some(Err(e)) => {
+                    return Err(Error::Io {
+                        file: source.to_string(),
+                        source: e,
+                    });
+                }
+                Some(Ok(l)) => l,
+            };
+            let kind = kind_of(&line);
+            let found = match (kind, format) {
+                (Kind::Jsonl, Format::Auto | Format::Jsonl) => Some(Format::Jsonl),
+                (Kind::CsvHeader, Format::Auto | Format::Csv) => Some(Format::Csv),
+                _ => None,
+            };
+            if found.is_some() {
+                lines.unread();
+                break found;
+            }
+            skipped += 1;
+            if kind != Kind::Blank && preamble.is_none() {
+                let first = match line {
+                    Line::Text(t) => String::from_utf8_lossy(t).chars().take(80).collect(),
+                    Line::TooLong => format!("(a line longer than {MAX_LINE} bytes)"),
+                };
+                preamble = Some(Preamble {
+                    lines: 0,
+                    first_line: number,
+                    first,
+                    no_record: false,
+                });
+            }
+        };
+        let preamble = preamble.map(|p| Preamble {
+            lines: skipped,
+            no_record: decided.is_none(),
+            ..p
+        });
+        let inner = match decided.unwrap_or(if format == Format::Csv {
+            Format::Csv
+        } else {
+            Format::Jsonl
+        }) {
+            Format::Csv => Inner::Csv(Box::new(CsvPairs::from_lines(lines, source)?)),
+            _ => Inner::Jsonl(JsonlPairs::from_lines(lines, source)),
+        };
+        Ok(Self { inner, preamble })
     }
-}
 
-impl<R: BufRead> PoseReader<R> {
+    /// The lines skipped before the first record, when any of them was neither blank nor a `#`
+    /// comment (a log line, say): to be told once.
+    pub fn preamble(&self) -> Option<&Preamble> {
+        self.preamble.as_ref()
+    }
+
+    /// The format read: [`Format::Jsonl`] or [`Format::Csv`].
+    pub fn format(&self) -> Format {
+        match self.inner {
+            Inner::Jsonl(_) => Format::Jsonl,
+            Inner::Csv(_) => Format::Csv,
+        }
+    }
+
     /// The rotation matrices projected onto SO(3) so far (see [`Projections`]).
     pub fn projections(&self) -> Projections {
-        match self {
-            Self::Jsonl(r) => r.projections(),
+        match &self.inner {
+            Inner::Jsonl(r) => r.projections(),
             // CSV gives quaternions only.
-            Self::Csv(_) => Projections::default(),
+            Inner::Csv(_) => Projections::default(),
         }
     }
 }
@@ -211,67 +368,21 @@ impl<R: BufRead> Iterator for PoseReader<R> {
     type Item = Result<StampedPosePair>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        match self {
-            Self::Jsonl(r) => r.next(),
-            Self::Csv(r) => r.next(),
+        match &mut self.inner {
+            Inner::Jsonl(r) => r.next(),
+            Inner::Csv(r) => r.next(),
         }
     }
 }
 
-/// Picks the format from the extension of `source`, else from the content: the first character
-/// that is neither blank nor in a `#` comment line, `{` meaning JSON Lines and anything else CSV
-/// (an input with nothing else counts as JSON Lines). The blank and comment lines before it are
-/// consumed (both readers skip them anyway); their number is returned with the format so that the
-/// reader's line numbers still count from the top of the input.
-fn detect<R: BufRead>(input: &mut R, source: &str) -> Result<(Format, usize)> {
-    let lower = source.to_ascii_lowercase();
-    if lower.ends_with(".jsonl") || lower.ends_with(".json") || lower.ends_with(".ndjson") {
-        return Ok((Format::Jsonl, 0));
-    }
-    if lower.ends_with(".csv") {
-        return Ok((Format::Csv, 0));
-    }
-    let mut lines = 0;
-    // Inside a `#` comment line whose end has not been seen yet.
-    let mut in_comment = false;
-    loop {
-        let buffer = input.fill_buf().map_err(|e| Error::Io {
-            file: source.to_string(),
-            source: e,
-        })?;
-        if buffer.is_empty() {
-            return Ok((Format::Jsonl, lines));
-        }
-        // Consume whole lines only, so that no byte of the first record is lost.
-        let mut consumed = 0;
-        let mut decided = None;
-        for (k, &b) in buffer.iter().enumerate() {
-            if b == b'\n' {
-                lines += 1;
-                in_comment = false;
-                consumed = k + 1;
-            } else if in_comment || b.is_ascii_whitespace() {
-                continue;
-            } else if b == b'#' {
-                in_comment = true;
-            } else {
-                decided = Some(if b == b'{' {
-                    Format::Jsonl
-                } else {
-                    Format::Csv
-                });
-                break;
-            }
-        }
-        if let Some(format) = decided {
-            input.consume(consumed);
-            return Ok((format, lines));
-        }
-        // Nothing decided in this buffer: all of it is blank or comment. Its last, unfinished
-        // line holds no newline, so consuming it keeps the count right.
-        let n = buffer.len();
-        input.consume(n);
-    }
+/// The error of a line longer than [`MAX_LINE`] bytes.
+pub(crate) fn too_long(source: &str, line: usize) -> Error {
+    parse_error(
+        source,
+        line,
+        "-",
+        format!("line longer than {MAX_LINE} bytes: skipped"),
+    )
 }
 
 /// Reads a whole text file, naming it in the error; text that is not UTF-8 is a parse error on
@@ -282,12 +393,17 @@ pub fn read_text(path: &Path) -> Result<String> {
         file: file.clone(),
         source: e,
     })?;
+    text_of(bytes, &file)
+}
+
+/// `bytes` as text, or a parse error on the line of the first invalid byte.
+fn text_of(bytes: Vec<u8>, file: &str) -> Result<String> {
     String::from_utf8(bytes).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
         let column = 1 + valid.iter().rev().take_while(|&&b| b != b'\n').count();
         parse_error(
-            &file,
+            file,
             line,
             "-",
             format!("not valid UTF-8 text (byte {column} of the line)"),
@@ -303,27 +419,59 @@ pub fn open(path: &Path) -> Result<BufReader<File>> {
     })
 }
 
+/// An input whose head was read to tell its format, and is read again before the rest.
+pub type Sniffed<R> = Chain<Cursor<Vec<u8>>, R>;
+
+/// A pose-pair input opened once: read whole, or streamed.
+pub enum PoseInput<R: BufRead> {
+    /// A format read whole (OpenCV YAML, moveit, ViSP).
+    Whole(PoseSeries),
+    /// JSON Lines or CSV, one record at a time.
+    Stream(PoseReader<Sniffed<R>>),
+}
+
+/// Opens the pose-pair file `path` once (a FIFO or `<(…)` cannot be read twice): with
+/// [`Format::Auto`] a directory is ViSP, else the format is told from the head of the content
+/// (see [`sniff_format`]), which is then read again from memory, not from the file.
+pub fn open_poses(path: &Path, format: Format) -> Result<PoseInput<BufReader<File>>> {
+    let source = path.display().to_string();
+    if format == Format::Visp || (format == Format::Auto && path.is_dir()) {
+        return peer::read_visp_dir(path).map(PoseInput::Whole);
+    }
+    let input = open(path)?;
+    let (sniffed, input) = sniff_format(input, &source)?;
+    let format = match format {
+        Format::Auto => sniffed,
+        f => f,
+    };
+    let text = |mut input: Sniffed<BufReader<File>>| {
+        let mut bytes = Vec::new();
+        input.read_to_end(&mut bytes).map_err(|e| Error::Io {
+            file: source.clone(),
+            source: e,
+        })?;
+        text_of(bytes, &source)
+    };
+    Ok(match format {
+        Format::OpencvYaml => PoseInput::Whole(peer::read_opencv_yaml(&text(input)?, &source)?),
+        Format::Moveit => PoseInput::Whole(peer::read_moveit_json(&text(input)?, &source)?),
+        f => PoseInput::Stream(PoseReader::new(input, &source, f)?),
+    })
+}
+
 /// Reads a whole pose-pair file; errors on the first bad record, or with fewer than 2 poses.
 pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     let source = path.display().to_string();
-    let format = match format {
-        Format::Auto => detect_file_format(path)?,
-        f => f,
+    let mut reader = match open_poses(path, format)? {
+        PoseInput::Whole(series) => return Ok(series),
+        PoseInput::Stream(reader) => reader,
     };
-    let text = || read_text(path);
-    match format {
-        Format::OpencvYaml => return peer::read_opencv_yaml(&text()?, &source),
-        Format::Moveit => return peer::read_moveit_json(&text()?, &source),
-        Format::Visp => return peer::read_visp_dir(path),
-        _ => {}
-    }
     let mut series = PoseSeries {
         pairs: Vec::new(),
         stamps: Vec::new(),
         lines: Vec::new(),
         projections: Projections::default(),
     };
-    let mut reader = PoseReader::new(open(path)?, &source, format)?;
     for record in reader.by_ref() {
         let r = record?;
         series.pairs.push(r.pose);
@@ -345,34 +493,81 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     Ok(series)
 }
 
-/// The format of a file for [`Format::Auto`]: a directory is ViSP, `%YAML` or
-/// `!!opencv-matrix` content is OpenCV YAML, a JSON list is moveit; otherwise decided per record
-/// ([`Format::Auto`] again, for the streaming reader).
+/// The format of a file for [`Format::Auto`]: a directory is ViSP, else as [`sniff_format`]
+/// tells from its head. Opens the file: for a FIFO use [`open_poses`], which reads it once.
 pub fn detect_file_format(path: &Path) -> Result<Format> {
     if path.is_dir() {
         return Ok(Format::Visp);
     }
-    let mut head = [0u8; 4096];
-    let n = {
-        use std::io::Read;
-        let mut f = File::open(path).map_err(|e| Error::Io {
-            file: path.display().to_string(),
-            source: e,
-        })?;
-        f.read(&mut head).map_err(|e| Error::Io {
-            file: path.display().to_string(),
-            source: e,
-        })?
-    };
-    let text = String::from_utf8_lossy(&head[..n]);
-    let trimmed = text.trim_start();
-    if trimmed.starts_with("%YAML") || text.contains("!!opencv-matrix") {
-        Ok(Format::OpencvYaml)
-    } else if trimmed.starts_with('[') {
-        Ok(Format::Moveit)
-    } else {
-        Ok(Format::Auto)
+    sniff_format(open(path)?, &path.display().to_string()).map(|(f, _)| f)
+}
+
+/// Tells the format of `input` from its head: `%YAML` first or `!!opencv-matrix` in the first
+/// content lines is OpenCV YAML, a JSON list (`[` then `[`, `{` or `]`) is moveit; otherwise [`Format::Auto`] (decided per
+/// record by [`PoseReader`]). The head read (up to the first line that is neither blank nor a `#`
+/// comment, or the next one after a YAML `---` or `key:` line; at most 2 × [`MAX_LINE`] bytes) is
+/// returned chained before the rest of `input`, so that nothing is lost and nothing reopened.
+pub fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Format, Sniffed<R>)> {
+    let mut head = Vec::new();
+    // Start of the line being read, in `head`.
+    let mut start = 0;
+    // Content lines seen (neither blank nor comments).
+    let mut content = 0;
+    loop {
+        let chunk = match input.fill_buf() {
+            Ok(c) => c,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => {
+                return Err(Error::Io {
+                    file: source.to_string(),
+                    source: e,
+                });
+            }
+        };
+        if chunk.is_empty() {
+            break;
+        }
+        let room = 2 * MAX_LINE - head.len();
+        let end = chunk.iter().take(room).position(|&b| b == b'\n');
+        let take = end.map_or(chunk.len().min(room), |k| k + 1);
+        head.extend_from_slice(&chunk[..take]);
+        input.consume(take);
+        if end.is_none() {
+            if head.len() >= 2 * MAX_LINE {
+                break;
+            }
+            continue;
+        }
+        let line = &head[start..];
+        let line = line
+            .strip_prefix(b"\xef\xbb\xbf")
+            .unwrap_or(line)
+            .trim_ascii();
+        if !line.is_empty() && !line.starts_with(b"#") {
+            let more = content == 0 && (line == b"---" || line.ends_with(b":"));
+            content += 1;
+            if !more {
+                break;
+            }
+        }
+        start = head.len();
     }
+    let text = String::from_utf8_lossy(&head);
+    let trimmed = text.trim_start_matches('\u{feff}').trim_start();
+    let format = if trimmed.starts_with("%YAML") || text.contains("!!opencv-matrix") {
+        Format::OpencvYaml
+    } else if trimmed.strip_prefix('[').is_some_and(|rest| {
+        matches!(
+            rest.trim_start().chars().next(),
+            None | Some('[' | '{' | ']')
+        )
+    }) {
+        // A JSON list (not a log line such as `[INFO] driver started`).
+        Format::Moveit
+    } else {
+        Format::Auto
+    };
+    Ok((format, Cursor::new(head).chain(input)))
 }
 
 /// Largest size of a time stamp accepted, seconds: about 31,700 years (Unix time is near 1.7e9 s;
@@ -474,7 +669,7 @@ mod tests {
             assert_eq!(got, lines, "{source}: {text}");
         }
         let csv_reader = PoseReader::new(small(&csv), "-", Format::Auto).unwrap();
-        assert!(matches!(csv_reader, PoseReader::Csv(_)));
+        assert_eq!(csv_reader.format(), Format::Csv);
         // Nothing but comments: JSON Lines with no records.
         assert_eq!(
             PoseReader::new(small("# only\n\n"), "-", Format::Auto)

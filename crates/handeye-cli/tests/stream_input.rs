@@ -1,0 +1,233 @@
+//! Input that cannot lose the stream (issue 13): `handeye online` gives the same events for a
+//! clean stream and for the same stream with a byte order mark, a log line first, a stray quote
+//! or an overflowing value in one line, through stdin and through a FIFO; an endless bad stream
+//! is read with bounded memory, each bad line counted.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use handeye::io::{Format, PoseReader};
+use serde_json::Value;
+
+fn testdata(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../testdata")
+        .join(rel)
+}
+
+fn handeye() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_handeye"))
+}
+
+/// Runs `handeye online INPUT --d-max 100` with `stdin` fed from another thread; returns
+/// (exit code, stdout, stderr).
+fn online(input: &Path, stdin: Vec<u8>) -> (i32, String, String) {
+    let mut child = handeye()
+        .arg("online")
+        .arg(input)
+        .args(["--d-max", "100"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut pipe = child.stdin.take().unwrap();
+    let writer = std::thread::spawn(move || {
+        // The reader may stop early; a broken pipe is its business.
+        let _ = pipe.write_all(&stdin);
+    });
+    let out = child.wait_with_output().unwrap();
+    writer.join().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr,
+    )
+}
+
+/// Runs `online` on a FIFO fed with `bytes`, or `None` where `mkfifo` is missing.
+#[cfg(unix)]
+fn online_fifo(bytes: &[u8]) -> Option<(i32, String, String)> {
+    use std::os::unix::fs::OpenOptionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("poses");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("mkfifo is missing: FIFO case skipped");
+        return None;
+    }
+    let bytes = bytes.to_vec();
+    let path = fifo.clone();
+    let writer = std::thread::spawn(move || {
+        if let Ok(mut f) = std::fs::OpenOptions::new().write(true).open(&path) {
+            let _ = f.write_all(&bytes);
+        }
+    });
+    let result = online(&fifo, Vec::new());
+    // Should the command have ended without opening the FIFO, open it (without blocking) so that
+    // the writer is not left waiting.
+    let _ = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(0o4000) // O_NONBLOCK
+        .open(&fifo);
+    writer.join().unwrap();
+    Some(result)
+}
+
+#[cfg(not(unix))]
+fn online_fifo(_: &[u8]) -> Option<(i32, String, String)> {
+    None
+}
+
+/// The events of `online`, without their timing.
+fn events(out: &str) -> Vec<Value> {
+    out.lines()
+        .map(|l| {
+            let mut v: Value = serde_json::from_str(l).unwrap();
+            if let Some(o) = v.as_object_mut() {
+                o.remove("seconds");
+            }
+            v
+        })
+        .collect()
+}
+
+/// The paper fixture as JSON Lines and as CSV (translation and quaternion columns).
+fn clean_streams() -> [(Vec<String>, &'static str); 2] {
+    let text = std::fs::read_to_string(testdata("paper/series_2007_000_200.jsonl")).unwrap();
+    let jsonl: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut csv = vec![
+        ["base_from_gripper", "camera_from_target"]
+            .iter()
+            .flat_map(|f| ["x", "y", "z", "qx", "qy", "qz", "qw"].map(move |s| format!("{f}_{s}")))
+            .collect::<Vec<_>>()
+            .join(","),
+    ];
+    for r in PoseReader::new(text.as_bytes(), "-", Format::Auto).unwrap() {
+        let p = r.unwrap().pose;
+        let mut v = Vec::new();
+        for t in [p.base_from_gripper, p.camera_from_target] {
+            v.extend(t.translation.vector.iter().copied());
+            v.extend(handeye::pose::quaternion_xyzw(&t));
+        }
+        csv.push(
+            v.iter()
+                .map(|x| format!("{x:?}"))
+                .collect::<Vec<_>>()
+                .join(","),
+        );
+    }
+    [(jsonl, "a stray quote\""), (csv, "1,2,\"3,4,5")]
+}
+
+#[test]
+fn a_bom_a_log_line_a_stray_quote_or_an_overflow_cost_their_own_line_only() {
+    for (clean, stray) in clean_streams() {
+        let csv = clean[0].starts_with("base_from");
+        let join = |lines: &[String]| format!("{}\n", lines.join("\n")).into_bytes();
+        let (code, out, err) = online(Path::new("-"), join(&clean));
+        assert_eq!(code, 0, "{err}");
+        let want = events(&out);
+        assert!(want.len() > 3, "{out}");
+        assert!(!err.contains("skipped"), "{err}");
+
+        let mut bom = b"\xef\xbb\xbf".to_vec();
+        bom.extend(join(&clean));
+        let mut logged = vec!["[INFO] robot driver started".to_string(), String::new()];
+        logged.extend(clean.iter().cloned());
+        let mut bad = clean.clone();
+        // Data line 50 gets a stray quote, line 120 a value whose inverse would overflow.
+        bad.insert(50, stray.to_string());
+        let overflow = if csv {
+            format!("1e300,{}", clean[1].split_once(',').unwrap().1)
+        } else {
+            "{\"base_from_gripper\": [[1,0,0,1e300],[0,1,0,0],[0,0,1,0],[0,0,0,1]], \"camera_from_target\": [[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}".to_string()
+        };
+        bad.insert(120, overflow);
+        let cases = [
+            ("bom", bom, None),
+            (
+                "log line",
+                join(&logged),
+                Some(
+                    "skipped 2 line(s) before the first pose record, the first not blank nor a comment at line 1: `[INFO] robot driver started`",
+                ),
+            ),
+            ("bad lines", join(&bad), Some("2 bad line(s) skipped")),
+        ];
+        for (name, bytes, said) in cases {
+            let mut runs = vec![("stdin", online(Path::new("-"), bytes.clone()))];
+            runs.extend(online_fifo(&bytes).map(|r| ("fifo", r)));
+            for (how, (code, out, err)) in runs {
+                let what = format!("{} {name} via {how}", if csv { "CSV" } else { "JSONL" });
+                assert_eq!(code, 0, "{what}: {err}");
+                assert_eq!(events(&out), want, "{what}: {err}");
+                if let Some(said) = said {
+                    assert!(err.contains(said), "{what}: {err}");
+                }
+                if name == "bad lines" {
+                    // Their places: the file's line numbers (a CSV header is line 1).
+                    assert!(
+                        err.contains(":51:") && err.contains(":121:"),
+                        "{what}: {err}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn online_on_a_fifo_reads_every_record() {
+    let [(clean, _), _] = clean_streams();
+    let text = format!("{}\n", clean.join("\n"));
+    let Some((code, _, err)) = online_fifo(text.as_bytes()) else {
+        return;
+    };
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("from 200 pose(s)"), "{err}");
+}
+
+#[test]
+fn an_endless_bad_stream_is_read_with_bounded_memory() {
+    let [(clean, _), _] = clean_streams();
+    let good = format!("{}\n", clean[..20].join("\n"));
+
+    // 50 MB without a newline, after good records: one bad line, never buffered.
+    let mut bytes = good.clone().into_bytes();
+    bytes.extend(std::iter::repeat_n(b'x', 50_000_000));
+    bytes.push(b'\n');
+    bytes.extend(good.bytes());
+    let (code, _, err) = online(Path::new("-"), bytes);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("-:21: field `-`: line longer than 65536 bytes")
+            && err.contains("from 40 pose(s), 1 bad line(s) skipped"),
+        "{err}"
+    );
+
+    // Nothing but zero bytes: one over-long line before any record.
+    let (code, _, err) = online(Path::new("-"), vec![0; 20_000_000]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("skipped 1 line(s) and found no pose record")
+            && err.contains("from 0 pose(s)"),
+        "{err}"
+    );
+
+    // A million lines of garbage after good records: each one counted, few shown.
+    let mut bytes = good.into_bytes();
+    for _ in 0..1_000_000 {
+        bytes.extend_from_slice(b"garbage \"\n");
+    }
+    let (code, _, err) = online(Path::new("-"), bytes);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("from 20 pose(s), 1000000 bad line(s) skipped"),
+        "{err}"
+    );
+    assert!(err.lines().count() < 200, "{} lines", err.lines().count());
+}
