@@ -280,19 +280,11 @@ impl<R: BufRead> Iterator for CsvPairs<R> {
 
     fn next(&mut self) -> Option<Self::Item> {
         loop {
-            let (number, line) = match self.lines.next_line()? {
-                Ok(l) => l,
-                // A failing input would fail again: the line reader ends here.
-                Err(e) => {
-                    return Some(Err(Error::Io {
-                        file: self.source.clone(),
-                        source: e,
-                    }));
-                }
-            };
-            let text = match line {
-                Line::TooLong => return Some(Err(too_long(&self.source, number))),
-                Line::Text(t) => t,
+            // A failing input (a directory, a broken pipe) would fail again: the line reader
+            // ends after its error.
+            let (number, text) = match self.lines.next_record(&self.source)? {
+                Ok(record) => record,
+                Err(e) => return Some(Err(e)),
             };
             match text.iter().find(|b| !b.is_ascii_whitespace()) {
                 None | Some(b'#') => continue,

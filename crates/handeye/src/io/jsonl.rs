@@ -5,12 +5,12 @@ use std::io::BufRead;
 
 use serde_json::{Map, Value};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::io::json_text::repeated_key;
-use crate::io::lines::{Line, Lines};
+use crate::io::lines::Lines;
 use crate::io::{
     CAMERA_FRAMES, Projections, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error,
-    read_transform_json, too_long,
+    read_transform_json,
 };
 use crate::motion::PosePair;
 use crate::pose::ReadTransform;
@@ -52,20 +52,11 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
 
     fn next(&mut self) -> Option<Self::Item> {
         loop {
-            let (number, line) = match self.lines.next_line()? {
-                Ok(l) => l,
-                // A failing input (a directory, a broken pipe) would fail again: the line reader
-                // ends here.
-                Err(e) => {
-                    return Some(Err(Error::Io {
-                        file: self.source.clone(),
-                        source: e,
-                    }));
-                }
-            };
-            let text = match line {
-                Line::TooLong => return Some(Err(too_long(&self.source, number))),
-                Line::Text(t) => t,
+            // A failing input (a directory, a broken pipe) would fail again: the line reader
+            // ends after its error.
+            let (number, text) = match self.lines.next_record(&self.source)? {
+                Ok(record) => record,
+                Err(e) => return Some(Err(e)),
             };
             let Ok(text) = std::str::from_utf8(text) else {
                 return Some(Err(parse_error(
@@ -196,6 +187,7 @@ fn frame(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Error;
 
     const I: &str = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
 
