@@ -99,7 +99,15 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
                 )
             },
         )?;
-        let refined = refine_time_offset(&robot, &camera, args.setup(), e.offset, args.max_gap);
+        let max_offset = OffsetOptions::default().max_offset;
+        let refined = refine_time_offset(
+            &robot,
+            &camera,
+            args.setup(),
+            e.offset,
+            max_offset,
+            args.max_gap,
+        );
         eprintln!(
             "time offset: {refined:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
             e.offset, e.correlation

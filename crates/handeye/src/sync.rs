@@ -267,17 +267,18 @@ fn median_period(s: &[StampedPose]) -> f64 {
 /// minimising how badly the paired poses agree on one X.
 ///
 /// Cross-correlating angular speeds ([`estimate_time_offset`]) finds the offset to within about a
-/// camera period; what is left biases X. Here, at each candidate offset the streams are paired,
+/// camera period, and outlier frames can mislead it entirely; what is left biases X. Here, at each
+/// candidate offset (around `initial`, and coarsely over ±`max_offset`) the streams are paired,
 /// X is the all-pairs Andreff solution from the accumulated normal equations (O(n)), and the cost
 /// is the mean squared per-pose rotation residual ([`crate::consistency::PoseResiduals`]) over the
-/// best 80% of the poses (a few bad samples do not steer it). A grid of 21 offsets over ±1 camera
-/// period around `initial` finds the basin, golden-section search its bottom. Returns `initial`
-/// when no candidate can be solved.
+/// best 80% of the poses (a few bad samples do not steer it). The grids find the basin,
+/// golden-section search its bottom. Returns `initial` when no candidate can be solved.
 pub fn refine_time_offset(
     robot: &[StampedPose],
     camera: &[StampedPose],
     setup: crate::motion::Setup,
     initial: f64,
+    max_offset: f64,
     max_gap: f64,
 ) -> f64 {
     let period = median_period(camera);
@@ -285,17 +286,26 @@ pub fn refine_time_offset(
         return initial;
     }
     let cost = |offset: f64| offset_cost(robot, camera, setup, offset, max_gap);
+    // A fine grid over ±1 period around `initial`, and a coarse one (half-period steps) over
+    // ±`max_offset`, in case outlier frames misled the correlation.
     const GRID: usize = 21;
-    let at = |k: usize| initial - period + 2.0 * period * k as f64 / (GRID - 1) as f64;
-    let costs: Vec<f64> = (0..GRID).map(|k| cost(at(k))).collect();
-    let Some(best) = (0..GRID)
-        .filter(|&k| costs[k].is_finite())
-        .min_by(|&a, &b| costs[a].total_cmp(&costs[b]))
+    let fine = (0..GRID).map(|k| initial - period + 2.0 * period * k as f64 / (GRID - 1) as f64);
+    let coarse_steps = (2.0 * max_offset / (0.5 * period))
+        .ceil()
+        .min(MAX_COARSE as f64) as usize;
+    let coarse = (0..=coarse_steps)
+        .map(|k| -max_offset + 2.0 * max_offset * k as f64 / coarse_steps.max(1) as f64);
+    let Some((best, best_cost, step)) = fine
+        .map(|o| (o, 2.0 * period / (GRID - 1) as f64))
+        .chain(coarse.map(|o| (o, 2.0 * max_offset / coarse_steps.max(1) as f64)))
+        .map(|(o, step)| (o, cost(o), step))
+        .filter(|c| c.1.is_finite())
+        .min_by(|a, b| a.1.total_cmp(&b.1))
     else {
         return initial;
     };
     // Golden-section search between the best grid point's neighbours.
-    let (mut lo, mut hi) = (at(best.saturating_sub(1)), at((best + 1).min(GRID - 1)));
+    let (mut lo, mut hi) = (best - step, best + step);
     let g = (5f64.sqrt() - 1.0) / 2.0;
     let (mut a, mut b) = (hi - g * (hi - lo), lo + g * (hi - lo));
     let (mut fa, mut fb) = (cost(a), cost(b));
@@ -313,12 +323,15 @@ pub fn refine_time_offset(
         }
     }
     let refined = 0.5 * (lo + hi);
-    if cost(refined) <= costs[best] {
+    if cost(refined) <= best_cost {
         refined
     } else {
-        at(best)
+        best
     }
 }
+
+/// Most points of the coarse grid of [`refine_time_offset`].
+const MAX_COARSE: usize = 4096;
 
 /// The cost of [`refine_time_offset`] at one offset: infinite when fewer than 10 pairs or no X.
 fn offset_cost(

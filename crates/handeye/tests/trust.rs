@@ -330,9 +330,9 @@ fn the_clock_offset_is_found_to_a_few_milliseconds() {
         .as_array()
         .unwrap()
         .iter()
-        .filter(|e| e["type"] == "stream_pair" && e["kind"] == "temporal")
+        .filter(|e| e["type"] == "stream_pair")
         .collect();
-    assert!(streams.len() >= 12);
+    assert!(streams.len() >= 15);
     let mut worst: f64 = 0.0;
     for e in streams {
         let read = |key: &str| read_stamped_poses(&suite().join(e[key].as_str().unwrap())).unwrap();
@@ -350,7 +350,7 @@ fn the_clock_offset_is_found_to_a_few_milliseconds() {
         let rough = estimate_time_offset(&robot, &camera, &OffsetOptions::default())
             .unwrap()
             .offset;
-        let fine = refine_time_offset(&robot, &camera, setup(e), rough, 0.1);
+        let fine = refine_time_offset(&robot, &camera, setup(e), rough, 1.0, 0.1);
         println!(
             "{}: truth {:+.4} s, correlation {:+.1} ms off, refined {:+.1} ms off",
             e["robot_file"],
