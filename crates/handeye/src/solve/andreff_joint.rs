@@ -35,8 +35,8 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
     // Eq. (10) stacks rotation rows (entries of order 1) on translation rows (entries of the
     // order of the data's lengths, in the input's unit): in kilometres or micrometres its normal
     // equations lose the smaller block entirely (X 1e-2 off at lengths ×1e8, t_x 100 % off at
-    // ×1e-8, on exact data). Within 2^10 of the input's unit it is solved as OpenCV solves it;
-    // beyond, in units that keep the two blocks within 2^10 of each other, and t_x scaled back
+    // ×1e-8, on exact data). Within 2^5 of the input's unit it is solved as OpenCV solves it;
+    // beyond, in units that keep the two blocks within 2^5 of each other, and t_x scaled back
     // (see `weighting_unit`).
     let unit = weighting_unit(motions);
     let scaled = Scaled::new(motions, unit);

@@ -37,8 +37,8 @@ pub fn daniilidis(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration>
     let check = check_motions(motions)?;
     // The rows of Eq. (31) mix the real parts (order 1) with the dual parts (order the data's
     // lengths): in the input's unit the eigenvectors lose digits as lengths grow or shrink (1e-2
-    // at lengths ×1e8 on exact data). Within 2^10 of the input's unit it is solved as OpenCV
-    // solves it; beyond, in units that keep the two within 2^10 of each other, and t_x scaled
+    // at lengths ×1e8 on exact data). Within 2^5 of the input's unit it is solved as OpenCV
+    // solves it; beyond, in units that keep the two within 2^5 of each other, and t_x scaled
     // back (see `weighting_unit`).
     let unit = weighting_unit(motions);
     let r_x0 = check.andreff_rotation;
