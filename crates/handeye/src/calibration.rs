@@ -465,15 +465,11 @@ fn quality_of(
     pairing: Pairing,
     c: &Calibration,
 ) -> QualityReport {
-    let deg = crate::metrics::OUTLIER_DEG;
     match pairing {
-        Pairing::All => quality_report(&AllPairs::new(poses, setup), &c.x, MAX_PER_MOTION, deg),
-        Pairing::Consecutive => quality_report(
-            &motion_pairs(poses, pairing, setup),
-            &c.x,
-            MAX_PER_MOTION,
-            deg,
-        ),
+        Pairing::All => quality_report(&AllPairs::new(poses, setup), &c.x, MAX_PER_MOTION),
+        Pairing::Consecutive => {
+            quality_report(&motion_pairs(poses, pairing, setup), &c.x, MAX_PER_MOTION)
+        }
     }
 }
 

@@ -158,42 +158,6 @@ impl ResidualSummary {
     }
 }
 
-/// The difference of the rotation angles of A and B in degrees. It is 0 for a rigid X (A and B are
-/// conjugate), so a large one marks a bad pair: a wrong timestamp, a misdetected target.
-pub fn angle_gap_deg(m: &MotionPair) -> f64 {
-    let a = crate::motion::MotionFeatures::of(&m.a).angle;
-    let b = crate::motion::MotionFeatures::of(&m.b).angle;
-    (a - b).abs().to_degrees()
-}
-
-/// The indices of the motion pairs whose A and B rotation angles differ by more than
-/// `threshold_deg` (outliers).
-pub fn find_outliers(motions: &(impl MotionSource + ?Sized), threshold_deg: f64) -> Vec<usize> {
-    let mut out = Vec::new();
-    let mut k = 0;
-    motions.for_each_motion(|m| {
-        if angle_gap_deg(m) > threshold_deg {
-            out.push(k);
-        }
-        k += 1;
-    });
-    out
-}
-
-/// Removes the motion pairs at `outliers` (sorted indices, as [`find_outliers`] gives them).
-pub fn remove_outliers(motions: &mut Vec<MotionPair>, outliers: &[usize]) {
-    let mut next = outliers.iter().peekable();
-    let mut k = 0;
-    motions.retain(|_| {
-        let drop = next.peek() == Some(&&k);
-        if drop {
-            next.next();
-        }
-        k += 1;
-        !drop
-    });
-}
-
 /// One motion pair in a [`QualityReport`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MotionQuality {
@@ -213,9 +177,6 @@ pub struct MotionQuality {
 pub struct QualityReport {
     /// RMS and worst of the residuals.
     pub residual: ResidualSummary,
-    /// Indices of the motion pairs whose A and B rotation angles differ by more than the
-    /// threshold given to [`quality_report`] (as [`find_outliers`] gives them).
-    pub outliers: Vec<usize>,
     /// Per motion pair, in input order (empty above the limit given to [`quality_report`]).
     pub per_motion: Vec<MotionQuality>,
     /// Largest angle between a motion's rotation axis (as a line) and the dominant axis, degrees:
@@ -231,24 +192,21 @@ pub struct QualityReport {
 pub const WARN_AXIS_SPREAD_DEG: f64 = 8.0;
 /// Rotation residual RMS above which the report warns about frame directions, degrees.
 pub const WARN_RESIDUAL_DEG: f64 = 5.0;
-/// Default outlier threshold on |θ_A − θ_B|, degrees.
+/// Default floor of the per-pose outlier test on the median |θ_A − θ_B| of a pose's motions, degrees.
 pub const OUTLIER_DEG: f64 = 3.0;
 
 /// The quality report of X over the motion pairs it was solved from. Per-motion entries are kept
-/// for at most `max_per_motion` motions (the summary covers all of them); motions whose A and B
-/// rotation angles differ by more than `outlier_deg` are listed as outliers.
+/// for at most `max_per_motion` motions (the summary covers all of them). Outliers are judged per
+/// pose ([`crate::consistency::pose_outliers`]).
 pub fn quality_report(
     motions: &(impl MotionSource + ?Sized),
     x: &Transform,
     max_per_motion: usize,
-    outlier_deg: f64,
 ) -> QualityReport {
     let keep = motions.count() <= max_per_motion;
     let mut per_motion = Vec::new();
-    let mut outliers = Vec::new();
     let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
     let mut residual = ResidualSummary::default();
-    let mut index = 0;
     motions.for_each_motion(|m| {
         let r = MotionResidual::of(m, x);
         let angle_a = crate::motion::MotionFeatures::of(&m.a).angle;
@@ -262,10 +220,6 @@ pub fn quality_report(
         residual.add(q.rotation_deg, q.translation);
         smallest = smallest.min(q.angle_deg);
         largest = largest.max(q.angle_deg);
-        if q.angle_gap_deg > outlier_deg {
-            outliers.push(index);
-        }
-        index += 1;
         if keep {
             per_motion.push(q);
         }
@@ -287,7 +241,6 @@ pub fn quality_report(
     }
     QualityReport {
         residual,
-        outliers,
         per_motion,
         axis_spread_deg,
         rotation_range_deg,
