@@ -1,12 +1,15 @@
-//! `handeye online`: the online calibrator on a stream, one JSON line per calibration.
+//! `handeye online`: the online calibrator on a stream, one JSON line per calibration (the
+//! paper's estimator) or per reported estimate and change (`--estimator accumulate`).
 
+use std::collections::VecDeque;
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
-use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig};
+use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::select::{AdaptiveParams, Selection};
+use handeye::tracking::{Report, Step, TrackOptions};
 use serde_json::{Map, Value, json};
 
 use crate::input::{InputArgs, records};
@@ -22,9 +25,24 @@ pub struct Args {
     #[arg(long, default_value = "adaptive", value_parser = ["adaptive", "fixed", "none"])]
     selection: String,
     /// Estimator: `paper` (Andreff on the two selected motions of each calibration) or
-    /// `accumulate` (every pair of poses since the last detected change of X).
+    /// `accumulate` (every pair of poses since the last detected change of X, outliers held out,
+    /// reported on its own schedule: --every, --shrink, and at the end).
     #[arg(long, default_value = "paper", value_parser = ["paper", "accumulate"])]
     estimator: String,
+    /// With --estimator accumulate: report the estimate at least every N poses.
+    #[arg(long, default_value_t = TrackOptions::default().every)]
+    every: usize,
+    /// With --estimator accumulate: also report when both uncertainties have shrunk to this
+    /// fraction of the last reported ones.
+    #[arg(long, default_value_t = TrackOptions::default().shrink)]
+    shrink: f64,
+    /// Length unit of the input: `auto` infers metres or millimetres from the first pose; it
+    /// sets the default --d-max (0.1 m).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "m", "mm"])]
+    unit: String,
+    /// Least rotation-angle gap (degrees) that marks a pose as an outlier (accumulate estimator).
+    #[arg(long, default_value_t = TrackOptions::default().outlier_deg)]
+    outlier_deg: f64,
     /// Also refine over the last five selected motions (the paper's optimal method).
     #[arg(long)]
     optimal: bool,
@@ -64,9 +82,10 @@ pub struct Args {
     /// Floor of a predicted β₀, degrees [default: 3, the library's default].
     #[arg(long)]
     beta_min_deg: Option<f64>,
-    /// Ceiling of a predicted d₀, in the input's length unit (0.1 m; use 100 for millimetres).
-    #[arg(long, default_value_t = AdaptiveParams::default().d_max)]
-    d_max: f64,
+    /// Ceiling of a predicted d₀, in the input's length unit [default: 0.1 m in the unit of
+    /// --unit].
+    #[arg(long)]
+    d_max: Option<f64>,
     /// Opt-in remedy for thresholds that lock when their four records are equal.
     #[arg(long)]
     unfreeze: bool,
@@ -104,74 +123,183 @@ pub fn run(args: Args) -> Result<()> {
             beta_min: args
                 .beta_min_deg
                 .map_or(AdaptiveParams::default().beta_min, f64::to_radians),
-            d_max: args.d_max,
+            d_max: args.d_max.unwrap_or(AdaptiveParams::default().d_max),
             unfreeze: args.unfreeze,
         },
         error_source: args.error_source.parse::<ErrorSource>()?,
         truth: truth.map(|t| t.x),
         optimal: args.optimal,
         estimator: args.estimator.parse::<Estimator>()?,
-        ..OnlineConfig::default()
+        tracking: TrackOptions {
+            every: args.every,
+            shrink: args.shrink,
+            outlier_deg: args.outlier_deg,
+            ..TrackOptions::default()
+        },
+        // An explicit --d-max is in the input's unit whatever it is.
+        unit: match args.d_max {
+            Some(_) => Unit::AsGiven,
+            None => args.unit.parse::<Unit>()?,
+        },
     };
+    for (name, value) in [("--every", args.every as f64), ("--shrink", args.shrink)] {
+        if !(value.is_finite() && value > 0.0) {
+            bail!("{name} must be a positive number, found {value}");
+        }
+    }
+    let accumulate = config.estimator == Estimator::Accumulate;
     let mut calibrator = OnlineCalibrator::new(config)?;
     let (records, source, time_offset) = records(&args.input)?;
-    let mut skipped: usize = 0;
+    let mut messages = Thinned::default();
+    let mut last: Option<Report> = None;
+    // Input lines of the recent poses, for naming the ones held out (the tracker may hold out a
+    // pose up to 256 poses after it came, when it judges its first poses together).
+    let mut lines: VecDeque<(usize, usize, Option<f64>)> = VecDeque::with_capacity(LINES_KEPT);
     for record in records {
-        // A pose the calibrator refuses is a bad line too, named by its place.
-        let pushed = record.and_then(|r| {
-            calibrator.push(&r.pose).map_err(|e| handeye::Error::Parse {
-                file: source.clone(),
-                line: r.line,
-                field: "-".to_string(),
-                message: e.to_string(),
-            })
-        });
-        let events = match pushed {
+        let record = match record {
+            Ok(r) => r,
+            Err(e) => {
+                bad_line(e, &args.on_bad_line, &mut messages)?;
+                continue;
+            }
+        };
+        // A pose the calibrator refuses (not finite, overflowing) is a bad line too, named by its
+        // place; a unit it cannot tell stops the run.
+        let events = match calibrator.push(&record.pose) {
             Ok(events) => events,
-            Err(e) if args.on_bad_line == "skip" && matches!(e, handeye::Error::Parse { .. }) => {
-                skipped += 1;
-                // Every bad line is counted; the first ones are shown, later ones sparsely, so
-                // that an endless bad stream cannot flood the terminal.
-                if skipped <= SHOWN_BAD_LINES || skipped.is_power_of_two() {
-                    eprintln!("skipped: {e}");
-                }
-                if skipped == SHOWN_BAD_LINES {
-                    eprintln!(
-                        "further bad lines are counted and shown only at the 2^k-th (the count is given at the end)"
-                    );
-                }
+            Err(e @ handeye::Error::InvalidTransform { .. }) => {
+                let e = handeye::Error::Parse {
+                    file: source.clone(),
+                    line: record.line,
+                    field: "-".to_string(),
+                    message: e.to_string(),
+                };
+                bad_line(e, &args.on_bad_line, &mut messages)?;
                 continue;
             }
             Err(e) => return Err(e.into()),
         };
-        if let Some(pose) = calibrator.change_detected() {
-            print_line(&json!({"change": pose}))?;
-            eprintln!("change of X detected at pose {pose}: accumulation restarted");
+        if calibrator.poses() == 1 {
+            tell_unit(&calibrator);
         }
-        for event in events {
-            print_line(&event_json(&event, time_offset))?;
+        if lines.len() == LINES_KEPT {
+            lines.pop_front();
+        }
+        // Paired streams are named by the camera stamp, files by their line.
+        let stamp = args.input.robot.as_ref().and(record.stamp);
+        lines.push_back((calibrator.poses(), record.line, stamp));
+        if let Some(step) = calibrator.step() {
+            print_step(step, setup, &lines, &source, time_offset, &mut messages)?;
+            last = step.report.or(last);
+        }
+        if !accumulate {
+            for event in events {
+                print_line(&event_json(&event, time_offset))?;
+            }
         }
     }
+    if let Some(report) = calibrator.finish() {
+        print_line(&with_offset(report.json(setup), time_offset))?;
+        last = Some(report);
+    }
+    eprintln!("{}", summary(&calibrator, last.as_ref(), messages.bad_lines));
+    Ok(())
+}
+
+/// Input lines kept for naming held-out poses.
+const LINES_KEPT: usize = 300;
+
+/// Counts and thins the messages of bad lines and held-out poses.
+#[derive(Default)]
+struct Thinned {
+    bad_lines: usize,
+    held_out: usize,
+}
+
+impl Thinned {
+    /// Every message is counted; the first ones are shown, later ones sparsely, so that an
+    /// endless bad stream cannot flood the terminal.
+    fn show(count: &mut usize, what: &str, message: String) {
+        *count += 1;
+        if *count <= SHOWN_BAD_LINES || count.is_power_of_two() {
+            eprintln!("{message}");
+        }
+        if *count == SHOWN_BAD_LINES {
+            eprintln!(
+                "further {what} are counted and shown only at the 2^k-th (the count is given at the end)"
+            );
+        }
+    }
+}
+
+/// Skips a bad line with its message, or stops with it (`--on-bad-line stop`).
+fn bad_line(e: handeye::Error, on_bad_line: &str, messages: &mut Thinned) -> Result<()> {
+    if on_bad_line == "skip" && matches!(e, handeye::Error::Parse { .. }) {
+        Thinned::show(&mut messages.bad_lines, "bad lines", format!("skipped: {e}"));
+        Ok(())
+    } else {
+        Err(e.into())
+    }
+}
+
+/// Tells on stderr which length unit the run uses.
+fn tell_unit(calibrator: &OnlineCalibrator) {
+    let unit = match calibrator.unit() {
+        Unit::Metre => "metres",
+        Unit::Millimetre => "millimetres",
+        Unit::Auto | Unit::AsGiven => {
+            eprintln!("length unit: as given (d_max = {})", calibrator.d_max());
+            return;
+        }
+    };
+    let how = if calibrator.config().unit == Unit::Auto {
+        "inferred from the first pose; --unit m|mm to set it"
+    } else {
+        "--unit"
+    };
     eprintln!(
-        "{} calibration(s) from {} pose(s){}; last X: {}",
-        calibrator.calibrations(),
-        calibrator.poses(),
-        if skipped > 0 {
-            format!(", {skipped} bad line(s) skipped")
-        } else {
-            String::new()
-        },
-        calibrator.last_x().map_or("none".to_string(), |x| {
-            let t = x.translation.vector;
-            format!(
-                "t = [{:.6}, {:.6}, {:.6}], rotation {:.4}°",
-                t.x,
-                t.y,
-                t.z,
-                x.rotation.angle().to_degrees()
-            )
-        })
+        "length unit: {unit} ({how}); d_max = {}",
+        calibrator.d_max()
     );
+}
+
+/// Prints what the accumulating estimator did with a pose: held-out poses on stderr (by their
+/// input line), a change and a report as JSON lines.
+fn print_step(
+    step: &Step,
+    setup: handeye::Setup,
+    lines: &VecDeque<(usize, usize, Option<f64>)>,
+    source: &str,
+    time_offset: Option<f64>,
+    messages: &mut Thinned,
+) -> Result<()> {
+    let place = |pose: usize| match lines.iter().find(|(p, _, _)| *p == pose) {
+        Some((_, _, Some(stamp))) => format!("{source} at t = {stamp:.3} s"),
+        Some((_, line, None)) => format!("{source}:{line}"),
+        None => format!("{source}, pose {pose}"),
+    };
+    let held = step
+        .held_out
+        .iter()
+        .map(|h| (step.pose, h))
+        .chain(step.earlier.iter().map(|(p, h)| (*p, h)));
+    for (pose, h) in held {
+        let message = format!("held out: {}: {h}", place(pose));
+        Thinned::show(&mut messages.held_out, "held-out poses", message);
+    }
+    if let Some(c) = &step.change {
+        eprintln!(
+            "change of X or of the target from {} on (confirmed at {}): X moved by {:.3}° and {:.4}; accumulation restarted there",
+            place(c.at),
+            place(c.confirmed),
+            c.x_rotation_deg,
+            c.x_translation
+        );
+        print_line(&c.json())?;
+    }
+    if let Some(r) = &step.report {
+        print_line(&with_offset(r.json(setup), time_offset))?;
+    }
     Ok(())
 }
 
@@ -188,21 +316,7 @@ pub fn event_json(e: &Event, time_offset: Option<f64>) -> Value {
     }
     out.insert("rms_r".into(), json!(e.rms.rms_r));
     out.insert("rms_t".into(), json!(e.rms.rms_t));
-    match &e.accumulated {
-        Some(a) => {
-            // The accumulated X is the event's transform; the paper's two-motion X is kept apart.
-            insert_transform(&mut out, &a.x);
-            out.insert("estimator".into(), json!("accumulate"));
-            out.insert(
-                "accumulated".into(),
-                json!({"poses": a.poses, "conditioning": a.conditioning, "noise_rotation_deg": a.noise[0], "noise_translation": a.noise[1], "uncertainty_rotation_deg": a.uncertainty.map(|u| u[0]), "uncertainty_translation": a.uncertainty.map(|u| u[1]), "last_change": a.change_at}),
-            );
-            let mut paper = Map::new();
-            insert_transform(&mut paper, &e.x);
-            out.insert("paper".into(), Value::Object(paper));
-        }
-        None => insert_transform(&mut out, &e.x),
-    }
+    insert_transform(&mut out, &e.x);
     if let Some(o) = &e.optimal {
         let mut opt = Map::new();
         insert_transform(&mut opt, &o.x);
@@ -215,4 +329,69 @@ pub fn event_json(e: &Event, time_offset: Option<f64>) -> Value {
         out.insert("time_offset_s".into(), json!(t));
     }
     Value::Object(out)
+}
+
+/// A JSON line with the clock offset used, for two streams.
+fn with_offset(mut v: Value, time_offset: Option<f64>) -> Value {
+    if let (Some(t), Some(o)) = (time_offset, v.as_object_mut()) {
+        o.insert("time_offset_s".into(), json!(t));
+    }
+    v
+}
+
+/// The stderr summary: what the events showed, or why there was none.
+fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usize) -> String {
+    let bad = if bad_lines > 0 {
+        format!(", {bad_lines} bad line(s) skipped")
+    } else {
+        String::new()
+    };
+    let Some(tracker) = calibrator.tracker() else {
+        let last = calibrator.last_x().map_or(
+            "none: the selection accepted no pair of motions (too little rotation, or all about one axis)".to_string(),
+            |x| describe(&x),
+        );
+        return format!(
+            "{} calibration(s) from {} pose(s){bad}; last X: {last}",
+            calibrator.calibrations(),
+            calibrator.poses()
+        );
+    };
+    let counts = format!(
+        "{} pose(s){bad}, {} held out, {} change(s)",
+        calibrator.poses(),
+        tracker.held_out(),
+        tracker.changes()
+    );
+    match (last, tracker.pending()) {
+        (Some(r), _) => {
+            let e = &r.estimate;
+            let weak = r
+                .weak
+                .as_ref()
+                .map_or(String::new(), |w| format!(" (weak: {w})"));
+            format!(
+                "last estimate ({}) from {} of {counts}: {}, uncertainty {:.3}° / {:.4}{weak}",
+                r.number,
+                e.poses,
+                describe(&e.x),
+                e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
+                e.uncertainty_translation.unwrap_or(f64::NAN)
+            )
+        }
+        (None, Some(why)) => format!("no estimate from {counts}: {why}"),
+        (None, None) => format!("no estimate from {counts}"),
+    }
+}
+
+/// A transform in a few words.
+fn describe(x: &handeye::Transform) -> String {
+    let t = x.translation.vector;
+    format!(
+        "t = [{:.6}, {:.6}, {:.6}], rotation {:.4}°",
+        t.x,
+        t.y,
+        t.z,
+        x.rotation.angle().to_degrees()
+    )
 }

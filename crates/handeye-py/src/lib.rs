@@ -4,7 +4,8 @@
 //! Conventions: `base_from_gripper` (OpenCV `gripper2base`), `camera_from_target` (`target2cam`),
 //! X = `gripper_from_camera` (`cam2gripper`) for eye-in-hand, `base_from_camera` for eye-to-hand.
 
-use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig};
+use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
+use handeye::tracking::TrackOptions;
 use handeye::pose::transform_from_matrix4;
 use handeye::select::{AdaptiveParams, Selection};
 use handeye::{Method, Pairing, PosePair, Setup, Transform};
@@ -170,7 +171,7 @@ struct PyOnline {
 #[pymethods]
 impl PyOnline {
     #[new]
-    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="paper", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false))]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="paper", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         selection: &str,
@@ -190,7 +191,11 @@ impl PyOnline {
         beta_min_deg: Option<f64>,
         d_max: Option<f64>,
         unfreeze: bool,
+        unit: &str,
+        every: Option<usize>,
+        shrink: Option<f64>,
     ) -> PyResult<Self> {
+        let tracking = TrackOptions::default();
         // A parameter left out takes the library's default.
         let d = AdaptiveParams::default();
         let truth = truth
@@ -216,7 +221,16 @@ impl PyOnline {
             truth,
             optimal,
             estimator: estimator.parse::<Estimator>().map_err(value_error)?,
-            ..OnlineConfig::default()
+            tracking: TrackOptions {
+                every: every.unwrap_or(tracking.every),
+                shrink: shrink.unwrap_or(tracking.shrink),
+                ..tracking
+            },
+            // An explicit d_max is in the input's unit whatever it is.
+            unit: match d_max {
+                Some(_) => Unit::AsGiven,
+                None => unit.parse::<Unit>().map_err(value_error)?,
+            },
         };
         Ok(Self {
             inner: OnlineCalibrator::new(config).map_err(value_error)?,
@@ -235,7 +249,30 @@ impl PyOnline {
             camera_from_target: transform(camera_from_target.as_array(), "camera_from_target")?,
         };
         let events = self.inner.push(&pose).map_err(value_error)?;
-        events.iter().map(|e| event(py, e)).collect()
+        let setup = self.inner.config().setup;
+        match self.inner.step() {
+            // The accumulating estimator's own lines: a change, a report.
+            Some(step) => {
+                let lines = step
+                    .change
+                    .map(|c| c.json())
+                    .into_iter()
+                    .chain(step.report.map(|r| r.json(setup)));
+                lines.map(|v| json_dict(py, &v)).collect()
+            }
+            None => events.iter().map(|e| event(py, e)).collect(),
+        }
+    }
+
+    /// The accumulating estimator's final report (JSON text), or None.
+    fn finish(&mut self) -> Option<String> {
+        let setup = self.inner.config().setup;
+        self.inner.finish().map(|r| r.json(setup).to_string())
+    }
+
+    /// Why the accumulating estimator has nothing to report now, or None.
+    fn pending(&self) -> Option<String> {
+        self.inner.pending().map(|p| p.to_string())
     }
 
     /// Poses pushed so far.
@@ -262,6 +299,13 @@ impl PyOnline {
     }
 }
 
+/// A JSON object as a dict (through Python's json module, so every face shows the same fields).
+fn json_dict<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py, PyDict>> {
+    let json = py.import("json")?;
+    let d = json.call_method1("loads", (v.to_string(),))?;
+    Ok(d.downcast_into::<PyDict>()?)
+}
+
 /// One event as a dict.
 fn event<'py>(py: Python<'py>, e: &Event) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -280,10 +324,6 @@ fn event<'py>(py: Python<'py>, e: &Event) -> PyResult<Bound<'py, PyDict>> {
     d.set_item("seconds", e.seconds)?;
     if let Some(o) = &e.optimal {
         d.set_item("optimal", matrix(py, &o.x))?;
-    }
-    if let Some(a) = &e.accumulated {
-        d.set_item("accumulated", matrix(py, &a.x))?;
-        d.set_item("accumulated_poses", a.poses)?;
     }
     Ok(d)
 }

@@ -1,6 +1,6 @@
 //! An online estimate that keeps improving: the normal equations of Andreff's linear system over
-//! *every pair* of poses seen so far, updated in O(1) time and memory per pose, and a CUSUM test
-//! that notices when X changes (a bumped camera).
+//! *every pair* of poses seen so far, updated in O(1) time and memory per pose. On a stream it is
+//! run by [`crate::tracking::Tracker`], which gates the poses and notices when X changes.
 //!
 //! Over all pairs i < j (motion from pose j to pose i, as [`crate::Pairing::All`]) the sums that
 //! make the normal equations factor through per-pose sums. With G_k = R_k ⊗ S_k (R_k the rotation
@@ -11,12 +11,19 @@
 //! term per pose built from running prefix sums. The result is the batch all-pairs Andreff
 //! solution — the most accurate batch solve on the paper's protocol — at every pose, for the cost
 //! of a 9×9 eigen-decomposition.
+//!
+//! The same sums give, for any X, the fixed frame every pose sees, Y_i = H_i X C_i (H_i the hand
+//! pose, C_i = `camera_from_target`; Y is `base_from_target` eye-in-hand, `gripper_from_target`
+//! eye-to-hand): `Σ R_Yi = unvec(S vec R_x)` and `Σ t_Yi = N vec R_x + U t_x + Σ p_k` with
+//! `N = Σ R_k ⊗ c_kᵀ` (c_k the translation of C_k). Two more sums (Σ‖c‖², Σ‖w‖², Σc, Σ c wᵀ with
+//! w_k = R_kᵀ p_k) give the scatter of the Y_i about their mean, Σ‖R_Yi − R_Y‖²_F and
+//! Σ‖t_Yi − t_Y‖², in closed form: the data's own noise level under X, in O(1)
+//! ([`PoseAccumulator::residual_scatter`]). [`crate::tracking`] judges each new pose by it.
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::metrics::MotionResidual;
-use crate::motion::{MotionPair, PosePair, Setup};
+use crate::motion::{PosePair, Setup};
 use crate::pose::{Transform, rotation_matrix, transform_from_parts};
 use crate::solve::RotationSystem;
 
@@ -44,6 +51,22 @@ pub struct PoseAccumulator {
     t: Matrix39,
     /// E with Σ_{i<j} Cᵀ R_x t_b = E vec(R_x).
     e: Matrix39,
+    /// N = Σ R_k ⊗ c_kᵀ, c_k the translation of `camera_from_target`.
+    n_c: Matrix39,
+    /// Σ c_k.
+    c: Vector3<f64>,
+    /// Σ c_k w_kᵀ, w_k = R_kᵀ p_k.
+    cw: Matrix3<f64>,
+    /// Σ‖c_k‖² + Σ‖w_k‖².
+    cc_ww: f64,
+    /// Σ‖p_k‖² (the spread of the hand positions).
+    pp: f64,
+    /// Σ‖c_k‖² (the camera's distance to the target).
+    cc: f64,
+    /// Σ [p_k]× R_k.
+    pr: Matrix3<f64>,
+    /// Σ w_k w_kᵀ.
+    ww: Matrix3<f64>,
 }
 
 /// The accumulated estimate of X.
@@ -55,6 +78,17 @@ pub struct Estimate {
     pub poses: usize,
     /// Conditioning of the rotation system (second-smallest over largest singular value).
     pub conditioning: f64,
+}
+
+/// How the poses' fixed frames Y_i = H_i X C_i scatter under one X (module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Scatter {
+    /// The mean fixed frame Y (chordal mean rotation, mean translation).
+    pub y: Transform,
+    /// RMS rotation of the Y_i about Y, radians (from Σ‖R_Yi − R_Y‖²_F = Σ 4(1 − cos θ_i) ≈ Σ 2θ_i²).
+    pub rotation: f64,
+    /// RMS distance of the Y_i from Y, input units.
+    pub translation: f64,
 }
 
 /// `A ⊗ r` for a 3×3 A and a row 3-vector r (3×9).
@@ -75,6 +109,14 @@ impl PoseAccumulator {
             q: Vector3::zeros(),
             t: Matrix39::zeros(),
             e: Matrix39::zeros(),
+            n_c: Matrix39::zeros(),
+            c: Vector3::zeros(),
+            cw: Matrix3::zeros(),
+            cc_ww: 0.0,
+            pp: 0.0,
+            cc: 0.0,
+            pr: Matrix3::zeros(),
+            ww: Matrix3::zeros(),
         }
     }
 
@@ -99,7 +141,122 @@ impl PoseAccumulator {
         self.w += r.transpose() * p;
         self.q += q;
         self.t += kron_row(&r.transpose(), &q);
+        // The fixed-frame sums: c = translation of camera_from_target, w = Rᵀp.
+        let c = pose.camera_from_target.translation.vector;
+        let w = r.transpose() * p;
+        self.n_c += kron_row(&r, &c);
+        self.c += c;
+        self.cw += c * w.transpose();
+        self.cc_ww += c.norm_squared() + w.norm_squared();
+        self.pp += p.norm_squared();
+        self.cc += c.norm_squared();
+        self.pr += crate::pose::skew(&p) * r;
+        self.ww += w * w.transpose();
         self.n += 1;
+    }
+
+    /// The setup the poses are read in.
+    pub fn setup(&self) -> Setup {
+        self.setup
+    }
+
+    /// RMS distance of the hand positions from their mean, input units: the size of the scene.
+    pub fn scene_scale(&self) -> f64 {
+        let n = self.n.max(1) as f64;
+        (self.pp / n - (self.p / n).norm_squared()).max(0.0).sqrt()
+    }
+
+    /// RMS distance of the camera from the target, input units.
+    pub fn viewing_distance(&self) -> f64 {
+        (self.cc / self.n.max(1) as f64).sqrt()
+    }
+
+    /// The covariance of X's error to first order, as (rotation about the gripper axes in
+    /// radians², translation in units²; 6×6), when every pose's fixed frame Y_k = H_k X C_k carries
+    /// independent noise of RMS `noise_rotation` (radians) and `noise_translation` about the
+    /// common Y: the robot-world reading of the poses, where each pose is one measurement (the
+    /// all-pairs sums count each pose's noise in n − 1 motions). With δ = (δr, δt) in the gripper
+    /// frame, Y_k moves by A_k δ, A_k = [[R_k, 0], [R_k [t_x]× + [p_k]× R_k, R_k]]; Y absorbs the
+    /// mean, so the information is Σ A_kᵀ W A_k − (Σ A_k)ᵀ W (Σ A_k) / n with
+    /// W = diag(I/σ_r², I/σ_t²), every sum from the accumulated ones. `None` when it is singular.
+    pub fn covariance(
+        &self,
+        x: &Transform,
+        noise_rotation: f64,
+        noise_translation: f64,
+    ) -> Option<SMatrix<f64, 6, 6>> {
+        if self.n < 3 || !(noise_rotation > 0.0 && noise_translation > 0.0) {
+            return None;
+        }
+        let n = self.n as f64;
+        let (wr, wt) = (1.0 / noise_rotation.powi(2), 1.0 / noise_translation.powi(2));
+        let t = x.translation.vector;
+        let tx = crate::pose::skew(&t);
+        let identity = Matrix3::identity();
+        // Lower-left block summed: Σ (R_k [t]× + [p_k]× R_k) = U [t]× + Σ [p_k]× R_k.
+        let sum_l = self.u * tx + self.pr;
+        // Σ L_kᵀ L_k with L_k = R_k [t]× + [p_k]× R_k: [t]×ᵀ[t]× n + [t]×ᵀ Σ Rᵀ[p]×R + its
+        // transpose + Σ Rᵀ[p]×ᵀ[p]×R, where Rᵀ[p]×R = [w]× and Rᵀ[p]×ᵀ[p]×R = ‖p‖² I − w wᵀ.
+        let w_sum = crate::pose::skew(&self.w);
+        let ltl = tx.transpose() * tx * n
+            + tx.transpose() * w_sum
+            + w_sum.transpose() * tx
+            + identity * self.pp
+            - self.ww;
+        // Σ L_kᵀ R_k = [t]×ᵀ n + Σ Rᵀ[p]×ᵀ R... = n [t]×ᵀ + [w]×ᵀ summed.
+        let ltr = tx.transpose() * n + w_sum.transpose();
+        let mut info = SMatrix::<f64, 6, 6>::zeros();
+        // Rotation block: Σ R_kᵀ R_k wr + Σ L_kᵀ L_k wt.
+        info.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(identity * (n * wr) + ltl * wt));
+        info.fixed_view_mut::<3, 3>(0, 3).copy_from(&(ltr * wt));
+        info.fixed_view_mut::<3, 3>(3, 0).copy_from(&(ltr.transpose() * wt));
+        info.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&(identity * (n * wt)));
+        // Minus the mean's share: (Σ A)ᵀ W (Σ A) / n, Σ A = [[U, 0], [ΣL, U]].
+        let mut sum_a = SMatrix::<f64, 6, 6>::zeros();
+        sum_a.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.u);
+        sum_a.fixed_view_mut::<3, 3>(3, 0).copy_from(&sum_l);
+        sum_a.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.u);
+        let weight = SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(
+            wr, wr, wr, wt, wt, wt,
+        ));
+        let info = info - sum_a.transpose() * weight * sum_a / n;
+        let info = (info + info.transpose()) * 0.5;
+        info.try_inverse()
+            .filter(|c| (0..6).all(|k| c[(k, k)].is_finite() && c[(k, k)] > 0.0))
+    }
+
+    /// The fixed frame Y and how the poses scatter about it under `x` (module documentation), in
+    /// O(1). `None` before the first pose.
+    pub fn residual_scatter(&self, x: &Transform) -> Option<Scatter> {
+        if self.n == 0 {
+            return None;
+        }
+        let n = self.n as f64;
+        let r_x = rotation_matrix(x);
+        let t_x = x.translation.vector;
+        let vec_r = SMatrix::<f64, 9, 1>::from_fn(|k, _| r_x[(k / 3, k % 3)]);
+        let sum_r = self.g * vec_r;
+        let sum_r = Matrix3::from_fn(|i, j| sum_r[3 * i + j]);
+        let r_y = crate::pose::proj_so3(&sum_r);
+        let sum_t = self.n_c * vec_r + self.u * t_x + self.p;
+        let t_y = sum_t / n;
+        // Σ‖R_Yi − R_Y‖²_F = 6n − 2 tr(R_Yᵀ Σ R_Yi), and per pose ‖R − R_Y‖²_F = 4(1 − cos θ) ≈ 2θ².
+        let rotation_f2 = (6.0 * n - 2.0 * (r_y.transpose() * sum_r).trace()).max(0.0);
+        let rotation = (rotation_f2 / (2.0 * n)).sqrt();
+        // ‖t_Yi‖² = ‖R_x c + t_x + w‖², summed term by term.
+        let sum_tt = self.cc_ww
+            + n * t_x.norm_squared()
+            + 2.0 * t_x.dot(&(r_x * self.c))
+            + 2.0 * (r_x * self.cw).trace()
+            + 2.0 * t_x.dot(&self.w);
+        let translation = ((sum_tt - n * t_y.norm_squared()) / n).max(0.0).sqrt();
+        Some(Scatter {
+            y: transform_from_parts(&r_y, &t_y),
+            rotation,
+            translation,
+        })
     }
 
     /// Poses accumulated.
@@ -143,103 +300,10 @@ impl PoseAccumulator {
     }
 }
 
-/// Settings of the change detector; `Default` gives the values on each field.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ChangeOptions {
-    /// Each new pose is tested through its motion from the pose this many poses earlier: long
-    /// enough to rotate well beyond the noise, short enough to react fast. Default 20.
-    pub lag: usize,
-    /// Motions used to learn the noise level before testing starts. Default 8.
-    pub warmup: usize,
-    /// CUSUM drift k, in units of the normalised statistic (whose mean is 1 without change).
-    /// Default 2.
-    pub drift: f64,
-    /// CUSUM alarm threshold h. Default 25.
-    pub threshold: f64,
-    /// Largest contribution of one motion to the CUSUM (clips single outliers). Default 15.
-    pub clip: f64,
-}
-
-impl Default for ChangeOptions {
-    fn default() -> Self {
-        Self {
-            lag: 20,
-            warmup: 8,
-            drift: 2.0,
-            threshold: 25.0,
-            clip: 15.0,
-        }
-    }
-}
-
-/// A CUSUM test on the A X − X B residuals of new motions under the current X.
-///
-/// Each motion's statistic is its squared residual (rotation in radians², translation in
-/// units²) divided by the running mean of the same quantity over the motions accepted so far, so
-/// that it averages 1 while X holds; `S ← max(0, S + min(s, clip) − drift)` and a change is declared
-/// when S exceeds the threshold.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ChangeDetector {
-    options: ChangeOptions,
-    /// Running sums of the squared rotation and translation residuals, and their count.
-    sum_r: f64,
-    sum_t: f64,
-    count: usize,
-    cusum: f64,
-}
-
-impl ChangeDetector {
-    /// A fresh detector.
-    pub fn new(options: ChangeOptions) -> Self {
-        Self {
-            options,
-            sum_r: 0.0,
-            sum_t: 0.0,
-            count: 0,
-            cusum: 0.0,
-        }
-    }
-
-    /// RMS rotation residual (radians) and translation residual (input units) learned so far.
-    pub fn noise_level(&self) -> (f64, f64) {
-        let n = self.count.max(1) as f64;
-        ((self.sum_r / n).sqrt(), (self.sum_t / n).sqrt())
-    }
-
-    /// Tests a new motion against `x`; returns true when a change is declared (and restarts the
-    /// CUSUM, keeping the learned noise level).
-    pub fn observe(&mut self, m: &MotionPair, x: &Transform) -> bool {
-        let r = MotionResidual::of(m, x);
-        let er = r.rotation_deg.to_radians().powi(2);
-        let et = r.delta_t.norm_squared();
-        if self.count < self.options.warmup {
-            self.learn(er, et);
-            return false;
-        }
-        let n = self.count as f64;
-        let (mr, mt) = ((self.sum_r / n).max(1e-30), (self.sum_t / n).max(1e-30));
-        let s = 0.5 * (er / mr + et / mt);
-        self.cusum = (self.cusum + s.min(self.options.clip) - self.options.drift).max(0.0);
-        if self.cusum > self.options.threshold {
-            self.cusum = 0.0;
-            return true;
-        }
-        if s < self.options.drift {
-            self.learn(er, et);
-        }
-        false
-    }
-
-    fn learn(&mut self, er: f64, et: f64) {
-        self.sum_r += er;
-        self.sum_t += et;
-        self.count += 1;
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::consistency::PoseResiduals;
     use crate::motion::{Pairing, motion_pairs};
     use crate::sim::{SimConfig, simulate};
     use crate::solve::andreff;
@@ -280,5 +344,109 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_scatter_in_closed_form_equals_the_poses_own_residuals() {
+        let s = simulate(&SimConfig::default(), 4, 0);
+        let eye_to_hand: Vec<PosePair> = s
+            .poses
+            .iter()
+            .map(|p| PosePair {
+                base_from_gripper: p.base_from_gripper.inverse(),
+                camera_from_target: p.camera_from_target,
+            })
+            .collect();
+        for (setup, poses) in [
+            (Setup::EyeInHand, &s.poses),
+            (Setup::EyeToHand, &eye_to_hand),
+        ] {
+            let mut acc = PoseAccumulator::new(setup);
+            poses.iter().for_each(|p| acc.add(p));
+            // Any X, not only the fitted one: the sums are exact for every X.
+            let x = s.gripper_from_camera
+                * Transform::new(Vector3::new(3.0, -2.0, 1.0), Vector3::new(0.01, 0.02, -0.01));
+            let got = acc.residual_scatter(&x).unwrap();
+            let ys: Vec<Transform> = poses
+                .iter()
+                .map(|p| setup.hand_pose(&p.base_from_gripper) * x * p.camera_from_target)
+                .collect();
+            let n = ys.len() as f64;
+            let mean_t = ys.iter().map(|y| y.translation.vector).sum::<Vector3<f64>>() / n;
+            let sum_r: Matrix3<f64> = ys.iter().map(|y| *y.rotation.matrix()).sum();
+            let r_y = crate::pose::proj_so3(&sum_r);
+            let rms_t = (ys
+                .iter()
+                .map(|y| (y.translation.vector - mean_t).norm_squared())
+                .sum::<f64>()
+                / n)
+                .sqrt();
+            let rms_r = (ys
+                .iter()
+                .map(|y| (y.rotation.matrix() - r_y).norm_squared() / 2.0)
+                .sum::<f64>()
+                / n)
+                .sqrt();
+            assert!((got.translation - rms_t).abs() <= 1e-9 * rms_t, "{setup:?}: {} {rms_t}", got.translation);
+            assert!((got.rotation - rms_r).abs() <= 1e-9 * rms_r, "{setup:?}: {} {rms_r}", got.rotation);
+            assert!((got.y.translation.vector - mean_t).norm() <= 1e-9 * mean_t.norm());
+            // Under the true X the mean frame is the one PoseResiduals finds, up to the noise.
+            let fitted = acc.residual_scatter(&s.gripper_from_camera).unwrap();
+            let robust = PoseResiduals::at(poses, setup, &s.gripper_from_camera);
+            let d = fitted.y.inverse() * robust.y;
+            assert!(d.rotation.angle() < 1e-3 && d.translation.vector.norm() < 1.0, "{d:?}");
+        }
+    }
+
+    #[test]
+    fn the_covariance_is_the_inverse_of_the_finite_difference_information() {
+        use crate::pose::{exp_so3, log_so3};
+        let s = simulate(&SimConfig::default(), 6, 0);
+        let poses = &s.poses[..60];
+        let setup = Setup::EyeInHand;
+        let mut acc = PoseAccumulator::new(setup);
+        poses.iter().for_each(|p| acc.add(p));
+        let x = s.gripper_from_camera;
+        let (sr, st) = (0.002, 0.7);
+        let got = acc.covariance(&x, sr, st).unwrap();
+        // Y_k's left perturbation in the base frame under X moved by δ (gripper frame).
+        let y = acc.residual_scatter(&x).unwrap().y;
+        let residual = |d: &nalgebra::Vector6<f64>, p: &PosePair| {
+            let r = exp_so3(&Vector3::new(d[0], d[1], d[2])) * rotation_matrix(&x);
+            let t = x.translation.vector + Vector3::new(d[3], d[4], d[5]);
+            let y_k = p.base_from_gripper * transform_from_parts(&r, &t) * p.camera_from_target;
+            let e = y_k * y.inverse();
+            let mut v = nalgebra::Vector6::zeros();
+            v.fixed_rows_mut::<3>(0).copy_from(&log_so3(e.rotation.matrix()));
+            v.fixed_rows_mut::<3>(3).copy_from(&e.translation.vector);
+            v
+        };
+        let h = 1e-6;
+        let jacobian = |p: &PosePair| {
+            SMatrix::<f64, 6, 6>::from_fn(|row, col| {
+                let mut d = nalgebra::Vector6::zeros();
+                d[col] = h;
+                (residual(&d, p)[row] - residual(&(-d), p)[row]) / (2.0 * h)
+            })
+        };
+        let w = SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(
+            1.0 / (sr * sr),
+            1.0 / (sr * sr),
+            1.0 / (sr * sr),
+            1.0 / (st * st),
+            1.0 / (st * st),
+            1.0 / (st * st),
+        ));
+        let (mut info, mut sum) = (SMatrix::<f64, 6, 6>::zeros(), SMatrix::<f64, 6, 6>::zeros());
+        for p in poses {
+            let a = jacobian(p);
+            info += a.transpose() * w * a;
+            sum += a;
+        }
+        let info = info - sum.transpose() * w * sum / poses.len() as f64;
+        let expected = info.try_inverse().unwrap();
+        let d = (got - expected).abs().max() / expected.abs().max();
+        // The closed form drops the residuals themselves from the Jacobian (first order).
+        assert!(d < 1e-2, "relative difference {d:e}\n{got}\n{expected}");
     }
 }

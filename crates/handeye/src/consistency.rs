@@ -92,11 +92,28 @@ pub fn pose_outliers(poses: &[PosePair], setup: Setup, min_angle_gap_deg: f64) -
 
 /// The gaps of pose `i` against its partners.
 fn pose_gap(poses: &[PosePair], setup: Setup, i: usize) -> PoseGap {
-    let n = poses.len();
+    let (angle_gap_deg, pitch_gap) =
+        screw_gaps(setup, &poses[i], partners(poses.len(), i).map(|j| &poses[j]));
+    PoseGap {
+        pose: i,
+        angle_gap_deg,
+        pitch_gap,
+    }
+}
+
+/// The screw-invariant gaps of `pose` against `partners` (module documentation): the medians over
+/// its motions to them of |θ_A − θ_B| (degrees) and |k_A·t_A − k_B·t_B| (input units; motions
+/// below 3° left out). The per-pose test of the batch ([`pose_outliers`]) and of the online
+/// tracker ([`crate::tracking`]) alike.
+pub fn screw_gaps<'a>(
+    setup: Setup,
+    pose: &PosePair,
+    partners: impl Iterator<Item = &'a PosePair>,
+) -> (f64, f64) {
     let mut angle = Vec::with_capacity(PARTNERS);
     let mut pitch = Vec::with_capacity(PARTNERS);
-    for j in partners(n, i) {
-        let m = MotionPair::between(setup, &poses[j], &poses[i]);
+    for partner in partners {
+        let m = MotionPair::between(setup, partner, pose);
         let (a, b) = (MotionFeatures::of(&m.a), MotionFeatures::of(&m.b));
         angle.push((a.angle - b.angle).abs().to_degrees());
         if let (Some(ka), Some(kb)) = (a.axis, b.axis)
@@ -108,11 +125,7 @@ fn pose_gap(poses: &[PosePair], setup: Setup, i: usize) -> PoseGap {
             pitch.push((pa - pb).abs());
         }
     }
-    PoseGap {
-        pose: i,
-        angle_gap_deg: median(angle),
-        pitch_gap: median(pitch),
-    }
+    (median(angle), median(pitch))
 }
 
 /// Up to [`PARTNERS`] other poses spread evenly over the sequence, starting at an offset that

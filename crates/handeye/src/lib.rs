@@ -36,6 +36,7 @@ pub mod select;
 pub mod sim;
 pub mod solve;
 pub mod sync;
+pub mod tracking;
 pub mod uncertainty;
 
 pub use error::{Degeneracy, Error, Result, TransformProblem};

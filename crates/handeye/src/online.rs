@@ -4,8 +4,11 @@
 //! when a pair of motions is selected it solves X with Andreff's method on those two motions,
 //! measures rmsR and rmsT with the configured [`ErrorSource`], tells the adaptive policy, and
 //! returns an [`Event`]. With `optimal` set it also refines X over the last five selected motions
-//! (the paper's "optimal method", sec. 4.1.3). Its state is constant in size, and serialisable
-//! (serde) so that a run can be saved and resumed.
+//! (the paper's "optimal method", sec. 4.1.3). With [`Estimator::Accumulate`] every pose also goes
+//! to a [`Tracker`] (all pairs of poses, gated, watched for change, reported on its own schedule:
+//! [`OnlineCalibrator::step`], [`OnlineCalibrator::finish`]). The one length threshold, `d_max`,
+//! follows the input's unit, inferred from the first pose unless given ([`Unit`]). The state is
+//! constant in size, and serialisable (serde) so that a run can be saved and resumed.
 
 use std::collections::VecDeque;
 use std::str::FromStr;
@@ -13,13 +16,13 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::accumulate::{ChangeDetector, ChangeOptions, Estimate, PoseAccumulator};
 use crate::error::{Error, Result};
 use crate::metrics::{errors_against_truth, residual_rms};
 use crate::motion::{MotionPair, PosePair, Setup};
 use crate::pose::Transform;
 use crate::select::{AdaptiveParams, Selected, Selection, Selector, Thresholds};
 use crate::solve::{RefineOptions, andreff, refine_from};
+use crate::tracking::{Pending, Report, Step, TrackEstimate, TrackOptions, Tracker};
 
 /// Number of selected motions the optimal method refines over (sec. 4.1.3).
 pub const OPTIMAL_WINDOW: usize = 5;
@@ -51,10 +54,88 @@ pub struct OnlineConfig {
     pub truth: Option<Transform>,
     /// Also run the optimal method (sec. 4.5). Default false.
     pub optimal: bool,
-    /// Which estimate events carry besides the paper's two-motion X. Default `Paper` (none).
+    /// Whether the accumulating estimator runs beside the paper's calibrations. Default `Paper`.
     pub estimator: Estimator,
-    /// The change detector of the accumulating estimator. Default: [`ChangeOptions::default`].
-    pub change: ChangeOptions,
+    /// The accumulating estimator's gates, change test and schedule. Default:
+    /// [`TrackOptions::default`].
+    pub tracking: TrackOptions,
+    /// The input's length unit, which sets `params.d_max` (0.1 m in that unit). Default `Auto`:
+    /// inferred from the first pose.
+    pub unit: Unit,
+}
+
+/// The length unit of the input, for the one threshold that has a unit (`d_max`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Unit {
+    /// Inferred from the first pose: metres when its translations are 0.05–10, millimetres when
+    /// they are 50–10,000; anything else is refused with a request to name the unit.
+    #[default]
+    Auto,
+    /// Metres: `d_max` = 0.1.
+    Metre,
+    /// Millimetres: `d_max` = 100.
+    Millimetre,
+    /// `params.d_max` as given, in the input's unit.
+    AsGiven,
+}
+
+impl Unit {
+    /// The name used on the command line and in the Python bindings.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Auto => "auto",
+            Self::Metre => "m",
+            Self::Millimetre => "mm",
+            Self::AsGiven => "as-given",
+        }
+    }
+
+    /// Metres or millimetres from the size of a pose's translations (the robot's reach and the
+    /// camera's distance to the target), or `None` when the size fits neither.
+    pub fn infer(pose: &PosePair) -> Option<Self> {
+        let size = pose
+            .base_from_gripper
+            .translation
+            .vector
+            .norm()
+            .max(pose.camera_from_target.translation.vector.norm());
+        if (0.05..=10.0).contains(&size) {
+            Some(Self::Metre)
+        } else if (50.0..=10_000.0).contains(&size) {
+            Some(Self::Millimetre)
+        } else {
+            None
+        }
+    }
+
+    /// `d_max` in this unit, or `None` for `Auto` and `AsGiven`.
+    pub fn d_max(self) -> Option<f64> {
+        match self {
+            Self::Metre => Some(0.1),
+            Self::Millimetre => Some(100.0),
+            Self::Auto | Self::AsGiven => None,
+        }
+    }
+}
+
+impl FromStr for Unit {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            "m" | "metre" | "meter" | "metres" | "meters" => Ok(Self::Metre),
+            "mm" | "millimetre" | "millimeter" | "millimetres" | "millimeters" => {
+                Ok(Self::Millimetre)
+            }
+            "as-given" => Ok(Self::AsGiven),
+            _ => Err(Error::InvalidParameter {
+                name: "unit",
+                message: format!("unknown unit `{s}`; auto, m or mm"),
+            }),
+        }
+    }
 }
 
 /// The estimator behind the selection.
@@ -65,8 +146,8 @@ pub enum Estimator {
     #[default]
     Paper,
     /// Normal equations over every pair of poses since the last detected change of X, updated in
-    /// O(1) per pose ([`crate::accumulate`]); the selection policy still decides when events are
-    /// emitted, but every pose contributes.
+    /// O(1) per pose and reported on their own schedule ([`crate::tracking`]); the paper's
+    /// calibrations still run beside it.
     Accumulate,
 }
 
@@ -118,30 +199,6 @@ impl FromStr for Estimator {
     }
 }
 
-/// The accumulating estimator's X at one calibration.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct AccumulatedEstimate {
-    /// X from every pair of poses since the start or the last change.
-    pub x: Transform,
-    /// Poses it rests on.
-    pub poses: usize,
-    /// Conditioning of its rotation system.
-    pub conditioning: f64,
-    /// RMS residual of the tested motions under X so far: rotation in degrees, translation in
-    /// input units.
-    pub noise: [f64; 2],
-    /// Uncertainty of X, as the expected size of its error: rotation in degrees, translation in
-    /// input units. Split-half estimate: the poses are dealt alternately to two more accumulators,
-    /// and half the difference of their estimates has the distribution of the full estimate's
-    /// error. `None` until both halves have an estimate.
-    pub uncertainty: Option<[f64; 2]>,
-    /// Pose number of the last declared change of X (accumulation restarted there), if any.
-    pub change_at: Option<usize>,
-}
-
-/// Poses between refreshes of the accumulated X used by the change detector.
-const REFRESH: usize = 10;
-
 /// rmsR and rmsT of a calibration, from the configured [`ErrorSource`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Rms {
@@ -183,8 +240,6 @@ pub struct Event {
     pub seconds: f64,
     /// The optimal method's X, when enabled and five motions have been selected.
     pub optimal: Option<OptimalEstimate>,
-    /// The accumulating estimator's X, with `Estimator::Accumulate`.
-    pub accumulated: Option<AccumulatedEstimate>,
 }
 
 /// The online calibrator (see the module documentation).
@@ -214,14 +269,11 @@ pub struct OnlineCalibrator {
     window: VecDeque<([usize; 2], MotionPair)>,
     optimal_results: usize,
     last_x: Option<Transform>,
-    accumulator: PoseAccumulator,
-    /// Even- and odd-numbered poses apart, for the split-half uncertainty.
-    halves: [PoseAccumulator; 2],
-    detector: ChangeDetector,
-    /// The last `lag` poses and the accumulated X last refreshed (accumulate estimator).
-    recent: VecDeque<PosePair>,
-    current: Option<Estimate>,
-    last_change: Option<usize>,
+    /// The unit in force: `config.unit`, or the one inferred from the first pose.
+    unit: Unit,
+    /// The accumulating estimator and what it did with the last pose.
+    tracker: Option<Tracker>,
+    step: Step,
 }
 
 impl OnlineCalibrator {
@@ -242,16 +294,22 @@ impl OnlineCalibrator {
             window: VecDeque::with_capacity(OPTIMAL_WINDOW + 1),
             optimal_results: 0,
             last_x: None,
-            accumulator: PoseAccumulator::new(config.setup),
-            halves: [
-                PoseAccumulator::new(config.setup),
-                PoseAccumulator::new(config.setup),
-            ],
-            detector: ChangeDetector::new(config.change),
-            recent: VecDeque::with_capacity(config.change.lag + 1),
-            current: None,
-            last_change: None,
+            unit: config.unit,
+            tracker: (config.estimator == Estimator::Accumulate)
+                .then(|| Tracker::new(config.setup, config.tracking)),
+            step: Step::default(),
         })
+    }
+
+    /// The length unit in force: the configured one, or the one inferred from the first pose
+    /// (`Auto` before it).
+    pub fn unit(&self) -> Unit {
+        self.unit
+    }
+
+    /// `d_max` in force, in the input's unit.
+    pub fn d_max(&self) -> f64 {
+        self.unit.d_max().unwrap_or(self.config.params.d_max)
     }
 
     /// The configuration.
@@ -287,11 +345,17 @@ impl OnlineCalibrator {
     /// Pushes the next pose pair; returns the calibrations it completes (usually none, at most one
     /// except at the end of the fixed method's initial window). A pose with a non-finite entry is
     /// refused with an error and leaves the state untouched.
+    ///
+    /// The first pose fixes the length unit when it is `Auto`; a pose whose size fits no unit is
+    /// refused with [`Error::InvalidParameter`] naming `unit`, and the calibrator stays unstarted.
     pub fn push(&mut self, pose: &PosePair) -> Result<Vec<Event>> {
         check_finite(pose)?;
+        if self.poses == 0 {
+            self.start(pose)?;
+        }
         self.poses += 1;
-        if self.config.estimator == Estimator::Accumulate {
-            self.update_accumulator(pose);
+        if let Some(tracker) = &mut self.tracker {
+            self.step = tracker.push(pose);
         }
         let selections = self.selector.offer(self.poses, pose);
         Ok(selections
@@ -319,9 +383,6 @@ impl OnlineCalibrator {
             .optimal
             .then(|| self.optimal(selected))
             .flatten();
-        let accumulated = (self.config.estimator == Estimator::Accumulate)
-            .then(|| self.accumulate())
-            .flatten();
         Some(Event {
             calibration: self.calibrations,
             poses: selected.poses,
@@ -331,70 +392,62 @@ impl OnlineCalibrator {
             conditioning: calibration.conditioning,
             seconds,
             optimal,
-            accumulated,
         })
     }
 
-    /// The accumulating estimator, per pose: test the motion from the pose `lag` poses earlier
-    /// against the current X (CUSUM on its residual), restart after a change, add the pose.
-    fn update_accumulator(&mut self, pose: &PosePair) {
-        if self.recent.len() == self.config.change.lag.max(1)
-            && let (Some(earlier), Some(current)) = (self.recent.front(), self.current)
-        {
-            let m = MotionPair::between(self.config.setup, earlier, pose);
-            if self.detector.observe(&m, &current.x) {
-                self.accumulator.reset();
-                self.halves.iter_mut().for_each(PoseAccumulator::reset);
-                self.recent.clear();
-                self.current = None;
-                self.last_change = Some(self.poses);
-            }
+    /// Fixes the unit before the first pose and builds the selector with its `d_max`.
+    fn start(&mut self, pose: &PosePair) -> Result<()> {
+        if self.unit == Unit::Auto {
+            self.unit = Unit::infer(pose).ok_or_else(|| Error::InvalidParameter {
+                name: "unit",
+                message: format!(
+                    "cannot tell the length unit from the first pose (translations of {:.4} and {:.4} fit neither metres nor millimetres): name it (--unit m or --unit mm, or --d-max in your unit)",
+                    pose.base_from_gripper.translation.vector.norm(),
+                    pose.camera_from_target.translation.vector.norm()
+                ),
+            })?;
         }
-        self.accumulator.add(pose);
-        self.halves[self.accumulator.poses() % 2].add(pose);
-        if self.recent.len() == self.config.change.lag.max(1) {
-            self.recent.pop_front();
+        if let Some(d_max) = self.unit.d_max() {
+            let params = AdaptiveParams {
+                d_max,
+                ..self.config.params
+            };
+            self.selector = Selector::new(self.config.selection, self.config.setup, params)?;
         }
-        self.recent.push_back(*pose);
-        if self.current.is_none() || self.accumulator.poses() % REFRESH == 0 {
-            self.current = self.accumulator.estimate();
-        }
+        Ok(())
     }
 
-    /// The accumulated estimate now, for an event.
-    fn accumulate(&mut self) -> Option<AccumulatedEstimate> {
-        let estimate = self.accumulator.estimate()?;
-        self.current = Some(estimate);
-        let (noise_r, noise_t) = self.detector.noise_level();
-        let uncertainty = match (self.halves[0].estimate(), self.halves[1].estimate()) {
-            (Some(a), Some(b)) => Some([
-                0.5 * crate::pose::rotation_angle_between(&a.x.rotation, &b.x.rotation)
-                    .to_degrees(),
-                0.5 * (a.x.translation.vector - b.x.translation.vector).norm(),
-            ]),
-            _ => None,
-        };
-        Some(AccumulatedEstimate {
-            x: estimate.x,
-            poses: estimate.poses,
-            conditioning: estimate.conditioning,
-            noise: [noise_r.to_degrees(), noise_t],
-            uncertainty,
-            change_at: self.last_change,
-        })
+    /// What the accumulating estimator did with the last pose: held it out, confirmed a change,
+    /// reported an estimate. `None` with the paper's estimator.
+    pub fn step(&self) -> Option<&Step> {
+        self.tracker.as_ref().map(|_| &self.step)
     }
 
-    /// The accumulating estimator's current X (every pair of poses since the last change), at
-    /// any time; `None` before three poses or with the paper's estimator.
-    pub fn accumulated(&self) -> Option<Estimate> {
-        (self.config.estimator == Estimator::Accumulate)
-            .then(|| self.accumulator.estimate())
-            .flatten()
+    /// The accumulating estimator's report at the end of the stream (the current estimate, if it
+    /// is determined and was not just reported).
+    pub fn finish(&mut self) -> Option<Report> {
+        self.tracker.as_mut()?.finish()
     }
 
-    /// The pose number of a change of X declared by the last `push`, if it declared one.
+    /// The accumulating estimator's current estimate, determined or not; `None` before it has
+    /// one or with the paper's estimator.
+    pub fn accumulated(&self) -> Option<TrackEstimate> {
+        self.tracker.as_ref()?.estimate()
+    }
+
+    /// Why the accumulating estimator has nothing to report now; `None` when it has.
+    pub fn pending(&self) -> Option<Pending> {
+        self.tracker.as_ref()?.pending()
+    }
+
+    /// The accumulating estimator itself (its counts), if it runs.
+    pub fn tracker(&self) -> Option<&Tracker> {
+        self.tracker.as_ref()
+    }
+
+    /// The pose number where a change of X began, when the last `push` confirmed one.
     pub fn change_detected(&self) -> Option<usize> {
-        self.last_change.filter(|&pose| pose == self.poses)
+        self.step()?.change.map(|c| c.at)
     }
 
     /// rmsR and rmsT of `x` from the configured source.

@@ -136,6 +136,77 @@ pub fn pair_streams(
     out
 }
 
+/// The clock offset to pair two streams with.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum TimeOffset {
+    /// Camera clock minus robot clock, seconds.
+    Fixed(f64),
+    /// Estimated: angular-speed correlation, refined by the agreement of the paired poses.
+    Auto,
+}
+
+/// Two stream files read and paired ([`pair_stream_files`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StreamPairing {
+    /// The pairs, their camera stamps and what was dropped.
+    pub synced: Synced,
+    /// Offset used, seconds.
+    pub time_offset: f64,
+    /// With [`TimeOffset::Auto`]: the correlation's own estimate before refinement.
+    pub correlated: Option<OffsetEstimate>,
+    /// Samples of the robot and the camera file that were out of time order (put in order).
+    pub reordered: [usize; 2],
+}
+
+/// Reads a robot stream (`base_from_gripper`) and a camera stream (`target_from_camera`, the
+/// ethz-asl and TUM layout) and pairs them at the camera stamps, with the given or an estimated
+/// clock offset.
+pub fn pair_stream_files(
+    robot: &std::path::Path,
+    camera: &std::path::Path,
+    setup: crate::motion::Setup,
+    offset: TimeOffset,
+    max_gap: f64,
+) -> Result<StreamPairing> {
+    let robot_stream = crate::io::read_stamped_poses(robot)?;
+    let camera_stream = crate::io::read_stamped_poses(camera)?;
+    let reordered = [robot_stream.reordered, camera_stream.reordered];
+    let robot = robot_stream.poses;
+    // The camera file holds target_from_camera; the pairs hold camera_from_target.
+    let camera: Vec<StampedPose> = camera_stream
+        .poses
+        .into_iter()
+        .map(|s| StampedPose {
+            stamp: s.stamp,
+            pose: s.pose.inverse(),
+        })
+        .collect();
+    let (time_offset, correlated) = match offset {
+        TimeOffset::Fixed(t) => (t, None),
+        TimeOffset::Auto => {
+            let options = OffsetOptions::default();
+            let e = estimate_time_offset(&robot, &camera, &options)?;
+            let refined =
+                refine_time_offset(&robot, &camera, setup, e.offset, options.max_offset, max_gap);
+            (refined, Some(e))
+        }
+    };
+    let synced = pair_streams(
+        &robot,
+        &camera,
+        &SyncOptions {
+            time_offset,
+            max_gap,
+        },
+    );
+    Ok(StreamPairing {
+        synced,
+        time_offset,
+        correlated,
+        reordered,
+    })
+}
+
 /// Options of the clock-offset search; `Default` gives the values on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct OffsetOptions {

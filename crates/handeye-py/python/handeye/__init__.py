@@ -121,14 +121,26 @@ def calibrate(
     return result
 
 
+def _with_arrays(event):
+    """The event with its ``matrix`` (and its target's) as 4x4 arrays."""
+    for d in (event, event.get("target")):
+        if isinstance(d, dict) and isinstance(d.get("matrix"), list):
+            d["matrix"] = np.array(d["matrix"], dtype=np.float64)
+    return event
+
+
 class OnlineCalibrator:
     """The online calibrator: ``push`` one pose pair at a time and get the calibrations it completes.
 
     Keyword arguments: ``selection`` ("adaptive", "fixed", "none"), ``setup``, ``estimator``
     ("paper", "accumulate"), ``error_source`` ("residual", "truth"), ``truth`` (4x4 X),
     ``optimal`` and the adaptive parameters ``n_init, interval, relax_down, relax_up, explore,
-    rms_r_max, rms_t_max, alpha_min, beta_min_deg, d_max`` (``d_max`` in your length unit:
-    0.1 for metres), ``unfreeze``."""
+    rms_r_max, rms_t_max, alpha_min, beta_min_deg, d_max`` (``d_max`` in your length unit;
+    left out, it is 0.1 m in the ``unit``: "auto" infers metres or millimetres from the first
+    pose, "m", "mm"), ``unfreeze``; for ``estimator="accumulate"`` also ``every`` and ``shrink``
+    (how often it reports). With ``estimator="accumulate"``, ``push`` returns the estimator's own
+    reports (``estimate``, X as ``matrix``, ``uncertainty``, ``target``, ...) and changes
+    (``change``), the same fields as ``handeye online --estimator accumulate`` prints."""
 
     def __init__(self, **params):
         truth = params.pop("truth", None)
@@ -143,9 +155,20 @@ class OnlineCalibrator:
             np.ascontiguousarray(base_from_gripper, dtype=np.float64),
             np.ascontiguousarray(camera_from_target, dtype=np.float64),
         )
+        events = [_with_arrays(e) for e in events]
         if not events:
             return None
         return events[0] if len(events) == 1 else events
+
+    def finish(self):
+        """The accumulating estimator's final report (a dict), or None: call it at the end of the
+        stream. A report whose uncertainty is above the reporting bounds carries ``weak``."""
+        text = self._inner.finish()
+        return None if text is None else _with_arrays(json.loads(text))
+
+    def pending(self):
+        """Why the accumulating estimator has nothing to report now (a sentence), or None."""
+        return self._inner.pending()
 
     @property
     def poses(self) -> int:
