@@ -43,11 +43,11 @@ fn sim() {
     for (rot, tr) in [(0.25, 1.25), (0.1, 0.5), (1.0, 5.0), (10.0, 50.0)] {
         let mut delays = vec![]; let mut false_alarms = 0; let mut missed = 0;
         for seed in 0..40 {
-            let sim = simulate(&SimConfig { poses: 300, jump: Some(Jump { at: 150, rotation_deg: rot, translation: tr }), ..SimConfig::default() }, 5, seed);
+            let sim = simulate(&SimConfig { poses: 300, jump: Some(Jump { at: 120, rotation_deg: rot, translation: tr }), ..SimConfig::default() }, 5, seed);
             let mut t = Tracker::new(Setup::EyeInHand, TrackOptions::default());
             let mut first = None;
-            for q in &sim.poses { let s = t.push(q); if let Some(c) = s.change { if c.confirmed < 150 { false_alarms += 1 } else { first.get_or_insert(c.confirmed); } } }
-            match first { Some(f) if f < 180 => delays.push(f - 150), _ => missed += 1 }
+            for q in &sim.poses { let s = t.push(q); if let Some(c) = s.change { if c.confirmed < 120 || c.at < 115 { false_alarms += 1 } else { first.get_or_insert(c.confirmed); } } }
+            match first { Some(f) if f < 150 => delays.push(f - 120), _ => missed += 1 }
         }
         delays.sort();
         println!("jump {rot}°/{tr}: detected {} missed {missed} false {false_alarms} median delay {:?}", delays.len(), delays.get(delays.len()/2));
@@ -59,7 +59,7 @@ fn sim() {
 #[allow(dead_code)]
 pub fn debug_seed(rot: f64, tr: f64, seed: u64) {
     use handeye::sim::{Jump, SimConfig, simulate};
-    let sim = simulate(&SimConfig { poses: 300, jump: Some(Jump { at: 150, rotation_deg: rot, translation: tr }), ..SimConfig::default() }, 5, seed);
+    let sim = simulate(&SimConfig { poses: 300, jump: Some(Jump { at: 120, rotation_deg: rot, translation: tr }), ..SimConfig::default() }, 5, seed);
     let mut t = Tracker::new(Setup::EyeInHand, TrackOptions::default());
-    for (k, q) in sim.poses.iter().enumerate() { let s = t.push(q); if k >= 145 && k < 200 { println!("{} held {:?} change {:?} pending {:?}", s.pose, s.held_out, s.change.map(|c| c.at), t.pending()); } }
+    for (k, q) in sim.poses.iter().enumerate() { let s = t.push(q); if k >= 110 && k < 160 { println!("{} held {:?} change {:?} {:?}", s.pose, s.held_out.map(|_| 1), s.change.map(|c| (c.at, c.confirmed)), t.pending().map(|_| "pending")); } }
 }

@@ -399,6 +399,7 @@ impl Segment {
             },
             scatter,
             local_rotation_deg: local.map(|l| l.0),
+            local,
         })
     }
 
@@ -445,6 +446,8 @@ struct Snapshot {
     /// The rotation uncertainty without the drift term (split-half and first-order): whether the
     /// poses so far fix the rotation at all, as a challenger needs.
     local_rotation_deg: Option<f64>,
+    /// Both, rotation (degrees) and translation.
+    local: Option<(f64, f64)>,
 }
 
 /// The case for a change: a second segment since the first elevated pose.
@@ -454,6 +457,8 @@ struct Challenger {
     current: Option<Snapshot>,
     poses: usize,
     elevated: usize,
+    /// Elevated poses kept out of the incumbent meanwhile, with their numbers and statistics.
+    pending: Vec<(usize, PosePair, f64)>,
 }
 
 /// The accumulating estimator on a stream (see the module documentation).
@@ -574,11 +579,18 @@ impl Tracker {
             return;
         };
         self.feed_challenger(pose, s, number);
-        if s <= self.options.gate {
+        if s <= self.options.elevated || (s <= self.options.gate && self.challenger.is_none()) {
             step.earlier = self.add(pose, number);
         } else {
-            self.held_out += 1;
-            step.held_out = Some(HeldOut::Residual { statistic: s });
+            // Kept out of the incumbent while the case for a change is open (it would pull the
+            // incumbent towards a new X); given back if the case is dismissed.
+            if let Some(c) = &mut self.challenger {
+                c.pending.push((number, *pose, s));
+            }
+            if s > self.options.gate {
+                self.held_out += 1;
+                step.held_out = Some(HeldOut::Residual { statistic: s });
+            }
         }
         step.change = step.change.or(self.judge_challenger());
     }
@@ -690,7 +702,12 @@ impl Tracker {
     /// The residual statistic of a pose, the larger of its rotation and translation ratios to the
     /// typical ones, when the incumbent is mature (enough poses, determined).
     fn residual(&self, raw: Option<[f64; 2]>) -> Option<f64> {
-        if self.incumbent.all.poses() < self.options.mature_poses || self.pending().is_some() {
+        let snapshot = self.current?;
+        let bound = self.incumbent.translation_bound(&self.options);
+        let local = snapshot.local.is_some_and(|(r, t)| {
+            r <= self.options.max_rotation_deg && t <= bound
+        });
+        if self.incumbent.all.poses() < self.options.mature_poses || !local {
             return None;
         }
         let [r, t] = raw?;
@@ -706,6 +723,7 @@ impl Tracker {
                 current: None,
                 poses: 0,
                 elevated: 0,
+                pending: Vec::new(),
             });
         }
         if let Some(c) = &mut self.challenger {
@@ -724,8 +742,18 @@ impl Tracker {
         }
         let old = self.current?.estimate;
         let [typical_r, typical_t] = self.typical_scale()?;
-        if 2 * c.elevated < c.poses || c.poses > CHALLENGER_LIFE * self.options.confirm_poses {
-            self.challenger = None;
+        // Dismissed: a few elevated poses among normal ones were the noise's tail or outliers
+        // (those above the gate stay out); a long misfit that determines no new X says the
+        // incumbent was not yet right for this part of the workspace (all of them go in).
+        let sporadic = 2 * c.elevated < c.poses;
+        if sporadic || c.poses > CHALLENGER_LIFE * self.options.confirm_poses {
+            let dismissed = self.challenger.take()?;
+            for (number, pose, s) in dismissed.pending {
+                if !sporadic || s <= self.options.gate {
+                    self.held_out -= usize::from(s > self.options.gate);
+                    self.add(&pose, number);
+                }
+            }
             return None;
         }
         if 10 * c.elevated < 6 * c.poses {
@@ -736,9 +764,10 @@ impl Tracker {
         // It must explain its own poses at the incumbent's noise level, and its rotation must be
         // determined: a local fit to one region of the workspace is not.
         let fits = scatter.rotation <= 2.0 * typical_r && scatter.translation <= 2.0 * typical_t;
+        let bound = c.segment.translation_bound(&self.options);
         let determined = snapshot
-            .local_rotation_deg
-            .is_some_and(|r| r <= self.options.max_rotation_deg);
+            .local
+            .is_some_and(|(r, t)| r <= self.options.max_rotation_deg && t <= bound);
         if !(fits && determined) {
             return None;
         }
