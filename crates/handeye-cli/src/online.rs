@@ -152,6 +152,7 @@ pub fn run(args: Args) -> Result<()> {
     let (records, source, time_offset) = records(&args.input)?;
     let mut messages = Thinned::default();
     let mut last: Option<Report> = None;
+    let mut told_unit = false;
     // Input lines of the recent poses, for naming the ones held out (the tracker may hold out a
     // pose up to 256 poses after it came, when it judges its first poses together).
     let mut lines: VecDeque<(usize, usize, Option<f64>)> = VecDeque::with_capacity(LINES_KEPT);
@@ -179,8 +180,8 @@ pub fn run(args: Args) -> Result<()> {
             }
             Err(e) => return Err(e.into()),
         };
-        if calibrator.poses() == 1 {
-            tell_unit(&calibrator);
+        if !told_unit {
+            told_unit = tell_unit(&calibrator, &record);
         }
         if lines.len() == LINES_KEPT {
             lines.pop_front();
@@ -202,7 +203,10 @@ pub fn run(args: Args) -> Result<()> {
         print_line(&with_offset(report.json(setup), time_offset))?;
         last = Some(report);
     }
-    eprintln!("{}", summary(&calibrator, last.as_ref(), messages.bad_lines));
+    eprintln!(
+        "{}",
+        summary(&calibrator, last.as_ref(), messages.bad_lines)
+    );
     Ok(())
 }
 
@@ -235,32 +239,54 @@ impl Thinned {
 /// Skips a bad line with its message, or stops with it (`--on-bad-line stop`).
 fn bad_line(e: handeye::Error, on_bad_line: &str, messages: &mut Thinned) -> Result<()> {
     if on_bad_line == "skip" && matches!(e, handeye::Error::Parse { .. }) {
-        Thinned::show(&mut messages.bad_lines, "bad lines", format!("skipped: {e}"));
+        Thinned::show(
+            &mut messages.bad_lines,
+            "bad lines",
+            format!("skipped: {e}"),
+        );
         Ok(())
     } else {
         Err(e.into())
     }
 }
 
-/// Tells on stderr which length unit the run uses.
-fn tell_unit(calibrator: &OnlineCalibrator) {
+/// Tells on stderr which length unit the run uses once it is known (true), and that it is not
+/// yet when the first pose's size fits neither unit.
+fn tell_unit(calibrator: &OnlineCalibrator, record: &handeye::io::StampedPosePair) -> bool {
     let unit = match calibrator.unit() {
         Unit::Metre => "metres",
         Unit::Millimetre => "millimetres",
-        Unit::Auto | Unit::AsGiven => {
+        Unit::AsGiven => {
             eprintln!("length unit: as given (d_max = {})", calibrator.d_max());
-            return;
+            return true;
+        }
+        Unit::Auto => {
+            if calibrator.poses() == 1 {
+                let p = &record.pose;
+                eprintln!(
+                    "warning: cannot tell the length unit from the first pose (line {}: translations of {:.4} and {:.4} fit neither metres nor millimetres); d_max stays {} until a pose tells: pass --unit m or --unit mm, or --d-max in your unit",
+                    record.line,
+                    p.base_from_gripper.translation.vector.norm(),
+                    p.camera_from_target.translation.vector.norm(),
+                    calibrator.d_max()
+                );
+            }
+            return false;
         }
     };
     let how = if calibrator.config().unit == Unit::Auto {
-        "inferred from the first pose; --unit m|mm to set it"
+        format!(
+            "inferred from pose {}; --unit m|mm to set it",
+            calibrator.poses()
+        )
     } else {
-        "--unit"
+        "--unit".to_string()
     };
     eprintln!(
         "length unit: {unit} ({how}); d_max = {}",
         calibrator.d_max()
     );
+    true
 }
 
 /// Prints what the accumulating estimator did with a pose: held-out poses on stderr (by their
@@ -345,6 +371,14 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
         format!(", {bad_lines} bad line(s) skipped")
     } else {
         String::new()
+    };
+    let bad = if calibrator.unit() == Unit::Auto && calibrator.poses() > 0 {
+        format!(
+            "{bad}; the length unit was never told by the data (d_max {} was used: pass --unit)",
+            calibrator.d_max()
+        )
+    } else {
+        bad
     };
     let Some(tracker) = calibrator.tracker() else {
         let last = calibrator.last_x().map_or(

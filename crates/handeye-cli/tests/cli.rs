@@ -503,32 +503,104 @@ fn online_accumulate_reports_the_running_estimate_and_a_change() {
         path.to_str().unwrap(),
         "--estimator",
         "accumulate",
-        "--d-max",
-        "100",
     ]));
     assert_eq!(code, 0, "{err}");
+    // The unit is inferred from the data and said.
+    assert!(err.contains("length unit: millimetres"), "{err}");
     let lines: Vec<Value> = out
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
-    let change = lines
-        .iter()
-        .find_map(|l| l["change"].as_u64())
-        .expect("a change line");
-    assert!((150..180).contains(&change), "change at {change}");
-    let events: Vec<&Value> = lines
-        .iter()
-        .filter(|l| l["calibration"].is_number())
-        .collect();
+    let changes: Vec<&Value> = lines.iter().filter(|l| l["change"].is_number()).collect();
+    assert_eq!(changes.len(), 1, "{out}");
+    let at = changes[0]["change"].as_u64().unwrap();
+    assert!((145..=160).contains(&at), "change at {at}");
+    assert!(changes[0]["confirmed"].as_u64().unwrap() < 190);
+    // Estimates come on their own schedule, each with its uncertainty and the target pose, and
+    // the last one at the end of the stream.
+    let estimates: Vec<&Value> = lines.iter().filter(|l| l["estimate"].is_number()).collect();
+    assert!(estimates.len() >= 3, "{out}");
+    assert!(estimates.iter().all(|e| e["estimator"] == "accumulate"
+        && e["uncertainty"]["rotation_deg"].is_number()
+        && e["target"]["frame"] == "base_from_target"
+        && e["matrix"].is_array()));
+    let last = estimates.last().unwrap();
+    assert_eq!(last["reason"], "end");
+    assert_eq!(last["pose"], 300);
+    assert!(last["since"].as_u64().unwrap() >= 145);
+    // No estimate between the change and the new segment's first determined one.
     assert!(
-        events
+        estimates
             .iter()
-            .all(|e| e["estimator"] == "accumulate" && e["paper"]["matrix"].is_array())
+            .filter(|e| e["pose"].as_u64().unwrap() > at)
+            .all(|e| e["since"].as_u64().unwrap() == last["since"].as_u64().unwrap()),
+        "{out}"
     );
+    // The summary shows the estimate the last line shows.
+    let t = last["translation"].as_array().unwrap();
     assert!(
-        events.last().unwrap()["accumulated"]["poses"]
-            .as_u64()
-            .unwrap()
-            > 50
+        err.contains(&format!("{:.6}", t[0].as_f64().unwrap())),
+        "{err}"
     );
+}
+
+#[test]
+fn online_infers_the_unit_and_refuses_to_guess() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, scale: f64| {
+        let sim = handeye::sim::simulate(&handeye::sim::SimConfig::default(), 4, 0);
+        let path = dir.path().join(name);
+        let text: String = sim
+            .poses
+            .iter()
+            .map(|p| {
+                let m = |t: &handeye::Transform| {
+                    let mut h = t.to_homogeneous();
+                    for r in 0..3 {
+                        h[(r, 3)] *= scale;
+                    }
+                    (0..4).map(|r| (0..4).map(|c| h[(r, c)]).collect::<Vec<_>>()).collect::<Vec<_>>()
+                };
+                serde_json::json!({"base_from_gripper": m(&p.base_from_gripper), "camera_from_target": m(&p.camera_from_target)}).to_string() + "\n"
+            })
+            .collect();
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    let poses = |out: &str| -> Vec<Value> {
+        out.lines()
+            .map(|l| serde_json::from_str::<Value>(l).unwrap()["poses"].clone())
+            .collect()
+    };
+    let mm = write("mm.jsonl", 1.0);
+    let m = write("m.jsonl", 1e-3);
+    let (code, by_mm, err) = run(handeye().args(["online", mm.to_str().unwrap()]));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("millimetres") && err.contains("d_max = 100"),
+        "{err}"
+    );
+    let (_, given, _) = run(handeye().args(["online", mm.to_str().unwrap(), "--d-max", "100"]));
+    let (code, by_m, err) = run(handeye().args(["online", m.to_str().unwrap()]));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("metres") && err.contains("d_max = 0.1"),
+        "{err}"
+    );
+    // The same calibrations whichever unit the same motions are written in.
+    assert!(poses(&by_mm).len() > 10);
+    assert_eq!(poses(&by_mm), poses(&given));
+    assert_eq!(poses(&by_mm), poses(&by_m));
+    // Sizes that fit neither unit are flagged with what to pass, at the start and in the summary.
+    let tiny = write("tiny.jsonl", 1e-5);
+    let (code, _, err) = run(handeye().args(["online", tiny.to_str().unwrap()]));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning: cannot tell the length unit") && err.contains("--unit m"),
+        "{err}"
+    );
+    assert!(err.contains("the length unit was never told"), "{err}");
+    let (code, _, err) = run(handeye().args(["online", tiny.to_str().unwrap(), "--unit", "mm"]));
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("length unit: millimetres (--unit)"), "{err}");
 }

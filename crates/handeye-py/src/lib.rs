@@ -5,9 +5,9 @@
 //! X = `gripper_from_camera` (`cam2gripper`) for eye-in-hand, `base_from_camera` for eye-to-hand.
 
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
-use handeye::tracking::TrackOptions;
 use handeye::pose::transform_from_matrix4;
 use handeye::select::{AdaptiveParams, Selection};
+use handeye::tracking::TrackOptions;
 use handeye::{Method, Pairing, PosePair, Setup, Transform};
 use nalgebra::Matrix4;
 use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3};

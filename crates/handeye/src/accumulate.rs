@@ -189,7 +189,10 @@ impl PoseAccumulator {
             return None;
         }
         let n = self.n as f64;
-        let (wr, wt) = (1.0 / noise_rotation.powi(2), 1.0 / noise_translation.powi(2));
+        let (wr, wt) = (
+            1.0 / noise_rotation.powi(2),
+            1.0 / noise_translation.powi(2),
+        );
         let t = x.translation.vector;
         let tx = crate::pose::skew(&t);
         let identity = Matrix3::identity();
@@ -210,7 +213,8 @@ impl PoseAccumulator {
         info.fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(identity * (n * wr) + ltl * wt));
         info.fixed_view_mut::<3, 3>(0, 3).copy_from(&(ltr * wt));
-        info.fixed_view_mut::<3, 3>(3, 0).copy_from(&(ltr.transpose() * wt));
+        info.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&(ltr.transpose() * wt));
         info.fixed_view_mut::<3, 3>(3, 3)
             .copy_from(&(identity * (n * wt)));
         // Minus the mean's share: (Σ A)ᵀ W (Σ A) / n, Σ A = [[U, 0], [ΣL, U]].
@@ -218,9 +222,8 @@ impl PoseAccumulator {
         sum_a.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.u);
         sum_a.fixed_view_mut::<3, 3>(3, 0).copy_from(&sum_l);
         sum_a.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.u);
-        let weight = SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(
-            wr, wr, wr, wt, wt, wt,
-        ));
+        let weight =
+            SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(wr, wr, wr, wt, wt, wt));
         let info = info - sum_a.transpose() * weight * sum_a / n;
         let info = (info + info.transpose()) * 0.5;
         info.try_inverse()
@@ -365,14 +368,21 @@ mod tests {
             poses.iter().for_each(|p| acc.add(p));
             // Any X, not only the fitted one: the sums are exact for every X.
             let x = s.gripper_from_camera
-                * Transform::new(Vector3::new(3.0, -2.0, 1.0), Vector3::new(0.01, 0.02, -0.01));
+                * Transform::new(
+                    Vector3::new(3.0, -2.0, 1.0),
+                    Vector3::new(0.01, 0.02, -0.01),
+                );
             let got = acc.residual_scatter(&x).unwrap();
             let ys: Vec<Transform> = poses
                 .iter()
                 .map(|p| setup.hand_pose(&p.base_from_gripper) * x * p.camera_from_target)
                 .collect();
             let n = ys.len() as f64;
-            let mean_t = ys.iter().map(|y| y.translation.vector).sum::<Vector3<f64>>() / n;
+            let mean_t = ys
+                .iter()
+                .map(|y| y.translation.vector)
+                .sum::<Vector3<f64>>()
+                / n;
             let sum_r: Matrix3<f64> = ys.iter().map(|y| *y.rotation.matrix()).sum();
             let r_y = crate::pose::proj_so3(&sum_r);
             let rms_t = (ys
@@ -387,14 +397,25 @@ mod tests {
                 .sum::<f64>()
                 / n)
                 .sqrt();
-            assert!((got.translation - rms_t).abs() <= 1e-9 * rms_t, "{setup:?}: {} {rms_t}", got.translation);
-            assert!((got.rotation - rms_r).abs() <= 1e-9 * rms_r, "{setup:?}: {} {rms_r}", got.rotation);
+            assert!(
+                (got.translation - rms_t).abs() <= 1e-9 * rms_t,
+                "{setup:?}: {} {rms_t}",
+                got.translation
+            );
+            assert!(
+                (got.rotation - rms_r).abs() <= 1e-9 * rms_r,
+                "{setup:?}: {} {rms_r}",
+                got.rotation
+            );
             assert!((got.y.translation.vector - mean_t).norm() <= 1e-9 * mean_t.norm());
             // Under the true X the mean frame is the one PoseResiduals finds, up to the noise.
             let fitted = acc.residual_scatter(&s.gripper_from_camera).unwrap();
             let robust = PoseResiduals::at(poses, setup, &s.gripper_from_camera);
             let d = fitted.y.inverse() * robust.y;
-            assert!(d.rotation.angle() < 1e-3 && d.translation.vector.norm() < 1.0, "{d:?}");
+            assert!(
+                d.rotation.angle() < 1e-3 && d.translation.vector.norm() < 1.0,
+                "{d:?}"
+            );
         }
     }
 
@@ -417,7 +438,8 @@ mod tests {
             let y_k = p.base_from_gripper * transform_from_parts(&r, &t) * p.camera_from_target;
             let e = y_k * y.inverse();
             let mut v = nalgebra::Vector6::zeros();
-            v.fixed_rows_mut::<3>(0).copy_from(&log_so3(e.rotation.matrix()));
+            v.fixed_rows_mut::<3>(0)
+                .copy_from(&log_so3(e.rotation.matrix()));
             v.fixed_rows_mut::<3>(3).copy_from(&e.translation.vector);
             v
         };

@@ -92,8 +92,11 @@ pub fn pose_outliers(poses: &[PosePair], setup: Setup, min_angle_gap_deg: f64) -
 
 /// The gaps of pose `i` against its partners.
 fn pose_gap(poses: &[PosePair], setup: Setup, i: usize) -> PoseGap {
-    let (angle_gap_deg, pitch_gap) =
-        screw_gaps(setup, &poses[i], partners(poses.len(), i).map(|j| &poses[j]));
+    let (angle_gap_deg, pitch_gap) = screw_gaps(
+        setup,
+        &poses[i],
+        partners(poses.len(), i).map(|j| &poses[j]),
+    );
     PoseGap {
         pose: i,
         angle_gap_deg,

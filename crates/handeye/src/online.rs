@@ -68,8 +68,8 @@ pub struct OnlineConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Unit {
-    /// Inferred from the first pose: metres when its translations are 0.05–10, millimetres when
-    /// they are 50–10,000; anything else is refused with a request to name the unit.
+    /// Inferred from the first pose whose translations fit a unit: metres when they are 0.05–10,
+    /// millimetres when they are 50–10,000 ([`Unit::infer`]).
     #[default]
     Auto,
     /// Metres: `d_max` = 0.1.
@@ -301,8 +301,8 @@ impl OnlineCalibrator {
         })
     }
 
-    /// The length unit in force: the configured one, or the one inferred from the first pose
-    /// (`Auto` before it).
+    /// The length unit in force: the configured one, or the one inferred from the poses (`Auto`
+    /// while none fitted a unit; `params.d_max` is then in force).
     pub fn unit(&self) -> Unit {
         self.unit
     }
@@ -346,12 +346,12 @@ impl OnlineCalibrator {
     /// except at the end of the fixed method's initial window). A pose with a non-finite entry is
     /// refused with an error and leaves the state untouched.
     ///
-    /// The first pose fixes the length unit when it is `Auto`; a pose whose size fits no unit is
-    /// refused with [`Error::InvalidParameter`] naming `unit`, and the calibrator stays unstarted.
+    /// With `Unit::Auto`, the first pose whose size fits a unit fixes it ([`Unit::infer`]);
+    /// until then `params.d_max` is in force ([`OnlineCalibrator::unit`] tells which).
     pub fn push(&mut self, pose: &PosePair) -> Result<Vec<Event>> {
         check_finite(pose)?;
-        if self.poses == 0 {
-            self.start(pose)?;
+        if self.poses == 0 || self.unit == Unit::Auto {
+            self.fix_unit(pose);
         }
         self.poses += 1;
         if let Some(tracker) = &mut self.tracker {
@@ -395,26 +395,14 @@ impl OnlineCalibrator {
         })
     }
 
-    /// Fixes the unit before the first pose and builds the selector with its `d_max`.
-    fn start(&mut self, pose: &PosePair) -> Result<()> {
+    /// Fixes the unit from the pose when it is `Auto`, and sets the selector's `d_max` from it.
+    fn fix_unit(&mut self, pose: &PosePair) {
         if self.unit == Unit::Auto {
-            self.unit = Unit::infer(pose).ok_or_else(|| Error::InvalidParameter {
-                name: "unit",
-                message: format!(
-                    "cannot tell the length unit from the first pose (translations of {:.4} and {:.4} fit neither metres nor millimetres): name it (--unit m or --unit mm, or --d-max in your unit)",
-                    pose.base_from_gripper.translation.vector.norm(),
-                    pose.camera_from_target.translation.vector.norm()
-                ),
-            })?;
+            self.unit = Unit::infer(pose).unwrap_or(Unit::Auto);
         }
         if let Some(d_max) = self.unit.d_max() {
-            let params = AdaptiveParams {
-                d_max,
-                ..self.config.params
-            };
-            self.selector = Selector::new(self.config.selection, self.config.setup, params)?;
+            self.selector.set_d_max(d_max);
         }
-        Ok(())
     }
 
     /// What the accumulating estimator did with the last pose: held it out, confirmed a change,

@@ -186,8 +186,14 @@ pub fn pair_stream_files(
         TimeOffset::Auto => {
             let options = OffsetOptions::default();
             let e = estimate_time_offset(&robot, &camera, &options)?;
-            let refined =
-                refine_time_offset(&robot, &camera, setup, e.offset, options.max_offset, max_gap);
+            let refined = refine_time_offset(
+                &robot,
+                &camera,
+                setup,
+                e.offset,
+                options.max_offset,
+                max_gap,
+            );
             (refined, Some(e))
         }
     };

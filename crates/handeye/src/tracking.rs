@@ -279,7 +279,10 @@ impl fmt::Display for Pending {
                     f,
                     "X not determined yet: uncertainty {r:.2}° and {t:.4} (reported below {bound_rotation_deg:.2}° and {bound_translation:.4}); add rotations about other axes"
                 ),
-                _ => write!(f, "X not determined yet: too few poses to measure its uncertainty"),
+                _ => write!(
+                    f,
+                    "X not determined yet: too few poses to measure its uncertainty"
+                ),
             },
         }
     }
@@ -294,7 +297,8 @@ struct Segment {
     /// The first accepted hand rotation and the largest rotation from it (radians).
     first: Option<Transform>,
     largest: f64,
-    /// Earlier estimates (pose count, X), each at 1.5 times the count of the one before.
+    /// Earlier estimates (pose count, X), each at 1.5 times the count of the one before, those of
+    /// at least a quarter of the poses now.
     checkpoints: Vec<(usize, Transform)>,
 }
 
@@ -321,7 +325,7 @@ impl Segment {
     }
 
     /// The segment's estimate now, kept as a checkpoint when its pose count has grown by half
-    /// since the last one (O(log n) of them).
+    /// since the last one.
     fn refresh(&mut self) -> Option<Snapshot> {
         let current = self.estimate();
         let n = self.all.poses();
@@ -334,6 +338,8 @@ impl Segment {
             && n >= 6
         {
             self.checkpoints.push((n, e.x));
+            // Those below n/4 are of no more use (constant memory: about four are kept).
+            self.checkpoints.retain(|(c, _)| 4 * c >= n);
         }
         current
     }
@@ -374,7 +380,11 @@ impl Segment {
         };
         let linear = self
             .all
-            .covariance(&e.x, scatter.rotation / 3f64.sqrt(), scatter.translation / 3f64.sqrt())
+            .covariance(
+                &e.x,
+                scatter.rotation / 3f64.sqrt(),
+                scatter.translation / 3f64.sqrt(),
+            )
             .map(|c| {
                 let rotation = (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees();
                 (rotation, (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt())
@@ -704,9 +714,9 @@ impl Tracker {
     fn residual(&self, raw: Option<[f64; 2]>) -> Option<f64> {
         let snapshot = self.current?;
         let bound = self.incumbent.translation_bound(&self.options);
-        let local = snapshot.local.is_some_and(|(r, t)| {
-            r <= self.options.max_rotation_deg && t <= bound
-        });
+        let local = snapshot
+            .local
+            .is_some_and(|(r, t)| r <= self.options.max_rotation_deg && t <= bound);
         if self.incumbent.all.poses() < self.options.mature_poses || !local {
             return None;
         }
@@ -927,6 +937,9 @@ pub fn target_frame(setup: Setup) -> &'static str {
 fn insert_transform(object: &mut serde_json::Map<String, serde_json::Value>, t: &Transform) {
     let j = crate::io::TransformJson::from(t);
     object.insert("translation".into(), serde_json::json!(j.translation));
-    object.insert("quaternion_xyzw".into(), serde_json::json!(j.quaternion_xyzw));
+    object.insert(
+        "quaternion_xyzw".into(),
+        serde_json::json!(j.quaternion_xyzw),
+    );
     object.insert("matrix".into(), serde_json::json!(j.matrix));
 }

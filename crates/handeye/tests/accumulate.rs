@@ -92,7 +92,9 @@ fn jump_detected(rotation_deg: f64, translation: f64) {
             c.push(p).unwrap();
             if let Some(change) = c.step().and_then(|s| s.change) {
                 assert!(
-                    change.confirmed >= jump.at && change.at + 10 >= jump.at && change.at <= jump.at + 10,
+                    change.confirmed >= jump.at
+                        && change.at + 10 >= jump.at
+                        && change.at <= jump.at + 10,
                     "series {s}: a change from {} confirmed at {}, the jump is at {}",
                     change.at,
                     change.confirmed,
@@ -103,7 +105,10 @@ fn jump_detected(rotation_deg: f64, translation: f64) {
         }
         let confirmed = first.unwrap_or_else(|| panic!("series {s}: the jump went unnoticed"));
         let delay = confirmed - jump.at;
-        assert!(delay < 40, "series {s}: confirmed {delay} poses after the jump");
+        assert!(
+            delay < 40,
+            "series {s}: confirmed {delay} poses after the jump"
+        );
         within_30 += usize::from(delay < 30);
         delays.push(delay);
         // After the jump the estimate converges to the new X.
@@ -182,6 +187,9 @@ fn the_reported_uncertainty_holds_and_is_not_wildly_conservative() {
             r.len(),
             100.0 * within
         );
-        assert!(within >= 0.95 && median >= 0.25, "{name}: {median} {within}");
+        assert!(
+            within >= 0.95 && median >= 0.25,
+            "{name}: {median} {within}"
+        );
     }
 }

@@ -134,8 +134,7 @@ fn outlier_stamps(entry: &Value) -> Vec<f64> {
 
 #[test]
 fn the_kinhec_streams_raise_no_alarm_hold_out_the_outliers_and_beat_opencv() {
-    let text =
-        std::fs::read_to_string(testdata().join("kinhec/opencv_streams.json")).unwrap();
+    let text = std::fs::read_to_string(testdata().join("kinhec/opencv_streams.json")).unwrap();
     let opencv: Value = serde_json::from_str(&text).unwrap();
     let all = streams();
     assert_eq!(all.len(), 15);
@@ -180,7 +179,10 @@ fn the_kinhec_streams_raise_no_alarm_hold_out_the_outliers_and_beat_opencv() {
             1e3 * cv_t
         );
         assert_eq!(run.alarms, 0, "{name}: false alarm");
-        assert!(dr <= 2.0 * cv_r && dt <= 2.0 * cv_t, "{name}: worse than OpenCV");
+        assert!(
+            dr <= 2.0 * cv_r && dt <= 2.0 * cv_t,
+            "{name}: worse than OpenCV"
+        );
         assert!(worst < 3.0, "{name}: a report {worst:.1} sigma off");
         let bad = outlier_stamps(e);
         if !bad.is_empty() {

@@ -217,6 +217,11 @@ impl AdaptiveSelector {
         None
     }
 
+    /// Sets d_max (see [`super::Selector::set_d_max`]).
+    pub fn set_d_max(&mut self, d_max: f64) {
+        self.params.d_max = d_max;
+    }
+
     /// Step 14–15: records the errors of the calibration made from the last selection, then
     /// predicts new thresholds (from the fourth calibration on) or explores (before it).
     pub fn record(&mut self, rms_r: f64, rms_t: f64) {

@@ -309,6 +309,14 @@ impl Selector {
         }
     }
 
+    /// Sets d_max, the one length parameter (the ceiling of a predicted d₀), once the input's unit
+    /// is known. Only the adaptive policy uses it, and only after its first regression.
+    pub fn set_d_max(&mut self, d_max: f64) {
+        if let Self::Adaptive(s) = self {
+            s.set_d_max(d_max);
+        }
+    }
+
     /// Tells the selector the errors (rmsR, rmsT) of the calibration made from its last selection.
     /// Only the adaptive policy uses them.
     pub fn record(&mut self, rms_r: f64, rms_t: f64) {
