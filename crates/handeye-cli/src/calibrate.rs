@@ -22,8 +22,8 @@ pub struct Args {
     #[arg(long, default_value = "andreff", value_parser = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
     method: String,
     /// Motions from consecutive poses, or from every pair i < j (as OpenCV does). Default:
-    /// consecutive for pose-pair files, all for two streams (`--robot/--camera`), whose
-    /// consecutive camera frames barely move.
+    /// consecutive for pose-pair files, all for two streams (`--robot/--camera`) and ROS 2
+    /// recordings, whose consecutive camera frames barely move.
     #[arg(long, value_parser = ["consecutive", "all"])]
     pairs: Option<String>,
     /// Leave out the poses that disagree with the others (their motions' robot and camera
@@ -135,7 +135,7 @@ fn options(args: &Args) -> Result<Options> {
             Some(_) => Pairing::Consecutive,
             // Consecutive samples of a stream are a camera period apart: tiny motions whose
             // noise dominates. Every pair of samples carries the information.
-            None if args.input.robot.is_some() => Pairing::All,
+            None if args.input.robot.is_some() || args.input.is_bag() => Pairing::All,
             None => Pairing::Consecutive,
         },
         tsai: TsaiOptions {
