@@ -22,7 +22,8 @@ Every bag is a cell arm filmed by one camera:
 
 The robot's pose between two 100 Hz samples is, by construction, their slerp / linear
 interpolation, and the camera's observation is made from that interpolated pose: noise-free bags
-are then exact for an interpolating reader, and X is recovered to rounding. Noisy bags add noise to
+are then exact for an interpolating reader, and X is recovered to rounding. One bag stamps its
+detections with a camera clock 37 ms ahead of the robot's (the clock offset to find). Noisy bags add noise to
 every robot sample (0.02 deg, 0.05 mm) and every detection (0.1 deg, 0.5 mm).
 
 The truth of each bag is in `<bag>.truth.json`: X under the names of its frames (from
@@ -183,7 +184,7 @@ def transform_stamped(ns, parent, child, p):
     )
 
 
-def write_bag(name, storage, setup, target, noise, seed, compress=False, extra_topic=False):
+def write_bag(name, storage, setup, target, noise, seed, compress=False, extra_topic=False, clock_offset_ns=0):
     path = OUT / name
     if path.exists():
         shutil.rmtree(path)
@@ -227,6 +228,8 @@ def write_bag(name, storage, setup, target, noise, seed, compress=False, extra_t
         optical_from_board = compose(optical_from_link, link_from_board)
         if noise:
             optical_from_board = noisy(optical_from_board, rng, 0.1, 0.0005)
+        # A camera clock ahead of the robot's by clock_offset_ns stamps the detection later.
+        ns += clock_offset_ns
         log_ns = ns + 20_000_000  # the detector publishes 20 ms after the exposure
         if target == "tf":
             msg = TFMessage(transforms=[transform_stamped(ns, "camera_color_optical_frame", "board", optical_from_board)])
@@ -275,6 +278,7 @@ def write_bag(name, storage, setup, target, noise, seed, compress=False, extra_t
         "storage": storage,
         "robot_samples": n_robot,
         "detections": n_camera,
+        "clock_offset_s": clock_offset_ns / 1e9,
         frames[0]: matrix(x),
         frames[1]: matrix(compose(x, LINK_FROM_OPTICAL)),
     }
@@ -294,6 +298,8 @@ BAGS = [
     ("eth_transform_mcap", "mcap", "eye-to-hand", "transform", False, 4, {"compress": True}),
     ("eih_pose_noisy_mcap", "mcap", "eye-in-hand", "pose", True, 5, {"extra_topic": True}),
     ("eth_tf_noisy_sqlite3", "sqlite3", "eye-to-hand", "tf", True, 6, {}),
+    # The detector stamps with a clock 37 ms ahead of the robot's.
+    ("eih_pose_offset_mcap", "mcap", "eye-in-hand", "pose", False, 8, {"clock_offset_ns": 37_000_000}),
 ]
 
 if __name__ == "__main__":

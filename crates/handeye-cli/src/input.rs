@@ -100,7 +100,7 @@ impl InputArgs {
 }
 
 /// The pose pairs of a ROS 2 recording, or `None` when INPUT is not one.
-pub fn bag(args: &InputArgs) -> Result<Option<(BagPairs, f64)>> {
+pub fn bag(args: &InputArgs) -> Result<Option<(BagPairs, Option<f64>)>> {
     let flags = [
         ("--base-frame", &args.base_frame),
         ("--gripper-frame", &args.gripper_frame),
@@ -141,27 +141,43 @@ pub fn bag(args: &InputArgs) -> Result<Option<(BagPairs, f64)>> {
         }
         .into());
     }
-    let time_offset = args
-        .time_offset
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| handeye::Error::InvalidParameter {
-            name: "time_offset",
-            message: format!(
-                "a ROS 2 recording takes seconds (camera clock minus robot clock; tf has one clock, so usually 0), found `{}`",
-                args.time_offset
-            ),
-        })?;
-    let options = BagOptions {
+    let mut options = BagOptions {
         base_frame: args.base_frame.clone().unwrap_or_default(),
         gripper_frame: args.gripper_frame.clone().unwrap_or_default(),
         camera_frame: args.camera_frame.clone().unwrap_or_default(),
         target_frame: args.target_frame.clone(),
         target_topic: args.target_topic.clone(),
-        time_offset,
+        time_offset: 0.0,
         max_gap: args.max_gap,
     };
+    let time_offset = if args.time_offset == "auto" {
+        // Stamped by another clock (a detector that stamps on arrival, say): find the offset on
+        // the streams of the recording read as it is, then read it again with that offset.
+        let first = read_bag_pairs(path, &options)?;
+        auto_offset(
+            &first.robot_stream,
+            &first.camera_stream,
+            args,
+            &format!(
+                "the robot's tf and {} in {}",
+                first.target_source,
+                path.display()
+            ),
+        )?
+    } else {
+        args.time_offset
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| handeye::Error::InvalidParameter {
+                name: "time_offset",
+                message: format!(
+                    "expected `auto` or seconds (camera clock minus robot clock), found `{}`",
+                    args.time_offset
+                ),
+            })?
+    };
+    options.time_offset = time_offset;
     let pairs = read_bag_pairs(path, &options)?;
     eprintln!(
         "{}: {} pose pair(s) from {} observation(s) of the target ({}){}",
@@ -178,7 +194,11 @@ pub fn bag(args: &InputArgs) -> Result<Option<(BagPairs, f64)>> {
             String::new()
         }
     );
-    Ok(Some((pairs, time_offset)))
+    // The offset is reported when one was asked for.
+    Ok(Some((
+        pairs,
+        (args.time_offset != "0").then_some(time_offset),
+    )))
 }
 
 /// Pose pairs from two streams, with what the pairing did.
@@ -216,29 +236,12 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
         })
         .collect();
     let time_offset = if args.time_offset == "auto" {
-        let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default()).with_context(
-            || {
-                format!(
-                    "--time-offset auto on {} and {}",
-                    robot_path.display(),
-                    camera_path.display()
-                )
-            },
-        )?;
-        let max_offset = OffsetOptions::default().max_offset;
-        let refined = refine_time_offset(
+        auto_offset(
             &robot,
             &camera,
-            args.setup(),
-            e.offset,
-            max_offset,
-            args.max_gap,
-        );
-        eprintln!(
-            "time offset: {refined:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
-            e.offset, e.correlation
-        );
-        refined
+            args,
+            &format!("{} and {}", robot_path.display(), camera_path.display()),
+        )?
     } else {
         args.time_offset
             .parse::<f64>()
@@ -296,11 +299,37 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
     Ok(Some(Synced { pairs, time_offset }))
 }
 
+/// The clock offset (camera − robot, seconds) of two streams: the angular speeds' correlation,
+/// refined by how well the paired poses agree on one X. `what` names the streams in messages.
+fn auto_offset(
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+    args: &InputArgs,
+    what: &str,
+) -> Result<f64> {
+    let e = estimate_time_offset(robot, camera, &OffsetOptions::default())
+        .with_context(|| format!("--time-offset auto on {what}"))?;
+    let max_offset = OffsetOptions::default().max_offset;
+    let refined = refine_time_offset(
+        robot,
+        camera,
+        args.setup(),
+        e.offset,
+        max_offset,
+        args.max_gap,
+    );
+    eprintln!(
+        "time offset: {refined:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
+        e.offset, e.correlation
+    );
+    Ok(refined)
+}
+
 /// All pose pairs of the input (a batch solve), each pose's name for messages (`file:line`, or
 /// the camera stream's file and time stamp), and the time offset used for streams.
 pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Vec<String>, Option<f64>)> {
     if let Some((b, offset)) = bag(args)? {
-        return Ok((b.poses(), b.names, (offset != 0.0).then_some(offset)));
+        return Ok((b.poses(), b.names, offset));
     }
     if let Some(s) = synced(args)? {
         let camera = args.camera.as_ref().map(|p| p.display().to_string());
@@ -415,11 +444,7 @@ pub fn records(args: &InputArgs) -> Result<(Records, String, Option<f64>)> {
                 .map_or(String::new(), |p| p.display().to_string()),
             b.target_source
         );
-        return Ok((
-            Box::new(b.pairs.into_iter().map(Ok)),
-            source,
-            (offset != 0.0).then_some(offset),
-        ));
+        return Ok((Box::new(b.pairs.into_iter().map(Ok)), source, offset));
     }
     if let Some(s) = synced(args)? {
         let camera = args

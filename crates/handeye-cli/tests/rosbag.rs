@@ -336,3 +336,38 @@ fn wrong_frames_topics_flags_and_files_are_refused_saying_what_is_there() {
         assert_eq!(code, 2, "{e}");
     }
 }
+
+#[test]
+fn a_clock_offset_is_given_or_found() {
+    let path = bag("eih_pose_offset_mcap").display().to_string();
+    let expected = flat(&truth("eih_pose_offset_mcap")["tool0_from_camera_link"]);
+    for (offset, tolerance) in [("0.037", 1e-9), ("auto", 1e-4)] {
+        let mut a = vec!["calibrate"];
+        a.extend(args(
+            &path,
+            &["--target-topic", "/board_pose"],
+            "eye-in-hand",
+        ));
+        a.extend(["--time-offset", offset]);
+        let (code, out, err) = run(&a);
+        assert_eq!(code, 0, "{err}");
+        let v: Value = serde_json::from_str(&out).unwrap();
+        let found = v["time_offset_s"].as_f64().unwrap();
+        let d = max_diff(&flat(&v["matrix"]), &expected);
+        println!("--time-offset {offset}: {found:.6} s, X off by {d:.2e}");
+        assert!((found - 0.037).abs() < 1e-3, "{found}");
+        assert!(d < tolerance, "{offset}: X off by {d:e}");
+    }
+    // Ignored, the offset shows in the residuals.
+    let mut a = vec!["calibrate"];
+    a.extend(args(
+        &path,
+        &["--target-topic", "/board_pose"],
+        "eye-in-hand",
+    ));
+    let (code, out, _) = run(&a);
+    assert_eq!(code, 0);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert!(v.get("time_offset_s").is_none());
+    assert!(max_diff(&flat(&v["matrix"]), &expected) > 1e-4);
+}

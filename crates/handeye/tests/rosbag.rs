@@ -404,3 +404,69 @@ fn a_truncated_or_foreign_file_is_an_error_not_a_panic() {
     let e = handeye::io::rosbag::Bag::open(dir.path().join("missing").as_path()).unwrap_err();
     assert!(matches!(e, Error::Io { .. }));
 }
+
+#[test]
+fn damaged_bytes_anywhere_give_an_answer_or_an_error_never_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    for (file, topic) in [
+        ("eih_tf_mcap/eih_tf_mcap.mcap", None),
+        (
+            "eth_transform_mcap/eth_transform_mcap.mcap",
+            Some("/board_transform"),
+        ),
+        ("eih_pose_sqlite3/eih_pose_sqlite3.db3", Some("/board_pose")),
+    ] {
+        let bytes = std::fs::read(bag(file)).unwrap();
+        let path = dir.path().join(Path::new(file).file_name().unwrap());
+        let (mut answers, mut errors) = (0, 0);
+        for at in (0..bytes.len()).step_by(bytes.len() / 150) {
+            let mut damaged = bytes.clone();
+            for b in &mut damaged[at..(at + 8).min(bytes.len())] {
+                *b ^= 0xa5;
+            }
+            std::fs::write(&path, &damaged).unwrap();
+            match read_bag_pairs(&path, &options("camera_link", topic)) {
+                Ok(_) => answers += 1,
+                Err(_) => errors += 1,
+            }
+        }
+        println!("{file}: {answers} answers, {errors} errors");
+        assert!(errors > 0, "{file}");
+    }
+}
+
+#[test]
+fn a_clock_offset_is_applied_to_the_robot_lookup() {
+    // The detector's clock runs 37 ms ahead of the robot's.
+    let name = "eih_pose_offset_mcap";
+    let t = truth(name);
+    assert!((t["clock_offset_s"].as_f64().unwrap() - 0.037).abs() < 1e-15);
+    let expected = matrix(&t["tool0_from_camera_link"]);
+    let solve_with = |offset: f64| {
+        let o = BagOptions {
+            time_offset: offset,
+            ..options("camera_link", Some("/board_pose"))
+        };
+        let pairs = read_bag_pairs(&bag(name), &o).unwrap();
+        let motions = motion_pairs(&pairs.poses(), Pairing::All, Setup::EyeInHand);
+        (
+            diff(&solve(Method::Andreff, &motions).unwrap().x, &expected),
+            pairs,
+        )
+    };
+    let (wrong, _) = solve_with(0.0);
+    let (right, pairs) = solve_with(0.037);
+    println!("clock offset ignored: X off by {wrong:.2e}; applied: {right:.2e}");
+    assert!(wrong > 1e-4, "{wrong}");
+    assert!(right < 1e-9, "{right}");
+    // The streams for estimating it: the robot at its own 100 Hz stamps, the camera at 10 Hz.
+    assert_eq!(pairs.robot_stream.len(), 801);
+    assert_eq!(pairs.camera_stream.len(), 80);
+    let e = handeye::sync::estimate_time_offset(
+        &pairs.robot_stream,
+        &pairs.camera_stream,
+        &handeye::sync::OffsetOptions::default(),
+    )
+    .unwrap();
+    assert!((e.offset - 0.037).abs() < 0.05, "{}", e.offset);
+}

@@ -30,7 +30,7 @@ use crate::error::{Error, Result};
 use crate::io::StampedPosePair;
 use crate::motion::PosePair;
 use crate::pose::{Transform, transform_from_xyz_quat_xyzw};
-use crate::sync::Lookup;
+use crate::sync::{Lookup, StampedPose};
 
 pub use cdr::CdrError;
 pub use msg::{POSE_STAMPED, TF_MESSAGE, TRANSFORM_STAMPED};
@@ -193,6 +193,11 @@ pub struct BagPairs {
     pub dropped_outside: usize,
     /// Observations in a gap, longer than `max_gap`, of a dynamic transform they need.
     pub dropped_gap: usize,
+    /// `base_from_gripper` at every stamp of the robot's dynamic transforms (robot clock), for an
+    /// estimate of the clock offset ([`crate::sync::estimate_time_offset`]).
+    pub robot_stream: Vec<StampedPose>,
+    /// `camera_from_target` at every observation (camera clock), in time order.
+    pub camera_stream: Vec<StampedPose>,
 }
 
 impl BagPairs {
@@ -360,6 +365,29 @@ fn nanoseconds(name: &'static str, value: f64) -> Result<i64> {
 /// is not a complete recording, a message that does not decode, a frame that is in no transform
 /// (the frames that are are listed), frames in different trees, a target topic that is missing or
 /// of another type, fewer than 2 pose pairs.
+///
+/// # Example
+/// ```
+/// use handeye::io::rosbag::{BagOptions, read_bag_pairs};
+/// use handeye::{Method, Pairing, Setup, motion_pairs, solve};
+///
+/// let bag = concat!(env!("CARGO_MANIFEST_DIR"), "/../../testdata/rosbag/eih_tf_mcap");
+/// let pairs = read_bag_pairs(
+///     std::path::Path::new(bag),
+///     &BagOptions {
+///         base_frame: "base_link".into(),
+///         gripper_frame: "tool0".into(),
+///         camera_frame: "camera_link".into(),
+///         target_frame: Some("board".into()),
+///         ..BagOptions::default()
+///     },
+/// )?;
+/// assert_eq!(pairs.pairs.len(), 80);
+/// let motions = motion_pairs(&pairs.poses(), Pairing::All, Setup::EyeInHand);
+/// let x = solve(Method::Andreff, &motions)?.x; // tool0_from_camera_link
+/// assert!((x.translation.vector.z - 0.08).abs() < 1e-9);
+/// # Ok::<(), handeye::Error>(())
+/// ```
 pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
     let bag = Bag::open(path)?;
     let frame = |name: &'static str, value: &str| {
@@ -497,6 +525,33 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
     }
     observations.sort_by_key(|o| o.1);
 
+    let mut robot_stamps: Vec<i64> = tf
+        .dynamic_on(&robot_path)
+        .iter()
+        .flat_map(|edge| tf.stamps_of(edge))
+        .collect();
+    robot_stamps.sort_unstable();
+    robot_stamps.dedup();
+    let robot_stream = robot_stamps
+        .into_iter()
+        .filter_map(|t| match tf.lookup(&robot_path, t, max_gap_ns) {
+            Lookup::Pose(pose) => Some(StampedPose {
+                stamp: seconds(t),
+                pose,
+            }),
+            _ => None,
+        })
+        .collect();
+    let camera_stream = observations
+        .iter()
+        .filter_map(|(_, t, o)| match o {
+            Lookup::Pose(pose) => Some(StampedPose {
+                stamp: seconds(*t),
+                pose: *pose,
+            }),
+            _ => None,
+        })
+        .collect();
     let mut out = BagPairs {
         pairs: Vec::new(),
         names: Vec::new(),
@@ -504,6 +559,8 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         observations: observations.len(),
         dropped_outside: 0,
         dropped_gap: 0,
+        robot_stream,
+        camera_stream,
     };
     for (index, stamp_ns, camera_from_target) in observations {
         let robot = tf.lookup(&robot_path, stamp_ns.saturating_sub(offset_ns), max_gap_ns);

@@ -1,7 +1,7 @@
 //! The two storages of rosbag2: MCAP files (the `mcap` crate) and SQLite3 databases
 //! (`rusqlite`), read as (topic, type, serialised bytes): MCAP in file order, SQLite3 by log time.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -79,42 +79,90 @@ fn scan_mcap(
     wanted: &dyn Fn(&str) -> bool,
     on_message: &mut dyn FnMut(Message<'_>) -> Result<()>,
 ) -> Result<BTreeMap<String, TopicInfo>> {
-    let bytes = std::fs::read(file).map_err(|e| Error::Io {
+    use mcap::records::Record;
+    use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
+    use std::io::Read;
+
+    let io_error = |e: std::io::Error| Error::Io {
         file: file.display().to_string(),
         source: e,
-    })?;
-    if !bytes.starts_with(MCAP_MAGIC) {
+    };
+    let mut f = std::fs::File::open(file).map_err(io_error)?;
+    let length = f.metadata().map_err(io_error)?.len();
+    let mut magic = [0u8; 8];
+    let got = f.read(&mut magic).map_err(io_error)?;
+    if got < magic.len() || magic != MCAP_MAGIC {
         return Err(bag_error(
             file,
             None,
             "not an MCAP file (it does not start with the MCAP magic bytes)",
         ));
     }
-    let stream = mcap::MessageStream::new(&bytes).map_err(|e| mcap_error(file, 0, e))?;
+    // Streamed, so that a recording with camera images is not held in memory: the magic is
+    // skipped (read above), and no record may claim more than the file holds.
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default()
+            .with_skip_start_magic(true)
+            .with_record_length_limit(usize::try_from(length).unwrap_or(usize::MAX)),
+    );
+    let mut schemas: HashMap<u16, String> = HashMap::new();
+    let mut channels: HashMap<u16, (String, String, u16)> = HashMap::new();
     let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
-    for (k, message) in stream.enumerate() {
-        let message = message.map_err(|e| mcap_error(file, k, e))?;
-        let channel = &message.channel;
-        let msg_type = channel.schema.as_ref().map_or("", |s| s.name.as_str());
-        let info = topics
-            .entry(channel.topic.clone())
-            .or_insert_with(|| TopicInfo {
-                msg_type: msg_type.to_string(),
-                encoding: channel.message_encoding.clone(),
-                count: 0,
-            });
-        info.count += 1;
-        if wanted(&channel.topic) {
-            on_message(Message {
-                topic: &channel.topic,
-                msg_type,
-                encoding: &channel.message_encoding,
-                data: &message.data,
-            })?;
+    let mut k = 0usize;
+    while let Some(event) = reader.next_event() {
+        match event.map_err(|e| mcap_error(file, k, e))? {
+            LinearReadEvent::ReadRequest(n) => {
+                let buffer = reader.insert(n.clamp(1, READ_SIZE));
+                let read = f.read(buffer).map_err(io_error)?;
+                reader.notify_read(read);
+            }
+            LinearReadEvent::Record { data, opcode } => {
+                match mcap::parse_record(opcode, data).map_err(|e| mcap_error(file, k, e))? {
+                    Record::Schema { header, .. } => {
+                        schemas.insert(header.id, header.name);
+                    }
+                    Record::Channel(c) => {
+                        channels.insert(c.id, (c.topic, c.message_encoding, c.schema_id));
+                    }
+                    Record::Message { header, data } => {
+                        k += 1;
+                        let Some((topic, encoding, schema_id)) = channels.get(&header.channel_id)
+                        else {
+                            return Err(bag_error(
+                                file,
+                                Some(format!("message {k}")),
+                                format!(
+                                    "the message names channel {}, which no channel record before it defines",
+                                    header.channel_id
+                                ),
+                            ));
+                        };
+                        let msg_type = schemas.get(schema_id).map_or("", String::as_str);
+                        let info = topics.entry(topic.clone()).or_insert_with(|| TopicInfo {
+                            msg_type: msg_type.to_string(),
+                            encoding: encoding.clone(),
+                            count: 0,
+                        });
+                        info.count += 1;
+                        if wanted(topic) {
+                            on_message(Message {
+                                topic,
+                                msg_type,
+                                encoding,
+                                data: &data,
+                            })?;
+                        }
+                    }
+                    _ => {}
+                }
+            }
         }
     }
     Ok(topics)
 }
+
+/// Bytes read from an MCAP file at a time.
+const READ_SIZE: usize = 1 << 20;
 
 fn mcap_error(file: &Path, k: usize, e: mcap::McapError) -> Error {
     let hint = match e {
