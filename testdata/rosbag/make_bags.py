@@ -302,6 +302,27 @@ BAGS = [
     ("eih_pose_offset_mcap", "mcap", "eye-in-hand", "pose", False, 8, {"clock_offset_ns": 37_000_000}),
 ]
 
+def write_cdr_fixtures():
+    """Single messages in both byte orders (the decoder's unit tests): a TFMessage of two
+    transforms with frame names of every length modulo 4, and a PoseStamped."""
+    out = OUT / "cdr"
+    out.mkdir(exist_ok=True)
+    tf = TFMessage(transforms=[
+        transform_stamped(1_700_000_000_123_456_789, "base_link", "flange", pose([0.1, -0.2, 0.3], [0.4, -0.5, 0.6])),
+        transform_stamped(5, "/odom", "tool", pose([0.0, 0.0, 1.0], [7.0, 8.0, 9.0])),
+    ])
+    q, t = pose([-0.3, 0.2, 0.1], [0.25, 0.5, 1.5])
+    ps = PoseStamped(
+        header=Header(stamp=Time(sec=-2, nanosec=999_999_999), frame_id="camera_color_optical_frame"),
+        pose=Pose(position=Point(x=t[0], y=t[1], z=t[2]), orientation=Quaternion(x=q[0], y=q[1], z=q[2], w=q[3])),
+    )
+    for msg, name in [(tf, "tf_message"), (ps, "pose_stamped")]:
+        for little, suffix in [(True, "le"), (False, "be")]:
+            data = bytes(TS.serialize_cdr(msg, msg.__msgtype__, little_endian=little))
+            (out / f"{name}_{suffix}.cdr").write_bytes(data)
+
+
 if __name__ == "__main__":
     for name, storage, setup, target, noise, seed, options in BAGS:
         write_bag(name, storage, setup, target, noise, seed, **options)
+    write_cdr_fixtures()

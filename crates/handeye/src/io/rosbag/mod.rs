@@ -512,11 +512,7 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
                     "the pose of `{target}` in `{camera}` never changes: every transform between them is in /tf_static (is the target published on a topic of its own?)"
                 )));
             };
-            let parent = tf
-                .summary()
-                .into_iter()
-                .find(|e| e.child == edge)
-                .map_or_else(String::new, |e| e.parent);
+            let parent = tf.parent_of(&edge).unwrap_or_default();
             target_source = format!("/tf `{parent}` → `{edge}`");
             for (k, t) in tf.stamps_of(&edge).into_iter().enumerate() {
                 observations.push((k + 1, t, tf.lookup(&target_path, t, max_gap_ns)));

@@ -203,6 +203,61 @@ pub(crate) mod tests {
         }
     }
 
+    fn fixture(name: &str) -> Vec<u8> {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../testdata/rosbag/cdr")
+            .join(name);
+        std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    }
+
+    #[test]
+    fn messages_of_an_independent_writer_decode_in_both_byte_orders() {
+        // Serialised by the `rosbags` package (testdata/rosbag/make_bags.py).
+        let tf = decode_tf_message(&fixture("tf_message_le.cdr")).unwrap();
+        assert_eq!(
+            tf,
+            decode_tf_message(&fixture("tf_message_be.cdr")).unwrap()
+        );
+        assert_eq!(tf.len(), 2);
+        assert_eq!(tf[0].header.stamp_ns, 1_700_000_000_123_456_789);
+        assert_eq!(
+            (
+                tf[0].header.frame_id.as_str(),
+                tf[0].child_frame_id.as_str()
+            ),
+            ("base_link", "flange")
+        );
+        assert_eq!(tf[0].transform.translation, [0.4, -0.5, 0.6]);
+        let q = [
+            0.049_708_843_324_859_49,
+            -0.099_417_686_649_718_95,
+            0.149_126_529_974_578_45,
+            0.982_550_982_155_258_9,
+        ];
+        for (a, b) in tf[0].transform.quaternion_xyzw.iter().zip(q) {
+            assert!((a - b).abs() < 1e-15);
+        }
+        // A leading `/` is dropped, as tf2 does.
+        assert_eq!(
+            (
+                tf[1].header.frame_id.as_str(),
+                tf[1].child_frame_id.as_str()
+            ),
+            ("odom", "tool")
+        );
+        assert_eq!(tf[1].header.stamp_ns, 5);
+        let p = decode_pose_stamped(&fixture("pose_stamped_le.cdr")).unwrap();
+        assert_eq!(
+            p,
+            decode_pose_stamped(&fixture("pose_stamped_be.cdr")).unwrap()
+        );
+        assert_eq!(p.header.frame_id, "camera_color_optical_frame");
+        // sec = −2, nanosec = 999 999 999.
+        assert_eq!(p.header.stamp_ns, -1_000_000_001);
+        assert_eq!(p.pose.translation, [0.25, 0.5, 1.5]);
+        assert!((p.pose.quaternion_xyzw[3] - 0.982_550_982_155_258_9).abs() < 1e-15);
+    }
+
     #[test]
     fn a_nanosecond_field_of_a_second_or_more_is_refused() {
         let mut bytes = vec![0, 1, 0, 0];

@@ -102,7 +102,7 @@ fn list(frames: &[String]) -> String {
     }
 }
 
-/// One step of a path: the child frame of the edge walked.
+/// The path between two frames a and b, as the child frames of the edges walked.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct TfPath {
     /// From `a` up to the common ancestor (children of the edges walked, `a` first).
@@ -200,6 +200,11 @@ impl TfBuffer {
             set.insert(&edge.parent);
         }
         set.into_iter().map(str::to_string).collect()
+    }
+
+    /// The parent of `child`, if it has one.
+    pub fn parent_of(&self, child: &str) -> Option<&str> {
+        self.edges.get(child).map(|e| e.parent.as_str())
     }
 
     /// Whether a transform names `frame`.
