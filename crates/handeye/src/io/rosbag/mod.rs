@@ -658,3 +658,42 @@ pub fn inspect_bag(path: &Path) -> Result<BagSummary> {
         tf: loaded.tf.summary(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_directory_is_read_by_split_number_in_one_storage() {
+        let dir = std::env::temp_dir().join(format!("handeye-bag-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for name in [
+            "metadata.yaml",
+            "run_10.mcap",
+            "run_2.mcap",
+            "run_0.mcap",
+            "notes.txt",
+        ] {
+            std::fs::write(dir.join(name), b"").unwrap();
+        }
+        assert!(is_bag(&dir));
+        let bag = Bag::open(&dir).unwrap();
+        let names: Vec<String> = bag
+            .files
+            .iter()
+            .map(|f| f.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["run_0.mcap", "run_2.mcap", "run_10.mcap"]);
+        assert_eq!(bag.storage, Storage::Mcap);
+        std::fs::write(dir.join("run_3.db3"), b"").unwrap();
+        let mixed = Bag::open(&dir).unwrap_err().to_string();
+        for f in ["run_0.mcap", "run_2.mcap", "run_10.mcap", "run_3.db3"] {
+            std::fs::remove_file(dir.join(f)).unwrap();
+        }
+        std::fs::write(dir.join("run_0.mcap.zstd"), b"").unwrap();
+        let compressed = Bag::open(&dir).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(mixed.contains("both .mcap and .db3"), "{mixed}");
+        assert!(compressed.contains("decompress"), "{compressed}");
+    }
+}
