@@ -266,7 +266,7 @@ fn a_missing_frame_is_named_with_the_frames_that_exist() {
     let e = bag_error("eih_tf_mcap", &o);
     assert!(e.contains("eih_tf_mcap"), "{e}");
     assert!(
-        e.contains("frame `tool1` is not in /tf or /tf_static"),
+        e.contains("frame `tool1` is not in /tf or /tf_static (did you mean `tool0`?)"),
         "{e}"
     );
     for f in [
@@ -326,9 +326,14 @@ fn a_wrong_or_missing_topic_is_refused_with_the_topics_there_are() {
             && e.contains("/joint_states"),
         "{e}"
     );
+    let e = bag_error(
+        "eih_pose_sqlite3",
+        &options("camera_link", Some("/board_poses")),
+    );
+    assert!(e.contains("(did you mean `/board_pose`?)"), "{e}");
     let e = bag_error("eih_pose_sqlite3", &options("camera_link", Some("/board")));
     assert!(
-        e.contains("no topic `/board`")
+        e.contains("no topic `/board` in the recording; ")
             && e.contains("/board_pose (geometry_msgs/msg/PoseStamped)"),
         "{e}"
     );

@@ -444,8 +444,11 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         Some(topic) => {
             match loaded.topics.get(topic) {
                 None => {
+                    let names: Vec<String> = loaded.topics.keys().cloned().collect();
+                    let near = tf::nearest(topic, &names)
+                        .map_or(String::new(), |n| format!(" (did you mean `{n}`?)"));
                     return Err(whole(format!(
-                        "no topic `{topic}` in the recording; the topics are: {}",
+                        "no topic `{topic}` in the recording{near}; the topics are: {}",
                         topic_list(&loaded.topics)
                     )));
                 }

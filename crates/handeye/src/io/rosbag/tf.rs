@@ -68,11 +68,13 @@ pub(crate) enum TfError {
 impl std::fmt::Display for TfError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Self::MissingFrame { frame, known } => write!(
-                f,
-                "frame `{frame}` is not in /tf or /tf_static; the frames there are: {}",
-                list(known)
-            ),
+            Self::MissingFrame { frame, known } => {
+                write!(f, "frame `{frame}` is not in /tf or /tf_static")?;
+                if let Some(near) = nearest(frame, known) {
+                    write!(f, " (did you mean `{near}`?)")?;
+                }
+                write!(f, "; the frames there are: {}", list(known))
+            }
             Self::Disconnected {
                 a,
                 a_tree,
@@ -87,6 +89,36 @@ impl std::fmt::Display for TfError {
             Self::Cycle { frame } => write!(f, "the tf tree has a loop through frame `{frame}`"),
         }
     }
+}
+
+/// The name of `known` closest to `name`, when it is within a couple of edits (a typo, a
+/// missing prefix such as `/`), ignoring case.
+pub(crate) fn nearest<'a>(name: &str, known: &'a [String]) -> Option<&'a str> {
+    let name = name.to_ascii_lowercase();
+    known
+        .iter()
+        .map(|k| (edit_distance(&name, &k.to_ascii_lowercase()), k))
+        .filter(|(d, k)| *d <= 2.max(k.len() / 5))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k.as_str())
+}
+
+/// Levenshtein distance.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut previous = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let current = row[j + 1];
+            row[j + 1] = (previous + usize::from(ca != *cb))
+                .min(row[j] + 1)
+                .min(current + 1);
+            previous = current;
+        }
+    }
+    row[b.len()]
 }
 
 /// Frames as `a, b, c` (none: `(none)`).
@@ -465,10 +497,13 @@ mod tests {
     fn missing_frames_and_disconnected_trees_name_what_exists() {
         let tf = buffer();
         let e = tf.path("base", "tool1").unwrap_err().to_string();
+        assert!(e.contains("(did you mean `tool0`?)"), "{e}");
         assert!(
             e.contains("`tool1`") && e.contains("`tool0`") && e.contains("`optical`"),
             "{e}"
         );
+        let e = tf.path("base", "camera").unwrap_err().to_string();
+        assert!(!e.contains("did you mean"), "{e}");
         let e = tf.path("base", "optical").unwrap_err().to_string();
         assert!(e.contains("not connected"), "{e}");
         assert!(e.contains("`camera_link`, `optical`"), "{e}");
