@@ -494,6 +494,58 @@ mod tests {
     }
 
     #[test]
+    fn dynamic_edges_at_their_own_rates_on_both_sides_of_the_common_ancestor() {
+        // world → a (100 Hz) → b (30 Hz, other stamps); world → c (static) → d (50 Hz).
+        // About z every rotation commutes and interpolates linearly in its angle.
+        let mut tf = TfBuffer::default();
+        let rot =
+            |angle: f64, x: f64| Transform::new(Vector3::new(x, 0.0, 0.0), Vector3::z() * angle);
+        for k in 0..=100 {
+            let t = k * 10_000_000;
+            tf.add(
+                "world",
+                "a",
+                t,
+                rot(0.01 * k as f64, 0.001 * k as f64),
+                false,
+            )
+            .unwrap();
+        }
+        for k in 0..=30 {
+            let t = 3_000_000 + k * 33_333_333;
+            tf.add("a", "b", t, rot(-0.02 * k as f64, 0.0), false)
+                .unwrap();
+        }
+        tf.add("world", "c", 0, rot(0.5, 1.0), true).unwrap();
+        for k in 0..=50 {
+            tf.add("c", "d", k * 20_000_000, rot(0.004 * k as f64, 0.0), false)
+                .unwrap();
+        }
+        tf.finish();
+        let path = tf.path("d", "b").unwrap();
+        assert_eq!(tf.dynamic_on(&path), ["b", "a", "d"]);
+        let t = 517_000_000i64;
+        let s = t as f64 / 1e9;
+        let world_from_a = rot(s, 0.1 * s);
+        let a_from_b = rot(-0.02 * (t - 3_000_000) as f64 / 33_333_333.0, 0.0);
+        let world_from_d = rot(0.5, 1.0) * rot(0.2 * s, 0.0);
+        let expected = world_from_d.inverse() * world_from_a * a_from_b;
+        let Lookup::Pose(d_from_b) = tf.lookup(&path, t, 100_000_000) else {
+            panic!()
+        };
+        let d = (d_from_b.to_homogeneous() - expected.to_homogeneous())
+            .abs()
+            .max();
+        // slerp of small rotations (nalgebra, through acos) is good to ~1e-11.
+        assert!(d < 1e-10, "{d:e}");
+        // Outside one edge's span (b's last sample is at 1.003 s) is outside.
+        assert_eq!(
+            tf.lookup(&path, 1_000_000_000 + 3_000_001, 100_000_000),
+            Lookup::Outside
+        );
+    }
+
+    #[test]
     fn missing_frames_and_disconnected_trees_name_what_exists() {
         let tf = buffer();
         let e = tf.path("base", "tool1").unwrap_err().to_string();
