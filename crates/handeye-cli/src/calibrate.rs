@@ -7,7 +7,7 @@ use handeye::calibration::{Fix, Options, Report, calibrate};
 use handeye::metrics::OUTLIER_DEG;
 use handeye::solve::TsaiOptions;
 use handeye::uncertainty::REPLICATES;
-use handeye::{Error, Method, Pairing};
+use handeye::{Error, Method, Pairing, Setup};
 use serde_json::Value;
 
 use crate::input::{InputArgs, read_all};
@@ -22,8 +22,8 @@ pub struct Args {
     #[arg(long, default_value = "andreff", value_parser = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
     method: String,
     /// Motions from consecutive poses, or from every pair i < j (as OpenCV does). Default:
-    /// consecutive for pose-pair files, all for two streams (`--robot/--camera`), whose
-    /// consecutive camera frames barely move.
+    /// consecutive for pose-pair files, all for two streams (`--robot/--camera`) and ROS 2
+    /// recordings, whose consecutive camera frames barely move.
     #[arg(long, value_parser = ["consecutive", "all"])]
     pairs: Option<String>,
     /// Leave out the poses that disagree with the others (their motions' robot and camera
@@ -101,6 +101,9 @@ pub fn run(args: Args) -> Result<()> {
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
+    if let Some(line) = static_transform_publisher(&args.input, &report) {
+        eprintln!("publish X in tf with: {line}");
+    }
     if args.output == "yaml" {
         print!("{}", ros_yaml(&report));
         return Ok(());
@@ -135,7 +138,7 @@ fn options(args: &Args) -> Result<Options> {
             Some(_) => Pairing::Consecutive,
             // Consecutive samples of a stream are a camera period apart: tiny motions whose
             // noise dominates. Every pair of samples carries the information.
-            None if args.input.robot.is_some() => Pairing::All,
+            None if args.input.robot.is_some() || args.input.is_bag() => Pairing::All,
             None => Pairing::Consecutive,
         },
         tsai: TsaiOptions {
@@ -164,4 +167,22 @@ fn ros_yaml(r: &Report) -> String {
         r.residual.translation_rms,
         r.motions,
     )
+}
+
+/// For a ROS 2 recording, the `static_transform_publisher` command that puts X in the tf tree:
+/// `gripper → camera` (eye-in-hand) or `base → camera` (eye-to-hand), in the recording's names.
+fn static_transform_publisher(input: &InputArgs, r: &Report) -> Option<String> {
+    if !input.is_bag() {
+        return None;
+    }
+    let parent = match input.setup() {
+        Setup::EyeInHand => input.gripper_frame.as_deref()?,
+        Setup::EyeToHand => input.base_frame.as_deref()?,
+    };
+    let camera = input.camera_frame.as_deref()?;
+    let [x, y, z] = r.x.translation;
+    let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
+    Some(format!(
+        "ros2 run tf2_ros static_transform_publisher --x {x} --y {y} --z {z} --qx {qx} --qy {qy} --qz {qz} --qw {qw} --frame-id {parent} --child-frame-id {camera}"
+    ))
 }

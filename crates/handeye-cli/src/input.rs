@@ -1,10 +1,12 @@
-//! Where the pose pairs come from: a pose-pair file (or stdin), or two timestamped streams.
+//! Where the pose pairs come from: a pose-pair file (or stdin), two timestamped streams, or a ROS 2
+//! recording.
 
 use std::io::BufRead;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
+use handeye::io::rosbag::{BagOptions, BagPairs, is_bag, read_bag_pairs};
 use handeye::io::{
     PoseInput, PoseReader, Projections, StampedPosePair, open_poses, read_stamped_poses,
 };
@@ -17,7 +19,8 @@ use handeye::{PosePair, Setup};
 #[derive(ClapArgs, Debug, Clone)]
 pub struct InputArgs {
     /// Pose-pair file (JSON Lines, CSV, OpenCV-YAML pairs, moveit JSON; a directory of ViSP pose
-    /// files; `-` for standard input). Not with --robot/--camera.
+    /// files; `-` for standard input), or a ROS 2 recording (a rosbag2 directory, an `.mcap` or a
+    /// `.db3` file; with --base-frame …). Not with --robot/--camera.
     #[arg(value_name = "INPUT", required_unless_present = "robot")]
     pub input: Option<PathBuf>,
     /// Format of INPUT.
@@ -35,6 +38,40 @@ pub struct InputArgs {
     /// Drop camera samples in gaps of the robot stream longer than this, seconds.
     #[arg(long, default_value_t = 0.1)]
     pub max_gap: f64,
+    /// ROS 2 recording: the robot's base frame in /tf (e.g. base_link).
+    #[arg(
+        long,
+        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+    )]
+    pub base_frame: Option<String>,
+    /// ROS 2 recording: the gripper's frame (e.g. tool0); base_from_gripper is composed along the
+    /// tf tree, static and dynamic transforms alike.
+    #[arg(
+        long,
+        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+    )]
+    pub gripper_frame: Option<String>,
+    /// ROS 2 recording: the camera frame X is found for (e.g. camera_color_optical_frame).
+    #[arg(
+        long,
+        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+    )]
+    pub camera_frame: Option<String>,
+    /// ROS 2 recording: the target's frame in /tf (e.g. board); with --target-topic of
+    /// TransformStamped its child_frame_id must be it.
+    #[arg(
+        long,
+        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+    )]
+    pub target_frame: Option<String>,
+    /// ROS 2 recording: a geometry_msgs/PoseStamped or TransformStamped topic of the target's
+    /// pose, its header naming the camera frame (or a frame tf relates to it). Without it the
+    /// target's pose is taken from /tf.
+    #[arg(
+        long,
+        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+    )]
+    pub target_topic: Option<String>,
     /// Camera on the gripper (X = gripper_from_camera) or fixed (X = base_from_camera).
     #[arg(long, default_value = "eye-in-hand", value_parser = ["eye-in-hand", "eye-to-hand"])]
     pub setup: String,
@@ -53,6 +90,115 @@ impl InputArgs {
     fn format(&self) -> Result<handeye::io::Format> {
         Ok(self.format.parse()?)
     }
+
+    /// Whether INPUT is a ROS 2 recording.
+    pub fn is_bag(&self) -> bool {
+        self.input
+            .as_ref()
+            .is_some_and(|p| p.as_os_str() != "-" && is_bag(p))
+    }
+}
+
+/// The pose pairs of a ROS 2 recording, or `None` when INPUT is not one.
+pub fn bag(args: &InputArgs) -> Result<Option<(BagPairs, Option<f64>)>> {
+    let flags = [
+        ("--base-frame", &args.base_frame),
+        ("--gripper-frame", &args.gripper_frame),
+        ("--camera-frame", &args.camera_frame),
+        ("--target-frame", &args.target_frame),
+        ("--target-topic", &args.target_topic),
+    ];
+    let Some(path) = args.input.as_ref().filter(|_| args.is_bag()) else {
+        if let Some((flag, _)) = flags.iter().find(|(_, v)| v.is_some()) {
+            return Err(handeye::Error::InvalidParameter {
+                name: "input",
+                message: format!(
+                    "{flag} is for a ROS 2 recording (a rosbag2 directory, an .mcap or a .db3 file), and INPUT is not one"
+                ),
+            }
+            .into());
+        }
+        return Ok(None);
+    };
+    let missing: Vec<&str> = flags[..3]
+        .iter()
+        .filter(|(_, v)| v.is_none())
+        .map(|(f, _)| *f)
+        .chain(
+            (args.target_frame.is_none() && args.target_topic.is_none())
+                .then_some("--target-frame (or --target-topic)"),
+        )
+        .collect();
+    if !missing.is_empty() {
+        return Err(handeye::Error::InvalidParameter {
+            name: "input",
+            message: format!(
+                "{} is a ROS 2 recording: name its frames with {} (`handeye inspect {}` lists the frames and topics)",
+                path.display(),
+                missing.join(", "),
+                path.display()
+            ),
+        }
+        .into());
+    }
+    let mut options = BagOptions {
+        base_frame: args.base_frame.clone().unwrap_or_default(),
+        gripper_frame: args.gripper_frame.clone().unwrap_or_default(),
+        camera_frame: args.camera_frame.clone().unwrap_or_default(),
+        target_frame: args.target_frame.clone(),
+        target_topic: args.target_topic.clone(),
+        time_offset: 0.0,
+        max_gap: args.max_gap,
+    };
+    let time_offset = if args.time_offset == "auto" {
+        // Stamped by another clock (a detector that stamps on arrival, say): find the offset on
+        // the streams of the recording read as it is, then read it again with that offset.
+        let first = read_bag_pairs(path, &options)?;
+        auto_offset(
+            &first.robot_stream,
+            &first.camera_stream,
+            args,
+            &format!(
+                "the robot's tf and {} in {}",
+                first.target_source,
+                path.display()
+            ),
+        )?
+    } else {
+        args.time_offset
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| handeye::Error::InvalidParameter {
+                name: "time_offset",
+                message: format!(
+                    "expected `auto` or seconds (camera clock minus robot clock), found `{}`",
+                    args.time_offset
+                ),
+            })?
+    };
+    options.time_offset = time_offset;
+    let pairs = read_bag_pairs(path, &options)?;
+    eprintln!(
+        "{}: {} pose pair(s) from {} observation(s) of the target ({}){}",
+        path.display(),
+        pairs.pairs.len(),
+        pairs.observations,
+        pairs.target_source,
+        if pairs.dropped_outside + pairs.dropped_gap > 0 {
+            format!(
+                "; dropped {} outside the robot's transforms and {} in their gaps longer than {} s",
+                pairs.dropped_outside, pairs.dropped_gap, args.max_gap
+            )
+        } else {
+            String::new()
+        }
+    );
+    // The offset is reported when one was asked for.
+    Ok(Some((
+        pairs,
+        (args.time_offset != "0").then_some(time_offset),
+    )))
 }
 
 /// Pose pairs from two streams, with what the pairing did.
@@ -90,29 +236,12 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
         })
         .collect();
     let time_offset = if args.time_offset == "auto" {
-        let e = estimate_time_offset(&robot, &camera, &OffsetOptions::default()).with_context(
-            || {
-                format!(
-                    "--time-offset auto on {} and {}",
-                    robot_path.display(),
-                    camera_path.display()
-                )
-            },
-        )?;
-        let max_offset = OffsetOptions::default().max_offset;
-        let refined = refine_time_offset(
+        auto_offset(
             &robot,
             &camera,
-            args.setup(),
-            e.offset,
-            max_offset,
-            args.max_gap,
-        );
-        eprintln!(
-            "time offset: {refined:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
-            e.offset, e.correlation
-        );
-        refined
+            args,
+            &format!("{} and {}", robot_path.display(), camera_path.display()),
+        )?
     } else {
         args.time_offset
             .parse::<f64>()
@@ -170,9 +299,38 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
     Ok(Some(Synced { pairs, time_offset }))
 }
 
+/// The clock offset (camera − robot, seconds) of two streams: the angular speeds' correlation,
+/// refined by how well the paired poses agree on one X. `what` names the streams in messages.
+fn auto_offset(
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+    args: &InputArgs,
+    what: &str,
+) -> Result<f64> {
+    let e = estimate_time_offset(robot, camera, &OffsetOptions::default())
+        .with_context(|| format!("--time-offset auto on {what}"))?;
+    let max_offset = OffsetOptions::default().max_offset;
+    let refined = refine_time_offset(
+        robot,
+        camera,
+        args.setup(),
+        e.offset,
+        max_offset,
+        args.max_gap,
+    );
+    eprintln!(
+        "time offset: {refined:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
+        e.offset, e.correlation
+    );
+    Ok(refined)
+}
+
 /// All pose pairs of the input (a batch solve), each pose's name for messages (`file:line`, or
 /// the camera stream's file and time stamp), and the time offset used for streams.
 pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Vec<String>, Option<f64>)> {
+    if let Some((b, offset)) = bag(args)? {
+        return Ok((b.poses(), b.names, offset));
+    }
     if let Some(s) = synced(args)? {
         let camera = args.camera.as_ref().map(|p| p.display().to_string());
         let names = s
@@ -278,6 +436,16 @@ pub type Records = Box<dyn Iterator<Item = handeye::Result<StampedPosePair>>>;
 /// A record stream for `online`: from stdin, a file, or paired streams, with the name of its
 /// source for messages. A file is opened once (a FIFO cannot be read twice).
 pub fn records(args: &InputArgs) -> Result<(Records, String, Option<f64>)> {
+    if let Some((b, offset)) = bag(args)? {
+        let source = format!(
+            "{} {}",
+            args.input
+                .as_ref()
+                .map_or(String::new(), |p| p.display().to_string()),
+            b.target_source
+        );
+        return Ok((Box::new(b.pairs.into_iter().map(Ok)), source, offset));
+    }
     if let Some(s) = synced(args)? {
         let camera = args
             .camera

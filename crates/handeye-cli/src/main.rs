@@ -10,6 +10,7 @@ mod demo;
 mod experiment;
 mod figures;
 mod input;
+mod inspect;
 mod online;
 mod output;
 mod simulate;
@@ -33,6 +34,8 @@ enum Command {
     Calibrate(calibrate::Args),
     /// Calibrate online, one pose pair at a time, printing each calibration as it happens.
     Online(online::Args),
+    /// List the topics, types, counts and tf tree of a ROS 2 recording, to choose its frames.
+    Inspect(inspect::Args),
     /// Write a simulated series (the paper's protocol) and its truth.
     Simulate(simulate::Args),
     /// Run the paper's simulated experiments and write tables and figures.
@@ -48,6 +51,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Online(a) => online::run(a),
+        Command::Inspect(a) => inspect::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Experiment(a) => experiment::run(a),
         Command::Demo(a) => demo::run(a),

@@ -207,6 +207,17 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A ROS 2 recording that cannot be read or used: the file, the place (topic and message
+    /// number) when one message is at fault, and what is wrong.
+    #[error("{file}{}: {message}", .at.as_ref().map(|a| format!(" ({a})")).unwrap_or_default())]
+    Bag {
+        /// The recording or one of its storage files.
+        file: String,
+        /// Where in it: `topic /tf, message 12`.
+        at: Option<String>,
+        /// What is wrong.
+        message: String,
+    },
     /// A file could not be read.
     #[error("{file}: {source}")]
     Io {

@@ -10,6 +10,7 @@ mod json_text;
 mod jsonl;
 mod lines;
 mod peer;
+pub mod rosbag;
 mod stamped;
 mod transform;
 mod truth;
