@@ -7,11 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::{BagOptions, BagPairs, is_bag, read_bag_pairs};
-use handeye::io::{
-    PoseInput, PoseReader, Projections, StampedPosePair, open_poses, read_stamped_poses,
-};
+use handeye::io::{PoseInput, PoseReader, Projections, StampedPosePair, open_poses};
 use handeye::sync::{
-    OffsetOptions, StampedPose, SyncOptions, estimate_time_offset, pair_streams, refine_time_offset,
+    OffsetOptions, StampedPose, TimeOffset, estimate_time_offset, pair_stream_files,
+    refine_time_offset,
 };
 use handeye::{PosePair, Setup};
 
@@ -214,54 +213,48 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
     let (Some(robot_path), Some(camera_path)) = (&args.robot, &args.camera) else {
         return Ok(None);
     };
-    let robot_stream = read_stamped_poses(robot_path)?;
-    let camera_stream = read_stamped_poses(camera_path)?;
-    for (name, s) in [(robot_path, &robot_stream), (camera_path, &camera_stream)] {
-        if s.reordered > 0 {
+    let offset = if args.time_offset == "auto" {
+        TimeOffset::Auto
+    } else {
+        TimeOffset::Fixed(
+            args.time_offset
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .with_context(|| {
+                    format!(
+                        "--time-offset: expected `auto` or seconds, found `{}`",
+                        args.time_offset
+                    )
+                })?,
+        )
+    };
+    let pairing = pair_stream_files(robot_path, camera_path, args.setup(), offset, args.max_gap)
+        .map_err(|e| match e {
+            // The offset search's own refusals say nothing of the files: name them.
+            handeye::Error::InvalidParameter { .. } => anyhow::Error::new(e).context(format!(
+                "--time-offset auto on {} and {}",
+                robot_path.display(),
+                camera_path.display()
+            )),
+            e => e.into(),
+        })?;
+    for (name, count) in [robot_path, camera_path].iter().zip(pairing.reordered) {
+        if count > 0 {
             eprintln!(
-                "{}: {} sample(s) out of time order, put in order",
-                name.display(),
-                s.reordered
+                "{}: {count} sample(s) out of time order, put in order",
+                name.display()
             );
         }
     }
-    let robot = robot_stream.poses;
-    // The camera file holds target_from_camera; the pairs hold camera_from_target.
-    let camera: Vec<StampedPose> = camera_stream
-        .poses
-        .into_iter()
-        .map(|s| StampedPose {
-            stamp: s.stamp,
-            pose: s.pose.inverse(),
-        })
-        .collect();
-    let time_offset = if args.time_offset == "auto" {
-        auto_offset(
-            &robot,
-            &camera,
-            args,
-            &format!("{} and {}", robot_path.display(), camera_path.display()),
-        )?
-    } else {
-        args.time_offset
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .with_context(|| {
-                format!(
-                    "--time-offset: expected `auto` or seconds, found `{}`",
-                    args.time_offset
-                )
-            })?
-    };
-    let s = pair_streams(
-        &robot,
-        &camera,
-        &SyncOptions {
-            time_offset,
-            max_gap: args.max_gap,
-        },
-    );
+    let time_offset = pairing.time_offset;
+    if let Some(e) = pairing.correlated {
+        eprintln!(
+            "time offset: {time_offset:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
+            e.offset, e.correlation
+        );
+    }
+    let s = pairing.synced;
     if s.dropped_outside + s.dropped_gap > 0 {
         eprintln!(
             "dropped {} camera sample(s) outside the robot stream and {} in gaps longer than {} s",

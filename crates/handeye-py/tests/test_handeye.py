@@ -157,3 +157,25 @@ def test_online_calibrator_reproduces_the_paper_fixture_and_resumes_from_state()
     later = [resumed.push(q[k], c[k]) for k in range(61, len(q))]
     later = [e for e in later if e is not None]
     assert [e["poses"] for e in later] == [e["poses"] for e in events if e["poses"][2] > 61]
+
+
+def test_the_accumulating_estimator_reports_on_its_own_schedule_with_an_honest_uncertainty():
+    q, c, truth, _ = load_series("series_2007_000_200")
+    cal = handeye.OnlineCalibrator(estimator="accumulate", every=50)
+    assert cal.pending() is not None  # nothing yet, and it says why
+    reports = []
+    for k in range(len(q)):
+        e = cal.push(q[k], c[k])
+        if e is not None:
+            reports.extend(e if isinstance(e, list) else [e])
+    final = cal.finish()
+    reports += [final] if final is not None else []
+    estimates = [r for r in reports if "estimate" in r]
+    assert len(estimates) >= 2 and estimates[-1]["reason"] == "end"
+    assert not any("change" in r for r in reports)
+    for r in estimates:
+        assert r["matrix"].shape == (4, 4) and r["target"]["frame"] == "base_from_target"
+        d = np.linalg.inv(truth) @ r["matrix"]
+        angle = np.degrees(np.arccos(np.clip((np.trace(d[:3, :3]) - 1) / 2, -1, 1)))
+        assert angle < 3 * r["uncertainty"]["rotation_deg"]
+        assert np.linalg.norm(d[:3, 3]) < 3 * r["uncertainty"]["translation"]

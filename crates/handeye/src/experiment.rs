@@ -624,11 +624,12 @@ fn detect(config: &TrackingConfig, rotation_deg: f64, translation: f64) -> Resul
             let (mut delay, mut false_alarms) = (None, 0);
             for p in &sim.poses {
                 c.push(p)?;
-                if let Some(pose) = c.change_detected() {
-                    if pose < at {
+                // Delay to the confirmation; a change confirmed before the jump is a false alarm.
+                if let Some(change) = c.step().and_then(|s| s.change) {
+                    if change.confirmed < at {
                         false_alarms += 1;
                     } else if delay.is_none() {
-                        delay = Some(pose - at);
+                        delay = Some(change.confirmed - at);
                     }
                 }
             }
