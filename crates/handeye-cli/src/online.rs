@@ -153,6 +153,9 @@ pub fn run(args: Args) -> Result<()> {
     let mut messages = Thinned::default();
     let mut last: Option<Report> = None;
     let mut told_unit = false;
+    // The paper's estimator has no checks of its own: the batch's check of the readings runs on
+    // the first poses (the accumulating estimator runs it itself).
+    let mut first: Vec<handeye::PosePair> = Vec::with_capacity(READINGS_SAMPLE);
     // Input lines of the recent poses, for naming the ones held out (the tracker may hold out a
     // pose up to 256 poses after it came, when it judges its first poses together).
     let mut lines: VecDeque<(usize, usize, Option<f64>)> = VecDeque::with_capacity(LINES_KEPT);
@@ -183,6 +186,12 @@ pub fn run(args: Args) -> Result<()> {
         if !told_unit {
             told_unit = tell_unit(&calibrator, &record);
         }
+        if !accumulate && first.len() < READINGS_SAMPLE {
+            first.push(record.pose);
+            if first.len() == READINGS_SAMPLE {
+                warn_misread(&first, setup);
+            }
+        }
         if lines.len() == LINES_KEPT {
             lines.pop_front();
         }
@@ -199,6 +208,9 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
+    if !accumulate && (16..READINGS_SAMPLE).contains(&first.len()) {
+        warn_misread(&first, setup);
+    }
     if let Some(report) = calibrator.finish() {
         print_line(&with_offset(report.json(setup), time_offset))?;
         last = Some(report);
@@ -208,6 +220,22 @@ pub fn run(args: Args) -> Result<()> {
         summary(&calibrator, last.as_ref(), messages.bad_lines)
     );
     Ok(())
+}
+
+/// Poses the readings are checked on with the paper's estimator.
+const READINGS_SAMPLE: usize = 64;
+
+/// Warns when the poses fit far better read another way (an inverted pose, `w, x, y, z`
+/// quaternions, millimetres on one side), or with sizes the setup makes unlikely.
+fn warn_misread(poses: &[handeye::PosePair], setup: handeye::Setup) {
+    let check = handeye::conventions::check_readings(poses, setup);
+    if let Some(advice) = check.advice(setup) {
+        eprintln!(
+            "warning: the calibrations are from data read wrongly: {advice} (`handeye calibrate` checks this too)"
+        );
+    } else if let Some(w) = check.size_warning(setup) {
+        eprintln!("warning: {w}");
+    }
 }
 
 /// Input lines kept for naming held-out poses.
@@ -404,8 +432,13 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
                 .weak
                 .as_ref()
                 .map_or(String::new(), |w| format!(" (weak: {w})"));
+            let implausible = if r.implausible {
+                " (warning: X and the target pose have sizes the setup makes unlikely: if both inputs give the inverse of the transform they name, the data fit as well with the two swapped)"
+            } else {
+                ""
+            };
             format!(
-                "last estimate ({}) from {} of {counts}: {}, uncertainty {:.3}° / {:.4}{weak}",
+                "last estimate ({}) from {} of {counts}: {}, uncertainty {:.3}° / {:.4}{weak}{implausible}",
                 r.number,
                 e.poses,
                 describe(&e.x),

@@ -37,6 +37,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::accumulate::{PoseAccumulator, Scatter};
 use crate::consistency::{OUTLIER_FACTOR, median, pose_outliers, screw_gaps};
+use crate::conventions::{Reading, check_readings};
 use crate::motion::{PosePair, Setup};
 use crate::pose::{Transform, rotation_angle_between};
 use crate::uncertainty::{UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION};
@@ -210,6 +211,10 @@ pub struct Report {
     /// Set on a final report whose uncertainty is above the reporting bounds (but below the batch
     /// refusal's, 10° and half the scene): why it is weak. `None`: determined.
     pub weak: Option<Pending>,
+    /// X and the target pose have the sizes the setup makes unlikely (the camera farther from
+    /// the gripper than the target from the base, eye-in-hand): the data fit exactly as well with
+    /// both inputs inverted, X and the target swapped.
+    pub implausible: bool,
 }
 
 /// What one pose did.
@@ -244,6 +249,15 @@ pub enum Pending {
     },
     /// Every rotation so far is about one axis: X's rotation about it is not determined.
     ParallelAxes,
+    /// The poses fit far better read another way (the batch's check of the readings,
+    /// [`check_readings`], on the first poses): an inverted pose, `w, x, y, z` quaternions, or
+    /// millimetres on one side. Nothing is reported from data read wrongly.
+    Misread {
+        /// The reading that fits.
+        reading: Reading,
+        /// The setup the poses are read in.
+        setup: Setup,
+    },
     /// An estimate exists but its uncertainty is above the bound.
     Undetermined {
         /// Rotation uncertainty, degrees (`None`: too few poses for the split-half estimate).
@@ -268,6 +282,12 @@ impl fmt::Display for Pending {
             Self::ParallelAxes => write!(
                 f,
                 "all rotation axes parallel so far: rotate the gripper about another axis"
+            ),
+            Self::Misread { reading, setup } => write!(
+                f,
+                "the poses fit far better read as {}: correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",
+                reading.meaning(*setup),
+                reading.name()
             ),
             Self::Undetermined {
                 rotation_deg,
@@ -484,6 +504,10 @@ pub struct Tracker {
     gaps: VecDeque<[f64; 2]>,
     /// The first accepted poses with their numbers, until they are judged together.
     warmup: Option<Vec<(usize, PosePair)>>,
+    /// What the last check of the readings on them found: a reading that fits far better, and
+    /// whether X and Y have sizes the setup makes unlikely (both poses inverted fit as well).
+    misread: Option<Reading>,
+    implausible: bool,
     /// The poses held out in a row by the screw gate, with their numbers.
     screw_run: Vec<(usize, PosePair)>,
     /// Pose number and uncertainties of the last report of this segment.
@@ -506,6 +530,8 @@ impl Tracker {
             partners: VecDeque::with_capacity(PARTNER_RING),
             gaps: VecDeque::with_capacity(GAP_RING),
             warmup: Some(Vec::new()),
+            misread: None,
+            implausible: false,
             screw_run: Vec::with_capacity(STALE_RUN),
             last_report: None,
             reports: 0,
@@ -541,6 +567,12 @@ impl Tracker {
 
     /// Why there is no estimate to report now; `None` when there is one.
     pub fn pending(&self) -> Option<Pending> {
+        if let Some(reading) = self.misread {
+            return Some(Pending::Misread {
+                reading,
+                setup: self.setup,
+            });
+        }
         self.incumbent
             .pending(self.estimate().as_ref(), &self.options)
     }
@@ -616,6 +648,10 @@ impl Tracker {
         }
         let e = self.estimate()?;
         let weak = self.pending();
+        // Only an estimate that is merely not determined enough may be reported as weak.
+        if weak.is_some_and(|w| !matches!(w, Pending::Undetermined { .. })) {
+            return None;
+        }
         if weak.is_some() {
             let scene = self.incumbent.all.scene_scale();
             let usable = matches!(
@@ -646,6 +682,12 @@ impl Tracker {
         let mut warmup = self.warmup.take().unwrap_or_default();
         let last = warmup.len() == WARMUP[WARMUP.len() - 1];
         let poses: Vec<PosePair> = warmup.iter().map(|(_, p)| *p).collect();
+        // The batch's check of the readings, on the same poses.
+        let readings = check_readings(&poses, self.setup);
+        if readings.as_given.is_some() {
+            self.misread = readings.better.map(|b| b.reading);
+            self.implausible = readings.size_warning(self.setup).is_some();
+        }
         let found = pose_outliers(&poses, self.setup, self.options.outlier_deg);
         let mut held = Vec::new();
         if !found.poses.is_empty() {
@@ -839,7 +881,9 @@ impl Tracker {
     /// Whether the current estimate is due for a report, and why.
     fn report_due(&self) -> Option<Reason> {
         let e = self.current?.estimate;
-        if self.pending().is_some() {
+        // Nothing before the first poses have been judged together (outliers, readings).
+        let judged = self.warmup.as_ref().is_none_or(|w| w.len() >= WARMUP[0]);
+        if self.pending().is_some() || !judged {
             return None;
         }
         let (ur, ut) = (e.uncertainty_rotation_deg?, e.uncertainty_translation?);
@@ -869,6 +913,7 @@ impl Tracker {
             reason,
             estimate,
             weak: None,
+            implausible: self.implausible,
         }
     }
 }
@@ -904,6 +949,12 @@ impl Report {
         out.insert("target".into(), target.into());
         if let Some(w) = &self.weak {
             out.insert("weak".into(), w.to_string().into());
+        }
+        if self.implausible {
+            out.insert(
+                "warning".into(),
+                "X and the target pose have the sizes the setup makes unlikely: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions".into(),
+            );
         }
         out.into()
     }
