@@ -169,18 +169,9 @@ pub fn pair_stream_files(
     max_gap: f64,
 ) -> Result<StreamPairing> {
     let robot_stream = crate::io::read_stamped_poses(robot)?;
-    let camera_stream = crate::io::read_stamped_poses(camera)?;
+    let camera_stream = crate::io::read_camera_stream(camera)?;
     let reordered = [robot_stream.reordered, camera_stream.reordered];
-    let robot = robot_stream.poses;
-    // The camera file holds target_from_camera; the pairs hold camera_from_target.
-    let camera: Vec<StampedPose> = camera_stream
-        .poses
-        .into_iter()
-        .map(|s| StampedPose {
-            stamp: s.stamp,
-            pose: s.pose.inverse(),
-        })
-        .collect();
+    let (robot, camera) = (robot_stream.poses, camera_stream.poses);
     let (time_offset, correlated) = match offset {
         TimeOffset::Fixed(t) => (t, None),
         TimeOffset::Auto => {

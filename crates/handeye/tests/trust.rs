@@ -322,8 +322,8 @@ mod readings {
 
 #[test]
 fn the_clock_offset_is_found_to_a_few_milliseconds() {
-    use handeye::io::read_stamped_poses;
-    use handeye::sync::{OffsetOptions, StampedPose, estimate_time_offset, refine_time_offset};
+    use handeye::io::{read_camera_stream, read_stamped_poses};
+    use handeye::sync::{OffsetOptions, estimate_time_offset, refine_time_offset};
     let text = std::fs::read_to_string(suite().join("manifest.json")).unwrap();
     let manifest: Value = serde_json::from_str(&text).unwrap();
     let streams: Vec<&Value> = manifest["files"]
@@ -335,17 +335,9 @@ fn the_clock_offset_is_found_to_a_few_milliseconds() {
     assert!(streams.len() >= 15);
     let mut worst: f64 = 0.0;
     for e in streams {
-        let read = |key: &str| read_stamped_poses(&suite().join(e[key].as_str().unwrap())).unwrap();
-        let robot = read("robot_file").poses;
-        // The camera file holds target_from_camera; the pairs hold camera_from_target.
-        let camera: Vec<StampedPose> = read("camera_file")
-            .poses
-            .into_iter()
-            .map(|s| StampedPose {
-                stamp: s.stamp,
-                pose: s.pose.inverse(),
-            })
-            .collect();
+        let path = |key: &str| suite().join(e[key].as_str().unwrap());
+        let robot = read_stamped_poses(&path("robot_file")).unwrap().poses;
+        let camera = read_camera_stream(&path("camera_file")).unwrap().poses;
         let truth = e["time_offset_s"].as_f64().unwrap();
         let rough = estimate_time_offset(&robot, &camera, &OffsetOptions::default())
             .unwrap()

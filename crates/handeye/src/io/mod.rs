@@ -29,7 +29,7 @@ pub use csv_pairs::CsvPairs;
 pub use jsonl::{JsonlPairs, parse_pose_line};
 pub use lines::MAX_LINE;
 pub use peer::{read_moveit_json, read_opencv_yaml, read_visp_dir, read_visp_pose};
-pub use stamped::{parse_stamped_poses, read_stamped_poses};
+pub use stamped::{parse_stamped_poses, read_camera_stream, read_stamped_poses};
 pub use transform::{
     CONSISTENCY_TOL, FieldProblem, TransformJson, read_transform_json, transform_from_json,
 };

@@ -18,6 +18,16 @@ pub fn read_stamped_poses(path: &Path) -> Result<StampedStream> {
     parse_stamped_poses(&text, &file)
 }
 
+/// Reads a camera stream file, which holds `target_from_camera` (the ethz-asl and TUM layout), as
+/// `camera_from_target` samples: what the pose pairs hold.
+pub fn read_camera_stream(path: &Path) -> Result<StampedStream> {
+    let mut stream = read_stamped_poses(path)?;
+    for s in &mut stream.poses {
+        s.pose = s.pose.inverse();
+    }
+    Ok(stream)
+}
+
 /// Parses a stream. Samples out of time order (real recordings have them) are put in order, the
 /// later line first among equal stamps, and counted in the result. Errors name the line and the
 /// field (`t`, `x` … `qw`).
