@@ -4,6 +4,7 @@
 //! Exit codes: 0 success, 2 bad input (file, line and field named), 3 valid input from which X
 //! cannot be determined.
 
+mod advise;
 mod bench;
 mod calibrate;
 mod demo;
@@ -36,6 +37,9 @@ enum Command {
     Online(online::Args),
     /// List the topics, types, counts and tf tree of a ROS 2 recording, to choose its frames.
     Inspect(inspect::Args),
+    /// Say what to record next: the least determined directions of X and the motions that
+    /// would shrink its uncertainty most.
+    Advise(advise::Args),
     /// Write a simulated series (the paper's protocol) and its truth.
     Simulate(simulate::Args),
     /// Run the paper's simulated experiments and write tables and figures.
@@ -52,6 +56,7 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Online(a) => online::run(a),
         Command::Inspect(a) => inspect::run(a),
+        Command::Advise(a) => advise::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Experiment(a) => experiment::run(a),
         Command::Demo(a) => demo::run(a),

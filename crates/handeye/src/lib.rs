@@ -22,6 +22,7 @@
 #![deny(missing_docs)]
 
 pub mod accumulate;
+pub mod advice;
 pub mod calibration;
 pub mod consistency;
 pub mod conventions;
