@@ -28,6 +28,7 @@ pub mod consistency;
 pub mod conventions;
 mod error;
 pub mod experiment;
+pub mod holdout;
 pub mod io;
 pub mod metrics;
 mod motion;

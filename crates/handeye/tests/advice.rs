@@ -172,3 +172,56 @@ fn following_the_advice_shrinks_the_error_as_predicted() {
     );
     assert!(advised[10] < random[10], "{} {}", advised[10], random[10]);
 }
+
+#[test]
+fn the_held_out_check_finds_a_mispaired_frame_and_nothing_on_clean_data() {
+    use handeye::calibration::{Options, calibrate};
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec/pairs");
+    for name in [
+        "nominal_stations_eih_s0",
+        "nominal_continuous_eth_s1",
+        "pnp_stations_eih_s2",
+    ] {
+        let setup = if name.contains("_eth_") {
+            Setup::EyeToHand
+        } else {
+            Setup::EyeInHand
+        };
+        let path = dir.join(format!("{name}.jsonl"));
+        let mut poses = handeye::io::read_pose_file(&path, handeye::io::Format::Auto)
+            .unwrap()
+            .pairs;
+        let options = Options {
+            pose_names: (0..poses.len()).map(|i| format!("pose {i}")).collect(),
+            ..Options::default()
+        };
+        let clean = calibrate(&poses, setup, &options).unwrap();
+        let h = clean.held_out.as_ref().unwrap();
+        println!(
+            "{name}: median held-out gap {:.3}° / {:.2} mm, {} disagree",
+            h.median_rotation_deg,
+            1e3 * h.median_translation,
+            h.disagree.len()
+        );
+        assert!(h.exact && h.disagree.len() <= 1, "{name}: {:?}", h.disagree);
+        // The camera frame of pose 7 paired with the robot pose of pose 20: a frame mispaired.
+        poses[7].camera_from_target = poses[20].camera_from_target;
+        let report = calibrate(&poses, setup, &options);
+        let names: Vec<String> = match &report {
+            Ok(r) => r
+                .held_out
+                .as_ref()
+                .unwrap()
+                .disagree
+                .iter()
+                .map(|d| d.name.clone())
+                .collect(),
+            // Refused as untrusted is fine too, if it names the pose.
+            Err(e) => vec![e.to_string()],
+        };
+        assert!(
+            names.iter().any(|n| n.contains("pose 7")),
+            "{name}: {names:?}"
+        );
+    }
+}
