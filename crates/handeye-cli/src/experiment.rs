@@ -17,7 +17,7 @@ use crate::figures::{write_figures, write_text, write_tracking_figures};
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Which experiment.
-    #[arg(value_parser = ["accuracy", "adaptability", "realtime", "tracking", "all"])]
+    #[arg(value_parser = ["accuracy", "adaptability", "realtime", "tracking", "advice", "all"])]
     which: String,
     /// Number of series (default: the paper's, 20 / 100 / 50).
     #[arg(long)]
@@ -34,7 +34,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let experiments: Vec<Experiment> = match args.which.as_str() {
         "all" => Experiment::ALL.to_vec(),
-        "tracking" => Vec::new(),
+        "tracking" | "advice" => Vec::new(),
         other => vec![other.parse()?],
     };
     std::fs::create_dir_all(&args.out)
@@ -73,7 +73,25 @@ pub fn run(args: Args) -> Result<()> {
         let figures = write_tracking_figures(&report, &args.out)?;
         publish(&args.out, "tracking", &table, &report, &figures)?;
     }
+    if args.which == "all" || args.which == "advice" {
+        let report = handeye::advice::closed_loop(args.series.unwrap_or(20), args.seed);
+        publish(&args.out, "advice", &advice_table(&report), &report, &[])?;
+    }
     Ok(())
+}
+
+/// The closed loop of the advice as Markdown.
+fn advice_table(r: &handeye::advice::ClosedLoop) -> String {
+    let cell = |n: Option<usize>| n.map_or(format!("> {}", r.most), |n| n.to_string());
+    format!(
+        "### advice ({} series of the paper's protocol, from its first 3 poses)\n\nPoses needed to reach a rotation one-sigma of {:.4}° (what the paper's walk reaches after {} poses), median over the series:\n\n| the paper's walk | turns about random axes | the advice |\n|---|---|---|\n| {} | {} | {} |\n",
+        r.series,
+        r.target_rotation_deg,
+        r.walk_poses,
+        cell(r.median_poses[0]),
+        cell(r.median_poses[1]),
+        cell(r.median_poses[2]),
+    )
 }
 
 /// Prints the table and writes `<name>.md` and `<name>.json` beside the figures already written.

@@ -268,3 +268,122 @@ fn consistent_pose(
         camera_from_target: x.inverse() * hand.inverse() * y,
     }
 }
+
+/// How many poses each way of moving needs to reach a target uncertainty (issue 16's closed loop):
+/// the paper's random walk, turns of the same sizes about random axes, and the advice.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ClosedLoop {
+    /// Series simulated.
+    pub series: usize,
+    /// The target: the rotation one-sigma the paper's walk reaches after `walk_poses` poses
+    /// (median over the series), degrees.
+    pub target_rotation_deg: f64,
+    /// Poses of the walk that set the target.
+    pub walk_poses: usize,
+    /// Median poses needed: the paper's walk, random turns, the advice (`None` where fewer than
+    /// half the series got there within `most` poses).
+    pub median_poses: [Option<usize>; 3],
+    /// Most poses a series may take.
+    pub most: usize,
+}
+
+/// The closed loop of [`ClosedLoop`] on the paper's simulation (millimetres): every series starts
+/// from the walk's first three poses; each new pose is recorded with the protocol's noise (uniform
+/// 1e-3 on the rotation matrix entries, 1% of each translation), and the uncertainty is the
+/// first-order one of the recorded data (the same measure for every way of moving).
+pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
+    use crate::sim::{SimConfig, simulate};
+    use rand::{RngExt, SeedableRng};
+    const WALK: usize = 100;
+    const MOST: usize = 300;
+    const START: usize = 3;
+    let sigma = |poses: &[PosePair]| -> Option<f64> {
+        let mut acc = PoseAccumulator::new(Setup::EyeInHand);
+        poses.iter().for_each(|p| acc.add(p));
+        let (x, _, noise) = solved(&acc)?;
+        predicted(&acc, &x, noise).map(|p| p.rotation_deg)
+    };
+    let noisy = |p: &PosePair, rng: &mut rand_xoshiro::Xoshiro256PlusPlus| {
+        let mut jitter = |t: &Transform| {
+            let n = Matrix3::from_fn(|_, _| rng.random_range(-1e-3..1e-3));
+            let r = crate::pose::proj_so3(&(t.rotation.matrix() + n));
+            let v = t.translation.vector;
+            let d = Vector3::from_fn(|_, _| rng.random_range(-0.01..0.01)) * v.norm();
+            transform_from_parts(&r, &(v + d))
+        };
+        PosePair {
+            base_from_gripper: jitter(&p.base_from_gripper),
+            camera_from_target: jitter(&p.camera_from_target),
+        }
+    };
+    let sims: Vec<_> = (0..series as u64)
+        .map(|s| {
+            simulate(
+                &SimConfig {
+                    poses: MOST,
+                    ..SimConfig::default()
+                },
+                seed,
+                s,
+            )
+        })
+        .collect();
+    let mut at_walk: Vec<f64> = sims
+        .iter()
+        .filter_map(|sim| sigma(&sim.poses[..WALK]))
+        .collect();
+    at_walk.sort_by(f64::total_cmp);
+    let target = at_walk.get(at_walk.len() / 2).copied().unwrap_or(f64::NAN);
+    let mut needed: [Vec<usize>; 3] = [Vec::new(), Vec::new(), Vec::new()];
+    for (s, sim) in sims.iter().enumerate() {
+        // The paper's walk.
+        let walk = (START..=MOST).find(|&n| sigma(&sim.poses[..n]).is_some_and(|v| v <= target));
+        needed[0].push(walk.unwrap_or(usize::MAX));
+        // Random turns and the advice, recorded through the true camera.
+        let (x, y) = (sim.gripper_from_camera, sim.base_from_target);
+        for (k, advised) in [(1, false), (2, true)] {
+            let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed ^ (s as u64) << 8);
+            let mut poses = sim.poses[..START].to_vec();
+            let mut from = poses[START - 1].base_from_gripper;
+            let mut reached = usize::MAX;
+            while poses.len() < MOST {
+                let (axis, angle) = if advised {
+                    match advise(&poses, Setup::EyeInHand, 1)
+                        .ok()
+                        .and_then(|a| a.suggestions.first().copied())
+                    {
+                        Some(s) => (Vector3::from(s.axis_gripper), s.angle_deg),
+                        None => break,
+                    }
+                } else {
+                    let v = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+                    (
+                        v.normalize(),
+                        ANGLES_DEG[rng.random_range(0..ANGLES_DEG.len())],
+                    )
+                };
+                let q = turned(&from, &axis, angle);
+                let exact = consistent_pose(Setup::EyeInHand, &x, &y, &q);
+                poses.push(noisy(&exact, &mut rng));
+                from = q;
+                if sigma(&poses).is_some_and(|v| v <= target) {
+                    reached = poses.len();
+                    break;
+                }
+            }
+            needed[k].push(reached);
+        }
+    }
+    let median = |v: &mut Vec<usize>| {
+        v.sort_unstable();
+        v.get(v.len() / 2).copied().filter(|n| *n != usize::MAX)
+    };
+    let [a, b, c] = &mut needed;
+    ClosedLoop {
+        series,
+        target_rotation_deg: target,
+        walk_poses: WALK,
+        median_poses: [median(a), median(b), median(c)],
+        most: MOST,
+    }
+}

@@ -225,3 +225,19 @@ fn the_held_out_check_finds_a_mispaired_frame_and_nothing_on_clean_data() {
         );
     }
 }
+
+#[test]
+fn following_the_advice_needs_at_least_twice_fewer_poses_than_the_papers_walk() {
+    let r = handeye::advice::closed_loop(8, 3);
+    println!(
+        "poses to reach {:.4}° (the walk's sigma after {} poses): walk {:?}, random turns {:?}, advice {:?}",
+        r.target_rotation_deg,
+        r.walk_poses,
+        r.median_poses[0],
+        r.median_poses[1],
+        r.median_poses[2]
+    );
+    let [walk, random, advice] = r.median_poses.map(|n| n.unwrap_or(usize::MAX));
+    assert!(2 * advice <= walk, "{advice} vs {walk}");
+    assert!(advice <= random, "{advice} vs {random}");
+}
