@@ -2,7 +2,7 @@
 //! of X or of the target, and reported on its own schedule with the reason when there is none.
 //!
 //! One [`Tracker`] takes the poses one at a time ([`Tracker::push`]). Each pose passes two tests
-//! before it enters the all-pairs sums of [`PoseAccumulator`]:
+//! before it enters the all-pairs sums of [`crate::accumulate::PoseAccumulator`]:
 //!
 //! 1. **The screw gate** (X-free, from the second pose on): the median screw-invariant gaps of the
 //!    pose against up to eight recent accepted poses ([`crate::consistency::screw_gaps`], the test
@@ -11,7 +11,7 @@
 //!    held out in a row mean the partners are stale (the rig changed): they are dropped.
 //! 2. **The residual gate**, once the estimate is mature: the pose's own fixed frame
 //!    Y_k = H_k X C_k against the accumulated Y, normalised by the scatter of all accepted poses
-//!    under the same X ([`PoseAccumulator::residual_scatter`], O(1)): the larger of rotation and
+//!    under the same X ([`crate::accumulate::PoseAccumulator::residual_scatter`], O(1)): the larger of rotation and
 //!    translation in units of their RMS. Above `gate` the pose is held out.
 //!
 //! **Change of X (or of the target).** A pose above `elevated` opens a *challenger*: a second
