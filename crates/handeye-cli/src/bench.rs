@@ -18,18 +18,19 @@ use handeye::{AllPairs, Method, Pairing, PosePair, Setup, Transform, motion_pair
 use serde_json::{Value, json};
 
 use crate::output::print_json;
+use crate::values;
 
 /// Options of `handeye bench`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Pose counts of the simulated datasets (ignored with --input).
-    #[arg(long, value_delimiter = ',', default_values_t = [10usize, 50, 200, 1000])]
+    #[arg(long, num_args = 1.., value_delimiter = ',', default_values_t = [10usize, 50, 200, 1000], value_parser = values::count(3, values::MAX_POSES))]
     poses: Vec<usize>,
     /// Pairings to time.
-    #[arg(long, value_delimiter = ',', default_values = ["consecutive", "all"])]
+    #[arg(long, num_args = 1.., value_delimiter = ',', default_values = ["consecutive", "all"], value_parser = ["consecutive", "all"])]
     pairs: Vec<String>,
     /// Methods to time.
-    #[arg(long, value_delimiter = ',', default_values = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
+    #[arg(long, num_args = 1.., value_delimiter = ',', default_values = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
     methods: Vec<String>,
     /// Pose files to time instead of simulated data (each may have a `<stem>.truth.json` beside
     /// it, or give --truth per file in the same order).
@@ -38,8 +39,8 @@ pub struct Args {
     /// Truth files for the errors of --input datasets, in the same order.
     #[arg(long)]
     truth: Vec<PathBuf>,
-    /// Least wall time spent timing each case, seconds.
-    #[arg(long, default_value_t = 0.3)]
+    /// Least wall time spent timing each case, seconds (at most an hour).
+    #[arg(long, default_value_t = 0.3, value_parser = values::budget_s)]
     min_time: f64,
     /// Print the JSON only (no table on stderr).
     #[arg(long)]

@@ -12,6 +12,7 @@ use handeye::experiment::{
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::figures::{write_figures, write_text, write_tracking_figures};
+use crate::values;
 
 /// Options of `handeye experiment`.
 #[derive(ClapArgs, Debug)]
@@ -20,7 +21,7 @@ pub struct Args {
     #[arg(value_parser = ["accuracy", "adaptability", "realtime", "tracking", "all"])]
     which: String,
     /// Number of series (default: the paper's, 20 / 100 / 50).
-    #[arg(long)]
+    #[arg(long, value_parser = values::count(1, values::MAX_SERIES))]
     series: Option<usize>,
     /// Seed of the run.
     #[arg(long, default_value_t = 1)]
@@ -84,7 +85,7 @@ fn publish(
     report: &impl serde::Serialize,
     figures: &[PathBuf],
 ) -> Result<()> {
-    println!("{table}");
+    crate::outln!("{table}")?;
     let stem = out.join(name);
     write_text(&stem.with_extension("md"), table)?;
     write_text(

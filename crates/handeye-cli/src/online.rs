@@ -8,12 +8,13 @@ use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
-use handeye::select::{AdaptiveParams, Selection};
+use handeye::select::{AdaptiveParams, MAX_N_INIT, Selection};
 use handeye::tracking::{Report, Step, TrackOptions};
 use serde_json::{Map, Value, json};
 
 use crate::input::{InputArgs, records};
 use crate::output::{insert_transform, print_line};
+use crate::values;
 
 /// Options of `handeye online`.
 #[derive(ClapArgs, Debug)]
@@ -30,18 +31,18 @@ pub struct Args {
     #[arg(long, default_value = "paper", value_parser = ["paper", "accumulate"])]
     estimator: String,
     /// With --estimator accumulate: report the estimate at least every N poses.
-    #[arg(long, default_value_t = TrackOptions::default().every)]
+    #[arg(long, default_value_t = TrackOptions::default().every, value_parser = values::count(1, u64::MAX))]
     every: usize,
     /// With --estimator accumulate: also report when both uncertainties have shrunk to this
     /// fraction of the last reported ones.
-    #[arg(long, default_value_t = TrackOptions::default().shrink)]
+    #[arg(long, default_value_t = TrackOptions::default().shrink, value_parser = values::positive)]
     shrink: f64,
     /// Length unit of the input: `auto` infers metres or millimetres from the first pose; it
     /// sets the default --d-max (0.1 m).
     #[arg(long, default_value = "auto", value_parser = ["auto", "m", "mm"])]
     unit: String,
     /// Least rotation-angle gap (degrees) that marks a pose as an outlier (accumulate estimator).
-    #[arg(long, default_value_t = TrackOptions::default().outlier_deg)]
+    #[arg(long, default_value_t = TrackOptions::default().outlier_deg, value_parser = values::angle_deg)]
     outlier_deg: f64,
     /// Also refine over the last five selected motions (the paper's optimal method).
     #[arg(long)]
@@ -55,41 +56,50 @@ pub struct Args {
     /// What to do with a bad line: report it and skip it, or stop (exit 2).
     #[arg(long, default_value = "skip", value_parser = ["skip", "stop"])]
     on_bad_line: String,
-    /// N of Eq. (1): motions averaged for the initial thresholds.
-    #[arg(long, default_value_t = AdaptiveParams::default().n_init)]
+    /// N of Eq. (1): motions averaged for the initial thresholds (2 to 1000000).
+    #[arg(long, default_value_t = AdaptiveParams::default().n_init, value_parser = values::count(2, MAX_N_INIT as u64))]
     n_init: usize,
     /// Candidates tried before the thresholds are relaxed.
-    #[arg(long, default_value_t = AdaptiveParams::default().interval)]
+    #[arg(long, default_value_t = AdaptiveParams::default().interval, value_parser = values::count(1, u64::MAX))]
     interval: usize,
-    /// Relaxation factor of sin α₀ and β₀.
-    #[arg(long, default_value_t = AdaptiveParams::default().relax_down)]
+    /// Relaxation factor of sin α₀ and β₀, in (0, 1].
+    #[arg(long, default_value_t = AdaptiveParams::default().relax_down, value_parser = values::fraction)]
     relax_down: f64,
-    /// Relaxation factor of d₀.
-    #[arg(long, default_value_t = AdaptiveParams::default().relax_up)]
+    /// Relaxation factor of d₀, at least 1.
+    #[arg(long, default_value_t = AdaptiveParams::default().relax_up, value_parser = values::at_least_one)]
     relax_up: f64,
     /// Exploration factor after calibrations 1–3.
-    #[arg(long, default_value_t = AdaptiveParams::default().explore)]
+    #[arg(long, default_value_t = AdaptiveParams::default().explore, value_parser = values::positive)]
     explore: f64,
-    /// Required rotation accuracy rmsRMax.
-    #[arg(long, default_value_t = AdaptiveParams::default().rms_r_max)]
+    /// Required rotation accuracy rmsRMax, unit-free: the RMS of the nine entries of R̂ − R
+    /// (‖R̂ − R‖_F / 3, the events' `rms_r`; 0.001 is a rotation error of about 0.12°).
+    #[arg(long, default_value_t = AdaptiveParams::default().rms_r_max, value_parser = values::positive)]
     rms_r_max: f64,
-    /// Required translation accuracy rmsTMax.
-    #[arg(long, default_value_t = AdaptiveParams::default().rms_t_max)]
+    /// Required translation accuracy rmsTMax, unit-free: a translation error relative to ‖t_X‖
+    /// (the events' `rms_t`; 0.05 is 5 %).
+    #[arg(long, default_value_t = AdaptiveParams::default().rms_t_max, value_parser = values::positive)]
     rms_t_max: f64,
-    /// Floor of a predicted sin α₀ (default sin 15°).
-    #[arg(long, default_value_t = AdaptiveParams::default().alpha_min)]
-    alpha_min: f64,
-    /// Floor of a predicted β₀, degrees [default: 3, the library's default].
-    #[arg(long)]
+    /// Floor of a predicted α₀ (the angle between the axes of A' and A''), degrees, in (0, 90].
+    #[arg(long, default_value_t = ALPHA_MIN_DEG, value_parser = values::axis_angle_deg, conflicts_with = "alpha_min")]
+    alpha_min_deg: f64,
+    /// Deprecated: the floor as a sine (sin α₀, in (0, 1]); use --alpha-min-deg.
+    #[arg(long, value_parser = values::fraction)]
+    alpha_min: Option<f64>,
+    /// Floor of a predicted β₀ (the least rotation angle of a selected motion), degrees, in
+    /// (0, 180] [default: 3, the library's default].
+    #[arg(long, value_parser = values::angle_deg)]
     beta_min_deg: Option<f64>,
     /// Ceiling of a predicted d₀, in the input's length unit [default: 0.1 m in the unit of
     /// --unit].
-    #[arg(long)]
+    #[arg(long, value_parser = values::positive)]
     d_max: Option<f64>,
     /// Opt-in remedy for thresholds that lock when their four records are equal.
     #[arg(long)]
     unfreeze: bool,
 }
+
+/// Default floor of a predicted α₀, degrees (the library's sin 15°).
+const ALPHA_MIN_DEG: f64 = 15.0;
 
 /// Bad lines shown one by one before `online` shows only every 2^k-th.
 const SHOWN_BAD_LINES: usize = 100;
@@ -119,7 +129,16 @@ pub fn run(args: Args) -> Result<()> {
             explore: args.explore,
             rms_r_max: args.rms_r_max,
             rms_t_max: args.rms_t_max,
-            alpha_min: args.alpha_min,
+            alpha_min: match args.alpha_min {
+                Some(sine) => {
+                    eprintln!(
+                        "warning: --alpha-min (a sine) is deprecated: use --alpha-min-deg {:.4}",
+                        sine.asin().to_degrees()
+                    );
+                    sine
+                }
+                None => args.alpha_min_deg.to_radians().sin(),
+            },
             beta_min: args
                 .beta_min_deg
                 .map_or(AdaptiveParams::default().beta_min, f64::to_radians),

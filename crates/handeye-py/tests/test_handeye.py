@@ -125,6 +125,9 @@ def test_bad_inputs_raise_and_never_crash():
         handeye.calibrate(np.stack([eye] * 3), np.stack([eye] * 3), method="magic")
     with pytest.raises(ValueError):
         handeye.OnlineCalibrator(selection="magic")
+    for selection in ("fixed", "adaptive"):
+        with pytest.raises(ValueError, match="n_init"):
+            handeye.OnlineCalibrator(selection=selection, n_init=2**62)
     c = handeye.OnlineCalibrator()
     with pytest.raises(ValueError):
         c.push(np.eye(3), eye)
