@@ -128,8 +128,11 @@ pub fn run(args: Args) -> Result<()> {
             report.poses
         );
     }
-    for w in &report.warnings {
-        eprintln!("warning: {w}");
+    // The text face lists the warnings itself.
+    if face != Face::Text {
+        for w in &report.warnings {
+            eprintln!("warning: {w}");
+        }
     }
     let frames = frames(&args);
     if args.input.is_bag() && matches!(face, Face::Json | Face::Yaml) {
