@@ -7,10 +7,10 @@ use handeye::calibration::{Fix, Options, calibrate};
 use handeye::metrics::OUTLIER_DEG;
 use handeye::solve::TsaiOptions;
 use handeye::uncertainty::REPLICATES;
-use handeye::{Error, Method, Pairing, Setup};
+use handeye::{Error, Method, Pairing};
 use serde_json::Value;
 
-use crate::faces::{self, Face, Frames, length_unit};
+use crate::faces::{self, Face, Published, length_unit};
 use crate::input::{InputArgs, read_all};
 use crate::output::{print_json, print_text};
 use crate::values;
@@ -134,11 +134,17 @@ pub fn run(args: Args) -> Result<()> {
             eprintln!("warning: {w}");
         }
     }
-    let frames = frames(&args);
+    let frames = faces::frames(
+        &args.input,
+        args.parent_frame.as_deref(),
+        args.child_frame.as_deref(),
+    );
+    let source = format!("calibrate, method {}", report.method);
+    let published = Published::of(&report, &source);
     if args.input.is_bag() && matches!(face, Face::Json | Face::Yaml) {
         eprintln!(
             "publish X in tf with: {}",
-            faces::static_transform_publisher(&report, &frames)
+            faces::static_transform_publisher(published, &frames)
         );
     }
     if unit == Some(handeye::online::Unit::Millimetre)
@@ -150,9 +156,9 @@ pub fn run(args: Args) -> Result<()> {
     }
     match face {
         Face::Text => return print_text(&faces::text(&report, &frames, unit)),
-        Face::Yaml => return print_text(&faces::yaml(&report, &frames)),
-        Face::Ros2 => return print_text(&faces::ros2(&report, &frames)),
-        Face::Urdf => return print_text(&faces::urdf(&report, &frames)),
+        Face::Yaml => return print_text(&faces::yaml(published, &frames, Some(&report))),
+        Face::Ros2 => return print_text(&faces::ros2(published, &frames)),
+        Face::Urdf => return print_text(&faces::urdf(published, &frames)),
         Face::Json => {}
     }
     let mut out = serde_json::to_value(&report)?;
@@ -197,35 +203,4 @@ fn options(args: &Args) -> Result<Options> {
         replicates: args.bootstrap,
         pose_names: Vec::new(),
     })
-}
-
-/// The frames of X: the flags, else the recording's names, else the frames of X's name.
-fn frames(args: &Args) -> Frames {
-    let input = &args.input;
-    let named = |flag: &Option<String>, generic: &str| {
-        flag.clone()
-            .filter(|_| input.is_bag())
-            .unwrap_or_else(|| generic.to_string())
-    };
-    let base = named(&input.base_frame, "base");
-    let gripper = named(&input.gripper_frame, "gripper");
-    let camera = named(&input.camera_frame, "camera");
-    let target = named(&input.target_frame, "target");
-    let parent = match input.setup() {
-        Setup::EyeInHand => gripper.clone(),
-        Setup::EyeToHand => base.clone(),
-    };
-    let parent = args.parent_frame.clone().unwrap_or(parent);
-    let child = args.child_frame.clone().unwrap_or(camera);
-    let (base, gripper) = match input.setup() {
-        Setup::EyeInHand => (base, parent.clone()),
-        Setup::EyeToHand => (parent.clone(), gripper),
-    };
-    Frames {
-        parent,
-        child,
-        base,
-        gripper,
-        target,
-    }
 }

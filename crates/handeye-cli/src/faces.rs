@@ -8,6 +8,8 @@ use handeye::calibration::Report;
 use handeye::online::Unit;
 use handeye::{Error, Setup};
 
+use crate::input::InputArgs;
+
 /// One of `--output`'s faces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Face {
@@ -53,6 +55,40 @@ pub struct Frames {
     pub target: String,
 }
 
+/// X as the ROS faces publish it: the transform, its frame name and where it came from.
+#[derive(Debug, Clone, Copy)]
+pub struct Published<'a> {
+    /// X.
+    pub x: &'a handeye::Transform,
+    /// X's frame name (`gripper_from_camera` or `base_from_camera`).
+    pub frame: &'a str,
+    /// The setup.
+    pub setup: Setup,
+    /// What made it, for the comment line (e.g. `calibrate, method andreff`).
+    pub source: &'a str,
+}
+
+impl<'a> Published<'a> {
+    /// A batch result.
+    pub fn of(r: &'a Report, source: &'a str) -> Self {
+        Self {
+            x: &r.transform,
+            frame: &r.frame,
+            setup: r.setup,
+            source,
+        }
+    }
+
+    fn translation(&self) -> [f64; 3] {
+        handeye::io::TransformJson::from(self.x).translation
+    }
+
+    /// The quaternion as the JSON gives it.
+    fn quaternion_xyzw(&self) -> [f64; 4] {
+        handeye::io::TransformJson::from(self.x).quaternion_xyzw
+    }
+}
+
 /// The input's length unit as far as the first poses tell (metres or millimetres).
 pub fn length_unit(poses: &[handeye::PosePair]) -> Option<Unit> {
     poses.iter().find_map(Unit::infer)
@@ -68,51 +104,58 @@ fn unit_name(unit: Option<Unit>) -> &'static str {
 
 /// X's roll, pitch, yaw in radians: fixed axes x, then y, then z (R = Rz(yaw) Ry(pitch) Rx(roll)),
 /// as URDF's `rpy` and tf's `setRPY`.
-pub fn rpy(r: &Report) -> [f64; 3] {
-    let (roll, pitch, yaw) = r.transform.rotation.euler_angles();
+pub fn rpy(x: &handeye::Transform) -> [f64; 3] {
+    let (roll, pitch, yaw) = x.rotation.euler_angles();
     [roll, pitch, yaw]
 }
 
 /// easy_handeye2's calibration file (`parameters` and `transform`), with handeye's own fields
-/// after it (`frame`, `parent_frame`, `child_frame`, uncertainty, residual).
-pub fn yaml(r: &Report, f: &Frames) -> String {
-    let [tx, ty, tz] = r.x.translation;
-    let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
-    let kind = match r.setup {
+/// after it (`frame`, `parent_frame`, `child_frame`, and for a batch result its uncertainty and
+/// residual).
+pub fn yaml(p: Published<'_>, f: &Frames, batch: Option<&Report>) -> String {
+    let [tx, ty, tz] = p.translation();
+    let [qx, qy, qz, qw] = p.quaternion_xyzw();
+    let kind = match p.setup {
         Setup::EyeInHand => "eye_in_hand",
         Setup::EyeToHand => "eye_on_base",
     };
-    format!(
-        "# handeye calibrate: method {method}, setup {setup}; easy_handeye2's layout\n\
+    let mut s = format!(
+        "# handeye {source}, setup {setup}; easy_handeye2's layout\n\
          parameters:\n  name: handeye\n  calibration_type: {kind}\n  robot_base_frame: {base}\n  \
          robot_effector_frame: {gripper}\n  tracking_base_frame: {camera}\n  \
          tracking_marker_frame: {target}\n  freehand_robot_movement: true\n\
          transform:\n  translation: {{x: {tx}, y: {ty}, z: {tz}}}\n  \
          rotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\n\
          frame: {frame}\nparent_frame: {parent}\nchild_frame: {camera}\n\
-         translation: {{x: {tx}, y: {ty}, z: {tz}}}\nrotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\n\
-         uncertainty: {{rotation_deg: {ur}, translation: {ut}}}\n\
-         residual: {{rotation_deg_rms: {rr}, translation_rms: {rt}}}\nmotions: {motions}\n",
-        method = r.method,
-        setup = r.setup.name(),
+         translation: {{x: {tx}, y: {ty}, z: {tz}}}\nrotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\n",
+        source = p.source,
+        setup = p.setup.name(),
         base = f.base,
         gripper = f.gripper,
         camera = f.child,
         target = f.target,
         parent = f.parent,
-        frame = r.frame,
-        ur = r.uncertainty.rotation_deg,
-        ut = r.uncertainty.translation,
-        rr = r.residual.rotation_deg_rms,
-        rt = r.residual.translation_rms,
-        motions = r.motions,
-    )
+        frame = p.frame,
+    );
+    if let Some(r) = batch {
+        let _ = write!(
+            s,
+            "uncertainty: {{rotation_deg: {}, translation: {}}}\n\
+             residual: {{rotation_deg_rms: {}, translation_rms: {}}}\nmotions: {}\n",
+            r.uncertainty.rotation_deg,
+            r.uncertainty.translation,
+            r.residual.rotation_deg_rms,
+            r.residual.translation_rms,
+            r.motions,
+        );
+    }
+    s
 }
 
 /// The `ros2 run tf2_ros static_transform_publisher` command that puts X in the tf tree.
-pub fn static_transform_publisher(r: &Report, f: &Frames) -> String {
-    let [x, y, z] = r.x.translation;
-    let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
+pub fn static_transform_publisher(p: Published<'_>, f: &Frames) -> String {
+    let [x, y, z] = p.translation();
+    let [qx, qy, qz, qw] = p.quaternion_xyzw();
     format!(
         "ros2 run tf2_ros static_transform_publisher --x {x} --y {y} --z {z} --qx {qx} --qy {qy} --qz {qz} --qw {qw} --frame-id {} --child-frame-id {}",
         f.parent, f.child
@@ -120,11 +163,11 @@ pub fn static_transform_publisher(r: &Report, f: &Frames) -> String {
 }
 
 /// The command line and a Python launch snippet publishing X.
-pub fn ros2(r: &Report, f: &Frames) -> String {
-    let [x, y, z] = r.x.translation;
-    let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
+pub fn ros2(p: Published<'_>, f: &Frames) -> String {
+    let [x, y, z] = p.translation();
+    let [qx, qy, qz, qw] = p.quaternion_xyzw();
     format!(
-        "# handeye calibrate: {frame} ({parent} -> {child}), method {method}\n\
+        "# handeye {source}: {frame} ({parent} -> {child})\n\
          {line}\n\
          \n\
          # In a launch file (Python):\n\
@@ -135,25 +178,25 @@ pub fn ros2(r: &Report, f: &Frames) -> String {
          \"--x\", \"{x}\", \"--y\", \"{y}\", \"--z\", \"{z}\",\n        \
          \"--qx\", \"{qx}\", \"--qy\", \"{qy}\", \"--qz\", \"{qz}\", \"--qw\", \"{qw}\",\n        \
          \"--frame-id\", \"{parent}\", \"--child-frame-id\", \"{child}\",\n    ],\n)\n",
-        frame = r.frame,
+        frame = p.frame,
         parent = f.parent,
         child = f.child,
-        method = r.method,
-        line = static_transform_publisher(r, f),
+        source = p.source,
+        line = static_transform_publisher(p, f),
     )
 }
 
 /// A URDF fixed `<joint>` from the parent to the child link.
-pub fn urdf(r: &Report, f: &Frames) -> String {
-    let [x, y, z] = r.x.translation;
-    let [roll, pitch, yaw] = rpy(r);
+pub fn urdf(p: Published<'_>, f: &Frames) -> String {
+    let [x, y, z] = p.translation();
+    let [roll, pitch, yaw] = rpy(p.x);
     format!(
-        "<!-- handeye calibrate: {frame}, method {method} -->\n\
+        "<!-- handeye {source}: {frame} -->\n\
          <joint name=\"{parent}_to_{child}\" type=\"fixed\">\n  \
          <parent link=\"{parent}\"/>\n  <child link=\"{child}\"/>\n  \
          <origin xyz=\"{x} {y} {z}\" rpy=\"{roll} {pitch} {yaw}\"/>\n</joint>\n",
-        frame = r.frame,
-        method = r.method,
+        frame = p.frame,
+        source = p.source,
         parent = f.parent,
         child = f.child,
     )
@@ -166,7 +209,7 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
     let mut s = String::new();
     let [tx, ty, tz] = r.x.translation;
     let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
-    let [roll, pitch, yaw] = rpy(r).map(f64::to_degrees);
+    let [roll, pitch, yaw] = rpy(&r.transform).map(f64::to_degrees);
     let _ = writeln!(
         s,
         "X = {} ({} -> {}), {} on {} motions of {} poses ({})",
@@ -268,4 +311,37 @@ fn short(v: f64) -> String {
     }
     let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
     format!("{v:.digits$}")
+}
+
+/// The frames of X: `--parent-frame`/`--child-frame`, else the recording's names, else the
+/// frames of X's name.
+pub fn frames(input: &InputArgs, parent: Option<&str>, child: Option<&str>) -> Frames {
+    let named = |flag: &Option<String>, generic: &str| {
+        flag.clone()
+            .filter(|_| input.is_bag())
+            .unwrap_or_else(|| generic.to_string())
+    };
+    let base = named(&input.base_frame, "base");
+    let gripper = named(&input.gripper_frame, "gripper");
+    let camera = named(&input.camera_frame, "camera");
+    let target = named(&input.target_frame, "target");
+    let parent = parent.map_or_else(
+        || match input.setup() {
+            Setup::EyeInHand => gripper.clone(),
+            Setup::EyeToHand => base.clone(),
+        },
+        str::to_string,
+    );
+    let child = child.map_or(camera, str::to_string);
+    let (base, gripper) = match input.setup() {
+        Setup::EyeInHand => (base, parent.clone()),
+        Setup::EyeToHand => (parent.clone(), gripper),
+    };
+    Frames {
+        parent,
+        child,
+        base,
+        gripper,
+        target,
+    }
 }

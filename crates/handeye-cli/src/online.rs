@@ -12,9 +12,10 @@ use handeye::select::{AdaptiveParams, MAX_N_INIT, Selection};
 use handeye::tracking::{Report, Step, TrackOptions};
 use serde_json::{Map, Value, json};
 
+use crate::faces::{self, Face, Published};
 use crate::input::{InputArgs, records};
-use crate::output::{insert_transform, print_line};
-use crate::values;
+use crate::output::{insert_transform, print_line, print_text};
+use crate::{outln, values};
 
 /// Options of `handeye online`.
 #[derive(ClapArgs, Debug)]
@@ -96,6 +97,20 @@ pub struct Args {
     /// Opt-in remedy for thresholds that lock when their four records are equal.
     #[arg(long)]
     unfreeze: bool,
+    /// Output: JSON Lines; a line for a person per calibration or estimate (`text`); or, at the
+    /// end of the stream, the last X as easy_handeye2's YAML, a `static_transform_publisher` line
+    /// and launch snippet (`ros2`) or a URDF `<joint>` (`urdf`) [default: text on a terminal,
+    /// JSON otherwise].
+    #[arg(long, value_parser = ["json", "text", "yaml", "ros2", "urdf"])]
+    output: Option<String>,
+    /// The parent frame of X in the yaml, ros2 and urdf outputs [default: the recording's gripper
+    /// frame (eye-in-hand) or base frame (eye-to-hand); `gripper` or `base` for files].
+    #[arg(long)]
+    parent_frame: Option<String>,
+    /// The child frame of X (the camera's) [default: the recording's camera frame; `camera` for
+    /// files].
+    #[arg(long)]
+    child_frame: Option<String>,
 }
 
 /// Default floor of a predicted α₀, degrees (the library's sin 15°).
@@ -167,6 +182,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     let accumulate = config.estimator == Estimator::Accumulate;
+    let face = Face::chosen(args.output.as_deref());
     let mut calibrator = OnlineCalibrator::new(config)?;
     let (records, source, time_offset) = records(&args.input)?;
     let mut messages = Thinned::default();
@@ -218,12 +234,24 @@ pub fn run(args: Args) -> Result<()> {
         let stamp = args.input.robot.as_ref().and(record.stamp);
         lines.push_back((calibrator.poses(), record.line, stamp));
         if let Some(step) = calibrator.step() {
-            print_step(step, setup, &lines, &source, time_offset, &mut messages)?;
+            print_step(
+                step,
+                setup,
+                &lines,
+                &source,
+                time_offset,
+                face,
+                &mut messages,
+            )?;
             last = step.report.or(last);
         }
         if !accumulate {
             for event in events {
-                print_line(&event_json(&event, time_offset))?;
+                match face {
+                    Face::Json => print_line(&event_json(&event, time_offset))?,
+                    Face::Text => outln!("{}", event_text(&event))?,
+                    _ => {}
+                }
             }
         }
     }
@@ -231,14 +259,87 @@ pub fn run(args: Args) -> Result<()> {
         warn_misread(&first, setup);
     }
     if let Some(report) = calibrator.finish() {
-        print_line(&with_offset(report.json(setup), time_offset))?;
+        print_report(&report, setup, time_offset, face)?;
         last = Some(report);
     }
     eprintln!(
         "{}",
         summary(&calibrator, last.as_ref(), messages.bad_lines)
     );
+    if matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf) {
+        let (x, source) = match (&last, calibrator.last_x()) {
+            (Some(r), _) => (r.estimate.x, format!("online, estimate {}", r.number)),
+            (None, Some(x)) if !accumulate => (
+                x,
+                format!("online, calibration {}", calibrator.calibrations()),
+            ),
+            _ => {
+                return Err(handeye::Error::TooFewMotions {
+                    got: calibrator.calibrations(),
+                    need: 1,
+                }
+                .into());
+            }
+        };
+        if calibrator.unit() == Unit::Millimetre {
+            eprintln!(
+                "warning: the translation is in millimetres, as the input; ROS expects metres (divide it by 1000)"
+            );
+        }
+        let frames = faces::frames(
+            &args.input,
+            args.parent_frame.as_deref(),
+            args.child_frame.as_deref(),
+        );
+        let published = Published {
+            x: &x,
+            frame: setup.x_frame(),
+            setup,
+            source: &source,
+        };
+        print_text(&match face {
+            Face::Yaml => faces::yaml(published, &frames, None),
+            Face::Ros2 => faces::ros2(published, &frames),
+            _ => faces::urdf(published, &frames),
+        })?;
+    }
     Ok(())
+}
+
+/// A report of the accumulating estimator on stdout, in the face chosen.
+fn print_report(
+    r: &Report,
+    setup: handeye::Setup,
+    time_offset: Option<f64>,
+    face: Face,
+) -> Result<()> {
+    match face {
+        Face::Json => print_line(&with_offset(r.json(setup), time_offset)),
+        Face::Text => {
+            let e = &r.estimate;
+            outln!(
+                "estimate {} from {} poses: {}, uncertainty {:.3}° / {:.4}",
+                r.number,
+                e.poses,
+                describe(&e.x),
+                e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
+                e.uncertainty_translation.unwrap_or(f64::NAN)
+            )
+        }
+        _ => Ok(()),
+    }
+}
+
+/// A calibration event for a person.
+fn event_text(e: &Event) -> String {
+    let [a, i, j] = e.poses;
+    format!(
+        "calibration {} (poses {a}, {i}, {j}): {}, rms_r {:.2e}, rms_t {:.2e}",
+        e.calibration,
+        describe(&e.x),
+        e.rms.rms_r,
+        e.rms.rms_t
+    )
 }
 
 /// Poses the readings are checked on with the paper's estimator.
@@ -344,6 +445,7 @@ fn print_step(
     lines: &VecDeque<(usize, usize, Option<f64>)>,
     source: &str,
     time_offset: Option<f64>,
+    face: Face,
     messages: &mut Thinned,
 ) -> Result<()> {
     let place = |pose: usize| match lines.iter().find(|(p, _, _)| *p == pose) {
@@ -368,10 +470,12 @@ fn print_step(
             c.x_rotation_deg,
             c.x_translation
         );
-        print_line(&c.json())?;
+        if face == Face::Json {
+            print_line(&c.json())?;
+        }
     }
     if let Some(r) = &step.report {
-        print_line(&with_offset(r.json(setup), time_offset))?;
+        print_report(r, setup, time_offset, face)?;
     }
     Ok(())
 }

@@ -519,3 +519,49 @@ fn a_terminal_gets_the_summary_and_a_pipe_the_json() {
     assert_eq!(code, 3, "{text}{err}");
     assert!(text.starts_with("Verdict: refused"), "{text}");
 }
+
+#[test]
+fn online_writes_its_last_x_for_ros_and_a_line_per_calibration_for_a_person() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = stream(dir.path(), 300);
+    let s = s.to_str().unwrap();
+    for estimator in ["paper", "accumulate"] {
+        let (code, json, err) = run(&["online", s, "--estimator", estimator]);
+        assert_eq!(code, 0, "{err}");
+        let last: Value =
+            serde_json::from_str(json.lines().rfind(|l| !l.contains("\"change\"")).unwrap())
+                .unwrap();
+        let m: Vec<f64> = last["matrix"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()))
+            .collect();
+        let x = Matrix4::from_row_slice(&m);
+        let (code, urdf, err) = run(&[
+            "online",
+            s,
+            "--estimator",
+            estimator,
+            "--output",
+            "urdf",
+            "--child-frame",
+            "cam",
+        ]);
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains("millimetres"), "{err}");
+        let xyz = attribute(&urdf, "xyz");
+        let rpy = attribute(&urdf, "rpy");
+        let r = Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]);
+        let from_urdf = homogeneous([xyz[0], xyz[1], xyz[2]], r);
+        assert!((from_urdf - x).abs().max() < 1e-9, "{estimator}: {urdf}");
+        assert!(urdf.contains("<child link=\"cam\"/>"), "{urdf}");
+        let (code, text, err) = run(&["online", s, "--estimator", estimator, "--output", "text"]);
+        assert_eq!(code, 0, "{err}");
+        assert_eq!(
+            text.lines().count(),
+            json.lines().filter(|l| !l.contains("\"change\"")).count()
+        );
+        assert!(text.lines().all(|l| !l.starts_with('{')), "{text}");
+    }
+}
