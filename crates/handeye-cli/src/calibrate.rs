@@ -141,7 +141,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     let source = format!("calibrate, method {}", report.method);
     let published = Published::of(&report, &source);
-    if args.input.is_bag() && matches!(face, Face::Json | Face::Yaml) {
+    if args.input.is_bag() && face != Face::Ros2 {
         eprintln!(
             "publish X in tf with: {}",
             faces::static_transform_publisher(published, &frames)

@@ -46,15 +46,7 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(n) = args.series {
             config.series = n;
         }
-        let bar = ProgressBar::new(config.series as u64);
-        if !std::io::stderr().is_terminal() {
-            bar.set_draw_target(ProgressDrawTarget::hidden());
-        }
-        bar.set_style(
-            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} series")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        bar.set_message(experiment.name());
+        let bar = series_bar(config.series, experiment.name());
         let report = run_experiment(experiment, &config, || bar.inc(1))?;
         bar.finish_and_clear();
         let table = markdown_table(&report);
@@ -69,12 +61,28 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(n) = args.series {
             config.series = n;
         }
-        let report = run_tracking(&config, || {})?;
+        let bar = series_bar(config.series, "tracking");
+        let report = run_tracking(&config, || bar.inc(1))?;
+        bar.finish_and_clear();
         let table = tracking_table(&report);
         let figures = write_tracking_figures(&report, &args.out)?;
         publish(&args.out, "tracking", &table, &report, &figures)?;
     }
     Ok(())
+}
+
+/// A progress bar over the series on stderr (hidden when stderr is not a terminal).
+fn series_bar(series: usize, name: &str) -> ProgressBar {
+    let bar = ProgressBar::new(series as u64);
+    if !std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} series")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message(name.to_string());
+    bar
 }
 
 /// Prints the table and writes `<name>.md` and `<name>.json` beside the figures already written.
