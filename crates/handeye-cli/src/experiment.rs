@@ -18,7 +18,7 @@ use crate::values;
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Which experiment.
-    #[arg(value_parser = ["accuracy", "adaptability", "realtime", "tracking", "all"])]
+    #[arg(value_parser = ["accuracy", "adaptability", "realtime", "tracking", "advice", "all"])]
     which: String,
     /// Number of series (default: the paper's, 20 / 100 / 50).
     #[arg(long, value_parser = values::count(1, values::MAX_SERIES))]
@@ -35,7 +35,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let experiments: Vec<Experiment> = match args.which.as_str() {
         "all" => Experiment::ALL.to_vec(),
-        "tracking" => Vec::new(),
+        "tracking" | "advice" => Vec::new(),
         other => vec![other.parse()?],
     };
     std::fs::create_dir_all(&args.out)
@@ -68,6 +68,10 @@ pub fn run(args: Args) -> Result<()> {
         let figures = write_tracking_figures(&report, &args.out)?;
         publish(&args.out, "tracking", &table, &report, &figures)?;
     }
+    if args.which == "all" || args.which == "advice" {
+        let report = handeye::advice::closed_loop(args.series.unwrap_or(20), args.seed);
+        publish(&args.out, "advice", &advice_table(&report), &report, &[])?;
+    }
     Ok(())
 }
 
@@ -83,6 +87,20 @@ fn series_bar(series: usize, name: &str) -> ProgressBar {
     );
     bar.set_message(name.to_string());
     bar
+}
+
+/// The closed loop of the advice as Markdown.
+fn advice_table(r: &handeye::advice::ClosedLoop) -> String {
+    let cell = |n: Option<usize>| n.map_or(format!("> {}", r.most), |n| n.to_string());
+    format!(
+        "### advice ({} series of the paper's protocol, from its first 3 poses)\n\nPoses needed to reach a rotation one-sigma of {:.4}° (what the paper's walk reaches after {} poses), median over the series:\n\n| the paper's walk | turns about random axes | the advice |\n|---|---|---|\n| {} | {} | {} |\n",
+        r.series,
+        r.target_rotation_deg,
+        r.walk_poses,
+        cell(r.median_poses[0]),
+        cell(r.median_poses[1]),
+        cell(r.median_poses[2]),
+    )
 }
 
 /// Prints the table and writes `<name>.md` and `<name>.json` beside the figures already written.

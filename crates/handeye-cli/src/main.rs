@@ -4,6 +4,7 @@
 //! Exit codes: 0 success, 2 bad input (file, line and field named), 3 valid input from which X
 //! cannot be determined.
 
+mod advise;
 mod bench;
 mod calibrate;
 mod demo;
@@ -44,6 +45,10 @@ enum Command {
     /// List the topics, types, counts and tf tree of a ROS 2 recording, to choose its frames.
     #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Inspect(inspect::Args),
+    /// Say what to record next: the least determined directions of X and the motions that
+    /// would shrink its uncertainty most.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
+    Advise(advise::Args),
     /// Write a simulated series (the paper's protocol) and its truth.
     #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Simulate(simulate::Args),
@@ -65,6 +70,7 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Online(a) => online::run(a),
         Command::Inspect(a) => inspect::run(a),
+        Command::Advise(a) => advise::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Experiment(a) => experiment::run(a),
         Command::Demo(a) => demo::run(a),

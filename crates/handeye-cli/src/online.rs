@@ -253,6 +253,11 @@ pub fn run(args: Args) -> Result<()> {
                     _ => {}
                 }
             }
+            if calibrator.poses() % QUIET_POSES == 0
+                && let Some(why) = calibrator.quiet(QUIET_POSES)
+            {
+                eprintln!("{why}");
+            }
         }
     }
     if !accumulate && (16..READINGS_SAMPLE).contains(&first.len()) {
@@ -342,13 +347,30 @@ fn event_text(e: &Event) -> String {
     )
 }
 
+/// Poses without a calibration after which the summary says why (and the paper's estimator says
+/// it during the run too, at every multiple).
+const QUIET_POSES: usize = 200;
+
 /// Poses the readings are checked on with the paper's estimator.
 const READINGS_SAMPLE: usize = 64;
 
 /// Warns when the poses fit far better read another way (an inverted pose, `w, x, y, z`
 /// quaternions, millimetres on one side), or with sizes the setup makes unlikely.
 fn warn_misread(poses: &[handeye::PosePair], setup: handeye::Setup) {
-    let check = handeye::conventions::check_readings(poses, setup);
+    if handeye::consistency::axis_scatter(poses, setup) < handeye::conventions::DEGENERATE_SCATTER {
+        eprintln!(
+            "warning: every rotation of the first {} poses is about one axis: X's rotation about it, and its translation along it, are not determined by them, whatever the calibrations below say; rotate the gripper about other axes",
+            poses.len()
+        );
+        return;
+    }
+    // As batch does: on the poses that agree with the others.
+    let outliers = handeye::consistency::pose_outliers(poses, setup, 3.0).indices();
+    let kept: Vec<handeye::PosePair> = (0..poses.len())
+        .filter(|i| !outliers.contains(i))
+        .map(|i| poses[i])
+        .collect();
+    let check = handeye::conventions::check_readings(&kept, setup);
     if let Some(advice) = check.advice(setup) {
         eprintln!(
             "warning: the calibrations are from data read wrongly: {advice} (`handeye calibrate` checks this too)"
@@ -532,12 +554,19 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
         bad
     };
     let Some(tracker) = calibrator.tracker() else {
-        let last = calibrator.last_x().map_or(
-            "none: the selection accepted no pair of motions (too little rotation, or all about one axis)".to_string(),
-            |x| describe(&x),
-        );
+        let last = calibrator
+            .last_x()
+            .map_or("none".to_string(), |x| describe(&x));
+        let quiet_after = if calibrator.calibrations() == 0 {
+            1
+        } else {
+            QUIET_POSES
+        };
+        let quiet = calibrator
+            .quiet(quiet_after)
+            .map_or(String::new(), |why| format!("\n{why}"));
         return format!(
-            "{} calibration(s) from {} pose(s){bad}; last X: {last}",
+            "{} calibration(s) from {} pose(s){bad}; last X: {last}{quiet}",
             calibrator.calibrations(),
             calibrator.poses()
         );

@@ -100,6 +100,8 @@ fn every_numeric_flag_out_of_range_is_exit_2_naming_the_flag() {
         (&["online", s, "--beta-min-deg", "nan"], "--beta-min-deg"),
         (&["online", s, "--d-max", "inf"], "--d-max"),
         (&["experiment", "accuracy", "--series", "0"], "--series"),
+        (&["advise", f, "--count", "0"], "--count"),
+        (&["advise", f, "--count", "18446744073709551616"], "--count"),
     ];
     for (args, flag) in cases {
         let (code, out, err) = run(args);
@@ -266,6 +268,7 @@ fn every_help_lists_the_exit_codes_and_the_units_of_the_accuracies() {
         "calibrate",
         "online",
         "inspect",
+        "advise",
         "simulate",
         "experiment",
         "demo",

@@ -191,3 +191,14 @@ def test_the_accumulating_estimator_reports_on_its_own_schedule_with_an_honest_u
         angle = np.degrees(np.arccos(np.clip((np.trace(d[:3, :3]) - 1) / 2, -1, 1)))
         assert angle < 3 * r["uncertainty"]["rotation_deg"]
         assert np.linalg.norm(d[:3, 3]) < 3 * r["uncertainty"]["translation"]
+
+
+def test_advise_names_the_next_motions_and_what_they_would_give():
+    q, c, _, _ = load_series("series_2007_000_200")
+    advice = handeye.advise(q[:12], c[:12], count=2)
+    assert advice["poses"] == 12 and len(advice["suggestions"]) == 2
+    now = advice["current"]["rotation_deg"]
+    assert advice["suggestions"][-1]["predicted"]["rotation_deg"] < now
+    assert {w["kind"] for w in advice["weakest"]} == {"rotation", "translation"}
+    with pytest.raises(ValueError):
+        handeye.advise(q[:12], c[:12], count=0)

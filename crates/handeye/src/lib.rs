@@ -22,11 +22,13 @@
 #![deny(missing_docs)]
 
 pub mod accumulate;
+pub mod advice;
 pub mod calibration;
 pub mod consistency;
 pub mod conventions;
 mod error;
 pub mod experiment;
+pub mod holdout;
 pub mod io;
 pub mod metrics;
 mod motion;

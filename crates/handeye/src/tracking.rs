@@ -682,13 +682,18 @@ impl Tracker {
         let mut warmup = self.warmup.take().unwrap_or_default();
         let last = warmup.len() == WARMUP[WARMUP.len() - 1];
         let poses: Vec<PosePair> = warmup.iter().map(|(_, p)| *p).collect();
-        // The batch's check of the readings, on the same poses.
-        let readings = check_readings(&poses, self.setup);
+        let found = pose_outliers(&poses, self.setup, self.options.outlier_deg);
+        // The batch's check of the readings, on the poses that agree with the others (outliers
+        // could make a mirror-image reading look better).
+        let kept: Vec<PosePair> = (0..poses.len())
+            .filter(|i| found.poses.iter().all(|g| g.pose != *i))
+            .map(|i| poses[i])
+            .collect();
+        let readings = check_readings(&kept, self.setup);
         if readings.as_given.is_some() {
             self.misread = readings.better.map(|b| b.reading);
             self.implausible = readings.size_warning(self.setup).is_some();
         }
-        let found = pose_outliers(&poses, self.setup, self.options.outlier_deg);
         let mut held = Vec::new();
         if !found.poses.is_empty() {
             let mut segment = Segment::new(self.setup, self.incumbent.since);

@@ -20,10 +20,11 @@ import warnings
 import numpy as np
 
 from ._handeye import _OnlineCalibrator
+from ._handeye import advise_report as _advise_report
 from ._handeye import calibrate_report as _calibrate_report
 from ._handeye import solve_x as _solve_x
 
-__all__ = ["calibrate_hand_eye", "calibrate", "OnlineCalibrator", "METHODS"]
+__all__ = ["calibrate_hand_eye", "calibrate", "advise", "OnlineCalibrator", "METHODS"]
 
 #: OpenCV's constants (cv2.CALIB_HAND_EYE_*) and handeye's names.
 METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
@@ -121,6 +122,18 @@ def calibrate(
     )
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)
     return result
+
+
+def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3):
+    """What to record next, as ``handeye advise`` prints it: X's one-sigma now (``current``), its
+    least determined directions (``weakest``) and the next gripper motions (``suggestions``: an
+    axis of the gripper frame, an angle, and the uncertainty predicted once recorded). Takes
+    (N, 4, 4) arrays."""
+    g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
+    c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
+    if g.ndim != 3 or c.ndim != 3:
+        raise ValueError("expected (N, 4, 4) arrays of transforms")
+    return json.loads(_advise_report(g, c, setup=setup, count=count))
 
 
 def _with_arrays(event):
