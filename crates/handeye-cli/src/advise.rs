@@ -1,6 +1,6 @@
 //! `handeye advise`: what to record next, from the poses recorded so far.
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::advice::{Advice, WeaknessKind, advise};
 
@@ -13,15 +13,12 @@ pub struct Args {
     #[command(flatten)]
     input: InputArgs,
     /// How many next motions to suggest (1 to 20).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = crate::values::count(1, 20))]
     count: usize,
 }
 
 /// Runs the command: the advice as JSON on stdout, in words on stderr.
 pub fn run(args: Args) -> Result<()> {
-    if !(1..=20).contains(&args.count) {
-        bail!("--count must be between 1 and 20, found {}", args.count);
-    }
     let (poses, _, _) = read_all(&args.input)?;
     let advice = advise(&poses, args.input.setup(), args.count)?;
     eprint!("{}", in_words(&advice));

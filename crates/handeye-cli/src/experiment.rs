@@ -12,6 +12,7 @@ use handeye::experiment::{
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::figures::{write_figures, write_text, write_tracking_figures};
+use crate::values;
 
 /// Options of `handeye experiment`.
 #[derive(ClapArgs, Debug)]
@@ -20,7 +21,7 @@ pub struct Args {
     #[arg(value_parser = ["accuracy", "adaptability", "realtime", "tracking", "advice", "all"])]
     which: String,
     /// Number of series (default: the paper's, 20 / 100 / 50).
-    #[arg(long)]
+    #[arg(long, value_parser = values::count(1, values::MAX_SERIES))]
     series: Option<usize>,
     /// Seed of the run.
     #[arg(long, default_value_t = 1)]
@@ -45,15 +46,7 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(n) = args.series {
             config.series = n;
         }
-        let bar = ProgressBar::new(config.series as u64);
-        if !std::io::stderr().is_terminal() {
-            bar.set_draw_target(ProgressDrawTarget::hidden());
-        }
-        bar.set_style(
-            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} series")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
-        );
-        bar.set_message(experiment.name());
+        let bar = series_bar(config.series, experiment.name());
         let report = run_experiment(experiment, &config, || bar.inc(1))?;
         bar.finish_and_clear();
         let table = markdown_table(&report);
@@ -68,7 +61,9 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(n) = args.series {
             config.series = n;
         }
-        let report = run_tracking(&config, || {})?;
+        let bar = series_bar(config.series, "tracking");
+        let report = run_tracking(&config, || bar.inc(1))?;
+        bar.finish_and_clear();
         let table = tracking_table(&report);
         let figures = write_tracking_figures(&report, &args.out)?;
         publish(&args.out, "tracking", &table, &report, &figures)?;
@@ -78,6 +73,20 @@ pub fn run(args: Args) -> Result<()> {
         publish(&args.out, "advice", &advice_table(&report), &report, &[])?;
     }
     Ok(())
+}
+
+/// A progress bar over the series on stderr (hidden when stderr is not a terminal).
+fn series_bar(series: usize, name: &str) -> ProgressBar {
+    let bar = ProgressBar::new(series as u64);
+    if !std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} series")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_message(name.to_string());
+    bar
 }
 
 /// The closed loop of the advice as Markdown.
@@ -102,7 +111,7 @@ fn publish(
     report: &impl serde::Serialize,
     figures: &[PathBuf],
 ) -> Result<()> {
-    println!("{table}");
+    crate::outln!("{table}")?;
     let stem = out.join(name);
     write_text(&stem.with_extension("md"), table)?;
     write_text(

@@ -170,7 +170,7 @@ const I: &str = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
 fn good_line(k: usize) -> String {
     // Rotations about alternating axes, so that two motions determine X.
     let (c, s) = ((0.3 * k as f64).cos(), (0.3 * k as f64).sin());
-    let r = if k % 2 == 0 {
+    let r = if k.is_multiple_of(2) {
         format!("[[1,0,0,{k}],[0,{c},{},0],[0,{s},{c},0],[0,0,0,1]]", -s)
     } else {
         format!("[[{c},0,{s},0],[0,1,0,{k}],[{},0,{c},0],[0,0,0,1]]", -s)

@@ -125,6 +125,18 @@ def test_bad_inputs_raise_and_never_crash():
         handeye.calibrate(np.stack([eye] * 3), np.stack([eye] * 3), method="magic")
     with pytest.raises(ValueError):
         handeye.OnlineCalibrator(selection="magic")
+    for selection in ("fixed", "adaptive"):
+        with pytest.raises(ValueError, match="n_init"):
+            handeye.OnlineCalibrator(selection=selection, n_init=2**62)
+    with pytest.raises(ValueError, match="alpha_min_deg"):
+        handeye.OnlineCalibrator(alpha_min_deg=95.0)
+    with pytest.raises(ValueError):
+        handeye.OnlineCalibrator(alpha_min_deg=15.0, alpha_min=0.25)
+    with pytest.raises(ValueError):
+        handeye.OnlineCalibrator(rms_t_max=float("nan"))
+    handeye.OnlineCalibrator(alpha_min_deg=15.0)
+    with pytest.warns(DeprecationWarning, match="alpha_min_deg"):
+        handeye.OnlineCalibrator(alpha_min=0.25)
     c = handeye.OnlineCalibrator()
     with pytest.raises(ValueError):
         c.push(np.eye(3), eye)

@@ -14,6 +14,8 @@ Two faces:
 from __future__ import annotations
 
 import json
+import math
+import warnings
 
 import numpy as np
 
@@ -148,7 +150,9 @@ class OnlineCalibrator:
     Keyword arguments: ``selection`` ("adaptive", "fixed", "none"), ``setup``, ``estimator``
     ("paper", "accumulate"), ``error_source`` ("residual", "truth"), ``truth`` (4x4 X),
     ``optimal`` and the adaptive parameters ``n_init, interval, relax_down, relax_up, explore,
-    rms_r_max, rms_t_max, alpha_min, beta_min_deg, d_max`` (``d_max`` in your length unit;
+    rms_r_max, rms_t_max, alpha_min_deg, beta_min_deg, d_max`` (``alpha_min_deg`` in degrees,
+    (0, 90]; the older ``alpha_min``, its sine, still works with a DeprecationWarning;
+    ``d_max`` in your length unit;
     left out, it is 0.1 m in the ``unit``: "auto" infers metres or millimetres from the first
     pose, "m", "mm"), ``unfreeze``; for ``estimator="accumulate"`` also ``every`` and ``shrink``
     (how often it reports). With ``estimator="accumulate"``, ``push`` returns the estimator's own
@@ -156,6 +160,19 @@ class OnlineCalibrator:
     (``change``), the same fields as ``handeye online --estimator accumulate`` prints."""
 
     def __init__(self, **params):
+        if "alpha_min_deg" in params:
+            if "alpha_min" in params:
+                raise ValueError("alpha_min_deg and alpha_min (deprecated) name one parameter: give one")
+            degrees = float(params.pop("alpha_min_deg"))
+            if not 0.0 < degrees <= 90.0:
+                raise ValueError(f"alpha_min_deg must be in (0, 90] degrees, got {degrees}")
+            params["alpha_min"] = math.sin(math.radians(degrees))
+        elif "alpha_min" in params:
+            warnings.warn(
+                "alpha_min (a sine) is deprecated: use alpha_min_deg (degrees)",
+                DeprecationWarning,
+                stacklevel=2,
+            )
         truth = params.pop("truth", None)
         if truth is not None:
             truth = np.ascontiguousarray(truth, dtype=np.float64)

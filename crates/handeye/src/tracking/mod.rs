@@ -233,7 +233,7 @@ impl Tracker {
             }
         }
         if step.change.is_none()
-            && (self.incumbent.all.poses() < REFRESH_ALWAYS || self.poses % 10 == 0)
+            && (self.incumbent.all.poses() < REFRESH_ALWAYS || self.poses.is_multiple_of(10))
         {
             self.current = self.incumbent.refresh();
         }
