@@ -111,6 +111,11 @@ pub struct Args {
     /// files].
     #[arg(long)]
     child_frame: Option<String>,
+    /// Also write a page for a person at the end: the estimate's convergence with its uncertainty
+    /// band, changes and held-out poses, and the paper's thresholds (one self-contained HTML
+    /// file).
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<PathBuf>,
 }
 
 /// Default floor of a predicted α₀, degrees (the library's sin 15°).
@@ -187,6 +192,11 @@ pub fn run(args: Args) -> Result<()> {
     let (records, source, time_offset) = records(&args.input)?;
     let mut messages = Thinned::default();
     let mut last: Option<Report> = None;
+    // Kept only for --report: a few numbers per event.
+    let mut trace = args
+        .report
+        .as_ref()
+        .map(|_| crate::report::OnlineTrace::default());
     let mut told_unit = false;
     // The paper's estimator has no checks of its own: the batch's check of the readings runs on
     // the first poses (the accumulating estimator runs it itself).
@@ -234,6 +244,9 @@ pub fn run(args: Args) -> Result<()> {
         let stamp = args.input.robot.as_ref().and(record.stamp);
         lines.push_back((calibrator.poses(), record.line, stamp));
         if let Some(step) = calibrator.step() {
+            if let Some(t) = &mut trace {
+                t.step(step);
+            }
             print_step(
                 step,
                 setup,
@@ -244,6 +257,9 @@ pub fn run(args: Args) -> Result<()> {
                 &mut messages,
             )?;
             last = step.report.or(last);
+        }
+        if let Some(t) = &mut trace {
+            events.iter().for_each(|e| t.calibration(e));
         }
         if !accumulate {
             for event in events {
@@ -265,12 +281,22 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let Some(report) = calibrator.finish() {
         print_report(&report, setup, time_offset, face)?;
+        if let Some(t) = &mut trace {
+            t.step(&Step {
+                pose: report.pose,
+                report: Some(report),
+                ..Step::default()
+            });
+        }
         last = Some(report);
     }
-    eprintln!(
-        "{}",
-        summary(&calibrator, last.as_ref(), messages.bad_lines)
-    );
+    let summary = summary(&calibrator, last.as_ref(), messages.bad_lines);
+    eprintln!("{summary}");
+    if let (Some(path), Some(mut trace)) = (&args.report, trace) {
+        trace.poses = calibrator.poses();
+        crate::report::write_online(path, &trace, &summary)?;
+        eprintln!("wrote {}", path.display());
+    }
     if matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf) {
         let (x, source) = match (&last, calibrator.last_x()) {
             (Some(r), _) => (r.estimate.x, format!("online, estimate {}", r.number)),

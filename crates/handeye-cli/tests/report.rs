@@ -1,5 +1,5 @@
-//! `calibrate --report FILE.html`: one self-contained page whose every figure renders in a real
-//! browser (headless Chromium, which `.ci/run` installs; without `CI` set, a missing browser
+//! `calibrate --report FILE.html` and `online --report FILE.html`: one self-contained page whose
+//! every figure renders in a real browser (headless Chromium, which `.ci/run` installs; without `CI` set, a missing browser
 //! skips only the rendering).
 
 use std::path::{Path, PathBuf};
@@ -57,6 +57,36 @@ fn chromium() -> Option<&'static str> {
     })
 }
 
+/// The online page for a kinhec stream with planted outliers.
+fn online_page(dir: &Path) -> PathBuf {
+    let path = dir.join("online.html");
+    let streams = testdata("kinhec/streams");
+    let out = Command::new(env!("CARGO_BIN_EXE_handeye"))
+        .args([
+            "online",
+            "--output",
+            "json",
+            "--estimator",
+            "accumulate",
+            "--time-offset",
+            "auto",
+        ])
+        .arg("--robot")
+        .arg(streams.join("temporal_outliers_gross_30hz_eih_s2_robot.txt"))
+        .arg("--camera")
+        .arg(streams.join("temporal_outliers_gross_30hz_eih_s2_camera.txt"))
+        .arg("--report")
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    path
+}
+
 #[test]
 fn every_figure_renders_in_headless_chromium() {
     let Some(browser) = chromium() else {
@@ -68,7 +98,13 @@ fn every_figure_renders_in_headless_chromium() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let path = page(dir.path());
+    for path in [page(dir.path()), online_page(dir.path())] {
+        rendered(browser, &path, dir.path());
+    }
+}
+
+/// Renders `path` and checks that its three figures are laid out and that the page is not blank.
+fn rendered(browser: &str, path: &Path, dir: &Path) {
     let flags = [
         "--headless",
         "--no-sandbox",
@@ -79,11 +115,11 @@ fn every_figure_renders_in_headless_chromium() {
         "--disable-component-update",
         "--disable-sync",
     ];
-    let profile = dir.path().join("profile");
-    let url = format!("file://{}", path.display());
+    let profile = dir.join("profile");
     // The rendered DOM, with each figure's size as laid out.
-    let probe = dir.path().join("probe.html");
-    let html = std::fs::read_to_string(&path).unwrap();
+    let probe = dir.join("probe.html");
+    let html = std::fs::read_to_string(path).unwrap();
+    assert_eq!(html.matches("<svg").count(), 3, "{}", path.display());
     let script = "<script>window.onload=()=>{const s=[...document.querySelectorAll('figure svg')];document.title='rendered:'+s.filter(e=>{const r=e.getBoundingClientRect();return r.width>100&&r.height>100&&e.querySelectorAll('*').length>20}).length+'/'+s.length;};</script>";
     std::fs::write(&probe, html.replace("</body>", &format!("{script}</body>"))).unwrap();
     let dom = Command::new(browser)
@@ -96,24 +132,27 @@ fn every_figure_renders_in_headless_chromium() {
     let dom_text = String::from_utf8_lossy(&dom.stdout);
     assert!(
         dom_text.contains("<title>rendered:3/3</title>"),
-        "{}",
+        "{}: {}",
+        path.display(),
         &dom_text[..dom_text.len().min(400)]
     );
-    // A screenshot that is not blank: a PNG of some size with more than one colour in it.
-    let png = dir.path().join("shot.png");
+    // A screenshot that is not blank: a PNG of some size.
+    let png = dir.join("shot.png");
+    let _ = std::fs::remove_file(&png);
     let shot = Command::new(browser)
         .args(flags)
         .arg(format!("--user-data-dir={}", profile.display()))
         .args(["--window-size=1000,1400", "--hide-scrollbars"])
         .arg(format!("--screenshot={}", png.display()))
-        .arg(&url)
+        .arg(format!("file://{}", path.display()))
         .output()
         .unwrap();
     let bytes = std::fs::read(&png)
         .unwrap_or_else(|_| panic!("no screenshot: {}", String::from_utf8_lossy(&shot.stderr)));
     assert!(
         bytes.starts_with(b"\x89PNG") && bytes.len() > 20_000,
-        "{} bytes",
+        "{}: {} bytes",
+        path.display(),
         bytes.len()
     );
 }
