@@ -347,7 +347,7 @@ fn solve_motions(motions: &(impl MotionSource + ?Sized), options: &Options) -> R
 }
 
 /// The reading to solve under, and the check behind it.
-fn choose_reading(
+pub(crate) fn choose_reading(
     poses: &[PosePair],
     setup: Setup,
     fix: Fix,
@@ -380,7 +380,7 @@ fn choose_reading(
 }
 
 /// Median distance from the camera to the target, input units.
-fn working_distance(poses: &[PosePair]) -> f64 {
+pub(crate) fn working_distance(poses: &[PosePair]) -> f64 {
     crate::consistency::median(
         poses
             .iter()

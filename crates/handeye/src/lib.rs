@@ -32,6 +32,7 @@ pub mod metrics;
 mod motion;
 pub mod online;
 pub mod pose;
+pub mod robot_world;
 pub mod select;
 pub mod sim;
 pub mod solve;
