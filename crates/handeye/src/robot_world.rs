@@ -15,8 +15,8 @@
 //!    its own residuals; `replicates` 0 says so). A direction of X or of the target that either
 //!    leaves undetermined refuses the result ([`Degeneracy::Undetermined`]), a weak one of X is a
 //!    warning. The first-order covariance is close to the truth on well-posed data (kinhec: median
-//!    error/σ 1.0) but underestimates nearly degenerate directions (3° where the bootstrap says
-//!    30° on single-joint recordings), which is why X's refusal rests on the bootstrap;
+//!    error/σ 1.0) but underestimates nearly degenerate directions (3–4° where the bootstrap
+//!    says 22–23° on single-joint recordings), which is why X's refusal rests on the bootstrap;
 //! 4. the residuals per pose: the angle between R_Y and R_Q R_X R_C (degrees) and how far pose i
 //!    puts the target's origin from Y's (input units).
 
