@@ -14,7 +14,7 @@ mod least_squares;
 mod park;
 mod quaternion;
 mod refine;
-mod robot_world;
+pub(crate) mod robot_world;
 mod rotation_system;
 mod scale;
 mod symmetric;

@@ -228,14 +228,8 @@ pub fn shah(poses: &[PosePair], setup: Setup) -> Result<RobotWorld> {
     for (a, b) in &p.ab {
         k += kron(&rotation_matrix(a), &rotation_matrix(b));
     }
-    // The first singular pair: the eigenvector of the largest eigenvalue of KᵀK, and K v.
-    let eigen = (k.transpose() * k).symmetric_eigen();
-    let top = eigen.eigenvalues.imax();
-    let v: SVector<f64, 9> = eigen.eigenvectors.column(top).into_owned();
-    let u = k * v;
     let ill = || singular(p.conditioning);
-    let r_x = normalize_rotation(&unvec(v.as_slice())).ok_or_else(ill)?;
-    let r_z = normalize_rotation(&unvec(u.as_slice())).ok_or_else(ill)?;
+    let (r_x, r_z) = shah_rotations(&k).ok_or_else(ill)?;
     // Translation: [−R_A  I] (t_X', t_Z') = t_A − R_Z' t_B, by normal equations and one step of
     // iterative refinement.
     let rows = |(a, b): &(Transform, Transform)| {
@@ -255,6 +249,24 @@ pub fn shah(poses: &[PosePair], setup: Setup) -> Result<RobotWorld> {
         (&r_x, &t_x),
         (&r_z, &t_z),
     ))
+}
+
+/// Shah's rotations (R_X', R_Z') from K = Σ R_A ⊗ R_B (row-major): the first singular pair (the
+/// eigenvector v of the largest eigenvalue of KᵀK, and K v), each normalised as OpenCV does.
+pub(crate) fn shah_rotations(k: &SMatrix<f64, 9, 9>) -> Option<(Matrix3<f64>, Matrix3<f64>)> {
+    let eigen = (k.transpose() * k).symmetric_eigen();
+    let top = eigen.eigenvalues.imax();
+    let v: SVector<f64, 9> = eigen.eigenvectors.column(top).into_owned();
+    let u = k * v;
+    Some((
+        normalize_rotation(&unvec(v.as_slice()))?,
+        normalize_rotation(&unvec(u.as_slice()))?,
+    ))
+}
+
+/// Row-major Kronecker product `M ⊗ N` (see [`kron`]), for the accumulating form.
+pub(crate) fn kron9(m: &Matrix3<f64>, n: &Matrix3<f64>) -> SMatrix<f64, 9, 9> {
+    kron(m, n)
 }
 
 /// Li, Wang and Wu's simultaneous solution, as OpenCV's `CALIB_ROBOT_WORLD_HAND_EYE_LI`.
