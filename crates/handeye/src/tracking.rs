@@ -35,7 +35,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::accumulate::{PoseAccumulator, Scatter};
+use crate::accumulate::{PoseAccumulator, RobotWorldAccumulator, Scatter};
 use crate::consistency::{OUTLIER_FACTOR, median, pose_outliers, screw_gaps};
 use crate::conventions::{Reading, check_readings};
 use crate::motion::{PosePair, Setup};
@@ -128,6 +128,19 @@ pub struct TrackEstimate {
     pub uncertainty_rotation_deg: Option<f64>,
     /// The same for the translation, input units.
     pub uncertainty_translation: Option<f64>,
+    /// The robot-world solution (Shah's A X = Z B over the same accepted poses of the segment,
+    /// [`RobotWorldAccumulator`]): X and the target solved together rather than the target as
+    /// the mean fixed frame under the hand–eye X. `None` while its system is degenerate.
+    pub robot_world: Option<RobotWorldPair>,
+}
+
+/// X and the target pose of a robot-world solution.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RobotWorldPair {
+    /// X.
+    pub x: Transform,
+    /// The target pose (`base_from_target` / `gripper_from_target`).
+    pub target: Transform,
 }
 
 /// Why a pose was held out of the sums.
@@ -313,6 +326,8 @@ impl fmt::Display for Pending {
 struct Segment {
     all: PoseAccumulator,
     halves: [PoseAccumulator; 2],
+    /// Shah's robot-world sums over the same poses.
+    robot_world: RobotWorldAccumulator,
     since: usize,
     /// The first accepted hand rotation and the largest rotation from it (radians).
     first: Option<Transform>,
@@ -327,6 +342,7 @@ impl Segment {
         Self {
             all: PoseAccumulator::new(setup),
             halves: [PoseAccumulator::new(setup), PoseAccumulator::new(setup)],
+            robot_world: RobotWorldAccumulator::new(setup),
             since,
             first: None,
             largest: 0.0,
@@ -342,6 +358,7 @@ impl Segment {
             .max(rotation_angle_between(&first.rotation, &hand.rotation));
         self.all.add(pose);
         self.halves[self.all.poses() % 2].add(pose);
+        self.robot_world.add(pose);
     }
 
     /// The segment's estimate now, kept as a checkpoint when its pose count has grown by half
@@ -426,6 +443,10 @@ impl Segment {
                 noise_translation: scatter.translation,
                 uncertainty_rotation_deg: ur,
                 uncertainty_translation: ut,
+                robot_world: self.robot_world.estimate().map(|r| RobotWorldPair {
+                    x: r.x,
+                    target: r.target,
+                }),
             },
             scatter,
             local_rotation_deg: local.map(|l| l.0),
@@ -921,7 +942,8 @@ impl Tracker {
 impl Report {
     /// The report as its JSON line (SPEC sec. 7), the one output of every face: `estimate`,
     /// `pose`, `reason`, `frame`, X (`translation`, `quaternion_xyzw`, `matrix`), `poses`,
-    /// `since`, `uncertainty`, `noise`, `conditioning`, `target` (the fixed frame) and, on a
+    /// `since`, `uncertainty`, `noise`, `conditioning`, `target` (the fixed frame), `robot_world`
+    /// (X and the target solved together by Shah over the same poses, when determined) and, on a
     /// weak final report, `weak` with the reason in words.
     pub fn json(&self, setup: Setup) -> serde_json::Value {
         let e = &self.estimate;
@@ -947,6 +969,17 @@ impl Report {
         target.insert("frame".into(), target_frame(setup).into());
         insert_transform(&mut target, &e.target);
         out.insert("target".into(), target.into());
+        if let Some(rw) = &e.robot_world {
+            let mut x = serde_json::Map::new();
+            x.insert("method".into(), "shah".into());
+            x.insert("frame".into(), setup.x_frame().into());
+            insert_transform(&mut x, &rw.x);
+            let mut target = serde_json::Map::new();
+            target.insert("frame".into(), target_frame(setup).into());
+            insert_transform(&mut target, &rw.target);
+            x.insert("target".into(), target.into());
+            out.insert("robot_world".into(), x.into());
+        }
         if let Some(w) = &self.weak {
             out.insert("weak".into(), w.to_string().into());
         }

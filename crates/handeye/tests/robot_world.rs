@@ -443,3 +443,38 @@ fn the_report_refuses_undetermined_data_and_reports_the_rest() {
         }
     }
 }
+
+/// The accumulating form on a stream: every report of the tracker carries X and the target
+/// solved together (Shah over the segment's accepted poses, O(1) per pose); with nothing held
+/// out and no change it is the batch Shah over all poses, and near the truth.
+#[test]
+fn the_tracker_reports_the_robot_world_solution() {
+    use handeye::tracking::{TrackOptions, Tracker};
+    let mut compared = 0;
+    for (path, setup, x, target) in kinhec(&["nominal_stations"]) {
+        let poses = read_pose_file(&path, Format::Auto).unwrap().pairs;
+        let mut tracker = Tracker::new(setup, TrackOptions::default());
+        for p in &poses {
+            tracker.push(p);
+        }
+        let report = tracker.finish().expect("a final report");
+        let rw = report.estimate.robot_world.expect("a robot-world solution");
+        let (xr, xt) = error(&rw.x, &x);
+        let (yr, yt) = error(&rw.target, &target);
+        assert!(
+            xr < 0.5 && xt < 0.005 && yr < 0.5 && yt < 0.005,
+            "{}",
+            path.display()
+        );
+        if tracker.held_out() == 0 && tracker.changes() == 0 {
+            let batch = shah(&poses, setup).unwrap();
+            assert!(max_entry_diff(&batch.x, &rw.x) < 1e-9, "{}", path.display());
+            assert!(max_entry_diff(&batch.target, &rw.target) < 1e-9);
+            compared += 1;
+        }
+        let json = report.json(setup);
+        assert_eq!(json["robot_world"]["method"], "shah");
+        assert!(json["robot_world"]["target"]["matrix"].is_array());
+    }
+    assert!(compared >= 2, "{compared} files compared with the batch");
+}
