@@ -3,7 +3,9 @@
 //! (see bench/compare_opencv.sh); the criterion benches in crates/handeye/benches are the
 //! statistically careful ones.
 
+use std::cell::Cell;
 use std::hint::black_box;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -15,21 +17,23 @@ use handeye::online::{OnlineCalibrator, OnlineConfig};
 use handeye::select::AdaptiveParams;
 use handeye::sim::{SimConfig, simulate};
 use handeye::{AllPairs, Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::{Value, json};
 
 use crate::output::print_json;
+use crate::values;
 
 /// Options of `handeye bench`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Pose counts of the simulated datasets (ignored with --input).
-    #[arg(long, value_delimiter = ',', default_values_t = [10usize, 50, 200, 1000])]
+    #[arg(long, num_args = 1.., value_delimiter = ',', default_values_t = [10usize, 50, 200, 1000], value_parser = values::count(3, values::MAX_POSES))]
     poses: Vec<usize>,
     /// Pairings to time.
-    #[arg(long, value_delimiter = ',', default_values = ["consecutive", "all"])]
+    #[arg(long, num_args = 1.., value_delimiter = ',', default_values = ["consecutive", "all"], value_parser = ["consecutive", "all"])]
     pairs: Vec<String>,
     /// Methods to time.
-    #[arg(long, value_delimiter = ',', default_values = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
+    #[arg(long, num_args = 1.., value_delimiter = ',', default_values = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
     methods: Vec<String>,
     /// Pose files to time instead of simulated data (each may have a `<stem>.truth.json` beside
     /// it, or give --truth per file in the same order).
@@ -38,12 +42,52 @@ pub struct Args {
     /// Truth files for the errors of --input datasets, in the same order.
     #[arg(long)]
     truth: Vec<PathBuf>,
-    /// Least wall time spent timing each case, seconds.
-    #[arg(long, default_value_t = 0.3)]
+    /// Least wall time spent timing each case, seconds (at most an hour).
+    #[arg(long, default_value_t = 0.3, value_parser = values::budget_s)]
     min_time: f64,
     /// Print the JSON only (no table on stderr).
     #[arg(long)]
     quiet: bool,
+}
+
+/// Cases of the online calibrator timed after the solvers.
+const ONLINE_CASES: u64 = 2;
+
+/// The progress bar on stderr: drawn once the run has taken a second (and only on a terminal),
+/// so quick runs stay quiet.
+struct Progress {
+    bar: ProgressBar,
+    started: Instant,
+    shown: Cell<bool>,
+}
+
+impl Progress {
+    fn new(cases: u64) -> Self {
+        let bar = ProgressBar::with_draw_target(Some(cases), ProgressDrawTarget::hidden());
+        bar.set_style(
+            ProgressStyle::with_template("{elapsed:>4} [{bar:30}] {pos}/{len} cases: {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        Self {
+            bar,
+            started: Instant::now(),
+            shown: Cell::new(false),
+        }
+    }
+
+    /// Marks the previous case done and names the next one.
+    fn case(&self, name: &str) {
+        if !self.shown.get()
+            && self.started.elapsed() > Duration::from_secs(1)
+            && std::io::stderr().is_terminal()
+        {
+            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+            self.bar.enable_steady_tick(Duration::from_millis(250));
+            self.shown.set(true);
+        }
+        self.bar.set_message(name.to_string());
+        self.bar.inc(1);
+    }
 }
 
 /// One dataset: its name, poses and true X if known.
@@ -62,6 +106,8 @@ pub fn run(args: Args) -> Result<()> {
         .map(|m| m.parse())
         .collect::<handeye::Result<_>>()?;
     let budget = Duration::from_secs_f64(args.min_time);
+    let progress =
+        Progress::new((datasets.len() * args.pairs.len() * methods.len()) as u64 + ONLINE_CASES);
     let mut rows = Vec::new();
     for d in &datasets {
         for pairs in &args.pairs {
@@ -79,6 +125,7 @@ pub fn run(args: Args) -> Result<()> {
                         solve(method, &motion_pairs(&d.poses, pairing, Setup::EyeInHand))
                     }
                 };
+                progress.case(&format!("{} {pairs} {}", d.name, method.name()));
                 let result = call();
                 let (median, calls) = time(|| black_box(call()).is_ok(), budget);
                 let errors = match (&result, &d.truth) {
@@ -101,7 +148,8 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
-    let online = online_throughput(budget)?;
+    let online = online_throughput(budget, &progress)?;
+    progress.bar.finish_and_clear();
     if !args.quiet {
         eprintln!("| dataset | poses | pairs | method | median per call | calls |");
         eprintln!("|---|---|---|---|---|---|");
@@ -201,7 +249,8 @@ fn time(mut f: impl FnMut() -> bool, budget: Duration) -> (f64, usize) {
 }
 
 /// Poses per second through `push` without calibrations, and the time of one calibration event.
-fn online_throughput(budget: Duration) -> Result<Value> {
+fn online_throughput(budget: Duration, progress: &Progress) -> Result<Value> {
+    progress.case("online push");
     let s = simulate(
         &SimConfig {
             poses: 1000,
@@ -235,6 +284,7 @@ fn online_throughput(budget: Duration) -> Result<Value> {
         },
         budget,
     );
+    progress.case("online calibration");
     let pairs = motion_pairs(&s.poses[..3], Pairing::Consecutive, Setup::EyeInHand);
     let (calibration, _) = time(|| handeye::andreff(black_box(&pairs)).is_ok(), budget);
     Ok(json!({"push_s": push, "push_per_s": 1.0 / push, "calibration_s": calibration}))

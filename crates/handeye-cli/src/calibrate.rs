@@ -3,17 +3,19 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::calibration::{Fix, Options, Report, calibrate};
+use handeye::calibration::{Fix, Options, calibrate};
 use handeye::metrics::OUTLIER_DEG;
 use handeye::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 use handeye::solve::RobotWorldMethod;
 use handeye::solve::TsaiOptions;
 use handeye::uncertainty::REPLICATES;
-use handeye::{Error, Method, Pairing, Setup};
+use handeye::{Error, Method, Pairing};
 use serde_json::Value;
 
+use crate::faces::{self, Face, Published, length_unit};
 use crate::input::{InputArgs, read_all};
-use crate::output::print_json;
+use crate::output::{print_json, print_text};
+use crate::values;
 
 /// Options of `handeye calibrate`.
 #[derive(ClapArgs, Debug)]
@@ -40,7 +42,7 @@ pub struct Args {
     reject_outliers: bool,
     /// A pose whose motions' robot and camera rotation angles differ by more than this (median,
     /// degrees) is an outlier whatever the noise level.
-    #[arg(long, default_value_t = OUTLIER_DEG)]
+    #[arg(long, default_value_t = OUTLIER_DEG, value_parser = values::angle_deg)]
     outlier_deg: f64,
     /// Read the input another way: `auto` applies a reading that fits far better when one is
     /// found; `as-given` keeps the input as it is (a better reading is then a warning, not a
@@ -50,15 +52,26 @@ pub struct Args {
     #[arg(long)]
     fix: Option<String>,
     /// Bootstrap replicates behind the reported uncertainty.
-    #[arg(long, default_value_t = REPLICATES)]
+    #[arg(long, default_value_t = REPLICATES, value_parser = values::count(MIN_REPLICATES as u64, values::MAX_REPLICATES))]
     bootstrap: usize,
     /// Drop the motions OpenCV's Tsai drops: robot or camera rotation with 2·sin(θ/2) outside
     /// [0.3, 1.7] (with --method tsai).
     #[arg(long)]
     tsai_opencv_filter: bool,
-    /// Output: the JSON object, or a ROS-style YAML (translation {x,y,z}, rotation {x,y,z,w}).
-    #[arg(long, default_value = "json", value_parser = ["json", "yaml"])]
-    output: String,
+    /// Output: the JSON object; a summary for a person (`text`); easy_handeye2's calibration
+    /// YAML (with translation {x,y,z} and rotation {x,y,z,w}); a `static_transform_publisher`
+    /// line and launch snippet (`ros2`); a URDF `<joint>` (`urdf`) [default: text on a terminal,
+    /// JSON otherwise].
+    #[arg(long, value_parser = ["json", "text", "yaml", "ros2", "urdf"])]
+    output: Option<String>,
+    /// The parent frame of X in the yaml, ros2 and urdf outputs [default: the recording's gripper
+    /// frame (eye-in-hand) or base frame (eye-to-hand); `gripper` or `base` for files].
+    #[arg(long)]
+    parent_frame: Option<String>,
+    /// The child frame of X (the camera's) [default: the recording's camera frame; `camera` for
+    /// files].
+    #[arg(long)]
+    child_frame: Option<String>,
 }
 
 /// Fewest bootstrap replicates that give a usable one-sigma.
@@ -88,14 +101,31 @@ pub fn run(args: Args) -> Result<()> {
         }
         .into());
     }
-    let report = calibrate(
+    let face = Face::chosen(args.output.as_deref());
+    let unit = length_unit(&poses);
+    let report = match calibrate(
         &poses,
         setup,
         &Options {
             pose_names,
             ..options
         },
-    )?;
+    ) {
+        Ok(report) => report,
+        Err(e) => {
+            let refusal = matches!(
+                e,
+                Error::Degenerate { .. }
+                    | Error::TooFewMotions { .. }
+                    | Error::Misread { .. }
+                    | Error::Untrusted { .. }
+            );
+            if face == Face::Text && refusal {
+                print_text(&faces::refused(&e))?;
+            }
+            return Err(e.into());
+        }
+    };
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
         eprintln!(
             "rejected {} outlier pose(s) of {}",
@@ -109,15 +139,38 @@ pub fn run(args: Args) -> Result<()> {
             report.poses
         );
     }
-    for w in &report.warnings {
-        eprintln!("warning: {w}");
+    // The text face lists the warnings itself.
+    if face != Face::Text {
+        for w in &report.warnings {
+            eprintln!("warning: {w}");
+        }
     }
-    if let Some(line) = static_transform_publisher(&args.input, &report) {
-        eprintln!("publish X in tf with: {line}");
+    let frames = faces::frames(
+        &args.input,
+        args.parent_frame.as_deref(),
+        args.child_frame.as_deref(),
+    );
+    let source = format!("calibrate, method {}", report.method);
+    let published = Published::of(&report, &source);
+    if args.input.is_bag() && face != Face::Ros2 {
+        eprintln!(
+            "publish X in tf with: {}",
+            faces::static_transform_publisher(published, &frames)
+        );
     }
-    if args.output == "yaml" {
-        print!("{}", ros_yaml(&report));
-        return Ok(());
+    if unit == Some(handeye::online::Unit::Millimetre)
+        && matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf)
+    {
+        eprintln!(
+            "warning: the translation is in millimetres, as the input; ROS expects metres (divide it by 1000)"
+        );
+    }
+    match face {
+        Face::Text => return print_text(&faces::text(&report, &frames, unit)),
+        Face::Yaml => return print_text(&faces::yaml(published, &frames, Some(&report))),
+        Face::Ros2 => return print_text(&faces::ros2(published, &frames)),
+        Face::Urdf => return print_text(&faces::urdf(published, &frames)),
+        Face::Json => {}
     }
     let mut out = serde_json::to_value(&report)?;
     if let (Some(t), Value::Object(o)) = (time_offset, &mut out) {
@@ -186,9 +239,19 @@ fn run_robot_world(args: &Args) -> Result<()> {
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }
-    if args.output == "yaml" {
-        print!("{}", robot_world_yaml(&report));
-        return Ok(());
+    match Face::chosen(args.output.as_deref()) {
+        // The YAML lists X, the target, their one-sigma and the residuals: readable as text too.
+        Face::Yaml | Face::Text => return print_text(&robot_world_yaml(&report)),
+        Face::Ros2 | Face::Urdf => {
+            return Err(Error::InvalidParameter {
+                name: "output",
+                message:
+                    "ros2 and urdf are not offered with --robot-world yet; use json, yaml or text"
+                        .into(),
+            }
+            .into());
+        }
+        Face::Json => {}
     }
     let mut out = serde_json::to_value(&report)?;
     if let (Some(t), Value::Object(o)) = (time_offset, &mut out) {
@@ -273,39 +336,4 @@ fn options(args: &Args) -> Result<Options> {
         replicates,
         pose_names: Vec::new(),
     })
-}
-
-/// The result as ROS-style YAML (easy_handeye / tf conventions: translation, rotation x y z w).
-fn ros_yaml(r: &Report) -> String {
-    let [tx, ty, tz] = r.x.translation;
-    let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
-    format!(
-        "# handeye calibrate: method {}, setup {}\nframe: {}\ntranslation: {{x: {tx}, y: {ty}, z: {tz}}}\nrotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\nuncertainty: {{rotation_deg: {}, translation: {}}}\nresidual: {{rotation_deg_rms: {}, translation_rms: {}}}\nmotions: {}\n",
-        r.method,
-        r.setup.name(),
-        r.frame,
-        r.uncertainty.rotation_deg,
-        r.uncertainty.translation,
-        r.residual.rotation_deg_rms,
-        r.residual.translation_rms,
-        r.motions,
-    )
-}
-
-/// For a ROS 2 recording, the `static_transform_publisher` command that puts X in the tf tree:
-/// `gripper → camera` (eye-in-hand) or `base → camera` (eye-to-hand), in the recording's names.
-fn static_transform_publisher(input: &InputArgs, r: &Report) -> Option<String> {
-    if !input.is_bag() {
-        return None;
-    }
-    let parent = match input.setup() {
-        Setup::EyeInHand => input.gripper_frame.as_deref()?,
-        Setup::EyeToHand => input.base_frame.as_deref()?,
-    };
-    let camera = input.camera_frame.as_deref()?;
-    let [x, y, z] = r.x.translation;
-    let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
-    Some(format!(
-        "ros2 run tf2_ros static_transform_publisher --x {x} --y {y} --z {z} --qx {qx} --qy {qy} --qz {qz} --qw {qw} --frame-id {parent} --child-frame-id {camera}"
-    ))
 }

@@ -11,6 +11,8 @@ use handeye::select::{AdaptiveParams, Selection};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
 
+use crate::{outln, values};
+
 /// Options of `handeye demo`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -18,7 +20,7 @@ pub struct Args {
     #[arg(long, default_value_t = 7)]
     seed: u64,
     /// Poses in the stream.
-    #[arg(long, default_value_t = 500)]
+    #[arg(long, default_value_t = 500, value_parser = values::count(10, values::MAX_POSES))]
     poses: usize,
 }
 
@@ -33,22 +35,22 @@ pub fn run(args: Args) -> Result<()> {
         0,
     );
     let truth = sim.gripper_from_camera;
-    println!(
+    outln!(
         "Simulated robot stream: {} poses (the paper's protocol: 5° / 10 mm random steps, 0.1% rotation and 1% translation noise).",
         sim.poses.len()
-    );
+    )?;
     let t = truth.translation.vector;
-    println!(
+    outln!(
         "True X = gripper_from_camera: rotation {:.2}°, translation [{:.1}, {:.1}, {:.1}] mm\n",
         truth.rotation.angle().to_degrees(),
         t.x,
         t.y,
         t.z
-    );
-    println!(
+    )?;
+    outln!(
         "| method | calibrations | mean rotation error (°) | mean translation error (%) | final X: rotation error (°), translation error (%) | time per calibration (µs) |"
-    );
-    println!("|---|---|---|---|---|---|");
+    )?;
+    outln!("|---|---|---|---|---|---|")?;
     for (name, selection, error_source) in [
         (
             "conventional (no selection)",
@@ -98,7 +100,7 @@ pub fn run(args: Args) -> Result<()> {
             .last_x()
             .map(|x| errors_against_truth(&x, &truth));
         let d = n.max(1) as f64;
-        println!(
+        outln!(
             "| {name} | {n} | {} | {} | {} | {} |",
             if n > 0 {
                 format!("{:.3}", rot / d)
@@ -120,14 +122,14 @@ pub fn run(args: Args) -> Result<()> {
             } else {
                 "–".into()
             },
-        );
+        )?;
     }
     let motions = motion_pairs(&sim.poses, Pairing::Consecutive, Setup::EyeInHand);
     let started = Instant::now();
     let batch = solve(Method::Refine, &motions)?;
     let elapsed = started.elapsed().as_secs_f64();
     let e = errors_against_truth(&batch.x, &truth);
-    println!(
+    outln!(
         "| batch `refine` on all {} motions (not online) | 1 | {:.3} | {:.1} | {:.3}, {:.1} | {:.1} |",
         motions.len(),
         e.rot_deg,
@@ -135,9 +137,9 @@ pub fn run(args: Args) -> Result<()> {
         e.rot_deg,
         100.0 * e.trans_rel,
         1e6 * elapsed
-    );
-    println!(
+    )?;
+    outln!(
         "\nErrors are against the true X: rotation angle of R̂ᵀR, and ‖t − t̂‖/‖t‖. Try `handeye experiment all` for the paper's full comparison."
-    );
+    )?;
     Ok(())
 }

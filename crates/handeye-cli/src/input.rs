@@ -32,10 +32,10 @@ pub struct InputArgs {
     #[arg(long, requires = "robot")]
     pub camera: Option<PathBuf>,
     /// Camera clock minus robot clock, seconds, or `auto` to estimate it from the angular speeds.
-    #[arg(long, default_value = "0")]
+    #[arg(long, default_value = "0", value_parser = crate::values::time_offset)]
     pub time_offset: String,
     /// Drop camera samples in gaps of the robot stream longer than this, seconds.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, value_parser = crate::values::positive)]
     pub max_gap: f64,
     /// ROS 2 recording: the robot's base frame in /tf (e.g. base_link).
     #[arg(

@@ -10,7 +10,7 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::{BagSummary, TfEdge, inspect_bag};
 
-use crate::output::print_json;
+use crate::output::{print_json, print_text};
 
 /// Options of `handeye inspect`.
 #[derive(ClapArgs, Debug)]
@@ -31,8 +31,7 @@ pub fn run(args: Args) -> Result<()> {
         None => std::io::stdout().is_terminal(),
     };
     if text {
-        print!("{}", render(&summary));
-        Ok(())
+        print_text(&render(&summary))
     } else {
         print_json(&serde_json::to_value(&summary)?)
     }

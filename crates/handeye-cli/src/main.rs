@@ -4,16 +4,19 @@
 //! Exit codes: 0 success, 2 bad input (file, line and field named), 3 valid input from which X
 //! cannot be determined.
 
+mod advise;
 mod bench;
 mod calibrate;
 mod demo;
 mod experiment;
+mod faces;
 mod figures;
 mod input;
 mod inspect;
 mod online;
 mod output;
 mod simulate;
+mod values;
 
 use std::process::ExitCode;
 
@@ -22,36 +25,52 @@ use clap::{Parser, Subcommand};
 /// Hand–eye calibration (AX = XB): batch solvers and online calibration with adaptive motion
 /// selection.
 #[derive(Parser)]
-#[command(name = "handeye", version, about, long_about = None)]
+#[command(name = "handeye", version, about, long_about = None, after_help = EXIT_CODES)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
 }
 
+/// The exit codes, in every command's `--help`.
+const EXIT_CODES: &str = "Exit codes: 0 success (also when the reader of a pipe closes it early); 1 an unexpected failure (a file that cannot be written); 2 bad input or an out-of-range option (the file, line and field, or the flag, named); 3 valid input from which X cannot be determined (degenerate motions, or data that fit far better read another way: the message says what to do).";
+
 #[derive(Subcommand)]
 enum Command {
     /// Solve X from a recording with one of the batch solvers.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Calibrate(calibrate::Args),
     /// Calibrate online, one pose pair at a time, printing each calibration as it happens.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Online(online::Args),
     /// List the topics, types, counts and tf tree of a ROS 2 recording, to choose its frames.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Inspect(inspect::Args),
+    /// Say what to record next: the least determined directions of X and the motions that
+    /// would shrink its uncertainty most.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
+    Advise(advise::Args),
     /// Write a simulated series (the paper's protocol) and its truth.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Simulate(simulate::Args),
     /// Run the paper's simulated experiments and write tables and figures.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Experiment(experiment::Args),
     /// Simulate a stream, calibrate it online three ways and compare with the true X.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Demo(demo::Args),
     /// Time every solver and the online calibrator in-process.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Bench(bench::Args),
 }
 
 fn main() -> ExitCode {
+    output::quiet_on_closed_pipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Online(a) => online::run(a),
         Command::Inspect(a) => inspect::run(a),
+        Command::Advise(a) => advise::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Experiment(a) => experiment::run(a),
         Command::Demo(a) => demo::run(a),
@@ -59,6 +78,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if output::is_closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {}", output::error_message(&e));
             ExitCode::from(output::exit_code(&e))

@@ -8,12 +8,14 @@ use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
-use handeye::select::{AdaptiveParams, Selection};
+use handeye::select::{AdaptiveParams, MAX_N_INIT, Selection};
 use handeye::tracking::{Report, Step, TrackOptions};
 use serde_json::{Map, Value, json};
 
+use crate::faces::{self, Face, Published};
 use crate::input::{InputArgs, records};
-use crate::output::{insert_transform, print_line};
+use crate::output::{insert_transform, print_line, print_text};
+use crate::{outln, values};
 
 /// Options of `handeye online`.
 #[derive(ClapArgs, Debug)]
@@ -30,18 +32,18 @@ pub struct Args {
     #[arg(long, default_value = "paper", value_parser = ["paper", "accumulate"])]
     estimator: String,
     /// With --estimator accumulate: report the estimate at least every N poses.
-    #[arg(long, default_value_t = TrackOptions::default().every)]
+    #[arg(long, default_value_t = TrackOptions::default().every, value_parser = values::count(1, u64::MAX))]
     every: usize,
     /// With --estimator accumulate: also report when both uncertainties have shrunk to this
     /// fraction of the last reported ones.
-    #[arg(long, default_value_t = TrackOptions::default().shrink)]
+    #[arg(long, default_value_t = TrackOptions::default().shrink, value_parser = values::positive)]
     shrink: f64,
     /// Length unit of the input: `auto` infers metres or millimetres from the first pose; it
     /// sets the default --d-max (0.1 m).
     #[arg(long, default_value = "auto", value_parser = ["auto", "m", "mm"])]
     unit: String,
     /// Least rotation-angle gap (degrees) that marks a pose as an outlier (accumulate estimator).
-    #[arg(long, default_value_t = TrackOptions::default().outlier_deg)]
+    #[arg(long, default_value_t = TrackOptions::default().outlier_deg, value_parser = values::angle_deg)]
     outlier_deg: f64,
     /// Also refine over the last five selected motions (the paper's optimal method).
     #[arg(long)]
@@ -55,41 +57,64 @@ pub struct Args {
     /// What to do with a bad line: report it and skip it, or stop (exit 2).
     #[arg(long, default_value = "skip", value_parser = ["skip", "stop"])]
     on_bad_line: String,
-    /// N of Eq. (1): motions averaged for the initial thresholds.
-    #[arg(long, default_value_t = AdaptiveParams::default().n_init)]
+    /// N of Eq. (1): motions averaged for the initial thresholds (2 to 1000000).
+    #[arg(long, default_value_t = AdaptiveParams::default().n_init, value_parser = values::count(2, MAX_N_INIT as u64))]
     n_init: usize,
     /// Candidates tried before the thresholds are relaxed.
-    #[arg(long, default_value_t = AdaptiveParams::default().interval)]
+    #[arg(long, default_value_t = AdaptiveParams::default().interval, value_parser = values::count(1, u64::MAX))]
     interval: usize,
-    /// Relaxation factor of sin α₀ and β₀.
-    #[arg(long, default_value_t = AdaptiveParams::default().relax_down)]
+    /// Relaxation factor of sin α₀ and β₀, in (0, 1].
+    #[arg(long, default_value_t = AdaptiveParams::default().relax_down, value_parser = values::fraction)]
     relax_down: f64,
-    /// Relaxation factor of d₀.
-    #[arg(long, default_value_t = AdaptiveParams::default().relax_up)]
+    /// Relaxation factor of d₀, at least 1.
+    #[arg(long, default_value_t = AdaptiveParams::default().relax_up, value_parser = values::at_least_one)]
     relax_up: f64,
     /// Exploration factor after calibrations 1–3.
-    #[arg(long, default_value_t = AdaptiveParams::default().explore)]
+    #[arg(long, default_value_t = AdaptiveParams::default().explore, value_parser = values::positive)]
     explore: f64,
-    /// Required rotation accuracy rmsRMax.
-    #[arg(long, default_value_t = AdaptiveParams::default().rms_r_max)]
+    /// Required rotation accuracy rmsRMax, unit-free: the RMS of the nine entries of R̂ − R
+    /// (‖R̂ − R‖_F / 3, the events' `rms_r`; 0.001 is a rotation error of about 0.12°).
+    #[arg(long, default_value_t = AdaptiveParams::default().rms_r_max, value_parser = values::positive)]
     rms_r_max: f64,
-    /// Required translation accuracy rmsTMax.
-    #[arg(long, default_value_t = AdaptiveParams::default().rms_t_max)]
+    /// Required translation accuracy rmsTMax, unit-free: a translation error relative to ‖t_X‖
+    /// (the events' `rms_t`; 0.05 is 5 %).
+    #[arg(long, default_value_t = AdaptiveParams::default().rms_t_max, value_parser = values::positive)]
     rms_t_max: f64,
-    /// Floor of a predicted sin α₀ (default sin 15°).
-    #[arg(long, default_value_t = AdaptiveParams::default().alpha_min)]
-    alpha_min: f64,
-    /// Floor of a predicted β₀, degrees [default: 3, the library's default].
-    #[arg(long)]
+    /// Floor of a predicted α₀ (the angle between the axes of A' and A''), degrees, in (0, 90].
+    #[arg(long, default_value_t = ALPHA_MIN_DEG, value_parser = values::axis_angle_deg, conflicts_with = "alpha_min")]
+    alpha_min_deg: f64,
+    /// Deprecated: the floor as a sine (sin α₀, in (0, 1]); use --alpha-min-deg.
+    #[arg(long, value_parser = values::fraction)]
+    alpha_min: Option<f64>,
+    /// Floor of a predicted β₀ (the least rotation angle of a selected motion), degrees, in
+    /// (0, 180] [default: 3, the library's default].
+    #[arg(long, value_parser = values::angle_deg)]
     beta_min_deg: Option<f64>,
     /// Ceiling of a predicted d₀, in the input's length unit [default: 0.1 m in the unit of
     /// --unit].
-    #[arg(long)]
+    #[arg(long, value_parser = values::positive)]
     d_max: Option<f64>,
     /// Opt-in remedy for thresholds that lock when their four records are equal.
     #[arg(long)]
     unfreeze: bool,
+    /// Output: JSON Lines; a line for a person per calibration or estimate (`text`); or, at the
+    /// end of the stream, the last X as easy_handeye2's YAML, a `static_transform_publisher` line
+    /// and launch snippet (`ros2`) or a URDF `<joint>` (`urdf`) [default: text on a terminal,
+    /// JSON otherwise].
+    #[arg(long, value_parser = ["json", "text", "yaml", "ros2", "urdf"])]
+    output: Option<String>,
+    /// The parent frame of X in the yaml, ros2 and urdf outputs [default: the recording's gripper
+    /// frame (eye-in-hand) or base frame (eye-to-hand); `gripper` or `base` for files].
+    #[arg(long)]
+    parent_frame: Option<String>,
+    /// The child frame of X (the camera's) [default: the recording's camera frame; `camera` for
+    /// files].
+    #[arg(long)]
+    child_frame: Option<String>,
 }
+
+/// Default floor of a predicted α₀, degrees (the library's sin 15°).
+const ALPHA_MIN_DEG: f64 = 15.0;
 
 /// Bad lines shown one by one before `online` shows only every 2^k-th.
 const SHOWN_BAD_LINES: usize = 100;
@@ -119,7 +144,16 @@ pub fn run(args: Args) -> Result<()> {
             explore: args.explore,
             rms_r_max: args.rms_r_max,
             rms_t_max: args.rms_t_max,
-            alpha_min: args.alpha_min,
+            alpha_min: match args.alpha_min {
+                Some(sine) => {
+                    eprintln!(
+                        "warning: --alpha-min (a sine) is deprecated: use --alpha-min-deg {:.4}",
+                        sine.asin().to_degrees()
+                    );
+                    sine
+                }
+                None => args.alpha_min_deg.to_radians().sin(),
+            },
             beta_min: args
                 .beta_min_deg
                 .map_or(AdaptiveParams::default().beta_min, f64::to_radians),
@@ -148,6 +182,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     let accumulate = config.estimator == Estimator::Accumulate;
+    let face = Face::chosen(args.output.as_deref());
     let mut calibrator = OnlineCalibrator::new(config)?;
     let (records, source, time_offset) = records(&args.input)?;
     let mut messages = Thinned::default();
@@ -199,12 +234,29 @@ pub fn run(args: Args) -> Result<()> {
         let stamp = args.input.robot.as_ref().and(record.stamp);
         lines.push_back((calibrator.poses(), record.line, stamp));
         if let Some(step) = calibrator.step() {
-            print_step(step, setup, &lines, &source, time_offset, &mut messages)?;
+            print_step(
+                step,
+                setup,
+                &lines,
+                &source,
+                time_offset,
+                face,
+                &mut messages,
+            )?;
             last = step.report.or(last);
         }
         if !accumulate {
             for event in events {
-                print_line(&event_json(&event, time_offset))?;
+                match face {
+                    Face::Json => print_line(&event_json(&event, time_offset))?,
+                    Face::Text => outln!("{}", event_text(&event))?,
+                    _ => {}
+                }
+            }
+            if calibrator.poses() % QUIET_POSES == 0
+                && let Some(why) = calibrator.quiet(QUIET_POSES)
+            {
+                eprintln!("{why}");
             }
         }
     }
@@ -212,15 +264,92 @@ pub fn run(args: Args) -> Result<()> {
         warn_misread(&first, setup);
     }
     if let Some(report) = calibrator.finish() {
-        print_line(&with_offset(report.json(setup), time_offset))?;
+        print_report(&report, setup, time_offset, face)?;
         last = Some(report);
     }
     eprintln!(
         "{}",
         summary(&calibrator, last.as_ref(), messages.bad_lines)
     );
+    if matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf) {
+        let (x, source) = match (&last, calibrator.last_x()) {
+            (Some(r), _) => (r.estimate.x, format!("online, estimate {}", r.number)),
+            (None, Some(x)) if !accumulate => (
+                x,
+                format!("online, calibration {}", calibrator.calibrations()),
+            ),
+            _ => {
+                return Err(handeye::Error::TooFewMotions {
+                    got: calibrator.calibrations(),
+                    need: 1,
+                }
+                .into());
+            }
+        };
+        if calibrator.unit() == Unit::Millimetre {
+            eprintln!(
+                "warning: the translation is in millimetres, as the input; ROS expects metres (divide it by 1000)"
+            );
+        }
+        let frames = faces::frames(
+            &args.input,
+            args.parent_frame.as_deref(),
+            args.child_frame.as_deref(),
+        );
+        let published = Published {
+            x: &x,
+            frame: setup.x_frame(),
+            setup,
+            source: &source,
+        };
+        print_text(&match face {
+            Face::Yaml => faces::yaml(published, &frames, None),
+            Face::Ros2 => faces::ros2(published, &frames),
+            _ => faces::urdf(published, &frames),
+        })?;
+    }
     Ok(())
 }
+
+/// A report of the accumulating estimator on stdout, in the face chosen.
+fn print_report(
+    r: &Report,
+    setup: handeye::Setup,
+    time_offset: Option<f64>,
+    face: Face,
+) -> Result<()> {
+    match face {
+        Face::Json => print_line(&with_offset(r.json(setup), time_offset)),
+        Face::Text => {
+            let e = &r.estimate;
+            outln!(
+                "estimate {} from {} poses: {}, uncertainty {:.3}° / {:.4}",
+                r.number,
+                e.poses,
+                describe(&e.x),
+                e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
+                e.uncertainty_translation.unwrap_or(f64::NAN)
+            )
+        }
+        _ => Ok(()),
+    }
+}
+
+/// A calibration event for a person.
+fn event_text(e: &Event) -> String {
+    let [a, i, j] = e.poses;
+    format!(
+        "calibration {} (poses {a}, {i}, {j}): {}, rms_r {:.2e}, rms_t {:.2e}",
+        e.calibration,
+        describe(&e.x),
+        e.rms.rms_r,
+        e.rms.rms_t
+    )
+}
+
+/// Poses without a calibration after which the summary says why (and the paper's estimator says
+/// it during the run too, at every multiple).
+const QUIET_POSES: usize = 200;
 
 /// Poses the readings are checked on with the paper's estimator.
 const READINGS_SAMPLE: usize = 64;
@@ -228,7 +357,20 @@ const READINGS_SAMPLE: usize = 64;
 /// Warns when the poses fit far better read another way (an inverted pose, `w, x, y, z`
 /// quaternions, millimetres on one side), or with sizes the setup makes unlikely.
 fn warn_misread(poses: &[handeye::PosePair], setup: handeye::Setup) {
-    let check = handeye::conventions::check_readings(poses, setup);
+    if handeye::consistency::axis_scatter(poses, setup) < handeye::conventions::DEGENERATE_SCATTER {
+        eprintln!(
+            "warning: every rotation of the first {} poses is about one axis: X's rotation about it, and its translation along it, are not determined by them, whatever the calibrations below say; rotate the gripper about other axes",
+            poses.len()
+        );
+        return;
+    }
+    // As batch does: on the poses that agree with the others.
+    let outliers = handeye::consistency::pose_outliers(poses, setup, 3.0).indices();
+    let kept: Vec<handeye::PosePair> = (0..poses.len())
+        .filter(|i| !outliers.contains(i))
+        .map(|i| poses[i])
+        .collect();
+    let check = handeye::conventions::check_readings(&kept, setup);
     if let Some(advice) = check.advice(setup) {
         eprintln!(
             "warning: the calibrations are from data read wrongly: {advice} (`handeye calibrate` checks this too)"
@@ -325,6 +467,7 @@ fn print_step(
     lines: &VecDeque<(usize, usize, Option<f64>)>,
     source: &str,
     time_offset: Option<f64>,
+    face: Face,
     messages: &mut Thinned,
 ) -> Result<()> {
     let place = |pose: usize| match lines.iter().find(|(p, _, _)| *p == pose) {
@@ -349,10 +492,12 @@ fn print_step(
             c.x_rotation_deg,
             c.x_translation
         );
-        print_line(&c.json())?;
+        if face == Face::Json {
+            print_line(&c.json())?;
+        }
     }
     if let Some(r) = &step.report {
-        print_line(&with_offset(r.json(setup), time_offset))?;
+        print_report(r, setup, time_offset, face)?;
     }
     Ok(())
 }
@@ -409,12 +554,19 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
         bad
     };
     let Some(tracker) = calibrator.tracker() else {
-        let last = calibrator.last_x().map_or(
-            "none: the selection accepted no pair of motions (too little rotation, or all about one axis)".to_string(),
-            |x| describe(&x),
-        );
+        let last = calibrator
+            .last_x()
+            .map_or("none".to_string(), |x| describe(&x));
+        let quiet_after = if calibrator.calibrations() == 0 {
+            1
+        } else {
+            QUIET_POSES
+        };
+        let quiet = calibrator
+            .quiet(quiet_after)
+            .map_or(String::new(), |why| format!("\n{why}"));
         return format!(
-            "{} calibration(s) from {} pose(s){bad}; last X: {last}",
+            "{} calibration(s) from {} pose(s){bad}; last X: {last}{quiet}",
             calibrator.calibrations(),
             calibrator.poses()
         );

@@ -9,11 +9,13 @@ use handeye::io::{Truth, truth_json};
 use handeye::sim::{SimConfig, simulate};
 use serde_json::json;
 
+use crate::values;
+
 /// Options of `handeye simulate`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// Number of poses.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = values::count(1, values::MAX_POSES))]
     poses: usize,
     /// Seed of the run.
     #[arg(long, default_value_t = 1)]
@@ -27,7 +29,8 @@ pub struct Args {
     /// Without measurement noise.
     #[arg(long)]
     noise_free: bool,
-    /// Output file (JSON Lines: `base_from_gripper`, `camera_from_target` as 4×4, `stamp`).
+    /// Output file (JSON Lines: `base_from_gripper`, `camera_from_target` as 4×4, `stamp`), or
+    /// `-` for standard output.
     #[arg(long)]
     out: PathBuf,
     /// Truth file to write (the true X and the target pose).
@@ -50,9 +53,16 @@ pub fn run(args: Args) -> Result<()> {
         config = config.noise_free();
     }
     let s = simulate(&config, args.seed, args.series);
-    let file = std::fs::File::create(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut w = std::io::BufWriter::new(file);
+    let to_stdout = args.out.as_os_str() == "-";
+    let sink: Box<dyn Write> = if to_stdout {
+        Box::new(std::io::stdout().lock())
+    } else {
+        Box::new(
+            std::fs::File::create(&args.out)
+                .with_context(|| format!("cannot create {}", args.out.display()))?,
+        )
+    };
+    let mut w = std::io::BufWriter::new(sink);
     for (k, p) in s.poses.iter().enumerate() {
         let m = |t: &handeye::Transform| {
             let h = t.to_homogeneous();
@@ -79,7 +89,11 @@ pub fn run(args: Args) -> Result<()> {
     eprintln!(
         "wrote {} poses (millimetres) to {}",
         s.poses.len(),
-        args.out.display()
+        if to_stdout {
+            "standard output".to_string()
+        } else {
+            args.out.display().to_string()
+        }
     );
     Ok(())
 }

@@ -170,7 +170,7 @@ const I: &str = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
 fn good_line(k: usize) -> String {
     // Rotations about alternating axes, so that two motions determine X.
     let (c, s) = ((0.3 * k as f64).cos(), (0.3 * k as f64).sin());
-    let r = if k % 2 == 0 {
+    let r = if k.is_multiple_of(2) {
         format!("[[1,0,0,{k}],[0,{c},{},0],[0,{s},{c},0],[0,0,0,1]]", -s)
     } else {
         format!("[[{c},0,{s},0],[0,1,0,{k}],[{},0,{c},0],[0,0,0,1]]", -s)
@@ -603,4 +603,51 @@ fn online_infers_the_unit_and_refuses_to_guess() {
     let (code, _, err) = run(handeye().args(["online", tiny.to_str().unwrap(), "--unit", "mm"]));
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("length unit: millimetres (--unit)"), "{err}");
+}
+
+#[test]
+fn online_with_the_papers_estimator_warns_about_misread_and_degenerate_input() {
+    let kinhec = testdata("kinhec");
+    let warnings = |file: &str, setup: &str| {
+        let (code, _, err) = run(handeye()
+            .arg("online")
+            .arg(kinhec.join(file))
+            .args(["--setup", setup]));
+        assert_eq!(code, 0, "{err}");
+        err.lines()
+            .filter(|l| l.starts_with("warning:"))
+            .map(str::to_string)
+            .collect::<Vec<_>>()
+    };
+    for (file, setup) in [
+        ("pairs/nominal_stations_eih_s0.jsonl", "eye-in-hand"),
+        (
+            "pairs/outliers_planar_flip_stations_eih_s0.jsonl",
+            "eye-in-hand",
+        ),
+        ("pairs/pnp_stations_eth_s0.jsonl", "eye-to-hand"),
+    ] {
+        assert!(warnings(file, setup).is_empty(), "{file}");
+    }
+    let misread = warnings(
+        "mistakes/robot_inverted__nominal_stations_eih_s0.jsonl",
+        "eye-in-hand",
+    );
+    assert!(
+        misread.iter().any(|w| w.contains("--fix robot-inverted")),
+        "{misread:?}"
+    );
+    let mm = warnings(
+        "mistakes/robot_mm__nominal_stations_eih_s0.jsonl",
+        "eye-in-hand",
+    );
+    assert!(mm.iter().any(|w| w.contains("millimetres")), "{mm:?}");
+    let one_axis = warnings(
+        "pairs/degenerate_single_joint_continuous_eih_s0.jsonl",
+        "eye-in-hand",
+    );
+    assert!(
+        one_axis.iter().any(|w| w.contains("about one axis")),
+        "{one_axis:?}"
+    );
 }

@@ -156,6 +156,27 @@ fn robot_world_report<'py>(
     serde_json::to_string(&report).map_err(value_error)
 }
 
+/// What to record next (`handeye advise`): the library's `Advice` as JSON text.
+#[pyfunction]
+#[pyo3(signature = (base_from_gripper, camera_from_target, setup="eye-in-hand", count=3))]
+fn advise_report<'py>(
+    py: Python<'py>,
+    base_from_gripper: PyReadonlyArray3<'py, f64>,
+    camera_from_target: PyReadonlyArray3<'py, f64>,
+    setup: &str,
+    count: usize,
+) -> PyResult<String> {
+    if !(1..=20).contains(&count) {
+        return Err(value_error(format!("count must be 1 to 20, found {count}")));
+    }
+    let setup = parse_setup(setup)?;
+    let poses = poses(&base_from_gripper, &camera_from_target)?;
+    let advice = py
+        .allow_threads(|| handeye::advice::advise(&poses, setup, count))
+        .map_err(value_error)?;
+    serde_json::to_string(&advice).map_err(value_error)
+}
+
 /// The method, pairing and Tsai options by name.
 fn calibration_options(
     method: &str,
@@ -363,6 +384,7 @@ fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_x, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
     m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
+    m.add_function(wrap_pyfunction!(advise_report, m)?)?;
     m.add_class::<PyOnline>()?;
     Ok(())
 }

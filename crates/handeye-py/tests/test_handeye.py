@@ -125,6 +125,18 @@ def test_bad_inputs_raise_and_never_crash():
         handeye.calibrate(np.stack([eye] * 3), np.stack([eye] * 3), method="magic")
     with pytest.raises(ValueError):
         handeye.OnlineCalibrator(selection="magic")
+    for selection in ("fixed", "adaptive"):
+        with pytest.raises(ValueError, match="n_init"):
+            handeye.OnlineCalibrator(selection=selection, n_init=2**62)
+    with pytest.raises(ValueError, match="alpha_min_deg"):
+        handeye.OnlineCalibrator(alpha_min_deg=95.0)
+    with pytest.raises(ValueError):
+        handeye.OnlineCalibrator(alpha_min_deg=15.0, alpha_min=0.25)
+    with pytest.raises(ValueError):
+        handeye.OnlineCalibrator(rms_t_max=float("nan"))
+    handeye.OnlineCalibrator(alpha_min_deg=15.0)
+    with pytest.warns(DeprecationWarning, match="alpha_min_deg"):
+        handeye.OnlineCalibrator(alpha_min=0.25)
     c = handeye.OnlineCalibrator()
     with pytest.raises(ValueError):
         c.push(np.eye(3), eye)
@@ -208,3 +220,14 @@ def test_robot_world_matches_opencv_and_reports_the_target():
         handeye.calibrate(g[:2], c[:2], robot_world=True)
     with pytest.raises(ValueError):
         handeye.calibrate(g, c, robot_world=True, method="tsai")
+
+
+def test_advise_names_the_next_motions_and_what_they_would_give():
+    q, c, _, _ = load_series("series_2007_000_200")
+    advice = handeye.advise(q[:12], c[:12], count=2)
+    assert advice["poses"] == 12 and len(advice["suggestions"]) == 2
+    now = advice["current"]["rotation_deg"]
+    assert advice["suggestions"][-1]["predicted"]["rotation_deg"] < now
+    assert {w["kind"] for w in advice["weakest"]} == {"rotation", "translation"}
+    with pytest.raises(ValueError):
+        handeye.advise(q[:12], c[:12], count=0)

@@ -176,7 +176,7 @@ impl PoseAccumulator {
     /// independent noise of RMS `noise_rotation` (radians) and `noise_translation` about the
     /// common Y: the robot-world reading of the poses, where each pose is one measurement (the
     /// all-pairs sums count each pose's noise in n − 1 motions). With δ = (δr, δt) in the gripper
-    /// frame, Y_k moves by A_k δ, A_k = [[R_k, 0], [R_k [t_x]× + [p_k]× R_k, R_k]]; Y absorbs the
+    /// frame, Y_k moves by A_k δ, `A_k = [[R_k, 0], [R_k [t_x]× + [p_k]× R_k, R_k]]`; Y absorbs the
     /// mean, so the information is Σ A_kᵀ W A_k − (Σ A_k)ᵀ W (Σ A_k) / n with
     /// W = diag(I/σ_r², I/σ_t²), every sum from the accumulated ones. `None` when it is singular.
     pub fn covariance(

@@ -18,6 +18,7 @@ use crate::accumulate::PoseAccumulator;
 use crate::consistency::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::conventions::{Reading, ReadingCheck, check_readings};
 use crate::error::{Degeneracy, Error, Result};
+use crate::holdout::leave_one_out;
 use crate::io::TransformJson;
 use crate::metrics::{MotionQuality, QualityReport, ResidualSummary, quality_report};
 use crate::motion::{AllPairs, MotionSource, Pairing, PosePair, Setup, motion_pairs};
@@ -202,6 +203,33 @@ pub struct Report {
     /// X as a transform (not serialised: `x` carries it).
     #[serde(skip)]
     pub transform: Transform,
+    /// The held-out check: each camera observation predicted from the other poses
+    /// ([`crate::holdout`]); `None` with fewer than four poses.
+    pub held_out: Option<HeldOutSummary>,
+}
+
+/// The held-out check in a [`Report`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeldOutSummary {
+    /// Median gap between the predicted and the recorded observation, degrees.
+    pub median_rotation_deg: f64,
+    /// Median gap in the target's position seen by the camera, input units.
+    pub median_translation: f64,
+    /// Each pose left out exactly (up to 300 poses) or not.
+    pub exact: bool,
+    /// The poses the others predict poorly (6 times the median or more), by name.
+    pub disagree: Vec<HeldOutName>,
+}
+
+/// One poorly predicted pose.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeldOutName {
+    /// Its name (`file:line` from the CLI).
+    pub name: String,
+    /// Its gaps: degrees and input units.
+    pub rotation_deg: f64,
+    /// See `rotation_deg`.
+    pub translation: f64,
 }
 
 /// Calibrates X from `poses` (see the module docs for the steps).
@@ -224,6 +252,7 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         Reading::AsGiven => as_given,
         _ => pose_outliers(&read, setup, options.outlier_deg),
     };
+    let read_len = read.len();
     let used: Vec<PosePair> = if options.reject_outliers {
         without(&read, &found)
     } else {
@@ -260,6 +289,17 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         ));
     }
     warnings.extend(kept_outliers);
+    let used_names: Vec<String> = (0..read_len)
+        .filter(|i| !(options.reject_outliers && found.poses.iter().any(|g| g.pose == *i)))
+        .map(|i| {
+            options
+                .pose_names
+                .get(i)
+                .cloned()
+                .unwrap_or_else(|| format!("pose {i}"))
+        })
+        .collect();
+    let held_out = held_out_of(&used, &used_names, setup, &mut warnings);
     Ok(Report {
         method: options.method,
         setup,
@@ -283,6 +323,44 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         warnings,
         units: Units::default(),
         transform: calibration.x,
+        held_out,
+    })
+}
+
+/// The held-out check of the poses used, their names, and a warning naming the poses the others
+/// predict poorly.
+fn held_out_of(
+    used: &[PosePair],
+    names: &[String],
+    setup: Setup,
+    warnings: &mut Vec<String>,
+) -> Option<HeldOutSummary> {
+    let check = leave_one_out(used, setup)?;
+    let disagree: Vec<HeldOutName> = check
+        .disagree
+        .iter()
+        .map(|&i| HeldOutName {
+            name: names.get(i).cloned().unwrap_or_else(|| format!("pose {i}")),
+            rotation_deg: check.poses[i].rotation_deg,
+            translation: check.poses[i].translation,
+        })
+        .collect();
+    if !disagree.is_empty() {
+        let list: Vec<String> = disagree.iter().take(5).map(|d| d.name.clone()).collect();
+        warnings.push(format!(
+            "{} pose(s) are predicted poorly by the others (6× the median gap of {:.2}° / {:.4}): a frame paired with the wrong robot pose, or a failed detection: {}{}",
+            disagree.len(),
+            check.median_rotation_deg,
+            check.median_translation,
+            list.join(", "),
+            if disagree.len() > 5 { " and more" } else { "" }
+        ));
+    }
+    Some(HeldOutSummary {
+        median_rotation_deg: check.median_rotation_deg,
+        median_translation: check.median_translation,
+        exact: check.exact,
+        disagree,
     })
 }
 

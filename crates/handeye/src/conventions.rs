@@ -214,7 +214,7 @@ impl ReadingFit {
     /// (robot inverted / camera inverted, as given / both inverted) fit equally well with X and Y
     /// swapped (Q X P⁻¹ = Y is also Q⁻¹ Y P = X), so only this tells them apart.
     ///
-    /// `Some(true)` when the sizes differ by at least [`SIZE_RATIO`] in the likely direction,
+    /// `Some(true)` when the sizes differ by at least twice (`SIZE_RATIO`) in the likely direction,
     /// `Some(false)` when in the other, `None` when they are too alike to tell.
     pub fn plausible(&self, setup: Setup) -> Option<bool> {
         let (near, far) = match setup {

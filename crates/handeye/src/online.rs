@@ -269,6 +269,11 @@ pub struct OnlineCalibrator {
     window: VecDeque<([usize; 2], MotionPair)>,
     optimal_results: usize,
     last_x: Option<Transform>,
+    /// Pose number of the last calibration, and the previous hand pose with the largest rotation
+    /// between consecutive poses since then (radians): what `quiet` says.
+    last_calibration: usize,
+    previous: Option<Transform>,
+    largest_step: f64,
     /// The unit in force: `config.unit`, or the one inferred from the first pose.
     unit: Unit,
     /// The accumulating estimator and what it did with the last pose.
@@ -294,6 +299,9 @@ impl OnlineCalibrator {
             window: VecDeque::with_capacity(OPTIMAL_WINDOW + 1),
             optimal_results: 0,
             last_x: None,
+            last_calibration: 0,
+            previous: None,
+            largest_step: 0.0,
             unit: config.unit,
             tracker: (config.estimator == Estimator::Accumulate)
                 .then(|| Tracker::new(config.setup, config.tracking)),
@@ -342,6 +350,32 @@ impl OnlineCalibrator {
         self.selector.thresholds()
     }
 
+    /// Why the paper's selection has made no calibration for a while, in words: `None` when a
+    /// calibration came within the last `poses` poses (or fewer were pushed).
+    pub fn quiet(&self, poses: usize) -> Option<String> {
+        let since = self.poses - self.last_calibration;
+        if since < poses.max(1) {
+            return None;
+        }
+        let largest = self.largest_step.to_degrees();
+        let what = if self.calibrations == 0 {
+            format!("no calibration in {} poses", self.poses)
+        } else {
+            format!("no calibration in the last {since} poses")
+        };
+        Some(match self.selector.thresholds() {
+            Some(t) => format!(
+                "{what}: the selection needs motions turning β₀ = {:.2}° or more, with axes at least {:.1}° apart and translations within d₀ = {:.4}; the largest turn between consecutive poses was {largest:.2}°",
+                t.beta.to_degrees(),
+                t.sin_alpha.clamp(-1.0, 1.0).asin().to_degrees(),
+                t.d
+            ),
+            None => format!(
+                "{what}: the largest turn between consecutive poses was {largest:.2}° (the selection needs rotations about different axes)"
+            ),
+        })
+    }
+
     /// Pushes the next pose pair; returns the calibrations it completes (usually none, at most one
     /// except at the end of the fixed method's initial window). A pose with a non-finite entry is
     /// refused with an error and leaves the state untouched.
@@ -354,6 +388,12 @@ impl OnlineCalibrator {
             self.fix_unit(pose);
         }
         self.poses += 1;
+        let hand = self.config.setup.hand_pose(&pose.base_from_gripper);
+        if let Some(previous) = self.previous {
+            let step = crate::pose::rotation_angle_between(&previous.rotation, &hand.rotation);
+            self.largest_step = self.largest_step.max(step);
+        }
+        self.previous = Some(hand);
         if let Some(tracker) = &mut self.tracker {
             self.step = tracker.push(pose);
         }
@@ -378,6 +418,8 @@ impl OnlineCalibrator {
         let seconds = started.elapsed().as_secs_f64();
         self.calibrations += 1;
         self.last_x = Some(x);
+        self.last_calibration = self.poses;
+        self.largest_step = 0.0;
         let optimal = self
             .config
             .optimal

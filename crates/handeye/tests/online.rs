@@ -333,3 +333,33 @@ fn estimators_and_error_sources_parse_from_their_names() {
     assert!(unknown.contains("paper or accumulate"), "{unknown}");
     assert!("exact".parse::<ErrorSource>().is_err());
 }
+
+#[test]
+fn an_absurd_n_init_is_refused_before_anything_is_allocated() {
+    for selection in [Selection::Fixed, Selection::Adaptive, Selection::None] {
+        for n_init in [
+            handeye::select::MAX_N_INIT + 1,
+            1 << 62,
+            1_000_000_000_000,
+            usize::MAX,
+        ] {
+            let config = OnlineConfig {
+                selection,
+                params: AdaptiveParams {
+                    n_init,
+                    ..AdaptiveParams::default()
+                },
+                ..OnlineConfig::default()
+            };
+            match OnlineCalibrator::new(config) {
+                Err(handeye::Error::InvalidParameter { name, .. }) => assert_eq!(name, "n_init"),
+                other => panic!("{selection:?} n_init {n_init}: {other:?}"),
+            }
+        }
+    }
+    let fine = AdaptiveParams {
+        n_init: handeye::select::MAX_N_INIT,
+        ..AdaptiveParams::default()
+    };
+    assert!(fine.validate().is_ok());
+}

@@ -14,15 +14,18 @@ Two faces:
 from __future__ import annotations
 
 import json
+import math
+import warnings
 
 import numpy as np
 
 from ._handeye import _OnlineCalibrator
+from ._handeye import advise_report as _advise_report
 from ._handeye import calibrate_report as _calibrate_report
 from ._handeye import robot_world_report as _robot_world_report
 from ._handeye import solve_x as _solve_x
 
-__all__ = ["calibrate_hand_eye", "calibrate", "OnlineCalibrator", "METHODS"]
+__all__ = ["calibrate_hand_eye", "calibrate", "advise", "OnlineCalibrator", "METHODS"]
 
 #: OpenCV's constants (cv2.CALIB_HAND_EYE_*) and handeye's names.
 METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
@@ -139,6 +142,18 @@ def calibrate(
     return result
 
 
+def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3):
+    """What to record next, as ``handeye advise`` prints it: X's one-sigma now (``current``), its
+    least determined directions (``weakest``) and the next gripper motions (``suggestions``: an
+    axis of the gripper frame, an angle, and the uncertainty predicted once recorded). Takes
+    (N, 4, 4) arrays."""
+    g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
+    c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
+    if g.ndim != 3 or c.ndim != 3:
+        raise ValueError("expected (N, 4, 4) arrays of transforms")
+    return json.loads(_advise_report(g, c, setup=setup, count=count))
+
+
 def _with_arrays(event):
     """The event with its ``matrix`` (and its target's) as 4x4 arrays."""
     for d in (event, event.get("target")):
@@ -153,7 +168,9 @@ class OnlineCalibrator:
     Keyword arguments: ``selection`` ("adaptive", "fixed", "none"), ``setup``, ``estimator``
     ("paper", "accumulate"), ``error_source`` ("residual", "truth"), ``truth`` (4x4 X),
     ``optimal`` and the adaptive parameters ``n_init, interval, relax_down, relax_up, explore,
-    rms_r_max, rms_t_max, alpha_min, beta_min_deg, d_max`` (``d_max`` in your length unit;
+    rms_r_max, rms_t_max, alpha_min_deg, beta_min_deg, d_max`` (``alpha_min_deg`` in degrees,
+    (0, 90]; the older ``alpha_min``, its sine, still works with a DeprecationWarning;
+    ``d_max`` in your length unit;
     left out, it is 0.1 m in the ``unit``: "auto" infers metres or millimetres from the first
     pose, "m", "mm"), ``unfreeze``; for ``estimator="accumulate"`` also ``every`` and ``shrink``
     (how often it reports). With ``estimator="accumulate"``, ``push`` returns the estimator's own
@@ -161,6 +178,19 @@ class OnlineCalibrator:
     (``change``), the same fields as ``handeye online --estimator accumulate`` prints."""
 
     def __init__(self, **params):
+        if "alpha_min_deg" in params:
+            if "alpha_min" in params:
+                raise ValueError("alpha_min_deg and alpha_min (deprecated) name one parameter: give one")
+            degrees = float(params.pop("alpha_min_deg"))
+            if not 0.0 < degrees <= 90.0:
+                raise ValueError(f"alpha_min_deg must be in (0, 90] degrees, got {degrees}")
+            params["alpha_min"] = math.sin(math.radians(degrees))
+        elif "alpha_min" in params:
+            warnings.warn(
+                "alpha_min (a sine) is deprecated: use alpha_min_deg (degrees)",
+                DeprecationWarning,
+                stacklevel=2,
+            )
         truth = params.pop("truth", None)
         if truth is not None:
             truth = np.ascontiguousarray(truth, dtype=np.float64)

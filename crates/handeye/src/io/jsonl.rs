@@ -18,8 +18,8 @@ use crate::pose::ReadTransform;
 /// Streaming reader of JSON Lines pose pairs (blank lines and `#` comments are skipped).
 ///
 /// Yields one [`StampedPosePair`] per record as soon as its line has been read, or an
-/// [`Error::Parse`] naming the file, the line (from 1) and the field of a bad record, and then goes
-/// on with the next line. A read error of the input itself ([`Error::Io`]) ends the iteration.
+/// [`crate::Error::Parse`] naming the file, the line (from 1) and the field of a bad record, and then goes
+/// on with the next line. A read error of the input itself ([`crate::Error::Io`]) ends the iteration.
 pub struct JsonlPairs<R: BufRead> {
     lines: Lines<R>,
     source: String,

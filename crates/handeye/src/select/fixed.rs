@@ -42,7 +42,8 @@ impl FixedSelector {
         Self {
             setup,
             n_init,
-            window: Vec::with_capacity(n_init + 1),
+            // Grown as poses come: never allocated from `n_init`, which the caller sets.
+            window: Vec::new(),
             stats: InitialStats::default(),
             thresholds: None,
             anchor: None,

@@ -82,6 +82,10 @@ pub struct Thresholds {
     pub d: f64,
 }
 
+/// The largest `n_init` accepted: far beyond any use (the paper's is 5), small enough that the
+/// poses buffered before the first thresholds stay a few hundred megabytes at worst.
+pub const MAX_N_INIT: usize = 1_000_000;
+
 /// Parameters of the adaptive method (SPEC sec. 4.3); `Default` gives the paper's values, listed on
 /// each field. Lengths are in the input's unit: the default `d_max` assumes metres.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -145,6 +149,12 @@ impl AdaptiveParams {
             return bad(
                 "n_init",
                 "must be at least 2 (Eq. (1) averages the angle between consecutive axes)",
+            );
+        }
+        if self.n_init > MAX_N_INIT {
+            return bad(
+                "n_init",
+                &format!("must be at most {MAX_N_INIT} (got {})", self.n_init),
             );
         }
         if self.interval < 1 {

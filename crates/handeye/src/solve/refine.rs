@@ -70,7 +70,7 @@ pub struct Refinement {
     pub termination: Termination,
     /// The block scales: RMS of the ΔR entries and of the ΔT entries at the start.
     pub scales: [f64; 2],
-    /// Covariance of the 6 parameters at the end (rotation increment of R_x exp([δ]×) in radians,
+    /// Covariance of the 6 parameters at the end (rotation increment of `R_x exp([δ]×)` in radians,
     /// then t_x in input units), from the Jacobian with each residual block's noise estimated from
     /// its final residuals; `None` when JᵀJ is singular or there are too few residuals.
     pub covariance: Option<Matrix6<f64>>,
@@ -78,10 +78,10 @@ pub struct Refinement {
 
 /// Refines X over all motions, started from [`andreff`] (SPEC sec. 3, `refine`).
 ///
-/// Unknowns R_x = R₀ exp([r]×) and t_x; residuals the 9 entries of ΔR_k = R_a R_x − R_x R_b and the
+/// Unknowns `R_x = R₀ exp([r]×)` and t_x; residuals the 9 entries of ΔR_k = R_a R_x − R_x R_b and the
 /// 3 of ΔT_k = R_a t_x + t_a − R_x t_b − t_x, each block divided by its RMS at the start so that
 /// neither dominates. The parameterisation is re-centred after every accepted step
-/// (R₀ ← R₀ exp([δ]×)), which reaches the same minimum as a fixed R₀.
+/// (`R₀ ← R₀ exp([δ]×)`), which reaches the same minimum as a fixed R₀.
 ///
 /// # References
 /// K. Levenberg (1944), D. Marquardt (1963); the step control follows H. B. Nielsen,
@@ -177,7 +177,7 @@ fn residual(
 
 /// The 12×6 weighted Jacobian of one motion's residuals and the weighted residual vector.
 ///
-/// With R = R_x exp([δ]×): ∂ΔR/∂δ_m = R_a R_x [e_m]× − R_x [e_m]× R_b and
+/// With R = `R_x exp([δ]×)`: ∂ΔR/∂δ_m = R_a R_x [e_m]× − R_x [e_m]× R_b and
 /// ∂ΔT/∂δ_m = −R_x [e_m]× t_b; ∂ΔT/∂t = R_a − I.
 fn jacobian(
     m: &MotionPair,
@@ -327,7 +327,7 @@ fn run(
     }
 }
 
-/// Covariance of X's parameters (rotation increment of R_x exp([δ]×) in radians, then t_x) at a
+/// Covariance of X's parameters (rotation increment of `R_x exp([δ]×)` in radians, then t_x) at a
 /// given X, as [`Refinement::covariance`]: the uncertainty of a solution from its residuals.
 pub fn covariance_at(
     motions: &(impl MotionSource + ?Sized),

@@ -459,7 +459,7 @@ pub fn pose_residuals(
         .collect()
 }
 
-/// Joint covariance of (δ_X, t_X, δ_Y, t_Y): rotation increments R exp([δ]×) in radians, then
+/// Joint covariance of (δ_X, t_X, δ_Y, t_Y): rotation increments R exp(\[δ\]×) in radians, then
 /// translations in input units; 12×12.
 pub type JointCovariance = SMatrix<f64, 12, 12>;
 
@@ -482,7 +482,7 @@ pub struct RobotWorldRefinement {
 
 /// Refines X and the target pose jointly over all poses, started from [`shah`].
 ///
-/// Unknowns R_X exp([δ_X]×), t_X, R_Y exp([δ_Y]×), t_Y; residuals the 9 entries of ΔR_i and the 3
+/// Unknowns R_X exp(\[δ_X\]×), t_X, R_Y exp(\[δ_Y\]×), t_Y; residuals the 9 entries of ΔR_i and the 3
 /// of ΔT_i of [`pose_residual`] per pose, each block divided by its RMS at the start (as the
 /// hand–eye `refine`, SPEC sec. 3). Levenberg–Marquardt with Nielsen's damping, in units of the
 /// data's own length scale; never returns a higher cost than its start.

@@ -149,10 +149,10 @@ impl<const N: usize> Tridiagonal<N> {
 
     /// λ₁, λ₂ and λ_N of T: by Laguerre's iteration, or by QR when that cannot be trusted.
     fn extremes(&self) -> Option<[f64; 3]> {
-        if N >= 3 {
-            if let Some(found) = self.extremes_by_laguerre() {
-                return Some(found);
-            }
+        if N >= 3
+            && let Some(found) = self.extremes_by_laguerre()
+        {
+            return Some(found);
         }
         let all = self.all_eigenvalues()?;
         Some([all[0], all[1.min(N - 1)], all[N - 1]])
@@ -591,10 +591,10 @@ impl<const N: usize> BandedLu<N> {
             lu.multiplier[k] = l;
             carried = [other[1] - l * pivot[1], other[2] - l * pivot[2], 0.0];
         }
-        if let Some(last) = lu.upper.last_mut() {
-            if last[0] == 0.0 {
-                last[0] = tiny;
-            }
+        if let Some(last) = lu.upper.last_mut()
+            && last[0] == 0.0
+        {
+            last[0] = tiny;
         }
         for (inverse, u) in lu.inverse_pivot.iter_mut().zip(&lu.upper) {
             *inverse = 1.0 / u[0];

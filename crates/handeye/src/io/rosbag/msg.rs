@@ -129,7 +129,7 @@ pub(crate) mod tests {
         nanosec: u32,
     ) {
         let pad = |out: &mut Vec<u8>, a: usize| {
-            while (out.len() - 4) % a != 0 {
+            while !(out.len() - 4).is_multiple_of(a) {
                 out.push(0);
             }
         };

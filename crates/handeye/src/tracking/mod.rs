@@ -2,7 +2,7 @@
 //! of X or of the target, and reported on its own schedule with the reason when there is none.
 //!
 //! One [`Tracker`] takes the poses one at a time ([`Tracker::push`]). Each pose passes two tests
-//! before it enters the all-pairs sums of [`PoseAccumulator`]:
+//! before it enters the all-pairs sums of [`crate::accumulate::PoseAccumulator`]:
 //!
 //! 1. **The screw gate** (X-free, from the second pose on): the median screw-invariant gaps of the
 //!    pose against up to eight recent accepted poses ([`crate::consistency::screw_gaps`], the test
@@ -11,7 +11,7 @@
 //!    held out in a row mean the partners are stale (the rig changed): they are dropped.
 //! 2. **The residual gate**, once the estimate is mature: the pose's own fixed frame
 //!    Y_k = H_k X C_k against the accumulated Y, normalised by the scatter of all accepted poses
-//!    under the same X ([`PoseAccumulator::residual_scatter`], O(1)): the larger of rotation and
+//!    under the same X ([`crate::accumulate::PoseAccumulator::residual_scatter`], O(1)): the larger of rotation and
 //!    translation in units of their RMS. Above `gate` the pose is held out.
 //!
 //! **Change of X (or of the target).** A pose above `elevated` opens a *challenger*: a second
@@ -30,17 +30,23 @@
 //! ones, and at the end of the stream ([`Tracker::finish`]). Until then [`Tracker::pending`] says
 //! why there is none.
 
+mod events;
+mod segment;
+
 use std::collections::VecDeque;
-use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::accumulate::{PoseAccumulator, RobotWorldAccumulator, Scatter};
 use crate::consistency::{OUTLIER_FACTOR, median, pose_outliers, screw_gaps};
 use crate::conventions::{Reading, check_readings};
 use crate::motion::{PosePair, Setup};
-use crate::pose::{Transform, rotation_angle_between};
+use crate::pose::rotation_angle_between;
 use crate::uncertainty::{UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION};
+
+pub use events::{
+    Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate, target_frame,
+};
+use segment::{Segment, Snapshot};
 
 /// Settings of the tracker; `Default` gives the values on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -102,404 +108,6 @@ const REFRESH_ALWAYS: usize = 200;
 const WARMUP: [usize; 3] = [16, 64, 256];
 /// A challenger unconfirmed after this many times `confirm_poses` poses is dropped.
 const CHALLENGER_LIFE: usize = 10;
-
-/// The estimate of one segment of the stream (since the start or the last change).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct TrackEstimate {
-    /// X from every pair of accepted poses of the segment (all-pairs Andreff).
-    pub x: Transform,
-    /// The fixed frame every pose sees under X: `base_from_target` eye-in-hand,
-    /// `gripper_from_target` eye-to-hand.
-    pub target: Transform,
-    /// Accepted poses it rests on.
-    pub poses: usize,
-    /// First pose number (from 1) of the segment.
-    pub since: usize,
-    /// Conditioning of its rotation system.
-    pub conditioning: f64,
-    /// RMS disagreement of the accepted poses with (X, target): rotation in degrees, translation in
-    /// input units. The data's own noise level.
-    pub noise_rotation_deg: f64,
-    /// See `noise_rotation_deg`.
-    pub noise_translation: f64,
-    /// Expected size of the error of X, rotation in degrees (split-half: the poses are dealt
-    /// alternately to two more accumulators, and half the difference of their estimates has the
-    /// distribution of the full estimate's error). `None` until both halves have an estimate.
-    pub uncertainty_rotation_deg: Option<f64>,
-    /// The same for the translation, input units.
-    pub uncertainty_translation: Option<f64>,
-    /// The robot-world solution (Shah's A X = Z B over the same accepted poses of the segment,
-    /// [`RobotWorldAccumulator`]): X and the target solved together rather than the target as
-    /// the mean fixed frame under the hand–eye X. `None` while its system is degenerate.
-    pub robot_world: Option<RobotWorldPair>,
-}
-
-/// X and the target pose of a robot-world solution.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RobotWorldPair {
-    /// X.
-    pub x: Transform,
-    /// The target pose (`base_from_target` / `gripper_from_target`).
-    pub target: Transform,
-}
-
-/// Why a pose was held out of the sums.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "test")]
-pub enum HeldOut {
-    /// Its motions to recent poses break the screw invariants.
-    Screw {
-        /// Median rotation-angle gap, degrees.
-        angle_gap_deg: f64,
-        /// Median pitch gap, input units.
-        pitch_gap: f64,
-    },
-    /// Its fixed frame disagrees with the mature estimate.
-    Residual {
-        /// Residual in RMS of the accepted poses' residuals.
-        statistic: f64,
-    },
-}
-
-impl fmt::Display for HeldOut {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::Screw {
-                angle_gap_deg,
-                pitch_gap,
-            } => write!(
-                f,
-                "its motions to the recent poses break the rigid-motion invariants (angle gap {angle_gap_deg:.2}°, pitch gap {pitch_gap:.2e}): a bad detection, a flipped target pose or a wrong stamp"
-            ),
-            Self::Residual { statistic } => write!(
-                f,
-                "it disagrees with the current estimate by {statistic:.1} times the typical residual"
-            ),
-        }
-    }
-}
-
-/// A confirmed change of X or of the target.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Change {
-    /// First pose number of the new segment (where the disagreement began).
-    pub at: usize,
-    /// Pose number at which the change was confirmed.
-    pub confirmed: usize,
-    /// Rotation between the old and the new X, degrees.
-    pub x_rotation_deg: f64,
-    /// Distance between the old and the new X's translations, input units.
-    pub x_translation: f64,
-    /// Rotation between the old and the new target pose, degrees.
-    pub target_rotation_deg: f64,
-    /// Distance between the old and the new target positions, input units.
-    pub target_translation: f64,
-}
-
-/// Why an estimate was reported.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Reason {
-    /// The first determined estimate of a segment.
-    Determined,
-    /// `every` poses since the last report.
-    Every,
-    /// Both uncertainties shrank to `shrink` of the last report's.
-    Shrunk,
-    /// The end of the stream.
-    End,
-}
-
-/// A reported estimate.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Report {
-    /// Number of this report (1, 2, …).
-    pub number: usize,
-    /// Pose number at which it was made.
-    pub pose: usize,
-    /// Why now.
-    pub reason: Reason,
-    /// The estimate.
-    pub estimate: TrackEstimate,
-    /// Set on a final report whose uncertainty is above the reporting bounds (but below the batch
-    /// refusal's, 10° and half the scene): why it is weak. `None`: determined.
-    pub weak: Option<Pending>,
-    /// X and the target pose have the sizes the setup makes unlikely (the camera farther from
-    /// the gripper than the target from the base, eye-in-hand): the data fit exactly as well with
-    /// both inputs inverted, X and the target swapped.
-    pub implausible: bool,
-}
-
-/// What one pose did.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-pub struct Step {
-    /// Pose number (from 1).
-    pub pose: usize,
-    /// Set when the pose was held out of the sums.
-    pub held_out: Option<HeldOut>,
-    /// Earlier poses held out now: the first poses, judged together once the gate has learned
-    /// (pose number, why).
-    pub earlier: Vec<(usize, HeldOut)>,
-    /// Set when this pose confirmed a change.
-    pub change: Option<Change>,
-    /// Set when an estimate is reported at this pose.
-    pub report: Option<Report>,
-}
-
-/// Why there is no estimate to report.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", tag = "why")]
-pub enum Pending {
-    /// Fewer than three accepted poses since the start or the last change.
-    FewPoses {
-        /// Accepted poses.
-        poses: usize,
-    },
-    /// The gripper has not turned by more than 2° from the segment's first pose.
-    NoRotation {
-        /// Largest rotation so far, degrees.
-        largest_deg: f64,
-    },
-    /// Every rotation so far is about one axis: X's rotation about it is not determined.
-    ParallelAxes,
-    /// The poses fit far better read another way (the batch's check of the readings,
-    /// [`check_readings`], on the first poses): an inverted pose, `w, x, y, z` quaternions, or
-    /// millimetres on one side. Nothing is reported from data read wrongly.
-    Misread {
-        /// The reading that fits.
-        reading: Reading,
-        /// The setup the poses are read in.
-        setup: Setup,
-    },
-    /// An estimate exists but its uncertainty is above the bound.
-    Undetermined {
-        /// Rotation uncertainty, degrees (`None`: too few poses for the split-half estimate).
-        rotation_deg: Option<f64>,
-        /// Translation uncertainty, input units.
-        translation: Option<f64>,
-        /// The bound on the rotation, degrees.
-        bound_rotation_deg: f64,
-        /// The bound on the translation, input units.
-        bound_translation: f64,
-    },
-}
-
-impl fmt::Display for Pending {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::FewPoses { poses } => write!(f, "only {poses} usable pose(s) so far"),
-            Self::NoRotation { largest_deg } => write!(
-                f,
-                "no rotation above 2° yet (the largest is {largest_deg:.2}°): turn the gripper"
-            ),
-            Self::ParallelAxes => write!(
-                f,
-                "all rotation axes parallel so far: rotate the gripper about another axis"
-            ),
-            Self::Misread { reading, setup } => write!(
-                f,
-                "the poses fit far better read as {}: correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",
-                reading.meaning(*setup),
-                reading.name()
-            ),
-            Self::Undetermined {
-                rotation_deg,
-                translation,
-                bound_rotation_deg,
-                bound_translation,
-            } => match (rotation_deg, translation) {
-                (Some(r), Some(t)) => write!(
-                    f,
-                    "X not determined yet: uncertainty {r:.2}° and {t:.4} (reported below {bound_rotation_deg:.2}° and {bound_translation:.4}); add rotations about other axes"
-                ),
-                _ => write!(
-                    f,
-                    "X not determined yet: too few poses to measure its uncertainty"
-                ),
-            },
-        }
-    }
-}
-
-/// All-pairs sums of one segment, with the two halves of the split-half uncertainty.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-struct Segment {
-    all: PoseAccumulator,
-    halves: [PoseAccumulator; 2],
-    /// Shah's robot-world sums over the same poses.
-    robot_world: RobotWorldAccumulator,
-    since: usize,
-    /// The first accepted hand rotation and the largest rotation from it (radians).
-    first: Option<Transform>,
-    largest: f64,
-    /// Earlier estimates (pose count, X), each at 1.5 times the count of the one before, those of
-    /// at least a quarter of the poses now.
-    checkpoints: Vec<(usize, Transform)>,
-}
-
-impl Segment {
-    fn new(setup: Setup, since: usize) -> Self {
-        Self {
-            all: PoseAccumulator::new(setup),
-            halves: [PoseAccumulator::new(setup), PoseAccumulator::new(setup)],
-            robot_world: RobotWorldAccumulator::new(setup),
-            since,
-            first: None,
-            largest: 0.0,
-            checkpoints: Vec::new(),
-        }
-    }
-
-    fn add(&mut self, pose: &PosePair) {
-        let hand = self.all.setup().hand_pose(&pose.base_from_gripper);
-        let first = *self.first.get_or_insert(hand);
-        self.largest = self
-            .largest
-            .max(rotation_angle_between(&first.rotation, &hand.rotation));
-        self.all.add(pose);
-        self.halves[self.all.poses() % 2].add(pose);
-        self.robot_world.add(pose);
-    }
-
-    /// The segment's estimate now, kept as a checkpoint when its pose count has grown by half
-    /// since the last one.
-    fn refresh(&mut self) -> Option<Snapshot> {
-        let current = self.estimate();
-        let n = self.all.poses();
-        let due = self
-            .checkpoints
-            .last()
-            .is_none_or(|(c, _)| 2 * n >= 3 * c && n >= c + 2);
-        if let Some(Snapshot { estimate: e, .. }) = current
-            && due
-            && n >= 6
-        {
-            self.checkpoints.push((n, e.x));
-            // Those below n/4 are of no more use (constant memory: about four are kept).
-            self.checkpoints.retain(|(c, _)| 4 * c >= n);
-        }
-        current
-    }
-
-    /// The drift of the estimate as an uncertainty: with c a checkpoint between n/4 and n/2 poses,
-    /// X_c − X_n has the spread of σ_n·√(n/c − 1) when the poses' errors are independent, and
-    /// more when the estimate still moves as the robot reaches new parts of the workspace (real
-    /// data). The largest over those checkpoints (two or three), so that one lucky agreement
-    /// does not pass for certainty.
-    fn drift(&self, x: &Transform) -> Option<(f64, f64)> {
-        let n = self.all.poses();
-        self.checkpoints
-            .iter()
-            .filter(|(c, _)| 2 * c <= n && 4 * c >= n)
-            .map(|(c, x_c)| {
-                let scale = ((n as f64 / *c as f64) - 1.0).max(1e-9).sqrt();
-                (
-                    rotation_angle_between(&x_c.rotation, &x.rotation).to_degrees() / scale,
-                    (x_c.translation.vector - x.translation.vector).norm() / scale,
-                )
-            })
-            .reduce(|a, b| (a.0.max(b.0), a.1.max(b.1)))
-    }
-
-    fn estimate(&self) -> Option<Snapshot> {
-        let e = self.all.estimate()?;
-        let scatter = self.all.residual_scatter(&e.x)?;
-        // The largest of three measures: the split-half difference, the first-order covariance
-        // with each pose as one measurement at the scatter's noise level, and the drift since
-        // half the poses.
-        let halves = (self.halves[0].estimate(), self.halves[1].estimate());
-        let split = match halves {
-            (Some(a), Some(b)) => Some((
-                0.5 * rotation_angle_between(&a.x.rotation, &b.x.rotation).to_degrees(),
-                0.5 * (a.x.translation.vector - b.x.translation.vector).norm(),
-            )),
-            _ => None,
-        };
-        let linear = self
-            .all
-            .covariance(
-                &e.x,
-                scatter.rotation / 3f64.sqrt(),
-                scatter.translation / 3f64.sqrt(),
-            )
-            .map(|c| {
-                let rotation = (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees();
-                (rotation, (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt())
-            });
-        let drift = self.drift(&e.x);
-        let local = split.zip(linear).map(|(a, b)| (a.0.max(b.0), a.1.max(b.1)));
-        let (ur, ut) = match (local, drift) {
-            (Some(a), Some(b)) => (Some(a.0.max(b.0)), Some(a.1.max(b.1))),
-            _ => (None, None),
-        };
-        Some(Snapshot {
-            estimate: TrackEstimate {
-                x: e.x,
-                target: scatter.y,
-                poses: e.poses,
-                since: self.since,
-                conditioning: e.conditioning,
-                noise_rotation_deg: scatter.rotation.to_degrees(),
-                noise_translation: scatter.translation,
-                uncertainty_rotation_deg: ur,
-                uncertainty_translation: ut,
-                robot_world: self.robot_world.estimate().map(|r| RobotWorldPair {
-                    x: r.x,
-                    target: r.target,
-                }),
-            },
-            scatter,
-            local_rotation_deg: local.map(|l| l.0),
-            local,
-        })
-    }
-
-    /// The translation bound for `e`, input units.
-    fn translation_bound(&self, options: &TrackOptions) -> f64 {
-        (options.max_translation * self.all.scene_scale())
-            .max(options.max_rotation_deg.to_radians() * self.all.viewing_distance())
-    }
-
-    /// Why `e` (this segment's estimate, if any) is not reportable; `None` when it is.
-    fn pending(&self, e: Option<&TrackEstimate>, options: &TrackOptions) -> Option<Pending> {
-        let Some(e) = e else {
-            return Some(if self.all.poses() < 3 {
-                Pending::FewPoses {
-                    poses: self.all.poses(),
-                }
-            } else if self.largest < 2f64.to_radians() {
-                Pending::NoRotation {
-                    largest_deg: self.largest.to_degrees(),
-                }
-            } else {
-                Pending::ParallelAxes
-            });
-        };
-        let bound_translation = self.translation_bound(options);
-        let ok = matches!(
-            (e.uncertainty_rotation_deg, e.uncertainty_translation),
-            (Some(r), Some(t)) if r <= options.max_rotation_deg && t <= bound_translation
-        );
-        (!ok).then_some(Pending::Undetermined {
-            rotation_deg: e.uncertainty_rotation_deg,
-            translation: e.uncertainty_translation,
-            bound_rotation_deg: options.max_rotation_deg,
-            bound_translation,
-        })
-    }
-}
-
-/// An estimate with what the tracker needs to judge by it.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-struct Snapshot {
-    estimate: TrackEstimate,
-    scatter: Scatter,
-    /// The rotation uncertainty without the drift term (split-half and first-order): whether the
-    /// poses so far fix the rotation at all, as a challenger needs.
-    local_rotation_deg: Option<f64>,
-    /// Both, rotation (degrees) and translation.
-    local: Option<(f64, f64)>,
-}
 
 /// The case for a change: a second segment since the first elevated pose.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -627,7 +235,7 @@ impl Tracker {
             }
         }
         if step.change.is_none()
-            && (self.incumbent.all.poses() < REFRESH_ALWAYS || self.poses % 10 == 0)
+            && (self.incumbent.all.poses() < REFRESH_ALWAYS || self.poses.is_multiple_of(10))
         {
             self.current = self.incumbent.refresh();
         }
@@ -703,13 +311,18 @@ impl Tracker {
         let mut warmup = self.warmup.take().unwrap_or_default();
         let last = warmup.len() == WARMUP[WARMUP.len() - 1];
         let poses: Vec<PosePair> = warmup.iter().map(|(_, p)| *p).collect();
-        // The batch's check of the readings, on the same poses.
-        let readings = check_readings(&poses, self.setup);
+        let found = pose_outliers(&poses, self.setup, self.options.outlier_deg);
+        // The batch's check of the readings, on the poses that agree with the others (outliers
+        // could make a mirror-image reading look better).
+        let kept: Vec<PosePair> = (0..poses.len())
+            .filter(|i| found.poses.iter().all(|g| g.pose != *i))
+            .map(|i| poses[i])
+            .collect();
+        let readings = check_readings(&kept, self.setup);
         if readings.as_given.is_some() {
             self.misread = readings.better.map(|b| b.reading);
             self.implausible = readings.size_warning(self.setup).is_some();
         }
-        let found = pose_outliers(&poses, self.setup, self.options.outlier_deg);
         let mut held = Vec::new();
         if !found.poses.is_empty() {
             let mut segment = Segment::new(self.setup, self.incumbent.since);
@@ -937,93 +550,4 @@ impl Tracker {
             implausible: self.implausible,
         }
     }
-}
-
-impl Report {
-    /// The report as its JSON line (SPEC sec. 7), the one output of every face: `estimate`,
-    /// `pose`, `reason`, `frame`, X (`translation`, `quaternion_xyzw`, `matrix`), `poses`,
-    /// `since`, `uncertainty`, `noise`, `conditioning`, `target` (the fixed frame), `robot_world`
-    /// (X and the target solved together by Shah over the same poses, when determined) and, on a
-    /// weak final report, `weak` with the reason in words.
-    pub fn json(&self, setup: Setup) -> serde_json::Value {
-        let e = &self.estimate;
-        let mut out = serde_json::Map::new();
-        out.insert("estimate".into(), self.number.into());
-        out.insert("pose".into(), self.pose.into());
-        out.insert("reason".into(), serde_json::json!(self.reason));
-        out.insert("estimator".into(), "accumulate".into());
-        out.insert("frame".into(), setup.x_frame().into());
-        insert_transform(&mut out, &e.x);
-        out.insert("poses".into(), e.poses.into());
-        out.insert("since".into(), e.since.into());
-        out.insert(
-            "uncertainty".into(),
-            serde_json::json!({"rotation_deg": e.uncertainty_rotation_deg, "translation": e.uncertainty_translation}),
-        );
-        out.insert(
-            "noise".into(),
-            serde_json::json!({"rotation_deg": e.noise_rotation_deg, "translation": e.noise_translation}),
-        );
-        out.insert("conditioning".into(), e.conditioning.into());
-        let mut target = serde_json::Map::new();
-        target.insert("frame".into(), target_frame(setup).into());
-        insert_transform(&mut target, &e.target);
-        out.insert("target".into(), target.into());
-        if let Some(rw) = &e.robot_world {
-            let mut x = serde_json::Map::new();
-            x.insert("method".into(), "shah".into());
-            x.insert("frame".into(), setup.x_frame().into());
-            insert_transform(&mut x, &rw.x);
-            let mut target = serde_json::Map::new();
-            target.insert("frame".into(), target_frame(setup).into());
-            insert_transform(&mut target, &rw.target);
-            x.insert("target".into(), target.into());
-            out.insert("robot_world".into(), x.into());
-        }
-        if let Some(w) = &self.weak {
-            out.insert("weak".into(), w.to_string().into());
-        }
-        if self.implausible {
-            out.insert(
-                "warning".into(),
-                "X and the target pose have the sizes the setup makes unlikely: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions".into(),
-            );
-        }
-        out.into()
-    }
-}
-
-impl Change {
-    /// The change as its JSON line: `change` (the first pose of the new segment), `confirmed`,
-    /// and how far X and the target moved.
-    pub fn json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "change": self.at,
-            "confirmed": self.confirmed,
-            "x_rotation_deg": self.x_rotation_deg,
-            "x_translation": self.x_translation,
-            "target_rotation_deg": self.target_rotation_deg,
-            "target_translation": self.target_translation,
-        })
-    }
-}
-
-/// The fixed frame the poses agree on: the target in the base eye-in-hand, on the gripper
-/// eye-to-hand.
-pub fn target_frame(setup: Setup) -> &'static str {
-    match setup {
-        Setup::EyeInHand => "base_from_target",
-        Setup::EyeToHand => "gripper_from_target",
-    }
-}
-
-/// Inserts `translation`, `quaternion_xyzw` and `matrix` of `t` into a JSON object.
-fn insert_transform(object: &mut serde_json::Map<String, serde_json::Value>, t: &Transform) {
-    let j = crate::io::TransformJson::from(t);
-    object.insert("translation".into(), serde_json::json!(j.translation));
-    object.insert(
-        "quaternion_xyzw".into(),
-        serde_json::json!(j.quaternion_xyzw),
-    );
-    object.insert("matrix".into(), serde_json::json!(j.matrix));
 }

@@ -1,0 +1,70 @@
+//! `handeye advise`: what to record next, from the poses recorded so far.
+
+use anyhow::Result;
+use clap::Args as ClapArgs;
+use handeye::advice::{Advice, WeaknessKind, advise};
+
+use crate::input::{InputArgs, read_all};
+use crate::output::print_json;
+
+/// Options of `handeye advise`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    #[command(flatten)]
+    input: InputArgs,
+    /// How many next motions to suggest (1 to 20).
+    #[arg(long, default_value_t = 3, value_parser = crate::values::count(1, 20))]
+    count: usize,
+}
+
+/// Runs the command: the advice as JSON on stdout, in words on stderr.
+pub fn run(args: Args) -> Result<()> {
+    let (poses, _, _) = read_all(&args.input)?;
+    let advice = advise(&poses, args.input.setup(), args.count)?;
+    eprint!("{}", in_words(&advice));
+    print_json(&serde_json::to_value(&advice)?)
+}
+
+/// The advice in a few lines.
+fn in_words(advice: &Advice) -> String {
+    let mut out = String::new();
+    match advice.current {
+        Some(c) => out.push_str(&format!(
+            "X from {} poses: one-sigma {:.3}° and {:.4} (input unit)\n",
+            advice.poses, c.rotation_deg, c.translation
+        )),
+        None => out.push_str(&format!(
+            "X is not determined by these {} poses: every rotation so far is about one axis\n",
+            advice.poses
+        )),
+    }
+    for w in &advice.weakest {
+        let [x, y, z] = w.axis_gripper;
+        out.push_str(&match w.kind {
+            WeaknessKind::Rotation => format!(
+                "  weakest rotation: about the gripper axis ({x:.2}, {y:.2}, {z:.2}), sigma {:.3}°\n",
+                w.sigma
+            ),
+            WeaknessKind::Translation => format!(
+                "  weakest translation: along ({x:.2}, {y:.2}, {z:.2}), sigma {:.4}\n",
+                w.sigma
+            ),
+        });
+    }
+    for (k, s) in advice.suggestions.iter().enumerate() {
+        let [x, y, z] = s.axis_gripper;
+        out.push_str(&format!(
+            "next motion {}: turn the gripper {:.0}° about its axis ({x:.2}, {y:.2}, {z:.2})",
+            k + 1,
+            s.angle_deg
+        ));
+        match s.predicted {
+            Some(p) => out.push_str(&format!(
+                " -> sigma {:.3}° and {:.4}\n",
+                p.rotation_deg, p.translation
+            )),
+            None => out.push('\n'),
+        }
+    }
+    out
+}

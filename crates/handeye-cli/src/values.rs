@@ -1,0 +1,127 @@
+//! Value parsers of the numeric flags: every number is checked when the command line is read, so
+//! that an out-of-range value is refused with exit 2 and the flag named (clap's message), before
+//! anything is computed or allocated from it.
+
+use clap::builder::RangedU64ValueParser;
+
+/// The most poses `simulate`, `demo` and `bench` make (each pose is about a hundred bytes, and
+/// `bench --pairs all` grows with the square).
+pub const MAX_POSES: u64 = 1_000_000;
+
+/// The most bootstrap replicates of `calibrate` (each a full solve).
+pub const MAX_REPLICATES: u64 = 100_000;
+
+/// The most series of `experiment`.
+pub const MAX_SERIES: u64 = 100_000;
+
+/// The longest `bench --min-time`, seconds.
+pub const MAX_MIN_TIME: f64 = 3600.0;
+
+/// A count in `min..=max`.
+pub fn count(min: u64, max: u64) -> RangedU64ValueParser<usize> {
+    RangedU64ValueParser::new().range(min..=max)
+}
+
+/// A finite number.
+fn number(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number, got `{s}`"))
+    }
+}
+
+/// A finite number above 0.
+pub fn positive(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be above 0, got {s}"))
+    }
+}
+
+/// A number in (0, 1].
+pub fn fraction(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v > 0.0 && v <= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be in (0, 1], got {s}"))
+    }
+}
+
+/// A finite number of at least 1.
+pub fn at_least_one(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v >= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be at least 1, got {s}"))
+    }
+}
+
+/// An angle in (0°, 180°].
+pub fn angle_deg(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v > 0.0 && v <= 180.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be in (0, 180] degrees, got {s}"))
+    }
+}
+
+/// An angle between two axes that a threshold can ask for: (0°, 90°].
+pub fn axis_angle_deg(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v > 0.0 && v <= 90.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be in (0, 90] degrees, got {s}"))
+    }
+}
+
+/// A time budget in (0, MAX_MIN_TIME] seconds.
+pub fn budget_s(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v > 0.0 && v <= MAX_MIN_TIME {
+        Ok(v)
+    } else {
+        Err(format!("must be in (0, {MAX_MIN_TIME}] seconds, got {s}"))
+    }
+}
+
+/// `auto` or a finite number of seconds (kept as given: `input` reads it).
+pub fn time_offset(s: &str) -> Result<String, String> {
+    if s == "auto" {
+        Ok(s.to_string())
+    } else {
+        number(s).map(|_| s.to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn refuses_what_is_not_finite_or_out_of_range() {
+        for bad in ["nan", "NaN", "inf", "-inf", "1e309", "x", ""] {
+            assert!(number(bad).is_err(), "{bad}");
+            assert!(time_offset(bad).is_err(), "{bad}");
+        }
+        assert!(positive("0").is_err() && positive("-1").is_err());
+        assert_eq!(positive("0.5"), Ok(0.5));
+        assert!(fraction("1.01").is_err() && fraction("0").is_err());
+        assert!(angle_deg("181").is_err() && angle_deg("180").is_ok());
+        assert!(axis_angle_deg("91").is_err() && axis_angle_deg("15").is_ok());
+        assert!(budget_s("1e308").is_err() && budget_s("0.3").is_ok());
+        assert!(at_least_one("0.99").is_err() && at_least_one("1").is_ok());
+        assert_eq!(time_offset("auto"), Ok("auto".to_string()));
+        assert_eq!(time_offset("-0.25"), Ok("-0.25".to_string()));
+    }
+}
