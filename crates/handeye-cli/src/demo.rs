@@ -1,12 +1,13 @@
 //! `handeye demo`: the embedded default. Simulates one series of the paper's protocol, streams it
-//! through the three online methods and compares each with the true X.
+//! through the paper's online methods and the accumulating estimator, and compares each with the
+//! true X.
 
 use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::metrics::errors_against_truth;
-use handeye::online::{ErrorSource, OnlineCalibrator, OnlineConfig};
+use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig};
 use handeye::select::{AdaptiveParams, Selection};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
@@ -124,6 +125,44 @@ pub fn run(args: Args) -> Result<()> {
             },
         )?;
     }
+    // The estimator beyond the paper: every pair of poses, O(1) per pose, reported with its
+    // uncertainty on its own schedule.
+    let mut calibrator = OnlineCalibrator::new(OnlineConfig {
+        estimator: Estimator::Accumulate,
+        ..OnlineConfig::default()
+    })?;
+    let (mut reports, mut rot, mut trans) = (Vec::new(), 0.0, 0.0);
+    let started = Instant::now();
+    for p in &sim.poses {
+        calibrator.push(p)?;
+        reports.extend(calibrator.step().and_then(|s| s.report));
+    }
+    reports.extend(calibrator.finish());
+    let per_pose = started.elapsed().as_secs_f64() / sim.poses.len() as f64;
+    for r in &reports {
+        let err = errors_against_truth(&r.estimate.x, &truth);
+        rot += err.rot_deg;
+        trans += err.trans_rel;
+    }
+    let accumulated = reports.last().map(|r| {
+        (
+            errors_against_truth(&r.estimate.x, &truth),
+            r.estimate.uncertainty_rotation_deg.unwrap_or(f64::NAN),
+        )
+    });
+    let d = reports.len().max(1) as f64;
+    outln!(
+        "| **accumulate** (every pair of poses, gated, `--estimator accumulate`) | {} reports | {:.3} | {:.1} | {} | {:.1} per pose |",
+        reports.len(),
+        rot / d,
+        100.0 * trans / d,
+        accumulated.map_or("–".into(), |(e, _)| format!(
+            "{:.3}, {:.1}",
+            e.rot_deg,
+            100.0 * e.trans_rel
+        )),
+        1e6 * per_pose
+    )?;
     let motions = motion_pairs(&sim.poses, Pairing::Consecutive, Setup::EyeInHand);
     let started = Instant::now();
     let batch = solve(Method::Refine, &motions)?;
@@ -138,8 +177,13 @@ pub fn run(args: Args) -> Result<()> {
         100.0 * e.trans_rel,
         1e6 * elapsed
     )?;
-    outln!(
-        "\nErrors are against the true X: rotation angle of R̂ᵀR, and ‖t − t̂‖/‖t‖. Try `handeye experiment all` for the paper's full comparison."
-    )?;
+    outln!("\nErrors are against the true X: rotation angle of R̂ᵀR, and ‖t − t̂‖/‖t‖.")?;
+    if let Some((e, sigma)) = accumulated {
+        outln!(
+            "The paper's online methods each solve from two motions, so their X wanders with the noise; the accumulating estimator uses every pose and ends {:.3}° from the truth, where it says to expect {:.3}° — what to run on a real stream. `handeye experiment all` gives the paper's full comparison.",
+            e.rot_deg,
+            sigma
+        )?;
+    }
     Ok(())
 }
