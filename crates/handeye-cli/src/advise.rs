@@ -30,8 +30,15 @@ fn in_words(advice: &Advice) -> String {
     let mut out = String::new();
     match advice.current {
         Some(c) => out.push_str(&format!(
-            "X from {} poses: one-sigma {:.3}° and {:.4} (input unit)\n",
-            advice.poses, c.rotation_deg, c.translation
+            "X from {} poses{}: one-sigma {:.3}° and {:.4} (input unit)\n",
+            advice.poses,
+            if advice.outliers > 0 {
+                format!(" ({} outlier(s) left out)", advice.outliers)
+            } else {
+                String::new()
+            },
+            c.rotation_deg,
+            c.translation
         )),
         None => out.push_str(&format!(
             "X is not determined by these {} poses: every rotation so far is about one axis\n",

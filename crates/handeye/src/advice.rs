@@ -15,7 +15,10 @@ use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::accumulate::PoseAccumulator;
+use crate::consistency::pose_outliers;
+use crate::conventions::check_readings;
 use crate::error::{Error, Result};
+use crate::metrics::OUTLIER_DEG;
 use crate::motion::{MotionFeatures, PosePair, Setup};
 use crate::pose::{Transform, exp_so3, transform_from_parts};
 
@@ -69,6 +72,8 @@ pub struct Suggestion {
 pub struct Advice {
     /// Poses it rests on.
     pub poses: usize,
+    /// Poses left out as outliers (the batch's per-pose test).
+    pub outliers: usize,
     /// X's uncertainty now (`None` when X is not determined at all).
     pub current: Option<Predicted>,
     /// The least determined rotation and translation directions, weakest first.
@@ -77,9 +82,12 @@ pub struct Advice {
     pub suggestions: Vec<Suggestion>,
 }
 
-/// The advice for `poses` (module documentation): `count` suggestions.
+/// The advice for `poses` (module documentation): `count` suggestions, from the poses that agree
+/// with the others (outliers by the batch's own test are left out and counted in `outliers`).
 ///
-/// Errors with [`Error::TooFewMotions`] for fewer than two poses.
+/// Errors with [`Error::TooFewMotions`] for fewer than two poses, and with [`Error::Misread`]
+/// when the poses fit far better read another way (an inverted pose, `w, x, y, z` quaternions,
+/// millimetres on one side): no advice from data read wrongly.
 pub fn advise(poses: &[PosePair], setup: Setup, count: usize) -> Result<Advice> {
     if poses.len() < 2 {
         return Err(Error::TooFewMotions {
@@ -87,11 +95,23 @@ pub fn advise(poses: &[PosePair], setup: Setup, count: usize) -> Result<Advice> 
             need: 2,
         });
     }
+    let outliers = pose_outliers(poses, setup, OUTLIER_DEG).indices();
+    let kept: Vec<PosePair> = (0..poses.len())
+        .filter(|i| !outliers.contains(i))
+        .map(|i| poses[i])
+        .collect();
+    if let Some(advice) = check_readings(&kept, setup).advice(setup) {
+        return Err(Error::Misread { advice });
+    }
+    let poses = &kept[..];
     let mut acc = PoseAccumulator::new(setup);
     poses.iter().for_each(|p| acc.add(p));
     let last = poses[poses.len() - 1].base_from_gripper;
     let Some((x, y, noise)) = solved(&acc) else {
-        return Ok(undetermined(poses, setup, count));
+        return Ok(Advice {
+            outliers: outliers.len(),
+            ..undetermined(poses, setup, count)
+        });
     };
     let current = predicted(&acc, &x, noise);
     let weakest = current
@@ -113,6 +133,7 @@ pub fn advise(poses: &[PosePair], setup: Setup, count: usize) -> Result<Advice> 
     }
     Ok(Advice {
         poses: poses.len(),
+        outliers: outliers.len(),
         current,
         weakest,
         suggestions,
@@ -224,6 +245,7 @@ fn undetermined(poses: &[PosePair], setup: Setup, count: usize) -> Advice {
         .collect();
     Advice {
         poses: poses.len(),
+        outliers: 0,
         current: None,
         weakest: Vec::new(),
         suggestions,

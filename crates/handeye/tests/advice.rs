@@ -241,3 +241,32 @@ fn following_the_advice_needs_at_least_twice_fewer_poses_than_the_papers_walk() 
     assert!(2 * advice <= walk, "{advice} vs {walk}");
     assert!(advice <= random, "{advice} vs {random}");
 }
+
+#[test]
+fn no_advice_from_misread_input_and_outliers_left_out() {
+    let kinhec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec");
+    let read = |f: &str| {
+        handeye::io::read_pose_file(&kinhec.join(f), handeye::io::Format::Auto)
+            .unwrap()
+            .pairs
+    };
+    for f in [
+        "mistakes/robot_inverted__nominal_stations_eih_s0.jsonl",
+        "mistakes/quat_wxyz_camera__nominal_stations_eih_s0.jsonl",
+        "mistakes/robot_mm__nominal_stations_eih_s0.jsonl",
+    ] {
+        let e = advise(&read(f), Setup::EyeInHand, 3).unwrap_err();
+        assert!(matches!(e, handeye::Error::Misread { .. }), "{f}: {e}");
+        assert!(e.to_string().contains("--fix"), "{f}: {e}");
+    }
+    let advice = advise(
+        &read("pairs/outliers_gross_stations_eih_s0.jsonl"),
+        Setup::EyeInHand,
+        2,
+    )
+    .unwrap();
+    assert!(
+        advice.outliers >= 3 && advice.current.is_some(),
+        "{advice:?}"
+    );
+}
