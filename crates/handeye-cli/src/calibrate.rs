@@ -183,7 +183,6 @@ pub fn run(args: Args) -> Result<()> {
 fn run_robot_world(args: &Args) -> Result<()> {
     for (flag, given) in [
         ("--pairs", args.pairs.is_some()),
-        ("--reject-outliers", args.reject_outliers),
         ("--tsai-opencv-filter", args.tsai_opencv_filter),
     ] {
         if given {
@@ -210,7 +209,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
         })?;
     let (fix, replicates) = (fix(args)?, replicates(args)?);
     let setup = args.input.setup();
-    let (poses, _, time_offset) = read_all(&args.input)?;
+    let (poses, pose_names, time_offset) = read_all(&args.input)?;
     if poses.len() < 3 {
         return Err(Error::Parse {
             file: args
@@ -234,8 +233,18 @@ fn run_robot_world(args: &Args) -> Result<()> {
             method,
             fix,
             replicates,
+            reject_outliers: args.reject_outliers,
+            outlier_deg: args.outlier_deg,
+            pose_names,
         },
     )?;
+    if report.outliers.rejected && !report.outliers.poses.is_empty() {
+        eprintln!(
+            "rejected {} outlier pose(s) of {}",
+            report.outliers.poses.len(),
+            report.outliers.poses.len() + report.poses
+        );
+    }
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }

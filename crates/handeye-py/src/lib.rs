@@ -130,7 +130,8 @@ fn calibrate_report<'py>(
 /// The robot-world calibration ([`handeye::robot_world::calibrate_robot_world`]): its report as
 /// JSON, the same object `handeye calibrate --robot-world` prints.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::uncertainty::REPLICATES))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::uncertainty::REPLICATES, reject_outliers=false))]
+#[allow(clippy::too_many_arguments)]
 fn robot_world_report<'py>(
     py: Python<'py>,
     base_from_gripper: PyReadonlyArray3<'py, f64>,
@@ -139,6 +140,7 @@ fn robot_world_report<'py>(
     setup: &str,
     fix: Option<&str>,
     bootstrap: usize,
+    reject_outliers: bool,
 ) -> PyResult<String> {
     let options = handeye::robot_world::RobotWorldOptions {
         method: method.parse().map_err(value_error)?,
@@ -147,6 +149,8 @@ fn robot_world_report<'py>(
             Some(name) => name.parse().map_err(value_error)?,
         },
         replicates: bootstrap.max(8),
+        reject_outliers,
+        ..Default::default()
     };
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;

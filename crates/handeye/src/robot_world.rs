@@ -3,8 +3,10 @@
 //!
 //! [`calibrate_robot_world`] is what `handeye calibrate --robot-world` and the Python
 //! `calibrate(..., robot_world=True)` run, and [`RobotWorldReport`] is what both print:
-//! 1. the readings a user may have meant are tried as in [`crate::calibration::calibrate`]
-//!    ([`Error::Misread`] unless [`Fix`] says otherwise);
+//! 1. the readings a user may have meant are tried, and the poses that break the screw invariants
+//!    of their motions found, as in [`crate::calibration::calibrate`] ([`Error::Misread`] unless
+//!    [`Fix`] says otherwise; outliers named in a warning, or left out with `reject_outliers`; a
+//!    refusal names them);
 //! 2. the method ([`RobotWorldMethod`]) solves Q_i X C_i = Y from every pose once
 //!    ([`crate::solve::shah`], [`crate::solve::li`], [`crate::solve::refine_robot_world`]);
 //! 3. the uncertainty of **X** is the hand–eye report's bootstrap ([`crate::uncertainty::bootstrap`]:
@@ -23,10 +25,16 @@
 use nalgebra::{Matrix3, Matrix6};
 use serde::{Deserialize, Serialize};
 
-use crate::calibration::{Fix, ReadingReport, Units, choose_reading, working_distance};
+use crate::calibration::{
+    Fix, Options, Outliers, ReadingReport, Units, choose_reading, explained, outlier_report,
+    outlier_warning, without, working_distance,
+};
+use crate::consistency::pose_outliers;
 use crate::consistency::translation_scale;
+use crate::conventions::Reading;
 use crate::error::{Degeneracy, Error, Result};
 use crate::io::TransformJson;
+use crate::metrics::OUTLIER_DEG;
 use crate::motion::{PosePair, Setup};
 use crate::pose::{Transform, rotation_matrix};
 use crate::solve::{
@@ -45,6 +53,15 @@ pub struct RobotWorldOptions {
     /// Bootstrap replicates for X's uncertainty. Default
     /// [`REPLICATES`](crate::uncertainty::REPLICATES).
     pub replicates: usize,
+    /// Leave out the outlier poses (found as in the hand–eye report, by the screw invariants of
+    /// their motions). Default false: they are kept and named in a warning.
+    pub reject_outliers: bool,
+    /// A pose whose median rotation-angle gap is above this (degrees) is an outlier. Default
+    /// [`OUTLIER_DEG`].
+    pub outlier_deg: f64,
+    /// How each pose is named in messages (e.g. `file:line`), by input index. Default empty
+    /// (`pose i`).
+    pub pose_names: Vec<String>,
 }
 
 impl Default for RobotWorldOptions {
@@ -53,6 +70,9 @@ impl Default for RobotWorldOptions {
             method: RobotWorldMethod::Refine,
             fix: Fix::Refuse,
             replicates: crate::uncertainty::REPLICATES,
+            reject_outliers: false,
+            outlier_deg: OUTLIER_DEG,
+            pose_names: Vec::new(),
         }
     }
 }
@@ -109,6 +129,8 @@ pub struct RobotWorldReport {
     pub conditioning: f64,
     /// The reading of the input.
     pub reading: ReadingReport,
+    /// Poses that disagree with the others (as in the hand–eye report).
+    pub outliers: Outliers,
     /// The per-pose residuals (degrees; input units).
     pub residual: PoseResidualSummary,
     /// Cautions in plain words, each with what to do.
@@ -145,22 +167,49 @@ pub fn calibrate_robot_world(
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
     let mut warnings = Vec::new();
-    let (applied, check) = choose_reading(poses, setup, options.fix, &mut warnings)?;
-    let used = applied.apply(poses);
-    let solved = robot_world(options.method, &used, setup)?;
+    // As in the hand–eye report: the readings are judged on the poses that agree with the others.
+    let as_given = pose_outliers(poses, setup, options.outlier_deg);
+    let (applied, check) = choose_reading(
+        &without(poses, &as_given),
+        setup,
+        options.fix,
+        &mut warnings,
+    )?;
+    let read = applied.apply(poses);
+    let found = match applied {
+        Reading::AsGiven => as_given,
+        _ => pose_outliers(&read, setup, options.outlier_deg),
+    };
+    let outliers = outlier_report(
+        &found,
+        &Options {
+            reject_outliers: options.reject_outliers,
+            pose_names: options.pose_names.clone(),
+            ..Options::default()
+        },
+    );
+    let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
+        .then(|| outlier_warning(&outliers));
+    let used = if options.reject_outliers {
+        without(&read, &found)
+    } else {
+        read
+    };
+    let explain = |e: Error| explained(e, &warnings, kept_outliers.as_deref());
+    let solved = robot_world(options.method, &used, setup).map_err(explain)?;
     let undetermined = |conditioning| Error::Degenerate {
         reason: Degeneracy::IllConditioned,
         conditioning,
     };
     let cov = joint_covariance(&used, setup, &solved.x, &solved.target)
-        .ok_or_else(|| undetermined(solved.conditioning))?;
+        .ok_or_else(|| explain(undetermined(solved.conditioning)))?;
     let scene = translation_scale(&used, setup).max(working_distance(&used));
     let method = options.method;
     let solve_x = |p: &[PosePair]| robot_world(method, p, setup).map(|r| r.x);
     let x_unc = bootstrap(&used, setup, &solved.x, &solve_x, options.replicates, scene);
     let y_unc = summarise(left_block(&cov, 6, &solved.target), 0, 0, scene);
     for u in [&x_unc, &y_unc] {
-        refuse_if_undetermined(u, setup, solved.conditioning)?;
+        refuse_if_undetermined(u, setup, solved.conditioning).map_err(explain)?;
     }
     warnings.extend(solved.warnings.iter().map(|w| w.to_string()));
     for (part, d) in [
@@ -171,6 +220,7 @@ pub fn calibrate_robot_world(
             warnings.push(advice(part, d, setup));
         }
     }
+    warnings.extend(kept_outliers);
     let per_pose = pose_residuals(&used, setup, &solved.x, &solved.target);
     let n = per_pose.len().max(1) as f64;
     let rms = |f: fn(&PoseResidual) -> f64| {
@@ -199,6 +249,7 @@ pub fn calibrate_robot_world(
         poses: used.len(),
         conditioning: solved.conditioning,
         reading: ReadingReport { applied, check },
+        outliers,
         residual,
         warnings,
         units: Units::default(),

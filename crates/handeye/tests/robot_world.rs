@@ -533,3 +533,46 @@ fn base_changes_and_units_act_as_they_must() {
         assert!(max_entry_diff(&a.x, &back) < 1e-12, "{method}: units");
     }
 }
+
+/// Outlier poses are found as in the hand–eye report: named in a warning, or left out with
+/// `reject_outliers`, after which X and the target are near the truth (kinhec outlier files).
+#[test]
+fn outliers_are_named_or_left_out() {
+    let files = kinhec(&[
+        "outliers_gross",
+        "outliers_random_pose",
+        "outliers_planar_flip",
+    ]);
+    assert!(files.len() >= 12);
+    let mut worst = [0.0_f64; 4];
+    for (path, setup, x, target) in files {
+        let poses = read_pose_file(&path, Format::Auto).unwrap().pairs;
+        if let Ok(kept) = calibrate_robot_world(&poses, setup, &RobotWorldOptions::default()) {
+            assert!(!kept.outliers.poses.is_empty(), "{}", path.display());
+            assert!(kept.warnings.iter().any(|w| w.contains("disagree")));
+        }
+        let options = RobotWorldOptions {
+            reject_outliers: true,
+            ..RobotWorldOptions::default()
+        };
+        let r = calibrate_robot_world(&poses, setup, &options).unwrap();
+        assert!(r.outliers.rejected && !r.outliers.poses.is_empty());
+        let (xr, xt) = error(&r.transform, &x);
+        let (yr, yt) = error(&r.target_transform, &target);
+        assert!(
+            xr < 0.5 && xt < 0.01 && yr < 0.5 && yt < 0.01,
+            "{}: {xr} {xt} {yr} {yt}",
+            path.display()
+        );
+        for (w, e) in worst.iter_mut().zip([xr, xt, yr, yt]) {
+            *w = w.max(e);
+        }
+    }
+    println!(
+        "worst with outliers left out: X {:.3}° {:.2} mm, target {:.3}° {:.2} mm",
+        worst[0],
+        worst[1] * 1e3,
+        worst[2],
+        worst[3] * 1e3
+    );
+}

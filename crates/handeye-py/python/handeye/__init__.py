@@ -108,8 +108,7 @@ def calibrate(
     "camera-mm"). ``method`` defaults to "andreff".
 
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
-    (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` and
-    ``reject_outliers`` do not apply): the same object ``handeye calibrate --robot-world`` prints,
+    (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
     with ``target`` (``frame`` "base_from_target" or "gripper_from_target", ``matrix`` as a (4,4)
     array, ``translation``, ``quaternion_xyzw``, ``uncertainty``) and ``residual`` per pose."""
     g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
@@ -117,10 +116,12 @@ def calibrate(
     if g.ndim != 3 or c.ndim != 3:
         raise ValueError("expected (N, 4, 4) arrays of transforms")
     if robot_world:
-        if pairs != "consecutive" or reject_outliers:
-            raise ValueError("pairs and reject_outliers do not apply to robot_world=True, which uses every pose once")
+        if pairs != "consecutive":
+            raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
         result = json.loads(
-            _robot_world_report(g, c, method=method or "refine", setup=setup, fix=fix, bootstrap=bootstrap)
+            _robot_world_report(
+                g, c, method=method or "refine", setup=setup, fix=fix, bootstrap=bootstrap, reject_outliers=reject_outliers
+            )
         )
         result["matrix"] = np.array(result["matrix"], dtype=np.float64)
         result["target"]["matrix"] = np.array(result["target"]["matrix"], dtype=np.float64)
