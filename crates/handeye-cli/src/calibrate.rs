@@ -72,6 +72,10 @@ pub struct Args {
     /// files].
     #[arg(long)]
     child_frame: Option<String>,
+    /// Also write a page for a person: the held-out gap of every pose, the rotation axes and the
+    /// rotation angles of the motions (one self-contained HTML file).
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<std::path::PathBuf>,
 }
 
 /// Fewest bootstrap replicates that give a usable one-sigma.
@@ -126,6 +130,10 @@ pub fn run(args: Args) -> Result<()> {
             return Err(e.into());
         }
     };
+    if let Some(path) = &args.report {
+        crate::report::write_calibrate(path, &poses, setup, &report)?;
+        eprintln!("wrote {}", path.display());
+    }
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
         eprintln!(
             "rejected {} outlier pose(s) of {}",

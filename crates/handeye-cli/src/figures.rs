@@ -15,6 +15,14 @@ use plotters::prelude::*;
 static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
+/// Registers the embedded font once (a font that does not parse leaves text undrawn; the figures
+/// are still written).
+pub fn register_font() {
+    REGISTER.call_once(|| {
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
 /// A number read off a method's summary.
 type Metric = fn(&MethodSummary) -> f64;
 
