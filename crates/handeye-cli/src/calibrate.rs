@@ -192,13 +192,12 @@ fn run_robot_world(args: &Args) -> Result<()> {
     for (flag, given) in [
         ("--pairs", args.pairs.is_some()),
         ("--tsai-opencv-filter", args.tsai_opencv_filter),
+        ("--report", args.report.is_some()),
     ] {
         if given {
             return Err(Error::InvalidParameter {
                 name: "robot-world",
-                message: format!(
-                    "{flag} does not apply to --robot-world, which uses every pose once"
-                ),
+                message: format!("{flag} is not offered with --robot-world (yet)"),
             }
             .into());
         }
