@@ -5,6 +5,8 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::calibration::{Fix, Options, calibrate};
 use handeye::metrics::OUTLIER_DEG;
+use handeye::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
+use handeye::solve::RobotWorldMethod;
 use handeye::solve::TsaiOptions;
 use handeye::uncertainty::REPLICATES;
 use handeye::{Error, Method, Pairing};
@@ -20,9 +22,15 @@ use crate::values;
 pub struct Args {
     #[command(flatten)]
     input: InputArgs,
-    /// Solver.
-    #[arg(long, default_value = "andreff", value_parser = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
-    method: String,
+    /// Solver. Hand–eye (default andreff): andreff, andreff-joint, tsai, park, horaud,
+    /// daniilidis, refine. With --robot-world (default refine): shah, li, refine.
+    #[arg(long, value_parser = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine", "shah", "li"])]
+    method: Option<String>,
+    /// Robot-world–hand-eye calibration (A X = Z B): solve X and the target's pose together
+    /// from every pose once (`base_from_target` eye-in-hand, `gripper_from_target` eye-to-hand),
+    /// instead of X alone from motions between poses.
+    #[arg(long)]
+    robot_world: bool,
     /// Motions from consecutive poses, or from every pair i < j (as OpenCV does). Default:
     /// consecutive for pose-pair files, all for two streams (`--robot/--camera`) and ROS 2
     /// recordings, whose consecutive camera frames barely move.
@@ -75,6 +83,9 @@ const MIN_REPLICATES: usize = 8;
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    if args.robot_world {
+        return run_robot_world(&args);
+    }
     let options = options(&args)?;
     let setup = args.input.setup();
     let (poses, pose_names, time_offset) = read_all(&args.input)?;
@@ -176,8 +187,127 @@ pub fn run(args: Args) -> Result<()> {
     print_json(&out)
 }
 
-/// The library's options from the command line.
-fn options(args: &Args) -> Result<Options> {
+/// `calibrate --robot-world`: X and the target's pose together.
+fn run_robot_world(args: &Args) -> Result<()> {
+    for (flag, given) in [
+        ("--pairs", args.pairs.is_some()),
+        ("--tsai-opencv-filter", args.tsai_opencv_filter),
+        ("--report", args.report.is_some()),
+    ] {
+        if given {
+            return Err(Error::InvalidParameter {
+                name: "robot-world",
+                message: format!("{flag} is not offered with --robot-world (yet)"),
+            }
+            .into());
+        }
+    }
+    let method = args
+        .method
+        .as_deref()
+        .unwrap_or("refine")
+        .parse::<RobotWorldMethod>()
+        .map_err(|_| Error::InvalidParameter {
+            name: "method",
+            message: format!(
+                "`{}` is a hand–eye method; with --robot-world use shah, li or refine",
+                args.method.as_deref().unwrap_or_default()
+            ),
+        })?;
+    let (fix, replicates) = (fix(args)?, replicates(args)?);
+    let setup = args.input.setup();
+    let (poses, pose_names, time_offset) = read_all(&args.input)?;
+    if poses.len() < 3 {
+        return Err(Error::Parse {
+            file: args
+                .input
+                .input
+                .as_ref()
+                .map_or("-".into(), |p| p.display().to_string()),
+            line: 0,
+            field: "-".into(),
+            message: format!(
+                "{} pose pair(s): at least 3 are needed to determine X and the target's pose",
+                poses.len()
+            ),
+        }
+        .into());
+    }
+    let report = calibrate_robot_world(
+        &poses,
+        setup,
+        &RobotWorldOptions {
+            method,
+            fix,
+            replicates,
+            reject_outliers: args.reject_outliers,
+            outlier_deg: args.outlier_deg,
+            pose_names,
+        },
+    )?;
+    if report.outliers.rejected && !report.outliers.poses.is_empty() {
+        eprintln!(
+            "rejected {} outlier pose(s) of {}",
+            report.outliers.poses.len(),
+            report.outliers.poses.len() + report.poses
+        );
+    }
+    for w in &report.warnings {
+        eprintln!("warning: {w}");
+    }
+    match Face::chosen(args.output.as_deref()) {
+        // The YAML lists X, the target, their one-sigma and the residuals: readable as text too.
+        Face::Yaml | Face::Text => return print_text(&robot_world_yaml(&report)),
+        Face::Ros2 | Face::Urdf => {
+            return Err(Error::InvalidParameter {
+                name: "output",
+                message:
+                    "ros2 and urdf are not offered with --robot-world yet; use json, yaml or text"
+                        .into(),
+            }
+            .into());
+        }
+        Face::Json => {}
+    }
+    let mut out = serde_json::to_value(&report)?;
+    if let (Some(t), Value::Object(o)) = (time_offset, &mut out) {
+        o.insert("time_offset_s".into(), t.into());
+    }
+    print_json(&out)
+}
+
+/// The robot-world result as ROS-style YAML: X and the target pose.
+fn robot_world_yaml(r: &RobotWorldReport) -> String {
+    let pose = |name: &str,
+                t: &handeye::io::TransformJson,
+                u: &handeye::uncertainty::Uncertainty| {
+        let [tx, ty, tz] = t.translation;
+        let [qx, qy, qz, qw] = t.quaternion_xyzw;
+        format!(
+            "{name}:\n  translation: {{x: {tx}, y: {ty}, z: {tz}}}\n  rotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\n  uncertainty: {{rotation_deg: {}, translation: {}}}\n",
+            u.rotation_deg, u.translation
+        )
+    };
+    format!(
+        "# handeye calibrate --robot-world: method {}, setup {}\n{}{}residual: {{rotation_deg_rms: {}, translation_rms: {}}}\nposes: {}\n",
+        r.method,
+        r.setup.name(),
+        pose(&r.frame, &r.x, &r.uncertainty),
+        pose(&r.target.frame, &r.target.pose, &r.target.uncertainty),
+        r.residual.rotation_deg_rms,
+        r.residual.translation_rms,
+        r.poses,
+    )
+}
+
+fn fix(args: &Args) -> Result<Fix> {
+    Ok(match args.fix.as_deref() {
+        None => Fix::Refuse,
+        Some(name) => name.parse::<Fix>()?,
+    })
+}
+
+fn replicates(args: &Args) -> Result<usize> {
     if args.bootstrap < MIN_REPLICATES {
         return Err(Error::InvalidParameter {
             name: "bootstrap",
@@ -188,12 +318,23 @@ fn options(args: &Args) -> Result<Options> {
         }
         .into());
     }
-    let fix = match args.fix.as_deref() {
-        None => Fix::Refuse,
-        Some(name) => name.parse::<Fix>()?,
-    };
+    Ok(args.bootstrap)
+}
+
+/// The library's options from the command line.
+fn options(args: &Args) -> Result<Options> {
+    let replicates = replicates(args)?;
+    let fix = fix(args)?;
+    let method = args.method.as_deref().unwrap_or("andreff");
+    if matches!(method, "shah" | "li") {
+        return Err(Error::InvalidParameter {
+            name: "method",
+            message: format!("`{method}` is a robot-world method: add --robot-world"),
+        }
+        .into());
+    }
     Ok(Options {
-        method: args.method.parse::<Method>()?,
+        method: method.parse::<Method>()?,
         pairing: match args.pairs.as_deref() {
             Some("all") => Pairing::All,
             Some(_) => Pairing::Consecutive,
@@ -208,7 +349,7 @@ fn options(args: &Args) -> Result<Options> {
         reject_outliers: args.reject_outliers,
         outlier_deg: args.outlier_deg,
         fix,
-        replicates: args.bootstrap,
+        replicates,
         pose_names: Vec::new(),
     })
 }

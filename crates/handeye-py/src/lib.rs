@@ -127,6 +127,39 @@ fn calibrate_report<'py>(
     serde_json::to_string(&report).map_err(value_error)
 }
 
+/// The robot-world calibration ([`handeye::robot_world::calibrate_robot_world`]): its report as
+/// JSON, the same object `handeye calibrate --robot-world` prints.
+#[pyfunction]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::uncertainty::REPLICATES, reject_outliers=false))]
+#[allow(clippy::too_many_arguments)]
+fn robot_world_report<'py>(
+    py: Python<'py>,
+    base_from_gripper: PyReadonlyArray3<'py, f64>,
+    camera_from_target: PyReadonlyArray3<'py, f64>,
+    method: &str,
+    setup: &str,
+    fix: Option<&str>,
+    bootstrap: usize,
+    reject_outliers: bool,
+) -> PyResult<String> {
+    let options = handeye::robot_world::RobotWorldOptions {
+        method: method.parse().map_err(value_error)?,
+        fix: match fix {
+            None => handeye::calibration::Fix::Refuse,
+            Some(name) => name.parse().map_err(value_error)?,
+        },
+        replicates: bootstrap.max(8),
+        reject_outliers,
+        ..Default::default()
+    };
+    let setup = parse_setup(setup)?;
+    let poses = poses(&base_from_gripper, &camera_from_target)?;
+    let report = py
+        .allow_threads(|| handeye::robot_world::calibrate_robot_world(&poses, setup, &options))
+        .map_err(value_error)?;
+    serde_json::to_string(&report).map_err(value_error)
+}
+
 /// What to record next (`handeye advise`): the library's `Advice` as JSON text.
 #[pyfunction]
 #[pyo3(signature = (base_from_gripper, camera_from_target, setup="eye-in-hand", count=3))]
@@ -354,6 +387,7 @@ fn event<'py>(py: Python<'py>, e: &Event) -> PyResult<Bound<'py, PyDict>> {
 fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_x, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
+    m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
     m.add_function(wrap_pyfunction!(advise_report, m)?)?;
     m.add_class::<PyOnline>()?;
     Ok(())

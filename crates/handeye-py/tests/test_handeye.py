@@ -193,6 +193,35 @@ def test_the_accumulating_estimator_reports_on_its_own_schedule_with_an_honest_u
         assert np.linalg.norm(d[:3, 3]) < 3 * r["uncertainty"]["translation"]
 
 
+def test_robot_world_matches_opencv_and_reports_the_target():
+    """calibrate(..., robot_world=True): Shah and Li give cv2.calibrateRobotWorldHandEye's answer
+    (OpenCV's A X = Z B with world2cam = camera_from_target, base2gripper = base_from_gripper⁻¹;
+    X = gripper2cam⁻¹, target = base2world⁻¹), and refine reports X and the target near the truth."""
+    rng = np.random.default_rng(5)
+    Rg, tg, Rc, tc, X = random_problem(rng, n=15)
+    g = np.array([np.block([[r, t.reshape(3, 1)], [np.zeros((1, 3)), np.ones((1, 1))]]) for r, t in zip(Rg, tg)])
+    c = np.array([np.block([[cv2.Rodrigues(r)[0], t.reshape(3, 1)], [np.zeros((1, 3)), np.ones((1, 1))]]) for r, t in zip(Rc, tc)])
+    b = np.linalg.inv(g)
+    for name, flag in [("shah", cv2.CALIB_ROBOT_WORLD_HAND_EYE_SHAH), ("li", cv2.CALIB_ROBOT_WORLD_HAND_EYE_LI)]:
+        r_w, t_w, r_z, t_z = cv2.calibrateRobotWorldHandEye(
+            [m[:3, :3] for m in c], [m[:3, 3:4] for m in c], [m[:3, :3] for m in b], [m[:3, 3:4] for m in b], method=flag
+        )
+        z = np.eye(4); z[:3, :3] = r_z; z[:3, 3] = t_z.ravel()
+        w = np.eye(4); w[:3, :3] = r_w; w[:3, 3] = t_w.ravel()
+        result = handeye.calibrate(g, c, robot_world=True, method=name)
+        assert np.abs(result["matrix"] - np.linalg.inv(z)).max() < 1e-6, name
+        assert np.abs(result["target"]["matrix"] - np.linalg.inv(w)).max() < 1e-6, name
+    result = handeye.calibrate(g, c, robot_world=True)
+    assert result["method"] == "refine" and result["target"]["frame"] == "base_from_target"
+    assert np.abs(result["matrix"][:3, :3] - X[:3, :3]).max() < 0.01
+    assert result["uncertainty"]["rotation_deg"] > 0 and result["target"]["uncertainty"]["translation"] > 0
+    assert len(result["residual"]["per_pose"]) == 15
+    with pytest.raises(ValueError):
+        handeye.calibrate(g[:2], c[:2], robot_world=True)
+    with pytest.raises(ValueError):
+        handeye.calibrate(g, c, robot_world=True, method="tsai")
+
+
 def test_advise_names_the_next_motions_and_what_they_would_give():
     q, c, _, _ = load_series("series_2007_000_200")
     advice = handeye.advise(q[:12], c[:12], count=2)

@@ -425,7 +425,7 @@ fn solve_motions(motions: &(impl MotionSource + ?Sized), options: &Options) -> R
 }
 
 /// The reading to solve under, and the check behind it.
-fn choose_reading(
+pub(crate) fn choose_reading(
     poses: &[PosePair],
     setup: Setup,
     fix: Fix,
@@ -458,7 +458,7 @@ fn choose_reading(
 }
 
 /// Median distance from the camera to the target, input units.
-fn working_distance(poses: &[PosePair]) -> f64 {
+pub(crate) fn working_distance(poses: &[PosePair]) -> f64 {
     crate::consistency::median(
         poses
             .iter()
@@ -468,7 +468,7 @@ fn working_distance(poses: &[PosePair]) -> f64 {
 }
 
 /// The poses without the outliers.
-fn without(poses: &[PosePair], found: &PoseOutliers) -> Vec<PosePair> {
+pub(crate) fn without(poses: &[PosePair], found: &PoseOutliers) -> Vec<PosePair> {
     let bad = found.indices();
     poses
         .iter()
@@ -480,7 +480,7 @@ fn without(poses: &[PosePair], found: &PoseOutliers) -> Vec<PosePair> {
 
 /// A refusal with what in the input explains it (outliers kept, a better reading kept as given),
 /// when anything does.
-fn explained(refusal: Error, warnings: &[String], kept_outliers: Option<&str>) -> Error {
+pub(crate) fn explained(refusal: Error, warnings: &[String], kept_outliers: Option<&str>) -> Error {
     let why: Vec<&str> = warnings
         .iter()
         .map(String::as_str)
@@ -551,7 +551,7 @@ fn quality_of(
     }
 }
 
-fn outlier_report(found: &PoseOutliers, options: &Options) -> Outliers {
+pub(crate) fn outlier_report(found: &PoseOutliers, options: &Options) -> Outliers {
     Outliers {
         poses: found
             .poses
@@ -573,7 +573,7 @@ fn outlier_report(found: &PoseOutliers, options: &Options) -> Outliers {
     }
 }
 
-fn outlier_warning(o: &Outliers) -> String {
+pub(crate) fn outlier_warning(o: &Outliers) -> String {
     const SHOWN: usize = 5;
     let listed: Vec<String> = o
         .poses

@@ -25,6 +25,9 @@
 //!   [`motion_pairs`].
 //! - Online: [`online::OnlineCalibrator`] (the paper's selection, and with
 //!   [`online::Estimator::Accumulate`] the [`tracking::Tracker`]).
+//! - Robot-world (X and the target pose together, A X = Z B): [`robot_world::calibrate_robot_world`]
+//!   on top of [`solve::shah`], [`solve::li`], [`solve::refine_robot_world`]; online, the sums of
+//!   [`accumulate::RobotWorldAccumulator`] in every [`tracking::Tracker`] report.
 //! - What to record next: [`advice::advise`]. Reading files: [`io`]; two streams:
 //!   [`sync::pair_stream_files`].
 //!
@@ -66,6 +69,7 @@ pub mod metrics;
 mod motion;
 pub mod online;
 pub mod pose;
+pub mod robot_world;
 pub mod select;
 pub mod sim;
 pub mod solve;

@@ -199,8 +199,15 @@ fn error_of(xb: &Transform, x: &Transform) -> Vector6<f64> {
     Vector6::new(dr.x, dr.y, dr.z, dt.x, dt.y, dt.z)
 }
 
-/// Sizes, weakest directions and verdicts of a covariance.
-fn summarise(cov: Matrix6<f64>, replicates: usize, refused: usize, scene: f64) -> Uncertainty {
+/// Sizes, weakest directions and verdicts of a covariance of (rotation vector in radians,
+/// translation) of X's error, with `replicates` and `refused` as given (0 for a first-order
+/// covariance); `scene` as in [`bootstrap`].
+pub(crate) fn summarise(
+    cov: Matrix6<f64>,
+    replicates: usize,
+    refused: usize,
+    scene: f64,
+) -> Uncertainty {
     let rot: Matrix3<f64> = cov.fixed_view::<3, 3>(0, 0).into_owned();
     let trans: Matrix3<f64> = cov.fixed_view::<3, 3>(3, 3).into_owned();
     let (rot_axis, rot_var) = weakest(&rot);

@@ -22,6 +22,7 @@ import numpy as np
 from ._handeye import _OnlineCalibrator
 from ._handeye import advise_report as _advise_report
 from ._handeye import calibrate_report as _calibrate_report
+from ._handeye import robot_world_report as _robot_world_report
 from ._handeye import solve_x as _solve_x
 
 __all__ = ["calibrate_hand_eye", "calibrate", "advise", "OnlineCalibrator", "METHODS"]
@@ -87,12 +88,13 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
 def calibrate(
     base_from_gripper,
     camera_from_target,
-    method="andreff",
+    method=None,
     setup="eye-in-hand",
     pairs="consecutive",
     reject_outliers=False,
     fix=None,
     bootstrap=40,
+    robot_world=False,
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
@@ -103,11 +105,28 @@ def calibrate(
     ``outliers`` (poses that disagree with the others), ``residual``, ``quality`` and
     ``warnings``. ``fix`` reads the input another way ("auto", "as-given", "robot-inverted",
     "camera-inverted", "both-inverted", "robot-wxyz", "camera-wxyz", "both-wxyz", "robot-mm",
-    "camera-mm")."""
+    "camera-mm"). ``method`` defaults to "andreff".
+
+    With ``robot_world=True`` X and the target's pose are solved together from every pose once
+    (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
+    with ``target`` (``frame`` "base_from_target" or "gripper_from_target", ``matrix`` as a (4,4)
+    array, ``translation``, ``quaternion_xyzw``, ``uncertainty``) and ``residual`` per pose."""
     g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
     c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
     if g.ndim != 3 or c.ndim != 3:
         raise ValueError("expected (N, 4, 4) arrays of transforms")
+    if robot_world:
+        if pairs != "consecutive":
+            raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
+        result = json.loads(
+            _robot_world_report(
+                g, c, method=method or "refine", setup=setup, fix=fix, bootstrap=bootstrap, reject_outliers=reject_outliers
+            )
+        )
+        result["matrix"] = np.array(result["matrix"], dtype=np.float64)
+        result["target"]["matrix"] = np.array(result["target"]["matrix"], dtype=np.float64)
+        return result
+    method = method or "andreff"
     result = json.loads(
         _calibrate_report(
             g,

@@ -18,12 +18,13 @@ def calibrate_hand_eye(
 def calibrate(
     base_from_gripper: npt.ArrayLike,
     camera_from_target: npt.ArrayLike,
-    method: str = "andreff",
+    method: Optional[str] = None,
     setup: str = "eye-in-hand",
     pairs: str = "consecutive",
     reject_outliers: bool = False,
     fix: Optional[str] = None,
     bootstrap: int = 40,
+    robot_world: bool = False,
 ) -> dict[str, Any]: ...
 
 class OnlineCalibrator:

@@ -14,6 +14,7 @@ mod least_squares;
 mod park;
 mod quaternion;
 mod refine;
+pub(crate) mod robot_world;
 mod rotation_system;
 mod scale;
 mod symmetric;
@@ -31,6 +32,11 @@ pub use daniilidis::daniilidis;
 pub use horaud::horaud;
 pub use park::park;
 pub use refine::{RefineOptions, Refinement, Termination, covariance_at, refine, refine_from};
+pub use robot_world::{
+    JointCovariance, PoseResidual, RobotWorld, RobotWorldMethod, RobotWorldRefinement,
+    joint_covariance, li, pose_residual, pose_residuals, refine_robot_world,
+    refine_robot_world_from, robot_world, shah, target_frame,
+};
 pub use rotation_system::{RotationSolution, RotationSystem};
 pub use tsai::{TsaiOptions, tsai, tsai_with};
 

@@ -49,7 +49,11 @@ const OPENCV_RANGE: f64 = 32.0;
 /// of rows ~1e-8 of the other, and its normal equations lose the smaller block entirely. The unit
 /// is continuous in the data's scale and a power of two, and noise-free data gives X at any scale.
 pub(crate) fn weighting_unit(motions: &(impl MotionSource + ?Sized)) -> f64 {
-    let scale = length_scale(motions);
+    weighting_from_scale(length_scale(motions))
+}
+
+/// [`weighting_unit`] for a data scale computed elsewhere (the robot-world solvers' poses).
+pub(crate) fn weighting_from_scale(scale: f64) -> f64 {
     if scale > OPENCV_RANGE {
         scale / OPENCV_RANGE
     } else if scale < 1.0 / OPENCV_RANGE {

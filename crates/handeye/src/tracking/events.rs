@@ -34,6 +34,20 @@ pub struct TrackEstimate {
     pub uncertainty_rotation_deg: Option<f64>,
     /// The same for the translation, input units.
     pub uncertainty_translation: Option<f64>,
+    /// The robot-world solution (Shah's A X = Z B over the same accepted poses of the segment,
+    /// [`crate::accumulate::RobotWorldAccumulator`]): X and the target solved together rather than
+    /// the target as the mean fixed frame under the hand–eye X. `None` while its system is
+    /// degenerate.
+    pub robot_world: Option<RobotWorldPair>,
+}
+
+/// X and the target pose of a robot-world solution.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RobotWorldPair {
+    /// X.
+    pub x: Transform,
+    /// The target pose (`base_from_target` / `gripper_from_target`).
+    pub target: Transform,
 }
 
 /// Why a pose was held out of the sums.
@@ -217,7 +231,8 @@ impl fmt::Display for Pending {
 impl Report {
     /// The report as its JSON line (SPEC sec. 7), the one output of every face: `estimate`,
     /// `pose`, `reason`, `frame`, X (`translation`, `quaternion_xyzw`, `matrix`), `poses`,
-    /// `since`, `uncertainty`, `noise`, `conditioning`, `target` (the fixed frame) and, on a
+    /// `since`, `uncertainty`, `noise`, `conditioning`, `target` (the fixed frame), `robot_world`
+    /// (X and the target solved together by Shah over the same poses, when determined) and, on a
     /// weak final report, `weak` with the reason in words.
     pub fn json(&self, setup: Setup) -> serde_json::Value {
         let e = &self.estimate;
@@ -243,6 +258,17 @@ impl Report {
         target.insert("frame".into(), target_frame(setup).into());
         insert_transform(&mut target, &e.target);
         out.insert("target".into(), target.into());
+        if let Some(rw) = &e.robot_world {
+            let mut x = serde_json::Map::new();
+            x.insert("method".into(), "shah".into());
+            x.insert("frame".into(), setup.x_frame().into());
+            insert_transform(&mut x, &rw.x);
+            let mut target = serde_json::Map::new();
+            target.insert("frame".into(), target_frame(setup).into());
+            insert_transform(&mut target, &rw.target);
+            x.insert("target".into(), target.into());
+            out.insert("robot_world".into(), x.into());
+        }
         if let Some(w) = &self.weak {
             out.insert("weak".into(), w.to_string().into());
         }

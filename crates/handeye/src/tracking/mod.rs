@@ -43,7 +43,9 @@ use crate::motion::{PosePair, Setup};
 use crate::pose::rotation_angle_between;
 use crate::uncertainty::{UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION};
 
-pub use events::{Change, HeldOut, Pending, Reason, Report, Step, TrackEstimate, target_frame};
+pub use events::{
+    Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate, target_frame,
+};
 use segment::{Segment, Snapshot};
 
 /// Settings of the tracker; `Default` gives the values on each field.

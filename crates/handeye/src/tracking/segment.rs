@@ -3,8 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Pending, TrackEstimate, TrackOptions};
-use crate::accumulate::{PoseAccumulator, Scatter};
+use super::{Pending, RobotWorldPair, TrackEstimate, TrackOptions};
+use crate::accumulate::{PoseAccumulator, RobotWorldAccumulator, Scatter};
 use crate::motion::{PosePair, Setup};
 use crate::pose::{Transform, rotation_angle_between};
 
@@ -23,6 +23,8 @@ pub(super) struct Snapshot {
 pub(super) struct Segment {
     pub(super) all: PoseAccumulator,
     pub(super) halves: [PoseAccumulator; 2],
+    /// Shah's robot-world sums over the same poses.
+    pub(super) robot_world: RobotWorldAccumulator,
     pub(super) since: usize,
     /// The first accepted hand rotation and the largest rotation from it (radians).
     pub(super) first: Option<Transform>,
@@ -37,6 +39,7 @@ impl Segment {
         Self {
             all: PoseAccumulator::new(setup),
             halves: [PoseAccumulator::new(setup), PoseAccumulator::new(setup)],
+            robot_world: RobotWorldAccumulator::new(setup),
             since,
             first: None,
             largest: 0.0,
@@ -52,6 +55,7 @@ impl Segment {
             .max(rotation_angle_between(&first.rotation, &hand.rotation));
         self.all.add(pose);
         self.halves[self.all.poses() % 2].add(pose);
+        self.robot_world.add(pose);
     }
 
     /// The segment's estimate now, kept as a checkpoint when its pose count has grown by half
@@ -136,6 +140,10 @@ impl Segment {
                 noise_translation: scatter.translation,
                 uncertainty_rotation_deg: ur,
                 uncertainty_translation: ut,
+                robot_world: self.robot_world.estimate().map(|r| RobotWorldPair {
+                    x: r.x,
+                    target: r.target,
+                }),
             },
             scatter,
             local,
