@@ -89,22 +89,7 @@ pub fn run(args: Args) -> Result<()> {
     let options = options(&args)?;
     let setup = args.input.setup();
     let (poses, pose_names, time_offset) = read_all(&args.input)?;
-    if poses.len() < 2 {
-        return Err(Error::Parse {
-            file: args
-                .input
-                .input
-                .as_ref()
-                .map_or("-".into(), |p| p.display().to_string()),
-            line: 0,
-            field: "-".into(),
-            message: format!(
-                "{} pose pair(s): at least 2 are needed to make a motion",
-                poses.len()
-            ),
-        }
-        .into());
-    }
+    enough(&args.input, poses.len(), 2, "to make a motion")?;
     let face = Face::chosen(args.output.as_deref());
     let unit = length_unit(&poses);
     let report = match calibrate(
@@ -217,22 +202,12 @@ fn run_robot_world(args: &Args) -> Result<()> {
     let (fix, replicates) = (fix(args)?, replicates(args)?);
     let setup = args.input.setup();
     let (poses, pose_names, time_offset) = read_all(&args.input)?;
-    if poses.len() < 3 {
-        return Err(Error::Parse {
-            file: args
-                .input
-                .input
-                .as_ref()
-                .map_or("-".into(), |p| p.display().to_string()),
-            line: 0,
-            field: "-".into(),
-            message: format!(
-                "{} pose pair(s): at least 3 are needed to determine X and the target's pose",
-                poses.len()
-            ),
-        }
-        .into());
-    }
+    enough(
+        &args.input,
+        poses.len(),
+        3,
+        "to determine X and the target's pose",
+    )?;
     let report = calibrate_robot_world(
         &poses,
         setup,
@@ -352,4 +327,21 @@ fn options(args: &Args) -> Result<Options> {
         replicates,
         pose_names: Vec::new(),
     })
+}
+
+/// Refuses fewer than `need` pose pairs, naming the input (exit 2).
+fn enough(input: &InputArgs, got: usize, need: usize, what: &str) -> Result<()> {
+    if got >= need {
+        return Ok(());
+    }
+    Err(Error::Parse {
+        file: input
+            .input
+            .as_ref()
+            .map_or("-".into(), |p| p.display().to_string()),
+        line: 0,
+        field: "-".into(),
+        message: format!("{got} pose pair(s): at least {need} are needed {what}"),
+    }
+    .into())
 }
