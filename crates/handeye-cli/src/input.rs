@@ -206,6 +206,8 @@ pub struct Synced {
     pub pairs: Vec<StampedPosePair>,
     /// Offset used, seconds.
     pub time_offset: f64,
+    /// With `--time-offset auto`: the angular speeds' correlation at each offset searched.
+    pub offset_curve: Option<Vec<[f64; 2]>>,
 }
 
 /// Reads and pairs the two streams of `args`.
@@ -248,6 +250,7 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
         }
     }
     let time_offset = pairing.time_offset;
+    let offset_curve = pairing.correlated.as_ref().map(|e| e.curve.clone());
     if let Some(e) = pairing.correlated {
         eprintln!(
             "time offset: {time_offset:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
@@ -289,7 +292,11 @@ pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
             pose: *p,
         })
         .collect();
-    Ok(Some(Synced { pairs, time_offset }))
+    Ok(Some(Synced {
+        pairs,
+        time_offset,
+        offset_curve,
+    }))
 }
 
 /// The clock offset (camera − robot, seconds) of two streams: the angular speeds' correlation,
@@ -426,9 +433,17 @@ impl<R: BufRead> Iterator for NotingReader<R> {
 /// Pose pairs one at a time, each with its place, or the error of a bad record.
 pub type Records = Box<dyn Iterator<Item = handeye::Result<StampedPosePair>>>;
 
+/// The clock offset two streams (or a recording) were paired with.
+pub struct Offset {
+    /// Camera clock minus robot clock, seconds.
+    pub seconds: f64,
+    /// With `--time-offset auto` on two streams: the correlation curve, `[offset s, correlation]`.
+    pub curve: Option<Vec<[f64; 2]>>,
+}
+
 /// A record stream for `online`: from stdin, a file, or paired streams, with the name of its
 /// source for messages. A file is opened once (a FIFO cannot be read twice).
-pub fn records(args: &InputArgs) -> Result<(Records, String, Option<f64>)> {
+pub fn records(args: &InputArgs) -> Result<(Records, String, Option<Offset>)> {
     if let Some((b, offset)) = bag(args)? {
         let source = format!(
             "{} {}",
@@ -437,6 +452,10 @@ pub fn records(args: &InputArgs) -> Result<(Records, String, Option<f64>)> {
                 .map_or(String::new(), |p| p.display().to_string()),
             b.target_source
         );
+        let offset = offset.map(|seconds| Offset {
+            seconds,
+            curve: None,
+        });
         return Ok((Box::new(b.pairs.into_iter().map(Ok)), source, offset));
     }
     if let Some(s) = synced(args)? {
@@ -444,11 +463,11 @@ pub fn records(args: &InputArgs) -> Result<(Records, String, Option<f64>)> {
             .camera
             .as_ref()
             .map_or("camera".to_string(), |p| p.display().to_string());
-        return Ok((
-            Box::new(s.pairs.into_iter().map(Ok)),
-            camera,
-            Some(s.time_offset),
-        ));
+        let offset = Offset {
+            seconds: s.time_offset,
+            curve: s.offset_curve,
+        };
+        return Ok((Box::new(s.pairs.into_iter().map(Ok)), camera, Some(offset)));
     }
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
     let source = path.display().to_string();

@@ -189,7 +189,8 @@ pub fn run(args: Args) -> Result<()> {
     let accumulate = config.estimator == Estimator::Accumulate;
     let face = Face::chosen(args.output.as_deref());
     let mut calibrator = OnlineCalibrator::new(config)?;
-    let (records, source, time_offset) = records(&args.input)?;
+    let (records, source, offset) = records(&args.input)?;
+    let time_offset = offset.as_ref().map(|o| o.seconds);
     let mut messages = Thinned::default();
     let mut last: Option<Report> = None;
     // Kept only for --report: a few numbers per event.
@@ -294,6 +295,7 @@ pub fn run(args: Args) -> Result<()> {
     eprintln!("{summary}");
     if let (Some(path), Some(mut trace)) = (&args.report, trace) {
         trace.poses = calibrator.poses();
+        trace.offset = offset.and_then(|o| o.curve.map(|c| (o.seconds, c)));
         crate::report::write_online(path, &trace, &summary)?;
         eprintln!("wrote {}", path.display());
     }

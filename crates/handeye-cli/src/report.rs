@@ -265,6 +265,8 @@ pub struct OnlineTrace {
     pub held_out: Vec<usize>,
     /// Poses pushed.
     pub poses: usize,
+    /// For two streams with `--time-offset auto`: the offset used and the correlation curve.
+    pub offset: Option<(f64, Vec<[f64; 2]>)>,
 }
 
 impl OnlineTrace {
@@ -349,6 +351,16 @@ pub fn write_online(path: &Path, trace: &OnlineTrace, summary: &str) -> Result<(
             "The paper's adaptive thresholds at each of its calibrations: β₀ (least rotation of a selected motion) and α₀ (least angle between the two motions' axes), degrees.".to_string(),
         ),
     ];
+    let mut figures = figures.to_vec();
+    if let Some((used, curve)) = &trace.offset {
+        figures.push((
+            offset_figure(*used, curve)?,
+            format!(
+                "Two streams: how well the gripper's and the camera's angular speeds correlate at each clock offset (camera − robot) searched; the line marks the offset used, {:.4} s (the correlation's peak, refined by how well the paired poses agree on one X).",
+                used
+            ),
+        ));
+    }
     let summary = format!("<p>{}</p>", escape(summary));
     std::fs::write(path, page("handeye online", &summary, "", &figures))
         .map_err(|e| anyhow!("cannot write {}: {e}", path.display()))
@@ -470,6 +482,49 @@ fn thresholds_figure(trace: &OnlineTrace) -> Result<String> {
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(())
+    })
+}
+
+/// The clock-offset correlation curve, with the offset used.
+fn offset_figure(used: f64, curve: &[[f64; 2]]) -> Result<String> {
+    let (lo, hi) = curve
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p[0]), hi.max(p[0]))
+        });
+    let (lo, hi) = if lo < hi {
+        (lo, hi)
+    } else {
+        (used - 1.0, used + 1.0)
+    };
+    let bottom = curve.iter().map(|p| p[1]).fold(0.0, f64::min);
+    svg(SIZE, |root| {
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                "angular-speed correlation against the clock offset",
+                ("sans-serif", 20),
+            )
+            .margin(12)
+            .x_label_area_size(36)
+            .y_label_area_size(60)
+            .build_cartesian_2d(lo..hi, bottom..1.0)
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("camera − robot clock (s)")
+            .y_desc("correlation")
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .draw_series(LineSeries::new(curve.iter().map(|p| (p[0], p[1])), &BLUE))
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .draw_series(LineSeries::new(
+                [(used, bottom), (used, 1.0)],
+                RED.stroke_width(2),
+            ))
             .map_err(|e| anyhow!("{e}"))?;
         Ok(())
     })

@@ -98,13 +98,15 @@ fn every_figure_renders_in_headless_chromium() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    for path in [page(dir.path()), online_page(dir.path())] {
-        rendered(browser, &path, dir.path());
+    // The online page of two streams also draws the clock-offset correlation.
+    for (path, figures) in [(page(dir.path()), 3), (online_page(dir.path()), 4)] {
+        rendered(browser, &path, figures, dir.path());
     }
 }
 
-/// Renders `path` and checks that its three figures are laid out and that the page is not blank.
-fn rendered(browser: &str, path: &Path, dir: &Path) {
+/// Renders `path` and checks that its `figures` figures are laid out and that the page is not
+/// blank.
+fn rendered(browser: &str, path: &Path, figures: usize, dir: &Path) {
     let flags = [
         "--headless",
         "--no-sandbox",
@@ -119,7 +121,7 @@ fn rendered(browser: &str, path: &Path, dir: &Path) {
     // The rendered DOM, with each figure's size as laid out.
     let probe = dir.join("probe.html");
     let html = std::fs::read_to_string(path).unwrap();
-    assert_eq!(html.matches("<svg").count(), 3, "{}", path.display());
+    assert_eq!(html.matches("<svg").count(), figures, "{}", path.display());
     let script = "<script>window.onload=()=>{const s=[...document.querySelectorAll('figure svg')];document.title='rendered:'+s.filter(e=>{const r=e.getBoundingClientRect();return r.width>100&&r.height>100&&e.querySelectorAll('*').length>20}).length+'/'+s.length;};</script>";
     std::fs::write(&probe, html.replace("</body>", &format!("{script}</body>"))).unwrap();
     let dom = Command::new(browser)
@@ -131,7 +133,7 @@ fn rendered(browser: &str, path: &Path, dir: &Path) {
         .unwrap();
     let dom_text = String::from_utf8_lossy(&dom.stdout);
     assert!(
-        dom_text.contains("<title>rendered:3/3</title>"),
+        dom_text.contains(&format!("<title>rendered:{figures}/{figures}</title>")),
         "{}: {}",
         path.display(),
         &dom_text[..dom_text.len().min(400)]

@@ -224,12 +224,15 @@ impl Default for OffsetOptions {
 }
 
 /// An estimated clock offset.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct OffsetEstimate {
     /// Camera clock minus robot clock, seconds.
     pub offset: f64,
     /// Normalised cross-correlation of the angular speeds at that offset (1 = identical shapes).
     pub correlation: f64,
+    /// The correlation at every offset searched, `[offset s, correlation]` (offsets where the
+    /// streams overlap too little are left out): what a report draws.
+    pub curve: Vec<[f64; 2]>,
 }
 
 /// Estimates the clock offset (camera − robot) by cross-correlating the angular speeds of the two
@@ -309,9 +312,15 @@ pub fn estimate_time_offset(
             offset += 0.5 * (l - r) / denom * step;
         }
     }
+    let curve = scores
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| s.map(|s| [(k as i64 - max_lag) as f64 * step, s]))
+        .collect();
     Ok(OffsetEstimate {
         offset,
         correlation: score,
+        curve,
     })
 }
 
