@@ -140,11 +140,7 @@ fn held_out_figure(poses: &[PosePair], setup: Setup, outliers: &[usize]) -> Resu
         .unwrap_or_default();
     let top = gaps.iter().map(|g| g.1).fold(1e-6, f64::max) * 1.1;
     svg(SIZE, |root| {
-        let mut chart = ChartBuilder::on(&root)
-            .caption("held-out gap per pose (°)", ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
+        let mut chart = chart(&root, "held-out gap per pose (°)", (36, 60))
             .build_cartesian_2d(0f64..poses.len().max(1) as f64, 0f64..top)
             .map_err(|e| anyhow!("{e}"))?;
         chart
@@ -178,11 +174,7 @@ fn axes_figure(motions: &[(f64, Option<[f64; 3]>)]) -> Result<String> {
         .collect();
     // Square, so that the hemisphere's rim is a circle.
     svg((500, 500), |root| {
-        let mut chart = ChartBuilder::on(&root)
-            .caption("rotation axes (gripper frame, from +z)", ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(30)
-            .y_label_area_size(40)
+        let mut chart = chart(&root, "rotation axes (gripper frame, from +z)", (30, 40))
             .build_cartesian_2d(-1.5f64..1.5, -1.5f64..1.5)
             .map_err(|e| anyhow!("{e}"))?;
         chart
@@ -223,11 +215,7 @@ fn angles_figure(motions: &[(f64, Option<[f64; 3]>)]) -> Result<String> {
     }
     let top = counts.iter().copied().max().unwrap_or(1).max(1);
     svg(SIZE, |root| {
-        let mut chart = ChartBuilder::on(&root)
-            .caption("rotation angle of the motions (°)", ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
+        let mut chart = chart(&root, "rotation angle of the motions (°)", (36, 60))
             .build_cartesian_2d(0f64..180.0, 0u32..top + 1)
             .map_err(|e| anyhow!("{e}"))?;
         chart
@@ -380,11 +368,7 @@ fn convergence_figure(
         * 1.1;
     let width = trace.poses.max(1) as f64;
     svg(SIZE, |root| {
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(70)
+        let mut chart = chart(&root, title, (36, 70))
             .build_cartesian_2d(0f64..width, 0f64..top)
             .map_err(|e| anyhow!("{e}"))?;
         chart
@@ -454,11 +438,7 @@ fn thresholds_figure(trace: &OnlineTrace) -> Result<String> {
     let top = beta.iter().chain(&alpha).map(|p| p.1).fold(1.0, f64::max) * 1.1;
     let width = trace.poses.max(1) as f64;
     svg(SIZE, |root| {
-        let mut chart = ChartBuilder::on(&root)
-            .caption("the paper's thresholds (°)", ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
+        let mut chart = chart(&root, "the paper's thresholds (°)", (36, 60))
             .build_cartesian_2d(0f64..width, 0f64..top)
             .map_err(|e| anyhow!("{e}"))?;
         chart
@@ -501,16 +481,13 @@ fn offset_figure(used: f64, curve: &[[f64; 2]]) -> Result<String> {
     };
     let bottom = curve.iter().map(|p| p[1]).fold(0.0, f64::min);
     svg(SIZE, |root| {
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                "angular-speed correlation against the clock offset",
-                ("sans-serif", 20),
-            )
-            .margin(12)
-            .x_label_area_size(36)
-            .y_label_area_size(60)
-            .build_cartesian_2d(lo..hi, bottom..1.0)
-            .map_err(|e| anyhow!("{e}"))?;
+        let mut chart = chart(
+            &root,
+            "angular-speed correlation against the clock offset",
+            (36, 60),
+        )
+        .build_cartesian_2d(lo..hi, bottom..1.0)
+        .map_err(|e| anyhow!("{e}"))?;
         chart
             .configure_mesh()
             .x_desc("camera − robot clock (s)")
@@ -528,4 +505,19 @@ fn offset_figure(used: f64, curve: &[[f64; 2]]) -> Result<String> {
             .map_err(|e| anyhow!("{e}"))?;
         Ok(())
     })
+}
+
+/// A chart builder with the report's title style, margin and label areas (x, y).
+fn chart<'a, 'b>(
+    root: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+    (x_area, y_area): (u32, u32),
+) -> ChartBuilder<'a, 'b, SVGBackend<'b>> {
+    let mut builder = ChartBuilder::on(root);
+    builder
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(x_area)
+        .y_label_area_size(y_area);
+    builder
 }
