@@ -2,6 +2,9 @@
 //! quiet success, the renamed flags keep their old spellings, the ROS outputs parse back to the
 //! transform of the JSON, and the text summary on a terminal.
 
+mod common;
+use common::{run, testdata};
+
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Command as Process, Stdio};
@@ -10,26 +13,8 @@ use assert_cmd::Command;
 use nalgebra::{Matrix4, Quaternion, Rotation3, UnitQuaternion};
 use serde_json::Value;
 
-fn testdata(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../testdata")
-        .join(rel)
-}
-
 fn bin() -> PathBuf {
     assert_cmd::cargo::cargo_bin("handeye")
-}
-
-/// Runs and returns (exit code, stdout, stderr); a panic fails the test.
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(bin()).args(args).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr,
-    )
 }
 
 const NOISY: &str = "opencv/opencv_eye-in-hand_noisy_10_12.jsonl";

@@ -3,9 +3,11 @@
 //! setups, the target in /tf and in a topic; and every wrong recording or frame refused with exit 2
 //! and a message that says what is there.
 
+mod common;
+use common::run;
+
 use std::path::{Path, PathBuf};
 
-use assert_cmd::Command;
 use serde_json::Value;
 
 fn bag(rel: &str) -> PathBuf {
@@ -45,22 +47,6 @@ fn errors(a: &[f64], b: &[f64]) -> (f64, f64) {
         .sum::<f64>()
         .sqrt();
     (angle, t)
-}
-
-/// Runs and returns (exit code, stdout, stderr).
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = Command::cargo_bin("handeye")
-        .unwrap()
-        .args(args)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "panic: {stderr}");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr,
-    )
 }
 
 const FRAMES: [&str; 6] = [
