@@ -221,17 +221,40 @@ fn block_scales(
     r_x: &Matrix3<f64>,
     t_x: &Vector3<f64>,
 ) -> [f64; 2] {
-    let (mut sr, mut st) = (0.0, 0.0);
+    let mut rms = BlockRms::default();
     motions.for_each_motion(|m| {
         let (dr, dt) = residual(m, r_x, t_x);
-        sr += dr.norm_squared();
-        st += dt.norm_squared();
+        rms.add(&dr, &dt);
     });
-    let n = motions.count().max(1) as f64;
-    [
-        (sr / (9.0 * n)).sqrt().max(MIN_BLOCK_RMS),
-        (st / (3.0 * n)).sqrt().max(MIN_BLOCK_RMS),
-    ]
+    rms.scales()
+}
+
+/// The RMS of the rotation-matrix entries and of the translation entries of residuals, each
+/// floored at [`MIN_BLOCK_RMS`]: the block scales that keep either block from dominating (SPEC
+/// sec. 3), for hand–eye motions and robot-world poses alike.
+#[derive(Debug, Default)]
+pub(crate) struct BlockRms {
+    rotation: f64,
+    translation: f64,
+    count: usize,
+}
+
+impl BlockRms {
+    /// Adds one residual: ΔR (3×3) and ΔT.
+    pub(crate) fn add(&mut self, dr: &Matrix3<f64>, dt: &Vector3<f64>) {
+        self.rotation += dr.norm_squared();
+        self.translation += dt.norm_squared();
+        self.count += 1;
+    }
+
+    /// [rotation, translation] RMS per entry.
+    pub(crate) fn scales(&self) -> [f64; 2] {
+        let n = self.count.max(1) as f64;
+        [
+            (self.rotation / (9.0 * n)).sqrt().max(MIN_BLOCK_RMS),
+            (self.translation / (3.0 * n)).sqrt().max(MIN_BLOCK_RMS),
+        ]
+    }
 }
 
 /// Levenberg–Marquardt with Nielsen's damping update.

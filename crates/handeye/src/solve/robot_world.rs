@@ -45,6 +45,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Degeneracy, Error, Result};
 use crate::motion::{Pairing, PosePair, Setup, motion_pairs};
 use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts};
+use crate::solve::refine::BlockRms;
 use crate::solve::scale::weighting_from_scale;
 use crate::solve::{RefineOptions, Termination, Warning, check_motions, singular};
 
@@ -521,9 +522,6 @@ pub fn refine_robot_world_from(
     run(poses, setup, start, options)
 }
 
-/// A start RMS below this counts as this (in units of the data's length scale for ΔT).
-const MIN_BLOCK_RMS: f64 = 1e-12;
-
 /// The problem in the data's length unit: (Q_i, C_i) with translations divided by the unit.
 struct Joint {
     qc: Vec<(Transform, Transform)>,
@@ -572,17 +570,12 @@ fn scaled_problem(poses: &[PosePair], setup: Setup) -> (Vec<(Transform, Transfor
 }
 
 fn block_scales(qc: &[(Transform, Transform)], s: &State) -> [f64; 2] {
-    let (mut sr, mut st) = (0.0, 0.0);
+    let mut rms = BlockRms::default();
     for (q, c) in qc {
         let (dr, dt) = s.residual(q, c);
-        sr += dr.norm_squared();
-        st += dt.norm_squared();
+        rms.add(&dr, &dt);
     }
-    let n = qc.len().max(1) as f64;
-    [
-        (sr / (9.0 * n)).sqrt().max(MIN_BLOCK_RMS),
-        (st / (3.0 * n)).sqrt().max(MIN_BLOCK_RMS),
-    ]
+    rms.scales()
 }
 
 /// The 12×12 weighted Jacobian of one pose's residuals at `s` and the weighted residuals.
