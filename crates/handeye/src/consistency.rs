@@ -106,29 +106,32 @@ fn pose_gap(poses: &[PosePair], setup: Setup, i: usize) -> PoseGap {
 
 /// The screw-invariant gaps of `pose` against `partners` (module documentation): the medians over
 /// its motions to them of |θ_A − θ_B| (degrees) and |k_A·t_A − k_B·t_B| (input units; motions
-/// below 3° left out). The per-pose test of the batch ([`pose_outliers`]) and of the online
-/// tracker ([`crate::tracking`]) alike.
+/// below 3° left out), over the first [`PARTNERS`] partners. The per-pose test of the batch
+/// ([`pose_outliers`]) and of the online tracker ([`crate::tracking`]) alike; it allocates
+/// nothing (the tracker runs it on every pose).
 pub fn screw_gaps<'a>(
     setup: Setup,
     pose: &PosePair,
     partners: impl Iterator<Item = &'a PosePair>,
 ) -> (f64, f64) {
-    let mut angle = Vec::with_capacity(PARTNERS);
-    let mut pitch = Vec::with_capacity(PARTNERS);
-    for partner in partners {
+    let (mut angle, mut pitch) = ([0.0; PARTNERS], [0.0; PARTNERS]);
+    let (mut na, mut np) = (0, 0);
+    for partner in partners.take(PARTNERS) {
         let m = MotionPair::between(setup, partner, pose);
         let (a, b) = (MotionFeatures::of(&m.a), MotionFeatures::of(&m.b));
-        angle.push((a.angle - b.angle).abs().to_degrees());
+        angle[na] = (a.angle - b.angle).abs().to_degrees();
+        na += 1;
         if let (Some(ka), Some(kb)) = (a.axis, b.axis)
             && a.angle > PITCH_MIN_ANGLE
         {
             // Near π the axis sign is arbitrary, so compare |pitch|.
             let pa = ka.dot(&m.a.translation.vector).abs();
             let pb = kb.dot(&m.b.translation.vector).abs();
-            pitch.push((pa - pb).abs());
+            pitch[np] = (pa - pb).abs();
+            np += 1;
         }
     }
-    (median(angle), median(pitch))
+    (median_in(&mut angle[..na]), median_in(&mut pitch[..np]))
 }
 
 /// Up to [`PARTNERS`] other poses spread evenly over the sequence, starting at an offset that
@@ -175,6 +178,11 @@ pub fn axis_scatter(poses: &[PosePair], setup: Setup) -> f64 {
 
 /// Median of the values (upper middle), 0 for none.
 pub(crate) fn median(mut v: Vec<f64>) -> f64 {
+    median_in(&mut v)
+}
+
+/// [`median`] in place, reordering the slice.
+pub(crate) fn median_in(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return 0.0;
     }

@@ -37,7 +37,7 @@ use std::collections::VecDeque;
 
 use serde::{Deserialize, Serialize};
 
-use crate::consistency::{OUTLIER_FACTOR, median, pose_outliers, screw_gaps};
+use crate::consistency::{OUTLIER_FACTOR, median_in, pose_outliers, screw_gaps};
 use crate::conventions::{Reading, check_readings};
 use crate::motion::{PosePair, Setup};
 use crate::pose::rotation_angle_between;
@@ -486,8 +486,13 @@ impl Tracker {
             .take(PARTNER_RING / PARTNER_STRIDE);
         let (angle, pitch) = screw_gaps(self.setup, pose, partners);
         if self.partners.len() >= PARTNER_STRIDE && self.gaps.len() >= 8 {
-            let typical_angle = median(self.gaps.iter().map(|g| g[0]).collect());
-            let typical_pitch = median(self.gaps.iter().map(|g| g[1]).collect());
+            let typical = |k: usize| {
+                let mut v = [0.0; GAP_RING];
+                let n = self.gaps.len();
+                v.iter_mut().zip(&self.gaps).for_each(|(d, g)| *d = g[k]);
+                median_in(&mut v[..n])
+            };
+            let (typical_angle, typical_pitch) = (typical(0), typical(1));
             let angle_limit = (OUTLIER_FACTOR * typical_angle).max(self.options.outlier_deg);
             let scale = pose.base_from_gripper.translation.vector.norm();
             let pitch_limit = OUTLIER_FACTOR * typical_pitch.max(1e-9 * scale);
