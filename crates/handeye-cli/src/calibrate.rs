@@ -135,7 +135,7 @@ pub fn run(args: Args) -> Result<()> {
     // The text face lists the warnings itself.
     if face != Face::Text {
         for w in &report.warnings {
-            eprintln!("warning: {w}");
+            eprintln!("warning: {}", faces::warning(w));
         }
     }
     let frames = faces::frames(
@@ -228,7 +228,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
         );
     }
     for w in &report.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", faces::warning(w));
     }
     match Face::chosen(args.output.as_deref()) {
         // The YAML lists X, the target, their one-sigma and the residuals: readable as text too.

@@ -242,7 +242,7 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
     };
     let _ = writeln!(s, "\nVerdict: {verdict}");
     for w in &r.warnings {
-        let _ = writeln!(s, "  - {w}");
+        let _ = writeln!(s, "  - {}", warning(w));
     }
     if !r.outliers.poses.is_empty() {
         let _ = writeln!(
@@ -344,4 +344,18 @@ pub fn frames(input: &InputArgs, parent: Option<&str>, child: Option<&str>) -> F
         gripper,
         target,
     }
+}
+
+/// A warning as the command line says it: its words, then its remedy as a flag
+/// ("…; pass `--reject-outliers` to leave them out").
+pub fn warning(w: &handeye::Warning) -> String {
+    let Some(remedy) = w.remedy() else {
+        return w.to_string();
+    };
+    let flag = format!("--{}", remedy.option().replace('_', "-"));
+    let flag = match remedy.value() {
+        serde_json::Value::String(value) => format!("{flag} {value}"),
+        _ => flag,
+    };
+    format!("{w}; pass `{flag}` {}", remedy.purpose())
 }

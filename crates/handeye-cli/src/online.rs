@@ -10,11 +10,11 @@ use handeye::io::read_truth;
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::select::{AdaptiveParams, MAX_N_INIT, Selection};
 use handeye::tracking::{Report, Step, TrackOptions};
-use serde_json::{Map, Value, json};
+use serde_json::{Value, json};
 
 use crate::faces::{self, Face, Published};
 use crate::input::{InputArgs, records};
-use crate::output::{insert_transform, print_line, print_text};
+use crate::output::{print_line, print_text};
 use crate::{outln, values};
 
 /// Options of `handeye online`.
@@ -532,30 +532,7 @@ fn print_step(
 
 /// One event as its JSON line (SPEC sec. 7).
 pub fn event_json(e: &Event, time_offset: Option<f64>) -> Value {
-    let mut out = Map::new();
-    out.insert("calibration".into(), json!(e.calibration));
-    out.insert("poses".into(), json!(e.poses));
-    if let Some(t) = e.thresholds {
-        out.insert(
-            "thresholds".into(),
-            json!({"sin_alpha": t.sin_alpha, "beta": t.beta, "d": t.d}),
-        );
-    }
-    out.insert("rms_r".into(), json!(e.rms.rms_r));
-    out.insert("rms_t".into(), json!(e.rms.rms_t));
-    insert_transform(&mut out, &e.x);
-    if let Some(o) = &e.optimal {
-        let mut opt = Map::new();
-        insert_transform(&mut opt, &o.x);
-        opt.insert("number".into(), json!(o.number));
-        opt.insert("motions".into(), json!(o.motions));
-        out.insert("optimal".into(), Value::Object(opt));
-    }
-    out.insert("seconds".into(), json!(e.seconds));
-    if let Some(t) = time_offset {
-        out.insert("time_offset_s".into(), json!(t));
-    }
-    Value::Object(out)
+    with_offset(e.json(), time_offset)
 }
 
 /// A JSON line with the clock offset used, for two streams.

@@ -2,9 +2,8 @@
 
 use std::io::Write;
 
-use handeye::io::TransformJson;
-use handeye::{Error, Transform};
-use serde_json::{Map, Value, json};
+use handeye::Error;
+use serde_json::Value;
 
 /// Exit code 2: bad input.
 pub const BAD_INPUT: u8 = 2;
@@ -37,14 +36,6 @@ pub fn error_message(e: &anyhow::Error) -> String {
         }
     }
     message
-}
-
-/// Inserts `translation`, `quaternion_xyzw` and `matrix` of `t` into a JSON object.
-pub fn insert_transform(object: &mut Map<String, Value>, t: &Transform) {
-    let j = TransformJson::from(t);
-    object.insert("translation".into(), json!(j.translation));
-    object.insert("quaternion_xyzw".into(), json!(j.quaternion_xyzw));
-    object.insert("matrix".into(), json!(j.matrix));
 }
 
 /// Prints text to stdout and flushes it. A closed pipe comes back as an error, on which `main`

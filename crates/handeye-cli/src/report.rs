@@ -64,7 +64,7 @@ pub fn write_calibrate(
     let warnings: String = report
         .warnings
         .iter()
-        .map(|w| format!("<li>{}</li>", escape(w)))
+        .map(|w| format!("<li>{}</li>", escape(&crate::faces::warning(w))))
         .collect();
     let warnings = if warnings.is_empty() {
         "<p>No warnings.</p>".to_string()

@@ -4,7 +4,7 @@
 //! Conventions: `base_from_gripper` (OpenCV `gripper2base`), `camera_from_target` (`target2cam`),
 //! X = `gripper_from_camera` (`cam2gripper`) for eye-in-hand, `base_from_camera` for eye-to-hand.
 
-use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
+use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::pose::transform_from_matrix4;
 use handeye::select::{AdaptiveParams, Selection};
 use handeye::tracking::TrackOptions;
@@ -314,7 +314,7 @@ impl PyOnline {
                     .chain(step.report.map(|r| r.json(setup)));
                 lines.map(|v| json_dict(py, &v)).collect()
             }
-            None => events.iter().map(|e| event(py, e)).collect(),
+            None => events.iter().map(|e| json_dict(py, &e.json())).collect(),
         }
     }
 
@@ -358,28 +358,6 @@ fn json_dict<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py,
     let json = py.import("json")?;
     let d = json.call_method1("loads", (v.to_string(),))?;
     Ok(d.downcast_into::<PyDict>()?)
-}
-
-/// One event as a dict.
-fn event<'py>(py: Python<'py>, e: &Event) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("calibration", e.calibration)?;
-    d.set_item("poses", e.poses.to_vec())?;
-    if let Some(t) = e.thresholds {
-        let th = PyDict::new(py);
-        th.set_item("sin_alpha", t.sin_alpha)?;
-        th.set_item("beta", t.beta)?;
-        th.set_item("d", t.d)?;
-        d.set_item("thresholds", th)?;
-    }
-    d.set_item("rms_r", e.rms.rms_r)?;
-    d.set_item("rms_t", e.rms.rms_t)?;
-    d.set_item("matrix", matrix(py, &e.x))?;
-    d.set_item("seconds", e.seconds)?;
-    if let Some(o) = &e.optimal {
-        d.set_item("optimal", matrix(py, &o.x))?;
-    }
-    Ok(d)
 }
 
 /// The extension module.

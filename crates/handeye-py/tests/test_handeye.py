@@ -231,3 +231,102 @@ def test_advise_names_the_next_motions_and_what_they_would_give():
     assert {w["kind"] for w in advice["weakest"]} == {"rotation", "translation"}
     with pytest.raises(ValueError):
         handeye.advise(q[:12], c[:12], count=0)
+
+
+REPO = pathlib.Path(__file__).resolve().parents[3]
+CLI = REPO / "target" / "release" / "handeye"
+
+
+def _cli_json(*args):
+    """What `handeye ARGS --output json` prints: one object, or a list for JSON Lines."""
+    import subprocess
+
+    assert CLI.exists(), f"build the command line first ({CLI}): cargo build --release"
+    out = subprocess.run([str(CLI), *map(str, args), "--output", "json"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    if args[0] == "calibrate":
+        return json.loads(out.stdout)
+    return [json.loads(l) for l in out.stdout.splitlines() if l.strip()]
+
+
+def _jsonl_poses(path):
+    rows = [json.loads(l) for l in path.read_text().splitlines() if l.strip()]
+    return (np.array([r["base_from_gripper"] for r in rows], dtype=np.float64),
+            np.array([r["camera_from_target"] for r in rows], dtype=np.float64))
+
+
+def _plain(v):
+    """Arrays as lists, so that the CLI's JSON and Python's dict compare as values."""
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, dict):
+        return {k: _plain(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_plain(x) for x in v]
+    return v
+
+
+# Fields that name the poses: the command line names them `file:line`, Python by number.
+NAMED = {"name", "shown", "disagree"}
+
+
+def _same(cli, py, where=""):
+    """The same fields, and the same values (names of poses apart), at every level."""
+    if isinstance(cli, dict):
+        assert isinstance(py, dict), where
+        assert set(cli) == set(py), f"{where}: only in the CLI {set(cli) - set(py)}, only in Python {set(py) - set(cli)}"
+        for k in cli:
+            if k in NAMED:
+                assert len(_plain(cli[k])) == len(_plain(py[k])) if isinstance(cli[k], list) else True, f"{where}.{k}"
+                continue
+            if k == "seconds":  # wall time of the event
+                continue
+            _same(cli[k], py[k], f"{where}.{k}")
+    elif isinstance(cli, list):
+        assert isinstance(py, list) and len(cli) == len(py), where
+        for i, (a, b) in enumerate(zip(cli, py)):
+            _same(a, b, f"{where}[{i}]")
+    elif isinstance(cli, str) and isinstance(py, str):
+        if where.endswith(".message"):  # a message may quote a pose's name
+            return
+        assert cli == py, where
+    elif isinstance(cli, float) or isinstance(py, float):
+        # The CLI parses the file's decimals, Python gets the same doubles (or, for the paper's
+        # target_from_camera, numpy's inverse): equal to the last digits.
+        assert py == pytest.approx(cli, rel=1e-9, abs=1e-12), f"{where}: {cli} != {py}"
+    else:
+        assert cli == py, f"{where}: {cli} != {py}"
+
+
+@pytest.mark.parametrize(
+    "name, setup, extra",
+    [
+        ("nominal_stations_eih_s0", "eye-in-hand", {}),
+        ("outliers_gross_stations_eth_s0", "eye-to-hand", {}),
+        ("near_degenerate_two_axes_continuous_eih_s0", "eye-in-hand", {"pairs": "all"}),
+        ("pnp_stations_eth_s0", "eye-to-hand", {"method": "refine", "pairs": "all"}),
+    ],
+)
+def test_the_command_line_and_python_give_the_same_report(name, setup, extra):
+    path = TESTDATA / "kinhec" / "pairs" / f"{name}.jsonl"
+    args = [a for k, v in extra.items() for a in (f"--{k}", v)]
+    cli = _cli_json("calibrate", path, "--setup", setup, *args)
+    g, c = _jsonl_poses(path)
+    py = _plain(handeye.calibrate(g, c, setup=setup, **extra))
+    _same(cli, py)
+    for w in py["warnings"]:
+        assert {"code", "message"} <= set(w) and "--" not in w["message"], w
+
+
+def test_the_command_line_and_python_give_the_same_online_events(tmp_path):
+    # 4x4 matrices as the file gives them, so that both faces solve from the same doubles.
+    path = tmp_path / "walk.jsonl"
+    import subprocess
+
+    subprocess.run([str(CLI), "simulate", "--poses", "400", "--seed", "5", "--out", str(path)], check=True)
+    q, c = _jsonl_poses(path)
+    cli = _cli_json("online", path, "--optimal")
+    cal = handeye.OnlineCalibrator(selection="adaptive", optimal=True)
+    py = [e for k in range(len(q)) if (e := cal.push(q[k], c[k])) is not None]
+    assert len(cli) > 3 and any("optimal" in e for e in cli)
+    _same(cli, _plain(py))

@@ -26,7 +26,8 @@ use crate::pose::Transform;
 use crate::solve::{
     Calibration, Method, RefineOptions, TsaiOptions, refine_from, solve, tsai_with,
 };
-use crate::uncertainty::{Part, Uncertainty, Verdict, advice, bootstrap};
+use crate::uncertainty::{Part, Uncertainty, Verdict, bootstrap};
+use crate::warning::{SHOWN, Warning};
 
 /// Per-motion details are kept up to this many motions.
 const MAX_PER_MOTION: usize = 10_000;
@@ -196,8 +197,9 @@ pub struct Report {
     pub translation_residual_rel: f64,
     /// The spread of the motions.
     pub quality: Spread,
-    /// Cautions in plain words, each with what to do.
-    pub warnings: Vec<String>,
+    /// Cautions, each with its code, its words and the option that fixes it, if one does.
+    #[serde(serialize_with = "crate::warning::described")]
+    pub warnings: Vec<Warning>,
     /// The units of the numbers.
     pub units: Units,
     /// X as a transform (not serialised: `x` carries it).
@@ -275,18 +277,17 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));
     refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
-        .map_err(|e| explained(e, &warnings, kept_outliers.as_deref()))?;
+        .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?;
     let quality = quality_of(&used, setup, options.pairing, &calibration);
     let residuals = PoseResiduals::at(&used, setup, &calibration.x);
     let translation_residual_rel = residuals.median_translation() / scene.max(f64::MIN_POSITIVE);
-    warnings.extend(calibration.warnings.iter().map(|w| w.to_string()));
+    warnings.extend(calibration.warnings.iter().cloned());
     warnings.extend(quality.warnings.iter().cloned());
     warn_weak(&uncertainty, setup, &mut warnings);
     if translation_residual_rel > WARN_TRANSLATION_RESIDUAL {
-        warnings.push(format!(
-            "translation residuals of {:.1}% of the scene's size (median per pose, against the hand's spread or the camera's distance): check the units of both inputs and the time pairing",
-            100.0 * translation_residual_rel
-        ));
+        warnings.push(Warning::TranslationResiduals {
+            relative: translation_residual_rel,
+        });
     }
     warnings.extend(kept_outliers);
     let used_names: Vec<String> = (0..read_len)
@@ -333,7 +334,7 @@ fn held_out_of(
     used: &[PosePair],
     names: &[String],
     setup: Setup,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Warning>,
 ) -> Option<HeldOutSummary> {
     let check = leave_one_out(used, setup)?;
     let disagree: Vec<HeldOutName> = check
@@ -346,15 +347,16 @@ fn held_out_of(
         })
         .collect();
     if !disagree.is_empty() {
-        let list: Vec<String> = disagree.iter().take(5).map(|d| d.name.clone()).collect();
-        warnings.push(format!(
-            "{} pose(s) are predicted poorly by the others (6× the median gap of {:.2}° / {:.4}): a frame paired with the wrong robot pose, or a failed detection: {}{}",
-            disagree.len(),
-            check.median_rotation_deg,
-            check.median_translation,
-            list.join(", "),
-            if disagree.len() > 5 { " and more" } else { "" }
-        ));
+        warnings.push(Warning::PoorlyPredicted {
+            count: disagree.len(),
+            median_rotation_deg: check.median_rotation_deg,
+            median_translation: check.median_translation,
+            shown: disagree
+                .iter()
+                .take(SHOWN)
+                .map(|d| d.name.clone())
+                .collect(),
+        });
     }
     Some(HeldOutSummary {
         median_rotation_deg: check.median_rotation_deg,
@@ -429,7 +431,7 @@ pub(crate) fn choose_reading(
     poses: &[PosePair],
     setup: Setup,
     fix: Fix,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Warning>,
 ) -> Result<(Reading, Option<ReadingCheck>)> {
     if let Fix::Read(r) = fix
         && r != Reading::AsGiven
@@ -437,23 +439,28 @@ pub(crate) fn choose_reading(
         return Ok((r, None));
     }
     let check = check_readings(poses, setup);
-    let Some(advice) = check.advice(setup) else {
+    let (Some(finding), Some(better)) = (check.finding(setup), check.better) else {
         warnings.extend(check.size_warning(setup));
         return Ok((Reading::AsGiven, Some(check)));
     };
-    match (fix, check.better) {
-        (Fix::Auto, Some(better)) if check.unambiguous() => {
-            warnings.push(format!(
-                "read as {} (--fix auto): {advice}",
-                better.reading.name()
-            ));
+    match fix {
+        Fix::Auto if check.unambiguous() => {
+            warnings.push(Warning::ReadAs {
+                reading: better.reading,
+                finding,
+            });
             Ok((better.reading, Some(check)))
         }
-        (Fix::Read(_), _) => {
-            warnings.push(format!("kept as given (--fix as-given), but {advice}"));
+        Fix::Read(_) => {
+            warnings.push(Warning::KeptAsGiven {
+                better: better.reading,
+                finding,
+            });
             Ok((Reading::AsGiven, Some(check)))
         }
-        _ => Err(Error::Misread { advice }),
+        _ => Err(Error::Misread {
+            advice: check.advice(setup).unwrap_or(finding),
+        }),
     }
 }
 
@@ -480,11 +487,18 @@ pub(crate) fn without(poses: &[PosePair], found: &PoseOutliers) -> Vec<PosePair>
 
 /// A refusal with what in the input explains it (outliers kept, a better reading kept as given),
 /// when anything does.
-pub(crate) fn explained(refusal: Error, warnings: &[String], kept_outliers: Option<&str>) -> Error {
-    let why: Vec<&str> = warnings
+pub(crate) fn explained(
+    refusal: Error,
+    warnings: &[Warning],
+    kept_outliers: Option<&Warning>,
+) -> Error {
+    let why: Vec<String> = warnings
         .iter()
-        .map(String::as_str)
         .chain(kept_outliers)
+        .map(|w| match w.remedy() {
+            Some(remedy) => format!("{w}; {}", remedy.in_words()),
+            None => w.to_string(),
+        })
         .collect();
     if why.is_empty() {
         return refusal;
@@ -525,13 +539,18 @@ fn undetermined(part: Part, d: &crate::uncertainty::Direction, setup: Setup) -> 
 }
 
 /// Warnings for weakly determined directions.
-fn warn_weak(u: &Uncertainty, setup: Setup, warnings: &mut Vec<String>) {
+pub(crate) fn warn_weak(u: &Uncertainty, setup: Setup, warnings: &mut Vec<Warning>) {
     for (part, d) in [
         (Part::Rotation, &u.weakest_rotation),
         (Part::Translation, &u.weakest_translation),
     ] {
         if d.verdict == Verdict::Weak {
-            warnings.push(advice(part, d, setup));
+            warnings.push(Warning::WeakDirection {
+                part,
+                axis: d.axis,
+                sigma: d.sigma,
+                setup,
+            });
         }
     }
 }
@@ -573,28 +592,9 @@ pub(crate) fn outlier_report(found: &PoseOutliers, options: &Options) -> Outlier
     }
 }
 
-pub(crate) fn outlier_warning(o: &Outliers) -> String {
-    const SHOWN: usize = 5;
-    let listed: Vec<String> = o
-        .poses
-        .iter()
-        .take(SHOWN)
-        .map(|p| {
-            format!(
-                "{} (angle gap {:.2}°, pitch gap {:.3})",
-                p.name, p.angle_gap_deg, p.pitch_gap
-            )
-        })
-        .collect();
-    let more = o.poses.len().saturating_sub(SHOWN);
-    format!(
-        "{} pose(s) disagree with the others (a bad detection, a flipped target pose, a wrong time stamp or a typo): {}{}; pass `--reject-outliers` to leave them out",
-        o.poses.len(),
-        listed.join(", "),
-        if more > 0 {
-            format!(" and {more} more")
-        } else {
-            String::new()
-        }
-    )
+pub(crate) fn outlier_warning(o: &Outliers) -> Warning {
+    Warning::Outliers {
+        count: o.poses.len(),
+        shown: o.poses.iter().take(SHOWN).cloned().collect(),
+    }
 }

@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::motion::{AllPairs, PosePair, Setup};
 use crate::pose::{Transform, exp_so3, transform_from_parts};
 use crate::solve::andreff;
+use crate::warning::{Remedy, Warning};
 
 /// At most this many poses (spread evenly) are used to try each reading.
 const SAMPLE: usize = 60;
@@ -104,7 +105,7 @@ impl Reading {
         match self {
             Self::AsGiven => "the poses as given".into(),
             Self::RobotInverted => format!(
-                "the robot poses inverted: either the file gives gripper_from_base under the name base_from_gripper, or the setup is {other} (then pass `--setup {other}`)"
+                "the robot poses inverted: either the file gives gripper_from_base under the name base_from_gripper, or the setup is {other}"
             ),
             Self::CameraInverted => "the camera poses inverted: the file gives target_from_camera under the name camera_from_target (or the reverse)".into(),
             Self::BothInverted => "both poses inverted: each file gives the inverse of the transform it names".into(),
@@ -251,21 +252,21 @@ pub struct ReadingCheck {
 }
 
 impl ReadingCheck {
-    /// The finding in words, with the fix, when a reading fits far better.
-    pub fn advice(&self, setup: Setup) -> Option<String> {
+    /// The finding in words, when a reading fits far better: what fits, how well, and the other
+    /// readings that fit as well (no face's spelling of the fix: see [`ReadingCheck::advice`]).
+    pub fn finding(&self, setup: Setup) -> Option<String> {
         let (given, better) = (self.as_given?, self.better?);
         let mut text = format!(
-            "the poses fit far better read as {} (median residual {:.2}° and {:.1}% of the motion range, against {:.2}° and {:.1}% as given): correct the input, or pass `--fix {}` to read it that way",
+            "the poses fit far better read as {} (median residual {:.2}° and {:.1}% of the motion range, against {:.2}° and {:.1}% as given)",
             better.reading.meaning(setup),
             better.rotation_deg,
             100.0 * better.translation_rel,
             given.rotation_deg,
             100.0 * given.translation_rel,
-            better.reading.name(),
         );
         for other in &self.also {
             text.push_str(&format!(
-                "; it fits as well read as {} (`--fix {}`), which gives an X of {} size for the {} setup",
+                "; it fits as well read as {} (fix {}), which gives an X of {} size for the {} setup",
                 other.reading.meaning(setup),
                 other.reading.name(),
                 match other.plausible(setup) {
@@ -279,6 +280,28 @@ impl ReadingCheck {
         Some(text)
     }
 
+    /// The finding with the fix in the words of both faces, for the refusal
+    /// ([`crate::Error::Misread`]).
+    pub fn advice(&self, setup: Setup) -> Option<String> {
+        let better = self.better?;
+        let mut text = format!(
+            "{}: correct the input, or {}",
+            self.finding(setup)?,
+            Remedy::Fix(better.reading).in_words()
+        );
+        if better.reading == Reading::RobotInverted {
+            let other = match setup {
+                Setup::EyeInHand => Setup::EyeToHand,
+                Setup::EyeToHand => Setup::EyeInHand,
+            }
+            .name();
+            text.push_str(&format!(
+                "; if the setup is {other}, pass `--setup {other}` (`setup=\"{other}\"` in Python)"
+            ));
+        }
+        Some(text)
+    }
+
     /// Whether the better reading is the only one that fits (so `--fix auto` may apply it).
     pub fn unambiguous(&self) -> bool {
         self.better.is_some() && self.also.is_empty()
@@ -286,27 +309,16 @@ impl ReadingCheck {
 
     /// A warning when the as-given reading fits but gives X and Y implausible sizes for the setup:
     /// both poses inverted fit exactly as well, with X and Y swapped.
-    pub fn size_warning(&self, setup: Setup) -> Option<String> {
+    pub fn size_warning(&self, setup: Setup) -> Option<Warning> {
         let given = self.as_given?;
         if self.better.is_some() || given.plausible(setup) != Some(false) {
             return None;
         }
-        let (x_is, y_is) = match setup {
-            Setup::EyeInHand => (
-                "the camera's distance from the gripper",
-                "the target's distance from the robot base",
-            ),
-            Setup::EyeToHand => (
-                "the camera's distance from the robot base",
-                "the target's distance from the gripper",
-            ),
-        };
-        Some(format!(
-            "X puts {x_is} at {:.3} and {y_is} at {:.3}, the reverse of what the {} setup usually has: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions (`--fix both-inverted` reads both inverted)",
-            given.x_translation,
-            given.y_translation,
-            setup.name(),
-        ))
+        Some(Warning::SwappedSizes {
+            x_translation: given.x_translation,
+            y_translation: given.y_translation,
+            setup,
+        })
     }
 }
 

@@ -76,6 +76,7 @@ pub mod solve;
 pub mod sync;
 pub mod tracking;
 pub mod uncertainty;
+pub mod warning;
 
 pub use error::{Degeneracy, Error, Result, TransformProblem};
 pub use motion::{
@@ -83,9 +84,9 @@ pub use motion::{
 };
 pub use pose::Transform;
 pub use solve::{
-    Calibration, Method, Warning, andreff, andreff_joint, daniilidis, horaud, park, refine, solve,
-    tsai,
+    Calibration, Method, andreff, andreff_joint, daniilidis, horaud, park, refine, solve, tsai,
 };
+pub use warning::Warning;
 
 /// The README's Rust examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{Transform, rotation_angle_between, rotation_matrix};
+use crate::warning::Warning;
 
 /// Smallest ‖t‖ used as a divisor in relative translation errors (an X with zero translation
 /// would otherwise divide by zero).
@@ -184,8 +185,9 @@ pub struct QualityReport {
     pub axis_spread_deg: f64,
     /// Smallest and largest rotation angle of the motions, degrees.
     pub rotation_range_deg: [f64; 2],
-    /// Cautions in plain words.
-    pub warnings: Vec<String>,
+    /// Cautions about the motions and the fit.
+    #[serde(serialize_with = "crate::warning::described")]
+    pub warnings: Vec<Warning>,
 }
 
 /// Axis spread below which the report warns, degrees.
@@ -229,15 +231,12 @@ pub fn quality_report(
     let rotation_range_deg = [smallest, largest];
     let mut warnings = Vec::new();
     if axis_spread_deg < WARN_AXIS_SPREAD_DEG {
-        warnings.push(format!(
-            "all rotation axes within {axis_spread_deg:.1}° of one direction: rotate about another axis"
-        ));
+        warnings.push(Warning::OneAxis { axis_spread_deg });
     }
     if residual.rotation_deg_rms > WARN_RESIDUAL_DEG {
-        warnings.push(format!(
-            "rotation residuals of {:.1}° RMS: check the directions of the poses (`--setup`, `base_from_gripper` vs `gripper_from_base`, `camera_from_target` vs `target_from_camera`) or reject outliers",
-            residual.rotation_deg_rms
-        ));
+        warnings.push(Warning::RotationResiduals {
+            rms_deg: residual.rotation_deg_rms,
+        });
     }
     QualityReport {
         residual,

@@ -22,7 +22,9 @@ use crate::motion::{MotionPair, PosePair, Setup};
 use crate::pose::Transform;
 use crate::select::{AdaptiveParams, Selected, Selection, Selector, Thresholds};
 use crate::solve::{RefineOptions, andreff, refine_from};
-use crate::tracking::{Pending, Report, Step, TrackEstimate, TrackOptions, Tracker};
+use crate::tracking::{
+    Pending, Report, Step, TrackEstimate, TrackOptions, Tracker, insert_transform,
+};
 
 /// Number of selected motions the optimal method refines over (sec. 4.1.3).
 pub const OPTIMAL_WINDOW: usize = 5;
@@ -240,6 +242,34 @@ pub struct Event {
     pub seconds: f64,
     /// The optimal method's X, when enabled and five motions have been selected.
     pub optimal: Option<OptimalEstimate>,
+}
+
+impl Event {
+    /// The event as its JSON line (SPEC sec. 7), the one output of every face: `calibration`,
+    /// `poses`, `thresholds` (adaptive and fixed selection), `rms_r`, `rms_t`, X (`translation`,
+    /// `quaternion_xyzw`, `matrix`), `conditioning`, `optimal` (X, `number`, `motions`) when
+    /// enabled, `seconds`.
+    pub fn json(&self) -> serde_json::Value {
+        let mut out = serde_json::Map::new();
+        out.insert("calibration".into(), self.calibration.into());
+        out.insert("poses".into(), serde_json::json!(self.poses));
+        if let Some(t) = self.thresholds {
+            out.insert("thresholds".into(), serde_json::json!(t));
+        }
+        out.insert("rms_r".into(), self.rms.rms_r.into());
+        out.insert("rms_t".into(), self.rms.rms_t.into());
+        insert_transform(&mut out, &self.x);
+        out.insert("conditioning".into(), self.conditioning.into());
+        if let Some(o) = &self.optimal {
+            let mut optimal = serde_json::Map::new();
+            insert_transform(&mut optimal, &o.x);
+            optimal.insert("number".into(), o.number.into());
+            optimal.insert("motions".into(), serde_json::json!(o.motions));
+            out.insert("optimal".into(), optimal.into());
+        }
+        out.insert("seconds".into(), self.seconds.into());
+        out.into()
+    }
 }
 
 /// The online calibrator (see the module documentation).

@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::calibration::{
     Fix, Options, Outliers, ReadingReport, Units, choose_reading, explained, outlier_report,
-    outlier_warning, without, working_distance,
+    outlier_warning, warn_weak, without, working_distance,
 };
 use crate::consistency::pose_outliers;
 use crate::consistency::translation_scale;
@@ -41,7 +41,7 @@ use crate::solve::{
     JointCovariance, PoseResidual, RobotWorldMethod, joint_covariance, pose_residuals, robot_world,
     target_frame,
 };
-use crate::uncertainty::{Part, Uncertainty, Verdict, advice, bootstrap, summarise};
+use crate::uncertainty::{Part, Uncertainty, Verdict, bootstrap, summarise};
 
 /// How to calibrate X and the target together.
 #[derive(Debug, Clone, PartialEq)]
@@ -133,8 +133,9 @@ pub struct RobotWorldReport {
     pub outliers: Outliers,
     /// The per-pose residuals (degrees; input units).
     pub residual: PoseResidualSummary,
-    /// Cautions in plain words, each with what to do.
-    pub warnings: Vec<String>,
+    /// Cautions, each with its code, its words and the option that fixes it, if one does.
+    #[serde(serialize_with = "crate::warning::described")]
+    pub warnings: Vec<crate::Warning>,
     /// The units of the numbers.
     pub units: Units,
     /// X as a transform (not serialised).
@@ -195,7 +196,7 @@ pub fn calibrate_robot_world(
     } else {
         read
     };
-    let explain = |e: Error| explained(e, &warnings, kept_outliers.as_deref());
+    let explain = |e: Error| explained(e, &warnings, kept_outliers.as_ref());
     let solved = robot_world(options.method, &used, setup).map_err(explain)?;
     let undetermined = |conditioning| Error::Degenerate {
         reason: Degeneracy::IllConditioned,
@@ -211,15 +212,8 @@ pub fn calibrate_robot_world(
     for u in [&x_unc, &y_unc] {
         refuse_if_undetermined(u, setup, solved.conditioning).map_err(explain)?;
     }
-    warnings.extend(solved.warnings.iter().map(|w| w.to_string()));
-    for (part, d) in [
-        (Part::Rotation, &x_unc.weakest_rotation),
-        (Part::Translation, &x_unc.weakest_translation),
-    ] {
-        if d.verdict == Verdict::Weak {
-            warnings.push(advice(part, d, setup));
-        }
-    }
+    warnings.extend(solved.warnings.iter().cloned());
+    warn_weak(&x_unc, setup, &mut warnings);
     warnings.extend(kept_outliers);
     let per_pose = pose_residuals(&used, setup, &solved.x, &solved.target);
     let n = per_pose.len().max(1) as f64;

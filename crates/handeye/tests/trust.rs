@@ -12,7 +12,8 @@ use handeye::calibration::{Fix, Options, Report, calibrate};
 use handeye::conventions::Reading;
 use handeye::io::{Format, read_pose_file, transform_from_json};
 use handeye::metrics::errors_against_truth;
-use handeye::{Error, Method, Pairing, Setup, Transform};
+use handeye::warning::Remedy;
+use handeye::{Error, Method, Pairing, Setup, Transform, Warning};
 use serde_json::Value;
 
 fn suite() -> PathBuf {
@@ -158,7 +159,9 @@ fn correct_data_is_never_called_misread() {
                 run(&e, &Options::default()).unwrap_or_else(|err| panic!("{}: {err}", e["file"]));
             assert_eq!(r.reading.applied, Reading::AsGiven, "{}", e["file"]);
             assert!(
-                r.warnings.iter().all(|w| !w.contains("--fix")),
+                r.warnings
+                    .iter()
+                    .all(|w| !matches!(w.remedy(), Some(Remedy::Fix(_)))),
                 "{}: {:?}",
                 e["file"],
                 r.warnings
@@ -202,7 +205,10 @@ fn every_mistake_is_refused_or_flagged_with_its_fix() {
             ("both_inverted", Ok(r)) => {
                 // Fits exactly as given with X and the target's pose swapped: flagged by sizes.
                 assert!(
-                    r.warnings.iter().any(|w| w.contains("--fix both-inverted")),
+                    r.warnings
+                        .iter()
+                        .any(|w| matches!(w, Warning::SwappedSizes { .. })
+                            && w.remedy() == Some(Remedy::Fix(Reading::BothInverted))),
                     "{file}: {:?}",
                     r.warnings
                 );

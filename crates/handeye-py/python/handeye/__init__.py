@@ -103,7 +103,8 @@ def calibrate(
     (``rotation_deg`` and ``translation``: one-sigma sizes of the error; ``weakest_rotation``,
     ``weakest_translation``, ``covariance``), ``reading`` (the readings of the input tried),
     ``outliers`` (poses that disagree with the others), ``residual``, ``quality`` and
-    ``warnings``. ``fix`` reads the input another way ("auto", "as-given", "robot-inverted",
+    ``warnings`` (each a dict: ``code``, its data, ``message`` in words and, when one argument
+    of this call would fix it, ``remedy``: ``option`` (the keyword), ``value`` and ``purpose``). ``fix`` reads the input another way ("auto", "as-given", "robot-inverted",
     "camera-inverted", "both-inverted", "robot-wxyz", "camera-wxyz", "both-wxyz", "robot-mm",
     "camera-mm"). ``method`` defaults to "andreff".
 
@@ -156,8 +157,8 @@ def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3):
 
 
 def _with_arrays(event):
-    """The event with its ``matrix`` (and its target's) as 4x4 arrays."""
-    for d in (event, event.get("target")):
+    """The event with its ``matrix`` (and its target's, its optimal X's) as 4x4 arrays."""
+    for d in (event, event.get("target"), event.get("optimal")):
         if isinstance(d, dict) and isinstance(d.get("matrix"), list):
             d["matrix"] = np.array(d["matrix"], dtype=np.float64)
     return event

@@ -43,6 +43,7 @@ pub use tsai::{TsaiOptions, tsai, tsai_with};
 use crate::error::{Degeneracy, Error, Result};
 use crate::motion::MotionSource;
 use crate::pose::{Transform, rotation_matrix};
+use crate::warning::Warning;
 
 /// Below this conditioning (second-smallest over largest singular value of Andreff's rotation
 /// system) a solve is refused as degenerate.
@@ -127,38 +128,6 @@ impl FromStr for Method {
                 "unknown method `{s}`; one of andreff, andreff-joint, tsai, park, horaud, daniilidis, refine"
             ),
         })
-    }
-}
-
-/// A caution attached to a successful solve.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-#[non_exhaustive]
-pub enum Warning {
-    /// The rotation system is weakly conditioned (axes close to parallel).
-    WeakConditioning {
-        /// Second-smallest over largest singular value of the rotation system.
-        conditioning: f64,
-    },
-    /// All rotations are small, so noise is amplified.
-    SmallRotations {
-        /// The largest rotation angle among the motions, degrees.
-        largest_deg: f64,
-    },
-}
-
-impl fmt::Display for Warning {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::WeakConditioning { conditioning } => write!(
-                f,
-                "weakly conditioned rotation system ({conditioning:.2e}): the rotation axes are nearly parallel; rotate about other axes"
-            ),
-            Self::SmallRotations { largest_deg } => write!(
-                f,
-                "all rotations are small (largest {largest_deg:.2}°): noise is amplified; use rotations of 10° or more"
-            ),
-        }
     }
 }
 

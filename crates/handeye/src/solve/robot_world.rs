@@ -47,7 +47,8 @@ use crate::motion::{Pairing, PosePair, Setup, motion_pairs};
 use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts};
 use crate::solve::refine::BlockRms;
 use crate::solve::scale::weighting_from_scale;
-use crate::solve::{RefineOptions, Termination, Warning, check_motions, singular};
+use crate::solve::{RefineOptions, Termination, check_motions, singular};
+use crate::warning::Warning;
 
 /// The robot-world solvers, by name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -307,7 +307,10 @@ pub fn target_frame(setup: Setup) -> &'static str {
 }
 
 /// Inserts `translation`, `quaternion_xyzw` and `matrix` of `t` into a JSON object.
-fn insert_transform(object: &mut serde_json::Map<String, serde_json::Value>, t: &Transform) {
+pub(crate) fn insert_transform(
+    object: &mut serde_json::Map<String, serde_json::Value>,
+    t: &Transform,
+) {
     let j = crate::io::TransformJson::from(t);
     object.insert("translation".into(), serde_json::json!(j.translation));
     object.insert(
