@@ -106,7 +106,7 @@ fn pose_gap(poses: &[PosePair], setup: Setup, i: usize) -> PoseGap {
 
 /// The screw-invariant gaps of `pose` against `partners` (module documentation): the medians over
 /// its motions to them of |θ_A − θ_B| (degrees) and |k_A·t_A − k_B·t_B| (input units; motions
-/// below 3° left out), over the first [`PARTNERS`] partners. The per-pose test of the batch
+/// below 3° left out), over the first `PARTNERS` (32) partners. The per-pose test of the batch
 /// ([`pose_outliers`]) and of the online tracker ([`crate::tracking`]) alike; it allocates
 /// nothing (the tracker runs it on every pose).
 pub fn screw_gaps<'a>(

@@ -36,7 +36,7 @@ pub const QUATERNION_NORM_TOL: f64 = 1e-3;
 pub const MAX_TRANSLATION: f64 = 1e9;
 
 /// Rotations smaller than this (radians) have no defined axis (SPEC sec. 1).
-pub const NO_AXIS_ANGLE: f64 = 1e-12;
+pub(crate) const NO_AXIS_ANGLE: f64 = 1e-12;
 
 /// Builds a transform from a rotation matrix that is already a rotation (not checked) and a translation.
 pub fn transform_from_parts(rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> Transform {
@@ -52,7 +52,7 @@ pub fn rotation_matrix(a_from_b: &Transform) -> Matrix3<f64> {
 }
 
 /// Checks that `m` is a rotation: orthonormal within [`ORTHONORMAL_TOL`], det > 0, all finite.
-pub fn check_rotation(m: &Matrix3<f64>) -> Result<(), TransformProblem> {
+pub(crate) fn check_rotation(m: &Matrix3<f64>) -> Result<(), TransformProblem> {
     if m.iter().any(|v| !v.is_finite()) {
         return Err(TransformProblem::NotFinite);
     }
@@ -68,7 +68,7 @@ pub fn check_rotation(m: &Matrix3<f64>) -> Result<(), TransformProblem> {
 }
 
 /// Checks one translation component read from data: finite and at most [`MAX_TRANSLATION`] in size.
-pub fn check_translation(value: f64) -> Result<(), TransformProblem> {
+pub(crate) fn check_translation(value: f64) -> Result<(), TransformProblem> {
     if !value.is_finite() {
         Err(TransformProblem::NotFinite)
     } else if value.abs() > MAX_TRANSLATION {
@@ -81,7 +81,7 @@ pub fn check_translation(value: f64) -> Result<(), TransformProblem> {
 /// A transform read from data, with how far from orthonormal its rotation matrix was as given
 /// (0 when it was given as a quaternion or a rotation vector).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ReadTransform {
+pub(crate) struct ReadTransform {
     /// The transform; its rotation projected onto SO(3) when `deviation` exceeds
     /// [`KEEP_AS_GIVEN_TOL`], else exactly as given.
     pub transform: Transform,
@@ -98,7 +98,7 @@ impl ReadTransform {
 }
 
 /// Reads a homogeneous 4×4 matrix (row-major, last row `0 0 0 1`) as a transform, refusing
-/// anything that is not a rigid transform (see [`read_matrix4`]).
+/// anything that is not a rigid transform (see [`crate::io::Projections`] for what is rounded).
 pub fn transform_from_matrix4(m: &Matrix4<f64>) -> Result<Transform, TransformProblem> {
     read_matrix4(m).map(|r| r.transform)
 }
@@ -106,7 +106,7 @@ pub fn transform_from_matrix4(m: &Matrix4<f64>) -> Result<Transform, TransformPr
 /// Reads a homogeneous 4×4 matrix (row-major, last row `0 0 0 1` within 1e-6) as a transform: a
 /// rotation orthonormal within [`ORTHONORMAL_TOL`] with det > 0, projected onto SO(3) unless exact
 /// to rounding, and a translation passing [`check_translation`].
-pub fn read_matrix4(m: &Matrix4<f64>) -> Result<ReadTransform, TransformProblem> {
+pub(crate) fn read_matrix4(m: &Matrix4<f64>) -> Result<ReadTransform, TransformProblem> {
     if m.iter().any(|v| !v.is_finite()) {
         return Err(TransformProblem::NotFinite);
     }
@@ -140,7 +140,7 @@ const LAST_ROW_TOL: f64 = 1e-6;
 
 /// Builds a transform from a translation and a quaternion given as `[x, y, z, w]` (file order).
 /// A quaternion whose norm is within [`QUATERNION_NORM_TOL`] of 1 is normalised; others are refused,
-/// as are translations failing [`check_translation`].
+/// as are translations that are not finite or beyond [`MAX_TRANSLATION`].
 pub fn transform_from_xyz_quat_xyzw(
     translation: [f64; 3],
     quaternion_xyzw: [f64; 4],
@@ -228,7 +228,7 @@ fn proj_so3_svd(m: &Matrix3<f64>) -> Matrix3<f64> {
 }
 
 /// The skew-symmetric matrix `[v]×` with `[v]× w = v × w`.
-pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+pub(crate) fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
 
@@ -239,7 +239,7 @@ pub fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
 
 /// Axis–angle of a rotation matrix (Rodrigues), robust near 0 and near π.
 ///
-/// Returns the angle θ ∈ [0, π] and the unit axis, or `None` for the axis when θ < [`NO_AXIS_ANGLE`]
+/// Returns the angle θ ∈ [0, π] and the unit axis, or `None` for the axis when θ < 1e-12
 /// (SPEC sec. 1). Near θ = π the axis comes from the symmetric part of R, its sign matched to the
 /// skew part.
 pub fn axis_angle(r: &Matrix3<f64>) -> (f64, Option<Vector3<f64>>) {
@@ -290,7 +290,7 @@ pub fn log_so3(r: &Matrix3<f64>) -> Vector3<f64> {
 
 /// Angle in radians between two unit axes, `acos(k₁·k₂)` ∈ [0, π] (SPEC sec. 1); 0 when either
 /// axis is undefined, so that a rotation with no axis fails every axis test.
-pub fn axis_angle_between(k1: Option<&Vector3<f64>>, k2: Option<&Vector3<f64>>) -> f64 {
+pub(crate) fn axis_angle_between(k1: Option<&Vector3<f64>>, k2: Option<&Vector3<f64>>) -> f64 {
     match (k1, k2) {
         (Some(a), Some(b)) => a.dot(b).clamp(-1.0, 1.0).acos(),
         _ => 0.0,

@@ -107,7 +107,7 @@ pub struct SimSeries {
 }
 
 /// The generator of series `series` of a run with seed `seed`.
-pub fn series_rng(seed: u64, series: u64) -> Xoshiro256PlusPlus {
+pub(crate) fn series_rng(seed: u64, series: u64) -> Xoshiro256PlusPlus {
     // SplitMix64 of the pair, so neighbouring seeds and series give unrelated streams.
     let mut z = seed ^ series.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
@@ -193,7 +193,7 @@ pub fn simulate(config: &SimConfig, seed: u64, series: u64) -> SimSeries {
 }
 
 /// A rotation drawn uniformly from SO(3) (a normalised Gaussian quaternion).
-pub fn random_rotation(rng: &mut impl Rng) -> Matrix3<f64> {
+pub(crate) fn random_rotation(rng: &mut impl Rng) -> Matrix3<f64> {
     let q = nalgebra::Quaternion::new(
         StandardNormal.sample(rng),
         StandardNormal.sample(rng),

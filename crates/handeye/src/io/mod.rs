@@ -30,9 +30,8 @@ pub use jsonl::{JsonlPairs, parse_pose_line};
 pub use lines::MAX_LINE;
 pub use peer::{read_moveit_json, read_opencv_yaml, read_visp_dir, read_visp_pose};
 pub use stamped::{parse_stamped_poses, read_camera_stream, read_stamped_poses};
-pub use transform::{
-    CONSISTENCY_TOL, FieldProblem, TransformJson, read_transform_json, transform_from_json,
-};
+pub use transform::{CONSISTENCY_TOL, TransformJson, transform_from_json};
+pub(crate) use transform::{FieldProblem, read_transform_json};
 pub use truth::{Truth, parse_truth, read_truth, truth_json, write_truth};
 
 /// The names a pose may have in a file, and whether the file's transform is the inverse of ours.
@@ -119,7 +118,7 @@ pub struct Projections {
 
 impl Projections {
     /// Counts `read` when its rotation was projected.
-    pub fn add(&mut self, read: &ReadTransform) {
+    pub(crate) fn add(&mut self, read: &ReadTransform) {
         if read.projected() {
             self.count += 1;
             self.largest_deviation = self.largest_deviation.max(read.deviation);

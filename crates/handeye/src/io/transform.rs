@@ -84,7 +84,7 @@ pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
 
 /// As [`transform_from_json`], also telling how far from orthonormal a matrix was as given (its
 /// rotation is then projected onto SO(3), see [`read_matrix4`]).
-pub fn read_transform_json(v: &Value) -> Result<ReadTransform, FieldProblem> {
+pub(crate) fn read_transform_json(v: &Value) -> Result<ReadTransform, FieldProblem> {
     match v {
         Value::Array(_) => Ok(read_matrix4(&matrix_from_json(v, "")?)?),
         Value::Object(o) => {

@@ -12,7 +12,7 @@ use crate::select::{
 };
 
 /// Number of past calibrations the regression of sec. 3.2 looks at.
-pub const RECORDS: usize = 4;
+pub(crate) const RECORDS: usize = 4;
 
 /// What one calibration leaves for the prediction: the thresholds it was selected with and its
 /// errors (step 14 of the Main Algorithm).
@@ -41,7 +41,7 @@ enum Phase {
 
 /// The adaptive selector's state: constant in size whatever the length of the stream.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct AdaptiveSelector {
+pub(crate) struct AdaptiveSelector {
     setup: Setup,
     params: AdaptiveParams,
     stats: InitialStats,
@@ -78,11 +78,6 @@ impl AdaptiveSelector {
     /// The thresholds in force, once Eq. (1) has run.
     pub fn thresholds(&self) -> Option<Thresholds> {
         (!matches!(self.phase, Phase::Initial { .. })).then_some(self.thresholds)
-    }
-
-    /// The records the next prediction will use, oldest first.
-    pub fn records(&self) -> impl Iterator<Item = &Record> {
-        self.records.iter()
     }
 
     /// Offers the next pose; returns a selected pair when A'' is accepted (step 11).

@@ -8,7 +8,7 @@ use crate::select::{Numbered, Selected};
 /// Selects every two consecutive motions (A_i, A_{i+1}) = poses (i, i+1, i+2): the paper's
 /// "conventional method", Andreff on whatever the robot did.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ConventionalSelector {
+pub(crate) struct ConventionalSelector {
     setup: Setup,
     /// The two poses before the current one.
     before: [Option<Numbered>; 2],

@@ -7,7 +7,7 @@ use crate::select::{FirstMotion, InitialStats, Numbered, Selected, gripper_motio
 
 /// Fixed thresholds (α₀ as an angle, β₀, d₀), the means of the first motions.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct FixedThresholds {
+pub(crate) struct FixedThresholds {
     /// α₀: the least angle between the axes of A' and A'', radians.
     pub alpha: f64,
     /// β₀: the least rotation angle, radians.
@@ -23,7 +23,7 @@ pub struct FixedThresholds {
 /// starts at pose 2, the first n_init+1 poses are kept until the thresholds are known and then
 /// searched at once (a bounded buffer: memory stays constant).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FixedSelector {
+pub(crate) struct FixedSelector {
     setup: Setup,
     n_init: usize,
     /// Poses 1..n_init+1, kept until the thresholds are known.
@@ -49,11 +49,6 @@ impl FixedSelector {
             anchor: None,
             first: None,
         }
-    }
-
-    /// The thresholds, once the first motions have been seen.
-    pub fn thresholds(&self) -> Option<FixedThresholds> {
-        self.thresholds
     }
 
     /// Offers the next pose.

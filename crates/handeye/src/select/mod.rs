@@ -4,8 +4,8 @@
 //! Three policies ([`Selection`]): `none`, the conventional method (SPEC sec. 4.1); `fixed`, Shi et
 //! al.'s thresholds from the first motions (sec. 4.2); `adaptive`, the paper's Main Algorithm with
 //! the threshold prediction of Algorithms I–III (sec. 4.3, 4.4). A selector sees one pose at a time
-//! ([`Selector::offer`]) and answers with the selected motion pairs; the adaptive one then learns
-//! the errors of the calibration made from them ([`Selector::record`]).
+//! (a selector's `offer`) and answers with the selected motion pairs; the adaptive one then learns
+//! the errors of the calibration made from them (a selector's `record`).
 
 mod adaptive;
 mod conventional;
@@ -17,10 +17,11 @@ use std::str::FromStr;
 
 use serde::{Deserialize, Serialize};
 
-pub use adaptive::{AdaptiveSelector, RECORDS, Record, predict};
-pub use conventional::ConventionalSelector;
-pub use fixed::FixedSelector;
-pub use regression::{MAX_CONDITION, fit, fit_condition};
+pub(crate) use adaptive::AdaptiveSelector;
+pub use adaptive::{Record, predict};
+pub(crate) use conventional::ConventionalSelector;
+pub(crate) use fixed::FixedSelector;
+pub use regression::{fit, fit_condition};
 
 use crate::error::{Error, Result};
 use crate::motion::{MotionFeatures, MotionPair, PosePair, Setup};
@@ -188,7 +189,7 @@ impl AdaptiveParams {
 
 /// A pair of motions chosen for one calibration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Selected {
+pub(crate) struct Selected {
     /// Pose numbers (a, i, j), from 1: A' = Q_a⁻¹ Q_i and A'' = Q_i⁻¹ Q_j.
     pub poses: [usize; 3],
     /// (A', B').
@@ -288,7 +289,7 @@ pub(crate) fn gripper_motion(setup: Setup, from: &PosePair, to: &PosePair) -> Mo
 /// One of the three selection policies, with its state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Selector {
+pub(crate) enum Selector {
     /// The conventional method.
     None(ConventionalSelector),
     /// Fixed thresholds.

@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 /// Above this 2-norm condition number of the scaled matrix L of Eq. (3) the fit gives nothing.
-pub const MAX_CONDITION: f64 = 1e14;
+pub(crate) const MAX_CONDITION: f64 = 1e14;
 
 /// Iteration cap of the 3×3 SVD that measures the condition number.
 const SVD_ITERATIONS: usize = 1000;
@@ -15,7 +15,7 @@ const SVD_ITERATIONS: usize = 1000;
 /// x is scaled by max|x| and y by max|y| (the paper's "normalised"; a scale of 0 counts as 1); the
 /// centred normal equations of Eq. (3) give b₁..b₃ (solved by LU with partial pivoting), b₀ comes
 /// from the means, and the value at `x_new / max|x|` is scaled back by max|y|. Returns `None` when
-/// Eq. (3) is singular: its condition number (2-norm, on the scaled L) is above [`MAX_CONDITION`] or
+/// Eq. (3) is singular: its condition number (2-norm, on the scaled L) is above 1e14 or
 /// not finite.
 ///
 /// # Example

@@ -8,7 +8,7 @@
 
 /// What went wrong, with the byte offset (from the start of the message) and the field.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct CdrError {
+pub(crate) struct CdrError {
     /// Offset of the read that failed, from the start of the message (header included).
     pub offset: usize,
     /// What was being read and why it failed.

@@ -32,8 +32,7 @@ use crate::motion::PosePair;
 use crate::pose::{Transform, transform_from_xyz_quat_xyzw};
 use crate::sync::{Lookup, StampedPose};
 
-pub use cdr::CdrError;
-pub use msg::{POSE_STAMPED, TF_MESSAGE, TRANSFORM_STAMPED};
+pub(crate) use msg::{POSE_STAMPED, TF_MESSAGE, TRANSFORM_STAMPED};
 pub use storage::Storage;
 pub use tf::TfEdge;
 
@@ -42,9 +41,9 @@ use storage::{Message, TopicInfo, bag_error, scan};
 use tf::{TfBuffer, TfError, seconds};
 
 /// The topic of dynamic transforms.
-pub const TF_TOPIC: &str = "/tf";
+pub(crate) const TF_TOPIC: &str = "/tf";
 /// The topic of static transforms.
-pub const TF_STATIC_TOPIC: &str = "/tf_static";
+pub(crate) const TF_STATIC_TOPIC: &str = "/tf_static";
 
 /// Whether `path` is a ROS 2 recording: a directory holding a `metadata.yaml` or an `.mcap` /
 /// `.db3` file, or a file with one of these extensions.

@@ -4,11 +4,11 @@
 use super::cdr::{CdrError, CdrReader};
 
 /// `tf2_msgs/msg/TFMessage`.
-pub const TF_MESSAGE: &str = "tf2_msgs/msg/TFMessage";
+pub(crate) const TF_MESSAGE: &str = "tf2_msgs/msg/TFMessage";
 /// `geometry_msgs/msg/TransformStamped`.
-pub const TRANSFORM_STAMPED: &str = "geometry_msgs/msg/TransformStamped";
+pub(crate) const TRANSFORM_STAMPED: &str = "geometry_msgs/msg/TransformStamped";
 /// `geometry_msgs/msg/PoseStamped`.
-pub const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
+pub(crate) const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
 
 /// Nanoseconds in a second.
 pub(crate) const NS: i64 = 1_000_000_000;
