@@ -164,4 +164,38 @@ mod tests {
         assert_eq!(time_offset("auto"), Ok("auto".to_string()));
         assert_eq!(time_offset("-0.25"), Ok("-0.25".to_string()));
     }
+
+    #[test]
+    fn named_values_parse_from_the_library_names_only() {
+        use handeye::Setup;
+        use handeye::online::Unit;
+        let cmd = Command::new("t")
+            .arg(
+                Arg::new("setup")
+                    .long("setup")
+                    .value_parser(named::<Setup>()),
+            )
+            .arg(
+                Arg::new("unit")
+                    .long("unit")
+                    .value_parser(named_of(&[Unit::Auto, Unit::Metre])),
+            );
+        let m = cmd
+            .clone()
+            .try_get_matches_from(["t", "--setup", "eye-to-hand", "--unit", "m"])
+            .expect("listed names");
+        assert_eq!(m.get_one::<Setup>("setup"), Some(&Setup::EyeToHand));
+        assert_eq!(m.get_one::<Unit>("unit"), Some(&Unit::Metre));
+        for bad in [
+            ["--setup", "eye_to_hand"],
+            ["--unit", "mm"],
+            ["--unit", "metre"],
+        ] {
+            let e = cmd
+                .clone()
+                .try_get_matches_from(["t", bad[0], bad[1]])
+                .unwrap_err();
+            assert_eq!(e.kind(), ErrorKind::InvalidValue, "{bad:?}");
+        }
+    }
 }
