@@ -1,8 +1,8 @@
 //! One source of names for the library's choices (methods, setups, pairings, …): each enum's
-//! spellings are written once, in a [`named_enum!`] list, and its `ALL`, `name()`, `FromStr` and
-//! `Display` come from that list. The command line's value parsers and the Python bindings parse
-//! through the same [`Named`] trait, so a name is accepted, listed and printed the same way in every
-//! face.
+//! spellings are written once, in a [`named_enum!`](crate::named_enum) list, and its `ALL`,
+//! `name()`, `FromStr` and `Display` come from that list. The command line's value parsers and the
+//! Python bindings parse through the same [`Named`] trait, so a name is accepted, listed and
+//! printed the same way in every face.
 
 use crate::error::{Error, Result};
 
