@@ -33,11 +33,18 @@ pub fn list<T: Named>() -> String {
         .join(", ")
 }
 
-/// Parses a name of `T`; an unknown one is an [`Error::InvalidParameter`] listing the names.
+/// Parses a name of `T`; an unknown one is an [`Error::InvalidParameter`] listing the names
+/// (`a or b` for two, `one of a, b, c` for more).
 pub fn parse<T: Named>(s: &str) -> Result<T> {
-    T::from_name(s).ok_or_else(|| Error::InvalidParameter {
-        name: T::PARAM,
-        message: format!("unknown {} `{s}`; one of {}", T::WHAT, list::<T>()),
+    T::from_name(s).ok_or_else(|| {
+        let choices = match T::ALL {
+            [a, b] => format!("{} or {}", a.name(), b.name()),
+            _ => format!("one of {}", list::<T>()),
+        };
+        Error::InvalidParameter {
+            name: T::PARAM,
+            message: format!("unknown {} `{s}`; {choices}", T::WHAT),
+        }
     })
 }
 
@@ -216,6 +223,11 @@ mod tests {
 
     #[test]
     fn unknown_name_lists_the_names() {
+        let e = "selected".parse::<Estimator>().unwrap_err().to_string();
+        assert!(
+            e.contains("unknown estimator `selected`; paper or accumulate"),
+            "{e}"
+        );
         let e = "opencv".parse::<Method>().unwrap_err().to_string();
         assert!(
             e.contains(
