@@ -30,11 +30,11 @@ pub struct Args {
     #[arg(long, num_args = 1.., value_delimiter = ',', default_values_t = [10usize, 50, 200, 1000], value_parser = values::count(3, values::MAX_POSES))]
     poses: Vec<usize>,
     /// Pairings to time.
-    #[arg(long, num_args = 1.., value_delimiter = ',', default_values = ["consecutive", "all"], value_parser = ["consecutive", "all"])]
-    pairs: Vec<String>,
+    #[arg(long, num_args = 1.., value_delimiter = ',', default_values_t = Pairing::ALL, value_parser = values::named::<Pairing>())]
+    pairs: Vec<Pairing>,
     /// Methods to time.
-    #[arg(long, num_args = 1.., value_delimiter = ',', default_values = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"])]
-    methods: Vec<String>,
+    #[arg(long, num_args = 1.., value_delimiter = ',', default_values_t = Method::ALL, value_parser = values::named::<Method>())]
+    methods: Vec<Method>,
     /// Pose files to time instead of simulated data (each may have a `<stem>.truth.json` beside
     /// it, or give --truth per file in the same order).
     #[arg(long)]
@@ -100,23 +100,14 @@ struct Dataset {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let datasets = datasets(&args)?;
-    let methods: Vec<Method> = args
-        .methods
-        .iter()
-        .map(|m| m.parse())
-        .collect::<handeye::Result<_>>()?;
+    let methods = &args.methods;
     let budget = Duration::from_secs_f64(args.min_time);
     let progress =
         Progress::new((datasets.len() * args.pairs.len() * methods.len()) as u64 + ONLINE_CASES);
     let mut rows = Vec::new();
     for d in &datasets {
-        for pairs in &args.pairs {
-            let pairing = if pairs == "all" {
-                Pairing::All
-            } else {
-                Pairing::Consecutive
-            };
-            for &method in &methods {
+        for &pairing in &args.pairs {
+            for &method in methods {
                 // A call includes building the motions from the poses, as OpenCV's does; all
                 // pairs are made on the fly, as `calibrate --pairs all` makes them.
                 let call = || match pairing {
@@ -125,7 +116,7 @@ pub fn run(args: Args) -> Result<()> {
                         solve(method, &motion_pairs(&d.poses, pairing, Setup::EyeInHand))
                     }
                 };
-                progress.case(&format!("{} {pairs} {}", d.name, method.name()));
+                progress.case(&format!("{} {pairing} {method}", d.name));
                 let result = call();
                 let (median, calls) = time(|| black_box(call()).is_ok(), budget);
                 let errors = match (&result, &d.truth) {
@@ -138,7 +129,7 @@ pub fn run(args: Args) -> Result<()> {
                 rows.push(json!({
                     "dataset": d.name,
                     "poses": d.poses.len(),
-                    "pairs": pairs,
+                    "pairs": pairing.name(),
                     "method": method.name(),
                     "median_s": median,
                     "calls": calls,

@@ -3,8 +3,10 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
+use clap::builder::PossibleValuesParser;
 use handeye::calibration::{Fix, Options, calibrate};
 use handeye::metrics::OUTLIER_DEG;
+use handeye::names;
 use handeye::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 use handeye::solve::RobotWorldMethod;
 use handeye::solve::TsaiOptions;
@@ -22,9 +24,9 @@ use crate::values;
 pub struct Args {
     #[command(flatten)]
     input: InputArgs,
-    /// Solver. Hand–eye (default andreff): andreff, andreff-joint, tsai, park, horaud,
-    /// daniilidis, refine. With --robot-world (default refine): shah, li, refine.
-    #[arg(long, value_parser = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine", "shah", "li"])]
+    /// Solver: a hand–eye method (default andreff), or with --robot-world a robot-world one
+    /// (shah, li or refine; default refine).
+    #[arg(long, value_parser = any_method())]
     method: Option<String>,
     /// Robot-world–hand-eye calibration (A X = Z B): solve X and the target's pose together
     /// from every pose once (`base_from_target` eye-in-hand, `gripper_from_target` eye-to-hand),
@@ -34,8 +36,8 @@ pub struct Args {
     /// Motions from consecutive poses, or from every pair i < j (as OpenCV does). Default:
     /// consecutive for pose-pair files, all for two streams (`--robot/--camera`) and ROS 2
     /// recordings, whose consecutive camera frames barely move.
-    #[arg(long, value_parser = ["consecutive", "all"])]
-    pairs: Option<String>,
+    #[arg(long, value_parser = values::named::<Pairing>())]
+    pairs: Option<Pairing>,
     /// Leave out the poses that disagree with the others (their motions' robot and camera
     /// rotation angles or pitches differ beyond the data's own noise).
     #[arg(long)]
@@ -46,11 +48,11 @@ pub struct Args {
     outlier_deg: f64,
     /// Read the input another way: `auto` applies a reading that fits far better when one is
     /// found; `as-given` keeps the input as it is (a better reading is then a warning, not a
-    /// refusal); or one of robot-inverted, camera-inverted, both-inverted, robot-wxyz,
-    /// camera-wxyz, both-wxyz, robot-mm, camera-mm. Without it, a reading that fits far better
-    /// refuses the calibration (exit 3) and names the fix.
-    #[arg(long)]
-    fix: Option<String>,
+    /// refusal); or another reading (robot-inverted, robot-wxyz, robot-mm, …). Without it (or
+    /// with `refuse`), a reading that fits far better refuses the calibration (exit 3) and names
+    /// the fix.
+    #[arg(long, value_parser = values::named::<Fix>())]
+    fix: Option<Fix>,
     /// Bootstrap replicates behind the reported uncertainty.
     #[arg(long, default_value_t = REPLICATES, value_parser = values::count(MIN_REPLICATES as u64, values::MAX_REPLICATES))]
     bootstrap: usize,
@@ -62,8 +64,8 @@ pub struct Args {
     /// YAML (with translation {x,y,z} and rotation {x,y,z,w}); a `static_transform_publisher`
     /// line and launch snippet (`ros2`); a URDF `<joint>` (`urdf`) [default: text on a terminal,
     /// JSON otherwise].
-    #[arg(long, value_parser = ["json", "text", "yaml", "ros2", "urdf"])]
-    output: Option<String>,
+    #[arg(long, value_parser = values::named::<Face>())]
+    output: Option<Face>,
     /// The parent frame of X in the yaml, ros2 and urdf outputs [default: the recording's gripper
     /// frame (eye-in-hand) or base frame (eye-to-hand); `gripper` or `base` for files].
     #[arg(long)]
@@ -78,6 +80,14 @@ pub struct Args {
     report: Option<std::path::PathBuf>,
 }
 
+/// The names of `--method`: the hand–eye methods and the robot-world ones, each once.
+fn any_method() -> PossibleValuesParser {
+    let robot_world = RobotWorldMethod::ALL.iter().map(|m| m.name());
+    let mut names: Vec<&'static str> = Method::ALL.iter().map(|m| m.name()).collect();
+    names.extend(robot_world.filter(|m| m.parse::<Method>().is_err()));
+    PossibleValuesParser::new(names)
+}
+
 /// Fewest bootstrap replicates that give a usable one-sigma.
 const MIN_REPLICATES: usize = 8;
 
@@ -90,7 +100,7 @@ pub fn run(args: Args) -> Result<()> {
     let setup = args.input.setup();
     let (poses, pose_names, time_offset) = read_all(&args.input)?;
     enough(&args.input, poses.len(), 2, "to make a motion")?;
-    let face = Face::chosen(args.output.as_deref());
+    let face = Face::chosen(args.output);
     let unit = length_unit(&poses);
     let report = match calibrate(
         &poses,
@@ -187,19 +197,19 @@ fn run_robot_world(args: &Args) -> Result<()> {
             .into());
         }
     }
-    let method = args
-        .method
-        .as_deref()
-        .unwrap_or("refine")
-        .parse::<RobotWorldMethod>()
-        .map_err(|_| Error::InvalidParameter {
-            name: "method",
-            message: format!(
-                "`{}` is a hand–eye method; with --robot-world use shah, li or refine",
-                args.method.as_deref().unwrap_or_default()
-            ),
-        })?;
-    let (fix, replicates) = (fix(args)?, replicates(args)?);
+    let method = match args.method.as_deref() {
+        None => RobotWorldMethod::Refine,
+        Some(name) => name
+            .parse::<RobotWorldMethod>()
+            .map_err(|_| Error::InvalidParameter {
+                name: "method",
+                message: format!(
+                    "`{name}` is a hand–eye method; with --robot-world use one of {}",
+                    names::list::<RobotWorldMethod>()
+                ),
+            })?,
+    };
+    let (fix, replicates) = (args.fix.unwrap_or_default(), replicates(args)?);
     let setup = args.input.setup();
     let (poses, pose_names, time_offset) = read_all(&args.input)?;
     enough(
@@ -230,7 +240,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
     for w in &report.warnings {
         eprintln!("warning: {}", faces::warning(w));
     }
-    match Face::chosen(args.output.as_deref()) {
+    match Face::chosen(args.output) {
         // The YAML lists X, the target, their one-sigma and the residuals: readable as text too.
         Face::Yaml | Face::Text => return print_text(&robot_world_yaml(&report)),
         Face::Ros2 | Face::Urdf => {
@@ -275,13 +285,6 @@ fn robot_world_yaml(r: &RobotWorldReport) -> String {
     )
 }
 
-fn fix(args: &Args) -> Result<Fix> {
-    Ok(match args.fix.as_deref() {
-        None => Fix::Refuse,
-        Some(name) => name.parse::<Fix>()?,
-    })
-}
-
 fn replicates(args: &Args) -> Result<usize> {
     if args.bootstrap < MIN_REPLICATES {
         return Err(Error::InvalidParameter {
@@ -299,20 +302,23 @@ fn replicates(args: &Args) -> Result<usize> {
 /// The library's options from the command line.
 fn options(args: &Args) -> Result<Options> {
     let replicates = replicates(args)?;
-    let fix = fix(args)?;
-    let method = args.method.as_deref().unwrap_or("andreff");
-    if matches!(method, "shah" | "li") {
-        return Err(Error::InvalidParameter {
-            name: "method",
-            message: format!("`{method}` is a robot-world method: add --robot-world"),
-        }
-        .into());
-    }
+    let method = match args.method.as_deref() {
+        None => Method::Andreff,
+        Some(name) => name.parse::<Method>().map_err(|e| {
+            if name.parse::<RobotWorldMethod>().is_ok() {
+                Error::InvalidParameter {
+                    name: "method",
+                    message: format!("`{name}` is a robot-world method: add --robot-world"),
+                }
+            } else {
+                e
+            }
+        })?,
+    };
     Ok(Options {
-        method: method.parse::<Method>()?,
-        pairing: match args.pairs.as_deref() {
-            Some("all") => Pairing::All,
-            Some(_) => Pairing::Consecutive,
+        method,
+        pairing: match args.pairs {
+            Some(pairing) => pairing,
             // Consecutive samples of a stream are a camera period apart: tiny motions whose
             // noise dominates. Every pair of samples carries the information.
             None if args.input.robot.is_some() || args.input.is_bag() => Pairing::All,
@@ -323,7 +329,7 @@ fn options(args: &Args) -> Result<Options> {
         },
         reject_outliers: args.reject_outliers,
         outlier_deg: args.outlier_deg,
-        fix,
+        fix: args.fix.unwrap_or_default(),
         replicates,
         pose_names: Vec::new(),
     })

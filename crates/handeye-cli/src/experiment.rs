@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
+use clap::builder::PossibleValuesParser;
 use handeye::experiment::{
     Experiment, ExperimentConfig, TrackingConfig, markdown_table, run_experiment, run_tracking,
     tracking_table,
@@ -17,8 +18,8 @@ use crate::values;
 /// Options of `handeye experiment`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
-    /// Which experiment.
-    #[arg(value_parser = ["accuracy", "adaptability", "realtime", "tracking", "advice", "all"])]
+    /// Which experiment: one of the paper's, the tracking or the advice study, or all of them.
+    #[arg(value_parser = which())]
     which: String,
     /// Number of series (default: the paper's, 20 / 100 / 50).
     #[arg(long, value_parser = values::count(1, values::MAX_SERIES))]
@@ -31,12 +32,36 @@ pub struct Args {
     out: PathBuf,
 }
 
+/// The runs beyond the paper's experiments.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Study {
+    /// The accumulating estimator's tracking study.
+    Tracking,
+    /// The closed loop of `advise`.
+    Advice,
+    /// The paper's experiments, then both studies.
+    All,
+}
+
+handeye::named_enum!(Study, "experiment", "experiment" {
+    Tracking => "tracking",
+    Advice => "advice",
+    All => "all",
+});
+
+/// The names of `which`: the paper's experiments, then the studies.
+fn which() -> PossibleValuesParser {
+    let studies = Study::ALL.iter().map(|s| s.name());
+    PossibleValuesParser::new(Experiment::ALL.iter().map(|e| e.name()).chain(studies))
+}
+
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let experiments: Vec<Experiment> = match args.which.as_str() {
-        "all" => Experiment::ALL.to_vec(),
-        "tracking" | "advice" => Vec::new(),
-        other => vec![other.parse()?],
+    let study = args.which.parse::<Study>().ok();
+    let experiments: Vec<Experiment> = match study {
+        Some(Study::All) => Experiment::ALL.to_vec(),
+        Some(_) => Vec::new(),
+        None => vec![args.which.parse()?],
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
@@ -53,7 +78,7 @@ pub fn run(args: Args) -> Result<()> {
         let figures = write_figures(&report, &args.out)?;
         publish(&args.out, experiment.name(), &table, &report, &figures)?;
     }
-    if args.which == "all" || args.which == "tracking" {
+    if matches!(study, Some(Study::All | Study::Tracking)) {
         let mut config = TrackingConfig {
             seed: args.seed,
             ..TrackingConfig::default()
@@ -68,7 +93,7 @@ pub fn run(args: Args) -> Result<()> {
         let figures = write_tracking_figures(&report, &args.out)?;
         publish(&args.out, "tracking", &table, &report, &figures)?;
     }
-    if args.which == "all" || args.which == "advice" {
+    if matches!(study, Some(Study::All | Study::Advice)) {
         let report = handeye::advice::closed_loop(args.series.unwrap_or(20), args.seed);
         publish(&args.out, "advice", &advice_table(&report), &report, &[])?;
     }

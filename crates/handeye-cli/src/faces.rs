@@ -25,15 +25,19 @@ pub enum Face {
     Urdf,
 }
 
+handeye::named_enum!(Face, "output", "output" {
+    Json => "json",
+    Text => "text",
+    Yaml => "yaml",
+    Ros2 => "ros2",
+    Urdf => "urdf",
+});
+
 impl Face {
     /// The face named on the command line, or the default for where stdout goes.
-    pub fn chosen(name: Option<&str>) -> Self {
-        match name {
-            Some("text") => Self::Text,
-            Some("yaml") => Self::Yaml,
-            Some("ros2") => Self::Ros2,
-            Some("urdf") => Self::Urdf,
-            Some(_) => Self::Json,
+    pub fn chosen(face: Option<Face>) -> Self {
+        match face {
+            Some(face) => face,
             None if std::io::IsTerminal::is_terminal(&std::io::stdout()) => Self::Text,
             None => Self::Json,
         }

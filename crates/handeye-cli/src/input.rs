@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::{BagOptions, BagPairs, is_bag, read_bag_pairs};
-use handeye::io::{PoseInput, PoseReader, Projections, StampedPosePair, open_poses};
+use handeye::io::{Format, PoseInput, PoseReader, Projections, StampedPosePair, open_poses};
 use handeye::sync::{
     OffsetOptions, StampedPose, TimeOffset, estimate_time_offset, pair_stream_files,
     refine_time_offset,
@@ -23,8 +23,8 @@ pub struct InputArgs {
     #[arg(value_name = "INPUT", required_unless_present = "robot")]
     pub input: Option<PathBuf>,
     /// Format of INPUT.
-    #[arg(long, default_value = "auto", value_parser = ["auto", "jsonl", "csv", "opencv-yaml", "moveit", "visp"])]
-    pub format: String,
+    #[arg(long, default_value_t = Format::Auto, value_parser = crate::values::named::<Format>())]
+    pub format: Format,
     /// Robot stream `t x y z qx qy qz qw` (base_from_gripper), ethz-asl / TUM layout.
     #[arg(long, requires = "camera", conflicts_with = "input")]
     pub robot: Option<PathBuf>,
@@ -72,22 +72,14 @@ pub struct InputArgs {
     )]
     pub target_topic: Option<String>,
     /// Camera on the gripper (X = gripper_from_camera) or fixed (X = base_from_camera).
-    #[arg(long, default_value = "eye-in-hand", value_parser = ["eye-in-hand", "eye-to-hand"])]
-    pub setup: String,
+    #[arg(long, default_value_t = Setup::EyeInHand, value_parser = crate::values::named::<Setup>())]
+    pub setup: Setup,
 }
 
 impl InputArgs {
     /// The setup.
     pub fn setup(&self) -> Setup {
-        if self.setup == "eye-to-hand" {
-            Setup::EyeToHand
-        } else {
-            Setup::EyeInHand
-        }
-    }
-
-    fn format(&self) -> Result<handeye::io::Format> {
-        Ok(self.format.parse()?)
+        self.setup
     }
 
     /// Whether INPUT is a ROS 2 recording.
@@ -359,14 +351,14 @@ pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Vec<String>, Option<
         names.push(name(r.line));
     };
     if path.as_os_str() == "-" {
-        let mut reader = PoseReader::new(std::io::stdin().lock(), "-", args.format()?)?;
+        let mut reader = PoseReader::new(std::io::stdin().lock(), "-", args.format)?;
         preamble(&reader, "-");
         for r in reader.by_ref() {
             take(r?);
         }
         note("-", &reader.projections());
     } else {
-        match open_poses(&path, args.format()?)? {
+        match open_poses(&path, args.format)? {
             PoseInput::Whole(series) => {
                 note(&source, &series.projections);
                 let names = series.lines.iter().map(|&l| name(l)).collect();
@@ -472,7 +464,7 @@ pub fn records(args: &InputArgs) -> Result<(Records, String, Option<Offset>)> {
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
     let source = path.display().to_string();
     if path.as_os_str() == "-" {
-        let reader = PoseReader::new(std::io::stdin().lock(), "-", args.format()?)?;
+        let reader = PoseReader::new(std::io::stdin().lock(), "-", args.format)?;
         preamble(&reader, &source);
         let records = NotingReader {
             reader,
@@ -481,7 +473,7 @@ pub fn records(args: &InputArgs) -> Result<(Records, String, Option<Offset>)> {
         };
         return Ok((Box::new(records), source, None));
     }
-    match open_poses(&path, args.format()?)? {
+    match open_poses(&path, args.format)? {
         PoseInput::Whole(series) => {
             note(&source, &series.projections);
             let records = series.pairs.into_iter().enumerate().map(|(k, pose)| {

@@ -3,13 +3,13 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::{BagSummary, TfEdge, inspect_bag};
 
+use crate::faces::Face;
 use crate::output::{print_json, print_text};
 
 /// Options of `handeye inspect`.
@@ -19,18 +19,14 @@ pub struct Args {
     #[arg(value_name = "BAG")]
     bag: PathBuf,
     /// Output: JSON, or text for a person [default: text on a terminal, JSON otherwise].
-    #[arg(long, value_parser = ["json", "text"])]
-    output: Option<String>,
+    #[arg(long, value_parser = crate::values::named_of(&[Face::Json, Face::Text]))]
+    output: Option<Face>,
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let summary = inspect_bag(&args.bag)?;
-    let text = match args.output.as_deref() {
-        Some(o) => o == "text",
-        None => std::io::stdout().is_terminal(),
-    };
-    if text {
+    if Face::chosen(args.output) == Face::Text {
         print_text(&render(&summary))
     } else {
         print_json(&serde_json::to_value(&summary)?)

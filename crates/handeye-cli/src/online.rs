@@ -24,13 +24,13 @@ pub struct Args {
     input: InputArgs,
     /// Motion selection: the paper's adaptive thresholds, Shi et al.'s fixed ones, or none (the
     /// conventional method).
-    #[arg(long, default_value = "adaptive", value_parser = ["adaptive", "fixed", "none"])]
-    selection: String,
+    #[arg(long, default_value_t = Selection::Adaptive, value_parser = values::named::<Selection>())]
+    selection: Selection,
     /// Estimator: `paper` (Andreff on the two selected motions of each calibration) or
     /// `accumulate` (every pair of poses since the last detected change of X, outliers held out,
     /// reported on its own schedule: --every, --shrink, and at the end).
-    #[arg(long, default_value = "paper", value_parser = ["paper", "accumulate"])]
-    estimator: String,
+    #[arg(long, default_value_t = Estimator::Paper, value_parser = values::named::<Estimator>())]
+    estimator: Estimator,
     /// With --estimator accumulate: report the estimate at least every N poses.
     #[arg(long, default_value_t = TrackOptions::default().every, value_parser = values::count(1, u64::MAX))]
     every: usize,
@@ -40,8 +40,8 @@ pub struct Args {
     shrink: f64,
     /// Length unit of the input: `auto` infers metres or millimetres from the first pose; it
     /// sets the default --d-max (0.1 m).
-    #[arg(long, default_value = "auto", value_parser = ["auto", "m", "mm"])]
-    unit: String,
+    #[arg(long, default_value_t = Unit::Auto, value_parser = values::named_of(&[Unit::Auto, Unit::Metre, Unit::Millimetre]))]
+    unit: Unit,
     /// Least rotation-angle gap (degrees) that marks a pose as an outlier (accumulate estimator).
     #[arg(long, default_value_t = TrackOptions::default().outlier_deg, value_parser = values::angle_deg)]
     outlier_deg: f64,
@@ -49,14 +49,14 @@ pub struct Args {
     #[arg(long)]
     optimal: bool,
     /// Source of rmsR/rmsT: the AX − XB residuals, or the true X (needs --truth).
-    #[arg(long, default_value = "residual", value_parser = ["residual", "truth"])]
-    error_source: String,
+    #[arg(long, default_value_t = ErrorSource::Residual, value_parser = values::named::<ErrorSource>())]
+    error_source: ErrorSource,
     /// Truth file (the true X), for --error-source truth.
     #[arg(long)]
     truth: Option<PathBuf>,
     /// What to do with a bad line: report it and skip it, or stop (exit 2).
-    #[arg(long, default_value = "skip", value_parser = ["skip", "stop"])]
-    on_bad_line: String,
+    #[arg(long, default_value_t = OnBadLine::Skip, value_parser = values::named::<OnBadLine>())]
+    on_bad_line: OnBadLine,
     /// N of Eq. (1): motions averaged for the initial thresholds (2 to 1000000).
     #[arg(long, default_value_t = AdaptiveParams::default().n_init, value_parser = values::count(2, MAX_N_INIT as u64))]
     n_init: usize,
@@ -101,8 +101,8 @@ pub struct Args {
     /// end of the stream, the last X as easy_handeye2's YAML, a `static_transform_publisher` line
     /// and launch snippet (`ros2`) or a URDF `<joint>` (`urdf`) [default: text on a terminal,
     /// JSON otherwise].
-    #[arg(long, value_parser = ["json", "text", "yaml", "ros2", "urdf"])]
-    output: Option<String>,
+    #[arg(long, value_parser = values::named::<Face>())]
+    output: Option<Face>,
     /// The parent frame of X in the yaml, ros2 and urdf outputs [default: the recording's gripper
     /// frame (eye-in-hand) or base frame (eye-to-hand); `gripper` or `base` for files].
     #[arg(long)]
@@ -140,7 +140,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let config = OnlineConfig {
         setup,
-        selection: args.selection.parse::<Selection>()?,
+        selection: args.selection,
         params: AdaptiveParams {
             n_init: args.n_init,
             interval: args.interval,
@@ -165,10 +165,10 @@ pub fn run(args: Args) -> Result<()> {
             d_max: args.d_max.unwrap_or(AdaptiveParams::default().d_max),
             unfreeze: args.unfreeze,
         },
-        error_source: args.error_source.parse::<ErrorSource>()?,
+        error_source: args.error_source,
         truth: truth.map(|t| t.x),
         optimal: args.optimal,
-        estimator: args.estimator.parse::<Estimator>()?,
+        estimator: args.estimator,
         tracking: TrackOptions {
             every: args.every,
             shrink: args.shrink,
@@ -178,7 +178,7 @@ pub fn run(args: Args) -> Result<()> {
         // An explicit --d-max is in the input's unit whatever it is.
         unit: match args.d_max {
             Some(_) => Unit::AsGiven,
-            None => args.unit.parse::<Unit>()?,
+            None => args.unit,
         },
     };
     for (name, value) in [("--every", args.every as f64), ("--shrink", args.shrink)] {
@@ -187,7 +187,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     let accumulate = config.estimator == Estimator::Accumulate;
-    let face = Face::chosen(args.output.as_deref());
+    let face = Face::chosen(args.output);
     let mut calibrator = OnlineCalibrator::new(config)?;
     let (records, source, offset) = records(&args.input)?;
     let time_offset = offset.as_ref().map(|o| o.seconds);
@@ -209,7 +209,7 @@ pub fn run(args: Args) -> Result<()> {
         let record = match record {
             Ok(r) => r,
             Err(e) => {
-                bad_line(e, &args.on_bad_line, &mut messages)?;
+                bad_line(e, args.on_bad_line, &mut messages)?;
                 continue;
             }
         };
@@ -224,7 +224,7 @@ pub fn run(args: Args) -> Result<()> {
                     field: "-".to_string(),
                     message: e.to_string(),
                 };
-                bad_line(e, &args.on_bad_line, &mut messages)?;
+                bad_line(e, args.on_bad_line, &mut messages)?;
                 continue;
             }
             Err(e) => return Err(e.into()),
@@ -434,9 +434,23 @@ impl Thinned {
     }
 }
 
+/// What `--on-bad-line` does with a line that does not parse.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum OnBadLine {
+    /// Report it and read on.
+    Skip,
+    /// Stop with its error (exit 2).
+    Stop,
+}
+
+handeye::named_enum!(OnBadLine, "on-bad-line", "on_bad_line" {
+    Skip => "skip",
+    Stop => "stop",
+});
+
 /// Skips a bad line with its message, or stops with it (`--on-bad-line stop`).
-fn bad_line(e: handeye::Error, on_bad_line: &str, messages: &mut Thinned) -> Result<()> {
-    if on_bad_line == "skip" && matches!(e, handeye::Error::Parse { .. }) {
+fn bad_line(e: handeye::Error, on_bad_line: OnBadLine, messages: &mut Thinned) -> Result<()> {
+    if on_bad_line == OnBadLine::Skip && matches!(e, handeye::Error::Parse { .. }) {
         Thinned::show(
             &mut messages.bad_lines,
             "bad lines",

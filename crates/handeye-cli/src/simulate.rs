@@ -24,8 +24,8 @@ pub struct Args {
     #[arg(long, default_value_t = 0)]
     series: u64,
     /// Motion preset: the paper's small steps, or large motions (60° steps, 50 mm standoff).
-    #[arg(long, default_value = "paper", value_parser = ["paper", "large"])]
-    preset: String,
+    #[arg(long, default_value_t = Preset::Paper, value_parser = values::named::<Preset>())]
+    preset: Preset,
     /// Without measurement noise.
     #[arg(long)]
     noise_free: bool,
@@ -38,12 +38,25 @@ pub struct Args {
     truth: Option<PathBuf>,
 }
 
+/// The motion presets of `--preset`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Preset {
+    /// The paper's protocol ([`SimConfig::default`]).
+    Paper,
+    /// [`SimConfig::large_motions`].
+    Large,
+}
+
+handeye::named_enum!(Preset, "preset", "preset" {
+    Paper => "paper",
+    Large => "large",
+});
+
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let base = if args.preset == "large" {
-        SimConfig::large_motions()
-    } else {
-        SimConfig::default()
+    let base = match args.preset {
+        Preset::Paper => SimConfig::default(),
+        Preset::Large => SimConfig::large_motions(),
     };
     let mut config = SimConfig {
         poses: args.poses,

@@ -2,7 +2,12 @@
 //! that an out-of-range value is refused with exit 2 and the flag named (clap's message), before
 //! anything is computed or allocated from it.
 
-use clap::builder::RangedU64ValueParser;
+use std::ffi::OsStr;
+
+use clap::builder::{PossibleValue, PossibleValuesParser, RangedU64ValueParser, TypedValueParser};
+use clap::error::ErrorKind;
+use clap::{Arg, Command};
+use handeye::names::Named;
 
 /// The most poses `simulate`, `demo` and `bench` make (each pose is about a hundred bytes, and
 /// `bench --pairs all` grows with the square).
@@ -104,6 +109,41 @@ pub fn time_offset(s: &str) -> Result<String, String> {
     }
 }
 
+/// A value parser of the names of some of `T`'s values, from the library's one list of names
+/// ([`Named`]): `--help` lists them, and clap refuses any other name with the list (exit 2).
+#[derive(Debug, Clone, Copy)]
+pub struct NamedParser<T: 'static>(&'static [T]);
+
+/// Any of `T`'s names.
+pub fn named<T: Named>() -> NamedParser<T> {
+    NamedParser(T::ALL)
+}
+
+/// The names of these values of `T` only.
+pub fn named_of<T: Named>(values: &'static [T]) -> NamedParser<T> {
+    NamedParser(values)
+}
+
+impl<T: Named + Send + Sync> TypedValueParser for NamedParser<T> {
+    type Value = T;
+
+    fn parse_ref(&self, cmd: &Command, arg: Option<&Arg>, value: &OsStr) -> Result<T, clap::Error> {
+        let names = PossibleValuesParser::new(self.0.iter().map(|v| v.name()));
+        let name = names.parse_ref(cmd, arg, value)?;
+        self.0
+            .iter()
+            .copied()
+            .find(|v| v.name() == name)
+            .ok_or_else(|| clap::Error::new(ErrorKind::InvalidValue).with_cmd(cmd))
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(
+            self.0.iter().map(|v| PossibleValue::new(v.name())),
+        ))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -123,5 +163,39 @@ mod tests {
         assert!(at_least_one("0.99").is_err() && at_least_one("1").is_ok());
         assert_eq!(time_offset("auto"), Ok("auto".to_string()));
         assert_eq!(time_offset("-0.25"), Ok("-0.25".to_string()));
+    }
+
+    #[test]
+    fn named_values_parse_from_the_library_names_only() {
+        use handeye::Setup;
+        use handeye::online::Unit;
+        let cmd = Command::new("t")
+            .arg(
+                Arg::new("setup")
+                    .long("setup")
+                    .value_parser(named::<Setup>()),
+            )
+            .arg(
+                Arg::new("unit")
+                    .long("unit")
+                    .value_parser(named_of(&[Unit::Auto, Unit::Metre])),
+            );
+        let m = cmd
+            .clone()
+            .try_get_matches_from(["t", "--setup", "eye-to-hand", "--unit", "m"])
+            .expect("listed names");
+        assert_eq!(m.get_one::<Setup>("setup"), Some(&Setup::EyeToHand));
+        assert_eq!(m.get_one::<Unit>("unit"), Some(&Unit::Metre));
+        for bad in [
+            ["--setup", "eye_to_hand"],
+            ["--unit", "mm"],
+            ["--unit", "metre"],
+        ] {
+            let e = cmd
+                .clone()
+                .try_get_matches_from(["t", bad[0], bad[1]])
+                .unwrap_err();
+            assert_eq!(e.kind(), ErrorKind::InvalidValue, "{bad:?}");
+        }
     }
 }

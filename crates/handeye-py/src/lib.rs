@@ -187,18 +187,9 @@ fn calibration_options(
     pairs: &str,
     tsai_opencv_filter: bool,
 ) -> PyResult<handeye::calibration::Options> {
-    let pairing = match pairs {
-        "consecutive" => Pairing::Consecutive,
-        "all" => Pairing::All,
-        other => {
-            return Err(value_error(format!(
-                "unknown pairs `{other}`; consecutive or all"
-            )));
-        }
-    };
     Ok(handeye::calibration::Options {
         method: method.parse::<Method>().map_err(value_error)?,
-        pairing,
+        pairing: pairs.parse::<Pairing>().map_err(value_error)?,
         tsai: handeye::solve::TsaiOptions {
             opencv_filter: tsai_opencv_filter,
         },
@@ -206,14 +197,9 @@ fn calibration_options(
     })
 }
 
+/// The setup by name (the library's names, as on the command line).
 fn parse_setup(setup: &str) -> PyResult<Setup> {
-    match setup {
-        "eye-in-hand" => Ok(Setup::EyeInHand),
-        "eye-to-hand" => Ok(Setup::EyeToHand),
-        other => Err(value_error(format!(
-            "unknown setup `{other}`; eye-in-hand or eye-to-hand"
-        ))),
-    }
+    setup.parse::<Setup>().map_err(value_error)
 }
 
 /// The online calibrator (see `handeye.OnlineCalibrator`).

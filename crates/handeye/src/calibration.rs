@@ -50,15 +50,51 @@ pub enum Fix {
     Auto,
 }
 
+impl Fix {
+    /// Every fix: `refuse`, `auto`, then each [`Reading`] (its name reads the input that way).
+    pub const ALL: [Fix; 2 + Reading::ALL.len()] = {
+        let mut all = [Fix::Refuse; 2 + Reading::ALL.len()];
+        all[1] = Fix::Auto;
+        let mut i = 0;
+        while i < Reading::ALL.len() {
+            all[2 + i] = Fix::Read(Reading::ALL[i]);
+            i += 1;
+        }
+        all
+    };
+
+    /// The name on the command line and in the Python bindings: `refuse`, `auto`, or the
+    /// reading's name (`as-given`, `robot-inverted`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Fix::Refuse => "refuse",
+            Fix::Auto => "auto",
+            Fix::Read(r) => r.name(),
+        }
+    }
+}
+
+impl crate::names::Named for Fix {
+    const WHAT: &'static str = "fix";
+    const PARAM: &'static str = "fix";
+    const ALL: &'static [Self] = &Fix::ALL;
+
+    fn name(self) -> &'static str {
+        Fix::name(self)
+    }
+}
+
+impl std::fmt::Display for Fix {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl std::str::FromStr for Fix {
     type Err = Error;
 
-    /// `auto`, or a [`Reading`]'s name (`as-given`, `robot-inverted`, …).
     fn from_str(s: &str) -> Result<Self> {
-        if s == "auto" {
-            return Ok(Fix::Auto);
-        }
-        s.parse::<Reading>().map(Fix::Read)
+        crate::names::parse(s)
     }
 }
 

@@ -6,14 +6,10 @@
 //! data as given and under each other [`Reading`], measures how well each fits (the median per-pose
 //! residual, [`crate::consistency::PoseResiduals`]), and names a reading that fits far better.
 
-use std::fmt;
-use std::str::FromStr;
-
 use nalgebra::{Quaternion, UnitQuaternion};
 use serde::{Deserialize, Serialize};
 
 use crate::consistency::{PoseResiduals, axis_scatter, median, translation_scale};
-use crate::error::{Error, Result};
 use crate::motion::{AllPairs, PosePair, Setup};
 use crate::pose::{Transform, exp_so3, transform_from_parts};
 use crate::solve::andreff;
@@ -68,39 +64,11 @@ pub enum Reading {
 }
 
 impl Reading {
-    /// Every reading, the as-given one first.
-    pub const ALL: [Reading; 9] = [
-        Reading::AsGiven,
-        Reading::RobotInverted,
-        Reading::CameraInverted,
-        Reading::BothInverted,
-        Reading::RobotWxyz,
-        Reading::CameraWxyz,
-        Reading::BothWxyz,
-        Reading::RobotMm,
-        Reading::CameraMm,
-    ];
-
-    /// The name on the command line (`--fix NAME`) and in output.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::AsGiven => "as-given",
-            Self::RobotInverted => "robot-inverted",
-            Self::CameraInverted => "camera-inverted",
-            Self::BothInverted => "both-inverted",
-            Self::RobotWxyz => "robot-wxyz",
-            Self::CameraWxyz => "camera-wxyz",
-            Self::BothWxyz => "both-wxyz",
-            Self::RobotMm => "robot-mm",
-            Self::CameraMm => "camera-mm",
-        }
-    }
-
     /// What the reading means, in words.
     pub fn meaning(self, setup: Setup) -> String {
         let other = match setup {
-            Setup::EyeInHand => "eye-to-hand",
-            Setup::EyeToHand => "eye-in-hand",
+            Setup::EyeInHand => Setup::EyeToHand,
+            Setup::EyeToHand => Setup::EyeInHand,
         };
         match self {
             Self::AsGiven => "the poses as given".into(),
@@ -142,28 +110,17 @@ impl Reading {
     }
 }
 
-impl fmt::Display for Reading {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Reading {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        Reading::ALL
-            .into_iter()
-            .find(|r| r.name() == s)
-            .ok_or_else(|| Error::InvalidParameter {
-                name: "fix",
-                message: format!(
-                    "unknown reading `{s}`; one of {}",
-                    Reading::ALL.map(Reading::name).join(", ")
-                ),
-            })
-    }
-}
+crate::named_enum!(Reading, "reading", "fix" {
+    AsGiven => "as-given",
+    RobotInverted => "robot-inverted",
+    CameraInverted => "camera-inverted",
+    BothInverted => "both-inverted",
+    RobotWxyz => "robot-wxyz",
+    CameraWxyz => "camera-wxyz",
+    BothWxyz => "both-wxyz",
+    RobotMm => "robot-mm",
+    CameraMm => "camera-mm",
+});
 
 /// The rotation whose `x, y, z, w` fields held `w, x, y, z`: the stored quaternion
 /// (x', y', z', w') = (w, x, y, z), so the meant one is (x, y, z, w) = (y', z', w', x').

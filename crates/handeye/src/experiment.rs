@@ -8,14 +8,12 @@
 //! - [`Experiment::Realtime`]: 50 series × 100 poses; time per calibration and errors, adaptive vs
 //!   optimal (Table I).
 
-use std::fmt;
-use std::str::FromStr;
 use std::time::Instant;
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::metrics::errors_against_truth;
 use crate::motion::{Pairing, Setup, motion_pairs};
 use crate::online::{ErrorSource, OnlineConfig, run_series};
@@ -36,22 +34,6 @@ pub enum Experiment {
 }
 
 impl Experiment {
-    /// All three, in the paper's order.
-    pub const ALL: [Experiment; 3] = [
-        Experiment::Accuracy,
-        Experiment::Adaptability,
-        Experiment::Realtime,
-    ];
-
-    /// The name used on the command line and in file names.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Accuracy => "accuracy",
-            Self::Adaptability => "adaptability",
-            Self::Realtime => "realtime",
-        }
-    }
-
     /// The paper's number of series.
     pub fn default_series(self) -> usize {
         match self {
@@ -88,27 +70,11 @@ impl Experiment {
     }
 }
 
-impl fmt::Display for Experiment {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Experiment {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        Experiment::ALL
-            .into_iter()
-            .find(|e| e.name() == s)
-            .ok_or_else(|| Error::InvalidParameter {
-                name: "experiment",
-                message: format!(
-                    "unknown experiment `{s}`; one of accuracy, adaptability, realtime"
-                ),
-            })
-    }
-}
+crate::named_enum!(Experiment, "experiment", "experiment" {
+    Accuracy => "accuracy",
+    Adaptability => "adaptability",
+    Realtime => "realtime",
+});
 
 /// The paper's online methods.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -124,17 +90,12 @@ pub enum OnlineMethod {
     Optimal,
 }
 
-impl OnlineMethod {
-    /// The name used in tables.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Conventional => "conventional",
-            Self::Fixed => "fixed",
-            Self::Adaptive => "adaptive",
-            Self::Optimal => "optimal",
-        }
-    }
-}
+crate::named_enum!(OnlineMethod, "online method", "method" {
+    Conventional => "conventional",
+    Fixed => "fixed",
+    Adaptive => "adaptive",
+    Optimal => "optimal",
+});
 
 /// Settings of a run; `for_experiment` gives the paper's.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -498,9 +459,9 @@ pub fn run_tracking(config: &TrackingConfig, progress: impl Fn() + Sync) -> Resu
     let every = config.every.max(1);
     let checkpoints: Vec<usize> = (1..=config.poses / every).map(|k| k * every).collect();
     let names = [
-        "accumulate",
-        "adaptive",
-        "conventional",
+        Estimator::Accumulate.name(),
+        OnlineMethod::Adaptive.name(),
+        OnlineMethod::Conventional.name(),
         "batch andreff (consecutive, so far)",
     ];
     // Per series: for each estimator and checkpoint, the errors (None before the first estimate).

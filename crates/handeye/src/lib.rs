@@ -67,6 +67,7 @@ pub mod holdout;
 pub mod io;
 pub mod metrics;
 mod motion;
+pub mod names;
 pub mod online;
 pub mod pose;
 pub mod robot_world;

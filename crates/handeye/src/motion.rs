@@ -26,14 +26,6 @@ impl Setup {
         }
     }
 
-    /// The name used on the command line and in files (`eye-in-hand`, `eye-to-hand`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::EyeInHand => "eye-in-hand",
-            Self::EyeToHand => "eye-to-hand",
-        }
-    }
-
     /// The paper's Q for this setup: `base_from_gripper` itself (eye-in-hand) or its inverse
     /// `gripper_from_base` (eye-to-hand).
     pub fn hand_pose(self, base_from_gripper: &Transform) -> Transform {
@@ -43,6 +35,11 @@ impl Setup {
         }
     }
 }
+
+crate::named_enum!(Setup, "setup", "setup" {
+    EyeInHand => "eye-in-hand",
+    EyeToHand => "eye-to-hand",
+});
 
 /// One synchronised measurement: the robot's pose and the camera's observation of the target.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -109,6 +106,11 @@ impl Pairing {
         }
     }
 }
+
+crate::named_enum!(Pairing, "pairing", "pairs" {
+    Consecutive => "consecutive",
+    All => "all",
+});
 
 /// Builds the motion pairs of a pose sequence.
 ///

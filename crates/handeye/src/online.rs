@@ -11,7 +11,6 @@
 //! constant in size, and serialisable (serde) so that a run can be saved and resumed.
 
 use std::collections::VecDeque;
-use std::str::FromStr;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -83,16 +82,6 @@ pub enum Unit {
 }
 
 impl Unit {
-    /// The name used on the command line and in the Python bindings.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Auto => "auto",
-            Self::Metre => "m",
-            Self::Millimetre => "mm",
-            Self::AsGiven => "as-given",
-        }
-    }
-
     /// Metres or millimetres from the size of a pose's translations (the robot's reach and the
     /// camera's distance to the target), or `None` when the size fits neither.
     pub fn infer(pose: &PosePair) -> Option<Self> {
@@ -121,24 +110,14 @@ impl Unit {
     }
 }
 
-impl FromStr for Unit {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "auto" => Ok(Self::Auto),
-            "m" | "metre" | "meter" | "metres" | "meters" => Ok(Self::Metre),
-            "mm" | "millimetre" | "millimeter" | "millimetres" | "millimeters" => {
-                Ok(Self::Millimetre)
-            }
-            "as-given" => Ok(Self::AsGiven),
-            _ => Err(Error::InvalidParameter {
-                name: "unit",
-                message: format!("unknown unit `{s}`; auto, m or mm"),
-            }),
-        }
-    }
-}
+// The serde names (`metre`, `millimetre`) are older than these and stay, for saved states; they
+// parse as aliases.
+crate::named_enum!(Unit, "unit", "unit" {
+    Auto => "auto",
+    Metre => "m" | "metre" | "meter" | "metres" | "meters",
+    Millimetre => "mm" | "millimetre" | "millimeter" | "millimetres" | "millimeters",
+    AsGiven => "as-given",
+});
 
 /// The estimator behind the selection.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -153,53 +132,15 @@ pub enum Estimator {
     Accumulate,
 }
 
-impl ErrorSource {
-    /// The name used on the command line and in the Python bindings.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Truth => "truth",
-            Self::Residual => "residual",
-        }
-    }
-}
+crate::named_enum!(ErrorSource, "error source", "error_source" {
+    Residual => "residual",
+    Truth => "truth",
+});
 
-impl FromStr for ErrorSource {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        [Self::Residual, Self::Truth]
-            .into_iter()
-            .find(|e| e.name() == s)
-            .ok_or_else(|| Error::InvalidParameter {
-                name: "error_source",
-                message: format!("unknown error source `{s}`; residual or truth"),
-            })
-    }
-}
-
-impl Estimator {
-    /// The name used on the command line and in the Python bindings.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Paper => "paper",
-            Self::Accumulate => "accumulate",
-        }
-    }
-}
-
-impl FromStr for Estimator {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        [Self::Paper, Self::Accumulate]
-            .into_iter()
-            .find(|e| e.name() == s)
-            .ok_or_else(|| Error::InvalidParameter {
-                name: "estimator",
-                message: format!("unknown estimator `{s}`; paper or accumulate"),
-            })
-    }
-}
+crate::named_enum!(Estimator, "estimator", "estimator" {
+    Paper => "paper",
+    Accumulate => "accumulate",
+});
 
 /// rmsR and rmsT of a calibration, from the configured [`ErrorSource`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

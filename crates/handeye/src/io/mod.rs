@@ -18,7 +18,6 @@ mod truth;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Chain, Cursor, Read};
 use std::path::Path;
-use std::str::FromStr;
 
 use crate::error::{Error, Result};
 use crate::motion::PosePair;
@@ -59,26 +58,14 @@ pub enum Format {
     Visp,
 }
 
-impl FromStr for Format {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "auto" => Ok(Self::Auto),
-            "jsonl" | "json" => Ok(Self::Jsonl),
-            "csv" => Ok(Self::Csv),
-            "opencv-yaml" | "yaml" => Ok(Self::OpencvYaml),
-            "moveit" => Ok(Self::Moveit),
-            "visp" => Ok(Self::Visp),
-            _ => Err(Error::InvalidParameter {
-                name: "format",
-                message: format!(
-                    "unknown format `{s}`; one of auto, jsonl, csv, opencv-yaml, moveit, visp"
-                ),
-            }),
-        }
-    }
-}
+crate::named_enum!(Format, "format", "format" {
+    Auto => "auto",
+    Jsonl => "jsonl" | "json",
+    Csv => "csv",
+    OpencvYaml => "opencv-yaml" | "yaml",
+    Moveit => "moveit",
+    Visp => "visp",
+});
 
 /// One pose pair read from a file, with its place.
 #[derive(Debug, Clone, Copy, PartialEq)]

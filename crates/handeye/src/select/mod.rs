@@ -12,9 +12,6 @@ mod conventional;
 mod fixed;
 mod regression;
 
-use std::fmt;
-use std::str::FromStr;
-
 use serde::{Deserialize, Serialize};
 
 pub(crate) use adaptive::AdaptiveSelector;
@@ -39,38 +36,11 @@ pub enum Selection {
     Adaptive,
 }
 
-impl Selection {
-    /// The name used on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::None => "none",
-            Self::Fixed => "fixed",
-            Self::Adaptive => "adaptive",
-        }
-    }
-}
-
-impl FromStr for Selection {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "none" | "conventional" => Ok(Self::None),
-            "fixed" => Ok(Self::Fixed),
-            "adaptive" => Ok(Self::Adaptive),
-            _ => Err(Error::InvalidParameter {
-                name: "selection",
-                message: format!("unknown selection `{s}`; one of none, fixed, adaptive"),
-            }),
-        }
-    }
-}
-
-impl fmt::Display for Selection {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
+crate::named_enum!(Selection, "selection", "selection" {
+    None => "none" | "conventional",
+    Fixed => "fixed",
+    Adaptive => "adaptive",
+});
 
 /// The adaptive method's thresholds (sin α₀, β₀, d₀).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -21,7 +21,6 @@ mod symmetric;
 mod tsai;
 
 use std::fmt;
-use std::str::FromStr;
 
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
@@ -86,50 +85,15 @@ pub enum Method {
     Refine,
 }
 
-impl Method {
-    /// Every method, in the order they are listed to users.
-    pub const ALL: [Method; 7] = [
-        Method::Andreff,
-        Method::AndreffJoint,
-        Method::Tsai,
-        Method::Park,
-        Method::Horaud,
-        Method::Daniilidis,
-        Method::Refine,
-    ];
-
-    /// The name used on the command line and in output.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Andreff => "andreff",
-            Self::AndreffJoint => "andreff-joint",
-            Self::Tsai => "tsai",
-            Self::Park => "park",
-            Self::Horaud => "horaud",
-            Self::Daniilidis => "daniilidis",
-            Self::Refine => "refine",
-        }
-    }
-}
-
-impl fmt::Display for Method {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for Method {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        Method::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| Error::InvalidParameter {
-            name: "method",
-            message: format!(
-                "unknown method `{s}`; one of andreff, andreff-joint, tsai, park, horaud, daniilidis, refine"
-            ),
-        })
-    }
-}
+crate::named_enum!(Method, "method", "method" {
+    Andreff => "andreff",
+    AndreffJoint => "andreff-joint",
+    Tsai => "tsai",
+    Park => "park",
+    Horaud => "horaud",
+    Daniilidis => "daniilidis",
+    Refine => "refine",
+});
 
 /// The result of a batch solve.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

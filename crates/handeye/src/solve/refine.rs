@@ -394,3 +394,7 @@ fn covariance(
     let s2 = 2.0 * lin.cost / (residuals - 6) as f64;
     lin.jtj.try_inverse().map(|inv| inv * s2)
 }
+
+#[cfg(test)]
+#[path = "refine_tests.rs"]
+mod tests;

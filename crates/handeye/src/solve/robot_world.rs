@@ -36,9 +36,6 @@
 //! between consecutive poses): fewer than 3 poses ([`Error::TooFewMotions`] with `need: 2`
 //! motions), rotations all ≈ 0 or all about one axis ([`Error::Degenerate`]).
 
-use std::fmt;
-use std::str::FromStr;
-
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -62,39 +59,11 @@ pub enum RobotWorldMethod {
     Refine,
 }
 
-impl RobotWorldMethod {
-    /// Every method, in the order they are listed to users.
-    pub const ALL: [RobotWorldMethod; 3] = [Self::Shah, Self::Li, Self::Refine];
-
-    /// The name used on the command line and in output.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Shah => "shah",
-            Self::Li => "li",
-            Self::Refine => "refine",
-        }
-    }
-}
-
-impl fmt::Display for RobotWorldMethod {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for RobotWorldMethod {
-    type Err = Error;
-
-    fn from_str(s: &str) -> Result<Self> {
-        Self::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| Error::InvalidParameter {
-                name: "method",
-                message: format!("unknown robot-world method `{s}`; one of shah, li, refine"),
-            })
-    }
-}
+crate::named_enum!(RobotWorldMethod, "robot-world method", "method" {
+    Shah => "shah",
+    Li => "li",
+    Refine => "refine",
+});
 
 /// The result of a robot-world solve.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
