@@ -69,6 +69,7 @@ pub mod metrics;
 mod motion;
 pub mod online;
 pub mod pose;
+mod residual;
 pub mod robot_world;
 pub mod select;
 pub mod sim;
