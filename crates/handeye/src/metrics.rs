@@ -4,12 +4,13 @@
 //! relative translation error `‖t − t̂‖ / ‖t‖`; rmsR = `‖R̂ − R‖_F / 3` (RMS of the 9 entries).
 
 use nalgebra::{Matrix3, Vector3};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::motion::{AllPairs, MotionSource};
 use crate::pose::{Transform, rotation_angle_between, rotation_matrix};
 
-use crate::residual::{MIN_NORM, poses_under};
+use crate::residual::{MIN_NORM, PoseUnderX, poses_under};
 
 /// Errors of an estimate X̂ against the true X.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -228,8 +229,10 @@ fn motion_quality(
 ///   the RMS is computed motion by motion instead, so the verdict and its message are always the
 ///   exact ones; data whose residuals are well below the threshold stay O(n).
 /// - The largest residuals, the range of rotation angles and the axis spread are maxima over the
-///   pairs, with no O(n) form: one pass over the pairs of per-pose matrices (a 3×3 product per
-///   pair, an arc tangent for the axis of each motion), never composing the motions.
+///   pairs, with no O(n) form: two passes over the pairs of per-pose matrices (a 3×3 product per
+///   pair and, in the first, an arc tangent for the angle of each motion), never composing the
+///   motions, in parallel blocks combined in a fixed order (the result does not depend on the
+///   number of threads).
 fn pairs_quality(
     pairs: &AllPairs,
     motions: &(impl MotionSource + ?Sized),
@@ -259,51 +262,38 @@ fn pairs_quality(
     // The pass over the pairs: the widest residual rotation (smallest ⟨W_i, W_j⟩), the largest
     // ‖ΔT‖, the rotation angles of A and the scatter of their axes.
     // ‖ΔR‖²_F = ‖W_i − W_j‖²_F = ‖D_i − D_j‖²_F.
-    let (mut widest_u, mut translation_max) = (0.0_f64, 0.0_f64);
-    let (mut smallest, mut largest) = (f64::INFINITY, 0.0_f64);
-    let mut scatter = Matrix3::zeros();
-    for i in 0..n {
-        let (p_i, g_i) = (&poses[i], &g[i]);
-        for p_j in &poses[i + 1..] {
-            widest_u = widest_u.max((p_i.d - p_j.d).norm_squared());
-            translation_max = translation_max.max((g_i - p_j.e + p_j.d * p_i.o).norm_squared());
-            let (angle, axis) = crate::pose::axis_angle(&(p_j.r.transpose() * p_i.r));
-            smallest = smallest.min(angle);
-            largest = largest.max(angle);
-            if let Some(k) = axis {
-                scatter += k * k.transpose() * (angle * angle);
+    // Rows i of the pairs in fixed blocks, in parallel; the blocks' results are combined in
+    // block order, so that the sums do not depend on the number of threads.
+    let blocks: Vec<usize> = (0..n).step_by(PAIR_ROWS).collect();
+    let rows = |start: usize| start..(start + PAIR_ROWS).min(n);
+    let passes: Vec<PairPass> = blocks
+        .par_iter()
+        .map(|&start| {
+            let mut pass = PairPass::default();
+            for i in rows(start) {
+                pass.add_row(&poses[i], &g[i], &poses[i + 1..]);
             }
-        }
-    }
-    let eigen = scatter.symmetric_eigen();
+            pass
+        })
+        .collect();
+    let pass = passes
+        .into_iter()
+        .fold(PairPass::default(), PairPass::merge);
+    let (widest_u, translation_max) = (pass.widest_u, pass.translation_max);
+    let (smallest, largest) = (pass.smallest, pass.largest);
+    let eigen = pass.scatter.symmetric_eigen();
     let dominant: Vector3<f64> = eigen
         .eigenvectors
         .column(eigen.eigenvalues.imax())
         .into_owned();
-    // The axis of each motion again, from the skew part sin θ · k of R_a without an angle, away
-    // from θ = π where [`crate::pose::axis_angle`] takes it from R_a + R_aᵀ instead.
-    let mut closest = 1.0_f64;
-    for i in 0..n {
-        for p_j in &poses[i + 1..] {
-            let r_a = p_j.r.transpose() * poses[i].r;
-            let cos = ((r_a.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
-            let sin_k = Vector3::new(
-                r_a[(2, 1)] - r_a[(1, 2)],
-                r_a[(0, 2)] - r_a[(2, 0)],
-                r_a[(1, 0)] - r_a[(0, 1)],
-            ) * 0.5;
-            let sin = sin_k.norm();
-            let k = if cos > -0.5 {
-                // θ = atan2(sin, cos) < NO_AXIS_ANGLE, with tan θ = θ to rounding there.
-                (sin >= crate::pose::NO_AXIS_ANGLE * cos).then(|| sin_k / sin)
-            } else {
-                crate::pose::axis_angle(&r_a).1
-            };
-            if let Some(k) = k {
-                closest = closest.min(k.dot(&dominant).abs());
-            }
-        }
-    }
+    let closest = blocks
+        .par_iter()
+        .map(|&start| {
+            rows(start)
+                .map(|i| closest_axis(&poses[i], &poses[i + 1..], &dominant))
+                .fold(1.0_f64, f64::min)
+        })
+        .reduce(|| 1.0, f64::min);
     let spread = closest.min(1.0).acos();
     let angle_of = |u: f64| 2.0 * (u / 8.0).clamp(0.0, 1.0).sqrt().asin();
     let mut rotation_rms = angle_of(chordal_mean).to_degrees();
@@ -328,4 +318,88 @@ fn pairs_quality(
         spread,
         [smallest.to_degrees(), largest.to_degrees()],
     )
+}
+
+/// Rows of pairs per parallel block in [`pairs_quality`].
+const PAIR_ROWS: usize = 16;
+
+/// The maxima and sums of one block of pairs in [`pairs_quality`].
+#[derive(Clone, Copy)]
+struct PairPass {
+    /// Largest ‖ΔR‖²_F.
+    widest_u: f64,
+    /// Largest ‖ΔT‖².
+    translation_max: f64,
+    /// Smallest and largest rotation angle of A, radians.
+    smallest: f64,
+    largest: f64,
+    /// Σ θ² k kᵀ of the rotations of A.
+    scatter: Matrix3<f64>,
+}
+
+impl Default for PairPass {
+    fn default() -> Self {
+        Self {
+            widest_u: 0.0,
+            translation_max: 0.0,
+            smallest: f64::INFINITY,
+            largest: 0.0,
+            scatter: Matrix3::zeros(),
+        }
+    }
+}
+
+impl PairPass {
+    /// The pairs of pose i (with g_i) and every later pose.
+    fn add_row(&mut self, p_i: &PoseUnderX, g_i: &Vector3<f64>, later: &[PoseUnderX]) {
+        for p_j in later {
+            self.widest_u = self.widest_u.max((p_i.d - p_j.d).norm_squared());
+            let dt = g_i - p_j.e + p_j.d * p_i.o;
+            self.translation_max = self.translation_max.max(dt.norm_squared());
+            let (angle, axis) = crate::pose::axis_angle(&(p_j.r.transpose() * p_i.r));
+            self.smallest = self.smallest.min(angle);
+            self.largest = self.largest.max(angle);
+            if let Some(k) = axis {
+                self.scatter += k * k.transpose() * (angle * angle);
+            }
+        }
+    }
+
+    /// Two blocks' results together.
+    fn merge(self, other: Self) -> Self {
+        Self {
+            widest_u: self.widest_u.max(other.widest_u),
+            translation_max: self.translation_max.max(other.translation_max),
+            smallest: self.smallest.min(other.smallest),
+            largest: self.largest.max(other.largest),
+            scatter: self.scatter + other.scatter,
+        }
+    }
+}
+
+/// The smallest |k · dominant| over the motions from the later poses to pose i (1 when none has
+/// an axis). The axis comes from the skew part sin θ · k of R_a without an angle, away from
+/// θ = π where [`crate::pose::axis_angle`] takes it from R_a + R_aᵀ instead.
+fn closest_axis(p_i: &PoseUnderX, later: &[PoseUnderX], dominant: &Vector3<f64>) -> f64 {
+    let mut closest = 1.0_f64;
+    for p_j in later {
+        let r_a = p_j.r.transpose() * p_i.r;
+        let cos = ((r_a.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
+        let sin_k = Vector3::new(
+            r_a[(2, 1)] - r_a[(1, 2)],
+            r_a[(0, 2)] - r_a[(2, 0)],
+            r_a[(1, 0)] - r_a[(0, 1)],
+        ) * 0.5;
+        let sin = sin_k.norm();
+        let k = if cos > -0.5 {
+            // θ = atan2(sin, cos) < NO_AXIS_ANGLE, with tan θ = θ to rounding there.
+            (sin >= crate::pose::NO_AXIS_ANGLE * cos).then(|| sin_k / sin)
+        } else {
+            crate::pose::axis_angle(&r_a).1
+        };
+        if let Some(k) = k {
+            closest = closest.min(k.dot(dominant).abs());
+        }
+    }
+    closest
 }
