@@ -20,15 +20,13 @@
 //! Σ‖t_Yi − t_Y‖², in closed form: the data's own noise level under X, in O(1)
 //! ([`PoseAccumulator::residual_scatter`]). [`crate::tracking`] judges each new pose by it.
 
-use nalgebra::{Matrix3, SMatrix, Vector3};
+use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 
-use crate::motion::{PosePair, Setup};
+use crate::motion::{Pairing, PosePair, Setup};
 use crate::pose::{Transform, rotation_matrix, transform_from_parts};
+use crate::residual::{Matrix9, Matrix13, Quadratic};
 use crate::solve::RotationSystem;
-
-/// A 9×9 matrix.
-type Matrix9 = SMatrix<f64, 9, 9>;
 /// A 3×9 matrix.
 type Matrix39 = SMatrix<f64, 3, 9>;
 
@@ -279,28 +277,160 @@ impl PoseAccumulator {
         if self.n < 3 {
             return None;
         }
-        let n2 = (self.n * self.n) as f64;
-        let rotation = RotationSystem::from_normal(
-            Matrix9::identity() * n2 - self.g.transpose() * self.g,
-            self.n * (self.n - 1) / 2,
-        );
-        let solution = rotation.solve();
+        let solution = self.rotation_system().solve();
         if solution.conditioning.is_nan()
             || solution.conditioning <= crate::solve::REFUSE_CONDITIONING
         {
             return None;
         }
-        let r = solution.r_x;
-        let vec_r = SMatrix::<f64, 9, 1>::from_fn(|k, _| r[(k / 3, k % 3)]);
-        let normal = Matrix3::identity() * n2 - self.u.transpose() * self.u;
-        let d = self.u.transpose() * self.p - self.w * self.n as f64;
-        let t = normal.lu().solve(&(d - self.e * vec_r))?;
-        t.iter().all(|v| v.is_finite()).then(|| Estimate {
-            x: transform_from_parts(&r, &t),
+        let t = self.translation(&solution.r_x)?;
+        Some(Estimate {
+            x: transform_from_parts(&solution.r_x, &t),
             poses: self.n,
             conditioning: solution.conditioning,
         })
     }
+
+    /// Andreff's rotation system over all pairs: the normal matrix `n² I − SᵀS`.
+    pub(crate) fn rotation_system(&self) -> RotationSystem {
+        let n2 = (self.n * self.n) as f64;
+        RotationSystem::from_normal(
+            Matrix9::identity() * n2 - self.g.transpose() * self.g,
+            self.n * self.n.saturating_sub(1) / 2,
+        )
+    }
+
+    /// The normal matrix `n² I − UᵀU` of Andreff's translation system over all pairs.
+    pub(crate) fn translation_normal(&self) -> Matrix3<f64> {
+        Matrix3::identity() * (self.n * self.n) as f64 - self.u.transpose() * self.u
+    }
+
+    /// Andreff's translation over all pairs given R_x: `t = (n² I − UᵀU)⁻¹ (d − E vec R_x)`.
+    /// `None` when the system is singular.
+    pub(crate) fn translation(&self, r_x: &Matrix3<f64>) -> Option<Vector3<f64>> {
+        let vec_r = SMatrix::<f64, 9, 1>::from_fn(|k, _| r_x[(k / 3, k % 3)]);
+        let normal = self.translation_normal();
+        let d = self.u.transpose() * self.p - self.w * self.n as f64;
+        let t = normal.lu().solve(&(d - self.e * vec_r))?;
+        t.iter().all(|v| v.is_finite()).then_some(t)
+    }
+}
+
+/// The sums over every pair i < j of a pose sequence that the batch solvers and the quality
+/// report use, in O(n) time and memory: Andreff's normal equations (a [`PoseAccumulator`]), the
+/// quadratic form of the residuals ([`Quadratic`]) and the lengths of the motions.
+///
+/// The poses are first moved to a base frame at the mean hand position and a target frame at
+/// the mean camera position: the motions (A_ij = Q_j⁻¹ Q_i, B_ij = C_j C_i⁻¹) do not change, and
+/// the sums, which are differences of large terms, lose fewer digits.
+///
+/// The ΔT form: with Q_k = (R_k, p_k), C_k = `camera_from_target` = (S_k, c_k) and
+/// o_k = S_kᵀ c_k, one finds `R_j ΔT_ij = F_i z − H_j z + R_j R_x S_j o_i`, where
+/// `F_k z = R_k t_x + p_k` and `H_k z = R_k R_x c_k + R_k t_x + p_k` (the translation of
+/// Q_k X C_k). So `L_ij = F_i + Σ_m a_i[m] B_j^m` with a_i = (1, o_i), B^0 = −H and
+/// B^{m+1} z = R_j R_x (S_j e_m), and Σ_{i<j} L_ijᵀ L_ij needs only the prefix sums
+/// Σ_{i<j} F_iᵀF_i, Σ_{i<j} a_i[m] F_iᵀ and Σ_{i<j} a_i a_iᵀ.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct PairSums {
+    /// Andreff's all-pairs normal equations.
+    pub(crate) poses: PoseAccumulator,
+    /// Σ‖ΔR‖² and Σ‖ΔT‖² over all pairs as a quadratic form in [vec R_x; t_x; 1].
+    pub(crate) quadratic: Quadratic,
+    /// Σ_{i<j} ‖t_a‖² + ‖t_b‖².
+    pub(crate) length_squares: f64,
+}
+
+/// A 3×13 matrix.
+type Matrix313 = SMatrix<f64, 3, 13>;
+
+/// One pose as (R_k, p_k) of Q_k and (S_k, c_k) of C_k = `camera_from_target`.
+type PoseParts = (Matrix3<f64>, Vector3<f64>, Matrix3<f64>, Vector3<f64>);
+
+impl PairSums {
+    /// The sums of the hand poses Q_k and camera poses C_k = `camera_from_target`.
+    pub(crate) fn new(hand: &[Transform], camera: &[Transform]) -> Self {
+        let n = hand.len().max(1) as f64;
+        let p_mean = hand
+            .iter()
+            .map(|q| q.translation.vector)
+            .sum::<Vector3<f64>>()
+            / n;
+        let o_mean = camera
+            .iter()
+            .map(|c| c.rotation.inverse() * c.translation.vector)
+            .sum::<Vector3<f64>>()
+            / n;
+        let mut poses = PoseAccumulator::new(Setup::EyeInHand);
+        let mut spread = 0.0;
+        let centred: Vec<PoseParts> = hand
+            .iter()
+            .zip(camera)
+            .map(|(q, c)| {
+                let (r, s) = (rotation_matrix(q), rotation_matrix(c));
+                let p = q.translation.vector - p_mean;
+                // The target frame moved by −ō: c ← c − S ō, so that o = Sᵀc ← o − ō.
+                let cv = c.translation.vector - s * o_mean;
+                spread += p.norm_squared() + (s.transpose() * cv).norm_squared();
+                poses.add(&PosePair {
+                    base_from_gripper: transform_from_parts(&r, &p),
+                    camera_from_target: transform_from_parts(&s, &cv),
+                });
+                (r, p, s, cv)
+            })
+            .collect();
+        let rotation = *poses.rotation_system().normal_matrix();
+        Self {
+            poses,
+            quadratic: Quadratic {
+                rotation,
+                translation: translation_form(&centred),
+                motions: Pairing::All.motion_count(hand.len()),
+            },
+            length_squares: n * spread,
+        }
+    }
+}
+
+/// M_T = Σ_{i<j} L_ijᵀ L_ij from the prefix sums over the poses (see [`PairSums`]); each pose
+/// given as (R_k, p_k, S_k, c_k).
+fn translation_form(poses: &[PoseParts]) -> Matrix13 {
+    let mut total = Matrix13::zeros();
+    let mut ff = Matrix13::zeros();
+    let mut af = [SMatrix::<f64, 13, 3>::zeros(); 4];
+    let mut aa = Matrix4::<f64>::zeros();
+    for (r, p, s, c) in poses {
+        // B^0 = −H = −[R ⊗ cᵀ, R, p]; B^{m+1} = [R ⊗ (S e_m)ᵀ, 0, 0].
+        let mut b = [Matrix313::zeros(); 4];
+        b[0].fixed_view_mut::<3, 9>(0, 0)
+            .copy_from(&-kron_row(r, c));
+        b[0].fixed_view_mut::<3, 3>(0, 9).copy_from(&-r);
+        b[0].fixed_view_mut::<3, 1>(0, 12).copy_from(&-p);
+        for m in 0..3 {
+            let column: Vector3<f64> = s.column(m).into_owned();
+            b[m + 1]
+                .fixed_view_mut::<3, 9>(0, 0)
+                .copy_from(&kron_row(r, &column));
+        }
+        total += ff;
+        for m in 0..4 {
+            let cross = af[m] * b[m];
+            total += cross + cross.transpose();
+            let combined = (0..4).fold(Matrix313::zeros(), |sum, l| sum + b[l] * aa[(m, l)]);
+            total += b[m].transpose() * combined;
+        }
+        // F = [0, R, p], a = (1, Sᵀc).
+        let mut f = Matrix313::zeros();
+        f.fixed_view_mut::<3, 3>(0, 9).copy_from(r);
+        f.fixed_view_mut::<3, 1>(0, 12).copy_from(p);
+        let o = s.transpose() * c;
+        let a = Vector4::new(1.0, o.x, o.y, o.z);
+        ff += f.transpose() * f;
+        for m in 0..4 {
+            af[m] += f.transpose() * a[m];
+        }
+        aa += a * a.transpose();
+    }
+    (total + total.transpose()) * 0.5
 }
 
 /// Running sums from which Shah's robot-world solution follows, in O(1) time and memory per pose:

@@ -70,6 +70,7 @@ mod motion;
 pub mod names;
 pub mod online;
 pub mod pose;
+mod residual;
 pub mod robot_world;
 pub mod select;
 pub mod sim;

@@ -142,14 +142,9 @@ crate::named_enum!(Estimator, "estimator", "estimator" {
     Accumulate => "accumulate",
 });
 
-/// rmsR and rmsT of a calibration, from the configured [`ErrorSource`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Rms {
-    /// rmsR.
-    pub rms_r: f64,
-    /// rmsT.
-    pub rms_t: f64,
-}
+/// rmsR and rmsT of a calibration, from the configured [`ErrorSource`]: against the truth, or
+/// the residual form ([`crate::metrics::ResidualRms`], the same type).
+pub type Rms = crate::metrics::ResidualRms;
 
 /// The optimal method's estimate at one calibration (SPEC sec. 4.5).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -461,13 +456,7 @@ impl OnlineCalibrator {
                     rms_t: e.rms_t(),
                 }
             }
-            _ => {
-                let r = residual_rms(pair, x);
-                Rms {
-                    rms_r: r.rms_r,
-                    rms_t: r.rms_t,
-                }
-            }
+            _ => residual_rms(pair, x),
         }
     }
 

@@ -37,6 +37,8 @@ pub use robot_world::{
     refine_robot_world_from, robot_world, shah, target_frame,
 };
 pub use rotation_system::{RotationSolution, RotationSystem};
+#[cfg(test)]
+pub(crate) use scale::Scaled;
 pub use tsai::{TsaiOptions, tsai, tsai_with};
 
 use crate::error::{Degeneracy, Error, Result};
@@ -133,22 +135,25 @@ pub fn check_motions(motions: &(impl MotionSource + ?Sized)) -> Result<MotionChe
             need: 2,
         });
     }
-    let mut system = RotationSystem::default();
-    // The largest rotation is the one with the smallest trace (θ = acos((tr − 1) / 2)): one
-    // comparison per motion, and one angle computed at the end.
-    let mut widest = Matrix3::identity();
-    motions.for_each_motion(|m| {
-        let r_a = rotation_matrix(&m.a);
-        system.add(&r_a, &rotation_matrix(&m.b));
-        if r_a.trace() < widest.trace() {
-            widest = r_a;
+    let (
+        RotationSolution {
+            r_x: andreff_rotation,
+            conditioning,
+        },
+        largest,
+    ) = match motions.all_pairs() {
+        Some(pairs) => (
+            pairs.sums().poses.rotation_system().solve_refined(motions),
+            largest_rotation_of_pairs(pairs, motions),
+        ),
+        None => {
+            let mut system = RotationSystem::default();
+            motions.for_each_motion(|m| {
+                system.add(&rotation_matrix(&m.a), &rotation_matrix(&m.b));
+            });
+            (system.solve_refined(motions), largest_rotation(motions))
         }
-    });
-    let largest = crate::pose::axis_angle(&widest).0;
-    let RotationSolution {
-        r_x: andreff_rotation,
-        conditioning,
-    } = system.solve_refined(motions);
+    };
     if largest < REFUSE_ANGLE {
         return Err(Error::Degenerate {
             reason: Degeneracy::SmallRotations {
@@ -159,7 +164,7 @@ pub fn check_motions(motions: &(impl MotionSource + ?Sized)) -> Result<MotionChe
     }
     if conditioning < REFUSE_CONDITIONING {
         let reason = Degeneracy::ParallelAxes {
-            largest_axis_angle_deg: 2.0 * crate::metrics::axis_spread(motions).to_degrees(),
+            largest_axis_angle_deg: 2.0 * crate::motion::axis_spread(motions).to_degrees(),
         };
         return Err(Error::Degenerate {
             reason,
@@ -180,6 +185,48 @@ pub fn check_motions(motions: &(impl MotionSource + ?Sized)) -> Result<MotionChe
         andreff_rotation,
         warnings,
     })
+}
+
+/// The largest rotation angle of the motions, radians.
+fn largest_rotation(motions: &(impl MotionSource + ?Sized)) -> f64 {
+    // The largest rotation is the one with the smallest trace (θ = acos((tr − 1) / 2)): one
+    // comparison per motion, and one angle computed at the end.
+    let mut widest = Matrix3::identity();
+    motions.for_each_motion(|m| {
+        let r_a = rotation_matrix(&m.a);
+        if r_a.trace() < widest.trace() {
+            widest = r_a;
+        }
+    });
+    crate::pose::axis_angle(&widest).0
+}
+
+/// [`largest_rotation`] over all pairs of poses, exactly where it decides anything, in O(n) when
+/// the rotations are not small. The motions from pose 0 give α = max_k ∠(R_0, R_k), attained by a
+/// pair; every pair's angle is at most 2α (the triangle inequality of the rotation angle). So
+/// when α ≥ [`WARN_ANGLE`], α is returned: the largest rotation is at least that, and neither the
+/// refusal nor the warning applies. Below, the motions are gone through.
+fn largest_rotation_of_pairs(
+    pairs: &crate::AllPairs,
+    motions: &(impl MotionSource + ?Sized),
+) -> f64 {
+    if pairs.poses() < 2 {
+        return 0.0;
+    }
+    let r_0 = rotation_matrix(pairs.pose(0).0);
+    let mut widest = Matrix3::identity();
+    for k in 1..pairs.poses() {
+        let r_a = rotation_matrix(pairs.pose(k).0).transpose() * r_0;
+        if r_a.trace() < widest.trace() {
+            widest = r_a;
+        }
+    }
+    let alpha = crate::pose::axis_angle(&widest).0;
+    if alpha >= WARN_ANGLE {
+        alpha
+    } else {
+        largest_rotation(motions)
+    }
 }
 
 /// Solves A X = X B with the given method.
@@ -209,13 +256,27 @@ pub fn solve(method: Method, motions: &(impl MotionSource + ?Sized)) -> Result<C
 }
 
 /// Least-squares translation of X given its rotation: the stacked
-/// (I − R_a) t_x = t_a − R_x t_b over all motions, solved through its 3×3 normal equations.
+/// (I − R_a) t_x = t_a − R_x t_b over all motions, solved through its 3×3 normal equations
+/// (over all pairs of poses, accumulated in O(n): [`crate::accumulate::PoseAccumulator`]).
 ///
 /// Returns `None` when the 3×3 system is singular (all axes parallel).
 pub fn translation_least_squares(
     motions: &(impl MotionSource + ?Sized),
     r_x: &Matrix3<f64>,
 ) -> Option<Vector3<f64>> {
+    // Over all pairs the normal equations come from the per-pose sums.
+    // One step of iterative refinement with the exact per-pose gradient, as `least_squares_3`
+    // does with the motions' residuals.
+    if let Some(pairs) = motions.all_pairs() {
+        let sums = &pairs.sums().poses;
+        let lu = sums.translation_normal().lu();
+        let mut t = sums.translation(r_x)?;
+        for _ in 0..2 {
+            let gradient = crate::residual::pairs_translation_gradient(pairs, r_x, &t);
+            t -= lu.solve(&gradient)?;
+        }
+        return t.iter().all(|v| v.is_finite()).then_some(t);
+    }
     // Rows C_k = I − R_a and right-hand sides d_k = t_a − R_x t_b.
     least_squares::least_squares_3(motions, |m| {
         (

@@ -1,18 +1,14 @@
 //! Nonlinear refinement of X: Levenberg–Marquardt on the A X − X B residuals.
 
-use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
+use nalgebra::{Matrix6, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
-use crate::motion::{MotionPair, MotionSource};
-use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts};
+use crate::motion::MotionSource;
+use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, transform_from_parts};
+use crate::residual::{PerMotion, Residuals, covariance};
 use crate::solve::scale::{Scaled, length_scale};
 use crate::solve::{Calibration, Method, MotionCheck, andreff, check_motions};
-
-/// A start RMS below this counts as this, so that exact data does not divide by zero (SPEC sec. 3).
-/// For the ΔT block it is in units of the data's length scale (see `run`), not of the input: 1e-12
-/// of a kilometre and 1e-12 of a micrometre are the same floor relative to the data.
-const MIN_BLOCK_RMS: f64 = 1e-12;
 
 /// Levenberg–Marquardt settings; `Default` gives the values documented on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -120,140 +116,17 @@ pub fn refine_from(
     Ok(run(motions, start, check, options))
 }
 
-/// The problem's current state: X and the weights of the two residual blocks.
-struct Problem<'a, M: MotionSource + ?Sized> {
-    motions: &'a M,
-    /// 1 / (start RMS of ΔR entries), 1 / (start RMS of ΔT entries).
-    weights: [f64; 2],
-}
-
-/// Normal equations at one iterate.
-struct Linearisation {
-    jtj: Matrix6<f64>,
-    jtr: Vector6<f64>,
-    cost: f64,
-}
-
-impl<M: MotionSource + ?Sized> Problem<'_, M> {
-    /// Weighted cost ½Σr² at (R, t).
-    fn cost(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>) -> f64 {
-        let mut sum = 0.0;
-        self.motions.for_each_motion(|m| {
-            let (dr, dt) = residual(m, r_x, t_x);
-            sum += (self.weights[0] * self.weights[0]) * dr.norm_squared()
-                + (self.weights[1] * self.weights[1]) * dt.norm_squared();
-        });
-        0.5 * sum
-    }
-
-    /// JᵀJ, Jᵀr and the cost at (R, t), for the increment R exp([δ]×), t + Δt.
-    fn linearise(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>) -> Linearisation {
-        let mut jtj = Matrix6::zeros();
-        let mut jtr = Vector6::zeros();
-        let mut cost = 0.0;
-        self.motions.for_each_motion(|m| {
-            let (dr, dt) = residual(m, r_x, t_x);
-            let (j, r) = jacobian(m, r_x, &dr, &dt, self.weights);
-            jtj += j.transpose() * j;
-            jtr += j.transpose() * r;
-            cost += 0.5 * r.norm_squared();
-        });
-        Linearisation { jtj, jtr, cost }
-    }
-}
-
-/// ΔR and ΔT of one motion at (R_x, t_x).
-fn residual(
-    m: &MotionPair,
-    r_x: &Matrix3<f64>,
-    t_x: &Vector3<f64>,
-) -> (Matrix3<f64>, Vector3<f64>) {
-    let r_a = rotation_matrix(&m.a);
-    let r_b = rotation_matrix(&m.b);
-    let dr = r_a * r_x - r_x * r_b;
-    let dt = r_a * t_x + m.a.translation.vector - r_x * m.b.translation.vector - t_x;
-    (dr, dt)
-}
-
-/// The 12×6 weighted Jacobian of one motion's residuals and the weighted residual vector.
-///
-/// With R = `R_x exp([δ]×)`: ∂ΔR/∂δ_m = R_a R_x [e_m]× − R_x [e_m]× R_b and
-/// ∂ΔT/∂δ_m = −R_x [e_m]× t_b; ∂ΔT/∂t = R_a − I.
-fn jacobian(
-    m: &MotionPair,
-    r_x: &Matrix3<f64>,
-    dr: &Matrix3<f64>,
-    dt: &Vector3<f64>,
-    weights: [f64; 2],
-) -> (SMatrix<f64, 12, 6>, SMatrix<f64, 12, 1>) {
-    let r_a = rotation_matrix(&m.a);
-    let r_b = rotation_matrix(&m.b);
-    let t_b = m.b.translation.vector;
-    let ar = r_a * r_x;
-    let mut j = SMatrix::<f64, 12, 6>::zeros();
-    let mut r = SMatrix::<f64, 12, 1>::zeros();
-    for c in 0..3 {
-        let e = skew(&Vector3::ith(c, 1.0));
-        let d_r = (ar * e - r_x * e * r_b) * weights[0];
-        let d_t = -(r_x * e * t_b) * weights[1];
-        for row in 0..3 {
-            for col in 0..3 {
-                // Row-major order of the 9 entries of ΔR.
-                j[(3 * row + col, c)] = d_r[(row, col)];
-            }
-            j[(9 + row, c)] = d_t[row];
-        }
-    }
-    let dta = (r_a - Matrix3::identity()) * weights[1];
-    j.fixed_view_mut::<3, 3>(9, 3).copy_from(&dta);
-    for row in 0..3 {
-        for col in 0..3 {
-            r[3 * row + col] = dr[(row, col)] * weights[0];
-        }
-        r[9 + row] = dt[row] * weights[1];
-    }
-    (j, r)
-}
-
-/// Block weights from the start: 1 / RMS of the ΔR entries and 1 / RMS of the ΔT entries.
-fn block_scales(
+/// The motions' residuals as the refinement sees them, lengths in units of `unit`: over all
+/// pairs of a pose sequence the quadratic form of the per-pose sums
+/// ([`crate::residual::Quadratic`], O(1) per evaluation), else motion by motion.
+fn with_residuals<T>(
     motions: &(impl MotionSource + ?Sized),
-    r_x: &Matrix3<f64>,
-    t_x: &Vector3<f64>,
-) -> [f64; 2] {
-    let mut rms = BlockRms::default();
-    motions.for_each_motion(|m| {
-        let (dr, dt) = residual(m, r_x, t_x);
-        rms.add(&dr, &dt);
-    });
-    rms.scales()
-}
-
-/// The RMS of the rotation-matrix entries and of the translation entries of residuals, each
-/// floored at [`MIN_BLOCK_RMS`]: the block scales that keep either block from dominating (SPEC
-/// sec. 3), for hand–eye motions and robot-world poses alike.
-#[derive(Debug, Default)]
-pub(crate) struct BlockRms {
-    rotation: f64,
-    translation: f64,
-    count: usize,
-}
-
-impl BlockRms {
-    /// Adds one residual: ΔR (3×3) and ΔT.
-    pub(crate) fn add(&mut self, dr: &Matrix3<f64>, dt: &Vector3<f64>) {
-        self.rotation += dr.norm_squared();
-        self.translation += dt.norm_squared();
-        self.count += 1;
-    }
-
-    /// [rotation, translation] RMS per entry.
-    pub(crate) fn scales(&self) -> [f64; 2] {
-        let n = self.count.max(1) as f64;
-        [
-            (self.rotation / (9.0 * n)).sqrt().max(MIN_BLOCK_RMS),
-            (self.translation / (3.0 * n)).sqrt().max(MIN_BLOCK_RMS),
-        ]
+    unit: f64,
+    f: impl FnOnce(&dyn Residuals) -> T,
+) -> T {
+    match motions.all_pairs() {
+        Some(pairs) => f(&pairs.sums().quadratic.in_unit(unit)),
+        None => f(&PerMotion(&Scaled::new(motions, unit))),
     }
 }
 
@@ -270,16 +143,25 @@ fn run(
     // they would stop the solve early, or never, depending on whether the data is in kilometres
     // or micrometres.
     let unit = length_scale(motions);
-    let motions = &Scaled::new(motions, unit);
+    with_residuals(motions, unit, |residuals| {
+        levenberg_marquardt(residuals, unit, start, check, options)
+    })
+}
+
+/// [`run`] on the residuals of the motions in units of `unit`.
+fn levenberg_marquardt(
+    residuals: &dyn Residuals,
+    unit: f64,
+    start: &Transform,
+    check: MotionCheck,
+    options: &RefineOptions,
+) -> Refinement {
     let mut r_x = rotation_matrix(start);
     let mut t_x = start.translation.vector / unit;
-    let scales = block_scales(motions, &r_x, &t_x);
-    let problem = Problem {
-        motions,
-        weights: [1.0 / scales[0], 1.0 / scales[1]],
-    };
+    let scales = residuals.block_rms(&r_x, &t_x).scales();
+    let weights = [1.0 / scales[0], 1.0 / scales[1]];
 
-    let mut lin = problem.linearise(&r_x, &t_x);
+    let mut lin = residuals.linearise(&r_x, &t_x, weights);
     let initial_cost = lin.cost;
     let mut damping = options.initial_damping * lin.jtj.diagonal().max();
     let mut growth = 2.0;
@@ -303,16 +185,16 @@ fn run(
         let rotation_step: Vector3<f64> = step.fixed_rows::<3>(0).into_owned();
         let new_r = proj_so3(&(r_x * exp_so3(&rotation_step)));
         let new_t = t_x + step.fixed_rows::<3>(3);
-        let new_cost = problem.cost(&new_r, &new_t);
+        let drop = -residuals.cost_change((&r_x, &t_x), (&new_r, &new_t), lin.cost, weights);
         // Predicted reduction of the linear model: −δᵀJᵀr − ½δᵀJᵀJδ = ½δᵀ(λδ − Jᵀr).
         let predicted = 0.5 * step.dot(&(step * damping - lin.jtr));
-        let gain = (lin.cost - new_cost) / predicted.max(f64::MIN_POSITIVE);
-        if new_cost < lin.cost && gain > 0.0 {
-            let relative_drop = (lin.cost - new_cost) / lin.cost.max(f64::MIN_POSITIVE);
+        let gain = drop / predicted.max(f64::MIN_POSITIVE);
+        if drop > 0.0 && gain > 0.0 {
+            let relative_drop = drop / lin.cost.max(f64::MIN_POSITIVE);
             let step_size = step.norm() / (t_x.norm() + 1.0);
             r_x = new_r;
             t_x = new_t;
-            lin = problem.linearise(&r_x, &t_x);
+            lin = residuals.linearise(&r_x, &t_x, weights);
             damping *= (1.0_f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
             growth = 2.0;
             if step_size <= options.step_tolerance {
@@ -332,12 +214,12 @@ fn run(
             }
         }
     }
-    let covariance = covariance_scaled(motions, &r_x, &t_x, unit);
+    let covariance = in_input_unit(covariance(residuals, &r_x, &t_x), unit);
     Refinement {
         calibration: Calibration {
             x: transform_from_parts(&r_x, &(t_x * unit)),
             method: Method::Refine,
-            motions: motions.count(),
+            motions: residuals.count(),
             conditioning: check.conditioning,
             warnings: check.warnings,
         },
@@ -351,48 +233,22 @@ fn run(
 }
 
 /// Covariance of X's parameters (rotation increment of `R_x exp([δ]×)` in radians, then t_x) at a
-/// given X, as [`Refinement::covariance`]: the uncertainty of a solution from its residuals.
+/// given X, as [`Refinement::covariance`]: the uncertainty of a solution from its residuals
+/// (Gauss–Newton, each residual block's noise estimated from its own residuals).
 pub fn covariance_at(
     motions: &(impl MotionSource + ?Sized),
     x: &Transform,
 ) -> Option<Matrix6<f64>> {
     let unit = length_scale(motions);
     let t_x = x.translation.vector / unit;
-    covariance_scaled(&Scaled::new(motions, unit), &rotation_matrix(x), &t_x, unit)
+    let c = with_residuals(motions, unit, |r| covariance(r, &rotation_matrix(x), &t_x));
+    in_input_unit(c, unit)
 }
 
-/// [`covariance`] of motions and a t_x given in units of `unit`, back in the input's unit.
-fn covariance_scaled(
-    motions: &(impl MotionSource + ?Sized),
-    r_x: &Matrix3<f64>,
-    t_x: &Vector3<f64>,
-    unit: f64,
-) -> Option<Matrix6<f64>> {
-    let units = Vector6::new(1.0, 1.0, 1.0, unit, unit, unit);
-    covariance(motions, r_x, t_x)
-        .map(|c| Matrix6::from_diagonal(&units) * c * Matrix6::from_diagonal(&units))
-}
-
-/// Covariance of (δ, t): `s² (JᵀJ)⁻¹` of the problem weighted by the final block RMS values, with
-/// `s² = Σr² / (N − 6)` for N residuals (Gauss–Newton with each block's noise estimated from its
-/// own residuals).
-fn covariance(
-    motions: &(impl MotionSource + ?Sized),
-    r_x: &Matrix3<f64>,
-    t_x: &Vector3<f64>,
-) -> Option<Matrix6<f64>> {
-    let residuals = 12 * motions.count();
-    if residuals <= 6 {
-        return None;
-    }
-    let scales = block_scales(motions, r_x, t_x);
-    let weighted = Problem {
-        motions,
-        weights: [1.0 / scales[0], 1.0 / scales[1]],
-    };
-    let lin = weighted.linearise(r_x, t_x);
-    let s2 = 2.0 * lin.cost / (residuals - 6) as f64;
-    lin.jtj.try_inverse().map(|inv| inv * s2)
+/// A covariance of (δ, t) with t in units of `unit`, in the input's unit.
+fn in_input_unit(c: Option<Matrix6<f64>>, unit: f64) -> Option<Matrix6<f64>> {
+    let units = Matrix6::from_diagonal(&Vector6::new(1.0, 1.0, 1.0, unit, unit, unit));
+    c.map(|c| units * c * units)
 }
 
 #[cfg(test)]

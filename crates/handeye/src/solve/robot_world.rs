@@ -42,7 +42,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Degeneracy, Error, Result};
 use crate::motion::{Pairing, PosePair, Setup, motion_pairs};
 use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts};
-use crate::solve::refine::BlockRms;
+use crate::residual::BlockRms;
 use crate::solve::scale::weighting_from_scale;
 use crate::solve::{RefineOptions, Termination, check_motions, singular};
 use crate::warning::Warning;

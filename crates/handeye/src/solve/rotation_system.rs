@@ -143,13 +143,20 @@ fn stacked_gradient(
     v: &SVector<f64, 9>,
 ) -> SVector<f64, 9> {
     let v_m = Matrix3::new(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
-    let mut g = Matrix3::zeros();
-    motions.for_each_motion(|m| {
-        let r_a = rotation_matrix(&m.a);
-        let r_b = rotation_matrix(&m.b);
-        let w = v_m - r_a * v_m * r_b.transpose();
-        g += w - r_a.transpose() * w * r_b;
-    });
+    let g = match motions.all_pairs() {
+        // Over all pairs of poses, from per-pose deviations in O(n).
+        Some(pairs) => crate::residual::pairs_rotation_gradient(pairs, &v_m),
+        None => {
+            let mut g = Matrix3::zeros();
+            motions.for_each_motion(|m| {
+                let r_a = rotation_matrix(&m.a);
+                let r_b = rotation_matrix(&m.b);
+                let w = v_m - r_a * v_m * r_b.transpose();
+                g += w - r_a.transpose() * w * r_b;
+            });
+            g
+        }
+    };
     SVector::<f64, 9>::from_row_slice(&[
         g[(0, 0)],
         g[(0, 1)],

@@ -17,11 +17,22 @@ use crate::pose::transform_from_parts;
 /// A power of two, so that dividing by it is exact: scaling every length of the input by 2^k
 /// scales X's translation by 2^k and changes nothing else, bit for bit; any other factor changes
 /// the result only by the rounding of the input.
+///
+/// Over all pairs of a pose sequence the sum of squares comes from the per-pose sums
+/// ([`crate::accumulate::PairSums`]) in O(n); it equals the motion-by-motion sum up to rounding,
+/// and the power of two then differs only for an RMS within rounding of a half-way point.
 pub(crate) fn length_scale(motions: &(impl MotionSource + ?Sized)) -> f64 {
-    let mut sum = 0.0;
-    motions.for_each_motion(|m| {
-        sum += m.a.translation.vector.norm_squared() + m.b.translation.vector.norm_squared();
-    });
+    let sum = match motions.all_pairs() {
+        Some(pairs) => pairs.sums().length_squares,
+        None => {
+            let mut sum = 0.0;
+            motions.for_each_motion(|m| {
+                sum +=
+                    m.a.translation.vector.norm_squared() + m.b.translation.vector.norm_squared();
+            });
+            sum
+        }
+    };
     let rms = (sum / (2 * motions.count().max(1)) as f64).sqrt();
     if !(rms.is_finite() && rms > 0.0) {
         return 1.0;
