@@ -251,6 +251,3 @@ fn in_input_unit(c: Option<Matrix6<f64>>, unit: f64) -> Option<Matrix6<f64>> {
     c.map(|c| units * c * units)
 }
 
-#[cfg(test)]
-#[path = "refine_tests.rs"]
-mod tests;
