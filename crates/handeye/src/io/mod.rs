@@ -8,6 +8,7 @@
 mod csv_pairs;
 mod json_text;
 mod jsonl;
+mod jsonl_fast;
 mod lines;
 mod peer;
 pub mod rosbag;
