@@ -60,9 +60,6 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
                 Ok(record) => record,
                 Err(e) => return Some(Err(e)),
             };
-            if let Some(record) = fast_record(text, number, &mut self.projections) {
-                return Some(Ok(record));
-            }
             let Ok(text) = std::str::from_utf8(text) else {
                 return Some(Err(parse_error(
                     &self.source,
@@ -71,6 +68,9 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
                     "the line is not valid UTF-8 text",
                 )));
             };
+            if let Some(record) = fast_record(text, number, &mut self.projections) {
+                return Some(Ok(record));
+            }
             let text = text.trim();
             if text.is_empty() || text.starts_with('#') {
                 continue;
@@ -88,7 +88,7 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
 /// The record of a line of the common shape (see [`jsonl_fast`](crate::io::jsonl_fast)) whose
 /// stamp and transforms are all valid; `None` leaves the line to [`parse_record`], which reads
 /// every other line and names the problem of a bad one.
-fn fast_record(text: &[u8], line: usize, projections: &mut Projections) -> Option<StampedPosePair> {
+fn fast_record(text: &str, line: usize, projections: &mut Projections) -> Option<StampedPosePair> {
     let scanned = scan(text)?;
     let stamp = scanned.stamp.map(check_stamp).transpose().ok()?;
     let read = |(numbers, inverted): (TransformNumbers, bool)| {
@@ -123,7 +123,11 @@ fn fast_record(text: &[u8], line: usize, projections: &mut Projections) -> Optio
 /// `camera_from_target`), inverting what the file gives in the other direction. Other keys are
 /// ignored; a key repeated in one object is refused (a JSON parser keeps only one of the two).
 pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedPosePair> {
-    parse_record(text, source, line, &mut Projections::default())
+    let mut projections = Projections::default();
+    match fast_record(text, line, &mut projections) {
+        Some(record) => Ok(record),
+        None => parse_record(text, source, line, &mut projections),
+    }
 }
 
 /// [`parse_pose_line`], counting the rotation matrices projected onto SO(3) into `projections`.
@@ -342,7 +346,7 @@ mod tests {
                 lines += 1;
                 let (mut p_fast, mut p_general) = (Projections::default(), Projections::default());
                 let general = parse_record(line.trim(), "t", k + 1, &mut p_general);
-                if let Some(record) = fast_record(line.as_bytes(), k + 1, &mut p_fast) {
+                if let Some(record) = fast_record(line, k + 1, &mut p_fast) {
                     fast += 1;
                     assert_eq!(
                         Ok(record),

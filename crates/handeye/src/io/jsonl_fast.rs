@@ -1,5 +1,5 @@
 //! The fast path of the JSON Lines reader: a record of the common shape read straight from the
-//! line's bytes, with no allocation and no `serde_json::Value`.
+//! line, with no allocation and no `serde_json::Value`.
 //!
 //! The common shape is one object whose keys are among `stamp`, `base_from_gripper`,
 //! `gripper_from_base`, `camera_from_target` and `target_from_camera`, each at most once (the
@@ -44,8 +44,12 @@ enum Key {
 
 /// Reads `line` (a record's text, line end removed) when it has the common shape; `None`
 /// otherwise, the general path to decide.
-pub(crate) fn scan(line: &[u8]) -> Option<Scanned> {
-    let mut c = Cursor { bytes: line, at: 0 };
+pub(crate) fn scan(line: &str) -> Option<Scanned> {
+    let mut c = Cursor {
+        text: line,
+        bytes: line.as_bytes(),
+        at: 0,
+    };
     c.space();
     c.eat(b'{')?;
     let mut stamp: Option<Option<f64>> = None;
@@ -84,8 +88,10 @@ pub(crate) fn scan(line: &[u8]) -> Option<Scanned> {
     })
 }
 
-/// A position in the bytes of a line.
+/// A position in a line.
 struct Cursor<'a> {
+    text: &'a str,
+    /// The bytes of `text`.
     bytes: &'a [u8],
     at: usize,
 }
@@ -178,8 +184,8 @@ impl<'a> Cursor<'a> {
                 return None;
             }
         }
-        // The grammar checked leaves only ASCII digits, signs, `.` and `e`.
-        let text = std::str::from_utf8(&self.bytes[start..self.at]).ok()?;
+        // ASCII from `start` to here: a slice of the text at character boundaries.
+        let text = self.text.get(start..self.at)?;
         text.parse::<f64>().ok().filter(|x| x.is_finite())
     }
 
@@ -262,18 +268,18 @@ mod tests {
             "{{ \"target_from_camera\" : {} ,\t\"gripper_from_base\": {I}, \"stamp\": null }}",
             I.replace(',', " , ")
         );
-        let a = scan(a.as_bytes()).unwrap();
+        let a = scan(&a).unwrap();
         assert_eq!(a.stamp, Some(1.5));
         assert_eq!((a.robot.1, a.camera.1), (false, false));
         assert_eq!(a.robot.0.matrix, Some(Matrix4::identity()));
-        let b = scan(b.as_bytes()).unwrap();
+        let b = scan(&b).unwrap();
         assert_eq!(b.stamp, None);
         assert_eq!((b.robot.1, b.camera.1), (true, true));
         assert_eq!(b.camera.0.matrix, Some(Matrix4::identity()));
         let parts = format!(
             r#"{{"base_from_gripper":{{"translation":[1,2,3],"quaternion_xyzw":[0,0,0,1]}},"camera_from_target":{{"matrix":{I},"translation":[0,0,0]}}}}"#
         );
-        let c = scan(parts.as_bytes()).unwrap();
+        let c = scan(&parts).unwrap();
         assert_eq!(c.robot.0.translation, Some([1.0, 2.0, 3.0]));
         assert_eq!(c.robot.0.quaternion_xyzw, Some([0.0, 0.0, 0.0, 1.0]));
         assert_eq!(c.robot.0.matrix, None);
@@ -317,7 +323,7 @@ mod tests {
             String::new(),
         ];
         for line in lines {
-            assert_eq!(scan(line.as_bytes()), None, "{line}");
+            assert_eq!(scan(&line), None, "{line}");
         }
     }
 
@@ -331,14 +337,14 @@ mod tests {
                 "{{\"stamp\":{text},\"base_from_gripper\":{I},\"camera_from_target\":{I}}}"
             );
             let serde: Option<f64> = serde_json::from_str(&text).ok();
-            let fast = scan(line.as_bytes()).map(|s| s.stamp.unwrap());
+            let fast = scan(&line).map(|s| s.stamp.unwrap());
             proptest::prop_assert_eq!(fast.map(f64::to_bits), serde.map(f64::to_bits));
         }
 
         /// Any bytes are scanned without panic.
         #[test]
         fn any_bytes_are_scanned_without_panic(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..80)) {
-            let _ = scan(&bytes);
+            let _ = scan(&String::from_utf8_lossy(&bytes));
         }
     }
 }
