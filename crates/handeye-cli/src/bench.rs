@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::io::{Format, read_pose_file, read_truth};
+use handeye::io::{Format, TransformJson, parse_pose_line, read_pose_file, read_truth};
 use handeye::metrics::errors_against_truth;
 use handeye::online::{OnlineCalibrator, OnlineConfig};
 use handeye::select::AdaptiveParams;
@@ -51,7 +51,7 @@ pub struct Args {
 }
 
 /// Cases of the online calibrator timed after the solvers.
-const ONLINE_CASES: u64 = 2;
+const ONLINE_CASES: u64 = 3;
 
 /// The progress bar on stderr: drawn once the run has taken a second (and only on a terminal),
 /// so quick runs stay quiet.
@@ -156,9 +156,10 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
         eprintln!(
-            "online push: {:.1} million poses/s without calibration; a calibration event in {:.2} µs",
+            "online push: {:.1} million poses/s without calibration; a calibration event in {:.2} µs; a JSON Lines record read in {:.2} µs",
             online["push_per_s"].as_f64().unwrap_or(0.0) / 1e6,
-            online["calibration_s"].as_f64().unwrap_or(f64::NAN) * 1e6
+            online["calibration_s"].as_f64().unwrap_or(f64::NAN) * 1e6,
+            online["parse_line_s"].as_f64().unwrap_or(f64::NAN) * 1e6
         );
     }
     print_json(&json!({"solvers": rows, "online": online}))
@@ -239,7 +240,8 @@ fn time(mut f: impl FnMut() -> bool, budget: Duration) -> (f64, usize) {
     (samples[samples.len() / 2], calls)
 }
 
-/// Poses per second through `push` without calibrations, and the time of one calibration event.
+/// Poses per second through `push` without calibrations, the time of one calibration event, and
+/// the time to read one JSON Lines record (the fast path).
 fn online_throughput(budget: Duration, progress: &Progress) -> Result<Value> {
     progress.case("online push");
     let s = simulate(
@@ -278,5 +280,20 @@ fn online_throughput(budget: Duration, progress: &Progress) -> Result<Value> {
     progress.case("online calibration");
     let pairs = motion_pairs(&s.poses[..3], Pairing::Consecutive, Setup::EyeInHand);
     let (calibration, _) = time(|| handeye::andreff(black_box(&pairs)).is_ok(), budget);
-    Ok(json!({"push_s": push, "push_per_s": 1.0 / push, "calibration_s": calibration}))
+    progress.case("online parse line");
+    // A record as `handeye simulate` writes it: what `online -` reads per pose.
+    let matrix = |t| json!(TransformJson::from(t).matrix);
+    let line = json!({
+        "stamp": 1.0,
+        "base_from_gripper": matrix(&s.poses[1].base_from_gripper),
+        "camera_from_target": matrix(&s.poses[1].camera_from_target),
+    })
+    .to_string();
+    let (parse, _) = time(|| parse_pose_line(black_box(&line), "-", 1).is_ok(), budget);
+    Ok(json!({
+        "push_s": push,
+        "push_per_s": 1.0 / push,
+        "calibration_s": calibration,
+        "parse_line_s": parse,
+    }))
 }

@@ -1,13 +1,17 @@
 //! Where the pose pairs come from: a pose-pair file (or stdin), two timestamped streams, or a ROS 2
 //! recording.
 
-use std::io::BufRead;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
 use std::path::PathBuf;
+use std::rc::Rc;
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::{BagOptions, BagPairs, is_bag, read_bag_pairs};
-use handeye::io::{Format, PoseInput, PoseReader, Projections, StampedPosePair, open_poses};
+use handeye::io::{
+    Format, PoseInput, PoseReader, Projections, StampedPosePair, open_pose_stream, open_poses,
+};
 use handeye::sync::{
     OffsetOptions, StampedPose, TimeOffset, estimate_time_offset, pair_stream_files,
     refine_time_offset,
@@ -433,9 +437,54 @@ pub struct Offset {
     pub curve: Option<Vec<[f64; 2]>>,
 }
 
+/// Bytes read from stdin or a file at a time by [`records`].
+const READ_BUFFER: usize = 64 * 1024;
+
+/// A buffered reader that calls `before_wait` whenever its buffer is empty, before it reads (and
+/// perhaps waits for) more input: `online` writes out its buffered output lines there.
+struct WaitHook<R> {
+    input: BufReader<R>,
+    before_wait: Rc<dyn Fn()>,
+}
+
+impl<R: Read> WaitHook<R> {
+    fn new(input: R, before_wait: Rc<dyn Fn()>) -> Self {
+        Self {
+            input: BufReader::with_capacity(READ_BUFFER, input),
+            before_wait,
+        }
+    }
+}
+
+impl<R: Read> Read for WaitHook<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        if self.input.buffer().is_empty() {
+            (self.before_wait)();
+        }
+        self.input.read(out)
+    }
+}
+
+impl<R: Read> BufRead for WaitHook<R> {
+    fn fill_buf(&mut self) -> std::io::Result<&[u8]> {
+        if self.input.buffer().is_empty() {
+            (self.before_wait)();
+        }
+        self.input.fill_buf()
+    }
+
+    fn consume(&mut self, amount: usize) {
+        self.input.consume(amount);
+    }
+}
+
 /// A record stream for `online`: from stdin, a file, or paired streams, with the name of its
-/// source for messages. A file is opened once (a FIFO cannot be read twice).
-pub fn records(args: &InputArgs) -> Result<(Records, String, Option<Offset>)> {
+/// source for messages. A file is opened once (a FIFO cannot be read twice). `before_wait` is
+/// called before each read of stdin or of the file, which may wait for input.
+pub fn records(
+    args: &InputArgs,
+    before_wait: Rc<dyn Fn()>,
+) -> Result<(Records, String, Option<Offset>)> {
     if let Some((b, offset)) = bag(args)? {
         let source = format!(
             "{} {}",
@@ -464,7 +513,8 @@ pub fn records(args: &InputArgs) -> Result<(Records, String, Option<Offset>)> {
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
     let source = path.display().to_string();
     if path.as_os_str() == "-" {
-        let reader = PoseReader::new(std::io::stdin().lock(), "-", args.format)?;
+        let stdin = WaitHook::new(std::io::stdin().lock(), before_wait);
+        let reader = PoseReader::new(stdin, "-", args.format)?;
         preamble(&reader, &source);
         let records = NotingReader {
             reader,
@@ -473,9 +523,25 @@ pub fn records(args: &InputArgs) -> Result<(Records, String, Option<Offset>)> {
         };
         return Ok((Box::new(records), source, None));
     }
-    match open_poses(&path, args.format)? {
+    let format = args.format;
+    let records = if format == Format::Visp || path.is_dir() {
+        file_records(open_poses(&path, format)?, &source)
+    } else {
+        let file = File::open(&path).map_err(|e| handeye::Error::Io {
+            file: source.clone(),
+            source: e,
+        })?;
+        let input = WaitHook::new(file, before_wait);
+        file_records(open_pose_stream(input, &source, format)?, &source)
+    };
+    Ok((records, source, None))
+}
+
+/// The records of a file opened by [`open_poses`] or [`open_pose_stream`].
+fn file_records<R: BufRead + 'static>(input: PoseInput<R>, source: &str) -> Records {
+    match input {
         PoseInput::Whole(series) => {
-            note(&source, &series.projections);
+            note(source, &series.projections);
             let records = series.pairs.into_iter().enumerate().map(|(k, pose)| {
                 Ok(StampedPosePair {
                     line: k + 1,
@@ -483,20 +549,15 @@ pub fn records(args: &InputArgs) -> Result<(Records, String, Option<Offset>)> {
                     pose,
                 })
             });
-            Ok((
-                Box::new(records.collect::<Vec<_>>().into_iter()),
-                source,
-                None,
-            ))
+            Box::new(records.collect::<Vec<_>>().into_iter())
         }
         PoseInput::Stream(reader) => {
-            preamble(&reader, &source);
-            let records = NotingReader {
+            preamble(&reader, source);
+            Box::new(NotingReader {
                 reader,
-                source: source.clone(),
+                source: source.to_string(),
                 told: false,
-            };
-            Ok((Box::new(records), source, None))
+            })
         }
     }
 }

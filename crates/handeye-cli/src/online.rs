@@ -3,6 +3,7 @@
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
+use std::rc::Rc;
 
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
@@ -14,8 +15,8 @@ use serde_json::{Value, json};
 
 use crate::faces::{self, Face, Published};
 use crate::input::{InputArgs, records};
-use crate::output::{print_line, print_text};
-use crate::{outln, values};
+use crate::output::{LineOut, print_text};
+use crate::values;
 
 /// Options of `handeye online`.
 #[derive(ClapArgs, Debug)]
@@ -189,9 +190,18 @@ pub fn run(args: Args) -> Result<()> {
     let accumulate = config.estimator == Estimator::Accumulate;
     let face = Face::chosen(args.output);
     let mut calibrator = OnlineCalibrator::new(config)?;
-    let (records, source, offset) = records(&args.input)?;
+    // Event lines are buffered, and written out before the input is waited for.
+    let out = LineOut::stdout();
+    let (records, source, offset) = records(&args.input, {
+        let out = out.clone();
+        Rc::new(move || out.flush_quietly())
+    })?;
     let time_offset = offset.as_ref().map(|o| o.seconds);
-    let mut messages = Thinned::default();
+    let mut messages = Thinned {
+        bad_lines: 0,
+        held_out: 0,
+        out: out.clone(),
+    };
     let mut last: Option<Report> = None;
     // Kept only for --report: a few numbers per event.
     let mut trace = args
@@ -235,6 +245,7 @@ pub fn run(args: Args) -> Result<()> {
         if !accumulate && first.len() < READINGS_SAMPLE {
             first.push(record.pose);
             if first.len() == READINGS_SAMPLE {
+                out.flush_quietly();
                 warn_misread(&first, setup);
             }
         }
@@ -265,14 +276,15 @@ pub fn run(args: Args) -> Result<()> {
         if !accumulate {
             for event in events {
                 match face {
-                    Face::Json => print_line(&event_json(&event, time_offset))?,
-                    Face::Text => outln!("{}", event_text(&event))?,
+                    Face::Json => out.json(&event_json(&event, time_offset))?,
+                    Face::Text => out.text(&format!("{}\n", event_text(&event)))?,
                     _ => {}
                 }
             }
             if calibrator.poses() % QUIET_POSES == 0
                 && let Some(why) = calibrator.quiet(QUIET_POSES)
             {
+                out.flush_quietly();
                 eprintln!("{why}");
             }
         }
@@ -281,7 +293,7 @@ pub fn run(args: Args) -> Result<()> {
         warn_misread(&first, setup);
     }
     if let Some(report) = calibrator.finish() {
-        print_report(&report, setup, time_offset, face)?;
+        print_report(&report, setup, time_offset, face, &out)?;
         if let Some(t) = &mut trace {
             t.step(&Step {
                 pose: report.pose,
@@ -291,6 +303,8 @@ pub fn run(args: Args) -> Result<()> {
         }
         last = Some(report);
     }
+    // Every line is out before the summary, the report and the other faces.
+    out.flush()?;
     let summary = summary(&calibrator, last.as_ref(), messages.bad_lines);
     eprintln!("{summary}");
     if let (Some(path), Some(mut trace)) = (&args.report, trace) {
@@ -345,19 +359,20 @@ fn print_report(
     setup: handeye::Setup,
     time_offset: Option<f64>,
     face: Face,
+    out: &LineOut,
 ) -> Result<()> {
     match face {
-        Face::Json => print_line(&with_offset(r.json(setup), time_offset)),
+        Face::Json => out.json(&with_offset(r.json(setup), time_offset)),
         Face::Text => {
             let e = &r.estimate;
-            outln!(
-                "estimate {} from {} poses: {}, uncertainty {:.3}° / {:.4}",
+            out.text(&format!(
+                "estimate {} from {} poses: {}, uncertainty {:.3}° / {:.4}\n",
                 r.number,
                 e.poses,
                 describe(&e.x),
                 e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
                 e.uncertainty_translation.unwrap_or(f64::NAN)
-            )
+            ))
         }
         _ => Ok(()),
     }
@@ -411,19 +426,21 @@ fn warn_misread(poses: &[handeye::PosePair], setup: handeye::Setup) {
 /// Input lines kept for naming held-out poses.
 const LINES_KEPT: usize = 300;
 
-/// Counts and thins the messages of bad lines and held-out poses.
-#[derive(Default)]
+/// Counts and thins the messages of bad lines and held-out poses, shown after the lines of `out`
+/// before them.
 struct Thinned {
     bad_lines: usize,
     held_out: usize,
+    out: LineOut,
 }
 
 impl Thinned {
     /// Every message is counted; the first ones are shown, later ones sparsely, so that an
-    /// endless bad stream cannot flood the terminal.
-    fn show(count: &mut usize, what: &str, message: String) {
+    /// endless bad stream cannot flood the terminal. The lines of `out` before it come first.
+    fn show(count: &mut usize, what: &str, message: String, out: &LineOut) {
         *count += 1;
         if *count <= SHOWN_BAD_LINES || count.is_power_of_two() {
+            out.flush_quietly();
             eprintln!("{message}");
         }
         if *count == SHOWN_BAD_LINES {
@@ -455,9 +472,11 @@ fn bad_line(e: handeye::Error, on_bad_line: OnBadLine, messages: &mut Thinned) -
             &mut messages.bad_lines,
             "bad lines",
             format!("skipped: {e}"),
+            &messages.out,
         );
         Ok(())
     } else {
+        messages.out.flush_quietly();
         Err(e.into())
     }
 }
@@ -512,6 +531,7 @@ fn print_step(
     face: Face,
     messages: &mut Thinned,
 ) -> Result<()> {
+    let out = messages.out.clone();
     let place = |pose: usize| match lines.iter().find(|(p, _, _)| *p == pose) {
         Some((_, _, Some(stamp))) => format!("{source} at t = {stamp:.3} s"),
         Some((_, line, None)) => format!("{source}:{line}"),
@@ -524,9 +544,10 @@ fn print_step(
         .chain(step.earlier.iter().map(|(p, h)| (*p, h)));
     for (pose, h) in held {
         let message = format!("held out: {}: {h}", place(pose));
-        Thinned::show(&mut messages.held_out, "held-out poses", message);
+        Thinned::show(&mut messages.held_out, "held-out poses", message, &out);
     }
     if let Some(c) = &step.change {
+        out.flush_quietly();
         eprintln!(
             "change of X or of the target from {} on (confirmed at {}): X moved by {:.3}° and {:.4}; accumulation restarted there",
             place(c.at),
@@ -535,11 +556,11 @@ fn print_step(
             c.x_translation
         );
         if face == Face::Json {
-            print_line(&c.json())?;
+            out.json(&c.json())?;
         }
     }
     if let Some(r) = &step.report {
-        print_report(r, setup, time_offset, face)?;
+        print_report(r, setup, time_offset, face, &out)?;
     }
     Ok(())
 }

@@ -96,12 +96,85 @@ pub fn print_json(v: &Value) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Prints one JSON line to stdout and flushes it, so that a reader at the other end of a pipe sees
-/// it at once.
-pub fn print_line(v: &Value) -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
-    serde_json::to_writer(&mut out, v)?;
-    writeln!(out)?;
-    out.flush()?;
-    Ok(())
+/// Bytes kept before [`LineOut`] writes them out even when no input is awaited.
+const LINE_OUT_BUFFER: usize = 64 * 1024;
+
+/// Standard output for a stream of lines (`online`): the lines are kept in a buffer and written
+/// in one go when the buffer fills, when the run is about to wait for input
+/// ([`LineOut::flush_quietly`], called by the input reader before each read), and at the end; on a
+/// terminal, after each line. A reader at the other end of a pipe thus sees every line before
+/// `handeye` waits for the next pose, without one write per line on a fast input.
+///
+/// Clones share the buffer. A failed write (a closed pipe) is kept and returned by the next
+/// [`LineOut::json`], [`LineOut::text`] or [`LineOut::flush`].
+#[derive(Clone)]
+pub struct LineOut(std::rc::Rc<std::cell::RefCell<LineBuffer>>);
+
+struct LineBuffer {
+    bytes: Vec<u8>,
+    terminal: bool,
+    failed: Option<std::io::Error>,
+}
+
+impl LineOut {
+    /// The buffered standard output.
+    pub fn stdout() -> Self {
+        Self(std::rc::Rc::new(std::cell::RefCell::new(LineBuffer {
+            bytes: Vec::with_capacity(LINE_OUT_BUFFER),
+            terminal: std::io::IsTerminal::is_terminal(&std::io::stdout()),
+            failed: None,
+        })))
+    }
+
+    /// One JSON line: the value, compact, and a line end.
+    pub fn json(&self, v: &Value) -> anyhow::Result<()> {
+        let mut buffer = self.0.borrow_mut();
+        serde_json::to_writer(&mut buffer.bytes, v)?;
+        buffer.bytes.push(b'\n');
+        Ok(buffer.written()?)
+    }
+
+    /// Text (whole lines, each ending in `\n`).
+    pub fn text(&self, text: &str) -> anyhow::Result<()> {
+        let mut buffer = self.0.borrow_mut();
+        buffer.bytes.extend_from_slice(text.as_bytes());
+        Ok(buffer.written()?)
+    }
+
+    /// Writes out what is buffered; the error of this write or of an earlier one.
+    pub fn flush(&self) -> std::io::Result<()> {
+        let mut buffer = self.0.borrow_mut();
+        buffer.flush();
+        buffer.failed.take().map_or(Ok(()), Err)
+    }
+
+    /// Writes out what is buffered, keeping an error for the next write (for the input reader,
+    /// which cannot report an error of the output).
+    pub fn flush_quietly(&self) {
+        if let Ok(mut buffer) = self.0.try_borrow_mut() {
+            buffer.flush();
+        }
+    }
+}
+
+impl LineBuffer {
+    /// After a line was added: writes the buffer out on a terminal or when it is full; the error
+    /// of this write or of an earlier one.
+    fn written(&mut self) -> std::io::Result<()> {
+        if self.terminal || self.bytes.len() >= LINE_OUT_BUFFER {
+            self.flush();
+        }
+        self.failed.take().map_or(Ok(()), Err)
+    }
+
+    fn flush(&mut self) {
+        if self.bytes.is_empty() || self.failed.is_some() {
+            return;
+        }
+        let mut out = std::io::stdout().lock();
+        if let Err(e) = out.write_all(&self.bytes).and_then(|()| out.flush()) {
+            self.failed = Some(e);
+        }
+        self.bytes.clear();
+    }
 }

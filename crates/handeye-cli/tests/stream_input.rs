@@ -231,3 +231,61 @@ fn an_endless_bad_stream_is_read_with_bounded_memory() {
     );
     assert!(err.lines().count() < 200, "{} lines", err.lines().count());
 }
+
+/// Output is buffered, but every event line is out before `online` waits for the next pose: a
+/// reader at the other end of the pipe sees the events of the poses written so far while the
+/// input is still open.
+#[test]
+fn events_come_out_before_the_next_pose_is_awaited() {
+    use std::io::BufRead;
+    let [(clean, _), _] = clean_streams();
+    let (code, out, err) = online(Path::new("-"), format!("{}\n", clean.join("\n")).into());
+    assert_eq!(code, 0, "{err}");
+    let all = events(&out);
+    assert!(all.len() > 3, "{out}");
+    let mut child = handeye()
+        .args(["online", "-", "--d-max", "100", "--output", "json"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let stdout = std::io::BufReader::new(child.stdout.take().unwrap());
+    let (sender, received) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        for line in stdout.lines() {
+            if sender.send(line.unwrap()).is_err() {
+                return;
+            }
+        }
+    });
+    // All the poses but the last, the input left open: every event but those of the last pose
+    // must arrive (the bound is only against a hang).
+    stdin
+        .write_all(format!("{}\n", clean[..clean.len() - 1].join("\n")).as_bytes())
+        .unwrap();
+    stdin.flush().unwrap();
+    let last_pose = clean.len() - 1;
+    let before_last: Vec<Value> = all
+        .iter()
+        .filter(|e| {
+            e["poses"][2]
+                .as_u64()
+                .is_some_and(|p| (p as usize) < last_pose)
+        })
+        .cloned()
+        .collect();
+    assert!(before_last.len() > 3);
+    let mut got = Vec::new();
+    while got.len() < before_last.len() {
+        let line = received
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .expect("an event line was held back while the input was open");
+        got.push(line);
+    }
+    assert_eq!(events(&got.join("\n")), before_last);
+    drop(stdin);
+    assert!(child.wait().unwrap().success());
+    reader.join().unwrap();
+}

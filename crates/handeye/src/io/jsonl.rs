@@ -7,7 +7,9 @@ use serde_json::{Map, Value};
 
 use crate::error::Result;
 use crate::io::json_text::repeated_key;
+use crate::io::jsonl_fast::scan;
 use crate::io::lines::Lines;
+use crate::io::transform::TransformNumbers;
 use crate::io::{
     CAMERA_FRAMES, Projections, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error,
     read_transform_json,
@@ -66,6 +68,9 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
                     "the line is not valid UTF-8 text",
                 )));
             };
+            if let Some(record) = fast_record(text, number, &mut self.projections) {
+                return Some(Ok(record));
+            }
             let text = text.trim();
             if text.is_empty() || text.starts_with('#') {
                 continue;
@@ -80,6 +85,37 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
     }
 }
 
+/// The record of a line of the common shape (see [`jsonl_fast`](crate::io::jsonl_fast)) whose
+/// stamp and transforms are all valid; `None` leaves the line to [`parse_record`], which reads
+/// every other line and names the problem of a bad one.
+fn fast_record(text: &str, line: usize, projections: &mut Projections) -> Option<StampedPosePair> {
+    let scanned = scan(text)?;
+    let stamp = scanned.stamp.map(check_stamp).transpose().ok()?;
+    let read = |(numbers, inverted): (TransformNumbers, bool)| {
+        let read = numbers.read()?;
+        Some(if inverted {
+            ReadTransform {
+                transform: read.transform.inverse(),
+                ..read
+            }
+        } else {
+            read
+        })
+    };
+    let robot = read(scanned.robot)?;
+    let camera = read(scanned.camera)?;
+    projections.add(&robot);
+    projections.add(&camera);
+    Some(StampedPosePair {
+        line,
+        stamp,
+        pose: PosePair {
+            base_from_gripper: robot.transform,
+            camera_from_target: camera.transform,
+        },
+    })
+}
+
 /// Parses one JSON Lines record (line number `line` of `source`): exactly one of
 /// `base_from_gripper` / `gripper_from_base`, exactly one of `camera_from_target` /
 /// `target_from_camera`, each a transform (SPEC sec. 7) or a bare 4×4 array, and an optional
@@ -87,7 +123,11 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
 /// `camera_from_target`), inverting what the file gives in the other direction. Other keys are
 /// ignored; a key repeated in one object is refused (a JSON parser keeps only one of the two).
 pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedPosePair> {
-    parse_record(text, source, line, &mut Projections::default())
+    let mut projections = Projections::default();
+    match fast_record(text, line, &mut projections) {
+        Some(record) => Ok(record),
+        None => parse_record(text, source, line, &mut projections),
+    }
 }
 
 /// [`parse_pose_line`], counting the rotation matrices projected onto SO(3) into `projections`.
@@ -281,6 +321,46 @@ mod tests {
                 other => panic!("{text}: {other:?}"),
             }
         }
+    }
+
+    /// Every record line of the test data that the fast path takes gives the general path's
+    /// record, bit for bit, and its projections; most lines take it.
+    #[test]
+    fn the_fast_path_reads_as_the_general_path() {
+        let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../../testdata");
+        let mut files = vec![std::path::PathBuf::from(root)];
+        let (mut lines, mut fast) = (0, 0);
+        while let Some(path) = files.pop() {
+            if path.is_dir() {
+                files.extend(std::fs::read_dir(&path).unwrap().map(|e| e.unwrap().path()));
+                continue;
+            }
+            if path.extension().is_none_or(|e| e != "jsonl") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            for (k, line) in text.lines().enumerate() {
+                if !line.trim_start().starts_with('{') {
+                    continue;
+                }
+                lines += 1;
+                let (mut p_fast, mut p_general) = (Projections::default(), Projections::default());
+                let general = parse_record(line.trim(), "t", k + 1, &mut p_general);
+                if let Some(record) = fast_record(line, k + 1, &mut p_fast) {
+                    fast += 1;
+                    assert_eq!(
+                        Ok(record),
+                        general.map_err(|e| e.to_string()),
+                        "{path:?}:{k}"
+                    );
+                    assert_eq!(p_fast, p_general);
+                }
+            }
+        }
+        assert!(
+            lines > 1000 && fast * 10 > lines * 9,
+            "{fast} of {lines} lines"
+        );
     }
 
     #[test]

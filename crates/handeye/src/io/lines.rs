@@ -4,7 +4,7 @@
 //! reports it as [`Line::TooLong`] with its number and skips to the next newline, so memory stays
 //! bounded whatever the input. A UTF-8 byte order mark at the start of the input is dropped.
 
-use std::io::{BufRead, ErrorKind};
+use std::io::{BufRead, ErrorKind, Read};
 
 /// Longest line kept, bytes (without its line end): 64 KiB, far more than any pose record.
 pub const MAX_LINE: usize = 64 * 1024;
@@ -99,37 +99,26 @@ impl<R: BufRead> Lines<R> {
         Some(Ok((self.number, line)))
     }
 
-    /// Reads one line into `buffer` (without its line end); false at the end of the input.
+    /// Reads one line into `buffer` (without its line end); false at the end of the input. The
+    /// newline is found by the standard library's `read_until` (a word-at-a-time search), on at
+    /// most the longest line kept: a longer one is skipped to its newline, not kept.
     fn read_line(&mut self) -> std::io::Result<bool> {
         self.buffer.clear();
         self.too_long = false;
-        let mut any = false;
-        loop {
-            let chunk = match self.input.fill_buf() {
-                Ok(c) => c,
-                Err(e) if e.kind() == ErrorKind::Interrupted => continue,
-                Err(e) => return Err(e),
-            };
-            if chunk.is_empty() {
-                break;
-            }
-            any = true;
-            let end = chunk.iter().position(|&b| b == b'\n');
-            let take = end.map_or(chunk.len(), |k| k + 1);
-            if !self.too_long {
-                let content = &chunk[..end.unwrap_or(chunk.len())];
-                // The BOM and a `\r` before the newline do not count towards the limit.
-                if self.buffer.len() + content.len() > MAX_LINE + BOM.len() + 1 {
-                    self.too_long = true;
-                    self.buffer = Vec::new();
-                } else {
-                    self.buffer.extend_from_slice(content);
-                }
-            }
-            self.input.consume(take);
-            if end.is_some() {
-                break;
-            }
+        // The BOM and a `\r` before the newline do not count towards the limit.
+        let most = MAX_LINE + BOM.len() + 1;
+        let read = (&mut self.input)
+            .take(most as u64 + 1)
+            .read_until(b'\n', &mut self.buffer)?;
+        if read == 0 {
+            return Ok(false);
+        }
+        if self.buffer.last() == Some(&b'\n') {
+            self.buffer.pop();
+        } else if self.buffer.len() > most {
+            self.skip_line()?;
+            self.too_long = true;
+            self.buffer = Vec::new();
         }
         if self.buffer.last() == Some(&b'\r') {
             self.buffer.pop();
@@ -144,7 +133,31 @@ impl<R: BufRead> Lines<R> {
             self.too_long = true;
             self.buffer = Vec::new();
         }
-        Ok(any)
+        Ok(true)
+    }
+
+    /// Skips the input up to and with the next newline, keeping nothing.
+    fn skip_line(&mut self) -> std::io::Result<()> {
+        loop {
+            let chunk = match self.input.fill_buf() {
+                Ok(c) => c,
+                Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e),
+            };
+            if chunk.is_empty() {
+                return Ok(());
+            }
+            match chunk.iter().position(|&b| b == b'\n') {
+                Some(k) => {
+                    self.input.consume(k + 1);
+                    return Ok(());
+                }
+                None => {
+                    let all = chunk.len();
+                    self.input.consume(all);
+                }
+            }
+        }
     }
 }
 

@@ -8,6 +8,7 @@
 mod csv_pairs;
 mod json_text;
 mod jsonl;
+mod jsonl_fast;
 mod lines;
 mod peer;
 pub mod rosbag;
@@ -425,24 +426,34 @@ pub fn open_poses(path: &Path, format: Format) -> Result<PoseInput<BufReader<Fil
     if format == Format::Visp || (format == Format::Auto && path.is_dir()) {
         return peer::read_visp_dir(path).map(PoseInput::Whole);
     }
-    let input = open(path)?;
-    let (sniffed, input) = sniff_format(input, &source)?;
+    open_pose_stream(open(path)?, &source, format)
+}
+
+/// [`open_poses`] on an input already open, named `source` in messages: for a reader of the
+/// caller's own (one that does something before it waits for input, say). ViSP directories are
+/// read by [`open_poses`].
+pub fn open_pose_stream<R: BufRead>(
+    input: R,
+    source: &str,
+    format: Format,
+) -> Result<PoseInput<R>> {
+    let (sniffed, input) = sniff_format(input, source)?;
     let format = match format {
         Format::Auto => sniffed,
         f => f,
     };
-    let text = |mut input: Sniffed<BufReader<File>>| {
+    let text = |mut input: Sniffed<R>| {
         let mut bytes = Vec::new();
         input.read_to_end(&mut bytes).map_err(|e| Error::Io {
-            file: source.clone(),
+            file: source.to_string(),
             source: e,
         })?;
-        text_of(bytes, &source)
+        text_of(bytes, source)
     };
     Ok(match format {
-        Format::OpencvYaml => PoseInput::Whole(peer::read_opencv_yaml(&text(input)?, &source)?),
-        Format::Moveit => PoseInput::Whole(peer::read_moveit_json(&text(input)?, &source)?),
-        f => PoseInput::Stream(PoseReader::new(input, &source, f)?),
+        Format::OpencvYaml => PoseInput::Whole(peer::read_opencv_yaml(&text(input)?, source)?),
+        Format::Moveit => PoseInput::Whole(peer::read_moveit_json(&text(input)?, source)?),
+        f => PoseInput::Stream(PoseReader::new(input, source, f)?),
     })
 }
 

@@ -93,31 +93,71 @@ pub(crate) fn read_transform_json(v: &Value) -> Result<ReadTransform, FieldProbl
                 .map(|m| Ok::<_, FieldProblem>(read_matrix4(&matrix_from_json(m, "matrix")?)?))
                 .transpose()?;
             let from_parts = transform_from_parts_json(o, from_matrix.is_some())?;
-            match (from_matrix, from_parts) {
-                (Some(a), Some(b)) => {
-                    let difference = (a.transform.to_homogeneous() - b.to_homogeneous())
-                        .abs()
-                        .max();
-                    if difference > CONSISTENCY_TOL.max(a.deviation) {
-                        return Err(TransformProblem::Inconsistent { difference }.into());
-                    }
-                    Ok(a)
-                }
-                (Some(a), None) => Ok(a),
-                (None, Some(b)) => Ok(ReadTransform {
-                    transform: b,
-                    deviation: 0.0,
-                }),
-                (None, None) => Err(FieldProblem::new(
-                    "",
-                    "a transform needs `matrix`, or `translation` and `quaternion_xyzw`",
-                )),
-            }
+            one_transform(from_matrix, from_parts)
         }
         _ => Err(FieldProblem::new(
             "",
             "expected a 4×4 array or an object with `matrix` or `translation` + `quaternion_xyzw`",
         )),
+    }
+}
+
+/// The one transform of an object giving a matrix, the parts, or both (which must agree within
+/// [`CONSISTENCY_TOL`], or within the matrix's deviation from orthonormality).
+fn one_transform(
+    from_matrix: Option<ReadTransform>,
+    from_parts: Option<Transform>,
+) -> Result<ReadTransform, FieldProblem> {
+    match (from_matrix, from_parts) {
+        (Some(a), Some(b)) => {
+            let difference = (a.transform.to_homogeneous() - b.to_homogeneous())
+                .abs()
+                .max();
+            if difference > CONSISTENCY_TOL.max(a.deviation) {
+                return Err(TransformProblem::Inconsistent { difference }.into());
+            }
+            Ok(a)
+        }
+        (Some(a), None) => Ok(a),
+        (None, Some(b)) => Ok(ReadTransform {
+            transform: b,
+            deviation: 0.0,
+        }),
+        (None, None) => Err(FieldProblem::new(
+            "",
+            "a transform needs `matrix`, or `translation` and `quaternion_xyzw`",
+        )),
+    }
+}
+
+/// The numbers of a transform as a line gives them (a bare 4×4 array is a `matrix`), read
+/// without `serde_json::Value` by the JSON Lines reader's fast path.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct TransformNumbers {
+    /// The 4×4 matrix, row-major.
+    pub matrix: Option<Matrix4<f64>>,
+    /// `translation`.
+    pub translation: Option<[f64; 3]>,
+    /// `quaternion_xyzw`.
+    pub quaternion_xyzw: Option<[f64; 4]>,
+}
+
+impl TransformNumbers {
+    /// The transform, as [`read_transform_json`] reads the same numbers; `None` where it refuses
+    /// them (it then says why).
+    pub fn read(&self) -> Option<ReadTransform> {
+        let from_matrix = self.matrix.map(|m| read_matrix4(&m)).transpose().ok()?;
+        let from_parts = match (self.translation, self.quaternion_xyzw) {
+            (Some(t), Some(q)) => {
+                if t.iter().any(|&v| check_translation(v).is_err()) {
+                    return None;
+                }
+                Some(transform_from_xyz_quat_xyzw(t, q).ok()?)
+            }
+            (Some(_), None) | (None, Some(_)) if self.matrix.is_none() => return None,
+            _ => None,
+        };
+        one_transform(from_matrix, from_parts).ok()
     }
 }
 

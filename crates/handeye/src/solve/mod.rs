@@ -20,7 +20,6 @@ mod scale;
 mod symmetric;
 mod tsai;
 
-
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 

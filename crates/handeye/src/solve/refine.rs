@@ -250,4 +250,3 @@ fn in_input_unit(c: Option<Matrix6<f64>>, unit: f64) -> Option<Matrix6<f64>> {
     let units = Matrix6::from_diagonal(&Vector6::new(1.0, 1.0, 1.0, unit, unit, unit));
     c.map(|c| units * c * units)
 }
-

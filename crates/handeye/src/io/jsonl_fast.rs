@@ -1,0 +1,350 @@
+//! The fast path of the JSON Lines reader: a record of the common shape read straight from the
+//! line, with no allocation and no `serde_json::Value`.
+//!
+//! The common shape is one object whose keys are among `stamp`, `base_from_gripper`,
+//! `gripper_from_base`, `camera_from_target` and `target_from_camera`, each at most once (the
+//! keys plain, without escapes), `stamp` a number or `null`, and each transform a bare 4×4 array
+//! of numbers or an object of `matrix`, `translation` and `quaternion_xyzw` (SPEC sec. 7): what
+//! `handeye simulate` writes and most recorders print. Anything else — another key, a string
+//! where a number goes, a malformed line — makes [`scan`]
+//! return `None`, and the line is read by the general path, which gives the same result or
+//! names the problem (file, line, field). The fast path therefore never decides an error.
+//!
+//! Numbers are checked against JSON's grammar, then converted by the standard library's
+//! correctly rounded parser: the same `f64` as serde_json's (built with `float_roundtrip`) for
+//! every number JSON allows, integers and `-0` included. A number out of `f64`'s range is left to
+//! the general path, which refuses it.
+
+use nalgebra::Matrix4;
+
+use crate::io::transform::TransformNumbers;
+
+/// What a line of the common shape gives: the stamp and the numbers of the two transforms as
+/// written, each with whether the file gives it in the other direction (`gripper_from_base`,
+/// `target_from_camera`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Scanned {
+    /// The stamp, seconds, when given and not `null`.
+    pub stamp: Option<f64>,
+    /// The robot's transform, and whether it is `gripper_from_base`.
+    pub robot: (TransformNumbers, bool),
+    /// The camera's transform, and whether it is `target_from_camera`.
+    pub camera: (TransformNumbers, bool),
+}
+
+/// The keys of the common shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Key {
+    Stamp,
+    /// A robot pose, inverted when `true` (`gripper_from_base`).
+    Robot(bool),
+    /// A camera pose, inverted when `true` (`target_from_camera`).
+    Camera(bool),
+}
+
+/// Reads `line` (a record's text, line end removed) when it has the common shape; `None`
+/// otherwise, the general path to decide.
+pub(crate) fn scan(line: &str) -> Option<Scanned> {
+    let mut c = Cursor {
+        text: line,
+        bytes: line.as_bytes(),
+        at: 0,
+    };
+    c.space();
+    c.eat(b'{')?;
+    let mut stamp: Option<Option<f64>> = None;
+    let mut robot = None;
+    let mut camera = None;
+    loop {
+        c.space();
+        let key = c.key()?;
+        c.space();
+        c.eat(b':')?;
+        c.space();
+        match key {
+            Key::Stamp if stamp.is_none() => stamp = Some(c.number_or_null()?),
+            Key::Robot(inverted) if robot.is_none() => robot = Some((c.transform()?, inverted)),
+            Key::Camera(inverted) if camera.is_none() => {
+                camera = Some((c.transform()?, inverted));
+            }
+            // A key given twice (or both names of one pose): the general path says which.
+            _ => return None,
+        }
+        c.space();
+        match c.next()? {
+            b',' => continue,
+            b'}' => break,
+            _ => return None,
+        }
+    }
+    c.space();
+    if c.at != line.len() {
+        return None;
+    }
+    Some(Scanned {
+        stamp: stamp.flatten(),
+        robot: robot?,
+        camera: camera?,
+    })
+}
+
+/// A position in a line.
+struct Cursor<'a> {
+    text: &'a str,
+    /// The bytes of `text`.
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Cursor<'a> {
+    /// The next byte, consumed.
+    fn next(&mut self) -> Option<u8> {
+        let b = *self.bytes.get(self.at)?;
+        self.at += 1;
+        Some(b)
+    }
+
+    /// Consumes `want`, or fails.
+    fn eat(&mut self, want: u8) -> Option<()> {
+        (self.next()? == want).then_some(())
+    }
+
+    /// Skips JSON's whitespace (space, tab, carriage return, line feed).
+    fn space(&mut self) {
+        while let Some(b' ' | b'\t' | b'\r' | b'\n') = self.bytes.get(self.at) {
+            self.at += 1;
+        }
+    }
+
+    /// Skips a run of ASCII digits; false when there is none.
+    fn digits(&mut self) -> bool {
+        let start = self.at;
+        while self.bytes.get(self.at).is_some_and(u8::is_ascii_digit) {
+            self.at += 1;
+        }
+        self.at > start
+    }
+
+    /// A plain string (no escapes), its bytes.
+    fn string(&mut self) -> Option<&'a [u8]> {
+        self.eat(b'"')?;
+        let (bytes, start) = (self.bytes, self.at);
+        let length = bytes[start..].iter().position(|&b| b == b'"')?;
+        self.at = start + length + 1;
+        let text = &bytes[start..start + length];
+        (!text.contains(&b'\\')).then_some(text)
+    }
+
+    /// A key of the common shape.
+    fn key(&mut self) -> Option<Key> {
+        match self.string()? {
+            b"stamp" => Some(Key::Stamp),
+            b"base_from_gripper" => Some(Key::Robot(false)),
+            b"gripper_from_base" => Some(Key::Robot(true)),
+            b"camera_from_target" => Some(Key::Camera(false)),
+            b"target_from_camera" => Some(Key::Camera(true)),
+            _ => None,
+        }
+    }
+
+    /// A number, or `null` (`None`).
+    fn number_or_null(&mut self) -> Option<Option<f64>> {
+        if self.bytes[self.at..].starts_with(b"null") {
+            self.at += 4;
+            return Some(None);
+        }
+        self.number().map(Some)
+    }
+
+    /// A finite number in JSON's grammar, `-? (0 | [1-9][0-9]*) (. [0-9]+)? ([eE] [+-]? [0-9]+)?`.
+    fn number(&mut self) -> Option<f64> {
+        let start = self.at;
+        if self.bytes.get(self.at) == Some(&b'-') {
+            self.at += 1;
+        }
+        match self.bytes.get(self.at)? {
+            b'0' => self.at += 1,
+            b'1'..=b'9' => {
+                self.digits();
+            }
+            _ => return None,
+        }
+        if self.bytes.get(self.at) == Some(&b'.') {
+            self.at += 1;
+            if !self.digits() {
+                return None;
+            }
+        }
+        if let Some(b'e' | b'E') = self.bytes.get(self.at) {
+            self.at += 1;
+            if let Some(b'+' | b'-') = self.bytes.get(self.at) {
+                self.at += 1;
+            }
+            if !self.digits() {
+                return None;
+            }
+        }
+        // ASCII from `start` to here: a slice of the text at character boundaries.
+        let text = self.text.get(start..self.at)?;
+        text.parse::<f64>().ok().filter(|x| x.is_finite())
+    }
+
+    /// A transform: a bare 4×4 array, or an object with `matrix`, `translation` and
+    /// `quaternion_xyzw` (each at most once, no other key).
+    fn transform(&mut self) -> Option<TransformNumbers> {
+        if self.bytes.get(self.at) == Some(&b'[') {
+            return Some(TransformNumbers {
+                matrix: Some(self.matrix()?),
+                ..TransformNumbers::default()
+            });
+        }
+        self.eat(b'{')?;
+        let mut numbers = TransformNumbers::default();
+        loop {
+            self.space();
+            let key = self.string()?;
+            self.space();
+            self.eat(b':')?;
+            self.space();
+            match key {
+                b"matrix" if numbers.matrix.is_none() => numbers.matrix = Some(self.matrix()?),
+                b"translation" if numbers.translation.is_none() => {
+                    numbers.translation = Some(self.numbers()?);
+                }
+                b"quaternion_xyzw" if numbers.quaternion_xyzw.is_none() => {
+                    numbers.quaternion_xyzw = Some(self.numbers()?);
+                }
+                _ => return None,
+            }
+            self.space();
+            match self.next()? {
+                b',' => continue,
+                b'}' => return Some(numbers),
+                _ => return None,
+            }
+        }
+    }
+
+    /// An array of exactly N numbers.
+    fn numbers<const N: usize>(&mut self) -> Option<[f64; N]> {
+        let mut out = [0.0; N];
+        self.eat(b'[')?;
+        for (k, x) in out.iter_mut().enumerate() {
+            self.space();
+            *x = self.number()?;
+            self.space();
+            self.eat(if k + 1 < N { b',' } else { b']' })?;
+        }
+        Some(out)
+    }
+
+    /// A 4×4 array of numbers, row-major.
+    fn matrix(&mut self) -> Option<Matrix4<f64>> {
+        let mut m = Matrix4::zeros();
+        self.eat(b'[')?;
+        for r in 0..4 {
+            self.space();
+            let row: [f64; 4] = self.numbers()?;
+            for (c, x) in row.into_iter().enumerate() {
+                m[(r, c)] = x;
+            }
+            self.space();
+            self.eat(if r < 3 { b',' } else { b']' })?;
+        }
+        Some(m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const I: &str = "[[1,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]";
+
+    #[test]
+    fn reads_the_common_shape_in_any_order_and_spacing() {
+        let a = format!(r#"{{"stamp":1.5,"base_from_gripper":{I},"camera_from_target":{I}}}"#);
+        let b = format!(
+            "{{ \"target_from_camera\" : {} ,\t\"gripper_from_base\": {I}, \"stamp\": null }}",
+            I.replace(',', " , ")
+        );
+        let a = scan(&a).unwrap();
+        assert_eq!(a.stamp, Some(1.5));
+        assert_eq!((a.robot.1, a.camera.1), (false, false));
+        assert_eq!(a.robot.0.matrix, Some(Matrix4::identity()));
+        let b = scan(&b).unwrap();
+        assert_eq!(b.stamp, None);
+        assert_eq!((b.robot.1, b.camera.1), (true, true));
+        assert_eq!(b.camera.0.matrix, Some(Matrix4::identity()));
+        let parts = format!(
+            r#"{{"base_from_gripper":{{"translation":[1,2,3],"quaternion_xyzw":[0,0,0,1]}},"camera_from_target":{{"matrix":{I},"translation":[0,0,0]}}}}"#
+        );
+        let c = scan(&parts).unwrap();
+        assert_eq!(c.robot.0.translation, Some([1.0, 2.0, 3.0]));
+        assert_eq!(c.robot.0.quaternion_xyzw, Some([0.0, 0.0, 0.0, 1.0]));
+        assert_eq!(c.robot.0.matrix, None);
+        assert_eq!(c.camera.0.quaternion_xyzw, None);
+    }
+
+    #[test]
+    fn leaves_every_other_shape_to_the_general_path() {
+        let rest = format!(r#""base_from_gripper":{I},"camera_from_target":{I}"#);
+        let lines = [
+            format!("{{{rest},\"frame\":\"tool0\"}}"),
+            format!("{{{rest},\"stamp\":1,\"stamp\":2}}"),
+            format!("{{{rest},\"gripper_from_base\":{I}}}"),
+            format!("{{\"stamp\":\"1\",{rest}}}"),
+            format!("{{\"stamp\":1e400,{rest}}}"),
+            format!("{{\"stamp\":01,{rest}}}"),
+            format!("{{\"stamp\":1.,{rest}}}"),
+            format!("{{\"stamp\":.5,{rest}}}"),
+            format!("{{\"stamp\":+1,{rest}}}"),
+            format!("{{\"st\\u0061mp\":1,{rest}}}"),
+            format!("{{{rest}}} x"),
+            format!("{{{rest},}}"),
+            format!("{{{rest}"),
+            format!("{{\"base_from_gripper\":{I}}}"),
+            format!(
+                "{{\"base_from_gripper\":{{\"matrix\":{I},\"frame\":1}},\"camera_from_target\":{I}}}"
+            ),
+            format!(
+                "{{\"base_from_gripper\":{{\"matrix\":{I},\"matrix\":{I}}},\"camera_from_target\":{I}}}"
+            ),
+            format!(
+                "{{\"base_from_gripper\":{{\"translation\":[1,2]}},\"camera_from_target\":{I}}}"
+            ),
+            format!(
+                "{{\"base_from_gripper\":[[1,0,0,0],[0,1,0,0],[0,0,1,0]],\"camera_from_target\":{I}}}"
+            ),
+            format!(
+                "{{\"base_from_gripper\":[[1,0,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]],\"camera_from_target\":{I}}}"
+            ),
+            "{}".to_string(),
+            String::new(),
+        ];
+        for line in lines {
+            assert_eq!(scan(&line), None, "{line}");
+        }
+    }
+
+    proptest::proptest! {
+        /// Every number JSON allows converts to serde_json's own value, bit for bit.
+        #[test]
+        fn numbers_are_serde_jsons(
+            text in "-?(0|[1-9][0-9]{0,24})(\\.[0-9]{1,24})?([eE][+-]?[0-9]{1,4})?"
+        ) {
+            let line = format!(
+                "{{\"stamp\":{text},\"base_from_gripper\":{I},\"camera_from_target\":{I}}}"
+            );
+            let serde: Option<f64> = serde_json::from_str(&text).ok();
+            let fast = scan(&line).map(|s| s.stamp.unwrap());
+            proptest::prop_assert_eq!(fast.map(f64::to_bits), serde.map(f64::to_bits));
+        }
+
+        /// Any bytes are scanned without panic.
+        #[test]
+        fn any_bytes_are_scanned_without_panic(bytes in proptest::collection::vec(proptest::num::u8::ANY, 0..80)) {
+            let _ = scan(&String::from_utf8_lossy(&bytes));
+        }
+    }
+}
