@@ -5,9 +5,13 @@
 #   bash bench/compare_opencv.sh [POSES...]        (default: 10 50 200 1000)
 #
 # Creates its own virtual environment (opencv-python-headless<5: OpenCV 5's wheel lacks
-# calibrateHandEye), writes the datasets with `handeye simulate`, times OpenCV in-process in
-# Python and handeye with `handeye bench`, and prints one Markdown table. The two take turns on
-# each dataset, ROUNDS times (default 2), and each time is the best median over the rounds.
+# calibrateHandEye; the handeye Python package built into it by maturin), writes the datasets with
+# `handeye simulate`, times OpenCV in-process in Python, handeye in-process with `handeye bench`
+# and as a whole process (`handeye calibrate --pairs all`, bench/process_time.py), the Python
+# drop-in beside OpenCV in one process (crates/handeye-py/bench_vs_opencv.py), and `handeye
+# online -` fed by `handeye simulate` through a pipe; prints Markdown tables. OpenCV and handeye
+# take turns on each dataset, ROUNDS times (default 2), and each time is the best median over the
+# rounds.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 poses=("${@:-10 50 200 1000}")
@@ -16,9 +20,11 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 python3 -m venv "$work/venv"
-"$work/venv/bin/pip" install -q "opencv-python-headless<5" numpy
+"$work/venv/bin/pip" install -q "opencv-python-headless<5" numpy maturin pytest
 cargo build --release -q -p handeye-cli
 bin=target/release/handeye
+VIRTUAL_ENV="$work/venv" PATH="$work/venv/bin:$PATH" maturin develop -q --release \
+    -m crates/handeye-py/Cargo.toml >/dev/null
 
 files=()
 for n in "${poses[@]}"; do
@@ -36,12 +42,17 @@ for ((round = 1; round <= rounds; round++)); do
         "$work/venv/bin/python" bench/opencv_time.py "$f" > "$work/opencv.$round.$n.json"
         "$bin" bench --quiet --pairs all --methods andreff,andreff-joint,tsai,park,horaud,daniilidis,refine \
             --input "$f" > "$work/handeye.$round.$n.json"
+        python3 bench/process_time.py "$bin" "$f" > "$work/process.$round.$n.json"
     done
+    "$work/venv/bin/python" crates/handeye-py/bench_vs_opencv.py --json > "$work/python.$round.json"
+    python3 bench/process_time.py "$bin" --online "${ONLINE_POSES:-100000}" > "$work/online.$round.json"
 done
 
 python3 - "$work" <<'PY'
 import glob, json, sys, platform, os, datetime
 work = sys.argv[1]
+CV = ["tsai", "park", "horaud", "andreff-joint", "daniilidis"]
+METHODS = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"]
 cv_rows, he_rows, online, version = {}, {}, [], None
 for path in glob.glob(f"{work}/opencv.*.json"):
     d = json.load(open(path)); version = d["opencv_version"]
@@ -71,4 +82,40 @@ for n in sorted({r["poses"] for r in cv_rows.values()}):
               f"{h['error']['rotation_deg']:.4f}, {h['error']['translation_rel']:.4f} |")
 push = max(o["push_per_s"] for o in online); event = min(o["calibration_s"] for o in online)
 print(f"\nonline: {push/1e6:.1f} million poses/s through push without calibration; a calibration event {event*1e6:.2f} µs")
+
+# The whole process: `handeye calibrate --pairs all` (start-up, parsing, the readings and outlier
+# checks, the bootstrap, the held-out check, the report) against OpenCV's call alone.
+process, stream = {}, []
+for path in glob.glob(f"{work}/process.*.json"):
+    for r in json.load(open(path))["rows"]:
+        k = (r["dataset"], r["method"])
+        if k not in process or r["median_s"] < process[k]["median_s"]:
+            process[k] = r
+for path in glob.glob(f"{work}/online.*.json"):
+    stream.append(json.load(open(path))["online"])
+print("\n| method | poses | OpenCV in-process | handeye calibrate, whole process | speed-up |")
+print("|---|---|---|---|---|")
+for r in sorted(process.values(), key=lambda r: (r["poses"], METHODS.index(r["method"]))):
+    # andreff and refine are compared with OpenCV's Andreff (its only Andreff).
+    cv = cv_rows[(r["dataset"], r["method"] if r["method"] in CV else "andreff-joint")]
+    label = r["method"] if r["method"] in CV else f"{r['method']} (vs OpenCV's andreff)"
+    label += " (refused, exit 3)" if r["refused"] else ""
+    print(f"| {label} | {r['poses']} | {cv['median_s']*1e3:.2f} ms | {r['median_s']*1e3:.2f} ms | "
+          f"{cv['median_s']/r['median_s']:.1f}× |")
+
+python = {}
+for path in glob.glob(f"{work}/python.*.json"):
+    for r in json.load(open(path))["rows"]:
+        k = (r["poses"], r["method"])
+        prev = python.get(k, r)
+        python[k] = dict(r, opencv_s=min(r["opencv_s"], prev["opencv_s"]),
+                         handeye_s=min(r["handeye_s"], prev["handeye_s"]))
+print("\n| method | poses | cv2.calibrateHandEye | handeye.calibrate_hand_eye | speed-up |")
+print("|---|---|---|---|---|")
+for r in sorted(python.values(), key=lambda r: (r["poses"], METHODS.index(r["method"]))):
+    print(f"| {r['method']} | {r['poses']} | {r['opencv_s']*1e6:.1f} µs | {r['handeye_s']*1e6:.1f} µs | "
+          f"{r['opencv_s']/r['handeye_s']:.1f}× |")
+best = max(stream, key=lambda o: o["poses_per_s"])
+print(f"\nonline end to end: `cat poses.jsonl | handeye online -` ({best['poses']} poses from `handeye simulate`): "
+      f"{best['poses_per_s']:,.0f} poses/s")
 PY

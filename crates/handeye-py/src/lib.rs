@@ -9,8 +9,8 @@ use handeye::pose::transform_from_matrix4;
 use handeye::select::{AdaptiveParams, Selection};
 use handeye::tracking::TrackOptions;
 use handeye::{Method, Pairing, PosePair, Setup, Transform};
-use nalgebra::Matrix4;
-use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3};
+use nalgebra::{Matrix3, Matrix4, Vector3};
+use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -22,14 +22,21 @@ fn value_error(e: impl std::fmt::Display) -> PyErr {
 
 /// A 4×4 transform from a numpy view, refusing non-rigid ones with `what` in the message.
 fn transform(m: ndarray_view::View<'_>, what: &str) -> PyResult<Transform> {
+    rigid(m).map_err(|p| value_error(format!("{what}: {p}")))
+}
+
+/// [`transform`] of the `k`-th pose, named `what[k]` (the name is made only for a message).
+fn transform_at(m: ndarray_view::View<'_>, what: &str, k: usize) -> PyResult<Transform> {
+    rigid(m).map_err(|p| value_error(format!("{what}[{k}]: {p}")))
+}
+
+/// A 4×4 view as a rigid transform, or what is wrong with it.
+fn rigid(m: ndarray_view::View<'_>) -> Result<Transform, String> {
     if m.shape() != [4, 4] {
-        return Err(value_error(format!(
-            "{what}: expected a 4×4 array, got shape {:?}",
-            m.shape()
-        )));
+        return Err(format!("expected a 4×4 array, got shape {:?}", m.shape()));
     }
     let mat = Matrix4::from_fn(|r, c| m[[r, c]]);
-    transform_from_matrix4(&mat).map_err(|p| value_error(format!("{what}: {p}")))
+    transform_from_matrix4(&mat).map_err(|p| p.to_string())
 }
 
 mod ndarray_view {
@@ -53,13 +60,15 @@ fn poses(
     (0..g.shape()[0])
         .map(|k| {
             Ok(PosePair {
-                base_from_gripper: transform(
+                base_from_gripper: transform_at(
                     g.index_axis(numpy::ndarray::Axis(0), k),
-                    &format!("base_from_gripper[{k}]"),
+                    "base_from_gripper",
+                    k,
                 )?,
-                camera_from_target: transform(
+                camera_from_target: transform_at(
                     c.index_axis(numpy::ndarray::Axis(0), k),
-                    &format!("camera_from_target[{k}]"),
+                    "camera_from_target",
+                    k,
                 )?,
             })
         })
@@ -91,6 +100,95 @@ fn solve_x<'py>(
         .allow_threads(|| handeye::calibration::solve_poses(&poses, setup, &options))
         .map_err(value_error)?;
     Ok(matrix(py, &c.x))
+}
+
+/// X alone from OpenCV's arguments, as `calibrate_hand_eye` (the OpenCV drop-in) returns it:
+/// `(R_cam2gripper (3, 3), t_cam2gripper (3, 1))`. Rotations are (N, 3, 3) matrices or (N, 3)
+/// rotation vectors, translations (N, 3); every pose pair is a motion (made on the fly, memory
+/// O(poses)), eye-in-hand. The whole conversion is here, not in numpy: at ten poses numpy's
+/// per-call cost on small arrays was twice the solve.
+#[pyfunction]
+#[pyo3(signature = (r_gripper2base, t_gripper2base, r_target2cam, t_target2cam, method="tsai", tsai_opencv_filter=false))]
+fn solve_opencv<'py>(
+    py: Python<'py>,
+    r_gripper2base: PyReadonlyArrayDyn<'py, f64>,
+    t_gripper2base: PyReadonlyArray2<'py, f64>,
+    r_target2cam: PyReadonlyArrayDyn<'py, f64>,
+    t_target2cam: PyReadonlyArray2<'py, f64>,
+    method: &str,
+    tsai_opencv_filter: bool,
+) -> PyResult<RotationTranslation<'py>> {
+    let options = calibration_options(method, "all", tsai_opencv_filter)?;
+    let robot = transforms(&r_gripper2base, &t_gripper2base, "base_from_gripper")?;
+    let camera = transforms(&r_target2cam, &t_target2cam, "camera_from_target")?;
+    if robot.len() != camera.len() {
+        return Err(value_error(format!(
+            "{} robot poses and {} camera poses: one of each per pose",
+            robot.len(),
+            camera.len()
+        )));
+    }
+    let poses: Vec<PosePair> = robot
+        .into_iter()
+        .zip(camera)
+        .map(|(base_from_gripper, camera_from_target)| PosePair {
+            base_from_gripper,
+            camera_from_target,
+        })
+        .collect();
+    let c = py
+        .allow_threads(|| handeye::calibration::solve_poses(&poses, Setup::EyeInHand, &options))
+        .map_err(value_error)?;
+    let (r, t) = (c.x.rotation.matrix(), c.x.translation.vector);
+    Ok((
+        numpy::ndarray::Array2::from_shape_fn((3, 3), |(i, j)| r[(i, j)]).into_pyarray(py),
+        numpy::ndarray::Array2::from_shape_fn((3, 1), |(i, _)| t[i]).into_pyarray(py),
+    ))
+}
+
+/// A rotation (3, 3) and a translation (3, 1), as OpenCV returns X.
+type RotationTranslation<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+
+/// Transforms from rotations ((N, 3, 3) matrices or (N, 3) rotation vectors) and (N, 3)
+/// translations, each checked as a 4×4 of `what[k]` is ([`transform`]).
+fn transforms(
+    rotations: &PyReadonlyArrayDyn<'_, f64>,
+    translations: &PyReadonlyArray2<'_, f64>,
+    what: &str,
+) -> PyResult<Vec<Transform>> {
+    let (r, t) = (rotations.as_array(), translations.as_array());
+    let n = r.shape()[0];
+    let matrices = r.shape()[1..] == [3, 3];
+    if !(matrices || r.shape()[1..] == [3]) || t.shape() != [n, 3] {
+        return Err(value_error(format!(
+            "{what}: expected (N, 3, 3) rotations or (N, 3) rotation vectors and (N, 3) translations, got {:?} and {:?}",
+            r.shape(),
+            t.shape()
+        )));
+    }
+    (0..n)
+        .map(|k| {
+            let rotation = if matrices {
+                Matrix3::from_fn(|i, j| r[[k, i, j]])
+            } else {
+                rodrigues(&Vector3::from_fn(|i, _| r[[k, i]]))
+            };
+            let mut m = Matrix4::identity();
+            m.fixed_view_mut::<3, 3>(0, 0).copy_from(&rotation);
+            m.fixed_view_mut::<3, 1>(0, 3)
+                .copy_from(&Vector3::from_fn(|i, _| t[[k, i]]));
+            transform_from_matrix4(&m).map_err(|p| value_error(format!("{what}[{k}]: {p}")))
+        })
+        .collect()
+}
+
+/// The rotation of a rotation vector w = θ k (Rodrigues): R = I + sin θ [k]× + (1 − cos θ) [k]×²,
+/// the identity for w = 0 (as OpenCV's `Rodrigues`).
+fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
+    let theta = w.norm();
+    let k = if theta > 1e-300 { w / theta } else { *w };
+    let kx = k.cross_matrix();
+    Matrix3::identity() + kx * theta.sin() + kx * kx * (1.0 - theta.cos())
 }
 
 /// The whole batch calibration ([`handeye::calibration::calibrate`]): its report as JSON, the same
@@ -350,6 +448,7 @@ fn json_dict<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py,
 #[pymodule]
 fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_x, m)?)?;
+    m.add_function(wrap_pyfunction!(solve_opencv, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
     m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
     m.add_function(wrap_pyfunction!(advise_report, m)?)?;

@@ -18,7 +18,7 @@ use crate::accumulate::PoseAccumulator;
 use crate::consistency::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::conventions::{Reading, ReadingCheck, check_readings};
 use crate::error::{Degeneracy, Error, Result};
-use crate::holdout::leave_one_out;
+use crate::holdout::{HeldOutCheck, leave_one_out};
 use crate::io::TransformJson;
 use crate::metrics::{MotionQuality, QualityReport, ResidualSummary, quality_report};
 use crate::motion::{AllPairs, MotionSource, Pairing, PosePair, Setup, motion_pairs};
@@ -301,21 +301,32 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     // Translation verdicts are relative to the larger of the hand's spread and the camera's
     // working distance: motions that barely translate (a wrist turning) still fix X's offset.
     let scene = translation_scale(&used, setup).max(working_distance(&used));
-    let uncertainty = bootstrap(
-        &used,
-        setup,
-        &calibration.x,
-        &solve_x,
-        options.replicates,
-        scene,
+    // The bootstrap and the checks of the solution (residuals, quality, held-out) are
+    // independent: they run side by side, each with the result it would have alone.
+    let (uncertainty, (quality, residuals, held_out)) = rayon::join(
+        || {
+            bootstrap(
+                &used,
+                setup,
+                &calibration.x,
+                &solve_x,
+                options.replicates,
+                scene,
+            )
+        },
+        || {
+            (
+                quality_of(&used, setup, options.pairing, &calibration),
+                PoseResiduals::at(&used, setup, &calibration.x),
+                leave_one_out(&used, setup),
+            )
+        },
     );
     let outliers = outlier_report(&found, options);
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));
     refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
         .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?;
-    let quality = quality_of(&used, setup, options.pairing, &calibration);
-    let residuals = PoseResiduals::at(&used, setup, &calibration.x);
     let translation_residual_rel = residuals.median_translation() / scene.max(f64::MIN_POSITIVE);
     warnings.extend(calibration.warnings.iter().cloned());
     warnings.extend(quality.warnings.iter().cloned());
@@ -336,7 +347,7 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
                 .unwrap_or_else(|| format!("pose {i}"))
         })
         .collect();
-    let held_out = held_out_of(&used, &used_names, setup, &mut warnings);
+    let held_out = held_out.map(|check| held_out_of(&check, &used_names, &mut warnings));
     Ok(Report {
         method: options.method,
         setup,
@@ -364,15 +375,13 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     })
 }
 
-/// The held-out check of the poses used, their names, and a warning naming the poses the others
-/// predict poorly.
+/// The held-out check of the poses used ([`leave_one_out`]) with their names, and a warning naming
+/// the poses the others predict poorly.
 fn held_out_of(
-    used: &[PosePair],
+    check: &HeldOutCheck,
     names: &[String],
-    setup: Setup,
     warnings: &mut Vec<Warning>,
-) -> Option<HeldOutSummary> {
-    let check = leave_one_out(used, setup)?;
+) -> HeldOutSummary {
     let disagree: Vec<HeldOutName> = check
         .disagree
         .iter()
@@ -394,12 +403,12 @@ fn held_out_of(
                 .collect(),
         });
     }
-    Some(HeldOutSummary {
+    HeldOutSummary {
         median_rotation_deg: check.median_rotation_deg,
         median_translation: check.median_translation,
         exact: check.exact,
         disagree,
-    })
+    }
 }
 
 /// Solves X from the poses with the options' method and pairing.

@@ -9,6 +9,7 @@
 //! [`EXACT_UP_TO`] poses each is left out exactly (O(n²)); beyond, one pose moves X by less than
 //! 1/300 of the data and the all-pose solution stands in for the others'.
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::accumulate::PoseAccumulator;
@@ -55,34 +56,39 @@ pub fn leave_one_out(poses: &[PosePair], setup: Setup) -> Option<HeldOutCheck> {
     }
     let exact = n <= EXACT_UP_TO;
     let all = solved(poses.iter(), setup);
-    let mut gaps = Vec::with_capacity(n);
-    for (i, pose) in poses.iter().enumerate() {
-        let (x, y) = if exact {
-            solved(
-                poses
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != i)
-                    .map(|(_, p)| p),
-                setup,
-            )?
-        } else {
-            all?
-        };
-        let hand = setup.hand_pose(&pose.base_from_gripper);
-        let predicted: Transform = x.inverse() * hand.inverse() * y;
-        gaps.push(HeldOutPose {
-            pose: i,
-            rotation_deg: rotation_angle_between(
-                &predicted.rotation,
-                &pose.camera_from_target.rotation,
-            )
-            .to_degrees(),
-            translation: (predicted.translation.vector
-                - pose.camera_from_target.translation.vector)
-                .norm(),
-        });
-    }
+    // Each pose's gap is its own solve: the poses are spread over the threads, and collected in
+    // input order (the same result on any number of threads).
+    let gaps: Vec<HeldOutPose> = poses
+        .par_iter()
+        .enumerate()
+        .map(|(i, pose)| {
+            let (x, y) = if exact {
+                solved(
+                    poses
+                        .iter()
+                        .enumerate()
+                        .filter(|(k, _)| *k != i)
+                        .map(|(_, p)| p),
+                    setup,
+                )?
+            } else {
+                all?
+            };
+            let hand = setup.hand_pose(&pose.base_from_gripper);
+            let predicted: Transform = x.inverse() * hand.inverse() * y;
+            Some(HeldOutPose {
+                pose: i,
+                rotation_deg: rotation_angle_between(
+                    &predicted.rotation,
+                    &pose.camera_from_target.rotation,
+                )
+                .to_degrees(),
+                translation: (predicted.translation.vector
+                    - pose.camera_from_target.translation.vector)
+                    .norm(),
+            })
+        })
+        .collect::<Option<_>>()?;
     let median_rotation_deg = median(gaps.iter().map(|g| g.rotation_deg).collect());
     let median_translation = median(gaps.iter().map(|g| g.translation).collect());
     let disagree = gaps

@@ -23,47 +23,12 @@ from ._handeye import _OnlineCalibrator
 from ._handeye import advise_report as _advise_report
 from ._handeye import calibrate_report as _calibrate_report
 from ._handeye import robot_world_report as _robot_world_report
-from ._handeye import solve_x as _solve_x
+from ._handeye import solve_opencv as _solve_opencv
 
 __all__ = ["calibrate_hand_eye", "calibrate", "advise", "OnlineCalibrator", "METHODS"]
 
 #: OpenCV's constants (cv2.CALIB_HAND_EYE_*) and handeye's names.
 METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
-
-
-def _rotations(rs, name: str) -> np.ndarray:
-    """(N, 3, 3) rotations from 3x3 matrices or rotation vectors (3, (3,1) or (1,3)), vectorised."""
-    try:
-        a = np.asarray(rs, dtype=np.float64)
-    except ValueError as e:
-        raise ValueError(f"{name}: rotations of mixed shapes ({e})") from None
-    if a.ndim == 3 and a.shape[1:] == (3, 3):
-        return a
-    if a.ndim >= 2 and a.shape[0] > 0 and a[0].size == 3:
-        w = a.reshape(len(a), 3)
-        theta = np.linalg.norm(w, axis=1)
-        k = w / np.where(theta > 1e-300, theta, 1.0)[:, None]
-        kx = np.zeros((len(a), 3, 3))
-        kx[:, 0, 1], kx[:, 0, 2], kx[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
-        kx[:, 1, 0], kx[:, 2, 0], kx[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
-        s, c = np.sin(theta)[:, None, None], (1 - np.cos(theta))[:, None, None]
-        return np.eye(3) + s * kx + c * (kx @ kx)
-    raise ValueError(f"{name}: a rotation must be a 3x3 matrix or a rotation vector, got shape {a.shape[1:]}")
-
-
-def _homogeneous(rotations, translations, name: str) -> np.ndarray:
-    r = _rotations(rotations, name)
-    try:
-        t = np.asarray(translations, dtype=np.float64)
-    except ValueError as e:
-        raise ValueError(f"{name}: translations of mixed shapes ({e})") from None
-    if len(t) != len(r) or t.size != 3 * len(r):
-        raise ValueError(f"{name}: {len(r)} rotations need {len(r)} translations of 3 entries, got shape {t.shape}")
-    out = np.zeros((len(r), 4, 4))
-    out[:, :3, :3] = r
-    out[:, :3, 3] = t.reshape(len(r), 3)
-    out[:, 3, 3] = 1.0
-    return out
 
 
 def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=0):
@@ -78,11 +43,30 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     name = METHODS.get(method, method) if isinstance(method, int) else method
     if not isinstance(name, str):
         raise ValueError(f"unknown method {method!r}")
-    g = _homogeneous(R_gripper2base, t_gripper2base, "gripper2base")
-    c = _homogeneous(R_target2cam, t_target2cam, "target2cam")
+    rg, tg = _arrays(R_gripper2base, t_gripper2base, "gripper2base")
+    rc, tc = _arrays(R_target2cam, t_target2cam, "target2cam")
     opencv_tsai = isinstance(method, int) and name == "tsai"
-    x = _solve_x(g, c, method=name, setup="eye-in-hand", pairs="all", tsai_opencv_filter=opencv_tsai)
-    return x[:3, :3].copy(), x[:3, 3:4].copy()
+    return _solve_opencv(rg, tg, rc, tc, method=name, tsai_opencv_filter=opencv_tsai)
+
+
+def _arrays(rotations, translations, name: str):
+    """(N, 3, 3) rotations or (N, 3) rotation vectors, and (N, 3) translations, as float arrays
+    (the rotation vectors become matrices in the extension: R = I + sin θ [k]× + (1 − cos θ) [k]×²)."""
+    try:
+        r = np.asarray(rotations, dtype=np.float64)
+    except ValueError as e:
+        raise ValueError(f"{name}: rotations of mixed shapes ({e})") from None
+    if r.ndim >= 2 and r.shape[0] > 0 and r.shape[1:] != (3, 3) and r[0].size == 3:
+        r = r.reshape(len(r), 3)
+    elif r.ndim != 3 or r.shape[1:] != (3, 3):
+        raise ValueError(f"{name}: a rotation must be a 3x3 matrix or a rotation vector, got shape {r.shape[1:]}")
+    try:
+        t = np.asarray(translations, dtype=np.float64)
+    except ValueError as e:
+        raise ValueError(f"{name}: translations of mixed shapes ({e})") from None
+    if len(t) != len(r) or t.size != 3 * len(r):
+        raise ValueError(f"{name}: {len(r)} rotations need {len(r)} translations of 3 entries, got shape {t.shape}")
+    return r, t.reshape(len(r), 3)
 
 
 def calibrate(

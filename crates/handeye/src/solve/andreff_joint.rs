@@ -47,12 +47,11 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
     // (measured: t_x 0.6 for 0.37 in the input's unit, a refusal at ×1e-8). The system's own
     // conditioning decides, with the threshold of the rotation system, measured in units of the
     // data's own scale (where both blocks of rows are of order 1, so that it is unit-free).
-    let mut normal = SMatrix::<f64, 12, 12>::zeros();
-    Scaled::new(motions, length_scale(motions)).for_each_motion(|m| {
-        let (c, _) = rows(m);
-        normal += c.transpose() * c;
-    });
-    let eigenvalues = normal.symmetric_eigenvalues();
+    let (mut joint, mut unused) = (SMatrix::<f64, 12, 12>::zeros(), SVector::<f64, 12>::zeros());
+    Scaled::new(motions, length_scale(motions))
+        .for_each_motion(|m| add_normal(m, &mut joint, &mut unused));
+    joint.fill_lower_triangle_with_upper_triangle();
+    let eigenvalues = joint.symmetric_eigenvalues();
     let joint_conditioning = (eigenvalues.min().max(0.0) / eigenvalues.max()).sqrt();
     let no_translation = || {
         let mut largest = 0.0_f64;
@@ -65,7 +64,8 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
     if joint_conditioning.is_nan() || joint_conditioning < REFUSE_CONDITIONING {
         return Err(no_translation());
     }
-    let x = least_squares_12(&scaled, rows).ok_or_else(|| singular(check.conditioning))?;
+    let x = least_squares_12(&scaled, add_normal, correction)
+        .ok_or_else(|| singular(check.conditioning))?;
     let raw = Matrix3::new(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]);
     let det = raw.determinant();
     // The scale of vec(R_x) is fixed only by the gripper translations t_a (the right-hand side of
@@ -88,35 +88,130 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
     ))
 }
 
-/// The 12 rows of Eq. (10) for one motion.
-fn rows(m: &MotionPair) -> (SMatrix<f64, 12, 12>, SVector<f64, 12>) {
+/// Adds one motion's share of the normal equations of Eq. (10) to `n` (its upper triangle) and
+/// `r`: (CᵀC, Cᵀd) for its 12 rows C = [I₉ − K, 0; T, I₃ − R_a], d = (0, t_a), with K = R_a ⊗ R_b
+/// and T = I₃ ⊗ t_bᵀ, formed block by block instead of as a 12×12 product (that product was half
+/// of an all-pairs solve):
+/// - (I − K)ᵀ(I − K) = I − K − Kᵀ + (R_aᵀR_a) ⊗ (R_bᵀR_b) (mixed product), plus
+///   TᵀT = I₃ ⊗ t_b t_bᵀ;
+/// - the coupling Tᵀ(I − R_a): entry (3i + k, j) = t_b[k] (δ_ij − R_a[i, j]);
+/// - (I − R_a)ᵀ(I − R_a) for t_x; Cᵀd = (vec(t_a t_bᵀ), (I − R_a)ᵀ t_a).
+fn add_normal(m: &MotionPair, n: &mut SMatrix<f64, 12, 12>, r: &mut SVector<f64, 12>) {
     let r_a = rotation_matrix(&m.a);
     let r_b = rotation_matrix(&m.b);
-    let t_b = m.b.translation.vector;
-    let mut c = SMatrix::<f64, 12, 12>::zeros();
+    let (t_a, t_b) = (m.a.translation.vector, m.b.translation.vector);
+    let (a_a, b_b) = (r_a.transpose() * r_a, r_b.transpose() * r_b);
+    let i_ra = Matrix3::identity() - r_a;
     for i in 0..3 {
-        for j in 0..3 {
-            for k in 0..3 {
+        for k in 0..3 {
+            let row = 3 * i + k;
+            for j in i..3 {
                 for l in 0..3 {
-                    // (R_a ⊗ R_b)[(3i+k, 3j+l)] = R_a[i,j] R_b[k,l].
-                    c[(3 * i + k, 3 * j + l)] = -r_a[(i, j)] * r_b[(k, l)];
+                    // K[(3i+k, 3j+l)] = R_a[i,j] R_b[k,l]; Kᵀ's entry is K's transposed one.
+                    let col = 3 * j + l;
+                    if col < row {
+                        continue;
+                    }
+                    let delta = if row == col { 1.0 } else { 0.0 };
+                    let t = if i == j { t_b[k] * t_b[l] } else { 0.0 };
+                    n[(row, col)] += delta - r_a[(i, j)] * r_b[(k, l)] - r_a[(j, i)] * r_b[(l, k)]
+                        + a_a[(i, j)] * b_b[(k, l)]
+                        + t;
+                }
+            }
+            for j in 0..3 {
+                n[(row, 9 + j)] += t_b[k] * i_ra[(i, j)];
+            }
+            r[row] += t_a[i] * t_b[k];
+        }
+    }
+    let mut block = n.fixed_view_mut::<3, 3>(9, 9);
+    block += i_ra.transpose() * i_ra;
+    let mut tail = r.fixed_rows_mut::<3>(9);
+    tail += i_ra.transpose() * t_a;
+}
+
+/// One motion's share of the refinement step of [`least_squares_12`]: Cᵀ(d − C x) for the rows of
+/// [`add_normal`], through 3×3 products: with X the row-major 3×3 of x[0..9], (I − K) vec X =
+/// vec(X − R_a X R_bᵀ) and Kᵀ vec E = vec(R_aᵀ E R_b).
+fn correction(m: &MotionPair, x: &SVector<f64, 12>) -> SVector<f64, 12> {
+    let r_a = rotation_matrix(&m.a);
+    let r_b = rotation_matrix(&m.b);
+    let (t_a, t_b) = (m.a.translation.vector, m.b.translation.vector);
+    let r_x = Matrix3::new(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]);
+    let t_x = x.fixed_rows::<3>(9).into_owned();
+    let i_ra = Matrix3::identity() - r_a;
+    // The residuals d − C x, of the rotation rows (as a 3×3) and of the translation rows.
+    let e = -(r_x - r_a * r_x * r_b.transpose());
+    let f = t_a - (r_x * t_b + i_ra * t_x);
+    let rot = e - r_a.transpose() * e * r_b + f * t_b.transpose();
+    let mut out = SVector::<f64, 12>::zeros();
+    for i in 0..3 {
+        for l in 0..3 {
+            out[3 * i + l] = rot[(i, l)];
+        }
+    }
+    out.fixed_rows_mut::<3>(9)
+        .copy_from(&(i_ra.transpose() * f));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Transform;
+    use nalgebra::Vector3;
+
+    /// The 12 rows of Eq. (10) for one motion, as the equation writes them.
+    fn rows(m: &MotionPair) -> (SMatrix<f64, 12, 12>, SVector<f64, 12>) {
+        let r_a = rotation_matrix(&m.a);
+        let r_b = rotation_matrix(&m.b);
+        let t_b = m.b.translation.vector;
+        let mut c = SMatrix::<f64, 12, 12>::zeros();
+        for i in 0..3 {
+            for j in 0..3 {
+                for k in 0..3 {
+                    for l in 0..3 {
+                        c[(3 * i + k, 3 * j + l)] = -r_a[(i, j)] * r_b[(k, l)];
+                    }
                 }
             }
         }
-    }
-    for d in 0..9 {
-        c[(d, d)] += 1.0;
-    }
-    for i in 0..3 {
-        // (I₃ ⊗ t_bᵀ) vec(R_x) = R_x t_b.
-        for l in 0..3 {
-            c[(9 + i, 3 * i + l)] = t_b[l];
+        for d in 0..9 {
+            c[(d, d)] += 1.0;
         }
-        for j in 0..3 {
-            c[(9 + i, 9 + j)] = if i == j { 1.0 } else { 0.0 } - r_a[(i, j)];
+        for i in 0..3 {
+            for l in 0..3 {
+                c[(9 + i, 3 * i + l)] = t_b[l];
+            }
+            for j in 0..3 {
+                c[(9 + i, 9 + j)] = if i == j { 1.0 } else { 0.0 } - r_a[(i, j)];
+            }
         }
+        let mut d = SVector::<f64, 12>::zeros();
+        d.fixed_rows_mut::<3>(9).copy_from(&m.a.translation.vector);
+        (c, d)
     }
-    let mut d = SVector::<f64, 12>::zeros();
-    d.fixed_rows_mut::<3>(9).copy_from(&m.a.translation.vector);
-    (c, d)
+
+    #[test]
+    fn the_blocks_are_the_products_of_the_rows() {
+        let motion = |w: [f64; 3], t: [f64; 3]| Transform::new(Vector3::from(t), Vector3::from(w));
+        let m = MotionPair {
+            a: motion([0.3, -0.2, 0.9], [0.4, -1.3, 0.25]),
+            b: motion([-0.5, 0.7, 0.1], [2.0, 0.3, -0.8]),
+        };
+        let x = SVector::<f64, 12>::from_fn(|i, _| (i as f64 * 0.37).sin());
+        let (c, d) = rows(&m);
+        let (mut n, mut r) = (SMatrix::zeros(), SVector::zeros());
+        add_normal(&m, &mut n, &mut r);
+        n.fill_lower_triangle_with_upper_triangle();
+        assert!(
+            (n - c.transpose() * c).norm() < 1e-12,
+            "{}",
+            n - c.transpose() * c
+        );
+        assert!((r - c.transpose() * d).norm() < 1e-12);
+        let want = c.transpose() * (d - c * x);
+        assert!((correction(&m, &x) - want).norm() < 1e-12, "{want}");
+    }
 }
