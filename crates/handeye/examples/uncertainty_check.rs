@@ -2,7 +2,7 @@
 //! the median of actual error / reported one-sigma (calibrated: near 1; required 0.33 … 3) and the
 //! share of results within 3 sigma (required ≥ 85%), per pairing and method.
 //!
-//! `cargo run --release -p handeye --example uncertainty_check`
+//! `cargo run --release -p handeye --example uncertainty_check [consecutive|all]`
 
 use handeye::calibration::{Options, calibrate};
 use handeye::metrics::errors_against_truth;
@@ -10,8 +10,16 @@ use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, Pairing, Setup};
 
 fn main() -> Result<(), handeye::Error> {
-    for pairing in [Pairing::Consecutive, Pairing::All] {
-        for method in [Method::Andreff, Method::Refine] {
+    let pairing_of = |p: &str| match p {
+        "consecutive" => Pairing::Consecutive,
+        _ => Pairing::All,
+    };
+    let pairings: Vec<Pairing> = match std::env::args().nth(1) {
+        Some(p) => vec![pairing_of(&p)],
+        None => vec![Pairing::Consecutive, Pairing::All],
+    };
+    for pairing in pairings {
+        for method in Method::ALL {
             let (mut rot, mut trans) = (Vec::new(), Vec::new());
             for s in 0..40 {
                 let sim = simulate(&SimConfig::default(), 5, s);
