@@ -24,7 +24,7 @@ use crate::pose::{Transform, exp_so3, log_so3, proj_so3, transform_from_parts};
 const PARTNERS: usize = 32;
 
 /// A pose is an outlier when its median gap is above this many times the median over all poses.
-pub const OUTLIER_FACTOR: f64 = 6.0;
+pub(crate) const OUTLIER_FACTOR: f64 = 6.0;
 
 /// Motions whose gripper rotation is below this angle (radians, 3°) have too noisy an axis for the
 /// pitch test; their pitch gap is not used.
@@ -109,7 +109,7 @@ fn pose_gap(poses: &[PosePair], setup: Setup, i: usize) -> PoseGap {
 /// below 3° left out), over the first `PARTNERS` (32) partners. The per-pose test of the batch
 /// ([`pose_outliers`]) and of the online tracker ([`crate::tracking`]) alike; it allocates
 /// nothing (the tracker runs it on every pose).
-pub fn screw_gaps<'a>(
+pub(crate) fn screw_gaps<'a>(
     setup: Setup,
     pose: &PosePair,
     partners: impl Iterator<Item = &'a PosePair>,
@@ -192,7 +192,7 @@ pub(crate) fn median_in(v: &mut [f64]) -> f64 {
 
 /// The length scale of the scene, in the robot's unit: the median distance of the hand positions
 /// from their coordinate-wise median (robust, so that one mistyped pose does not set it).
-pub fn translation_scale(poses: &[PosePair], setup: Setup) -> f64 {
+pub(crate) fn translation_scale(poses: &[PosePair], setup: Setup) -> f64 {
     let hand: Vec<Vector3<f64>> = poses
         .iter()
         .map(|p| setup.hand_pose(&p.base_from_gripper).translation.vector)

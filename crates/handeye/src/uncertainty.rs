@@ -106,7 +106,7 @@ impl Uncertainty {
 /// The bootstrap uncertainty of `x` (solved from `poses` by `solve`) with `replicates` re-solves.
 ///
 /// `solve` must be the same method and pairing that produced `x`; `scene` is the length scale the
-/// translation verdicts are relative to ([`crate::consistency::translation_scale`]).
+/// translation verdicts are relative to (`consistency::translation_scale`).
 pub fn bootstrap(
     poses: &[PosePair],
     setup: Setup,
@@ -265,7 +265,7 @@ fn weakest(block: &Matrix3<f64>) -> (Vector3<f64>, f64) {
 }
 
 /// The frame X is expressed in, in words: where the undetermined axis lies.
-pub fn reference_frame(setup: Setup) -> &'static str {
+pub(crate) fn reference_frame(setup: Setup) -> &'static str {
     match setup {
         Setup::EyeInHand => "gripper",
         Setup::EyeToHand => "robot base",

@@ -29,7 +29,7 @@ pub use csv_pairs::CsvPairs;
 pub use jsonl::{JsonlPairs, parse_pose_line};
 pub use lines::MAX_LINE;
 pub use peer::{read_moveit_json, read_opencv_yaml, read_visp_dir, read_visp_pose};
-pub use stamped::{parse_stamped_poses, read_camera_stream, read_stamped_poses};
+pub use stamped::{read_camera_stream, read_stamped_poses};
 pub use transform::{CONSISTENCY_TOL, TransformJson, transform_from_json};
 pub(crate) use transform::{FieldProblem, read_transform_json};
 pub use truth::{Truth, parse_truth, read_truth, truth_json, write_truth};
@@ -375,7 +375,7 @@ pub(crate) fn too_long(source: &str, line: usize) -> Error {
 
 /// Reads a whole text file, naming it in the error; text that is not UTF-8 is a parse error on
 /// the line of its first invalid byte.
-pub fn read_text(path: &Path) -> Result<String> {
+pub(crate) fn read_text(path: &Path) -> Result<String> {
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| Error::Io {
         file: file.clone(),
@@ -408,7 +408,7 @@ pub fn open(path: &Path) -> Result<BufReader<File>> {
 }
 
 /// An input whose head was read to tell its format, and is read again before the rest.
-pub type Sniffed<R> = Chain<Cursor<Vec<u8>>, R>;
+pub(crate) type Sniffed<R> = Chain<Cursor<Vec<u8>>, R>;
 
 /// A pose-pair input opened once: read whole, or streamed.
 pub enum PoseInput<R: BufRead> {
@@ -420,7 +420,7 @@ pub enum PoseInput<R: BufRead> {
 
 /// Opens the pose-pair file `path` once (a FIFO or `<(…)` cannot be read twice): with
 /// [`Format::Auto`] a directory is ViSP, else the format is told from the head of the content
-/// (see [`sniff_format`]), which is then read again from memory, not from the file.
+/// (its head tells the format), which is then read again from memory, not from the file.
 pub fn open_poses(path: &Path, format: Format) -> Result<PoseInput<BufReader<File>>> {
     let source = path.display().to_string();
     if format == Format::Visp || (format == Format::Auto && path.is_dir()) {
@@ -491,21 +491,12 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     Ok(series)
 }
 
-/// The format of a file for [`Format::Auto`]: a directory is ViSP, else as [`sniff_format`]
-/// tells from its head. Opens the file: for a FIFO use [`open_poses`], which reads it once.
-pub fn detect_file_format(path: &Path) -> Result<Format> {
-    if path.is_dir() {
-        return Ok(Format::Visp);
-    }
-    sniff_format(open(path)?, &path.display().to_string()).map(|(f, _)| f)
-}
-
 /// Tells the format of `input` from its head: `%YAML` first or `!!opencv-matrix` in the first
 /// content lines is OpenCV YAML, a JSON list (`[` then `[`, `{` or `]`) is moveit; otherwise [`Format::Auto`] (decided per
 /// record by [`PoseReader`]). The head read (up to the first line that is neither blank nor a `#`
 /// comment, or the next one after a YAML `---` or `key:` line; at most 2 × [`MAX_LINE`] bytes) is
 /// returned chained before the rest of `input`, so that nothing is lost and nothing reopened.
-pub fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Format, Sniffed<R>)> {
+pub(crate) fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Format, Sniffed<R>)> {
     let mut head = Vec::new();
     // Start of the line being read, in `head`.
     let mut start = 0;
@@ -570,7 +561,7 @@ pub fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Format, S
 
 /// Largest size of a time stamp accepted, seconds: about 31,700 years (Unix time is near 1.7e9 s;
 /// stamps in milli- or nanoseconds are beyond it). Differences of stamps within it cannot overflow.
-pub const MAX_STAMP: f64 = 1e12;
+pub(crate) const MAX_STAMP: f64 = 1e12;
 
 /// Checks a time stamp read from data: finite and at most [`MAX_STAMP`] in size; the message
 /// says why not.

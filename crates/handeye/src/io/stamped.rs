@@ -11,7 +11,7 @@ use crate::sync::StampedPose;
 /// The field names of a stream line, for messages.
 const FIELDS: [&str; 8] = ["t", "x", "y", "z", "qx", "qy", "qz", "qw"];
 
-/// Reads a stream file (see [`parse_stamped_poses`]).
+/// Reads a stream file: `t x y z qx qy qz qw` per line (the ethz-asl / TUM layout).
 pub fn read_stamped_poses(path: &Path) -> Result<StampedStream> {
     let file = path.display().to_string();
     let text = read_text(path)?;
@@ -31,7 +31,7 @@ pub fn read_camera_stream(path: &Path) -> Result<StampedStream> {
 /// Parses a stream. Samples out of time order (real recordings have them) are put in order, the
 /// later line first among equal stamps, and counted in the result. Errors name the line and the
 /// field (`t`, `x` … `qw`).
-pub fn parse_stamped_poses(text: &str, source: &str) -> Result<StampedStream> {
+pub(crate) fn parse_stamped_poses(text: &str, source: &str) -> Result<StampedStream> {
     let mut out: Vec<StampedPose> = Vec::new();
     let mut reordered = 0usize;
     for (k, raw) in text.lines().enumerate() {

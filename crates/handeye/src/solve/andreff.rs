@@ -10,7 +10,7 @@ use crate::solve::{
 ///
 /// Step 1: vec(R_x) spans the null space of the stacked 9m×9 matrix `[I₉ − R_a ⊗ R_b]` (row-major
 /// vec), found as the eigenvector of the smallest eigenvalue of its normal matrix
-/// ([`crate::solve::RotationSystem`]); its sign is fixed so that det > 0 and it is projected onto
+/// (`solve::rotation_system`); its sign is fixed so that det > 0 and it is projected onto
 /// SO(3). Step 2: t_x is the least-squares solution of the stacked (I₃ − R_a) t_x = t_a − R_x t_b.
 /// This is SPEC sec. 3 `andreff`, and the solver of the paper's online methods.
 ///

@@ -47,7 +47,7 @@ stacked!(least_squares_3, 3, 3);
 /// lower one is filled from it once, at the end) and Cᵀd to `r`, and `correction(m, x)` is
 /// Cᵀ(d − C x). For a structured C (Andreff's Eq. (10)) these cost a fraction of forming the 12×12
 /// product.
-pub fn least_squares_12(
+pub(crate) fn least_squares_12(
     motions: &(impl MotionSource + ?Sized),
     add_normal: impl Fn(&MotionPair, &mut SMatrix<f64, 12, 12>, &mut SVector<f64, 12>),
     correction: impl Fn(&MotionPair, &SVector<f64, 12>) -> SVector<f64, 12>,

@@ -31,10 +31,10 @@ pub use park::park;
 pub use refine::{RefineOptions, Refinement, Termination, covariance_at, refine, refine_from};
 pub use robot_world::{
     JointCovariance, PoseResidual, RobotWorld, RobotWorldMethod, RobotWorldRefinement,
-    joint_covariance, li, pose_residual, pose_residuals, refine_robot_world,
-    refine_robot_world_from, robot_world, shah, target_frame,
+    joint_covariance, li, pose_residuals, refine_robot_world, refine_robot_world_from, robot_world,
+    shah, target_frame,
 };
-pub use rotation_system::{RotationSolution, RotationSystem};
+pub(crate) use rotation_system::{RotationSolution, RotationSystem};
 #[cfg(test)]
 pub(crate) use scale::Scaled;
 pub use tsai::{TsaiOptions, tsai, tsai_with};
@@ -258,7 +258,7 @@ pub fn solve(method: Method, motions: &(impl MotionSource + ?Sized)) -> Result<C
 /// (over all pairs of poses, accumulated in O(n): [`crate::accumulate::PoseAccumulator`]).
 ///
 /// Returns `None` when the 3×3 system is singular (all axes parallel).
-pub fn translation_least_squares(
+pub(crate) fn translation_least_squares(
     motions: &(impl MotionSource + ?Sized),
     r_x: &Matrix3<f64>,
 ) -> Option<Vector3<f64>> {

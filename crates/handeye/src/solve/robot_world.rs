@@ -383,7 +383,7 @@ pub fn robot_world(
 /// The residual of one pose at (X, Y), defined once for the refinement and for reports:
 /// ΔR = R_Q R_X R_C − R_Y and ΔT = R_Q (R_X t_C + t_X) + t_Q − t_Y (the target's origin as pose i
 /// sees it, minus Y's, in the fixed frame: input units).
-pub fn pose_residual(
+pub(crate) fn pose_residual(
     q: &Transform,
     camera_from_target: &Transform,
     x: (&Matrix3<f64>, &Vector3<f64>),
@@ -454,7 +454,7 @@ pub struct RobotWorldRefinement {
 /// Refines X and the target pose jointly over all poses, started from [`shah`].
 ///
 /// Unknowns R_X exp(\[δ_X\]×), t_X, R_Y exp(\[δ_Y\]×), t_Y; residuals the 9 entries of ΔR_i and the 3
-/// of ΔT_i of [`pose_residual`] per pose, each block divided by its RMS at the start (as the
+/// of ΔT_i of the pose residual per pose, each block divided by its RMS at the start (as the
 /// hand–eye `refine`, SPEC sec. 3). Levenberg–Marquardt with Nielsen's damping, in units of the
 /// data's own length scale; never returns a higher cost than its start.
 ///

@@ -18,7 +18,7 @@ type Matrix9 = SMatrix<f64, 9, 9>;
 /// vectors and singular values of the stacked 9m×9 matrix are the eigenvectors and square roots of
 /// the eigenvalues of `M`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RotationSystem {
+pub(crate) struct RotationSystem {
     normal: Matrix9,
     motions: usize,
 }
@@ -34,7 +34,7 @@ impl Default for RotationSystem {
 
 /// What the rotation system gives: R_x and how well it is determined.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RotationSolution {
+pub(crate) struct RotationSolution {
     /// The rotation of X, projected onto SO(3).
     pub r_x: Matrix3<f64>,
     /// Second-smallest over largest singular value of the stacked system.
@@ -72,11 +72,6 @@ impl RotationSystem {
     /// `motions` motion pairs.
     pub fn from_normal(normal: SMatrix<f64, 9, 9>, motions: usize) -> Self {
         Self { normal, motions }
-    }
-
-    /// Number of motion pairs added.
-    pub fn motions(&self) -> usize {
-        self.motions
     }
 
     /// The accumulated 9×9 normal matrix.

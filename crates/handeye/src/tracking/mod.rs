@@ -5,7 +5,7 @@
 //! before it enters the all-pairs sums of [`crate::accumulate::PoseAccumulator`]:
 //!
 //! 1. **The screw gate** (X-free, from the second pose on): the median screw-invariant gaps of the
-//!    pose against up to eight recent accepted poses ([`crate::consistency::screw_gaps`], the test
+//!    pose against up to eight recent accepted poses (`consistency::screw_gaps`, the test
 //!    of batch `--reject-outliers`) above `max(outlier_deg, 6 × typical)` in angle, or 6 × typical
 //!    in pitch, hold it out: a flipped or random target pose, a gross error, a bad stamp. Eight
 //!    held out in a row mean the partners are stale (the rig changed): they are dropped.
