@@ -276,20 +276,13 @@ pub struct HeldOutName {
 /// [`Error::Degenerate`] when the motions do not determine X, [`Error::TooFewMotions`].
 pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
     let mut warnings = Vec::new();
-    // The readings are judged on the poses that agree with the others, so that outliers do not
-    // make a mirror-image reading look better.
-    let as_given = pose_outliers(poses, setup, options.outlier_deg);
-    let (applied, check) = choose_reading(
-        &without(poses, &as_given),
+    let (applied, check, read, found) = read_poses(
+        poses,
         setup,
         options.fix,
+        options.outlier_deg,
         &mut warnings,
     )?;
-    let read = applied.apply(poses);
-    let found = match applied {
-        Reading::AsGiven => as_given,
-        _ => pose_outliers(&read, setup, options.outlier_deg),
-    };
     let read_len = read.len();
     let used: Vec<PosePair> = if options.reject_outliers {
         without(&read, &found)
@@ -476,6 +469,26 @@ fn solve_motions(motions: &(impl MotionSource + ?Sized), options: &Options) -> R
     } else {
         solve(options.method, motions)
     }
+}
+
+/// The poses as they are to be read, with the reading chosen, its check and the outliers of the
+/// poses so read. The readings are judged on the poses that agree with the others, so that
+/// outliers do not make a mirror-image reading look better.
+pub(crate) fn read_poses(
+    poses: &[PosePair],
+    setup: Setup,
+    fix: Fix,
+    outlier_deg: f64,
+    warnings: &mut Vec<Warning>,
+) -> Result<(Reading, Option<ReadingCheck>, Vec<PosePair>, PoseOutliers)> {
+    let as_given = pose_outliers(poses, setup, outlier_deg);
+    let (applied, check) = choose_reading(&without(poses, &as_given), setup, fix, warnings)?;
+    let read = applied.apply(poses);
+    let found = match applied {
+        Reading::AsGiven => as_given,
+        _ => pose_outliers(&read, setup, outlier_deg),
+    };
+    Ok((applied, check, read, found))
 }
 
 /// The reading to solve under, and the check behind it.

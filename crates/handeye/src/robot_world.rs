@@ -26,12 +26,10 @@ use nalgebra::{Matrix3, Matrix6};
 use serde::{Deserialize, Serialize};
 
 use crate::calibration::{
-    Fix, Options, Outliers, ReadingReport, Units, choose_reading, explained, outlier_report,
-    outlier_warning, warn_weak, without, working_distance,
+    Fix, Options, Outliers, ReadingReport, Units, explained, outlier_report, outlier_warning,
+    read_poses, warn_weak, without, working_distance,
 };
-use crate::consistency::pose_outliers;
 use crate::consistency::translation_scale;
-use crate::conventions::Reading;
 use crate::error::{Degeneracy, Error, Result};
 use crate::io::TransformJson;
 use crate::metrics::OUTLIER_DEG;
@@ -168,19 +166,13 @@ pub fn calibrate_robot_world(
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
     let mut warnings = Vec::new();
-    // As in the hand–eye report: the readings are judged on the poses that agree with the others.
-    let as_given = pose_outliers(poses, setup, options.outlier_deg);
-    let (applied, check) = choose_reading(
-        &without(poses, &as_given),
+    let (applied, check, read, found) = read_poses(
+        poses,
         setup,
         options.fix,
+        options.outlier_deg,
         &mut warnings,
     )?;
-    let read = applied.apply(poses);
-    let found = match applied {
-        Reading::AsGiven => as_given,
-        _ => pose_outliers(&read, setup, options.outlier_deg),
-    };
     let outliers = outlier_report(
         &found,
         &Options {
