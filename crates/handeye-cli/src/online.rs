@@ -276,7 +276,7 @@ pub fn run(args: Args) -> Result<()> {
         if !accumulate {
             for event in events {
                 match face {
-                    Face::Json => out.json(&event_json(&event, time_offset))?,
+                    Face::Json => out.json(&event.line(time_offset))?,
                     Face::Text => out.text(&format!("{}\n", event_text(&event)))?,
                     _ => {}
                 }
@@ -563,11 +563,6 @@ fn print_step(
         print_report(r, setup, time_offset, face, &out)?;
     }
     Ok(())
-}
-
-/// One event as its JSON line (SPEC sec. 7).
-pub fn event_json(e: &Event, time_offset: Option<f64>) -> Value {
-    with_offset(e.json(), time_offset)
 }
 
 /// A JSON line with the clock offset used, for two streams.

@@ -127,7 +127,7 @@ impl LineOut {
     }
 
     /// One JSON line: the value, compact, and a line end.
-    pub fn json(&self, v: &Value) -> anyhow::Result<()> {
+    pub fn json(&self, v: &impl serde::Serialize) -> anyhow::Result<()> {
         let mut buffer = self.0.borrow_mut();
         serde_json::to_writer(&mut buffer.bytes, v)?;
         buffer.bytes.push(b'\n');

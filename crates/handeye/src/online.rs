@@ -16,14 +16,13 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::io::TransformJson;
 use crate::metrics::{errors_against_truth, residual_rms};
 use crate::motion::{MotionPair, PosePair, Setup};
 use crate::pose::Transform;
 use crate::select::{AdaptiveParams, Selected, Selection, Selector, Thresholds};
 use crate::solve::{RefineOptions, andreff, refine_from};
-use crate::tracking::{
-    Pending, Report, Step, TrackEstimate, TrackOptions, Tracker, insert_transform,
-};
+use crate::tracking::{Pending, Report, Step, TrackEstimate, TrackOptions, Tracker};
 
 /// Number of selected motions the optimal method refines over (sec. 4.1.3).
 pub const OPTIMAL_WINDOW: usize = 5;
@@ -184,28 +183,73 @@ impl Event {
     /// The event as its JSON line (SPEC sec. 7), the one output of every face: `calibration`,
     /// `poses`, `thresholds` (adaptive and fixed selection), `rms_r`, `rms_t`, X (`translation`,
     /// `quaternion_xyzw`, `matrix`), `conditioning`, `optimal` (X, `number`, `motions`) when
-    /// enabled, `seconds`.
-    pub fn json(&self) -> serde_json::Value {
-        let mut out = serde_json::Map::new();
-        out.insert("calibration".into(), self.calibration.into());
-        out.insert("poses".into(), serde_json::json!(self.poses));
-        if let Some(t) = self.thresholds {
-            out.insert("thresholds".into(), serde_json::json!(t));
+    /// enabled, `seconds`; and `time_offset_s`, the clock offset applied, when one was.
+    ///
+    /// The CLI serialises it straight to its output; [`Self::json`] is the same line as a value.
+    pub fn line(&self, time_offset_s: Option<f64>) -> EventLine {
+        EventLine {
+            calibration: self.calibration,
+            poses: self.poses,
+            thresholds: self.thresholds,
+            rms_r: self.rms.rms_r,
+            rms_t: self.rms.rms_t,
+            x: TransformJson::from(&self.x),
+            conditioning: self.conditioning,
+            optimal: self.optimal.as_ref().map(|o| OptimalLine {
+                x: TransformJson::from(&o.x),
+                number: o.number,
+                motions: o.motions,
+            }),
+            seconds: self.seconds,
+            time_offset_s,
         }
-        out.insert("rms_r".into(), self.rms.rms_r.into());
-        out.insert("rms_t".into(), self.rms.rms_t.into());
-        insert_transform(&mut out, &self.x);
-        out.insert("conditioning".into(), self.conditioning.into());
-        if let Some(o) = &self.optimal {
-            let mut optimal = serde_json::Map::new();
-            insert_transform(&mut optimal, &o.x);
-            optimal.insert("number".into(), o.number.into());
-            optimal.insert("motions".into(), serde_json::json!(o.motions));
-            out.insert("optimal".into(), optimal.into());
-        }
-        out.insert("seconds".into(), self.seconds.into());
-        out.into()
     }
+
+    /// [`Self::line`] without a clock offset, as a JSON value.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::to_value(self.line(None)).unwrap_or_default()
+    }
+}
+
+/// An [`Event`] as its JSON line ([`Event::line`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EventLine {
+    /// Number of the calibration, from 1.
+    pub calibration: usize,
+    /// The three pose numbers of the two selected motions.
+    pub poses: [usize; 3],
+    /// The thresholds the motions passed (not with selection `none`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thresholds: Option<Thresholds>,
+    /// rmsR of the calibration.
+    pub rms_r: f64,
+    /// rmsT of the calibration.
+    pub rms_t: f64,
+    /// X.
+    #[serde(flatten)]
+    pub x: TransformJson,
+    /// The conditioning of the two motions.
+    pub conditioning: f64,
+    /// The optimal method's X, when enabled.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub optimal: Option<OptimalLine>,
+    /// Wall time of the calibration, seconds.
+    pub seconds: f64,
+    /// The clock offset applied to a second stream, seconds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_offset_s: Option<f64>,
+}
+
+/// The optimal method's part of an [`EventLine`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OptimalLine {
+    /// X refined over the last five selected motions.
+    #[serde(flatten)]
+    pub x: TransformJson,
+    /// Number of this optimal result.
+    pub number: usize,
+    /// The five motions as pose-number pairs, oldest first.
+    pub motions: [[usize; 2]; OPTIMAL_WINDOW],
 }
 
 /// The online calibrator (see the module documentation).

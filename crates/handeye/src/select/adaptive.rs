@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::motion::{MotionPair, PosePair, Setup};
 use crate::select::{
-    AdaptiveParams, FirstMotion, InitialStats, Numbered, Selected, Thresholds, axis_sine, fit,
-    gripper_motion,
+    AdaptiveParams, FirstMotion, InitialStats, Numbered, Selected, Thresholds, axis_sine,
+    gripper_motion, regression::Cubic,
 };
 
 /// Number of past calibrations the regression of sec. 3.2 looks at.
@@ -282,18 +282,21 @@ pub fn predict(
     let x_t = mean(&rms_t).min(params.rms_t_max);
     let mut t = current;
 
+    // Eq. (3) once for each x: rmsR serves Algorithms I and II, rmsT II and III.
+    let (fit_r, fit_t) = (Cubic::of(&rms_r), Cubic::of(&rms_t));
+    let at = |fit: &Option<Cubic>, y: &[f64; RECORDS], x: f64| fit.as_ref()?.at(y, x);
     // Algorithm I: sin α₀ from rmsR.
-    if let Some(v) = fit(&rms_r, &sin_alpha, x_r) {
+    if let Some(v) = at(&fit_r, &sin_alpha, x_r) {
         t.sin_alpha = params.alpha_min.max(v.min(1.0));
     }
     // Algorithm II: β₀ from rmsR and rmsT, weighted 3:1.
-    if let (Some(b1), Some(b2)) = (fit(&rms_r, &beta, x_r), fit(&rms_t, &beta, x_t)) {
+    if let (Some(b1), Some(b2)) = (at(&fit_r, &beta, x_r), at(&fit_t, &beta, x_t)) {
         t.beta = params
             .beta_min
             .max(((3.0 * b1 + b2) / 4.0).min(std::f64::consts::PI));
     }
     // Algorithm III: d₀ from rmsT.
-    if let Some(v) = fit(&rms_t, &d, x_t).filter(|v| *v > 0.0) {
+    if let Some(v) = at(&fit_t, &d, x_t).filter(|v| *v > 0.0) {
         t.d = params.d_max.min(v);
     }
     // The opt-in remedy for lock-in: a threshold whose four records are equal explores instead.

@@ -6,8 +6,8 @@ use nalgebra::{Matrix3, Vector3};
 /// Above this 2-norm condition number of the scaled matrix L of Eq. (3) the fit gives nothing.
 pub(crate) const MAX_CONDITION: f64 = 1e14;
 
-/// Iteration cap of the 3×3 SVD that measures the condition number.
-const SVD_ITERATIONS: usize = 1000;
+/// Iteration cap of the 3×3 eigen-decomposition that measures the condition number.
+const EIGEN_ITERATIONS: usize = 1000;
 
 /// Fits Eq. (2), y = b₀ + b₁x + b₂x² + b₃x³, to four points by least squares and evaluates it at
 /// `x_new` (Eq. (5)).
@@ -28,28 +28,61 @@ const SVD_ITERATIONS: usize = 1000;
 /// assert!((at - (1.0 + 1.0 - 0.125)).abs() < 1e-9);
 /// ```
 pub fn fit(x: &[f64; 4], y: &[f64; 4], x_new: f64) -> Option<f64> {
-    if !(x.iter().chain(y).all(|v| v.is_finite()) && x_new.is_finite()) {
-        return None;
+    Cubic::of(x)?.at(y, x_new)
+}
+
+/// Eq. (3)'s matrix L for one set of four x values, checked and factored once: Algorithms I–III
+/// fit two thresholds each against the same rmsR or rmsT records.
+pub(crate) struct Cubic {
+    /// max|x|, the scale of x.
+    sx: f64,
+    /// The scaled (x, x², x³) of the four points.
+    powers: [Vector3<f64>; 4],
+    /// Their means x̄₁, x̄₂, x̄₃.
+    mean_p: Vector3<f64>,
+    /// L, factored.
+    lu: nalgebra::LU<f64, nalgebra::U3, nalgebra::U3>,
+}
+
+impl Cubic {
+    /// L for these x values; `None` when they are not finite or L is singular (condition number
+    /// above [`MAX_CONDITION`]).
+    pub(crate) fn of(x: &[f64; 4]) -> Option<Self> {
+        if !x.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let (l, mean_p, sx) = centred_moments(x);
+        let condition = condition_of(&l);
+        if !condition.is_finite() || condition > MAX_CONDITION {
+            return None;
+        }
+        Some(Self {
+            sx,
+            powers: x.map(|v| powers(v / sx)),
+            mean_p,
+            lu: l.lu(),
+        })
     }
-    let sx = scale_of(x);
-    let sy = scale_of(y);
-    let (l, mean_p) = centred_moments(x);
-    let ys = y.map(|v| v / sy);
-    let mean_y = ys.iter().sum::<f64>() / 4.0;
-    // L_p0 = Σ (x^p − x̄_p)(y − ȳ).
-    let mut l0 = Vector3::zeros();
-    for (xs, y) in x.iter().map(|v| v / sx).zip(ys) {
-        l0 += (powers(xs) - mean_p) * (y - mean_y);
+
+    /// Eq. (4) and (5): the least-squares cubic through (x, y), evaluated at `x_new`.
+    pub(crate) fn at(&self, y: &[f64; 4], x_new: f64) -> Option<f64> {
+        if !(y.iter().all(|v| v.is_finite()) && x_new.is_finite()) {
+            return None;
+        }
+        let sy = scale_of(y);
+        let ys = y.map(|v| v / sy);
+        let mean_y = ys.iter().sum::<f64>() / 4.0;
+        // L_p0 = Σ (x^p − x̄_p)(y − ȳ).
+        let mut l0 = Vector3::zeros();
+        for (p, y) in self.powers.iter().zip(ys) {
+            l0 += (p - self.mean_p) * (y - mean_y);
+        }
+        let b = self.lu.solve(&l0)?;
+        let b0 = mean_y - b.dot(&self.mean_p);
+        let u = x_new / self.sx;
+        let value = (b0 + b[0] * u + b[1] * u * u + b[2] * u * u * u) * sy;
+        value.is_finite().then_some(value)
     }
-    let condition = condition_of(&l)?;
-    if !condition.is_finite() || condition > MAX_CONDITION {
-        return None;
-    }
-    let b = l.lu().solve(&l0)?;
-    let b0 = mean_y - b.dot(&mean_p);
-    let u = x_new / sx;
-    let value = (b0 + b[0] * u + b[1] * u * u + b[2] * u * u * u) * sy;
-    value.is_finite().then_some(value)
 }
 
 /// The 2-norm condition number of Eq. (3)'s matrix L for these x values (after scaling by
@@ -58,7 +91,7 @@ pub fn fit_condition(x: &[f64; 4]) -> f64 {
     if !x.iter().all(|v| v.is_finite()) {
         return f64::INFINITY;
     }
-    condition_of(&centred_moments(x).0).unwrap_or(f64::INFINITY)
+    condition_of(&centred_moments(x).0)
 }
 
 /// (x, x², x³) of one scaled x value.
@@ -66,8 +99,9 @@ fn powers(v: f64) -> Vector3<f64> {
     Vector3::new(v, v * v, v * v * v)
 }
 
-/// Eq. (3)'s L_pq = Σ (x^p − x̄_p)(x^q − x̄_q) on x scaled by max|x|, and the means x̄₁, x̄₂, x̄₃.
-fn centred_moments(x: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>) {
+/// Eq. (3)'s L_pq = Σ (x^p − x̄_p)(x^q − x̄_q) on x scaled by max|x|, the means x̄₁, x̄₂, x̄₃, and
+/// the scale max|x|.
+fn centred_moments(x: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>, f64) {
     let sx = scale_of(x);
     let p = x.map(|v| powers(v / sx));
     let mean = p.iter().sum::<Vector3<f64>>() / 4.0;
@@ -76,15 +110,18 @@ fn centred_moments(x: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>) {
         let c = v - mean;
         l += c * c.transpose();
     }
-    (l, mean)
+    (l, mean, sx)
 }
 
-/// σ_max / σ_min of a 3×3 matrix; `None` if the SVD does not converge.
-fn condition_of(l: &Matrix3<f64>) -> Option<f64> {
-    let sv = l
-        .try_svd(false, false, f64::EPSILON, SVD_ITERATIONS)?
-        .singular_values;
-    Some(sv.max() / sv.min())
+/// σ_max / σ_min of L. L = Σ c cᵀ is symmetric positive semi-definite, so its singular values
+/// are its eigenvalues (their magnitudes, against rounding); infinite when L is singular or the
+/// decomposition does not converge.
+fn condition_of(l: &Matrix3<f64>) -> f64 {
+    let Some(eigen) = l.try_symmetric_eigen(f64::EPSILON, EIGEN_ITERATIONS) else {
+        return f64::INFINITY;
+    };
+    let magnitudes = eigen.eigenvalues.abs();
+    magnitudes.max() / magnitudes.min()
 }
 
 /// max|v|, or 1 when it is 0.

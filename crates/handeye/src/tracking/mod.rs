@@ -43,7 +43,6 @@ use crate::motion::{PosePair, Setup};
 use crate::pose::rotation_angle_between;
 use crate::uncertainty::{UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION};
 
-pub(crate) use events::insert_transform;
 pub use events::{
     Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate, target_frame,
 };
