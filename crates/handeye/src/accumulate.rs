@@ -340,8 +340,11 @@ pub(crate) struct PairSums {
     pub(crate) length_squares: f64,
 }
 
-/// A 3×13 matrix.
-type Matrix313 = SMatrix<f64, 3, 13>;
+/// A 4×3 matrix.
+type Matrix43 = SMatrix<f64, 4, 3>;
+
+/// A 3×4 matrix.
+type Matrix34 = SMatrix<f64, 3, 4>;
 
 /// One pose as (R_k, p_k) of Q_k and (S_k, c_k) of C_k = `camera_from_target`.
 type PoseParts = (Matrix3<f64>, Vector3<f64>, Matrix3<f64>, Vector3<f64>);
@@ -393,40 +396,67 @@ impl PairSums {
 
 /// M_T = Σ_{i<j} L_ijᵀ L_ij from the prefix sums over the poses (see [`PairSums`]); each pose
 /// given as (R_k, p_k, S_k, c_k).
+///
+/// With z = (vec R_x, t_x, 1), B^m = [K_m, T_m] splits into its 9 rotation columns and 4 others:
+/// K_0 = −R ⊗ cᵀ, T_0 = −[R, p], and K_m = R ⊗ (S e_m)ᵀ, T_m = 0 for m = 1..3; F = [0, R, p] has
+/// only the 4 others. So the three terms of L_ijᵀ L_ij summed over i < j are, block by block:
+/// - Σ F_iᵀF_i: the 4×4 block of Σ_{i<j} [R_i, p_i]ᵀ[R_i, p_i];
+/// - Σ_m (Σ_i a_i[m] F_iᵀ) B_j^m and its transpose: rows 9..13 only, P_m = Σ_{i<j} a_i[m] [R_i, p_i]ᵀ;
+/// - Σ_{m,l} (Σ_i a_i a_iᵀ)[m, l] B_j^mᵀ B_j^l: K's 9×9, the 9×4 coupling through T_0, and T_0's 4×4.
+///
+/// Only the non-zero blocks are formed (a third of the products of the full 13-column form).
 fn translation_form(poses: &[PoseParts]) -> Matrix13 {
     let mut total = Matrix13::zeros();
-    let mut ff = Matrix13::zeros();
-    let mut af = [SMatrix::<f64, 13, 3>::zeros(); 4];
+    let mut ff = Matrix4::<f64>::zeros();
+    let mut p_sums = [Matrix43::zeros(); 4];
     let mut aa = Matrix4::<f64>::zeros();
     for (r, p, s, c) in poses {
-        // B^0 = −H = −[R ⊗ cᵀ, R, p]; B^{m+1} = [R ⊗ (S e_m)ᵀ, 0, 0].
-        let mut b = [Matrix313::zeros(); 4];
-        b[0].fixed_view_mut::<3, 9>(0, 0)
-            .copy_from(&-kron_row(r, c));
-        b[0].fixed_view_mut::<3, 3>(0, 9).copy_from(&-r);
-        b[0].fixed_view_mut::<3, 1>(0, 12).copy_from(&-p);
-        for m in 0..3 {
-            let column: Vector3<f64> = s.column(m).into_owned();
-            b[m + 1]
-                .fixed_view_mut::<3, 9>(0, 0)
-                .copy_from(&kron_row(r, &column));
-        }
-        total += ff;
+        let k = [
+            -kron_row(r, c),
+            kron_row(r, &s.column(0).into_owned()),
+            kron_row(r, &s.column(1).into_owned()),
+            kron_row(r, &s.column(2).into_owned()),
+        ];
+        // F's non-zero columns [R, p]; T_0 = −[R, p].
+        let mut f = Matrix34::zeros();
+        f.fixed_view_mut::<3, 3>(0, 0).copy_from(r);
+        f.set_column(3, p);
+        let t0 = -f;
+        // The quadratic term: Σ_{m,l} aa[m,l] K_mᵀ K_l, and its coupling and 4×4 through T_0.
+        let mut kk = Matrix9::zeros();
+        let mut c0 = Matrix39::zeros();
         for m in 0..4 {
-            let cross = af[m] * b[m];
-            total += cross + cross.transpose();
-            let combined = (0..4).fold(Matrix313::zeros(), |sum, l| sum + b[l] * aa[(m, l)]);
-            total += b[m].transpose() * combined;
+            let mut cm = k[0] * aa[(m, 0)];
+            for (l, k_l) in k.iter().enumerate().skip(1) {
+                cm += k_l * aa[(m, l)];
+            }
+            kk += k[m].transpose() * cm;
+            if m == 0 {
+                c0 = cm;
+            }
         }
-        // F = [0, R, p], a = (1, Sᵀc).
-        let mut f = Matrix313::zeros();
-        f.fixed_view_mut::<3, 3>(0, 9).copy_from(r);
-        f.fixed_view_mut::<3, 1>(0, 12).copy_from(p);
+        // The cross term, rows 9..13: Σ_m P_m K_m and P_0 T_0.
+        let mut pk = p_sums[0] * k[0];
+        for m in 1..4 {
+            pk += p_sums[m] * k[m];
+        }
+        let pt = p_sums[0] * t0;
+        let coupling = c0.transpose() * t0 + pk.transpose();
+        let mut rotation = total.fixed_view_mut::<9, 9>(0, 0);
+        rotation += kk;
+        let mut upper = total.fixed_view_mut::<9, 4>(0, 9);
+        upper += coupling;
+        let mut lower = total.fixed_view_mut::<4, 9>(9, 0);
+        lower += coupling.transpose();
+        let mut corner = total.fixed_view_mut::<4, 4>(9, 9);
+        corner += ff + t0.transpose() * t0 * aa[(0, 0)] + pt + pt.transpose();
+        // This pose joins the prefix sums: a = (1, Sᵀc).
         let o = s.transpose() * c;
         let a = Vector4::new(1.0, o.x, o.y, o.z);
         ff += f.transpose() * f;
-        for m in 0..4 {
-            af[m] += f.transpose() * a[m];
+        let ft = f.transpose();
+        for (m, sum) in p_sums.iter_mut().enumerate() {
+            *sum += ft * a[m];
         }
         aa += a * a.transpose();
     }

@@ -102,7 +102,13 @@ fn every_method_gives_the_motion_by_motion_answer() {
     for (name, poses, setup) in datasets() {
         let sums = AllPairs::new(&poses, setup);
         let stored = motion_pairs(&poses, Pairing::All, setup);
-        for method in [Method::Andreff, Method::Refine, Method::Tsai, Method::Park] {
+        for method in [
+            Method::Andreff,
+            Method::AndreffJoint,
+            Method::Refine,
+            Method::Tsai,
+            Method::Park,
+        ] {
             let (a, b) = (solve(method, &sums), solve(method, &stored));
             match (&a, &b) {
                 (Ok(a), Ok(b)) => {

@@ -5,6 +5,7 @@ use nalgebra::{Matrix3, SMatrix, SVector};
 use crate::error::{Degeneracy, Error, Result};
 use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{proj_so3, rotation_matrix};
+use crate::residual::Quadratic;
 use crate::solve::least_squares::least_squares_12;
 use crate::solve::scale::{Scaled, length_scale, weighting_unit};
 use crate::solve::{Calibration, Method, REFUSE_CONDITIONING, check_motions, finish, singular};
@@ -47,10 +48,17 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
     // (measured: t_x 0.6 for 0.37 in the input's unit, a refusal at ×1e-8). The system's own
     // conditioning decides, with the threshold of the rotation system, measured in units of the
     // data's own scale (where both blocks of rows are of order 1, so that it is unit-free).
-    let (mut joint, mut unused) = (SMatrix::<f64, 12, 12>::zeros(), SVector::<f64, 12>::zeros());
-    Scaled::new(motions, length_scale(motions))
-        .for_each_motion(|m| add_normal(m, &mut joint, &mut unused));
-    joint.fill_lower_triangle_with_upper_triangle();
+    let joint = match motions.all_pairs() {
+        Some(pairs) => form_normal(&pairs.sums().quadratic.in_unit(length_scale(motions))).0,
+        None => {
+            let (mut joint, mut unused) =
+                (SMatrix::<f64, 12, 12>::zeros(), SVector::<f64, 12>::zeros());
+            Scaled::new(motions, length_scale(motions))
+                .for_each_motion(|m| add_normal(m, &mut joint, &mut unused));
+            joint.fill_lower_triangle_with_upper_triangle();
+            joint
+        }
+    };
     let eigenvalues = joint.symmetric_eigenvalues();
     let joint_conditioning = (eigenvalues.min().max(0.0) / eigenvalues.max()).sqrt();
     let no_translation = || {
@@ -64,8 +72,11 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
     if joint_conditioning.is_nan() || joint_conditioning < REFUSE_CONDITIONING {
         return Err(no_translation());
     }
-    let x = least_squares_12(&scaled, add_normal, correction)
-        .ok_or_else(|| singular(check.conditioning))?;
+    let x = match motions.all_pairs() {
+        Some(pairs) => solve_form(&pairs.sums().quadratic.in_unit(unit)),
+        None => least_squares_12(&scaled, add_normal, correction),
+    }
+    .ok_or_else(|| singular(check.conditioning))?;
     let raw = Matrix3::new(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8]);
     let det = raw.determinant();
     // The scale of vec(R_x) is fixed only by the gripper translations t_a (the right-hand side of
@@ -86,6 +97,28 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
         &r_x,
         &t_x,
     ))
+}
+
+/// The normal equations of Eq. (10) from the quadratic form of the same motions' residuals
+/// ([`Quadratic`], O(1) for every pair of n poses once its O(n) sums are made): Eq. (10)'s rows
+/// are ΔR and ΔT up to a rotation and a sign, so Σ‖C x − d‖² = zᵀ M z for z = (x, 1) with
+/// M = M_R ⊕ 0 + M_T. Hence CᵀC is M's leading 12×12 block and Cᵀd = −M[0..12, 12].
+fn form_normal(form: &Quadratic) -> (SMatrix<f64, 12, 12>, SVector<f64, 12>) {
+    let mut normal: SMatrix<f64, 12, 12> = form.translation.fixed_view::<12, 12>(0, 0).into_owned();
+    let mut rotation = normal.fixed_view_mut::<9, 9>(0, 0);
+    rotation += form.rotation;
+    let rhs = -form.translation.fixed_view::<12, 1>(0, 12).into_owned();
+    (normal, rhs)
+}
+
+/// Eq. (10) solved from its normal equations made by [`form_normal`] (LU). The refinement step of
+/// [`least_squares_12`] would need the motions one by one; without it the error is the normal
+/// equations' ε·κ², measured equal to the motion-by-motion solve to ~1e-12 over all pairs
+/// (`tests/all_pairs.rs`).
+fn solve_form(form: &Quadratic) -> Option<SVector<f64, 12>> {
+    let (normal, rhs) = form_normal(form);
+    let x = normal.lu().solve(&rhs)?;
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Adds one motion's share of the normal equations of Eq. (10) to `n` (its upper triangle) and
