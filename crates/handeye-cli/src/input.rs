@@ -1,10 +1,13 @@
 //! Where the pose pairs come from: a pose-pair file (or stdin), two timestamped streams, or a ROS 2
 //! recording.
 
+use std::cell::RefCell;
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::PathBuf;
 use std::rc::Rc;
+use std::sync::mpsc::{Receiver, TryRecvError, sync_channel};
+use std::thread::JoinHandle;
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
@@ -559,5 +562,116 @@ fn file_records<R: BufRead + 'static>(input: PoseInput<R>, source: &str) -> Reco
                 told: false,
             })
         }
+    }
+}
+
+/// The records of [`records`], read and parsed on a second thread while this one calibrates.
+///
+/// The reader thread sends them in batches of up to [`BATCH`], and a partial batch whenever it
+/// is about to wait for input, so a slow stream is not held back; this thread calls
+/// `before_wait` (which writes out the buffered output) whenever no batch is ready. At most
+/// [`QUEUED_BATCHES`] batches wait in between, so the memory stays constant. The records come in
+/// the order read, as from [`records`] itself.
+pub struct ReadAhead {
+    batches: Receiver<Vec<handeye::Result<StampedPosePair>>>,
+    batch: std::vec::IntoIter<handeye::Result<StampedPosePair>>,
+    before_wait: Rc<dyn Fn()>,
+    reader: Option<JoinHandle<()>>,
+}
+
+/// Records per batch sent by [`ReadAhead`]'s reader thread.
+const BATCH: usize = 256;
+
+/// Batches [`ReadAhead`]'s reader may have read ahead.
+const QUEUED_BATCHES: usize = 8;
+
+/// [`records`] read ahead on a second thread ([`ReadAhead`]): the same records, source name and
+/// clock offset, and the same error when the input cannot be opened.
+pub fn read_ahead(
+    args: &InputArgs,
+    before_wait: Rc<dyn Fn()>,
+) -> Result<(ReadAhead, String, Option<Offset>)> {
+    let args = args.clone();
+    let (batches, received) = sync_channel(QUEUED_BATCHES);
+    let (opened, head) = sync_channel(1);
+    let reader = std::thread::spawn(move || {
+        let pending = Rc::new(RefCell::new(Vec::with_capacity(BATCH)));
+        let send = {
+            let (pending, batches) = (pending.clone(), batches.clone());
+            move || {
+                let batch = std::mem::take(&mut *pending.borrow_mut());
+                // A closed channel: the calibrating thread has stopped, and so does this one.
+                batch.is_empty() || batches.send(batch).is_ok()
+            }
+        };
+        let records = match records(&args, {
+            let send = send.clone();
+            Rc::new(move || {
+                send();
+            })
+        }) {
+            Ok((records, source, offset)) => {
+                let _ = opened.send(Ok((source, offset)));
+                records
+            }
+            Err(e) => {
+                let _ = opened.send(Err(e));
+                return;
+            }
+        };
+        for record in records {
+            pending.borrow_mut().push(record);
+            if pending.borrow().len() >= BATCH && !send() {
+                return;
+            }
+        }
+        send();
+    });
+    match head.recv() {
+        Ok(Ok((source, offset))) => Ok((
+            ReadAhead {
+                batches: received,
+                batch: Vec::new().into_iter(),
+                before_wait,
+                reader: Some(reader),
+            },
+            source,
+            offset,
+        )),
+        Ok(Err(e)) => Err(e),
+        // The reader stopped before it opened the input: only a panic does that.
+        Err(_) => std::panic::resume_unwind(
+            reader
+                .join()
+                .err()
+                .unwrap_or_else(|| Box::new("the input reader stopped before opening the input")),
+        ),
+    }
+}
+
+impl Iterator for ReadAhead {
+    type Item = handeye::Result<StampedPosePair>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if let Some(record) = self.batch.next() {
+            return Some(record);
+        }
+        let batch = match self.batches.try_recv() {
+            Ok(batch) => Some(batch),
+            Err(TryRecvError::Empty) => {
+                (self.before_wait)();
+                self.batches.recv().ok()
+            }
+            Err(TryRecvError::Disconnected) => None,
+        };
+        let Some(batch) = batch else {
+            // The reader is done; a panic of its own is this thread's too, never a short input.
+            if let Some(Err(panic)) = self.reader.take().map(JoinHandle::join) {
+                std::panic::resume_unwind(panic);
+            }
+            return None;
+        };
+        self.batch = batch.into_iter();
+        self.batch.next()
     }
 }

@@ -14,7 +14,7 @@ use handeye::tracking::{Report, Step, TrackOptions};
 use serde_json::{Value, json};
 
 use crate::faces::{self, Face, Published};
-use crate::input::{InputArgs, records};
+use crate::input::{InputArgs, read_ahead};
 use crate::output::{LineOut, print_text};
 use crate::values;
 
@@ -192,7 +192,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut calibrator = OnlineCalibrator::new(config)?;
     // Event lines are buffered, and written out before the input is waited for.
     let out = LineOut::stdout();
-    let (records, source, offset) = records(&args.input, {
+    let (records, source, offset) = read_ahead(&args.input, {
         let out = out.clone();
         Rc::new(move || out.flush_quietly())
     })?;
