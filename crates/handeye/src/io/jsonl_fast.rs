@@ -10,10 +10,10 @@
 //! return `None`, and the line is read by the general path, which gives the same result or
 //! names the problem (file, line, field). The fast path therefore never decides an error.
 //!
-//! Numbers are checked against JSON's grammar, then converted by the standard library's
-//! correctly rounded parser: the same `f64` as serde_json's (built with `float_roundtrip`) for
-//! every number JSON allows, integers and `-0` included. A number out of `f64`'s range is left to
-//! the general path, which refuses it.
+//! Numbers are checked against JSON's grammar and converted in one pass by lexical-core's JSON
+//! number format, correctly rounded: the same `f64` as serde_json's (built with `float_roundtrip`)
+//! for every number JSON allows, integers and `-0` included. A number out of `f64`'s range is left
+//! to the general path, which refuses it.
 
 use nalgebra::Matrix4;
 
@@ -46,7 +46,6 @@ enum Key {
 /// otherwise, the general path to decide.
 pub(crate) fn scan(line: &str) -> Option<Scanned> {
     let mut c = Cursor {
-        text: line,
         bytes: line.as_bytes(),
         at: 0,
     };
@@ -90,8 +89,7 @@ pub(crate) fn scan(line: &str) -> Option<Scanned> {
 
 /// A position in a line.
 struct Cursor<'a> {
-    text: &'a str,
-    /// The bytes of `text`.
+    /// The line's bytes.
     bytes: &'a [u8],
     at: usize,
 }
@@ -114,15 +112,6 @@ impl<'a> Cursor<'a> {
         while let Some(b' ' | b'\t' | b'\r' | b'\n') = self.bytes.get(self.at) {
             self.at += 1;
         }
-    }
-
-    /// Skips a run of ASCII digits; false when there is none.
-    fn digits(&mut self) -> bool {
-        let start = self.at;
-        while self.bytes.get(self.at).is_some_and(u8::is_ascii_digit) {
-            self.at += 1;
-        }
-        self.at > start
     }
 
     /// A plain string (no escapes), its bytes.
@@ -156,37 +145,18 @@ impl<'a> Cursor<'a> {
         self.number().map(Some)
     }
 
-    /// A finite number in JSON's grammar, `-? (0 | [1-9][0-9]*) (. [0-9]+)? ([eE] [+-]? [0-9]+)?`.
+    /// A finite number in JSON's grammar, `-? (0 | [1-9][0-9]*) (. [0-9]+)? ([eE] [+-]? [0-9]+)?`,
+    /// checked and converted in one pass by lexical-core's JSON number format (correctly rounded,
+    /// like the standard library's parser; the same `f64` as serde_json's, tested below). A
+    /// number out of range comes out infinite and is left to the general path.
     fn number(&mut self) -> Option<f64> {
-        let start = self.at;
-        if self.bytes.get(self.at) == Some(&b'-') {
-            self.at += 1;
-        }
-        match self.bytes.get(self.at)? {
-            b'0' => self.at += 1,
-            b'1'..=b'9' => {
-                self.digits();
-            }
-            _ => return None,
-        }
-        if self.bytes.get(self.at) == Some(&b'.') {
-            self.at += 1;
-            if !self.digits() {
-                return None;
-            }
-        }
-        if let Some(b'e' | b'E') = self.bytes.get(self.at) {
-            self.at += 1;
-            if let Some(b'+' | b'-') = self.bytes.get(self.at) {
-                self.at += 1;
-            }
-            if !self.digits() {
-                return None;
-            }
-        }
-        // ASCII from `start` to here: a slice of the text at character boundaries.
-        let text = self.text.get(start..self.at)?;
-        text.parse::<f64>().ok().filter(|x| x.is_finite())
+        const JSON: u128 = lexical_core::format::JSON;
+        const OPTIONS: lexical_core::ParseFloatOptions = lexical_core::ParseFloatOptions::new();
+        let rest = self.bytes.get(self.at..)?;
+        let (x, used) =
+            lexical_core::parse_partial_with_options::<f64, JSON>(rest, &OPTIONS).ok()?;
+        self.at += used;
+        x.is_finite().then_some(x)
     }
 
     /// A transform: a bare 4×4 array, or an object with `matrix`, `translation` and
