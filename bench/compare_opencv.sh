@@ -42,7 +42,7 @@ for ((round = 1; round <= rounds; round++)); do
         "$work/venv/bin/python" bench/opencv_time.py "$f" > "$work/opencv.$round.$n.json"
         "$bin" bench --quiet --pairs all --methods andreff,andreff-joint,tsai,park,horaud,daniilidis,refine \
             --input "$f" > "$work/handeye.$round.$n.json"
-        python3 bench/process_time.py "$bin" "$f" > "$work/process.$round.$n.json"
+        OPENCV_PYTHON="$work/venv/bin/python" python3 bench/process_time.py "$bin" "$f" > "$work/process.$round.$n.json"
     done
     "$work/venv/bin/python" crates/handeye-py/bench_vs_opencv.py --json > "$work/python.$round.json"
     python3 bench/process_time.py "$bin" --online "${ONLINE_POSES:-100000}" > "$work/online.$round.json"
@@ -93,15 +93,18 @@ for path in glob.glob(f"{work}/process.*.json"):
             process[k] = r
 for path in glob.glob(f"{work}/online.*.json"):
     stream.append(json.load(open(path))["online"])
-print("\n| method | poses | OpenCV in-process | handeye calibrate, whole process | speed-up |")
-print("|---|---|---|---|---|")
+print("\n| method | poses | OpenCV in-process | handeye calibrate, whole process | speed-up | OpenCV script, whole process | speed-up |")
+print("|---|---|---|---|---|---|---|")
 for r in sorted(process.values(), key=lambda r: (r["poses"], METHODS.index(r["method"]))):
     # andreff and refine are compared with OpenCV's Andreff (its only Andreff).
-    cv = cv_rows[(r["dataset"], r["method"] if r["method"] in CV else "andreff-joint")]
+    shared = r["method"] if r["method"] in CV else "andreff-joint"
+    cv = cv_rows[(r["dataset"], shared)]
     label = r["method"] if r["method"] in CV else f"{r['method']} (vs OpenCV's andreff)"
     label += " (refused, exit 3)" if r["refused"] else ""
+    script = process.get((r["dataset"], shared), {}).get("opencv_process_s")
+    whole = f"{script*1e3:.1f} ms | {script/r['median_s']:.1f}×" if script else "– | –"
     print(f"| {label} | {r['poses']} | {cv['median_s']*1e3:.2f} ms | {r['median_s']*1e3:.2f} ms | "
-          f"{cv['median_s']/r['median_s']:.1f}× |")
+          f"{cv['median_s']/r['median_s']:.1f}× | {whole} |")
 
 python = {}
 for path in glob.glob(f"{work}/python.*.json"):

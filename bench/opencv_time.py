@@ -1,6 +1,10 @@
 """Times cv2.calibrateHandEye in-process on handeye pose files; prints JSON.
 
 Usage: python opencv_time.py FILE.jsonl [FILE.jsonl ...]  (each with FILE.truth.json beside it)
+       python opencv_time.py --once METHOD FILE.jsonl
+
+With --once: what a script using OpenCV does as a whole process (import cv2, read the file, one
+calibrateHandEye call, print X), for bench/process_time.py to time from outside.
 """
 import json
 import sys
@@ -53,7 +57,15 @@ def errors(r, t, truth):
     return {"rotation_deg": float(angle), "translation_rel": float(rel)}
 
 
+def once(method, path):
+    r, t = cv2.calibrateHandEye(*load(path), method=METHODS[method])
+    print(json.dumps({"rotation": r.tolist(), "translation": t.ravel().tolist()}))
+
+
 def main():
+    if sys.argv[1:2] == ["--once"]:
+        once(sys.argv[2], sys.argv[3])
+        return
     rows = []
     for path in sys.argv[1:]:
         data = load(path)

@@ -3,12 +3,15 @@ prints JSON.
 
 Usage: python process_time.py BIN FILE.jsonl [FILE.jsonl ...]
        python process_time.py BIN --online POSES
+       OPENCV_PYTHON=venv/bin/python python process_time.py BIN FILE.jsonl ...
 
 For each file: `BIN calibrate FILE --pairs all --method M --output json` for every hand–eye
 method (a refusal, exit 3, is timed too and marked). With --online: `BIN online -` end to end,
 as poses per second, fed through one pipe (`cat`) with POSES poses that `BIN simulate` wrote
 beforehand (simulate itself makes fewer poses a second than online reads, so a pipe straight from
-it would time the simulation). Each time is the median wall time of at least three runs
+it would time the simulation). With OPENCV_PYTHON set (a Python with cv2), OpenCV's script is
+timed the same way for the methods it shares: `OPENCV_PYTHON bench/opencv_time.py --once M FILE`
+(start-up, `import cv2`, reading the file, one call), the whole process a user of OpenCV runs. Each time is the median wall time of at least three runs
 (more while under MIN_TIME seconds, default 1), each timed around the child from Python (a spawn
 costs about a millisecond, which stays in handeye's figure).
 """
@@ -21,6 +24,7 @@ import tempfile
 import time
 
 METHODS = ["andreff", "andreff-joint", "tsai", "park", "horaud", "daniilidis", "refine"]
+OPENCV = ["andreff-joint", "tsai", "park", "horaud", "daniilidis"]
 
 
 def wall(argv, min_time, shell=False):
@@ -49,6 +53,10 @@ def main():
             median, runs, refused = wall(argv, min_time)
             rows.append({"dataset": os.path.basename(path).replace(".jsonl", ""), "poses": poses,
                          "method": method, "median_s": median, "runs": runs, "refused": refused})
+            opencv = os.environ.get("OPENCV_PYTHON")
+            if opencv and method in OPENCV:
+                script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "opencv_time.py")
+                rows[-1]["opencv_process_s"] = wall([opencv, script, "--once", method, path], min_time)[0]
             print(f"process {rows[-1]['dataset']} {method}: {median * 1e3:.1f} ms", file=sys.stderr)
     print(json.dumps({"rows": rows}))
 
