@@ -89,6 +89,23 @@ pub struct Scatter {
     pub translation: f64,
 }
 
+/// `T (R ⊗ S)` for a 3×9 T, without forming the 9×9 `R ⊗ S`: row a of the product, read as a
+/// 3×3 in the layout of [`kron_row`], is `Rᵀ M_a S` with `M_a[b, c] = T[a, 3b + c]` (162
+/// multiplications instead of 243, and none to build the Kronecker product).
+fn times_kron(t: &Matrix39, r: &Matrix3<f64>, s: &Matrix3<f64>) -> Matrix39 {
+    let mut out = Matrix39::zeros();
+    for a in 0..3 {
+        let m = Matrix3::from_fn(|b, c| t[(a, 3 * b + c)]);
+        let block = r.transpose() * m * s;
+        for d in 0..3 {
+            for e in 0..3 {
+                out[(a, 3 * d + e)] = block[(d, e)];
+            }
+        }
+    }
+    out
+}
+
 /// `A ⊗ r` for a 3×3 A and a row 3-vector r (3×9).
 fn kron_row(a: &Matrix3<f64>, r: &Vector3<f64>) -> Matrix39 {
     Matrix39::from_fn(|i, c| a[(i, c / 3)] * r[c % 3])
@@ -130,9 +147,10 @@ impl PoseAccumulator {
         let q_s = s.transpose() * q;
         let sum_q_s = s.transpose() * self.q;
         let identity = Matrix3::identity();
-        self.e +=
-            kron_row(&identity, &sum_q_s) - kron_row(&identity, &q_s) * self.n as f64 - self.t * g
-                + kron_row(&(self.u.transpose() * r), &q_s);
+        self.e += kron_row(&identity, &sum_q_s)
+            - kron_row(&identity, &q_s) * self.n as f64
+            - times_kron(&self.t, &r, &s)
+            + kron_row(&(self.u.transpose() * r), &q_s);
         self.g += g;
         self.u += r;
         self.p += p;
