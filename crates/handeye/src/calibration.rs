@@ -424,7 +424,10 @@ pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
 /// (park, horaud, as with their own replicates), 1.02 (tsai; 0.81 with its own), every error
 /// within 3 sigma. Not andreff-joint and daniilidis: their errors are larger than Andreff's
 /// (with Andreff's sigma, median error/sigma 3.3 and only 30% within 3 sigma), so they keep
-/// their own replicates. Consecutive refine starts from the replicate's own Andreff solution
+/// their own replicates. Daniilidis over all pairs is itself O(n) (per-pose sums, the same system
+/// as the motions': `daniilidis::pairs_normal`), so its own replicates cost what Andreff's do:
+/// median error/sigma 0.89 (rotation), 0.96 (translation), every error within 3 sigma; the whole
+/// `calibrate` at 1,000 poses went from 6.7 s to 0.37 s (loaded machine). Consecutive refine starts from the replicate's own Andreff solution
 /// (never from X̂, which would hide a direction the data leave free) and takes at most
 /// [`REPLICATE_ITERATIONS`] steps.
 fn solve_replicate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Transform> {

@@ -105,6 +105,7 @@ fn every_method_gives_the_motion_by_motion_answer() {
         for method in [
             Method::Andreff,
             Method::AndreffJoint,
+            Method::Daniilidis,
             Method::Refine,
             Method::Tsai,
             Method::Park,
