@@ -20,6 +20,8 @@
 //! Σ‖t_Yi − t_Y‖², in closed form: the data's own noise level under X, in O(1)
 //! ([`PoseAccumulator::residual_scatter`]). [`crate::tracking`] judges each new pose by it.
 
+use std::sync::OnceLock;
+
 use nalgebra::{Matrix3, Matrix4, SMatrix, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 
@@ -352,8 +354,11 @@ impl PoseAccumulator {
 pub(crate) struct PairSums {
     /// Andreff's all-pairs normal equations.
     pub(crate) poses: PoseAccumulator,
-    /// Σ‖ΔR‖² and Σ‖ΔT‖² over all pairs as a quadratic form in [vec R_x; t_x; 1].
-    pub(crate) quadratic: Quadratic,
+    /// Σ‖ΔR‖² and Σ‖ΔT‖² over all pairs as a quadratic form in [vec R_x; t_x; 1], made on first
+    /// use ([`Self::quadratic`]): only refine, andreff-joint and the residual scales need it.
+    quadratic: OnceLock<Quadratic>,
+    /// The centred poses the form is made from.
+    centred: Vec<PoseParts>,
     /// Σ_{i<j} ‖t_a‖² + ‖t_b‖².
     pub(crate) length_squares: f64,
 }
@@ -399,16 +404,21 @@ impl PairSums {
                 (r, p, s, cv)
             })
             .collect();
-        let rotation = *poses.rotation_system().normal_matrix();
         Self {
             poses,
-            quadratic: Quadratic {
-                rotation,
-                translation: translation_form(&centred),
-                motions: Pairing::All.motion_count(hand.len()),
-            },
+            quadratic: OnceLock::new(),
+            centred,
             length_squares: n * spread,
         }
+    }
+
+    /// The quadratic form of the residuals over all pairs (O(n) on first use).
+    pub(crate) fn quadratic(&self) -> &Quadratic {
+        self.quadratic.get_or_init(|| Quadratic {
+            rotation: *self.poses.rotation_system().normal_matrix(),
+            translation: translation_form(&self.centred),
+            motions: Pairing::All.motion_count(self.centred.len()),
+        })
     }
 }
 

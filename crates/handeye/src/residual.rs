@@ -141,7 +141,7 @@ pub(crate) fn block_sums(
     t_x: &Vector3<f64>,
 ) -> BlockRms {
     match motions.all_pairs() {
-        Some(pairs) => pairs.sums().quadratic.block_rms(r_x, t_x),
+        Some(pairs) => pairs.sums().quadratic().block_rms(r_x, t_x),
         None => PerMotion(motions).block_rms(r_x, t_x),
     }
 }
@@ -645,7 +645,7 @@ mod tests {
             let pairs = AllPairs::new(&s.poses, setup);
             let stored = motion_pairs(&s.poses, Pairing::All, setup);
             let a = PerMotion(&stored[..]).linearise(&r_x, &t_x, weights);
-            let b = pairs.sums().quadratic.linearise(&r_x, &t_x, weights);
+            let b = pairs.sums().quadratic().linearise(&r_x, &t_x, weights);
             assert!(close(a.cost, b.cost), "{setup:?}: {} vs {}", a.cost, b.cost);
             for k in 0..36 {
                 assert!(close(a.jtj[k], b.jtj[k]), "{setup:?} JᵀJ entry {k}");

@@ -49,7 +49,7 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
     // conditioning decides, with the threshold of the rotation system, measured in units of the
     // data's own scale (where both blocks of rows are of order 1, so that it is unit-free).
     let joint = match motions.all_pairs() {
-        Some(pairs) => form_normal(&pairs.sums().quadratic.in_unit(length_scale(motions))).0,
+        Some(pairs) => form_normal(&pairs.sums().quadratic().in_unit(length_scale(motions))).0,
         None => {
             let (mut joint, mut unused) =
                 (SMatrix::<f64, 12, 12>::zeros(), SVector::<f64, 12>::zeros());
@@ -73,7 +73,7 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
         return Err(no_translation());
     }
     let x = match motions.all_pairs() {
-        Some(pairs) => solve_form(&pairs.sums().quadratic.in_unit(unit)),
+        Some(pairs) => solve_form(&pairs.sums().quadratic().in_unit(unit)),
         None => least_squares_12(&scaled, add_normal, correction),
     }
     .ok_or_else(|| singular(check.conditioning))?;

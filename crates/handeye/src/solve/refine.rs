@@ -125,7 +125,7 @@ fn with_residuals<T>(
     f: impl FnOnce(&dyn Residuals) -> T,
 ) -> T {
     match motions.all_pairs() {
-        Some(pairs) => f(&pairs.sums().quadratic.in_unit(unit)),
+        Some(pairs) => f(&pairs.sums().quadratic().in_unit(unit)),
         None => f(&PerMotion(&Scaled::new(motions, unit))),
     }
 }
