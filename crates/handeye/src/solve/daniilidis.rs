@@ -216,17 +216,48 @@ fn pairs_normal(pairs: &AllPairs, unit: f64, r_x0: &Matrix3<f64>) -> Option<SMat
         }
         moments += *w * w.transpose();
     }
-    let g = pair_rows();
+    // Σ_r Σ G_k[p, q] G_l[p', q'] M[p, p'] M[q', q] over the non-zero entries of the G tables
+    // (a few per table: the dense 16×16 products were 150 µs whatever n, more than the whole
+    // per-motion sum at ten poses).
     let mut normal = SMatrix::<f64, 8, 8>::zeros();
-    for row in g {
-        let h: Vec<SMatrix<f64, 16, 16>> = row.iter().map(|g_l| moments * g_l * moments).collect();
+    for row in sparse_pair_rows() {
         for k in 0..8 {
-            for l in 0..8 {
-                normal[(k, l)] += 0.5 * row[k].dot(&h[l]);
+            for l in k..8 {
+                let mut sum = 0.0;
+                for &(p, q, a) in &row[k] {
+                    for &(p2, q2, b) in &row[l] {
+                        sum += a * b * moments[(p, p2)] * moments[(q2, q)];
+                    }
+                }
+                normal[(k, l)] += 0.5 * sum;
+                if l != k {
+                    normal[(l, k)] += 0.5 * sum;
+                }
             }
         }
     }
     normal.iter().all(|v| v.is_finite()).then_some(normal)
+}
+
+/// The non-zero entries (p, q, G_pq) of each table of [`pair_rows`] (made once).
+fn sparse_pair_rows() -> &'static [[Vec<(usize, usize, f64)>; 8]; 6] {
+    static ROWS: std::sync::OnceLock<[[Vec<(usize, usize, f64)>; 8]; 6]> =
+        std::sync::OnceLock::new();
+    ROWS.get_or_init(|| {
+        pair_rows().map(|row| {
+            row.map(|g| {
+                let mut entries = Vec::new();
+                for p in 0..16 {
+                    for q in 0..16 {
+                        if g[(p, q)] != 0.0 {
+                            entries.push((p, q, g[(p, q)]));
+                        }
+                    }
+                }
+                entries
+            })
+        })
+    })
 }
 
 /// G_pq[r][k] of [`pairs_normal`] as 16×16 matrices over (p, q): entry (r, k) of the rows of the
