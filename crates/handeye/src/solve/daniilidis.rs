@@ -239,10 +239,12 @@ fn pairs_normal(pairs: &AllPairs, unit: f64, r_x0: &Matrix3<f64>) -> Option<SMat
     normal.iter().all(|v| v.is_finite()).then_some(normal)
 }
 
+/// The tables of [`pair_rows`] as their non-zero entries (p, q, G_pq).
+type SparseRows = [[Vec<(usize, usize, f64)>; 8]; 6];
+
 /// The non-zero entries (p, q, G_pq) of each table of [`pair_rows`] (made once).
-fn sparse_pair_rows() -> &'static [[Vec<(usize, usize, f64)>; 8]; 6] {
-    static ROWS: std::sync::OnceLock<[[Vec<(usize, usize, f64)>; 8]; 6]> =
-        std::sync::OnceLock::new();
+fn sparse_pair_rows() -> &'static SparseRows {
+    static ROWS: std::sync::OnceLock<SparseRows> = std::sync::OnceLock::new();
     ROWS.get_or_init(|| {
         pair_rows().map(|row| {
             row.map(|g| {
