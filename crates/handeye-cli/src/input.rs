@@ -599,7 +599,8 @@ pub fn read_ahead(
         let send = {
             let (pending, batches) = (pending.clone(), batches.clone());
             move || {
-                let batch = std::mem::take(&mut *pending.borrow_mut());
+                let batch =
+                    std::mem::replace(&mut *pending.borrow_mut(), Vec::with_capacity(BATCH));
                 // A closed channel: the calibrating thread has stopped, and so does this one.
                 batch.is_empty() || batches.send(batch).is_ok()
             }

@@ -427,8 +427,8 @@ pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
 /// their own replicates. Daniilidis over all pairs is itself O(n) (per-pose sums, the same system
 /// as the motions': `daniilidis::pairs_normal`), so its own replicates cost what Andreff's do:
 /// median error/sigma 0.89 (rotation), 0.96 (translation), every error within 3 sigma; the whole
-/// `calibrate` at 1,000 poses went from 6.7 s to 0.37 s (loaded machine). Consecutive refine starts from the replicate's own Andreff solution
-/// (never from X̂, which would hide a direction the data leave free) and takes at most
+/// `calibrate` at 1,000 poses went from 6.7 s to 0.37 s (loaded machine). Consecutive refine
+/// starts from the replicate's own Andreff solution (never from X̂, which would hide a direction the data leave free) and takes at most
 /// [`REPLICATE_ITERATIONS`] steps.
 fn solve_replicate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Transform> {
     match (options.method, options.pairing) {

@@ -48,14 +48,14 @@ impl Cubic {
         if !x.iter().all(|v| v.is_finite()) {
             return None;
         }
-        let (l, mean_p, sx) = centred_moments(x);
+        let (l, mean_p, sx, powers) = centred_moments(x);
         let condition = condition_of(&l);
         if !condition.is_finite() || condition > MAX_CONDITION {
             return None;
         }
         Some(Self {
             sx,
-            powers: x.map(|v| powers(v / sx)),
+            powers,
             mean_p,
             lu: l.lu(),
         })
@@ -96,9 +96,9 @@ fn powers(v: f64) -> Vector3<f64> {
     Vector3::new(v, v * v, v * v * v)
 }
 
-/// Eq. (3)'s L_pq = Σ (x^p − x̄_p)(x^q − x̄_q) on x scaled by max|x|, the means x̄₁, x̄₂, x̄₃, and
-/// the scale max|x|.
-fn centred_moments(x: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>, f64) {
+/// Eq. (3)'s L_pq = Σ (x^p − x̄_p)(x^q − x̄_q) on x scaled by max|x|, the means x̄₁, x̄₂, x̄₃, the
+/// scale max|x| and the scaled powers (x, x², x³) of each point.
+fn centred_moments(x: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>, f64, [Vector3<f64>; 4]) {
     let sx = scale_of(x);
     let p = x.map(|v| powers(v / sx));
     let mean = p.iter().sum::<Vector3<f64>>() / 4.0;
@@ -107,7 +107,7 @@ fn centred_moments(x: &[f64; 4]) -> (Matrix3<f64>, Vector3<f64>, f64) {
         let c = v - mean;
         l += c * c.transpose();
     }
-    (l, mean, sx)
+    (l, mean, sx, p)
 }
 
 /// σ_max / σ_min of L. L = Σ c cᵀ is symmetric positive semi-definite, so its singular values

@@ -263,35 +263,32 @@ fn sparse_pair_rows() -> &'static SparseRows {
 }
 
 /// G_pq[r][k] of [`pairs_normal`] as 16×16 matrices over (p, q): entry (r, k) of the rows of the
-/// motion from a pose e_p to a pose e_q (made once).
-fn pair_rows() -> &'static [[SMatrix<f64, 16, 16>; 8]; 6] {
-    static ROWS: std::sync::OnceLock<[[SMatrix<f64, 16, 16>; 8]; 6]> = std::sync::OnceLock::new();
-    ROWS.get_or_init(|| {
-        let conj = |q: &Vector4<f64>| Vector4::new(q[0], -q[1], -q[2], -q[3]);
-        let basis = |p: usize| PoseDual::from_fn(|i, _| if i == p { 1.0 } else { 0.0 });
-        let parts = |w: &PoseDual| {
-            let q = |k: usize| w.fixed_rows::<4>(4 * k).into_owned();
-            (q(0), q(1), q(2), q(3))
-        };
-        let mut g = [[SMatrix::<f64, 16, 16>::zeros(); 8]; 6];
-        for p in 0..16 {
-            let (qj, qj_, cj, cj_) = parts(&basis(p));
-            for q in 0..16 {
-                let (qi, qi_, ci, ci_) = parts(&basis(q));
-                let qa = multiply(&conj(&qj), &qi);
-                let qa_ = multiply(&conj(&qj_), &qi) + multiply(&conj(&qj), &qi_);
-                let qb = multiply(&cj, &conj(&ci));
-                let qb_ = multiply(&cj_, &conj(&ci)) + multiply(&cj, &conj(&ci_));
-                let t = rows_of(&qa, &qb, &qa_, &qb_);
-                for (r, row) in g.iter_mut().enumerate() {
-                    for (k, entry) in row.iter_mut().enumerate() {
-                        entry[(p, q)] = t[(r, k)];
-                    }
+/// motion from a pose e_p to a pose e_q ([`sparse_pair_rows`] keeps their non-zero entries).
+fn pair_rows() -> [[SMatrix<f64, 16, 16>; 8]; 6] {
+    let conj = |q: &Vector4<f64>| Vector4::new(q[0], -q[1], -q[2], -q[3]);
+    let basis = |p: usize| PoseDual::from_fn(|i, _| if i == p { 1.0 } else { 0.0 });
+    let parts = |w: &PoseDual| {
+        let q = |k: usize| w.fixed_rows::<4>(4 * k).into_owned();
+        (q(0), q(1), q(2), q(3))
+    };
+    let mut g = [[SMatrix::<f64, 16, 16>::zeros(); 8]; 6];
+    for p in 0..16 {
+        let (qj, qj_, cj, cj_) = parts(&basis(p));
+        for q in 0..16 {
+            let (qi, qi_, ci, ci_) = parts(&basis(q));
+            let qa = multiply(&conj(&qj), &qi);
+            let qa_ = multiply(&conj(&qj_), &qi) + multiply(&conj(&qj), &qi_);
+            let qb = multiply(&cj, &conj(&ci));
+            let qb_ = multiply(&cj_, &conj(&ci)) + multiply(&cj, &conj(&ci_));
+            let t = rows_of(&qa, &qb, &qa_, &qb_);
+            for (r, row) in g.iter_mut().enumerate() {
+                for (k, entry) in row.iter_mut().enumerate() {
+                    entry[(p, q)] = t[(r, k)];
                 }
             }
         }
-        g
-    })
+    }
+    g
 }
 
 #[cfg(test)]
