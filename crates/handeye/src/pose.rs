@@ -51,8 +51,9 @@ pub fn rotation_matrix(a_from_b: &Transform) -> Matrix3<f64> {
     *a_from_b.rotation.matrix()
 }
 
-/// Checks that `m` is a rotation: orthonormal within [`ORTHONORMAL_TOL`], det > 0, all finite.
-pub(crate) fn check_rotation(m: &Matrix3<f64>) -> Result<(), TransformProblem> {
+/// Checks that `m` is a rotation: orthonormal within [`ORTHONORMAL_TOL`], det > 0, all finite;
+/// its deviation from orthonormal (largest entry of `|mᵀm − I|`) when it is.
+pub(crate) fn check_rotation(m: &Matrix3<f64>) -> Result<f64, TransformProblem> {
     if m.iter().any(|v| !v.is_finite()) {
         return Err(TransformProblem::NotFinite);
     }
@@ -64,7 +65,7 @@ pub(crate) fn check_rotation(m: &Matrix3<f64>) -> Result<(), TransformProblem> {
     if m.determinant() <= 0.0 {
         return Err(TransformProblem::Reflection);
     }
-    Ok(())
+    Ok(deviation)
 }
 
 /// Checks one translation component read from data: finite and at most [`MAX_TRANSLATION`] in size.
@@ -115,24 +116,19 @@ pub(crate) fn read_matrix4(m: &Matrix4<f64>) -> Result<ReadTransform, TransformP
         return Err(TransformProblem::BadLastRow);
     }
     let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
-    check_rotation(&r)?;
+    let deviation = check_rotation(&r)?;
     let t: Vector3<f64> = m.fixed_view::<3, 1>(0, 3).into_owned();
     for v in t.iter() {
         check_translation(*v)?;
     }
-    let deviation = orthonormality_deviation(&r);
-    let read = ReadTransform {
+    let mut read = ReadTransform {
         transform: transform_from_parts(&r, &t),
         deviation,
     };
-    Ok(if read.projected() {
-        ReadTransform {
-            transform: transform_from_parts(&proj_so3(&r), &t),
-            ..read
-        }
-    } else {
-        read
-    })
+    if read.projected() {
+        read.transform = transform_from_parts(&proj_so3(&r), &t);
+    }
+    Ok(read)
 }
 
 /// Largest sum of the deviations of a 4×4 matrix's last row from `0 0 0 1`.
@@ -182,7 +178,12 @@ fn orthonormality_deviation(m: &Matrix3<f64>) -> f64 {
 /// When det(m) > 0 this is the orthogonal polar factor of m, computed by Higham's scaled Newton
 /// iteration `X ← ½(γX + X⁻ᵀ/γ)` (quadratic convergence, a few 3×3 inverses: an order of magnitude
 /// cheaper than an SVD, and as accurate); otherwise, or if the iteration does not settle, by SVD.
+/// A matrix already orthonormal to [`NEAR_ROTATION`] (a rotation printed with ten or more
+/// digits, say) takes one or two Newton–Schulz steps instead, which need no inverse.
 pub fn proj_so3(m: &Matrix3<f64>) -> Matrix3<f64> {
+    if let Some(r) = near_rotation_polar(m) {
+        return r;
+    }
     if m.determinant() > 0.0
         && let Some(r) = polar_newton(m)
     {
@@ -208,6 +209,29 @@ fn polar_newton(m: &Matrix3<f64>) -> Option<Matrix3<f64>> {
         }
     }
     None
+}
+
+/// Largest deviation of `MᵀM` from I (max entry) for which [`proj_so3`] takes Newton–Schulz
+/// steps: from there two steps reach rounding.
+pub(crate) const NEAR_ROTATION: f64 = 1e-5;
+
+/// The orthogonal polar factor of a matrix within [`NEAR_ROTATION`] of orthonormal with det > 0,
+/// by the Newton–Schulz iteration `X ← ½ X (3I − XᵀX)` (N. J. Higham, *Functions of Matrices*,
+/// 2008, sec. 8.3). For `X = Q(I + E)`, E symmetric, one step leaves `Q(I − 3E²/2 − E³/2)`: the
+/// error is squared, so a deviation up to 1e-9 needs one step and up to [`NEAR_ROTATION`] two.
+/// `None` for any other matrix.
+fn near_rotation_polar(m: &Matrix3<f64>) -> Option<Matrix3<f64>> {
+    let identity = Matrix3::identity();
+    let gram = m.transpose() * m;
+    let deviation = (gram - identity).abs().max();
+    if !(deviation <= NEAR_ROTATION && m.determinant() > 0.0) {
+        return None;
+    }
+    let mut x = m * (identity * 3.0 - gram) * 0.5;
+    if deviation > 1e-9 {
+        x = x * (identity * 3.0 - x.transpose() * x) * 0.5;
+    }
+    Some(x)
 }
 
 /// Iteration cap of [`polar_newton`] (it needs about 5 from a near-rotation, 10 from far).
@@ -348,6 +372,42 @@ mod tests {
                 (a - b).abs().max()
             );
         }
+    }
+
+    #[test]
+    fn near_rotations_take_newton_schulz_steps_to_the_svd_projection() {
+        // Rotations perturbed as printing with 4 to 15 digits perturbs them, on both sides of the
+        // one-step bound (1e-9) and up to NEAR_ROTATION.
+        let (mut one_step, mut two_steps) = (0, 0);
+        for k in 0..400 {
+            let f = k as f64;
+            let r =
+                exp_so3(&Vector3::new(0.7 * f, -0.3 * f, 0.05 * f + 0.1).map(|v| v.sin() * 3.0));
+            let size = 10f64.powf(-5.2 - 10.0 * (k % 100) as f64 / 100.0);
+            let m = r + Matrix3::from_fn(|i, j| size * ((i * 3 + j) as f64 * 1.7 + f).sin());
+            let deviation = orthonormality_deviation(&m);
+            let Some(fast) = near_rotation_polar(&m) else {
+                assert!(deviation > NEAR_ROTATION, "case {k}: deviation {deviation}");
+                continue;
+            };
+            if deviation > 1e-9 {
+                two_steps += 1;
+            } else {
+                one_step += 1;
+            }
+            let svd = proj_so3_svd(&m);
+            assert!(
+                (fast - svd).abs().max() < 1e-15,
+                "case {k} (deviation {deviation:e}): {:e}",
+                (fast - svd).abs().max()
+            );
+            assert!(orthonormality_deviation(&fast) < 4.0 * f64::EPSILON);
+        }
+        assert!(one_step > 100 && two_steps > 100, "{one_step} {two_steps}");
+        // A reflection is not a near rotation, however orthonormal.
+        let flip = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0));
+        assert_eq!(near_rotation_polar(&flip), None);
+        assert!((proj_so3(&flip).determinant() - 1.0).abs() < 1e-12);
     }
 
     #[test]
