@@ -10,10 +10,12 @@ use handeye::select::{AdaptiveParams, Selection};
 use handeye::tracking::TrackOptions;
 use handeye::{Method, Pairing, PosePair, Setup, Transform};
 use nalgebra::{Matrix3, Matrix4, Vector3};
-use numpy::{IntoPyArray, PyArray2, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn};
+use numpy::{
+    IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList, PyTuple};
 
 /// A library error as a Python `ValueError` with the library's message.
 fn value_error(e: impl std::fmt::Display) -> PyErr {
@@ -118,9 +120,20 @@ fn solve_opencv<'py>(
     method: &str,
     tsai_opencv_filter: bool,
 ) -> PyResult<RotationTranslation<'py>> {
-    let options = calibration_options(method, "all", tsai_opencv_filter)?;
     let robot = transforms(&r_gripper2base, &t_gripper2base, "base_from_gripper")?;
     let camera = transforms(&r_target2cam, &t_target2cam, "camera_from_target")?;
+    solve_opencv_poses(py, robot, camera, method, tsai_opencv_filter)
+}
+
+/// X from OpenCV's two sides, read and checked.
+fn solve_opencv_poses<'py>(
+    py: Python<'py>,
+    robot: Vec<Transform>,
+    camera: Vec<Transform>,
+    method: &str,
+    tsai_opencv_filter: bool,
+) -> PyResult<RotationTranslation<'py>> {
+    let options = calibration_options(method, "all", tsai_opencv_filter)?;
     if robot.len() != camera.len() {
         return Err(value_error(format!(
             "{} robot poses and {} camera poses: one of each per pose",
@@ -146,6 +159,107 @@ fn solve_opencv<'py>(
     ))
 }
 
+/// [`solve_opencv`] on OpenCV's usual arguments, four lists (or tuples) of float64 arrays: (3, 3)
+/// rotation matrices or rotation vectors of 3 entries, translations of 3 entries, each array in
+/// any layout (a view `T[:3, :3]` too). Each array is read where it lies, so that ten poses cost
+/// no stacking in numpy (`np.asarray` of the lists was a third of the call). `None` for any other
+/// input, which the Python layer then stacks and passes to [`solve_opencv`]: the same answer, and
+/// its messages for bad shapes.
+#[pyfunction]
+#[pyo3(signature = (r_gripper2base, t_gripper2base, r_target2cam, t_target2cam, method="tsai", tsai_opencv_filter=false))]
+fn solve_opencv_sequences<'py>(
+    py: Python<'py>,
+    r_gripper2base: &Bound<'py, PyAny>,
+    t_gripper2base: &Bound<'py, PyAny>,
+    r_target2cam: &Bound<'py, PyAny>,
+    t_target2cam: &Bound<'py, PyAny>,
+    method: &str,
+    tsai_opencv_filter: bool,
+) -> PyResult<Option<RotationTranslation<'py>>> {
+    let Some((robot, camera)) = sequence_parts(r_gripper2base, t_gripper2base)
+        .zip(sequence_parts(r_target2cam, t_target2cam))
+    else {
+        return Ok(None);
+    };
+    let robot = checked_transforms(robot, "base_from_gripper")?;
+    let camera = checked_transforms(camera, "camera_from_target")?;
+    solve_opencv_poses(py, robot, camera, method, tsai_opencv_filter).map(Some)
+}
+
+/// The rotations and translations of one side, from lists or tuples of float64 arrays; `None`
+/// when they are not that, or their shapes are not OpenCV's, or the counts differ.
+fn sequence_parts(
+    rotations: &Bound<'_, PyAny>,
+    translations: &Bound<'_, PyAny>,
+) -> Option<Vec<(Matrix3<f64>, Vector3<f64>)>> {
+    let (rotations, translations) = (sequence(rotations)?, sequence(translations)?);
+    if rotations.len() != translations.len() {
+        return None;
+    }
+    let mut matrices = None;
+    rotations
+        .iter()
+        .zip(translations.iter())
+        .map(|(r, t)| {
+            let (r, t) = (float_array(r)?, float_array(t)?);
+            let (r, t) = (r.as_array(), t.as_array());
+            // All rotations matrices, or all rotation vectors, as one stacked array would be.
+            let is_matrix = *matrices.get_or_insert(r.shape() == [3, 3]);
+            let rotation = if is_matrix && r.shape() == [3, 3] {
+                Matrix3::from_fn(|i, j| r[[i, j]])
+            } else if !is_matrix && r.len() == 3 && r.ndim() <= 2 {
+                let w: Vec<f64> = r.iter().copied().collect();
+                rodrigues(&Vector3::from_column_slice(&w))
+            } else {
+                return None;
+            };
+            if t.len() != 3 || t.ndim() > 2 {
+                return None;
+            }
+            let mut entries = t.iter().copied();
+            let translation = Vector3::from_fn(|_, _| entries.next().unwrap_or(f64::NAN));
+            Some((rotation, translation))
+        })
+        .collect()
+}
+
+/// The items of a list or a tuple.
+fn sequence<'py>(object: &Bound<'py, PyAny>) -> Option<Vec<Bound<'py, PyAny>>> {
+    if let Ok(list) = object.downcast::<PyList>() {
+        Some(list.iter().collect())
+    } else if let Ok(tuple) = object.downcast::<PyTuple>() {
+        Some(tuple.iter().collect())
+    } else {
+        None
+    }
+}
+
+/// A float64 numpy array, borrowed for reading.
+fn float_array<'py>(object: &Bound<'py, PyAny>) -> Option<PyReadonlyArrayDyn<'py, f64>> {
+    object
+        .downcast::<numpy::PyArrayDyn<f64>>()
+        .ok()?
+        .try_readonly()
+        .ok()
+}
+
+/// Each rotation and translation checked as a 4×4 of `what[k]` is ([`transform`]).
+fn checked_transforms(
+    parts: Vec<(Matrix3<f64>, Vector3<f64>)>,
+    what: &str,
+) -> PyResult<Vec<Transform>> {
+    parts
+        .iter()
+        .enumerate()
+        .map(|(k, (rotation, translation))| {
+            let mut m = Matrix4::identity();
+            m.fixed_view_mut::<3, 3>(0, 0).copy_from(rotation);
+            m.fixed_view_mut::<3, 1>(0, 3).copy_from(translation);
+            transform_from_matrix4(&m).map_err(|p| value_error(format!("{what}[{k}]: {p}")))
+        })
+        .collect()
+}
+
 /// A rotation (3, 3) and a translation (3, 1), as OpenCV returns X.
 type RotationTranslation<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 
@@ -166,20 +280,17 @@ fn transforms(
             t.shape()
         )));
     }
-    (0..n)
+    let parts = (0..n)
         .map(|k| {
             let rotation = if matrices {
                 Matrix3::from_fn(|i, j| r[[k, i, j]])
             } else {
                 rodrigues(&Vector3::from_fn(|i, _| r[[k, i]]))
             };
-            let mut m = Matrix4::identity();
-            m.fixed_view_mut::<3, 3>(0, 0).copy_from(&rotation);
-            m.fixed_view_mut::<3, 1>(0, 3)
-                .copy_from(&Vector3::from_fn(|i, _| t[[k, i]]));
-            transform_from_matrix4(&m).map_err(|p| value_error(format!("{what}[{k}]: {p}")))
+            (rotation, Vector3::from_fn(|i, _| t[[k, i]]))
         })
-        .collect()
+        .collect();
+    checked_transforms(parts, what)
 }
 
 /// The rotation of a rotation vector w = θ k (Rodrigues): R = I + sin θ [k]× + (1 − cos θ) [k]×²,
@@ -449,6 +560,7 @@ fn json_dict<'py>(py: Python<'py>, v: &serde_json::Value) -> PyResult<Bound<'py,
 fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_x, m)?)?;
     m.add_function(wrap_pyfunction!(solve_opencv, m)?)?;
+    m.add_function(wrap_pyfunction!(solve_opencv_sequences, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
     m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
     m.add_function(wrap_pyfunction!(advise_report, m)?)?;

@@ -65,6 +65,36 @@ def test_same_answers_as_opencv(seed):
             assert np.abs(t - t_cv).max() <= 1e-6, name
 
 
+def test_every_form_of_the_arguments_gives_the_same_answer():
+    # Lists of arrays are read in place by the extension; stacked arrays, tuples, views, lists of
+    # lists and other dtypes take the other road. Each must give the same X, bit for bit.
+    rng = np.random.default_rng(3)
+    Rg, tg, Rc, tc, _ = random_problem(rng)
+    homogeneous = [np.block([[r, t], [np.zeros((1, 3)), np.ones((1, 1))]]) for r, t in zip(Rg, tg)]
+    forms = {
+        "lists of arrays": (Rg, tg, Rc, tc),
+        "tuples": (tuple(Rg), tuple(tg), tuple(Rc), tuple(tc)),
+        "views of 4x4": ([h[:3, :3] for h in homogeneous], [h[:3, 3] for h in homogeneous], Rc, tc),
+        "flat vectors": (Rg, [t.ravel() for t in tg], [r.ravel() for r in Rc], [t.T for t in tc]),
+        "stacked arrays": (np.array(Rg), np.array(tg), np.array(Rc), np.array(tc)),
+        "lists of lists": ([r.tolist() for r in Rg], [t.tolist() for t in tg], Rc, tc),
+        "float32": ([r.astype(np.float32) for r in Rg], tg, Rc, tc),
+    }
+    for m in ("tsai", "park", "daniilidis", cv2.CALIB_HAND_EYE_TSAI):
+        r0, t0 = handeye.calibrate_hand_eye(*forms["stacked arrays"], method=m)
+        for name, args in forms.items():
+            r, t = handeye.calibrate_hand_eye(*args, method=m)
+            tol = 1e-6 if name == "float32" else 0.0
+            assert np.abs(r - r0).max() <= tol and np.abs(t - t0).max() <= tol, (name, m)
+    # Mixed rotation forms and bad sizes keep their messages whichever road they take.
+    with pytest.raises(ValueError, match="rotation"):
+        handeye.calibrate_hand_eye([Rg[0], Rc[1]] + Rg[2:], tg, Rc, tc)
+    with pytest.raises(ValueError, match="translations"):
+        handeye.calibrate_hand_eye(Rg, [np.zeros(2)] + tg[1:], Rc, tc)
+    with pytest.raises(ValueError, match="orthonormal"):
+        handeye.calibrate_hand_eye([2 * Rg[0]] + Rg[1:], tg, Rc, tc)
+
+
 def test_noise_free_data_gives_the_truth_for_every_method():
     rng = np.random.default_rng(7)
     Rg, tg, Rc, tc, X = random_problem(rng, noise=False)

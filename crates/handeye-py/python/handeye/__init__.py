@@ -24,6 +24,7 @@ from ._handeye import advise_report as _advise_report
 from ._handeye import calibrate_report as _calibrate_report
 from ._handeye import robot_world_report as _robot_world_report
 from ._handeye import solve_opencv as _solve_opencv
+from ._handeye import solve_opencv_sequences as _solve_opencv_sequences
 
 __all__ = ["calibrate_hand_eye", "calibrate", "advise", "OnlineCalibrator", "METHODS"]
 
@@ -43,9 +44,16 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     name = METHODS.get(method, method) if isinstance(method, int) else method
     if not isinstance(name, str):
         raise ValueError(f"unknown method {method!r}")
+    opencv_tsai = isinstance(method, int) and name == "tsai"
+    # Lists of float64 arrays, as OpenCV's users pass them, are read in place by the extension;
+    # anything else is stacked here first (same answer, and the messages for bad shapes).
+    x = _solve_opencv_sequences(
+        R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=name, tsai_opencv_filter=opencv_tsai
+    )
+    if x is not None:
+        return x
     rg, tg = _arrays(R_gripper2base, t_gripper2base, "gripper2base")
     rc, tc = _arrays(R_target2cam, t_target2cam, "target2cam")
-    opencv_tsai = isinstance(method, int) and name == "tsai"
     return _solve_opencv(rg, tg, rc, tc, method=name, tsai_opencv_filter=opencv_tsai)
 
 
