@@ -253,7 +253,7 @@ pub struct HeldOutSummary {
     pub median_rotation_deg: f64,
     /// Median gap in the target's position seen by the camera, input units.
     pub median_translation: f64,
-    /// Each pose left out exactly (up to 300 poses) or not.
+    /// Each pose left out exactly or not (always, since the check is O(n); up to 300 poses before).
     pub exact: bool,
     /// The poses the others predict poorly (6 times the median or more), by name.
     pub disagree: Vec<HeldOutName>,
