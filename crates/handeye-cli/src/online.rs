@@ -11,7 +11,6 @@ use handeye::io::read_truth;
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::select::{AdaptiveParams, MAX_N_INIT, Selection};
 use handeye::tracking::{Report, Step, TrackOptions};
-use serde_json::{Value, json};
 
 use crate::faces::{self, Face, Published};
 use crate::input::{InputArgs, read_ahead};
@@ -362,7 +361,7 @@ fn print_report(
     out: &LineOut,
 ) -> Result<()> {
     match face {
-        Face::Json => out.json(&with_offset(r.json(setup), time_offset)),
+        Face::Json => out.json(&r.json(setup, time_offset)),
         Face::Text => {
             let e = &r.estimate;
             out.text(&format!(
@@ -563,14 +562,6 @@ fn print_step(
         print_report(r, setup, time_offset, face, &out)?;
     }
     Ok(())
-}
-
-/// A JSON line with the clock offset used, for two streams.
-fn with_offset(mut v: Value, time_offset: Option<f64>) -> Value {
-    if let (Some(t), Some(o)) = (time_offset, v.as_object_mut()) {
-        o.insert("time_offset_s".into(), json!(t));
-    }
-    v
 }
 
 /// The stderr summary: what the events showed, or why there was none.

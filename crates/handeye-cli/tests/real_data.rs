@@ -56,6 +56,39 @@ fn ethz_streams_calibrate_and_run_online() {
 }
 
 #[test]
+fn the_accumulating_estimators_reports_carry_the_clock_offset_found() {
+    // kinhec's 30 Hz stream, its camera clock offset from the robot's (testdata/kinhec).
+    let streams = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec/streams");
+    let robot = streams.join("temporal_30hz_eih_s0_robot.txt");
+    let camera = streams.join("temporal_30hz_eih_s0_camera.txt");
+    let (code, out, err) = run(&[
+        "online",
+        "--robot",
+        robot.to_str().unwrap(),
+        "--camera",
+        camera.to_str().unwrap(),
+        "--estimator",
+        "accumulate",
+        "--time-offset",
+        "auto",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let reports: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert!(reports.len() >= 2, "{err}");
+    let offset = reports[0]["time_offset_s"].as_f64().unwrap();
+    assert!(offset.abs() > 0.01, "{offset}");
+    assert!(
+        reports
+            .iter()
+            .all(|v| v["estimate"].is_u64() && v["time_offset_s"] == offset),
+        "{out}"
+    );
+}
+
+#[test]
 fn a_known_clock_offset_is_recovered_within_a_camera_period() {
     let robot = real("ethz-asl/robot_arm_sim_B_H.csv");
     let camera_text = std::fs::read_to_string(real("ethz-asl/robot_arm_sim_W_E.csv")).unwrap();

@@ -506,7 +506,7 @@ impl PyOnline {
                     .change
                     .map(|c| c.json())
                     .into_iter()
-                    .chain(step.report.map(|r| r.json(setup)));
+                    .chain(step.report.map(|r| r.json(setup, None)));
                 lines.map(|v| json_dict(py, &v)).collect()
             }
             None => events.iter().map(|e| json_dict(py, &e.json())).collect(),
@@ -516,7 +516,7 @@ impl PyOnline {
     /// The accumulating estimator's final report (JSON text), or None.
     fn finish(&mut self) -> Option<String> {
         let setup = self.inner.config().setup;
-        self.inner.finish().map(|r| r.json(setup).to_string())
+        self.inner.finish().map(|r| r.json(setup, None).to_string())
     }
 
     /// Why the accumulating estimator has nothing to report now, or None.

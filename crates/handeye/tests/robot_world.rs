@@ -472,7 +472,7 @@ fn the_tracker_reports_the_robot_world_solution() {
             assert!(max_entry_diff(&batch.target, &rw.target) < 1e-9);
             compared += 1;
         }
-        let json = report.json(setup);
+        let json = report.json(setup, None);
         assert_eq!(json["robot_world"]["method"], "shah");
         assert!(json["robot_world"]["target"]["matrix"].is_array());
     }

@@ -233,8 +233,9 @@ impl Report {
     /// `pose`, `reason`, `frame`, X (`translation`, `quaternion_xyzw`, `matrix`), `poses`,
     /// `since`, `uncertainty`, `noise`, `conditioning`, `target` (the fixed frame), `robot_world`
     /// (X and the target solved together by Shah over the same poses, when determined) and, on a
-    /// weak final report, `weak` with the reason in words.
-    pub fn json(&self, setup: Setup) -> serde_json::Value {
+    /// weak final report, `weak` with the reason in words; last, `time_offset_s` when a clock
+    /// offset was applied to a second stream (as [`crate::online::EventLine`] carries it).
+    pub fn json(&self, setup: Setup, time_offset_s: Option<f64>) -> serde_json::Value {
         let e = &self.estimate;
         let mut out = serde_json::Map::new();
         out.insert("estimate".into(), self.number.into());
@@ -277,6 +278,9 @@ impl Report {
                 "warning".into(),
                 "X and the target pose have the sizes the setup makes unlikely: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions".into(),
             );
+        }
+        if let Some(t) = time_offset_s {
+            out.insert("time_offset_s".into(), t.into());
         }
         out.into()
     }
