@@ -178,8 +178,8 @@ fn orthonormality_deviation(m: &Matrix3<f64>) -> f64 {
 /// When det(m) > 0 this is the orthogonal polar factor of m, computed by Higham's scaled Newton
 /// iteration `X ← ½(γX + X⁻ᵀ/γ)` (quadratic convergence, a few 3×3 inverses: an order of magnitude
 /// cheaper than an SVD, and as accurate); otherwise, or if the iteration does not settle, by SVD.
-/// A matrix already orthonormal to [`NEAR_ROTATION`] (a rotation printed with ten or more
-/// digits, say) takes one or two Newton–Schulz steps instead, which need no inverse.
+/// A matrix already orthonormal to 1e-5 (a rotation printed with six or more digits, say) takes
+/// one or two Newton–Schulz steps instead, which need no inverse.
 pub fn proj_so3(m: &Matrix3<f64>) -> Matrix3<f64> {
     if let Some(r) = near_rotation_polar(m) {
         return r;
@@ -213,7 +213,7 @@ fn polar_newton(m: &Matrix3<f64>) -> Option<Matrix3<f64>> {
 
 /// Largest deviation of `MᵀM` from I (max entry) for which [`proj_so3`] takes Newton–Schulz
 /// steps: from there two steps reach rounding.
-pub(crate) const NEAR_ROTATION: f64 = 1e-5;
+const NEAR_ROTATION: f64 = 1e-5;
 
 /// The orthogonal polar factor of a matrix within [`NEAR_ROTATION`] of orthonormal with det > 0,
 /// by the Newton–Schulz iteration `X ← ½ X (3I − XᵀX)` (N. J. Higham, *Functions of Matrices*,
