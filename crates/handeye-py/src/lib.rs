@@ -150,7 +150,9 @@ fn solve_opencv_poses<'py>(
         })
         .collect();
     let c = py
-        .allow_threads(|| handeye::calibration::solve_poses(&poses, Setup::EyeInHand, &options))
+        .allow_threads(|| {
+            handeye::calibration::solve_poses_determined(&poses, Setup::EyeInHand, &options)
+        })
         .map_err(value_error)?;
     let (r, t) = (c.x.rotation.matrix(), c.x.translation.vector);
     Ok((

@@ -145,6 +145,31 @@ def test_degenerate_data_raises_where_opencv_returns_garbage():
         handeye.calibrate_hand_eye(Rg, tg, Rc, tc, method="park")
 
 
+def test_noisy_motions_about_one_axis_raise_where_opencv_answers_far_off():
+    # kinhec: two parallel joint axes move, with robot and PnP noise. No solver's own test sees a
+    # singular system, and OpenCV's Park answers 63 cm from the truth; the drop-in must refuse.
+    path = TESTDATA / "kinhec" / "pairs" / "degenerate_parallel_axes_continuous_eih_s0.jsonl"
+    poses = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    g = [np.array(p["base_from_gripper"]) for p in poses]
+    c = [np.array(p["camera_from_target"]) for p in poses]
+    args = ([x[:3, :3] for x in g], [x[:3, 3] for x in g], [x[:3, :3] for x in c], [x[:3, 3] for x in c])
+    truth = json.loads(path.with_suffix(".truth.json").read_text())["gripper_from_camera"]["translation"]
+    _, t_cv = cv2.calibrateHandEye(*args, method=cv2.CALIB_HAND_EYE_PARK)
+    assert np.linalg.norm(t_cv.ravel() - truth) > 0.3
+    for m in (cv2.CALIB_HAND_EYE_PARK, "horaud", "andreff-joint", "daniilidis", "refine"):
+        with pytest.raises(ValueError, match="not determined"):
+            handeye.calibrate_hand_eye(*args, method=m)
+    # The same motions with the other axes moving too are answered (the check is not a blanket one).
+    good = TESTDATA / "kinhec" / "pairs" / "nominal_continuous_eih_s0.jsonl"
+    poses = [json.loads(line) for line in good.read_text().splitlines() if line.strip()]
+    g = [np.array(p["base_from_gripper"]) for p in poses]
+    c = [np.array(p["camera_from_target"]) for p in poses]
+    _, t = handeye.calibrate_hand_eye([x[:3, :3] for x in g], [x[:3, 3] for x in g], [x[:3, :3] for x in c],
+                                      [x[:3, 3] for x in c], method="park")
+    truth = json.loads(good.with_suffix(".truth.json").read_text())["gripper_from_camera"]["translation"]
+    assert np.linalg.norm(t.ravel() - truth) < 0.01
+
+
 def test_bad_inputs_raise_and_never_crash():
     eye = np.eye(4)
     with pytest.raises(ValueError):

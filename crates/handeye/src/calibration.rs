@@ -414,6 +414,40 @@ pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
     }
 }
 
+/// [`solve_poses`], refused as [`calibrate`] refuses it when the data leave a direction of X
+/// undetermined, but from a first-order covariance instead of the bootstrap: the drop-in for
+/// OpenCV's `calibrateHandEye`, which returns X alone and must not return it for data that do
+/// not determine it (noisy motions about one axis, say, where a solver's own conditioning test
+/// sees nothing singular). The covariance is [`PoseAccumulator::covariance`] over all pairs at
+/// the solved X, each pose's fixed frame carrying the noise the poses themselves show under it
+/// (as the accumulating estimator's reports do), judged with the bootstrap's bounds
+/// ([`crate::uncertainty::UNDETERMINED_ROTATION_DEG`], and half the scene for the translation).
+/// O(n) beyond the solve. Noise-free data (no scatter to measure) are not refused here: the
+/// solvers' own tests see their degeneracy.
+pub fn solve_poses_determined(
+    poses: &[PosePair],
+    setup: Setup,
+    options: &Options,
+) -> Result<Calibration> {
+    let calibration = solve_poses(poses, setup, options)?;
+    let mut sums = PoseAccumulator::new(setup);
+    poses.iter().for_each(|p| sums.add(p));
+    let x = &calibration.x;
+    let Some(covariance) = sums.residual_scatter(x).and_then(|noise| {
+        sums.covariance(
+            x,
+            noise.rotation / 3f64.sqrt(),
+            noise.translation / 3f64.sqrt(),
+        )
+    }) else {
+        return Ok(calibration);
+    };
+    let scene = translation_scale(poses, setup).max(working_distance(poses));
+    let first_order = crate::uncertainty::summarise(covariance, 0, 0, scene);
+    refuse_if_undetermined(&first_order, setup, calibration.conditioning)?;
+    Ok(calibration)
+}
+
 /// Bootstrap replicates: the same method and pairing as [`solve_poses`], made cheaper where the
 /// answer is the same or bounds it. All-pairs Andreff comes from the O(n) accumulated normal
 /// equations ([`PoseAccumulator`], equal to the batch solve to ~1e-12). Refine, Tsai, Park and

