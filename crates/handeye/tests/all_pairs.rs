@@ -261,4 +261,3 @@ fn the_quality_report_has_the_same_verdicts_and_values() {
         );
     }
 }
-
