@@ -151,7 +151,7 @@ fn solve_opencv_poses<'py>(
         .collect();
     let c = py
         .allow_threads(|| {
-            handeye::calibration::solve_poses_determined(&poses, Setup::EyeInHand, &options)
+            handeye::calibration::solve_poses_checked(&poses, Setup::EyeInHand, &options)
         })
         .map_err(value_error)?;
     let (r, t) = (c.x.rotation.matrix(), c.x.translation.vector);

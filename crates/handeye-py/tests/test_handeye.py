@@ -170,6 +170,19 @@ def test_noisy_motions_about_one_axis_raise_where_opencv_answers_far_off():
     assert np.linalg.norm(t.ravel() - truth) < 0.01
 
 
+def test_misread_inputs_raise_with_the_fix():
+    # kinhec's mistakes: the robot in millimetres, the camera poses inverted. OpenCV answers both.
+    for name, fix in (("robot_mm__nominal_stations_eih_s0", "robot-mm"), ("camera_inverted__nominal_stations_eih_s0", "camera-inverted")):
+        lines = (TESTDATA / "kinhec" / "mistakes" / f"{name}.jsonl").read_text().splitlines()
+        poses = [json.loads(line) for line in lines if line.strip()]
+        m = lambda v: np.array(v["matrix"] if isinstance(v, dict) else v)
+        g = [m(p["base_from_gripper"]) for p in poses]
+        c = [m(p["camera_from_target"]) for p in poses]
+        with pytest.raises(ValueError, match=fix):
+            handeye.calibrate_hand_eye([x[:3, :3] for x in g], [x[:3, 3] for x in g], [x[:3, :3] for x in c],
+                                       [x[:3, 3] for x in c], method="park")
+
+
 def test_bad_inputs_raise_and_never_crash():
     eye = np.eye(4)
     with pytest.raises(ValueError):

@@ -414,21 +414,30 @@ pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
     }
 }
 
-/// [`solve_poses`], refused as [`calibrate`] refuses it when the data leave a direction of X
-/// undetermined, but from a first-order covariance instead of the bootstrap: the drop-in for
-/// OpenCV's `calibrateHandEye`, which returns X alone and must not return it for data that do
-/// not determine it (noisy motions about one axis, say, where a solver's own conditioning test
-/// sees nothing singular). The covariance is [`PoseAccumulator::covariance`] over all pairs at
-/// the solved X, each pose's fixed frame carrying the noise the poses themselves show under it
-/// (as the accumulating estimator's reports do), judged with the bootstrap's bounds
+/// [`solve_poses`] with the two refusals of [`calibrate`] that need no bootstrap: the poses fit
+/// far better read another way (an inverted pose, `w, x, y, z` quaternions, millimetres on one
+/// side: [`Error::Misread`], from [`check_readings`]), or the data leave a direction of X
+/// undetermined, judged from a first-order covariance instead of the bootstrap. This is the
+/// drop-in for OpenCV's `calibrateHandEye`, which returns X alone and must not return it for data
+/// that do not determine it (noisy motions about one axis, say, where a solver's own
+/// conditioning test sees nothing singular) or that were read wrongly. The covariance is
+/// [`PoseAccumulator::covariance`] over all pairs at the solved X, each pose's fixed frame
+/// carrying the noise the poses themselves show under it (as the accumulating estimator's
+/// reports do), judged with the bootstrap's bounds
 /// ([`crate::uncertainty::UNDETERMINED_ROTATION_DEG`], and half the scene for the translation).
-/// O(n) beyond the solve. Noise-free data (no scatter to measure) are not refused here: the
-/// solvers' own tests see their degeneracy.
-pub fn solve_poses_determined(
+/// Noise-free data (no scatter to measure) are not refused by it: the solvers' own tests see
+/// their degeneracy.
+pub fn solve_poses_checked(
     poses: &[PosePair],
     setup: Setup,
     options: &Options,
 ) -> Result<Calibration> {
+    let check = check_readings(poses, setup);
+    if let (Some(finding), Some(_)) = (check.finding(setup), check.better) {
+        return Err(Error::Misread {
+            advice: check.advice(setup).unwrap_or(finding),
+        });
+    }
     let calibration = solve_poses(poses, setup, options)?;
     let mut sums = PoseAccumulator::new(setup);
     poses.iter().for_each(|p| sums.add(p));
