@@ -183,6 +183,22 @@ def test_misread_inputs_raise_with_the_fix():
                                        [x[:3, 3] for x in c], method="park")
 
 
+def test_outliers_are_named_not_mistaken_for_a_misread_input():
+    # kinhec's series with a few flipped target poses (planar flip) or random poses: as given the
+    # median fit is poor, and "both inverted" looked better, so the drop-in told the user to invert
+    # correct data. Judged without the outlier poses the data fit as given: the outliers are named.
+    for name in ("outliers_planar_flip_stations_eih_s0", "outliers_planar_flip_stations_eih_s2",
+                 "outliers_random_pose_stations_eih_s2"):
+        lines = (TESTDATA / "kinhec" / "pairs" / f"{name}.jsonl").read_text().splitlines()
+        poses = [json.loads(line) for line in lines if line.strip()]
+        g = [np.array(p["base_from_gripper"]) for p in poses]
+        c = [np.array(p["camera_from_target"]) for p in poses]
+        with pytest.raises(ValueError, match="disagree with the others") as e:
+            handeye.calibrate_hand_eye([x[:3, :3] for x in g], [x[:3, 3] for x in g], [x[:3, :3] for x in c],
+                                       [x[:3, 3] for x in c], method="park")
+        assert "misread" not in str(e.value) and "reject_outliers=True" in str(e.value)
+
+
 def test_bad_inputs_raise_and_never_crash():
     eye = np.eye(4)
     with pytest.raises(ValueError):

@@ -137,6 +137,13 @@ impl PoseAccumulator {
         }
     }
 
+    /// The sums of every pose in `poses`.
+    pub fn of(poses: &[PosePair], setup: Setup) -> Self {
+        let mut sums = Self::new(setup);
+        poses.iter().for_each(|p| sums.add(p));
+        sums
+    }
+
     /// Adds one pose pair: the motions from it to every earlier pose enter the normal equations.
     pub fn add(&mut self, pose: &PosePair) {
         self.add_returning(pose);

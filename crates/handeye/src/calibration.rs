@@ -426,21 +426,19 @@ pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
 /// reports do), judged with the bootstrap's bounds
 /// ([`crate::uncertainty::UNDETERMINED_ROTATION_DEG`], and half the scene for the translation).
 /// Noise-free data (no scatter to measure) are not refused by it: the solvers' own tests see
-/// their degeneracy.
+/// their degeneracy. When the poor fit that makes another reading look better comes from a few
+/// outlier poses, the refusal names them instead ([`Error::Untrusted`]).
 pub fn solve_poses_checked(
     poses: &[PosePair],
     setup: Setup,
     options: &Options,
 ) -> Result<Calibration> {
-    let check = check_readings(poses, setup);
-    if let (Some(finding), Some(_)) = (check.finding(setup), check.better) {
-        return Err(Error::Misread {
-            advice: check.advice(setup).unwrap_or(finding),
-        });
+    let sums = PoseAccumulator::of(poses, setup);
+    let check = crate::conventions::check_readings_summed(poses, setup, Some(&sums));
+    if check.better.is_some() {
+        return Err(misread_or_outliers(poses, setup, options, &check));
     }
     let calibration = solve_poses(poses, setup, options)?;
-    let mut sums = PoseAccumulator::new(setup);
-    poses.iter().for_each(|p| sums.add(p));
     let x = &calibration.x;
     let Some(covariance) = sums.residual_scatter(x).and_then(|noise| {
         sums.covariance(
@@ -455,6 +453,41 @@ pub fn solve_poses_checked(
     let first_order = crate::uncertainty::summarise(covariance, 0, 0, scene);
     refuse_if_undetermined(&first_order, setup, calibration.conditioning)?;
     Ok(calibration)
+}
+
+/// The refusal of [`solve_poses_checked`] when another reading fits far better. A few poses that
+/// disagree with the others (gross outliers, a flipped target pose) can make a mirror-image
+/// reading look better, so the readings are judged again without the outlier poses, as
+/// [`calibrate`] judges them. When the poses as given then fit, the outliers are the finding, and
+/// the remedy is to leave them out (the drop-in has no option for it). The outlier test
+/// ([`pose_outliers`], about 7 µs at ten poses) runs only here, after a poor fit, so that data
+/// that fit well pay nothing for it.
+fn misread_or_outliers(
+    poses: &[PosePair],
+    setup: Setup,
+    options: &Options,
+    check: &ReadingCheck,
+) -> Error {
+    let found = pose_outliers(poses, setup, options.outlier_deg);
+    let misread = |check: &ReadingCheck| Error::Misread {
+        advice: check
+            .advice(setup)
+            .or_else(|| check.finding(setup))
+            .unwrap_or_default(),
+    };
+    if found.poses.is_empty() {
+        return misread(check);
+    }
+    let without_outliers = check_readings(&without(poses, &found), setup);
+    if without_outliers.better.is_some() {
+        return misread(&without_outliers);
+    }
+    Error::Untrusted {
+        advice: format!(
+            "{}; they make the poses fit a wrong reading of the input better than the right one, and X would follow them: leave them out, or calibrate with `reject_outliers=True` (`handeye.calibrate` in Python, `--reject-outliers` on the command line)",
+            outlier_warning(&outlier_report(&found, options))
+        ),
+    }
 }
 
 /// Bootstrap replicates: the same method and pairing as [`solve_poses`], made cheaper where the
@@ -501,12 +534,13 @@ fn refine_briefly(motions: &(impl MotionSource + ?Sized), start: &Transform) -> 
 
 /// All-pairs Andreff from the accumulated normal equations.
 fn accumulated_andreff(poses: &[PosePair], setup: Setup) -> Result<Transform> {
-    let mut acc = PoseAccumulator::new(setup);
-    poses.iter().for_each(|p| acc.add(p));
-    acc.estimate().map(|e| e.x).ok_or(Error::Degenerate {
-        reason: Degeneracy::IllConditioned,
-        conditioning: 0.0,
-    })
+    PoseAccumulator::of(poses, setup)
+        .estimate()
+        .map(|e| e.x)
+        .ok_or(Error::Degenerate {
+            reason: Degeneracy::IllConditioned,
+            conditioning: 0.0,
+        })
 }
 
 fn solve_motions(motions: &(impl MotionSource + ?Sized), options: &Options) -> Result<Calibration> {

@@ -18,7 +18,7 @@ use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::motion::{MotionFeatures, MotionPair, PosePair, Setup};
-use crate::pose::{Transform, exp_so3, log_so3, proj_so3, transform_from_parts};
+use crate::pose::{Transform, axis_angle, exp_so3, log_so3, proj_so3, transform_from_parts};
 
 /// Partners each pose is compared with in [`pose_outliers`] (all others when there are fewer).
 const PARTNERS: usize = 32;
@@ -144,35 +144,65 @@ fn partners(n: usize, i: usize) -> impl Iterator<Item = usize> {
 }
 
 /// How far the gripper's rotation axes spread beyond one direction, X-free: the second-largest over
-/// the largest eigenvalue of Σ θ² k kᵀ over the motions between up to 60 poses spread over the input
-/// (motions between distant poses are large, so noise hardly moves their axes; θ² weighs down the
-/// small ones whose axes noise does move). Near 0 when every rotation is about one axis: then X's
-/// rotation about that axis, and its translation along it, are not determined by any reading of
-/// the input.
+/// the largest eigenvalue of Σ (1 − cos θ) k kᵀ over the gripper's motions between every pair of
+/// poses (motions between distant poses are large, so noise hardly moves their axes; the weight
+/// 1 − cos θ = 2 sin²(θ/2) weighs down the small ones whose axes noise does move). Near 0 when
+/// every rotation is about one axis: then X's rotation about that axis, and its translation along
+/// it, are not determined by any reading of the input.
+///
+/// O(n), with no trigonometry: for the motion M = R_iᵀ R_j, (M + Mᵀ)/2 = cos θ I + (1 − cos θ) k kᵀ
+/// and tr M = 1 + 2 cos θ, both linear in M, and with U = Σ R_k the pairs sum to
+/// Σ_{i<j} (M + Mᵀ)/2 = (UᵀU − n I)/2. (The weight θ² of an earlier, O(n²) form moves the ratio
+/// by at most π²/4; on the repository's realistic suite and real data the two agree within a
+/// factor 0.93–1.40: degenerate series ≤ 6.5e-6, the others ≥ 1.8e-2.)
 pub fn axis_scatter(poses: &[PosePair], setup: Setup) -> f64 {
-    const SAMPLE: usize = 60;
-    let n = poses.len();
-    let idx: Vec<usize> = if n <= SAMPLE {
-        (0..n).collect()
-    } else {
-        (0..SAMPLE).map(|k| k * (n - 1) / (SAMPLE - 1)).collect()
+    gripper_rotations(poses, setup).scatter
+}
+
+/// What the gripper's rotations between the poses show: their [`axis_scatter`] and how large
+/// they are.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct GripperRotations {
+    /// [`axis_scatter`].
+    pub scatter: f64,
+    /// The largest rotation angle from the first pose to another, radians: at least half the
+    /// largest between any two (the angles obey the triangle inequality).
+    pub widest_from_first: f64,
+}
+
+/// [`axis_scatter`] and the widest rotation from the first pose, in one O(n) pass.
+pub(crate) fn gripper_rotations(poses: &[PosePair], setup: Setup) -> GripperRotations {
+    let Some(first) = poses.first() else {
+        return GripperRotations {
+            scatter: 0.0,
+            widest_from_first: 0.0,
+        };
     };
-    let mut scatter = Matrix3::zeros();
-    for (a, &i) in idx.iter().enumerate() {
-        for &j in &idx[a + 1..] {
-            let m = MotionPair::between(setup, &poses[i], &poses[j]);
-            let f = MotionFeatures::of(&m.a);
-            if let Some(k) = f.axis {
-                scatter += k * k.transpose() * (f.angle * f.angle);
-            }
+    let r_0 = *setup.hand_pose(&first.base_from_gripper).rotation.matrix();
+    let mut u = Matrix3::zeros();
+    let mut widest = Matrix3::identity();
+    for p in poses {
+        let r = *setup.hand_pose(&p.base_from_gripper).rotation.matrix();
+        u += r;
+        let m = r_0.transpose() * r;
+        if m.trace() < widest.trace() {
+            widest = m;
         }
     }
+    let n = poses.len() as f64;
+    let pairs = n * (n - 1.0) / 2.0;
+    // Σ (M + Mᵀ)/2 − Σ cos θ I, with Σ cos θ = (tr Σ M − pairs)/2.
+    let sym = (u.transpose() * u - Matrix3::identity() * n) * 0.5;
+    let scatter = sym - Matrix3::identity() * ((sym.trace() - pairs) * 0.5);
     let mut e: Vec<f64> = scatter.symmetric_eigenvalues().iter().copied().collect();
     e.sort_by(|a, b| b.total_cmp(a));
-    if e[0] <= 0.0 {
-        0.0
-    } else {
-        e[1].max(0.0) / e[0]
+    GripperRotations {
+        scatter: if e[0] <= 0.0 {
+            0.0
+        } else {
+            e[1].max(0.0) / e[0]
+        },
+        widest_from_first: axis_angle(&widest).0,
     }
 }
 

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{rotation_matrix, skew};
 use crate::solve::least_squares::least_squares_3;
-use crate::solve::quaternion::{motion_quaternions, quaternion_of, rotation_of};
+use crate::solve::quaternion::{motion_quaternions, rotation_of};
 use crate::solve::{
     Calibration, Method, MotionCheck, check_motions, finish, singular, translation_least_squares,
 };
@@ -138,13 +138,39 @@ fn vector_part(q: &Vector4<f64>) -> Vector3<f64> {
     Vector3::new(q[1], q[2], q[3])
 }
 
-/// P = 2 sin(θ/2) k = twice the vector part of the rotation's quaternion.
-fn modified_rodrigues(r: &Matrix3<f64>) -> Vector3<f64> {
-    vector_part(&quaternion_of(r)) * 2.0
+/// Whether a rotation passes OpenCV's motion filter: |P| = 2·sin(θ/2) in [0.3, 1.7]. OpenCV takes
+/// |P| from the quaternion; from the trace, tr R = 1 + 2 cos θ = 3 − 4 sin²(θ/2), it is
+/// √(3 − tr R), with no quaternion to make (the same value to rounding).
+fn in_filter_range(r: &Matrix3<f64>) -> bool {
+    let p = (3.0 - r.trace()).max(0.0).sqrt();
+    (FILTER_RANGE.0..=FILTER_RANGE.1).contains(&p)
 }
 
-/// Whether a rotation passes OpenCV's motion filter: 2·sin(θ/2) in [0.3, 1.7].
-fn in_filter_range(r: &Matrix3<f64>) -> bool {
-    let p = modified_rodrigues(r).norm();
-    (FILTER_RANGE.0..=FILTER_RANGE.1).contains(&p)
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solve::quaternion::quaternion_of;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The filter's |P| from the trace is OpenCV's, twice the norm of the quaternion's vector
+        /// part, over every angle and axis (to rounding).
+        #[test]
+        fn filter_norm_from_the_trace_is_the_quaternions(
+            angle in 0.0f64..std::f64::consts::PI,
+            axis in prop::array::uniform3(-1.0f64..1.0),
+        ) {
+            let axis = Vector3::from(axis);
+            prop_assume!(axis.norm() > 1e-3);
+            let r = *nalgebra::Rotation3::new(axis.normalize() * angle).matrix();
+            let q = quaternion_of(&r);
+            let from_quaternion = 2.0 * vector_part(&q).norm();
+            let from_trace = (3.0 - r.trace()).max(0.0).sqrt();
+            // √ of a difference near 0 loses half the digits: 1e-8 at worst, at tiny angles.
+            prop_assert!((from_quaternion - from_trace).abs() < 1e-7, "{from_quaternion} vs {from_trace}");
+            let bounds = FILTER_RANGE;
+            let near_bound = (from_quaternion - bounds.0).abs().min((from_quaternion - bounds.1).abs()) < 1e-12;
+            prop_assert!(near_bound || in_filter_range(&r) == (bounds.0..=bounds.1).contains(&from_quaternion));
+        }
+    }
 }
