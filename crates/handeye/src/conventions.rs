@@ -3,8 +3,9 @@
 //! The mistakes every hand–eye tool's users make are a pose given inverted under its name, the
 //! quaternion written `w, x, y, z` into `x, y, z, w` fields, and millimetres on one side and metres
 //! on the other. Each turns consistent data into data that no X fits. [`check_readings`] solves the
-//! data as given and under each other [`Reading`], measures how well each fits (the median per-pose
-//! residual, [`crate::consistency::PoseResiduals`]), and names a reading that fits far better.
+//! data as given and, when that fits poorly, under each other [`Reading`], measures how well each
+//! fits (the median per-pose residual, [`crate::consistency::PoseResiduals`]), and names a reading
+//! that fits far better.
 
 use nalgebra::{Quaternion, UnitQuaternion};
 use serde::{Deserialize, Serialize};

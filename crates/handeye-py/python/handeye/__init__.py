@@ -40,7 +40,10 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     motion filter is applied too (motions whose robot or camera rotation has 2·sin(θ/2) outside
     [0.3, 1.7] are dropped), so the
     answer is OpenCV's; with the name "tsai" every motion is kept. For eye-to-hand pass base2gripper poses, as
-    with OpenCV, and get cam2base. Raises ValueError on bad input, on poses that fit far better read another way (inverted, millimetres, w-first quaternions: the message names the ``fix`` for ``calibrate``) and on motions that leave X undetermined, where OpenCV answers."""
+    with OpenCV, and get cam2base. Raises ValueError on bad input, on poses that fit far better read another way
+    (inverted, millimetres, w-first quaternions: the message names the ``fix`` for ``calibrate``), on outlier
+    poses that make such a reading look better (the message names them; ``calibrate(...,
+    reject_outliers=True)`` leaves them out) and on motions that leave X undetermined, where OpenCV answers."""
     name = METHODS.get(method, method) if isinstance(method, int) else method
     if not isinstance(name, str):
         raise ValueError(f"unknown method {method!r}")
