@@ -8,7 +8,7 @@ use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Un
 use handeye::pose::transform_from_matrix4;
 use handeye::select::{AdaptiveParams, Selection};
 use handeye::tracking::TrackOptions;
-use handeye::{Method, Pairing, PosePair, Setup, Transform};
+use handeye::{Method, Pairing, PosePair, Setup, Transform, Warning};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use numpy::{
     IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn,
@@ -159,6 +159,14 @@ fn solve_opencv_poses<'py>(
     Ok((
         numpy::ndarray::Array2::from_shape_fn((3, 3), |(i, j)| r[(i, j)]).into_pyarray(py),
         numpy::ndarray::Array2::from_shape_fn((3, 1), |(i, _)| t[i]).into_pyarray(py),
+        c.warnings
+            .iter()
+            // OpenCV's arguments serve both setups (eye-to-hand passes base2gripper), so the
+            // eye-in-hand reading of them cannot tell which sizes of X and the target are likely:
+            // that warning would fire on every correct eye-to-hand call.
+            .filter(|w| !matches!(w, Warning::SwappedSizes { .. }))
+            .map(|w| w.to_string())
+            .collect(),
     ))
 }
 
@@ -278,8 +286,13 @@ fn checked_transforms(
         .collect()
 }
 
-/// A rotation (3, 3) and a translation (3, 1), as OpenCV returns X.
-type RotationTranslation<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+/// A rotation (3, 3) and a translation (3, 1), as OpenCV returns X, and the warnings in words
+/// (the Python layer issues them).
+type RotationTranslation<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<String>,
+);
 
 /// Transforms from rotations ((N, 3, 3) matrices or (N, 3) rotation vectors) and (N, 3)
 /// translations, each checked as a 4×4 of `what[k]` is ([`transform`]).

@@ -414,31 +414,51 @@ pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
     }
 }
 
-/// [`solve_poses`] with the two refusals of [`calibrate`] that need no bootstrap: the poses fit
-/// far better read another way (an inverted pose, `w, x, y, z` quaternions, millimetres on one
-/// side: [`Error::Misread`], from [`check_readings`]), or the data leave a direction of X
-/// undetermined, judged from a first-order covariance instead of the bootstrap. This is the
-/// drop-in for OpenCV's `calibrateHandEye`, which returns X alone and must not return it for data
-/// that do not determine it (noisy motions about one axis, say, where a solver's own
-/// conditioning test sees nothing singular) or that were read wrongly. The covariance is
-/// [`PoseAccumulator::covariance`] over all pairs at the solved X, each pose's fixed frame
-/// carrying the noise the poses themselves show under it (as the accumulating estimator's
-/// reports do), judged with the bootstrap's bounds
-/// ([`crate::uncertainty::UNDETERMINED_ROTATION_DEG`], and half the scene for the translation).
-/// Noise-free data (no scatter to measure) are not refused by it: the solvers' own tests see
-/// their degeneracy. When the poor fit that makes another reading look better comes from a few
-/// outlier poses, the refusal names them instead ([`Error::Untrusted`]).
+/// [`solve_poses`] with the refusals of [`calibrate`] that need no bootstrap, for the drop-in for
+/// OpenCV's `calibrateHandEye`, which returns X alone and so must not return it for data that were
+/// read wrongly, that hold outliers, or that do not determine it:
+/// - the poses fit far better read another way (an inverted pose, `w, x, y, z` quaternions,
+///   millimetres on one side): [`Error::Misread`], judged on the poses that agree with the others,
+///   as [`calibrate`] judges it ([`read_poses`]);
+/// - some poses disagree with the others ([`pose_outliers`]): [`Error::Untrusted`] naming them.
+///   [`calibrate`] answers with a warning and the uncertainty they cause; X alone cannot carry
+///   either, and a few random poses move it by degrees (kinhec's `outliers_random_pose` series:
+///   10–15° and 7–13 cm from the truth);
+/// - a direction of X is undetermined, judged from a first-order covariance instead of the
+///   bootstrap (noisy motions about one axis, say, where a solver's own conditioning test sees
+///   nothing singular). The covariance is [`PoseAccumulator::covariance`] over all pairs at the
+///   solved X, each pose's fixed frame carrying the noise the poses themselves show under it (as
+///   the accumulating estimator's reports do), judged with the bootstrap's bounds
+///   ([`crate::uncertainty::UNDETERMINED_ROTATION_DEG`], and half the scene for the translation).
+///   Noise-free data (no scatter to measure) are not refused by it: the solvers' own tests see
+///   their degeneracy.
+///
+/// The warnings of the reading and of the solve are the result's, and a weakly determined direction
+/// of X ([`Warning::WeakDirection`], from the same covariance) is one of them.
 pub fn solve_poses_checked(
     poses: &[PosePair],
     setup: Setup,
     options: &Options,
 ) -> Result<Calibration> {
-    let sums = PoseAccumulator::of(poses, setup);
-    let check = crate::conventions::check_readings_summed(poses, setup, Some(&sums));
-    if check.better.is_some() {
-        return Err(misread_or_outliers(poses, setup, options, &check));
+    let mut warnings = Vec::new();
+    let (_, _, read, found) = read_poses(
+        poses,
+        setup,
+        options.fix,
+        options.outlier_deg,
+        &mut warnings,
+    )?;
+    if !found.poses.is_empty() {
+        return Err(Error::Untrusted {
+            advice: format!(
+                "{}; X would follow them: leave them out, or calibrate with `reject_outliers=True` (`handeye.calibrate` in Python, `--reject-outliers` on the command line)",
+                outlier_warning(&outlier_report(&found, options))
+            ),
+        });
     }
-    let calibration = solve_poses(poses, setup, options)?;
+    let mut calibration = solve_poses(&read, setup, options)?;
+    calibration.warnings.splice(0..0, warnings);
+    let sums = PoseAccumulator::of(&read, setup);
     let x = &calibration.x;
     let Some(covariance) = sums.residual_scatter(x).and_then(|noise| {
         sums.covariance(
@@ -449,45 +469,11 @@ pub fn solve_poses_checked(
     }) else {
         return Ok(calibration);
     };
-    let scene = translation_scale(poses, setup).max(working_distance(poses));
+    let scene = translation_scale(&read, setup).max(working_distance(&read));
     let first_order = crate::uncertainty::summarise(covariance, 0, 0, scene);
     refuse_if_undetermined(&first_order, setup, calibration.conditioning)?;
+    warn_weak(&first_order, setup, &mut calibration.warnings);
     Ok(calibration)
-}
-
-/// The refusal of [`solve_poses_checked`] when another reading fits far better. A few poses that
-/// disagree with the others (gross outliers, a flipped target pose) can make a mirror-image
-/// reading look better, so the readings are judged again without the outlier poses, as
-/// [`calibrate`] judges them. When the poses as given then fit, the outliers are the finding, and
-/// the remedy is to leave them out (the drop-in has no option for it). The outlier test
-/// ([`pose_outliers`], about 7 µs at ten poses) runs only here, after a poor fit, so that data
-/// that fit well pay nothing for it.
-fn misread_or_outliers(
-    poses: &[PosePair],
-    setup: Setup,
-    options: &Options,
-    check: &ReadingCheck,
-) -> Error {
-    let found = pose_outliers(poses, setup, options.outlier_deg);
-    let misread = |check: &ReadingCheck| Error::Misread {
-        advice: check
-            .advice(setup)
-            .or_else(|| check.finding(setup))
-            .unwrap_or_default(),
-    };
-    if found.poses.is_empty() {
-        return misread(check);
-    }
-    let without_outliers = check_readings(&without(poses, &found), setup);
-    if without_outliers.better.is_some() {
-        return misread(&without_outliers);
-    }
-    Error::Untrusted {
-        advice: format!(
-            "{}; they make the poses fit a wrong reading of the input better than the right one, and X would follow them: leave them out, or calibrate with `reject_outliers=True` (`handeye.calibrate` in Python, `--reject-outliers` on the command line)",
-            outlier_warning(&outlier_report(&found, options))
-        ),
-    }
 }
 
 /// Bootstrap replicates: the same method and pairing as [`solve_poses`], made cheaper where the

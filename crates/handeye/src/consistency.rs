@@ -70,9 +70,7 @@ impl PoseOutliers {
 /// median pitch gap above `6 × typical` (typical: the median over all poses, floored at 1e-9 of the
 /// motions' translation scale so that noise-free data has no outliers).
 pub fn pose_outliers(poses: &[PosePair], setup: Setup, min_angle_gap_deg: f64) -> PoseOutliers {
-    let gaps: Vec<PoseGap> = (0..poses.len())
-        .map(|i| pose_gap(poses, setup, i))
-        .collect();
+    let gaps = pose_gaps(poses, setup);
     let typical_angle = median(gaps.iter().map(|g| g.angle_gap_deg).collect());
     let typical_pitch = median(gaps.iter().map(|g| g.pitch_gap).collect());
     let scale = translation_scale(poses, setup);
@@ -88,6 +86,36 @@ pub fn pose_outliers(poses: &[PosePair], setup: Setup, min_angle_gap_deg: f64) -
         angle_threshold_deg,
         pitch_threshold,
     }
+}
+
+/// Every pose's gaps against its partners. When every other pose is a partner (at most
+/// `PARTNERS + 1` poses), the motion between two poses serves both: its gaps are made once, for
+/// half the work (the reversed motion has the same angles and |pitch|, to rounding).
+fn pose_gaps(poses: &[PosePair], setup: Setup) -> Vec<PoseGap> {
+    let n = poses.len();
+    if n > PARTNERS + 1 {
+        return (0..n).map(|i| pose_gap(poses, setup, i)).collect();
+    }
+    let mut pairs = vec![(0.0, None); n * n];
+    for i in 0..n {
+        for j in i + 1..n {
+            let gaps = motion_gaps(setup, &poses[j], &poses[i]);
+            pairs[i * n + j] = gaps;
+            pairs[j * n + i] = gaps;
+        }
+    }
+    (0..n)
+        .map(|i| {
+            let row = || (0..n).filter(move |&j| j != i).map(|j| pairs[i * n + j]);
+            let mut angle: Vec<f64> = row().map(|g| g.0).collect();
+            let mut pitch: Vec<f64> = row().filter_map(|g| g.1).collect();
+            PoseGap {
+                pose: i,
+                angle_gap_deg: median_in(&mut angle),
+                pitch_gap: median_in(&mut pitch),
+            }
+        })
+        .collect()
 }
 
 /// The gaps of pose `i` against its partners.
@@ -117,21 +145,33 @@ pub(crate) fn screw_gaps<'a>(
     let (mut angle, mut pitch) = ([0.0; PARTNERS], [0.0; PARTNERS]);
     let (mut na, mut np) = (0, 0);
     for partner in partners.take(PARTNERS) {
-        let m = MotionPair::between(setup, partner, pose);
-        let (a, b) = (MotionFeatures::of(&m.a), MotionFeatures::of(&m.b));
-        angle[na] = (a.angle - b.angle).abs().to_degrees();
+        let (angle_gap, pitch_gap) = motion_gaps(setup, partner, pose);
+        angle[na] = angle_gap;
         na += 1;
-        if let (Some(ka), Some(kb)) = (a.axis, b.axis)
-            && a.angle > PITCH_MIN_ANGLE
-        {
-            // Near π the axis sign is arbitrary, so compare |pitch|.
-            let pa = ka.dot(&m.a.translation.vector).abs();
-            let pb = kb.dot(&m.b.translation.vector).abs();
-            pitch[np] = (pa - pb).abs();
+        if let Some(gap) = pitch_gap {
+            pitch[np] = gap;
             np += 1;
         }
     }
     (median_in(&mut angle[..na]), median_in(&mut pitch[..np]))
+}
+
+/// The gaps of the motion from `partner` to `pose`: |θ_A − θ_B| (degrees) and, when the motion
+/// turns by more than 3° about a defined axis, |k_A·t_A − k_B·t_B|.
+fn motion_gaps(setup: Setup, partner: &PosePair, pose: &PosePair) -> (f64, Option<f64>) {
+    let m = MotionPair::between(setup, partner, pose);
+    let (a, b) = (MotionFeatures::of(&m.a), MotionFeatures::of(&m.b));
+    let angle = (a.angle - b.angle).abs().to_degrees();
+    let pitch = match (a.axis, b.axis) {
+        (Some(ka), Some(kb)) if a.angle > PITCH_MIN_ANGLE => {
+            // Near π the axis sign is arbitrary, so compare |pitch|.
+            let pa = ka.dot(&m.a.translation.vector).abs();
+            let pb = kb.dot(&m.b.translation.vector).abs();
+            Some((pa - pb).abs())
+        }
+        _ => None,
+    };
+    (angle, pitch)
 }
 
 /// Up to [`PARTNERS`] other poses spread evenly over the sequence, starting at an offset that

@@ -12,9 +12,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::accumulate::PoseAccumulator;
 use crate::consistency::{PoseResiduals, gripper_rotations, median, translation_scale};
-use crate::motion::{AllPairs, PosePair, Setup};
+use crate::motion::{PosePair, Setup};
 use crate::pose::{Transform, exp_so3, transform_from_parts};
-use crate::solve::{REFUSE_ANGLE, andreff};
+use crate::solve::REFUSE_ANGLE;
 use crate::warning::{Remedy, Warning};
 
 /// At most this many poses (spread evenly) are used to try each reading.
@@ -289,26 +289,15 @@ impl ReadingCheck {
 
 /// Tries every [`Reading`] of `poses` and names one that fits far better than the as-given one.
 ///
-/// Each reading is solved by Andreff over all pairs of at most 60 poses spread over the input, and
-/// judged by its median per-pose residuals; the millimetre readings are judged only by which side's
-/// translations are the larger (they fit equally well up to the unit of X).
+/// Each reading is solved by Andreff over all pairs of at most 60 poses spread over the input, from
+/// the accumulated normal equations ([`PoseAccumulator`], O(n)), and judged by its median per-pose
+/// residuals; the millimetre readings are judged only by which side's translations are the larger
+/// (they fit equally well up to the unit of X).
 ///
 /// The as-given reading is solved first: when it fits well (not [`ReadingFit::poor`]) no other
 /// reading can be far better, by the rule itself, and the other eight are not tried. The result
-/// is the same as trying them all; the check then costs one solve instead of nine (about a tenth,
-/// which is most of the OpenCV drop-in's time at ten poses). That one solve comes from the
-/// accumulated normal equations ([`PoseAccumulator`], O(n), the same X as Andreff's over all
-/// pairs to about 1e-12); the rare readings after a poor fit are solved over the pairs.
+/// is the same as trying them all, for one solve instead of nine.
 pub fn check_readings(poses: &[PosePair], setup: Setup) -> ReadingCheck {
-    check_readings_summed(poses, setup, None)
-}
-
-/// [`check_readings`], given the accumulated sums of `poses` when the caller has them.
-pub(crate) fn check_readings_summed(
-    poses: &[PosePair],
-    setup: Setup,
-    sums: Option<&PoseAccumulator>,
-) -> ReadingCheck {
     let sample = spread(poses);
     let none = |as_given| ReadingCheck {
         as_given,
@@ -321,18 +310,7 @@ pub(crate) fn check_readings_summed(
     if rotations.scatter < DEGENERATE_SCATTER || rotations.widest_from_first < REFUSE_ANGLE {
         return none(None);
     }
-    let summed;
-    let sums = match sums {
-        Some(sums) if sample.len() == poses.len() => sums,
-        _ => {
-            summed = PoseAccumulator::of(&sample, setup);
-            &summed
-        }
-    };
-    let Some(given) = sums
-        .estimate()
-        .and_then(|e| fit_at(&sample, setup, Reading::AsGiven, &e.x))
-    else {
+    let Some(given) = fit(&sample, setup, Reading::AsGiven) else {
         return none(None);
     };
     if !given.poor() {
@@ -405,13 +383,8 @@ fn spread(poses: &[PosePair]) -> Vec<PosePair> {
 /// target frame and in the camera frame (the mirror swaps the two), over the summed spreads of the
 /// hand positions of Q and of Q⁻¹ (the mirror swaps those too).
 fn fit(poses: &[PosePair], setup: Setup, reading: Reading) -> Option<ReadingFit> {
-    let x = andreff(&AllPairs::new(poses, setup)).ok()?.x;
-    fit_at(poses, setup, reading, &x)
-}
-
-/// The fit of one reading at its X ([`fit`]).
-fn fit_at(poses: &[PosePair], setup: Setup, reading: Reading, x: &Transform) -> Option<ReadingFit> {
-    let r = PoseResiduals::at(poses, setup, x);
+    let x = PoseAccumulator::of(poses, setup).estimate()?.x;
+    let r = PoseResiduals::at(poses, setup, &x);
     let in_camera_frame = median(
         poses
             .iter()

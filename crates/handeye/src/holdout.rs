@@ -16,7 +16,7 @@
 //! 200 poses, 2.2 ms at 1,000, 60 ms at 10,000, 0.45 s at 100,000 (from 1,000 poses on about 10
 //! times the single all-pose solve that stood in for the others' beyond 300 poses before); the
 //! whole `calibrate --pairs all` took 4 ms more CPU at 1,000 poses (70 against 66 ms) and 1% more
-//! at 10,000 (4.94 against 4.88 s), so [`EXACT_UP_TO`] bounds nothing now. Until 2026-12-02
+//! at 10,000 (4.94 against 4.88 s), so no size bound is needed. Until 2026-12-02
 //! each pose was left out by adding the n − 1 others afresh (O(n²), exact only up to 300 poses).
 
 use rayon::prelude::*;
@@ -26,10 +26,6 @@ use crate::accumulate::{MergeableAccumulator, PoseAccumulator};
 use crate::consistency::{OUTLIER_FACTOR, median};
 use crate::motion::{PosePair, Setup};
 use crate::pose::{Transform, rotation_angle_between};
-
-/// Poses up to which each is left out exactly: every size (module documentation). It was 300
-/// while leaving out was O(n²).
-pub const EXACT_UP_TO: usize = usize::MAX;
 
 /// The held-out gap of one pose.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -52,7 +48,8 @@ pub struct HeldOutCheck {
     pub median_rotation_deg: f64,
     /// See `median_rotation_deg`.
     pub median_translation: f64,
-    /// Whether each pose was left out exactly (`false` beyond [`EXACT_UP_TO`] poses: never).
+    /// Whether each pose was left out exactly: always, at every size (it was `false` beyond 300
+    /// poses while the check was O(n²)); kept for the readers of the reports.
     pub exact: bool,
     /// Indices of the poses whose gap is above 6 times the median (rotation or translation).
     pub disagree: Vec<usize>,
@@ -180,13 +177,8 @@ mod tests {
     use crate::sim::{SimConfig, simulate};
 
     /// X and Y from the poses.
-    fn solved<'a>(
-        poses: impl Iterator<Item = &'a PosePair>,
-        setup: Setup,
-    ) -> Option<(Transform, Transform)> {
-        let mut acc = PoseAccumulator::new(setup);
-        poses.for_each(|p| acc.add(p));
-        solution(&acc)
+    fn solved(poses: &[PosePair], setup: Setup) -> Option<(Transform, Transform)> {
+        solution(&PoseAccumulator::of(poses, setup))
     }
 
     /// The check as it was made before the O(n) one: each pose left out by adding the n − 1
@@ -197,20 +189,19 @@ mod tests {
             return None;
         }
         let exact = n <= 300;
-        let all = solved(poses.iter(), setup);
+        let all = solved(poses, setup);
         let gaps: Vec<HeldOutPose> = poses
             .par_iter()
             .enumerate()
             .map(|(i, pose)| {
                 let (x, y) = if exact {
-                    solved(
-                        poses
-                            .iter()
-                            .enumerate()
-                            .filter(|(k, _)| *k != i)
-                            .map(|(_, p)| p),
-                        setup,
-                    )?
+                    let others: Vec<PosePair> = poses
+                        .iter()
+                        .enumerate()
+                        .filter(|(k, _)| *k != i)
+                        .map(|(_, p)| *p)
+                        .collect();
+                    solved(&others, setup)?
                 } else {
                     all?
                 };
@@ -276,9 +267,10 @@ mod tests {
     }
 
     fn solved_conditioning(poses: &[PosePair], setup: Setup) -> f64 {
-        let mut acc = PoseAccumulator::new(setup);
-        poses.iter().for_each(|p| acc.add(p));
-        acc.rotation_system().solve().conditioning
+        PoseAccumulator::of(poses, setup)
+            .rotation_system()
+            .solve()
+            .conditioning
     }
 
     #[test]

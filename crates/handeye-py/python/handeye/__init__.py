@@ -41,9 +41,11 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     [0.3, 1.7] are dropped), so the
     answer is OpenCV's; with the name "tsai" every motion is kept. For eye-to-hand pass base2gripper poses, as
     with OpenCV, and get cam2base. Raises ValueError on bad input, on poses that fit far better read another way
-    (inverted, millimetres, w-first quaternions: the message names the ``fix`` for ``calibrate``), on outlier
-    poses that make such a reading look better (the message names them; ``calibrate(...,
-    reject_outliers=True)`` leaves them out) and on motions that leave X undetermined, where OpenCV answers."""
+    (inverted, millimetres, w-first quaternions: the message names the ``fix`` for ``calibrate``), on poses
+    that disagree with the others (the message names them; ``calibrate(..., reject_outliers=True)`` leaves
+    them out) and on motions that leave X undetermined, where OpenCV answers.
+    What ``calibrate`` would warn about (weak conditioning, small rotations, X and the target of unlikely
+    sizes) is issued as a ``UserWarning``."""
     name = METHODS.get(method, method) if isinstance(method, int) else method
     if not isinstance(name, str):
         raise ValueError(f"unknown method {method!r}")
@@ -53,11 +55,14 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     x = _solve_opencv_sequences(
         R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=name, tsai_opencv_filter=opencv_tsai
     )
-    if x is not None:
-        return x
-    rg, tg = _arrays(R_gripper2base, t_gripper2base, "gripper2base")
-    rc, tc = _arrays(R_target2cam, t_target2cam, "target2cam")
-    return _solve_opencv(rg, tg, rc, tc, method=name, tsai_opencv_filter=opencv_tsai)
+    if x is None:
+        rg, tg = _arrays(R_gripper2base, t_gripper2base, "gripper2base")
+        rc, tc = _arrays(R_target2cam, t_target2cam, "target2cam")
+        x = _solve_opencv(rg, tg, rc, tc, method=name, tsai_opencv_filter=opencv_tsai)
+    rotation, translation, said = x
+    for text in said:
+        warnings.warn(text, UserWarning, stacklevel=2)
+    return rotation, translation
 
 
 def _arrays(rotations, translations, name: str):

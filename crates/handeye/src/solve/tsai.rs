@@ -138,12 +138,16 @@ fn vector_part(q: &Vector4<f64>) -> Vector3<f64> {
     Vector3::new(q[1], q[2], q[3])
 }
 
-/// Whether a rotation passes OpenCV's motion filter: |P| = 2·sin(θ/2) in [0.3, 1.7]. OpenCV takes
-/// |P| from the quaternion; from the trace, tr R = 1 + 2 cos θ = 3 − 4 sin²(θ/2), it is
-/// √(3 − tr R), with no quaternion to make (the same value to rounding).
+/// Whether a rotation passes OpenCV's motion filter: |P| in [0.3, 1.7].
 fn in_filter_range(r: &Matrix3<f64>) -> bool {
-    let p = (3.0 - r.trace()).max(0.0).sqrt();
-    (FILTER_RANGE.0..=FILTER_RANGE.1).contains(&p)
+    (FILTER_RANGE.0..=FILTER_RANGE.1).contains(&modified_rodrigues_norm(r))
+}
+
+/// |P| = 2·sin(θ/2), the length of the modified Rodrigues vector. OpenCV takes it from the
+/// quaternion; from the trace, tr R = 1 + 2 cos θ = 3 − 4 sin²(θ/2), it is √(3 − tr R), with no
+/// quaternion to make (the same value to rounding).
+fn modified_rodrigues_norm(r: &Matrix3<f64>) -> f64 {
+    (3.0 - r.trace()).max(0.0).sqrt()
 }
 
 #[cfg(test)]
@@ -165,7 +169,7 @@ mod tests {
             let r = *nalgebra::Rotation3::new(axis.normalize() * angle).matrix();
             let q = quaternion_of(&r);
             let from_quaternion = 2.0 * vector_part(&q).norm();
-            let from_trace = (3.0 - r.trace()).max(0.0).sqrt();
+            let from_trace = modified_rodrigues_norm(&r);
             // √ of a difference near 0 loses half the digits: 1e-8 at worst, at tiny angles.
             prop_assert!((from_quaternion - from_trace).abs() < 1e-7, "{from_quaternion} vs {from_trace}");
             let bounds = FILTER_RANGE;
