@@ -22,7 +22,7 @@ pub fn run(args: Args) -> Result<()> {
     let (poses, _, _) = read_all(&args.input)?;
     let advice = advise(&poses, args.input.setup(), args.count)?;
     eprint!("{}", in_words(&advice));
-    print_json(&serde_json::to_value(&advice)?)
+    print_json(&advice)
 }
 
 /// The advice in a few lines.

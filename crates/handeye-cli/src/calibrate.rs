@@ -12,7 +12,6 @@ use handeye::solve::RobotWorldMethod;
 use handeye::solve::TsaiOptions;
 use handeye::uncertainty::REPLICATES;
 use handeye::{Error, Method, Pairing};
-use serde_json::Value;
 
 use crate::faces::{self, Face, Published, length_unit};
 use crate::input::{InputArgs, read_all};
@@ -175,11 +174,10 @@ pub fn run(args: Args) -> Result<()> {
         Face::Urdf => return print_text(&faces::urdf(published, &frames)),
         Face::Json => {}
     }
-    let mut out = serde_json::to_value(&report)?;
-    if let (Some(t), Value::Object(o)) = (time_offset, &mut out) {
-        o.insert("time_offset_s".into(), t.into());
-    }
-    print_json(&out)
+    print_json(&WithTimeOffset {
+        report: &report,
+        time_offset_s: time_offset,
+    })
 }
 
 /// `calibrate --robot-world`: X and the target's pose together.
@@ -254,11 +252,10 @@ fn run_robot_world(args: &Args) -> Result<()> {
         }
         Face::Json => {}
     }
-    let mut out = serde_json::to_value(&report)?;
-    if let (Some(t), Value::Object(o)) = (time_offset, &mut out) {
-        o.insert("time_offset_s".into(), t.into());
-    }
-    print_json(&out)
+    print_json(&WithTimeOffset {
+        report: &report,
+        time_offset_s: time_offset,
+    })
 }
 
 /// The robot-world result as ROS-style YAML: X and the target pose.
@@ -350,4 +347,13 @@ fn enough(input: &InputArgs, got: usize, need: usize, what: &str) -> Result<()> 
         message: format!("{got} pose pair(s): at least {need} are needed {what}"),
     }
     .into())
+}
+
+/// A report with the clock offset the input was read under (`--time-offset`), as its last field.
+#[derive(serde::Serialize)]
+struct WithTimeOffset<'a, T> {
+    #[serde(flatten)]
+    report: &'a T,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    time_offset_s: Option<f64>,
 }

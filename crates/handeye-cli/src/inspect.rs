@@ -29,7 +29,7 @@ pub fn run(args: Args) -> Result<()> {
     if Face::chosen(args.output) == Face::Text {
         print_text(&render(&summary))
     } else {
-        print_json(&serde_json::to_value(&summary)?)
+        print_json(&summary)
     }
 }
 

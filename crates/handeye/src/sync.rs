@@ -9,6 +9,7 @@
 //! camera rotate by the same angle over any interval.
 
 use nalgebra::UnitQuaternion;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -372,10 +373,18 @@ pub fn refine_time_offset(
         .min(MAX_COARSE as f64) as usize;
     let coarse = (0..=coarse_steps)
         .map(|k| -max_offset + 2.0 * max_offset * k as f64 / coarse_steps.max(1) as f64);
-    let Some((best, best_cost, step)) = fine
+    // The grid points are independent, so they are costed in parallel; the best is then taken
+    // in grid order, the same point as one by one.
+    let grid: Vec<(f64, f64)> = fine
         .map(|o| (o, 2.0 * period / (GRID - 1) as f64))
         .chain(coarse.map(|o| (o, 2.0 * max_offset / coarse_steps.max(1) as f64)))
-        .map(|(o, step)| (o, cost(o), step))
+        .collect();
+    let costed: Vec<(f64, f64, f64)> = grid
+        .par_iter()
+        .map(|&(o, step)| (o, cost(o), step))
+        .collect();
+    let Some((best, best_cost, step)) = costed
+        .into_iter()
         .filter(|c| c.1.is_finite())
         .min_by(|a, b| a.1.total_cmp(&b.1))
     else {
