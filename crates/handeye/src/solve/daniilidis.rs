@@ -5,7 +5,7 @@ use nalgebra::{Matrix3, Matrix4, SMatrix, SVector, SymmetricEigen, Vector3, Vect
 use crate::error::Result;
 use crate::motion::{AllPairs, MotionPair, MotionSource};
 use crate::pose::{rotation_matrix, skew};
-use crate::solve::quaternion::{motion_quaternions, multiply, quaternion_of, rotation_of};
+use crate::solve::quaternion::{Signs, motion_quaternions, multiply, quaternion_of, rotation_of};
 use crate::solve::scale::{Scaled, weighting_unit};
 use crate::solve::{Calibration, Method, check_motions, finish, singular};
 
@@ -131,7 +131,12 @@ fn dual_part(q: &Vector4<f64>, t: &Vector3<f64>) -> Vector4<f64> {
 /// and the wrong sign gives six false rows. The sign of q_b (and with it q_b') is taken from
 /// `r_x0` (see `motion_quaternions`).
 fn rows(m: &MotionPair, r_x0: &Matrix3<f64>) -> SMatrix<f64, 6, 8> {
-    let (qa, qb) = motion_quaternions(&rotation_matrix(&m.a), &rotation_matrix(&m.b), r_x0);
+    let (qa, qb) = motion_quaternions(
+        &rotation_matrix(&m.a),
+        &rotation_matrix(&m.b),
+        r_x0,
+        Signs::Agreeing,
+    );
     let qa_ = dual_part(&qa, &m.a.translation.vector);
     let qb_ = dual_part(&qb, &m.b.translation.vector);
     rows_of(&qa, &qb, &qa_, &qb_)

@@ -5,7 +5,7 @@ use nalgebra::{Matrix4, SymmetricEigen, Vector4};
 use crate::error::Result;
 use crate::motion::MotionSource;
 use crate::pose::rotation_matrix;
-use crate::solve::quaternion::{motion_quaternions, rotation_of};
+use crate::solve::quaternion::{Signs, motion_quaternions, rotation_of};
 use crate::solve::{
     Calibration, Method, check_motions, finish, singular, translation_least_squares,
 };
@@ -40,7 +40,12 @@ pub fn horaud(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
     // The sign is taken from Andreff's R_x (see `motion_quaternions`).
     let r_x0 = check.andreff_rotation;
     motions.for_each_motion(|m| {
-        let (q_a, q_b) = motion_quaternions(&rotation_matrix(&m.a), &rotation_matrix(&m.b), &r_x0);
+        let (q_a, q_b) = motion_quaternions(
+            &rotation_matrix(&m.a),
+            &rotation_matrix(&m.b),
+            &r_x0,
+            Signs::NearHalfTurn,
+        );
         let d = left(&q_a) - right(&q_b);
         a += d.transpose() * d;
     });

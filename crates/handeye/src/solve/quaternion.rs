@@ -12,7 +12,8 @@
 //! q_b independently, half the time the wrong pair (−q_b satisfies q_a ⊗ q_x = −q_x ⊗ q_b, a
 //! different linear constraint, and one such motion pulls the least squares to a wrong X; on
 //! exact data it was 180° off). [`motion_quaternions`] takes the sign of q_b from the data
-//! instead: the one closer to the q_b that a first estimate of R_x predicts.
+//! instead, near 180° ([`HALF_TURN_WITHIN`]): the one closer to the q_b that a first estimate of
+//! R_x predicts.
 
 use nalgebra::{Matrix3, Vector3, Vector4};
 
@@ -23,22 +24,49 @@ pub fn quaternion_of(r: &Matrix3<f64>) -> Vector4<f64> {
     if q[0] < 0.0 { -q } else { q }
 }
 
+/// How far from 180° a motion's rotations may turn for the sign of their quaternions (and the
+/// lift of their logarithms) to be in question: 10°, where the scalar part cos(θ/2) is below
+/// sin 5° ≈ 0.087. Noise moves a rotation's angle by far less (kinhec's PnP noise: under 1°), so
+/// a motion pair that agrees with X and crosses 180° by noise is inside it. Beyond it, a pair
+/// whose quaternions disagree under every near estimate of R_x is not a sign question but a pair
+/// that does not agree with X (an outlier): its canonical signs are kept, as OpenCV keeps them.
+pub(crate) const HALF_TURN_WITHIN: f64 = 10.0 * std::f64::consts::PI / 180.0;
+
+/// Which motions [`motion_quaternions`] gives the sign that agrees with the estimate of R_x.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Signs {
+    /// Every motion (Daniilidis, whose all-pairs sums give every pair the sign that agrees, per
+    /// pose: the per-motion form must choose as they do).
+    Agreeing,
+    /// Only motions that turn within [`HALF_TURN_WITHIN`] of 180° on both sides; the others keep
+    /// w ≥ 0 (Tsai, Horaud). Giving an outlier motion the sign that agrees with Andreff's R_x makes
+    /// it pull towards Andreff's answer, which the outliers have moved too: on kinhec's series
+    /// with random poses Horaud answered 10° from the truth where OpenCV's w ≥ 0 answers 5°.
+    NearHalfTurn,
+}
+
 /// The quaternions (q_a, q_b) of a motion pair's rotations, with the signs that make
 /// q_a ⊗ q_x = q_x ⊗ q_b hold for the true X.
 ///
 /// q_a is [`quaternion_of`] R_a (w ≥ 0). q_b is ±[`quaternion_of`] R_b, whichever is nearer (in
 /// R⁴) to q_x* ⊗ q_a ⊗ q_x = (w_a, R_xᵀ a) predicted by `r_x`, a first estimate of R_x (Andreff's
-/// rotation, which has no sign ambiguity). The two candidates are 180° apart as rotations of the
-/// pair, so any estimate within 90° of R_x chooses right. Away from 180° both scalar parts are
-/// clearly positive, the choice is the canonical w ≥ 0 one and OpenCV's answer is unchanged; it
-/// only differs when |w| is at rounding level, where w ≥ 0 is arbitrary.
-pub fn motion_quaternions(
+/// rotation, which has no sign ambiguity), for the motions `signs` names; w ≥ 0 for the others.
+/// The two candidates are 180° apart as rotations of the pair, so any estimate within 90° of R_x
+/// chooses right. For a pair that agrees with X, away from 180° both scalar parts are clearly
+/// positive and the choice is the canonical w ≥ 0 one (OpenCV's answer is unchanged); it differs
+/// when |w| is at noise level, where w ≥ 0 is arbitrary.
+pub(crate) fn motion_quaternions(
     r_a: &Matrix3<f64>,
     r_b: &Matrix3<f64>,
     r_x: &Matrix3<f64>,
+    signs: Signs,
 ) -> (Vector4<f64>, Vector4<f64>) {
     let q_a = quaternion_of(r_a);
     let q_b = quaternion_of(r_b);
+    let in_question = (0.5 * HALF_TURN_WITHIN).sin();
+    if signs == Signs::NearHalfTurn && q_a[0].max(q_b[0]) > in_question {
+        return (q_a, q_b);
+    }
     let predicted = r_x.transpose() * Vector3::new(q_a[1], q_a[2], q_a[3]);
     let agreement = q_a[0] * q_b[0] + predicted.dot(&Vector3::new(q_b[1], q_b[2], q_b[3]));
     (q_a, if agreement < 0.0 { -q_b } else { q_b })

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::motion::{MotionPair, MotionSource};
 use crate::pose::{rotation_matrix, skew};
 use crate::solve::least_squares::least_squares_3;
-use crate::solve::quaternion::{motion_quaternions, rotation_of};
+use crate::solve::quaternion::{Signs, motion_quaternions, rotation_of};
 use crate::solve::{
     Calibration, Method, MotionCheck, check_motions, finish, singular, translation_least_squares,
 };
@@ -115,7 +115,12 @@ fn solve_tsai(motions: &(impl MotionSource + ?Sized), check: MotionCheck) -> Res
     // sign of P_c is taken from Andreff's R_x (see `motion_quaternions`).
     let r_x0 = check.andreff_rotation;
     let p_prime = least_squares_3(motions, |m| {
-        let (q_g, q_c) = motion_quaternions(&rotation_matrix(&m.a), &rotation_matrix(&m.b), &r_x0);
+        let (q_g, q_c) = motion_quaternions(
+            &rotation_matrix(&m.a),
+            &rotation_matrix(&m.b),
+            &r_x0,
+            Signs::NearHalfTurn,
+        );
         let p_g = vector_part(&q_g) * 2.0;
         let p_c = vector_part(&q_c) * 2.0;
         (skew(&(p_g + p_c)), p_c - p_g)
