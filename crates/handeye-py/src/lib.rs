@@ -8,7 +8,7 @@ use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Un
 use handeye::pose::transform_from_matrix4;
 use handeye::select::{AdaptiveParams, Selection};
 use handeye::tracking::TrackOptions;
-use handeye::{Method, Pairing, PosePair, Setup, Transform, Warning};
+use handeye::{Method, Pairing, PosePair, Setup, Transform};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use numpy::{
     IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn,
@@ -41,6 +41,8 @@ fn rigid(m: ndarray_view::View<'_>) -> Result<Transform, String> {
     let mat = Matrix4::from_fn(|r, c| m[[r, c]]);
     transform_from_matrix4(&mat).map_err(|p| p.to_string())
 }
+
+mod opencv_words;
 
 mod ndarray_view {
     /// A 4×4 view of a numpy array.
@@ -111,7 +113,9 @@ fn solve_x<'py>(
 /// O(poses)), eye-in-hand. The whole conversion is here, not in numpy: at ten poses numpy's
 /// per-call cost on small arrays was twice the solve.
 #[pyfunction]
-#[pyo3(signature = (r_gripper2base, t_gripper2base, r_target2cam, t_target2cam, method="tsai", tsai_opencv_filter=false))]
+#[pyo3(signature = (r_gripper2base, t_gripper2base, r_target2cam, t_target2cam, method="tsai", tsai_opencv_filter=false, setup=None))]
+// OpenCV's four arrays, then the drop-in's keywords: the signature Python sees.
+#[allow(clippy::too_many_arguments)]
 fn solve_opencv<'py>(
     py: Python<'py>,
     r_gripper2base: PyReadonlyArrayDyn<'py, f64>,
@@ -120,21 +124,29 @@ fn solve_opencv<'py>(
     t_target2cam: PyReadonlyArray2<'py, f64>,
     method: &str,
     tsai_opencv_filter: bool,
+    setup: Option<&str>,
 ) -> PyResult<RotationTranslation<'py>> {
     let robot = transforms(&r_gripper2base, &t_gripper2base, "base_from_gripper")?;
     let camera = transforms(&r_target2cam, &t_target2cam, "camera_from_target")?;
-    solve_opencv_poses(py, robot, camera, method, tsai_opencv_filter)
+    solve_opencv_poses(py, robot, camera, method, tsai_opencv_filter, setup)
 }
 
-/// X from OpenCV's two sides, read and checked.
+/// X from OpenCV's two sides, read and checked. Without a `setup` the arrays are read as
+/// eye-in-hand, which serves both setups (OpenCV's eye-to-hand callers pass base2gripper and get
+/// cam2base); with `setup="eye-to-hand"` the robot poses are base2gripper, inverted here, and the
+/// checks judge the sizes of X and the target for a fixed camera. The messages name OpenCV's
+/// arguments ([`opencv_words`]).
 fn solve_opencv_poses<'py>(
     py: Python<'py>,
     robot: Vec<Transform>,
     camera: Vec<Transform>,
     method: &str,
     tsai_opencv_filter: bool,
+    setup: Option<&str>,
 ) -> PyResult<RotationTranslation<'py>> {
     let options = calibration_options(method, "all", tsai_opencv_filter)?;
+    let said = setup.map(parse_setup).transpose()?;
+    let setup = said.unwrap_or(Setup::EyeInHand);
     if robot.len() != camera.len() {
         return Err(value_error(format!(
             "{} robot poses and {} camera poses: one of each per pose",
@@ -145,27 +157,24 @@ fn solve_opencv_poses<'py>(
     let poses: Vec<PosePair> = robot
         .into_iter()
         .zip(camera)
-        .map(|(base_from_gripper, camera_from_target)| PosePair {
-            base_from_gripper,
+        .map(|(hand, camera_from_target)| PosePair {
+            base_from_gripper: match setup {
+                Setup::EyeInHand => hand,
+                Setup::EyeToHand => hand.inverse(),
+            },
             camera_from_target,
         })
         .collect();
     let c = py
-        .allow_threads(|| {
-            handeye::calibration::solve_poses_checked(&poses, Setup::EyeInHand, &options)
-        })
-        .map_err(value_error)?;
+        .allow_threads(|| handeye::calibration::solve_poses_checked(&poses, setup, &options))
+        .map_err(|e| value_error(opencv_words::error(&e, said)))?;
     let (r, t) = (c.x.rotation.matrix(), c.x.translation.vector);
     Ok((
         numpy::ndarray::Array2::from_shape_fn((3, 3), |(i, j)| r[(i, j)]).into_pyarray(py),
         numpy::ndarray::Array2::from_shape_fn((3, 1), |(i, _)| t[i]).into_pyarray(py),
         c.warnings
             .iter()
-            // OpenCV's arguments serve both setups (eye-to-hand passes base2gripper), so the
-            // eye-in-hand reading of them cannot tell which sizes of X and the target are likely:
-            // that warning would fire on every correct eye-to-hand call.
-            .filter(|w| !matches!(w, Warning::SwappedSizes { .. }))
-            .map(|w| w.to_string())
+            .map(|w| opencv_words::warning(w, said))
             .collect(),
     ))
 }
@@ -177,7 +186,9 @@ fn solve_opencv_poses<'py>(
 /// input, which the Python layer then stacks and passes to [`solve_opencv`]: the same answer, and
 /// its messages for bad shapes.
 #[pyfunction]
-#[pyo3(signature = (r_gripper2base, t_gripper2base, r_target2cam, t_target2cam, method="tsai", tsai_opencv_filter=false))]
+#[pyo3(signature = (r_gripper2base, t_gripper2base, r_target2cam, t_target2cam, method="tsai", tsai_opencv_filter=false, setup=None))]
+// OpenCV's four arrays, then the drop-in's keywords: the signature Python sees.
+#[allow(clippy::too_many_arguments)]
 fn solve_opencv_sequences<'py>(
     py: Python<'py>,
     r_gripper2base: &Bound<'py, PyAny>,
@@ -186,6 +197,7 @@ fn solve_opencv_sequences<'py>(
     t_target2cam: &Bound<'py, PyAny>,
     method: &str,
     tsai_opencv_filter: bool,
+    setup: Option<&str>,
 ) -> PyResult<Option<RotationTranslation<'py>>> {
     let Some((robot, camera)) = sequence_parts(r_gripper2base, t_gripper2base)
         .zip(sequence_parts(r_target2cam, t_target2cam))
@@ -194,7 +206,7 @@ fn solve_opencv_sequences<'py>(
     };
     let robot = checked_transforms(robot, "base_from_gripper")?;
     let camera = checked_transforms(camera, "camera_from_target")?;
-    solve_opencv_poses(py, robot, camera, method, tsai_opencv_filter).map(Some)
+    solve_opencv_poses(py, robot, camera, method, tsai_opencv_filter, setup).map(Some)
 }
 
 /// The rotations and translations of one side, from lists or tuples of float64 arrays; `None`

@@ -185,12 +185,28 @@ def test_noisy_motions_about_one_axis_raise_where_opencv_answers_far_off():
     assert np.linalg.norm(t.ravel() - truth) < 0.01
 
 
-def test_misread_inputs_raise_with_the_fix():
+def test_misread_inputs_raise_naming_the_arrays_to_change():
     # kinhec's mistakes: the robot in millimetres, the camera poses inverted. OpenCV answers both.
-    for name, fix in (("robot_mm__nominal_stations_eih_s0", "robot-mm"), ("camera_inverted__nominal_stations_eih_s0", "camera-inverted")):
+    # The drop-in has no `fix=`: its message names OpenCV's arrays and what to pass instead.
+    for name, says in (("robot_mm__nominal_stations_eih_s0", "t_gripper2base in millimetres"),
+                       ("camera_inverted__nominal_stations_eih_s0", "inverses of R_target2cam and t_target2cam"),
+                       ("robot_inverted__nominal_stations_eih_s0", "inverses of R_gripper2base and t_gripper2base")):
         args, _ = opencv_arguments(TESTDATA / "kinhec" / "mistakes" / f"{name}.jsonl")
-        with pytest.raises(ValueError, match=fix):
+        with pytest.raises(ValueError, match="misread") as e:
             handeye.calibrate_hand_eye(*args, method="park")
+        assert says in str(e.value) and "--fix" not in str(e.value) and "fix=" not in str(e.value), str(e.value)
+
+
+def test_all_four_arrays_inverted_are_not_answered_silently():
+    # Eye-in-hand with every array inverted fits exactly, with X and the target's pose swapped:
+    # X comes out half a metre from the truth. Without `setup` a fixed camera would give the same
+    # sizes, so the drop-in warns and asks; told "eye-in-hand", it says the arrays are inverted.
+    args, truth = opencv_arguments(TESTDATA / "kinhec" / "mistakes" / "both_inverted__nominal_stations_eih_s0.jsonl")
+    with pytest.warns(UserWarning, match='setup="eye-to-hand" or setup="eye-in-hand"'):
+        _, t = handeye.calibrate_hand_eye(*args, method="park")
+    assert np.linalg.norm(t.ravel() - truth) > 0.3
+    with pytest.warns(UserWarning, match="all four arrays are likely inverted"):
+        handeye.calibrate_hand_eye(*args, method="park", setup="eye-in-hand")
 
 
 def test_outliers_are_named_not_mistaken_for_a_misread_input():
@@ -221,10 +237,11 @@ def test_outliers_that_leave_the_median_fit_good_are_refused_where_opencv_answer
     assert np.linalg.norm(t.ravel() - truth) < 0.002
 
 
-def test_what_calibrate_would_warn_about_is_a_python_warning_and_eye_to_hand_raises_none():
+def test_what_calibrate_would_warn_about_is_a_python_warning_and_eye_to_hand_says_its_setup():
     # Eye-to-hand as OpenCV takes it: base2gripper poses, cam2base back. kinhec's PnP stations
-    # leave a rotation of X weakly determined (calibrate warns, one-sigma about 1 degree); the
-    # nominal stations warn of nothing, not even of X's size, which only the setup can judge.
+    # leave a rotation of X weakly determined (calibrate warns, one-sigma about 1 degree). The
+    # nominal stations warn of nothing once the caller says the setup; without it, X's size is
+    # also what an eye-in-hand caller with every array inverted would get, and the drop-in asks.
     def base2gripper(name):
         poses = [json.loads(line) for line in (TESTDATA / "kinhec" / "pairs" / f"{name}.jsonl").read_text().splitlines()]
         g = [np.linalg.inv(matrix4(p["base_from_gripper"])) for p in poses]
@@ -232,10 +249,14 @@ def test_what_calibrate_would_warn_about_is_a_python_warning_and_eye_to_hand_rai
         return [x[:3, :3] for x in g], [x[:3, 3] for x in g], [x[:3, :3] for x in c], [x[:3, 3] for x in c]
 
     with pytest.warns(UserWarning, match="weakly determined"):
-        handeye.calibrate_hand_eye(*base2gripper("pnp_stations_eth_s2"), method="park")
+        handeye.calibrate_hand_eye(*base2gripper("pnp_stations_eth_s2"), method="park", setup="eye-to-hand")
+    with pytest.warns(UserWarning, match="right for a fixed camera"):
+        r_unsaid, t_unsaid = handeye.calibrate_hand_eye(*base2gripper("nominal_stations_eth_s0"), method="park")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        handeye.calibrate_hand_eye(*base2gripper("nominal_stations_eth_s0"), method="park")
+        r, t = handeye.calibrate_hand_eye(*base2gripper("nominal_stations_eth_s0"), method="park", setup="eye-to-hand")
+    # The same motions either way: the same X.
+    assert np.abs(r - r_unsaid).max() < 1e-9 and np.abs(t - t_unsaid).max() < 1e-9
 
 
 def test_bad_inputs_raise_and_never_crash():

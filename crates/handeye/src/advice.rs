@@ -100,8 +100,12 @@ pub fn advise(poses: &[PosePair], setup: Setup, count: usize) -> Result<Advice> 
         .filter(|i| !outliers.contains(i))
         .map(|i| poses[i])
         .collect();
-    if let Some(advice) = check_readings(&kept, setup).advice(setup) {
-        return Err(Error::Misread { advice });
+    let check = check_readings(&kept, setup);
+    if let Some(advice) = check.advice(setup) {
+        return Err(Error::Misread {
+            advice,
+            readings: check.fitting_better(),
+        });
     }
     let poses = &kept[..];
     let mut acc = PoseAccumulator::new(setup);

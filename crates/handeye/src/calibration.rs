@@ -591,6 +591,7 @@ pub(crate) fn choose_reading(
         }
         _ => Err(Error::Misread {
             advice: check.advice(setup).unwrap_or(finding),
+            readings: check.fitting_better(),
         }),
     }
 }

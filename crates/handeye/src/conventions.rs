@@ -267,6 +267,16 @@ impl ReadingCheck {
         Some(text)
     }
 
+    /// The readings that fit far better than the as-given one: the better one, then the others
+    /// that fit as well.
+    pub fn fitting_better(&self) -> Vec<Reading> {
+        self.better
+            .iter()
+            .chain(&self.also)
+            .map(|f| f.reading)
+            .collect()
+    }
+
     /// Whether the better reading is the only one that fits (so `--fix auto` may apply it).
     pub fn unambiguous(&self) -> bool {
         self.better.is_some() && self.also.is_empty()

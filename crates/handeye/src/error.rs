@@ -187,6 +187,9 @@ pub enum Error {
     Misread {
         /// What fits better, and the fix.
         advice: String,
+        /// The readings that fit far better, the one the advice leads with first: for a face
+        /// that words the fix in its own terms (the OpenCV drop-in names OpenCV's arguments).
+        readings: Vec<crate::conventions::Reading>,
     },
     /// X is not determined, and the input shows why: outlier poses, or a reading of the input
     /// that fits far better (kept by request).

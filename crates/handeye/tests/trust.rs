@@ -187,7 +187,7 @@ fn every_mistake_is_refused_or_flagged_with_its_fix() {
             _ => None,
         };
         match (mistake, &result) {
-            (_, Err(Error::Misread { advice })) if fix.is_some() => {
+            (_, Err(Error::Misread { advice, .. })) if fix.is_some() => {
                 assert!(advice.contains(fix.unwrap()), "{file}: {advice}");
                 // Read as the advice says, the answer is right within its uncertainty.
                 let reading: Reading = fix.unwrap()["--fix ".len()..].parse().unwrap();

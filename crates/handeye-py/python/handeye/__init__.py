@@ -32,20 +32,27 @@ __all__ = ["calibrate_hand_eye", "calibrate", "advise", "OnlineCalibrator", "MET
 METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
 
 
-def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=0):
+def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=0, setup=None):
     """Drop-in for ``cv2.calibrateHandEye``; returns ``(R_cam2gripper, t_cam2gripper)`` as (3,3) and
     (3,1) arrays. ``method`` is an OpenCV constant (``cv2.CALIB_HAND_EYE_TSAI`` = 0, the default) or
     a handeye name ("andreff", "tsai", "park", "horaud", "andreff-joint", "daniilidis", "refine").
     Motions come from every pose pair, as in OpenCV. With OpenCV's constant for Tsai, OpenCV's
     motion filter is applied too (motions whose robot or camera rotation has 2·sin(θ/2) outside
-    [0.3, 1.7] are dropped), so the
-    answer is OpenCV's; with the name "tsai" every motion is kept. For eye-to-hand pass base2gripper poses, as
-    with OpenCV, and get cam2base. Raises ValueError on bad input, on poses that fit far better read another way
-    (inverted, millimetres, w-first quaternions: the message names the ``fix`` for ``calibrate``), on poses
-    that disagree with the others (the message names them; ``calibrate(..., reject_outliers=True)`` leaves
-    them out) and on motions that leave X undetermined, where OpenCV answers.
-    What ``calibrate`` would warn about (weak conditioning, small rotations, X and the target of unlikely
-    sizes) is issued as a ``UserWarning``."""
+    [0.3, 1.7] are dropped), so the answer is OpenCV's; with the name "tsai" every motion is kept.
+    For eye-to-hand pass base2gripper poses, as with OpenCV, and get cam2base.
+
+    ``setup`` ("eye-in-hand" or "eye-to-hand"; not in OpenCV) says which the arrays are. Without
+    it the same arrays serve both, as in OpenCV: X and the target's pose of the sizes a fixed
+    camera gives are also what a camera on the gripper gives with all four arrays inverted, and a
+    ``UserWarning`` says so; an eye-to-hand call with all four arrays inverted looks exactly like a
+    correct eye-in-hand one, and only ``setup="eye-to-hand"`` lets it be caught. Pass it.
+
+    Raises ValueError on bad input, on poses that fit far better read another way (inverted
+    arrays, millimetres on one side, rotations made from quaternions in the other order: the
+    message says which arrays to change), on poses that disagree with the others (the message
+    names them; ``calibrate(..., reject_outliers=True)`` leaves them out) and on motions that leave
+    X undetermined, where OpenCV answers. What ``calibrate`` would warn about (weak conditioning,
+    small rotations, a weakly determined direction of X) is issued as a ``UserWarning``."""
     name = METHODS.get(method, method) if isinstance(method, int) else method
     if not isinstance(name, str):
         raise ValueError(f"unknown method {method!r}")
@@ -53,12 +60,13 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     # Lists of float64 arrays, as OpenCV's users pass them, are read in place by the extension;
     # anything else is stacked here first (same answer, and the messages for bad shapes).
     x = _solve_opencv_sequences(
-        R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=name, tsai_opencv_filter=opencv_tsai
+        R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=name,
+        tsai_opencv_filter=opencv_tsai, setup=setup
     )
     if x is None:
         rg, tg = _arrays(R_gripper2base, t_gripper2base, "gripper2base")
         rc, tc = _arrays(R_target2cam, t_target2cam, "target2cam")
-        x = _solve_opencv(rg, tg, rc, tc, method=name, tsai_opencv_filter=opencv_tsai)
+        x = _solve_opencv(rg, tg, rc, tc, method=name, tsai_opencv_filter=opencv_tsai, setup=setup)
     rotation, translation, said = x
     for text in said:
         warnings.warn(text, UserWarning, stacklevel=2)

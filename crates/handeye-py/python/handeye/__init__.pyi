@@ -14,6 +14,7 @@ def calibrate_hand_eye(
     R_target2cam: Sequence[npt.ArrayLike],
     t_target2cam: Sequence[npt.ArrayLike],
     method: Union[int, str] = 0,
+    setup: Optional[str] = None,
 ) -> tuple[np.ndarray, np.ndarray]: ...
 def calibrate(
     base_from_gripper: npt.ArrayLike,

@@ -1,0 +1,115 @@
+//! What the OpenCV drop-in (`calibrate_hand_eye`) says, in the names of OpenCV's arguments: its
+//! callers have no `fix=` and, unless they pass `setup=`, no setup, so the library's advice
+//! (`--fix robot-inverted`, "the file gives …") is worded again for them here.
+
+use handeye::conventions::Reading;
+use handeye::{Error, Setup, Warning};
+
+/// The drop-in's message for a library error: a misread input in OpenCV's terms, any other error
+/// as the library words it. `setup` is what the caller said, if anything: without it, readings
+/// that fit alike are ordered as for a camera on the gripper, and the message says so.
+pub fn error(e: &Error, setup: Option<Setup>) -> String {
+    match e {
+        Error::Misread { readings, .. } if !readings.is_empty() => {
+            let mut text = misread(readings);
+            if readings.len() > 1 && setup.is_none() {
+                text.push_str(
+                    "; which one is meant depends on where the camera is: pass \
+                     setup=\"eye-in-hand\" or setup=\"eye-to-hand\" to have the likelier first",
+                );
+            }
+            text
+        }
+        _ => e.to_string(),
+    }
+}
+
+/// The drop-in's text for a warning: the sizes of X and the target in OpenCV's terms (`setup` is
+/// what the caller said, if anything), any other warning as the library words it.
+pub fn warning(w: &Warning, setup: Option<Setup>) -> String {
+    match w {
+        Warning::SwappedSizes {
+            x_translation,
+            y_translation,
+            ..
+        } => swapped_sizes(*x_translation, *y_translation, setup),
+        _ => w.to_string(),
+    }
+}
+
+/// "the input looks misread: …" with what to pass instead, the likeliest reading first.
+fn misread(readings: &[Reading]) -> String {
+    let mut text = format!(
+        "the input looks misread: the poses fit far better with {}",
+        reading(readings[0])
+    );
+    for other in &readings[1..] {
+        text.push_str(&format!("; they fit as well with {}", reading(*other)));
+    }
+    text
+}
+
+/// One reading as the mistake in OpenCV's arguments, and the remedy.
+fn reading(r: Reading) -> &'static str {
+    match r {
+        Reading::AsGiven => "the arrays as given",
+        Reading::RobotInverted => {
+            "the robot poses inverted: pass the inverses of R_gripper2base and t_gripper2base \
+             (OpenCV takes gripper2base, the gripper's pose in the robot base frame, for a camera \
+             on the gripper, and base2gripper for a fixed camera)"
+        }
+        Reading::CameraInverted => {
+            "the camera poses inverted: pass the inverses of R_target2cam and t_target2cam \
+             (OpenCV takes target2cam, the target's pose in the camera frame, as solvePnP \
+             returns it)"
+        }
+        Reading::BothInverted => {
+            "the robot and the camera poses inverted: pass the inverses of all four arrays"
+        }
+        Reading::RobotWxyz => {
+            "the robot rotations made from quaternions in the other order (w, x, y, z taken \
+             for x, y, z, w, or the reverse): make R_gripper2base with the order its source uses"
+        }
+        Reading::CameraWxyz => {
+            "the camera rotations made from quaternions in the other order (w, x, y, z taken \
+             for x, y, z, w, or the reverse): make R_target2cam with the order its source uses"
+        }
+        Reading::BothWxyz => {
+            "the robot and camera rotations made from quaternions in the other order (w, x, y, z \
+             taken for x, y, z, w, or the reverse): make R_gripper2base and R_target2cam with the \
+             order their sources use"
+        }
+        Reading::RobotMm => {
+            "t_gripper2base in millimetres and t_target2cam in metres: give both in one unit"
+        }
+        Reading::CameraMm => {
+            "t_target2cam in millimetres and t_gripper2base in metres: give both in one unit"
+        }
+    }
+}
+
+/// X and the target of sizes that fit one setup with all four arrays inverted, or the other
+/// setup as given: which, only the caller knows.
+fn swapped_sizes(x: f64, y: f64, setup: Option<Setup>) -> String {
+    let swapped = "the same data fit exactly with X and the target's pose swapped";
+    match setup {
+        None => format!(
+            "X puts the camera {x:.3} from the gripper and the target {y:.3} from the robot base: \
+             right for a fixed camera (eye-to-hand, base2gripper passed: X is then cam2base), \
+             wrong for a camera on the gripper, where it means all four arrays are inverted \
+             ({swapped}); pass setup=\"eye-to-hand\" or setup=\"eye-in-hand\" to say which"
+        ),
+        Some(Setup::EyeInHand) => format!(
+            "X puts the camera {x:.3} from the gripper and the target {y:.3} from the robot base, \
+             the reverse of a camera on the gripper: all four arrays are likely inverted \
+             ({swapped}); pass gripper2base and target2cam, or setup=\"eye-to-hand\" if the \
+             camera is fixed"
+        ),
+        Some(Setup::EyeToHand) => format!(
+            "X puts the camera {x:.3} from the robot base and the target {y:.3} from the gripper, \
+             the reverse of a fixed camera: all four arrays are likely inverted ({swapped}); pass \
+             base2gripper and target2cam, or setup=\"eye-in-hand\" if the camera rides on the \
+             gripper"
+        ),
+    }
+}
