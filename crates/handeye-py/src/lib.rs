@@ -110,8 +110,9 @@ fn solve_x<'py>(
 /// X alone from OpenCV's arguments, as `calibrate_hand_eye` (the OpenCV drop-in) returns it:
 /// `(R_cam2gripper (3, 3), t_cam2gripper (3, 1))`. Rotations are (N, 3, 3) matrices or (N, 3)
 /// rotation vectors, translations (N, 3); every pose pair is a motion (made on the fly, memory
-/// O(poses)), eye-in-hand. The whole conversion is here, not in numpy: at ten poses numpy's
-/// per-call cost on small arrays was twice the solve.
+/// O(poses)), read as eye-in-hand unless `setup` says otherwise ([`solve_opencv_poses`]). The
+/// whole conversion is here, not in numpy: at ten poses numpy's per-call cost on small arrays was
+/// twice the solve.
 #[pyfunction]
 #[pyo3(signature = (r_gripper2base, t_gripper2base, r_target2cam, t_target2cam, method="tsai", tsai_opencv_filter=false, setup=None))]
 // OpenCV's four arrays, then the drop-in's keywords: the signature Python sees.
