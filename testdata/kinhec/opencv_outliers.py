@@ -26,6 +26,8 @@ import os
 import cv2
 import numpy as np
 
+from kinhec_poses import matrix4
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 LIMIT_DEG = 170.0
 METHODS = {
@@ -33,21 +35,6 @@ METHODS = {
     "park": cv2.CALIB_HAND_EYE_PARK,
     "horaud": cv2.CALIB_HAND_EYE_HORAUD,
 }
-
-
-def matrix4(v):
-    """A pose of a kinhec file as a 4x4: a matrix, {"matrix": ...}, or translation and quaternion_xyzw."""
-    if isinstance(v, list):
-        return np.array(v, dtype=float)
-    if "matrix" in v:
-        return np.array(v["matrix"], dtype=float)
-    x, y, z, w = v["quaternion_xyzw"]
-    m = np.eye(4)
-    m[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                 [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                 [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-    m[:3, 3] = v["translation"]
-    return m
 
 
 def angle_deg(r):

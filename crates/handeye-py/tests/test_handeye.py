@@ -1,6 +1,7 @@
 """handeye from Python: parity with cv2.calibrateHandEye, the paper fixtures, bad input."""
 import json
 import pathlib
+import sys
 import warnings
 
 import cv2
@@ -10,6 +11,8 @@ import pytest
 import handeye
 
 TESTDATA = pathlib.Path(__file__).resolve().parents[3] / "testdata"
+sys.path.insert(0, str(TESTDATA / "kinhec"))
+from kinhec_poses import matrix4  # noqa: E402  (the kinhec files' pose reader, shared with their scripts)
 
 
 def random_problem(rng, n=10, noise=True):
@@ -144,21 +147,6 @@ def test_degenerate_data_raises_where_opencv_returns_garbage():
     tc = [np.zeros(3) for _ in range(5)]
     with pytest.raises(ValueError, match="parallel"):
         handeye.calibrate_hand_eye(Rg, tg, Rc, tc, method="park")
-
-
-def matrix4(v):
-    """A pose of a kinhec file as a 4x4: a matrix, {"matrix": ...}, or translation and quaternion_xyzw."""
-    if isinstance(v, list):
-        return np.array(v)
-    if "matrix" in v:
-        return np.array(v["matrix"])
-    x, y, z, w = v["quaternion_xyzw"]
-    m = np.eye(4)
-    m[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                 [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                 [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
-    m[:3, 3] = v["translation"]
-    return m
 
 
 def opencv_arguments(path):
