@@ -94,9 +94,9 @@ fn swapped_sizes(x: f64, y: f64, setup: Option<Setup>) -> String {
     let swapped = "the same data fit exactly with X and the target's pose swapped";
     match setup {
         None => format!(
-            "X puts the camera {x:.3} from the gripper and the target {y:.3} from the robot base: \
-             right for a fixed camera (eye-to-hand, base2gripper passed: X is then cam2base), \
-             wrong for a camera on the gripper, where it means all four arrays are inverted \
+            "X's translation is {x:.3} long and the target pose's {y:.3}: what a fixed camera \
+             gives (eye-to-hand, base2gripper passed: X is cam2base, the target rides on the \
+             gripper), and what a camera on the gripper gives only with all four arrays inverted \
              ({swapped}); pass setup=\"eye-to-hand\" or setup=\"eye-in-hand\" to say which"
         ),
         Some(Setup::EyeInHand) => format!(

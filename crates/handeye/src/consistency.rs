@@ -106,13 +106,12 @@ fn pose_gaps(poses: &[PosePair], setup: Setup) -> Vec<PoseGap> {
     }
     (0..n)
         .map(|i| {
-            let row = || (0..n).filter(move |&j| j != i).map(|j| pairs[i * n + j]);
-            let mut angle: Vec<f64> = row().map(|g| g.0).collect();
-            let mut pitch: Vec<f64> = row().filter_map(|g| g.1).collect();
+            let (angle_gap_deg, pitch_gap) =
+                gap_medians((0..n).filter(|&j| j != i).map(|j| pairs[i * n + j]));
             PoseGap {
                 pose: i,
-                angle_gap_deg: median_in(&mut angle),
-                pitch_gap: median_in(&mut pitch),
+                angle_gap_deg,
+                pitch_gap,
             }
         })
         .collect()
@@ -142,10 +141,15 @@ pub(crate) fn screw_gaps<'a>(
     pose: &PosePair,
     partners: impl Iterator<Item = &'a PosePair>,
 ) -> (f64, f64) {
+    gap_medians(partners.map(|partner| motion_gaps(setup, partner, pose)))
+}
+
+/// The medians of the first [`PARTNERS`] motions' angle gaps and of their pitch gaps (where a
+/// motion has one), with no allocation.
+fn gap_medians(gaps: impl Iterator<Item = (f64, Option<f64>)>) -> (f64, f64) {
     let (mut angle, mut pitch) = ([0.0; PARTNERS], [0.0; PARTNERS]);
     let (mut na, mut np) = (0, 0);
-    for partner in partners.take(PARTNERS) {
-        let (angle_gap, pitch_gap) = motion_gaps(setup, partner, pose);
+    for (angle_gap, pitch_gap) in gaps.take(PARTNERS) {
         angle[na] = angle_gap;
         na += 1;
         if let Some(gap) = pitch_gap {

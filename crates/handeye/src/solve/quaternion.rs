@@ -32,6 +32,10 @@ pub fn quaternion_of(r: &Matrix3<f64>) -> Vector4<f64> {
 /// that does not agree with X (an outlier): its canonical signs are kept, as OpenCV keeps them.
 pub(crate) const HALF_TURN_WITHIN: f64 = 10.0 * std::f64::consts::PI / 180.0;
 
+/// The scalar part cos(θ/2) at θ = 180° − [`HALF_TURN_WITHIN`], sin 5°: quaternions with a larger
+/// one are not near a half turn (a constant, not a `sin` per motion).
+const HALF_TURN_SCALAR: f64 = 0.087_155_742_747_658_17;
+
 /// Which motions [`motion_quaternions`] gives the sign that agrees with the estimate of R_x.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Signs {
@@ -63,8 +67,7 @@ pub(crate) fn motion_quaternions(
 ) -> (Vector4<f64>, Vector4<f64>) {
     let q_a = quaternion_of(r_a);
     let q_b = quaternion_of(r_b);
-    let in_question = (0.5 * HALF_TURN_WITHIN).sin();
-    if signs == Signs::NearHalfTurn && q_a[0].max(q_b[0]) > in_question {
+    if signs == Signs::NearHalfTurn && q_a[0].max(q_b[0]) > HALF_TURN_SCALAR {
         return (q_a, q_b);
     }
     let predicted = r_x.transpose() * Vector3::new(q_a[1], q_a[2], q_a[3]);
@@ -123,6 +126,11 @@ pub fn multiply(s: &Vector4<f64>, t: &Vector4<f64>) -> Vector4<f64> {
 mod tests {
     use super::*;
     use crate::pose::exp_so3;
+
+    #[test]
+    fn the_half_turn_scalar_is_the_angles() {
+        assert!((HALF_TURN_SCALAR - (0.5 * HALF_TURN_WITHIN).sin()).abs() < 1e-17);
+    }
 
     #[test]
     fn round_trips_in_every_branch() {
