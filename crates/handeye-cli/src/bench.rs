@@ -11,10 +11,10 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
+use handeye::check::quality::errors_against_truth;
 use handeye::io::{Format, TransformJson, parse_pose_line, read_pose_file, read_truth};
-use handeye::metrics::errors_against_truth;
+use handeye::online::select::AdaptiveParams;
 use handeye::online::{OnlineCalibrator, OnlineConfig};
-use handeye::select::AdaptiveParams;
 use handeye::sim::{SimConfig, simulate};
 use handeye::{AllPairs, Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};

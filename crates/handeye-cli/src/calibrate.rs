@@ -4,13 +4,13 @@
 use anyhow::Result;
 use clap::Args as ClapArgs;
 use clap::builder::PossibleValuesParser;
-use handeye::calibration::{Fix, Options, calibrate};
-use handeye::metrics::OUTLIER_DEG;
-use handeye::names;
-use handeye::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
+use handeye::calibrate::batch::{Fix, Options, calibrate};
+use handeye::calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
+use handeye::check::quality::OUTLIER_DEG;
+use handeye::check::uncertainty::REPLICATES;
+use handeye::model::names;
 use handeye::solve::RobotWorldMethod;
 use handeye::solve::TsaiOptions;
-use handeye::uncertainty::REPLICATES;
 use handeye::{Error, Method, Pairing};
 
 use crate::faces::{self, Face, Published, length_unit};
@@ -262,7 +262,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
 fn robot_world_yaml(r: &RobotWorldReport) -> String {
     let pose = |name: &str,
                 t: &handeye::io::TransformJson,
-                u: &handeye::uncertainty::Uncertainty| {
+                u: &handeye::check::uncertainty::Uncertainty| {
         let [tx, ty, tz] = t.translation;
         let [qx, qy, qz, qw] = t.quaternion_xyzw;
         format!(

@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::metrics::errors_against_truth;
+use handeye::check::quality::errors_against_truth;
+use handeye::online::select::{AdaptiveParams, Selection};
 use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig};
-use handeye::select::{AdaptiveParams, Selection};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
 

@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use handeye::calibration::Report;
+use handeye::calibrate::batch::Report;
 use handeye::online::Unit;
 use handeye::{Error, Setup};
 

@@ -12,12 +12,12 @@ use std::thread::JoinHandle;
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::{BagOptions, BagPairs, is_bag, read_bag_pairs};
-use handeye::io::{
-    Format, PoseInput, PoseReader, Projections, StampedPosePair, open_pose_stream, open_poses,
-};
-use handeye::sync::{
+use handeye::io::sync::{
     OffsetOptions, StampedPose, TimeOffset, estimate_time_offset, pair_stream_files,
     refine_time_offset,
+};
+use handeye::io::{
+    Format, PoseInput, PoseReader, Projections, StampedPosePair, open_pose_stream, open_poses,
 };
 use handeye::{PosePair, Setup};
 

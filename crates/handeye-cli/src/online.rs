@@ -8,9 +8,9 @@ use std::rc::Rc;
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
+use handeye::online::select::{AdaptiveParams, MAX_N_INIT, Selection};
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
-use handeye::select::{AdaptiveParams, MAX_N_INIT, Selection};
-use handeye::tracking::{Report, Step, TrackOptions};
+use handeye::track::{Report, Step, TrackOptions};
 
 use crate::faces::{self, Face, Published};
 use crate::input::{InputArgs, read_ahead};
@@ -399,7 +399,9 @@ const READINGS_SAMPLE: usize = 64;
 /// Warns when the poses fit far better read another way (an inverted pose, `w, x, y, z`
 /// quaternions, millimetres on one side), or with sizes the setup makes unlikely.
 fn warn_misread(poses: &[handeye::PosePair], setup: handeye::Setup) {
-    if handeye::consistency::axis_scatter(poses, setup) < handeye::conventions::DEGENERATE_SCATTER {
+    if handeye::check::outliers::axis_scatter(poses, setup)
+        < handeye::check::readings::DEGENERATE_SCATTER
+    {
         eprintln!(
             "warning: every rotation of the first {} poses is about one axis: X's rotation about it, and its translation along it, are not determined by them, whatever the calibrations below say; rotate the gripper about other axes",
             poses.len()
@@ -407,12 +409,12 @@ fn warn_misread(poses: &[handeye::PosePair], setup: handeye::Setup) {
         return;
     }
     // As batch does: on the poses that agree with the others.
-    let outliers = handeye::consistency::pose_outliers(poses, setup, 3.0).indices();
+    let outliers = handeye::check::outliers::pose_outliers(poses, setup, 3.0).indices();
     let kept: Vec<handeye::PosePair> = (0..poses.len())
         .filter(|i| !outliers.contains(i))
         .map(|i| poses[i])
         .collect();
-    let check = handeye::conventions::check_readings(&kept, setup);
+    let check = handeye::check::readings::check_readings(&kept, setup);
     if let Some(advice) = check.advice(setup) {
         eprintln!(
             "warning: the calibrations are from data read wrongly: {advice} (`handeye calibrate` checks this too)"

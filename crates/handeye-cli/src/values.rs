@@ -7,7 +7,7 @@ use std::ffi::OsStr;
 use clap::builder::{PossibleValue, PossibleValuesParser, RangedU64ValueParser, TypedValueParser};
 use clap::error::ErrorKind;
 use clap::{Arg, Command};
-use handeye::names::Named;
+use handeye::model::names::Named;
 
 /// The most poses `simulate`, `demo` and `bench` make (each pose is about a hundred bytes, and
 /// `bench --pairs all` grows with the square).

@@ -3,8 +3,8 @@
 //! `cargo bench -p handeye --bench online`
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use handeye::online::select::{AdaptiveParams, Selection};
 use handeye::online::{OnlineCalibrator, OnlineConfig};
-use handeye::select::{AdaptiveParams, Selection};
 use handeye::sim::{SimConfig, SimSeries, simulate};
 use handeye::{PosePair, Transform, andreff};
 use std::hint::black_box;
@@ -76,7 +76,7 @@ fn push(c: &mut Criterion) {
 criterion_group!(benches, push);
 
 fn accumulator(c: &mut Criterion) {
-    use handeye::accumulate::PoseAccumulator;
+    use handeye::solve::accumulate::PoseAccumulator;
     let sim = series();
     c.bench_function("accumulate/add_pose", |b| {
         let mut acc = PoseAccumulator::new(handeye::Setup::EyeInHand);

@@ -6,11 +6,11 @@
 //! `cargo bench -p handeye --bench solvers`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use handeye::calibration::{Options, solve_poses, solve_poses_checked};
-use handeye::consistency::pose_outliers;
-use handeye::conventions::check_readings;
+use handeye::calibrate::batch::{Options, solve_poses, solve_poses_checked};
+use handeye::check::outliers::pose_outliers;
+use handeye::check::quality::OUTLIER_DEG;
+use handeye::check::readings::check_readings;
 use handeye::io::{Format, read_pose_file};
-use handeye::metrics::OUTLIER_DEG;
 use handeye::sim::{SimConfig, simulate};
 use handeye::solve::{RobotWorldMethod, robot_world};
 use handeye::{Method, Pairing, PosePair, Setup, motion_pairs, solve};

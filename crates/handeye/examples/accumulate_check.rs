@@ -3,9 +3,9 @@
 //!
 //! `cargo run --release -p handeye --example accumulate_check`
 
-use handeye::metrics::errors_against_truth;
+use handeye::check::quality::errors_against_truth;
+use handeye::online::select::AdaptiveParams;
 use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig};
-use handeye::select::AdaptiveParams;
 use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
 

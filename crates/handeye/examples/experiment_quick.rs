@@ -2,7 +2,7 @@
 //!
 //! `cargo run --release -p handeye --example experiment_quick`
 
-use handeye::experiment::{Experiment, ExperimentConfig, markdown_table, run_experiment};
+use handeye::online::experiment::{Experiment, ExperimentConfig, markdown_table, run_experiment};
 
 fn main() -> Result<(), handeye::Error> {
     for experiment in Experiment::ALL {

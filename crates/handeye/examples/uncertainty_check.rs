@@ -4,8 +4,8 @@
 //!
 //! `cargo run --release -p handeye --example uncertainty_check [consecutive|all]`
 
-use handeye::calibration::{Options, calibrate};
-use handeye::metrics::errors_against_truth;
+use handeye::calibrate::batch::{Options, calibrate};
+use handeye::check::quality::errors_against_truth;
 use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, Pairing, Setup};
 

@@ -56,39 +56,23 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-pub mod accumulate;
-pub mod advice;
-pub mod calibration;
-pub mod consistency;
-pub mod conventions;
-mod error;
-pub mod experiment;
-pub mod holdout;
+pub mod calibrate;
+pub mod check;
 pub mod io;
-pub mod metrics;
-mod motion;
-pub mod names;
+pub mod model;
 pub mod online;
-pub mod pose;
-mod residual;
-pub mod robot_world;
-pub mod select;
 pub mod sim;
 pub mod solve;
-pub mod sync;
-pub mod tracking;
-pub mod uncertainty;
-pub mod warning;
+pub mod track;
 
-pub use error::{Degeneracy, Error, Result, TransformProblem};
-pub use motion::{
-    AllPairs, MotionFeatures, MotionPair, MotionSource, Pairing, PosePair, Setup, motion_pairs,
-};
-pub use pose::Transform;
+pub use model::error::{Degeneracy, Error, Result, TransformProblem};
+pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
+pub use model::pose::Transform;
+pub use model::warning::Warning;
+pub use solve::motions::{AllPairs, MotionSource};
 pub use solve::{
     Calibration, Method, andreff, andreff_joint, daniilidis, horaud, park, refine, solve, tsai,
 };
-pub use warning::Warning;
 
 /// The README's Rust examples, compiled and run as doctests.
 #[cfg(doctest)]

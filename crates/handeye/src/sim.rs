@@ -10,8 +10,8 @@ use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use serde::{Deserialize, Serialize};
 
-use crate::motion::PosePair;
-use crate::pose::{Transform, exp_so3, log_so3, proj_so3, transform_from_parts};
+use crate::model::motion::PosePair;
+use crate::model::pose::{Transform, exp_so3, log_so3, proj_so3, transform_from_parts};
 
 /// Parameters of a simulated series; `Default` is the paper's protocol (values on each field).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

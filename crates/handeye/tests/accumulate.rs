@@ -1,8 +1,8 @@
 //! The accumulating estimator and its change detection (issue 7's claims, on SPEC sec. 5 data).
 
-use handeye::metrics::errors_against_truth;
+use handeye::check::quality::errors_against_truth;
+use handeye::online::select::AdaptiveParams;
 use handeye::online::{Estimator, OnlineCalibrator, OnlineConfig};
-use handeye::select::AdaptiveParams;
 use handeye::sim::{Jump, SimConfig, simulate};
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
 

@@ -2,9 +2,9 @@
 
 use std::path::Path;
 
-use handeye::advice::advise;
-use handeye::metrics::errors_against_truth;
-use handeye::pose::{exp_so3, proj_so3, transform_from_parts};
+use handeye::calibrate::advice::advise;
+use handeye::check::quality::errors_against_truth;
+use handeye::model::pose::{exp_so3, proj_so3, transform_from_parts};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, MotionFeatures, MotionPair, Pairing, PosePair, Setup, Transform};
 use handeye::{motion_pairs, solve};
@@ -175,7 +175,7 @@ fn following_the_advice_shrinks_the_error_as_predicted() {
 
 #[test]
 fn the_held_out_check_finds_a_mispaired_frame_and_nothing_on_clean_data() {
-    use handeye::calibration::{Options, calibrate};
+    use handeye::calibrate::batch::{Options, calibrate};
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec/pairs");
     for name in [
         "nominal_stations_eih_s0",
@@ -228,7 +228,7 @@ fn the_held_out_check_finds_a_mispaired_frame_and_nothing_on_clean_data() {
 
 #[test]
 fn following_the_advice_needs_at_least_twice_fewer_poses_than_the_papers_walk() {
-    let r = handeye::advice::closed_loop(8, 3);
+    let r = handeye::calibrate::advice::closed_loop(8, 3);
     println!(
         "poses to reach {:.4}° (the walk's sigma after {} poses): walk {:?}, random turns {:?}, advice {:?}",
         r.target_rotation_deg,

@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
+use handeye::check::quality::quality_report;
 use handeye::io::{Format, read_pose_file};
-use handeye::metrics::quality_report;
 use handeye::solve::{covariance_at, refine};
 use handeye::{AllPairs, Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
 

@@ -1,7 +1,7 @@
 //! The paper's experiments with few series: the report's fields and the direction of each claim
 //! of SPEC sec. 6 / issue 4.
 
-use handeye::experiment::{Experiment, ExperimentConfig, run_experiment};
+use handeye::online::experiment::{Experiment, ExperimentConfig, run_experiment};
 use serde_json::Value;
 
 fn run(experiment: Experiment, series: usize) -> Value {
@@ -114,7 +114,7 @@ fn results_do_not_depend_on_the_number_of_threads() {
 
 #[test]
 fn tracking_the_running_estimate_improves_and_jumps_are_caught() {
-    use handeye::experiment::{TrackingConfig, run_tracking};
+    use handeye::online::experiment::{TrackingConfig, run_tracking};
     let config = TrackingConfig {
         series: 8,
         ..TrackingConfig::default()

@@ -1,9 +1,9 @@
 //! The online calibrator through its public API: save/restore, constant memory, the relaxation
 //! rule, lock-in, and the paper's claim on simulated data.
 
-use handeye::metrics::errors_against_truth;
+use handeye::check::quality::errors_against_truth;
+use handeye::online::select::{AdaptiveParams, Record, Selection, Thresholds, predict};
 use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, run_series};
-use handeye::select::{AdaptiveParams, Record, Selection, Thresholds, predict};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{PosePair, Transform};
 use nalgebra::Vector3;
@@ -338,7 +338,7 @@ fn estimators_and_error_sources_parse_from_their_names() {
 fn an_absurd_n_init_is_refused_before_anything_is_allocated() {
     for selection in [Selection::Fixed, Selection::Adaptive, Selection::None] {
         for n_init in [
-            handeye::select::MAX_N_INIT + 1,
+            handeye::online::select::MAX_N_INIT + 1,
             1 << 62,
             1_000_000_000_000,
             usize::MAX,
@@ -358,7 +358,7 @@ fn an_absurd_n_init_is_refused_before_anything_is_allocated() {
         }
     }
     let fine = AdaptiveParams {
-        n_init: handeye::select::MAX_N_INIT,
+        n_init: handeye::online::select::MAX_N_INIT,
         ..AdaptiveParams::default()
     };
     assert!(fine.validate().is_ok());

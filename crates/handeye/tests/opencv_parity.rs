@@ -7,8 +7,8 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::metrics::errors_against_truth;
-use handeye::pose::transform_from_matrix4;
+use handeye::check::quality::errors_against_truth;
+use handeye::model::pose::transform_from_matrix4;
 use handeye::solve::{TsaiOptions, tsai_with};
 use handeye::{Method, MotionPair, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
 use nalgebra::Matrix4;

@@ -7,7 +7,7 @@
 //! The mean and worst errors of every method are printed
 //! (`cargo test --test opencv_tolerance -- --nocapture`).
 
-use handeye::pose::{exp_so3, log_so3, rotation_matrix, transform_from_parts};
+use handeye::model::pose::{exp_so3, log_so3, rotation_matrix, transform_from_parts};
 use handeye::solve::{TsaiOptions, tsai_with};
 use handeye::{Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
 use nalgebra::Vector3;

@@ -3,9 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
+use handeye::model::pose::transform_from_matrix4;
+use handeye::online::select::{
+    AdaptiveParams, Record, Selection, Thresholds, fit_condition, predict,
+};
 use handeye::online::{ErrorSource, Event, OnlineConfig, run_series};
-use handeye::pose::transform_from_matrix4;
-use handeye::select::{AdaptiveParams, Record, Selection, Thresholds, fit_condition, predict};
 use handeye::{PosePair, Transform};
 use nalgebra::Matrix4;
 use serde_json::Value;

@@ -10,13 +10,13 @@
 
 use std::path::{Path, PathBuf};
 
+use handeye::calibrate::robot_world::{RobotWorldOptions, calibrate_robot_world};
 use handeye::io::{Format, read_pose_file, read_truth};
-use handeye::pose::{exp_so3, transform_from_matrix4, transform_from_parts};
-use handeye::robot_world::{RobotWorldOptions, calibrate_robot_world};
+use handeye::model::findings::Verdict;
+use handeye::model::pose::{exp_so3, transform_from_matrix4, transform_from_parts};
 use handeye::solve::{
     RobotWorldMethod, joint_covariance, li, pose_residuals, refine_robot_world, robot_world, shah,
 };
-use handeye::uncertainty::Verdict;
 use handeye::{Degeneracy, Error, PosePair, Setup, Transform};
 use nalgebra::{Matrix4, Vector3};
 use proptest::prelude::*;
@@ -182,10 +182,11 @@ fn shah_and_li_match_opencv() {
 
 /// Rotation error (degrees) and translation error (input units) against the truth.
 fn error(est: &Transform, truth: &Transform) -> (f64, f64) {
-    let r =
-        handeye::pose::axis_angle(&(est.rotation.matrix().transpose() * truth.rotation.matrix()))
-            .0
-            .to_degrees();
+    let r = handeye::model::pose::axis_angle(
+        &(est.rotation.matrix().transpose() * truth.rotation.matrix()),
+    )
+    .0
+    .to_degrees();
     (
         r,
         (est.translation.vector - truth.translation.vector).norm(),
@@ -449,7 +450,7 @@ fn the_report_refuses_undetermined_data_and_reports_the_rest() {
 /// out and no change it is the batch Shah over all poses, and near the truth.
 #[test]
 fn the_tracker_reports_the_robot_world_solution() {
-    use handeye::tracking::{TrackOptions, Tracker};
+    use handeye::track::{TrackOptions, Tracker};
     let mut compared = 0;
     for (path, setup, x, target) in kinhec(&["nominal_stations"]) {
         let poses = read_pose_file(&path, Format::Auto).unwrap().pairs;

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use handeye::io::rosbag::{BagOptions, inspect_bag, read_bag_pairs};
-use handeye::pose::Transform;
+use handeye::model::pose::Transform;
 use handeye::{Error, Method, Pairing, Setup, motion_pairs, solve};
 use nalgebra::Matrix4;
 use serde_json::Value;
@@ -25,7 +25,7 @@ fn truth(name: &str) -> Value {
 fn matrix(v: &Value) -> Transform {
     let rows: Vec<Vec<f64>> = serde_json::from_value(v.clone()).unwrap();
     let m = Matrix4::from_fn(|i, j| rows[i][j]);
-    handeye::pose::transform_from_matrix4(&m).unwrap()
+    handeye::model::pose::transform_from_matrix4(&m).unwrap()
 }
 
 fn diff(a: &Transform, b: &Transform) -> f64 {
@@ -35,7 +35,7 @@ fn diff(a: &Transform, b: &Transform) -> f64 {
 /// (rotation error in degrees, translation error in metres).
 fn errors(a: &Transform, b: &Transform) -> (f64, f64) {
     (
-        handeye::pose::rotation_angle_between(&a.rotation, &b.rotation).to_degrees(),
+        handeye::model::pose::rotation_angle_between(&a.rotation, &b.rotation).to_degrees(),
         (a.translation.vector - b.translation.vector).norm(),
     )
 }
@@ -151,12 +151,12 @@ fn noisy_bags_give_x_to_the_noise_level() {
         }
         let t = truth(name);
         let pairs = read_bag_pairs(&bag(name), &options("camera_link", topic)).unwrap();
-        let report = handeye::calibration::calibrate(
+        let report = handeye::calibrate::batch::calibrate(
             &pairs.poses(),
             setup,
-            &handeye::calibration::Options {
+            &handeye::calibrate::batch::Options {
                 pairing: Pairing::All,
-                ..handeye::calibration::Options::default()
+                ..handeye::calibrate::batch::Options::default()
             },
         )
         .unwrap();
@@ -467,10 +467,10 @@ fn a_clock_offset_is_applied_to_the_robot_lookup() {
     // The streams for estimating it: the robot at its own 100 Hz stamps, the camera at 10 Hz.
     assert_eq!(pairs.robot_stream.len(), 801);
     assert_eq!(pairs.camera_stream.len(), 80);
-    let e = handeye::sync::estimate_time_offset(
+    let e = handeye::io::sync::estimate_time_offset(
         &pairs.robot_stream,
         &pairs.camera_stream,
-        &handeye::sync::OffsetOptions::default(),
+        &handeye::io::sync::OffsetOptions::default(),
     )
     .unwrap();
     assert!((e.offset - 0.037).abs() < 0.05, "{}", e.offset);

@@ -1,6 +1,6 @@
 //! The simulator of SPEC sec. 5: reproducibility, noise model, walk statistics.
 
-use handeye::metrics::errors_against_truth;
+use handeye::check::quality::errors_against_truth;
 use handeye::sim::{SimConfig, simulate};
 use handeye::{MotionFeatures, Pairing, Setup, andreff, motion_pairs};
 use nalgebra::Matrix3;

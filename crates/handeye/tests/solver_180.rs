@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use handeye::pose::{exp_so3, transform_from_parts};
+use handeye::model::pose::{exp_so3, transform_from_parts};
 use handeye::solve::check_motions;
 use handeye::{
     Degeneracy, Error, Method, MotionPair, Pairing, PosePair, Setup, Transform, motion_pairs, solve,

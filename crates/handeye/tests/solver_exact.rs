@@ -5,7 +5,7 @@
 mod common;
 
 use common::{any_transform, errors, recording, robot_pose, transform};
-use handeye::pose::{exp_so3, transform_from_parts};
+use handeye::model::pose::{exp_so3, transform_from_parts};
 use handeye::solve::{Calibration, TsaiOptions, tsai_with};
 use handeye::{Degeneracy, Error, Method, MotionPair, Pairing, Setup, motion_pairs, solve};
 use nalgebra::Vector3;

@@ -5,9 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::pose::rotation_angle_between;
-use handeye::sync::{StreamPairing, TimeOffset, pair_stream_files};
-use handeye::tracking::{Report, TrackEstimate, TrackOptions, Tracker};
+use handeye::io::sync::{StreamPairing, TimeOffset, pair_stream_files};
+use handeye::model::pose::rotation_angle_between;
+use handeye::track::{Report, TrackEstimate, TrackOptions, Tracker};
 use handeye::{Method, Pairing, Setup, Transform, motion_pairs, solve};
 use serde_json::Value;
 

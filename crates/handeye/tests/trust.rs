@@ -8,11 +8,11 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::calibration::{Fix, Options, Report, calibrate};
-use handeye::conventions::Reading;
+use handeye::calibrate::batch::{Fix, Options, Report, calibrate};
+use handeye::check::quality::errors_against_truth;
 use handeye::io::{Format, read_pose_file, transform_from_json};
-use handeye::metrics::errors_against_truth;
-use handeye::warning::Remedy;
+use handeye::model::findings::Reading;
+use handeye::model::warning::Remedy;
 use handeye::{Error, Method, Pairing, Setup, Transform, Warning};
 use serde_json::Value;
 
@@ -256,7 +256,8 @@ fn the_truth_files_agree_with_the_manifest() {
 
 mod readings {
     use handeye::PosePair;
-    use handeye::conventions::{Reading, check_readings};
+    use handeye::check::readings::check_readings;
+    use handeye::model::findings::Reading;
     use handeye::sim::{SimConfig, simulate};
     use handeye::{Setup, Transform};
     use proptest::prelude::*;
@@ -328,8 +329,8 @@ mod readings {
 
 #[test]
 fn the_clock_offset_is_found_to_a_few_milliseconds() {
+    use handeye::io::sync::{OffsetOptions, estimate_time_offset, refine_time_offset};
     use handeye::io::{read_camera_stream, read_stamped_poses};
-    use handeye::sync::{OffsetOptions, estimate_time_offset, refine_time_offset};
     let text = std::fs::read_to_string(suite().join("manifest.json")).unwrap();
     let manifest: Value = serde_json::from_str(&text).unwrap();
     let streams: Vec<&Value> = manifest["files"]

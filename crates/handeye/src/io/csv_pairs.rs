@@ -3,11 +3,11 @@
 
 use std::io::BufRead;
 
-use crate::error::{Error, Result};
 use crate::io::lines::{Line, Lines};
 use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error, too_long};
-use crate::motion::PosePair;
-use crate::pose::{Transform, check_translation, transform_from_xyz_quat_xyzw};
+use crate::model::error::{Error, Result};
+use crate::model::motion::PosePair;
+use crate::model::pose::{Transform, check_translation, transform_from_xyz_quat_xyzw};
 
 /// The column suffixes of one pose, in order.
 const SUFFIXES: [&str; 7] = ["x", "y", "z", "qx", "qy", "qz", "qw"];
@@ -26,7 +26,7 @@ struct PoseColumns {
 /// (`base_from_gripper` or `gripper_from_base`) and exactly one camera pose (`camera_from_target`
 /// or `target_from_camera`), in any order; any other column is refused. Rows are yielded one at
 /// a time in our directions (Q = `base_from_gripper`, `camera_from_target`), or as an
-/// [`Error::Parse`](crate::Error::Parse) naming the file, the line and the column, after which
+/// [`Error::Parse`](crate::model::error::Error::Parse) naming the file, the line and the column, after which
 /// the next row is read. Blank lines and lines starting with `#` are skipped.
 pub struct CsvPairs<R: BufRead> {
     lines: Lines<R>,

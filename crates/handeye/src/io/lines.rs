@@ -55,13 +55,16 @@ impl<R: BufRead> Lines<R> {
     /// The next line with its number, `None` at the end of the input, or the input's error (after
     /// which the reader yields `None`: a failing input would fail again).
     /// The next line as a record's text with its number, or the error of a failing input (an
-    /// [`Error::Io`](crate::Error::Io) naming `source`) or of an over-long line; `None` at the
+    /// [`Error::Io`](crate::model::error::Error::Io) naming `source`) or of an over-long line; `None` at the
     /// end.
-    pub(crate) fn next_record(&mut self, source: &str) -> Option<crate::Result<(usize, &[u8])>> {
+    pub(crate) fn next_record(
+        &mut self,
+        source: &str,
+    ) -> Option<crate::model::error::Result<(usize, &[u8])>> {
         Some(match self.next_line()? {
             Ok((number, Line::Text(text))) => Ok((number, text)),
             Ok((number, Line::TooLong)) => Err(super::too_long(source, number)),
-            Err(e) => Err(crate::Error::Io {
+            Err(e) => Err(crate::model::error::Error::Io {
                 file: source.to_string(),
                 source: e,
             }),

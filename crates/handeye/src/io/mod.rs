@@ -13,6 +13,7 @@ mod lines;
 mod peer;
 pub mod rosbag;
 mod stamped;
+pub mod sync;
 mod transform;
 mod truth;
 
@@ -20,9 +21,9 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Chain, Cursor, Read};
 use std::path::Path;
 
-use crate::error::{Error, Result};
-use crate::motion::PosePair;
-use crate::pose::ReadTransform;
+use crate::model::error::{Error, Result};
+use crate::model::motion::PosePair;
+use crate::model::pose::ReadTransform;
 use lines::{Line, Lines};
 
 pub use csv_pairs::CsvPairs;
@@ -94,8 +95,8 @@ pub struct PoseSeries {
 }
 
 /// The rotation matrices of one input that were orthonormal only to the precision they were
-/// printed with (between [`KEEP_AS_GIVEN_TOL`](crate::pose::KEEP_AS_GIVEN_TOL) and
-/// [`ORTHONORMAL_TOL`](crate::pose::ORTHONORMAL_TOL)) and were projected onto the nearest rotation.
+/// printed with (between [`KEEP_AS_GIVEN_TOL`](crate::model::pose::KEEP_AS_GIVEN_TOL) and
+/// [`ORTHONORMAL_TOL`](crate::model::pose::ORTHONORMAL_TOL)) and were projected onto the nearest rotation.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Projections {
     /// How many matrices were projected.

@@ -7,13 +7,13 @@ use std::path::Path;
 use nalgebra::{Matrix4, Vector3};
 use serde_json::Value;
 
-use crate::error::{Error, Result};
 use crate::io::json_text::{Step, line_of, path_name, repeated_key, steps};
 use crate::io::{
     FieldProblem, PoseSeries, Projections, parse_error, read_text, read_transform_json,
 };
-use crate::motion::PosePair;
-use crate::pose::{
+use crate::model::error::{Error, Result};
+use crate::model::motion::PosePair;
+use crate::model::pose::{
     ReadTransform, Transform, check_translation, exp_so3, read_matrix4, transform_from_parts,
 };
 

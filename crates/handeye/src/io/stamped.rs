@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
-use crate::error::Result;
+use crate::io::sync::StampedPose;
 use crate::io::{check_stamp, parse_error, read_text};
-use crate::pose::{check_translation, transform_from_xyz_quat_xyzw};
-use crate::sync::StampedPose;
+use crate::model::error::Result;
+use crate::model::pose::{check_translation, transform_from_xyz_quat_xyzw};
 
 /// The field names of a stream line, for messages.
 const FIELDS: [&str; 8] = ["t", "x", "y", "z", "qx", "qy", "qz", "qw"];
@@ -106,7 +106,7 @@ pub struct StampedStream {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::error::Error;
+    use crate::model::error::Error;
 
     #[test]
     fn reads_comma_and_space_separated_streams() {

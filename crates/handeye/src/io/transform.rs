@@ -1,42 +1,17 @@
 //! The JSON form of a transform (SPEC sec. 7): `{"translation", "quaternion_xyzw", "matrix"}`.
 
 use nalgebra::Matrix4;
-use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
-use crate::error::TransformProblem;
-use crate::pose::{
-    ReadTransform, Transform, check_translation, quaternion_xyzw, read_matrix4,
-    transform_from_xyz_quat_xyzw,
+use crate::model::error::TransformProblem;
+pub use crate::model::pose::TransformJson;
+use crate::model::pose::{
+    ReadTransform, Transform, check_translation, read_matrix4, transform_from_xyz_quat_xyzw,
 };
 
 /// Largest entry difference accepted between `matrix` and `translation`/`quaternion_xyzw` when both
 /// are given.
 pub const CONSISTENCY_TOL: f64 = 1e-6;
-
-/// A transform as written in output: translation, quaternion (x y z w, w ≥ 0) and the 4×4
-/// row-major matrix.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TransformJson {
-    /// Translation `[x, y, z]`.
-    pub translation: [f64; 3],
-    /// Rotation as a unit quaternion `[x, y, z, w]`.
-    pub quaternion_xyzw: [f64; 4],
-    /// The homogeneous 4×4 matrix, row-major.
-    pub matrix: [[f64; 4]; 4],
-}
-
-impl From<&Transform> for TransformJson {
-    fn from(t: &Transform) -> Self {
-        let m = t.to_homogeneous();
-        let v = t.translation.vector;
-        Self {
-            translation: [v.x, v.y, v.z],
-            quaternion_xyzw: quaternion_xyzw(t),
-            matrix: std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)])),
-        }
-    }
-}
 
 /// A problem found while reading a transform: where inside it (a field path relative to the
 /// transform, such as `matrix[1][2]`, empty for the whole) and what.
@@ -241,6 +216,7 @@ fn number(v: &Value, field: &str) -> Result<f64, FieldProblem> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::pose::quaternion_xyzw;
     use serde_json::json;
 
     #[test]

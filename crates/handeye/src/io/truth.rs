@@ -13,10 +13,10 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
-use crate::error::{Error, Result};
 use crate::io::json_text::{line_of, repeated_key, steps};
 use crate::io::{TransformJson, parse_error, read_text, transform_from_json};
-use crate::pose::Transform;
+use crate::model::error::{Error, Result};
+use crate::model::pose::Transform;
 
 /// The names X may have in a truth file.
 const X_FRAMES: [&str; 2] = ["gripper_from_camera", "base_from_camera"];

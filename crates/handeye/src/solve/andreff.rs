@@ -1,7 +1,7 @@
 //! Andreff's linear solver in its two-step form, the one the paper uses.
 
-use crate::error::Result;
-use crate::motion::MotionSource;
+use crate::model::error::Result;
+use crate::solve::motions::MotionSource;
 use crate::solve::{
     Calibration, Method, check_motions, finish, singular, translation_least_squares,
 };

@@ -2,11 +2,12 @@
 
 use nalgebra::{Matrix3, SMatrix, SVector};
 
-use crate::error::{Degeneracy, Error, Result};
-use crate::motion::{MotionPair, MotionSource};
-use crate::pose::{proj_so3, rotation_matrix};
-use crate::residual::Quadratic;
+use crate::model::error::{Degeneracy, Error, Result};
+use crate::model::motion::MotionPair;
+use crate::model::pose::{proj_so3, rotation_matrix};
 use crate::solve::least_squares::least_squares_12;
+use crate::solve::motions::MotionSource;
+use crate::solve::residual::Quadratic;
 use crate::solve::scale::{Scaled, length_scale, weighting_unit};
 use crate::solve::{Calibration, Method, REFUSE_CONDITIONING, check_motions, finish, singular};
 
@@ -192,7 +193,7 @@ fn correction(m: &MotionPair, x: &SVector<f64, 12>) -> SVector<f64, 12> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Transform;
+    use crate::model::pose::Transform;
     use nalgebra::Vector3;
 
     /// The 12 rows of Eq. (10) for one motion, as the equation writes them.

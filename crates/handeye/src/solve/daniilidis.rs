@@ -2,9 +2,10 @@
 
 use nalgebra::{Matrix3, Matrix4, SMatrix, SVector, SymmetricEigen, Vector3, Vector4};
 
-use crate::error::Result;
-use crate::motion::{AllPairs, MotionPair, MotionSource};
-use crate::pose::{rotation_matrix, skew};
+use crate::model::error::Result;
+use crate::model::motion::MotionPair;
+use crate::model::pose::{rotation_matrix, skew};
+use crate::solve::motions::{AllPairs, MotionSource};
 use crate::solve::quaternion::{Signs, motion_quaternions, multiply, quaternion_of, rotation_of};
 use crate::solve::scale::{Scaled, weighting_unit};
 use crate::solve::{Calibration, Method, check_motions, finish, singular};
@@ -299,10 +300,13 @@ fn pair_rows() -> [[SMatrix<f64, 16, 16>; 8]; 6] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::{Pairing, PosePair, Setup, motion_pairs};
+    use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
     use crate::sim::{SimConfig, simulate};
 
-    fn both(poses: &[PosePair], setup: Setup) -> (crate::Transform, crate::Transform) {
+    fn both(
+        poses: &[PosePair],
+        setup: Setup,
+    ) -> (crate::model::pose::Transform, crate::model::pose::Transform) {
         let pairs = AllPairs::new(poses, setup);
         let listed = motion_pairs(poses, Pairing::All, setup);
         (
@@ -342,7 +346,8 @@ mod tests {
             ..SimConfig::default()
         };
         let mut s = simulate(&config, 3, 0);
-        let turn = crate::Transform::new(Vector3::zeros(), Vector3::new(0.0, 2.8, 0.0));
+        let turn =
+            crate::model::pose::Transform::new(Vector3::zeros(), Vector3::new(0.0, 2.8, 0.0));
         s.poses[7].camera_from_target = turn * s.poses[7].camera_from_target;
         let pairs = AllPairs::new(&s.poses, Setup::EyeInHand);
         let r_x0 = check_motions(&pairs).unwrap().andreff_rotation;

@@ -2,9 +2,9 @@
 
 use nalgebra::{Matrix4, SymmetricEigen, Vector4};
 
-use crate::error::Result;
-use crate::motion::MotionSource;
-use crate::pose::rotation_matrix;
+use crate::model::error::Result;
+use crate::model::pose::rotation_matrix;
+use crate::solve::motions::MotionSource;
 use crate::solve::quaternion::{Signs, motion_quaternions, rotation_of};
 use crate::solve::{
     Calibration, Method, check_motions, finish, singular, translation_least_squares,

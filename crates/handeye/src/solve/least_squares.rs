@@ -3,7 +3,8 @@
 
 use nalgebra::{SMatrix, SVector};
 
-use crate::motion::{MotionPair, MotionSource};
+use crate::model::motion::MotionPair;
+use crate::solve::motions::MotionSource;
 
 /// Defines a least-squares solver for R-row blocks in N unknowns (nalgebra's LU needs concrete
 /// sizes).

@@ -6,14 +6,17 @@
 //! that are all parallel; every result carries the conditioning of Andreff's rotation system, the
 //! same measure for every method.
 
+pub mod accumulate;
 mod andreff;
 mod andreff_joint;
 mod daniilidis;
 mod horaud;
 mod least_squares;
+pub mod motions;
 mod park;
 mod quaternion;
 mod refine;
+pub mod residual;
 pub(crate) mod robot_world;
 mod rotation_system;
 mod scale;
@@ -39,10 +42,10 @@ pub(crate) use rotation_system::{RotationSolution, RotationSystem};
 pub(crate) use scale::Scaled;
 pub use tsai::{TsaiOptions, tsai, tsai_with};
 
-use crate::error::{Degeneracy, Error, Result};
-use crate::motion::MotionSource;
-use crate::pose::{Transform, rotation_matrix};
-use crate::warning::Warning;
+use crate::model::error::{Degeneracy, Error, Result};
+use crate::model::pose::{Transform, rotation_matrix};
+use crate::model::warning::Warning;
+use crate::solve::motions::MotionSource;
 
 /// Below this conditioning (second-smallest over largest singular value of Andreff's rotation
 /// system) a solve is refused as degenerate.
@@ -162,7 +165,7 @@ pub fn check_motions(motions: &(impl MotionSource + ?Sized)) -> Result<MotionChe
     }
     if conditioning < REFUSE_CONDITIONING {
         let reason = Degeneracy::ParallelAxes {
-            largest_axis_angle_deg: 2.0 * crate::motion::axis_spread(motions).to_degrees(),
+            largest_axis_angle_deg: 2.0 * crate::solve::motions::axis_spread(motions).to_degrees(),
         };
         return Err(Error::Degenerate {
             reason,
@@ -196,7 +199,7 @@ fn largest_rotation(motions: &(impl MotionSource + ?Sized)) -> f64 {
             widest = r_a;
         }
     });
-    crate::pose::axis_angle(&widest).0
+    crate::model::pose::axis_angle(&widest).0
 }
 
 /// [`largest_rotation`] over all pairs of poses, exactly where it decides anything, in O(n) when
@@ -205,7 +208,7 @@ fn largest_rotation(motions: &(impl MotionSource + ?Sized)) -> f64 {
 /// when α ≥ [`WARN_ANGLE`], α is returned: the largest rotation is at least that, and neither the
 /// refusal nor the warning applies. Below, the motions are gone through.
 fn largest_rotation_of_pairs(
-    pairs: &crate::AllPairs,
+    pairs: &crate::solve::motions::AllPairs,
     motions: &(impl MotionSource + ?Sized),
 ) -> f64 {
     if pairs.poses() < 2 {
@@ -219,7 +222,7 @@ fn largest_rotation_of_pairs(
             widest = r_a;
         }
     }
-    let alpha = crate::pose::axis_angle(&widest).0;
+    let alpha = crate::model::pose::axis_angle(&widest).0;
     if alpha >= WARN_ANGLE {
         alpha
     } else {
@@ -255,7 +258,7 @@ pub fn solve(method: Method, motions: &(impl MotionSource + ?Sized)) -> Result<C
 
 /// Least-squares translation of X given its rotation: the stacked
 /// (I − R_a) t_x = t_a − R_x t_b over all motions, solved through its 3×3 normal equations
-/// (over all pairs of poses, accumulated in O(n): [`crate::accumulate::PoseAccumulator`]).
+/// (over all pairs of poses, accumulated in O(n): [`crate::solve::accumulate::PoseAccumulator`]).
 ///
 /// Returns `None` when the 3×3 system is singular (all axes parallel).
 pub(crate) fn translation_least_squares(
@@ -270,7 +273,7 @@ pub(crate) fn translation_least_squares(
         let lu = sums.translation_normal().lu();
         let mut t = sums.translation(r_x)?;
         for _ in 0..2 {
-            let gradient = crate::residual::pairs_translation_gradient(pairs, r_x, &t);
+            let gradient = crate::solve::residual::pairs_translation_gradient(pairs, r_x, &t);
             t -= lu.solve(&gradient)?;
         }
         return t.iter().all(|v| v.is_finite()).then_some(t);
@@ -293,7 +296,7 @@ pub(crate) fn finish(
     t_x: &Vector3<f64>,
 ) -> Calibration {
     Calibration {
-        x: crate::pose::transform_from_parts(r_x, t_x),
+        x: crate::model::pose::transform_from_parts(r_x, t_x),
         method,
         motions,
         conditioning: check.conditioning,

@@ -4,9 +4,9 @@ use std::f64::consts::PI;
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::error::Result;
-use crate::motion::MotionSource;
-use crate::pose::{log_so3, proj_so3, rotation_matrix};
+use crate::model::error::Result;
+use crate::model::pose::{log_so3, proj_so3, rotation_matrix};
+use crate::solve::motions::MotionSource;
 use crate::solve::quaternion::HALF_TURN_WITHIN;
 use crate::solve::{
     Calibration, Method, check_motions, finish, singular, translation_least_squares,

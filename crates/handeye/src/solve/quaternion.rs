@@ -125,7 +125,7 @@ pub fn multiply(s: &Vector4<f64>, t: &Vector4<f64>) -> Vector4<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pose::exp_so3;
+    use crate::model::pose::exp_so3;
 
     #[test]
     fn the_half_turn_scalar_is_the_angles() {

@@ -3,10 +3,10 @@
 use nalgebra::{Matrix6, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
-use crate::error::Result;
-use crate::motion::MotionSource;
-use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, transform_from_parts};
-use crate::residual::{PerMotion, Residuals, covariance};
+use crate::model::error::Result;
+use crate::model::pose::{Transform, exp_so3, proj_so3, rotation_matrix, transform_from_parts};
+use crate::solve::motions::MotionSource;
+use crate::solve::residual::{PerMotion, Residuals, covariance};
 use crate::solve::scale::{Scaled, length_scale};
 use crate::solve::{Calibration, Method, MotionCheck, andreff, check_motions};
 
@@ -118,7 +118,7 @@ pub fn refine_from(
 
 /// The motions' residuals as the refinement sees them, lengths in units of `unit`: over all
 /// pairs of a pose sequence the quadratic form of the per-pose sums
-/// ([`crate::residual::Quadratic`], O(1) per evaluation), else motion by motion.
+/// ([`crate::solve::residual::Quadratic`], O(1) per evaluation), else motion by motion.
 fn with_residuals<T>(
     motions: &(impl MotionSource + ?Sized),
     unit: f64,

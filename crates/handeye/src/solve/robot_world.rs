@@ -39,13 +39,15 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Degeneracy, Error, Result};
-use crate::motion::{Pairing, PosePair, Setup, motion_pairs};
-use crate::pose::{Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts};
-use crate::residual::BlockRms;
+use crate::model::error::{Degeneracy, Error, Result};
+use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
+use crate::model::pose::{
+    Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts,
+};
+use crate::model::warning::Warning;
+use crate::solve::residual::BlockRms;
 use crate::solve::scale::weighting_from_scale;
 use crate::solve::{RefineOptions, Termination, check_motions, singular};
-use crate::warning::Warning;
 
 /// The robot-world solvers, by name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -421,7 +423,7 @@ pub fn pose_residuals(
             let (_, dt) = pose_residual(&q, &p.camera_from_target, (&r_x, &t_x), (&r_y, &t_y));
             let predicted = rotation_matrix(&q) * r_x * rotation_matrix(&p.camera_from_target);
             PoseResidual {
-                rotation_deg: crate::pose::axis_angle(&(r_y.transpose() * predicted))
+                rotation_deg: crate::model::pose::axis_angle(&(r_y.transpose() * predicted))
                     .0
                     .to_degrees(),
                 translation: dt.norm(),

@@ -3,8 +3,8 @@
 use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
-use crate::motion::MotionSource;
-use crate::pose::{proj_so3, rotation_matrix};
+use crate::model::pose::{proj_so3, rotation_matrix};
+use crate::solve::motions::MotionSource;
 use crate::solve::symmetric::{SmallestEigen, smallest_eigen};
 
 /// A 9×9 matrix.
@@ -140,7 +140,7 @@ fn stacked_gradient(
     let v_m = Matrix3::new(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
     let g = match motions.all_pairs() {
         // Over all pairs of poses, from per-pose deviations in O(n).
-        Some(pairs) => crate::residual::pairs_rotation_gradient(pairs, &v_m),
+        Some(pairs) => crate::solve::residual::pairs_rotation_gradient(pairs, &v_m),
         None => {
             let mut g = Matrix3::zeros();
             motions.for_each_motion(|m| {
@@ -177,8 +177,8 @@ fn conditioning_of(eigen: &SmallestEigen<9>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::MotionPair;
-    use crate::pose::Transform;
+    use crate::model::motion::MotionPair;
+    use crate::model::pose::Transform;
     use nalgebra::{Rotation3, SymmetricEigen, Vector3};
     use proptest::prelude::*;
 

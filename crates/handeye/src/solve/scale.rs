@@ -8,8 +8,9 @@
 //! one unit only. The solvers that need it therefore solve in units of [`length_scale`] and scale
 //! the translation of X back.
 
-use crate::motion::{MotionPair, MotionSource};
-use crate::pose::transform_from_parts;
+use crate::model::motion::MotionPair;
+use crate::model::pose::transform_from_parts;
+use crate::solve::motions::MotionSource;
 
 /// The data's length unit: the power of two nearest the RMS of the gripper and camera translation
 /// lengths over all motions, or 1 when every translation is 0 (or the RMS is not finite).
@@ -19,7 +20,7 @@ use crate::pose::transform_from_parts;
 /// the result only by the rounding of the input.
 ///
 /// Over all pairs of a pose sequence the sum of squares comes from the per-pose sums
-/// ([`crate::accumulate::PairSums`]) in O(n); it equals the motion-by-motion sum up to rounding,
+/// ([`crate::solve::accumulate::PairSums`]) in O(n); it equals the motion-by-motion sum up to rounding,
 /// and the power of two then differs only for an RMS within rounding of a half-way point.
 pub(crate) fn length_scale(motions: &(impl MotionSource + ?Sized)) -> f64 {
     let sum = match motions.all_pairs() {
@@ -98,7 +99,7 @@ impl<M: MotionSource + ?Sized> MotionSource for Scaled<'_, M> {
     fn for_each_motion(&self, mut f: impl FnMut(&MotionPair)) {
         let s = self.inverse_unit;
         self.motions.for_each_motion(|m| {
-            let scaled = |t: &crate::Transform| {
+            let scaled = |t: &crate::model::pose::Transform| {
                 transform_from_parts(t.rotation.matrix(), &(t.translation.vector * s))
             };
             f(&MotionPair {
@@ -112,7 +113,7 @@ impl<M: MotionSource + ?Sized> MotionSource for Scaled<'_, M> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Transform;
+    use crate::model::pose::Transform;
     use nalgebra::Vector3;
 
     #[test]

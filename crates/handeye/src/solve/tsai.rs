@@ -3,10 +3,11 @@
 use nalgebra::{Matrix3, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
-use crate::motion::{MotionPair, MotionSource};
-use crate::pose::{rotation_matrix, skew};
+use crate::model::error::{Error, Result};
+use crate::model::motion::MotionPair;
+use crate::model::pose::{rotation_matrix, skew};
 use crate::solve::least_squares::least_squares_3;
+use crate::solve::motions::MotionSource;
 use crate::solve::quaternion::{Signs, motion_quaternions, rotation_of};
 use crate::solve::{
     Calibration, Method, MotionCheck, check_motions, finish, singular, translation_least_squares,

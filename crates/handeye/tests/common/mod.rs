@@ -3,7 +3,7 @@
 
 #![allow(dead_code)] // Each test file uses its own part.
 
-use handeye::pose::{exp_so3, transform_from_parts};
+use handeye::model::pose::{exp_so3, transform_from_parts};
 use handeye::{PosePair, Setup, Transform};
 use nalgebra::Vector3;
 use proptest::prelude::*;

@@ -26,11 +26,11 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use crate::error::{Error, Result};
 use crate::io::StampedPosePair;
-use crate::motion::PosePair;
-use crate::pose::{Transform, transform_from_xyz_quat_xyzw};
-use crate::sync::{Lookup, StampedPose};
+use crate::io::sync::{Lookup, StampedPose};
+use crate::model::error::{Error, Result};
+use crate::model::motion::PosePair;
+use crate::model::pose::{Transform, transform_from_xyz_quat_xyzw};
 
 pub(crate) use msg::{POSE_STAMPED, TF_MESSAGE, TRANSFORM_STAMPED};
 pub use storage::Storage;
@@ -193,7 +193,7 @@ pub struct BagPairs {
     /// Observations in a gap, longer than `max_gap`, of a dynamic transform they need.
     pub dropped_gap: usize,
     /// `base_from_gripper` at every stamp of the robot's dynamic transforms (robot clock), for an
-    /// estimate of the clock offset ([`crate::sync::estimate_time_offset`]).
+    /// estimate of the clock offset ([`crate::io::sync::estimate_time_offset`]).
     pub robot_stream: Vec<StampedPose>,
     /// `camera_from_target` at every observation (camera clock), in time order.
     pub camera_stream: Vec<StampedPose>,

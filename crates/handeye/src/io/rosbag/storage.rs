@@ -4,7 +4,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::model::error::{Error, Result};
 
 /// The storage of one file of a recording.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]

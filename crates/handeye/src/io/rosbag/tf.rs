@@ -4,14 +4,14 @@
 //! As in tf2, every frame has at most one parent; an edge parent → child holds `parent_from_child`
 //! (the pose of the child in the parent), either static or as a time series. A lookup of
 //! `a_from_b` at time t walks from both frames up to their nearest common ancestor, interpolating
-//! every dynamic edge at t (slerp, linear translation; [`crate::sync::interpolate`]).
+//! every dynamic edge at t (slerp, linear translation; [`crate::io::sync::interpolate`]).
 
 use std::collections::{BTreeMap, BTreeSet};
 
 use serde::Serialize;
 
-use crate::pose::Transform;
-use crate::sync::{Lookup, StampedPose, interpolate};
+use crate::io::sync::{Lookup, StampedPose, interpolate};
+use crate::model::pose::Transform;
 
 use super::msg::NS;
 

@@ -1,0 +1,415 @@
+//! What to record next: the least determined directions of X, and the gripper motions that would
+//! shrink its uncertainty most.
+//!
+//! From the poses so far, [`advise`] solves X (all-pairs Andreff from [`PoseAccumulator`]) and the
+//! fixed frame Y, measures the data's noise as the scatter of the poses' own Y_k = H_k X C_k, and
+//! takes the first-order covariance of X with each pose one measurement
+//! ([`PoseAccumulator::covariance`]). A candidate next pose is the last robot pose turned by an
+//! angle about an axis of the gripper frame, with the camera observation that agrees exactly with
+//! (X, Y); adding it to a copy of the sums predicts the covariance after recording it, in O(1).
+//! The suggestions are chosen greedily, each one assuming the earlier ones were recorded. When X
+//! is not determined at all (every rotation about one axis), the first suggestion turns about the
+//! axis farthest from the ones seen so far.
+
+use nalgebra::{Matrix3, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::check::outliers::pose_outliers;
+use crate::check::quality::OUTLIER_DEG;
+use crate::check::readings::check_readings;
+use crate::model::error::{Error, Result};
+use crate::model::motion::{MotionFeatures, PosePair, Setup};
+use crate::model::pose::{Transform, exp_so3, transform_from_parts};
+use crate::solve::accumulate::PoseAccumulator;
+
+/// Angles a suggestion may turn by, degrees.
+const ANGLES_DEG: [f64; 3] = [15.0, 30.0, 60.0];
+
+/// One-sigma sizes of the error of X: rotation in degrees, translation in the input's unit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Predicted {
+    /// Rotation, degrees.
+    pub rotation_deg: f64,
+    /// Translation, input units.
+    pub translation: f64,
+}
+
+/// A least determined direction of X.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Weakness {
+    /// `rotation` (about the axis) or `translation` (along it).
+    pub kind: WeaknessKind,
+    /// The direction in the gripper frame (X's own frame for the translation).
+    pub axis_gripper: [f64; 3],
+    /// One-sigma along it: degrees for a rotation, input units for a translation.
+    pub sigma: f64,
+}
+
+/// Rotation or translation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WeaknessKind {
+    /// A rotation of X about the axis.
+    Rotation,
+    /// A translation of X along the axis.
+    Translation,
+}
+
+/// A motion to record next.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Suggestion {
+    /// Axis of the gripper's rotation from its last pose, in the gripper frame.
+    pub axis_gripper: [f64; 3],
+    /// Angle of that rotation, degrees.
+    pub angle_deg: f64,
+    /// X's uncertainty once this motion and the ones before it are recorded (`None` while X is not
+    /// determined).
+    pub predicted: Option<Predicted>,
+}
+
+/// The advice for a recording.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Advice {
+    /// Poses it rests on.
+    pub poses: usize,
+    /// Poses left out as outliers (the batch's per-pose test).
+    pub outliers: usize,
+    /// X's uncertainty now (`None` when X is not determined at all).
+    pub current: Option<Predicted>,
+    /// The least determined rotation and translation directions, weakest first.
+    pub weakest: Vec<Weakness>,
+    /// The next motions, in the order to record them.
+    pub suggestions: Vec<Suggestion>,
+}
+
+/// The advice for `poses` (module documentation): `count` suggestions, from the poses that agree
+/// with the others (outliers by the batch's own test are left out and counted in `outliers`).
+///
+/// Errors with [`Error::TooFewMotions`] for fewer than two poses, and with [`Error::Misread`]
+/// when the poses fit far better read another way (an inverted pose, `w, x, y, z` quaternions,
+/// millimetres on one side): no advice from data read wrongly.
+pub fn advise(poses: &[PosePair], setup: Setup, count: usize) -> Result<Advice> {
+    if poses.len() < 2 {
+        return Err(Error::TooFewMotions {
+            got: poses.len().saturating_sub(1),
+            need: 2,
+        });
+    }
+    let outliers = pose_outliers(poses, setup, OUTLIER_DEG).indices();
+    let kept: Vec<PosePair> = (0..poses.len())
+        .filter(|i| !outliers.contains(i))
+        .map(|i| poses[i])
+        .collect();
+    let check = check_readings(&kept, setup);
+    if let Some(advice) = check.advice(setup) {
+        return Err(Error::Misread {
+            advice,
+            readings: check.fitting_better(),
+        });
+    }
+    let poses = &kept[..];
+    let mut acc = PoseAccumulator::new(setup);
+    poses.iter().for_each(|p| acc.add(p));
+    let last = poses[poses.len() - 1].base_from_gripper;
+    let Some((x, y, noise)) = solved(&acc) else {
+        return Ok(Advice {
+            outliers: outliers.len(),
+            ..undetermined(poses, setup, count)
+        });
+    };
+    let current = predicted(&acc, &x, noise);
+    let weakest = current
+        .map(|_| weakest(&acc, &x, noise))
+        .unwrap_or_default();
+    let mut suggestions = Vec::with_capacity(count);
+    let mut from = last;
+    for _ in 0..count {
+        let Some((axis, angle, next, after)) = best_next(&acc, setup, &x, &y, &from, noise) else {
+            break;
+        };
+        acc.add(&next);
+        from = next.base_from_gripper;
+        suggestions.push(Suggestion {
+            axis_gripper: axis.into(),
+            angle_deg: angle,
+            predicted: Some(after),
+        });
+    }
+    Ok(Advice {
+        poses: poses.len(),
+        outliers: outliers.len(),
+        current,
+        weakest,
+        suggestions,
+    })
+}
+
+/// X, Y and the noise (per-axis rotation in radians, per-axis translation) of the poses, when X
+/// is determined. A noise of zero (exact data) is floored, so that predictions stay finite.
+fn solved(acc: &PoseAccumulator) -> Option<(Transform, Transform, (f64, f64))> {
+    let x = acc.estimate()?.x;
+    let scatter = acc.residual_scatter(&x)?;
+    let scale = acc.scene_scale().max(acc.viewing_distance()).max(1e-12);
+    let r = (scatter.rotation / 3f64.sqrt()).max(1e-6);
+    let t = (scatter.translation / 3f64.sqrt()).max(1e-6 * scale);
+    Some((x, scatter.y, (r, t)))
+}
+
+/// The one-sigma sizes from the covariance.
+fn predicted(acc: &PoseAccumulator, x: &Transform, noise: (f64, f64)) -> Option<Predicted> {
+    let c = acc.covariance(x, noise.0, noise.1)?;
+    Some(Predicted {
+        rotation_deg: (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees(),
+        translation: (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt(),
+    })
+}
+
+/// The weakest rotation and translation directions (the largest eigenvalue of each block).
+fn weakest(acc: &PoseAccumulator, x: &Transform, noise: (f64, f64)) -> Vec<Weakness> {
+    let Some(c) = acc.covariance(x, noise.0, noise.1) else {
+        return Vec::new();
+    };
+    let block = |k: usize| -> Matrix3<f64> { c.fixed_view::<3, 3>(k, k).into_owned() };
+    let mut out = Vec::new();
+    for (kind, k) in [(WeaknessKind::Rotation, 0), (WeaknessKind::Translation, 3)] {
+        let e = block(k).symmetric_eigen();
+        let i = e.eigenvalues.imax();
+        let sigma = e.eigenvalues[i].max(0.0).sqrt();
+        let v: Vector3<f64> = e.eigenvectors.column(i).into_owned();
+        out.push(Weakness {
+            kind,
+            axis_gripper: v.into(),
+            sigma: match kind {
+                WeaknessKind::Rotation => sigma.to_degrees(),
+                WeaknessKind::Translation => sigma,
+            },
+        });
+    }
+    out
+}
+
+/// The candidate next motion that leaves the smallest uncertainty (rotation and translation each
+/// relative to now), with the pose it makes and the prediction.
+fn best_next(
+    acc: &PoseAccumulator,
+    setup: Setup,
+    x: &Transform,
+    y: &Transform,
+    from: &Transform,
+    noise: (f64, f64),
+) -> Option<(Vector3<f64>, f64, PosePair, Predicted)> {
+    let now = predicted(acc, x, noise)?;
+    let mut best: Option<(f64, Vector3<f64>, f64, PosePair, Predicted)> = None;
+    for axis in candidate_axes() {
+        for angle in ANGLES_DEG {
+            let next = consistent_pose(setup, x, y, &turned(from, &axis, angle));
+            let mut trial = acc.clone();
+            trial.add(&next);
+            let Some(p) = predicted(&trial, x, noise) else {
+                continue;
+            };
+            let score = p.rotation_deg / now.rotation_deg + p.translation / now.translation;
+            if best.as_ref().is_none_or(|b| score < b.0) {
+                best = Some((score, axis, angle, next, p));
+            }
+        }
+    }
+    best.map(|(_, axis, angle, next, p)| (axis, angle, next, p))
+}
+
+/// The advice when X is not determined: turn about the axis farthest from the rotation axes seen
+/// so far (the least eigenvector of Σ θ² k kᵀ over the motions between the poses).
+fn undetermined(poses: &[PosePair], setup: Setup, count: usize) -> Advice {
+    let mut scatter = Matrix3::zeros();
+    let step = (poses.len() / 60).max(1);
+    let sample: Vec<&PosePair> = poses.iter().step_by(step).collect();
+    for (i, a) in sample.iter().enumerate() {
+        for b in &sample[i + 1..] {
+            let m = crate::model::motion::MotionPair::between(setup, a, b);
+            let f = MotionFeatures::of(&m.a);
+            if let Some(k) = f.axis {
+                scatter += k * k.transpose() * (f.angle * f.angle);
+            }
+        }
+    }
+    let e = scatter.symmetric_eigen();
+    let order = {
+        let mut idx = [0, 1, 2];
+        idx.sort_by(|&a, &b| e.eigenvalues[a].total_cmp(&e.eigenvalues[b]));
+        idx
+    };
+    let suggestions = order
+        .iter()
+        .take(count.min(2))
+        .map(|&i| Suggestion {
+            axis_gripper: e.eigenvectors.column(i).into_owned().into(),
+            angle_deg: 30.0,
+            predicted: None,
+        })
+        .collect();
+    Advice {
+        poses: poses.len(),
+        outliers: 0,
+        current: None,
+        weakest: Vec::new(),
+        suggestions,
+    }
+}
+
+/// 13 axes of the gripper frame, one of each ± pair: the 3 coordinate axes, the 6 face diagonals
+/// and the 4 space diagonals.
+fn candidate_axes() -> Vec<Vector3<f64>> {
+    let mut out = Vec::new();
+    for x in [-1.0, 0.0, 1.0] {
+        for y in [-1.0, 0.0, 1.0] {
+            for z in [-1.0, 0.0, 1.0] {
+                let v = Vector3::new(x, y, z);
+                // One of each ± pair: the first non-zero coordinate positive.
+                let first = [x, y, z].into_iter().find(|c| *c != 0.0);
+                if first.is_some_and(|c| c > 0.0) {
+                    out.push(v.normalize());
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The robot pose turned by `angle_deg` about `axis` of its own (gripper) frame.
+fn turned(base_from_gripper: &Transform, axis: &Vector3<f64>, angle_deg: f64) -> Transform {
+    let r = exp_so3(&(axis * angle_deg.to_radians()));
+    base_from_gripper * transform_from_parts(&r, &Vector3::zeros())
+}
+
+/// The pose pair at `base_from_gripper` that agrees exactly with X and Y: C = X⁻¹ H⁻¹ Y.
+fn consistent_pose(
+    setup: Setup,
+    x: &Transform,
+    y: &Transform,
+    base_from_gripper: &Transform,
+) -> PosePair {
+    let hand = setup.hand_pose(base_from_gripper);
+    PosePair {
+        base_from_gripper: *base_from_gripper,
+        camera_from_target: x.inverse() * hand.inverse() * y,
+    }
+}
+
+/// How many poses each way of moving needs to reach a target uncertainty (issue 16's closed loop):
+/// the paper's random walk, turns of the same sizes about random axes, and the advice.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ClosedLoop {
+    /// Series simulated.
+    pub series: usize,
+    /// The target: the rotation one-sigma the paper's walk reaches after `walk_poses` poses
+    /// (median over the series), degrees.
+    pub target_rotation_deg: f64,
+    /// Poses of the walk that set the target.
+    pub walk_poses: usize,
+    /// Median poses needed: the paper's walk, random turns, the advice (`None` where fewer than
+    /// half the series got there within `most` poses).
+    pub median_poses: [Option<usize>; 3],
+    /// Most poses a series may take.
+    pub most: usize,
+}
+
+/// The closed loop of [`ClosedLoop`] on the paper's simulation (millimetres): every series starts
+/// from the walk's first three poses; each new pose is recorded with the protocol's noise (uniform
+/// 1e-3 on the rotation matrix entries, 1% of each translation), and the uncertainty is the
+/// first-order one of the recorded data (the same measure for every way of moving).
+pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
+    use crate::sim::{SimConfig, simulate};
+    use rand::{RngExt, SeedableRng};
+    const WALK: usize = 100;
+    const MOST: usize = 300;
+    const START: usize = 3;
+    let sigma = |poses: &[PosePair]| -> Option<f64> {
+        let mut acc = PoseAccumulator::new(Setup::EyeInHand);
+        poses.iter().for_each(|p| acc.add(p));
+        let (x, _, noise) = solved(&acc)?;
+        predicted(&acc, &x, noise).map(|p| p.rotation_deg)
+    };
+    let noisy = |p: &PosePair, rng: &mut rand_xoshiro::Xoshiro256PlusPlus| {
+        let mut jitter = |t: &Transform| {
+            let n = Matrix3::from_fn(|_, _| rng.random_range(-1e-3..1e-3));
+            let r = crate::model::pose::proj_so3(&(t.rotation.matrix() + n));
+            let v = t.translation.vector;
+            let d = Vector3::from_fn(|_, _| rng.random_range(-0.01..0.01)) * v.norm();
+            transform_from_parts(&r, &(v + d))
+        };
+        PosePair {
+            base_from_gripper: jitter(&p.base_from_gripper),
+            camera_from_target: jitter(&p.camera_from_target),
+        }
+    };
+    let sims: Vec<_> = (0..series as u64)
+        .map(|s| {
+            simulate(
+                &SimConfig {
+                    poses: MOST,
+                    ..SimConfig::default()
+                },
+                seed,
+                s,
+            )
+        })
+        .collect();
+    let mut at_walk: Vec<f64> = sims
+        .iter()
+        .filter_map(|sim| sigma(&sim.poses[..WALK]))
+        .collect();
+    at_walk.sort_by(f64::total_cmp);
+    let target = at_walk.get(at_walk.len() / 2).copied().unwrap_or(f64::NAN);
+    let mut needed: [Vec<usize>; 3] = [Vec::new(), Vec::new(), Vec::new()];
+    for (s, sim) in sims.iter().enumerate() {
+        // The paper's walk.
+        let walk = (START..=MOST).find(|&n| sigma(&sim.poses[..n]).is_some_and(|v| v <= target));
+        needed[0].push(walk.unwrap_or(usize::MAX));
+        // Random turns and the advice, recorded through the true camera.
+        let (x, y) = (sim.gripper_from_camera, sim.base_from_target);
+        for (k, advised) in [(1, false), (2, true)] {
+            let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(seed ^ (s as u64) << 8);
+            let mut poses = sim.poses[..START].to_vec();
+            let mut from = poses[START - 1].base_from_gripper;
+            let mut reached = usize::MAX;
+            while poses.len() < MOST {
+                let (axis, angle) = if advised {
+                    match advise(&poses, Setup::EyeInHand, 1)
+                        .ok()
+                        .and_then(|a| a.suggestions.first().copied())
+                    {
+                        Some(s) => (Vector3::from(s.axis_gripper), s.angle_deg),
+                        None => break,
+                    }
+                } else {
+                    let v = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
+                    (
+                        v.normalize(),
+                        ANGLES_DEG[rng.random_range(0..ANGLES_DEG.len())],
+                    )
+                };
+                let q = turned(&from, &axis, angle);
+                let exact = consistent_pose(Setup::EyeInHand, &x, &y, &q);
+                poses.push(noisy(&exact, &mut rng));
+                from = q;
+                if sigma(&poses).is_some_and(|v| v <= target) {
+                    reached = poses.len();
+                    break;
+                }
+            }
+            needed[k].push(reached);
+        }
+    }
+    let median = |v: &mut Vec<usize>| {
+        v.sort_unstable();
+        v.get(v.len() / 2).copied().filter(|n| *n != usize::MAX)
+    };
+    let [a, b, c] = &mut needed;
+    ClosedLoop {
+        series,
+        target_rotation_deg: target,
+        walk_poses: WALK,
+        median_poses: [median(a), median(b), median(c)],
+        most: MOST,
+    }
+}

@@ -1,0 +1,7 @@
+//! The batch jobs: hand–eye calibration ([`batch`]), robot-world calibration ([`robot_world`]),
+//! and what to record next ([`advice`]). Each strings a solver and the checks together and
+//! returns a typed report.
+
+pub mod advice;
+pub mod batch;
+pub mod robot_world;

@@ -1,0 +1,397 @@
+//! The readings of the input a user may have meant, tried against the data.
+//!
+//! The mistakes every hand–eye tool's users make are a pose given inverted under its name, the
+//! quaternion written `w, x, y, z` into `x, y, z, w` fields, and millimetres on one side and metres
+//! on the other. Each turns consistent data into data that no X fits. [`check_readings`] solves the
+//! data as given and, when that fits poorly, under each other [`Reading`], measures how well each
+//! fits (the median per-pose residual, [`crate::check::outliers::PoseResiduals`]), and names a reading
+//! that fits far better.
+
+use serde::{Deserialize, Serialize};
+
+use crate::check::outliers::{PoseResiduals, gripper_rotations, median, translation_scale};
+use crate::model::findings::Reading;
+use crate::model::motion::{PosePair, Setup};
+use crate::model::pose::{exp_so3, transform_from_parts};
+use crate::model::warning::{Remedy, Warning};
+use crate::solve::REFUSE_ANGLE;
+use crate::solve::accumulate::PoseAccumulator;
+
+/// At most this many poses (spread evenly) are used to try each reading.
+const SAMPLE: usize = 60;
+
+/// A reading fits far better when one of its residuals is below this fraction of the as-given
+/// one and the other is not worse than [`NOT_WORSE`] times it.
+const FAR_BETTER: f64 = 0.2;
+/// See [`FAR_BETTER`].
+const NOT_WORSE: f64 = 1.5;
+/// The millimetre readings are tried only when one side's translations are this many times the
+/// other's (a factor of 1000 between them, give or take the scene's proportions).
+const UNIT_RATIO: f64 = 30.0;
+/// Below this axis scatter ([`crate::check::outliers::axis_scatter`]) the motions do not determine X
+/// under any reading, so readings are not compared (the fit of a free direction says nothing about
+/// the reading). The realistic suite measures ≤ 6.5e-6 for one joint or parallel axes, ≥ 1.8e-2
+/// otherwise.
+pub const DEGENERATE_SCATTER: f64 = 1e-4;
+/// The as-given reading is questioned only when its median rotation residual is above this
+/// (degrees) …
+const POOR_ROTATION_DEG: f64 = 0.5;
+/// … or its median translation residual above this fraction of the scene's size.
+const POOR_TRANSLATION: f64 = 0.02;
+
+/// X and Y sizes must differ by this factor for [`ReadingFit::plausible`] to tell.
+const SIZE_RATIO: f64 = 2.0;
+
+/// How well one reading fits.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ReadingFit {
+    /// The reading.
+    pub reading: Reading,
+    /// Median per-pose rotation residual, degrees.
+    pub rotation_deg: f64,
+    /// Median per-pose translation residual over the scene's size (RMS spread of the hand
+    /// positions), unit-free.
+    pub translation_rel: f64,
+    /// ‖t‖ of the X solved under this reading.
+    pub x_translation: f64,
+    /// ‖t‖ of the fixed frame Y (`base_from_target` eye-in-hand, `gripper_from_target`
+    /// eye-to-hand) under this reading.
+    pub y_translation: f64,
+}
+
+impl ReadingFit {
+    /// Whether the fit is poor enough to question the reading ([`POOR_ROTATION_DEG`],
+    /// [`POOR_TRANSLATION`]).
+    fn poor(&self) -> bool {
+        self.rotation_deg > POOR_ROTATION_DEG || self.translation_rel > POOR_TRANSLATION
+    }
+
+    /// Whether this fit is far better than `given` (see [`FAR_BETTER`]).
+    fn far_better_than(&self, given: &ReadingFit) -> bool {
+        let poor = given.poor();
+        let much = self.rotation_deg < FAR_BETTER * given.rotation_deg
+            || self.translation_rel < FAR_BETTER * given.translation_rel;
+        let not_worse = self.rotation_deg <= NOT_WORSE * given.rotation_deg
+            && self.translation_rel <= NOT_WORSE * given.translation_rel;
+        poor && much && not_worse
+    }
+
+    /// Whether X and Y have the sizes the setup makes likely: a camera on the gripper is nearer to
+    /// the gripper than the target is to the base (eye-in-hand), a fixed camera farther from the
+    /// base than the target is from the gripper (eye-to-hand). A reading and its mirror image
+    /// (robot inverted / camera inverted, as given / both inverted) fit equally well with X and Y
+    /// swapped (Q X P⁻¹ = Y is also Q⁻¹ Y P = X), so only this tells them apart.
+    ///
+    /// `Some(true)` when the sizes differ by at least twice (`SIZE_RATIO`) in the likely direction,
+    /// `Some(false)` when in the other, `None` when they are too alike to tell.
+    pub fn plausible(&self, setup: Setup) -> Option<bool> {
+        let (near, far) = match setup {
+            Setup::EyeInHand => (self.x_translation, self.y_translation),
+            Setup::EyeToHand => (self.y_translation, self.x_translation),
+        };
+        if far >= SIZE_RATIO * near {
+            Some(true)
+        } else if near >= SIZE_RATIO * far {
+            Some(false)
+        } else {
+            None
+        }
+    }
+
+    /// Improvement score against `given` (smaller is better).
+    fn score(&self, given: &ReadingFit) -> f64 {
+        self.rotation_deg / given.rotation_deg.max(1e-300)
+            + self.translation_rel / given.translation_rel.max(1e-300)
+    }
+}
+
+/// What [`check_readings`] found.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReadingCheck {
+    /// The fit of the poses as given (`None` when they cannot be solved at all, or when every
+    /// rotation is about one axis and no reading could be judged).
+    pub as_given: Option<ReadingFit>,
+    /// A reading that fits far better than the as-given one, if any: the best, the plausible one
+    /// first among equals ([`ReadingFit::plausible`]).
+    pub better: Option<ReadingFit>,
+    /// Other readings that fit about as well as `better` (its mirror image, typically).
+    pub also: Vec<ReadingFit>,
+}
+
+impl ReadingCheck {
+    /// The finding in words, when a reading fits far better: what fits, how well, and the other
+    /// readings that fit as well (no face's spelling of the fix: see [`ReadingCheck::advice`]).
+    pub fn finding(&self, setup: Setup) -> Option<String> {
+        let (given, better) = (self.as_given?, self.better?);
+        let mut text = format!(
+            "the poses fit far better read as {} (median residual {:.2}° and {:.1}% of the motion range, against {:.2}° and {:.1}% as given)",
+            better.reading.meaning(setup),
+            better.rotation_deg,
+            100.0 * better.translation_rel,
+            given.rotation_deg,
+            100.0 * given.translation_rel,
+        );
+        for other in &self.also {
+            text.push_str(&format!(
+                "; it fits as well read as {} (fix {}), which gives an X of {} size for the {} setup",
+                other.reading.meaning(setup),
+                other.reading.name(),
+                match other.plausible(setup) {
+                    Some(true) => "a plausible",
+                    Some(false) => "an unlikely",
+                    None => "a possible",
+                },
+                setup.name(),
+            ));
+        }
+        Some(text)
+    }
+
+    /// The finding with the fix in the words of both faces, for the refusal
+    /// ([`crate::model::error::Error::Misread`]).
+    pub fn advice(&self, setup: Setup) -> Option<String> {
+        let better = self.better?;
+        let mut text = format!(
+            "{}: correct the input, or {}",
+            self.finding(setup)?,
+            Remedy::Fix(better.reading).in_words()
+        );
+        if better.reading == Reading::RobotInverted {
+            let other = match setup {
+                Setup::EyeInHand => Setup::EyeToHand,
+                Setup::EyeToHand => Setup::EyeInHand,
+            }
+            .name();
+            text.push_str(&format!(
+                "; if the setup is {other}, pass `--setup {other}` (`setup=\"{other}\"` in Python)"
+            ));
+        }
+        Some(text)
+    }
+
+    /// The readings that fit far better than the as-given one: the better one, then the others
+    /// that fit as well.
+    pub fn fitting_better(&self) -> Vec<Reading> {
+        self.better
+            .iter()
+            .chain(&self.also)
+            .map(|f| f.reading)
+            .collect()
+    }
+
+    /// Whether the better reading is the only one that fits (so `--fix auto` may apply it).
+    pub fn unambiguous(&self) -> bool {
+        self.better.is_some() && self.also.is_empty()
+    }
+
+    /// A warning when the as-given reading fits but gives X and Y implausible sizes for the setup:
+    /// both poses inverted fit exactly as well, with X and Y swapped.
+    pub fn size_warning(&self, setup: Setup) -> Option<Warning> {
+        let given = self.as_given?;
+        if self.better.is_some() || given.plausible(setup) != Some(false) {
+            return None;
+        }
+        Some(Warning::SwappedSizes {
+            x_translation: given.x_translation,
+            y_translation: given.y_translation,
+            setup,
+        })
+    }
+}
+
+/// Tries every [`Reading`] of `poses` and names one that fits far better than the as-given one.
+///
+/// Each reading is solved by Andreff over all pairs of at most 60 poses spread over the input, from
+/// the accumulated normal equations ([`PoseAccumulator`], O(n)), and judged by its median per-pose
+/// residuals; the millimetre readings are judged only by which side's translations are the larger
+/// (they fit equally well up to the unit of X).
+///
+/// The as-given reading is solved first: when it fits well (not [`ReadingFit::poor`]) no other
+/// reading can be far better, by the rule itself, and the other eight are not tried. The result
+/// is the same as trying them all, for one solve instead of nine.
+pub fn check_readings(poses: &[PosePair], setup: Setup) -> ReadingCheck {
+    let sample = spread(poses);
+    let none = |as_given| ReadingCheck {
+        as_given,
+        better: None,
+        also: Vec::new(),
+    };
+    let rotations = gripper_rotations(&sample, setup);
+    // Below DEGENERATE_SCATTER, and when every rotation is below about REFUSE_ANGLE (where no
+    // solver answers), the rotations leave X free: no reading can be judged.
+    if rotations.scatter < DEGENERATE_SCATTER || rotations.widest_from_first < REFUSE_ANGLE {
+        return none(None);
+    }
+    let Some(given) = fit(&sample, setup, Reading::AsGiven) else {
+        return none(None);
+    };
+    if !given.poor() {
+        return none(Some(given));
+    }
+    let mm = mm_side(&sample, setup);
+    let mut candidates: Vec<ReadingFit> = Reading::ALL
+        .iter()
+        .filter(|&&r| r != Reading::AsGiven)
+        .filter_map(|&r| fit(&r.apply(&sample), setup, r))
+        // A unit mix-up of 1000× leaves translation residuals of the size of the motions; a few
+        // percent come from noise, or from motions that leave the translation free (a gripper
+        // turning about one point fits any camera unit).
+        .filter(|f| {
+            !matches!(f.reading, Reading::RobotMm | Reading::CameraMm) || Some(f.reading) == mm
+        })
+        .filter(|f| f.far_better_than(&given))
+        .collect();
+    candidates.sort_by(|a, b| a.score(&given).total_cmp(&b.score(&given)));
+    // Readings within 2× of the best score fit as well: the plausible one leads.
+    let best = candidates.first().map_or(0.0, |f| f.score(&given));
+    candidates.retain(|f| f.score(&given) <= 2.0 * best + 1e-12);
+    candidates.sort_by_key(|f| match f.plausible(setup) {
+        Some(true) => 0,
+        None => 1,
+        Some(false) => 2,
+    });
+    let mut candidates = candidates.into_iter();
+    ReadingCheck {
+        as_given: Some(given),
+        better: candidates.next(),
+        also: candidates.collect(),
+    }
+}
+
+/// The millimetre reading that makes sense, if any: the side whose translations are the larger,
+/// when they are [`UNIT_RATIO`] times the other's.
+fn mm_side(poses: &[PosePair], setup: Setup) -> Option<Reading> {
+    let robot = translation_scale(poses, setup);
+    let camera = median(
+        poses
+            .iter()
+            .map(|p| p.camera_from_target.translation.vector.norm())
+            .collect(),
+    );
+    if robot > UNIT_RATIO * camera {
+        Some(Reading::RobotMm)
+    } else if camera > UNIT_RATIO * robot {
+        Some(Reading::CameraMm)
+    } else {
+        None
+    }
+}
+
+/// At most [`SAMPLE`] poses spread evenly over the input.
+fn spread(poses: &[PosePair]) -> Vec<PosePair> {
+    if poses.len() <= SAMPLE {
+        return poses.to_vec();
+    }
+    (0..SAMPLE)
+        .map(|k| poses[k * (poses.len() - 1) / (SAMPLE - 1)])
+        .collect()
+}
+
+/// The fit of one reading, `None` when it cannot be solved.
+///
+/// Every measure is the same for a reading and its mirror image (X and Y swapped, see
+/// [`ReadingFit::plausible`]), so that only a real difference of fit can favour one: the rotation
+/// residual is an angle; the translation residual is the smaller of the medians measured in the
+/// target frame and in the camera frame (the mirror swaps the two), over the summed spreads of the
+/// hand positions of Q and of Q⁻¹ (the mirror swaps those too).
+fn fit(poses: &[PosePair], setup: Setup, reading: Reading) -> Option<ReadingFit> {
+    let x = PoseAccumulator::of(poses, setup).estimate()?.x;
+    let r = PoseResiduals::at(poses, setup, &x);
+    let in_camera_frame = median(
+        poses
+            .iter()
+            .zip(&r.residuals)
+            .map(|(p, (w, t))| {
+                let d = transform_from_parts(&exp_so3(w), t);
+                let c = p.camera_from_target;
+                (c * d.inverse() * c.inverse()).translation.vector.norm()
+            })
+            .collect(),
+    );
+    let other = match setup {
+        Setup::EyeInHand => Setup::EyeToHand,
+        Setup::EyeToHand => Setup::EyeInHand,
+    };
+    let scale =
+        (translation_scale(poses, setup) + translation_scale(poses, other)).max(f64::MIN_POSITIVE);
+    Some(ReadingFit {
+        reading,
+        rotation_deg: r.median_rotation_deg(),
+        translation_rel: r.median_translation().min(in_camera_frame) / scale,
+        x_translation: x.translation.vector.norm(),
+        y_translation: r.y.translation.vector.norm(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Quaternion, UnitQuaternion};
+
+    use crate::model::findings::{scaled, wxyz};
+    use crate::model::pose::Transform;
+    use crate::sim::{SimConfig, simulate};
+
+    fn poses(seed: u64) -> Vec<PosePair> {
+        simulate(&SimConfig::large_motions(), seed, 0).poses
+    }
+
+    #[test]
+    fn wxyz_undoes_the_mistake() {
+        let t = Transform::new(
+            nalgebra::Vector3::zeros(),
+            nalgebra::Vector3::new(0.3, -0.2, 0.5),
+        );
+        let q = UnitQuaternion::from_rotation_matrix(&t.rotation);
+        // What a reader of x, y, z, w fields makes of w, x, y, z written into them.
+        let misread = UnitQuaternion::from_quaternion(Quaternion::new(q.k, q.w, q.i, q.j));
+        let read = Transform::from_parts(t.translation, misread.to_rotation_matrix());
+        let diff = wxyz(&read).to_homogeneous() - t.to_homogeneous();
+        assert!(diff.norm() < 1e-12, "{diff}");
+    }
+
+    #[test]
+    fn correct_data_raises_nothing() {
+        for seed in 0..5 {
+            let c = check_readings(&poses(seed), Setup::EyeInHand);
+            // (The simulation's target sits closer to the base than the camera to the gripper,
+            // so the size warning is tested on the realistic suite, tests/trust.rs.)
+            assert!(c.better.is_none(), "seed {seed}: {c:?}");
+        }
+    }
+
+    #[test]
+    fn each_mistake_is_named() {
+        for seed in 0..3 {
+            let good = poses(seed);
+            for mistake in [
+                Reading::RobotInverted,
+                Reading::CameraInverted,
+                Reading::BothInverted,
+            ] {
+                // Inverting is its own undoing. Robot and camera inverted mirror each other (the
+                // same fit with X and Y swapped): the true one must lead, the mirror follow.
+                let c = check_readings(&mistake.apply(&good), Setup::EyeInHand);
+                if mistake == Reading::BothInverted {
+                    // Fits exactly as given, with X and Y swapped: only sizes can tell.
+                    assert!(c.better.is_none(), "seed {seed}: {c:?}");
+                    continue;
+                }
+                // The simulation's X and Y have alike sizes, so either may lead.
+                let named: Vec<Reading> =
+                    c.better.iter().chain(&c.also).map(|f| f.reading).collect();
+                assert!(named.contains(&mistake), "seed {seed}: {c:?}");
+                assert!(!c.unambiguous(), "seed {seed}: {c:?}");
+            }
+            let mm: Vec<PosePair> = good
+                .iter()
+                .map(|p| PosePair {
+                    base_from_gripper: scaled(&p.base_from_gripper, 1e3),
+                    camera_from_target: p.camera_from_target,
+                })
+                .collect();
+            let c = check_readings(&mm, Setup::EyeInHand);
+            assert_eq!(c.better.map(|f| f.reading), Some(Reading::RobotMm), "{c:?}");
+        }
+    }
+}

@@ -1,0 +1,194 @@
+//! What errors, warnings and reports carry about X and the poses: how well a direction of X is
+//! determined ([`Verdict`], [`Direction`], [`Part`]), how the poses may have been read
+//! ([`Reading`]), and which poses disagree ([`OutlierPose`]). Plain data of the bottom layer, so
+//! that the layers that raise them and the faces that word them share one type.
+
+use nalgebra::{Quaternion, UnitQuaternion};
+use serde::{Deserialize, Serialize};
+
+use crate::model::motion::{PosePair, Setup};
+use crate::model::pose::Transform;
+
+/// How well one direction of X is determined.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Within the thresholds.
+    Determined,
+    /// Uncertain enough to warn.
+    Weak,
+    /// Not determined by the data: refused.
+    Undetermined,
+}
+
+/// The least determined direction of X's rotation or translation.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Direction {
+    /// Unit axis in X's reference frame (the gripper for eye-in-hand, the robot base for
+    /// eye-to-hand).
+    pub axis: [f64; 3],
+    /// One-sigma along the axis: degrees for rotation, input units for translation.
+    pub sigma: f64,
+    /// How well it is determined.
+    pub verdict: Verdict,
+}
+
+/// Rotation or translation of X.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Part {
+    /// X's rotation (about an axis).
+    Rotation,
+    /// X's translation (along an axis).
+    Translation,
+}
+
+/// What to tell the user about a direction of X: what is (weakly or not) determined, and what to
+/// record to fix it.
+pub fn advice(part: Part, d: &Direction, setup: Setup) -> String {
+    let frame = reference_frame(setup);
+    let (name, others) = axis_names(&d.axis);
+    let [x, y, z] = d.axis;
+    let how = match d.verdict {
+        Verdict::Determined => "determined",
+        Verdict::Weak => "weakly determined",
+        Verdict::Undetermined => "not determined",
+    };
+    match part {
+        Part::Rotation => format!(
+            "the rotation of X about the {frame} {name} axis ({x:.2}, {y:.2}, {z:.2}) is {how} (one-sigma {:.2}° under the data's own noise): the motions rotate mostly about this axis; add motions that rotate about the {frame} {others} axis",
+            d.sigma
+        ),
+        Part::Translation => format!(
+            "the translation of X along the {frame} {name} axis ({x:.2}, {y:.2}, {z:.2}) is {how} (one-sigma {:.3} in the input's length unit under the data's own noise): add larger rotations, rotations about the {frame} {others} axis, or more poses",
+            d.sigma
+        ),
+    }
+}
+
+/// The frame X is expressed in, in words: where the undetermined axis lies.
+pub(crate) fn reference_frame(setup: Setup) -> &'static str {
+    match setup {
+        Setup::EyeInHand => "gripper",
+        Setup::EyeToHand => "robot base",
+    }
+}
+
+/// The name of the coordinate axis closest to `axis` and the two others: ("z", "x or y").
+fn axis_names(axis: &[f64; 3]) -> (&'static str, &'static str) {
+    let i = (0..3)
+        .max_by(|&a, &b| axis[a].abs().total_cmp(&axis[b].abs()))
+        .unwrap_or(2);
+    [("x", "y or z"), ("y", "x or z"), ("z", "x or y")][i]
+}
+
+/// One way to read the poses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reading {
+    /// As the files name them.
+    AsGiven,
+    /// The robot poses are `gripper_from_base` (or the setup is the other one).
+    RobotInverted,
+    /// The camera poses are `target_from_camera`.
+    CameraInverted,
+    /// Both inverted.
+    BothInverted,
+    /// The robot quaternions were written `w, x, y, z` into `x, y, z, w` fields.
+    RobotWxyz,
+    /// The camera quaternions were written `w, x, y, z`.
+    CameraWxyz,
+    /// Both sides' quaternions were written `w, x, y, z`.
+    BothWxyz,
+    /// The robot translations are millimetres (the camera's metres): divided by 1000.
+    RobotMm,
+    /// The camera translations are millimetres (the robot's metres): divided by 1000.
+    CameraMm,
+}
+
+impl Reading {
+    /// What the reading means, in words.
+    pub fn meaning(self, setup: Setup) -> String {
+        let other = match setup {
+            Setup::EyeInHand => Setup::EyeToHand,
+            Setup::EyeToHand => Setup::EyeInHand,
+        };
+        match self {
+            Self::AsGiven => "the poses as given".into(),
+            Self::RobotInverted => format!(
+                "the robot poses inverted: either the file gives gripper_from_base under the name base_from_gripper, or the setup is {other}"
+            ),
+            Self::CameraInverted => "the camera poses inverted: the file gives target_from_camera under the name camera_from_target (or the reverse)".into(),
+            Self::BothInverted => "both poses inverted: each file gives the inverse of the transform it names".into(),
+            Self::RobotWxyz => "the robot quaternions in the order w, x, y, z: handeye reads x, y, z, w".into(),
+            Self::CameraWxyz => "the camera quaternions in the order w, x, y, z: handeye reads x, y, z, w".into(),
+            Self::BothWxyz => "all quaternions in the order w, x, y, z: handeye reads x, y, z, w".into(),
+            Self::RobotMm => "the robot translations in millimetres and the camera's in metres".into(),
+            Self::CameraMm => "the camera translations in millimetres and the robot's in metres".into(),
+        }
+    }
+
+    /// The poses read this way.
+    pub fn apply(self, poses: &[PosePair]) -> Vec<PosePair> {
+        poses.iter().map(|p| self.apply_one(p)).collect()
+    }
+
+    fn apply_one(self, p: &PosePair) -> PosePair {
+        let (robot, camera) = (p.base_from_gripper, p.camera_from_target);
+        let (base_from_gripper, camera_from_target) = match self {
+            Self::AsGiven => (robot, camera),
+            Self::RobotInverted => (robot.inverse(), camera),
+            Self::CameraInverted => (robot, camera.inverse()),
+            Self::BothInverted => (robot.inverse(), camera.inverse()),
+            Self::RobotWxyz => (wxyz(&robot), camera),
+            Self::CameraWxyz => (robot, wxyz(&camera)),
+            Self::BothWxyz => (wxyz(&robot), wxyz(&camera)),
+            Self::RobotMm => (scaled(&robot, 1e-3), camera),
+            Self::CameraMm => (robot, scaled(&camera, 1e-3)),
+        };
+        PosePair {
+            base_from_gripper,
+            camera_from_target,
+        }
+    }
+}
+
+crate::named_enum!(Reading, "reading", "fix" {
+    AsGiven => "as-given",
+    RobotInverted => "robot-inverted",
+    CameraInverted => "camera-inverted",
+    BothInverted => "both-inverted",
+    RobotWxyz => "robot-wxyz",
+    CameraWxyz => "camera-wxyz",
+    BothWxyz => "both-wxyz",
+    RobotMm => "robot-mm",
+    CameraMm => "camera-mm",
+});
+
+/// The rotation whose `x, y, z, w` fields held `w, x, y, z`: the stored quaternion
+/// (x', y', z', w') = (w, x, y, z), so the meant one is (x, y, z, w) = (y', z', w', x').
+pub(crate) fn wxyz(t: &Transform) -> Transform {
+    let q = UnitQuaternion::from_rotation_matrix(&t.rotation);
+    let (x, y, z, w) = (q.i, q.j, q.k, q.w);
+    let meant = UnitQuaternion::from_quaternion(Quaternion::new(x, y, z, w));
+    Transform::from_parts(t.translation, meant.to_rotation_matrix())
+}
+
+pub(crate) fn scaled(t: &Transform, s: f64) -> Transform {
+    let mut out = *t;
+    out.translation.vector *= s;
+    out
+}
+
+/// One outlier pose of a batch report: the pose and how far its motions disagree.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OutlierPose {
+    /// Index in the input.
+    pub pose: usize,
+    /// Its name (`file:line` from the CLI).
+    pub name: String,
+    /// Median |θ_A − θ_B| of its motions, degrees.
+    pub angle_gap_deg: f64,
+    /// Median |k_A·t_A − k_B·t_B| of its motions, input units.
+    pub pitch_gap: f64,
+}

@@ -1,0 +1,9 @@
+//! The model: poses, motions, the setup, and what errors and warnings carry. The bottom layer:
+//! it imports nothing else of the crate.
+
+pub mod error;
+pub mod findings;
+pub mod motion;
+pub mod names;
+pub mod pose;
+pub mod warning;

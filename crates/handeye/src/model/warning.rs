@@ -1,0 +1,414 @@
+//! Cautions attached to a result that is returned: each a machine code, the words for a person,
+//! and, where one option of the call would fix it, that option.
+//!
+//! Every face shows the same thing: the JSON of a report lists each warning as
+//! `{"code", …its data…, "message", "remedy"?}` ([`described`]), the command line prints the
+//! message with the remedy as a flag (`--reject-outliers`), Python as a keyword
+//! (`reject_outliers=True`). The messages themselves name no face's spelling.
+
+use std::fmt;
+
+use serde::ser::{SerializeMap, SerializeSeq};
+use serde::{Deserialize, Serialize, Serializer};
+
+use crate::model::findings::OutlierPose;
+use crate::model::findings::Reading;
+use crate::model::findings::{Direction, Part, Verdict, advice};
+use crate::model::motion::Setup;
+
+/// Poses a warning lists by name before it says "and N more".
+pub const SHOWN: usize = 5;
+
+/// A caution about a result that is returned (a result that cannot be trusted is refused with an
+/// [`crate::model::error::Error`] instead).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "code", rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Warning {
+    /// The rotation system is weakly conditioned (axes close to parallel).
+    WeakConditioning {
+        /// Second-smallest over largest singular value of the rotation system.
+        conditioning: f64,
+    },
+    /// All rotations are small, so noise is amplified.
+    SmallRotations {
+        /// The largest rotation angle among the motions, degrees.
+        largest_deg: f64,
+    },
+    /// Every rotation axis lies close to one direction.
+    OneAxis {
+        /// Largest angle between a motion's axis and the dominant one, degrees.
+        axis_spread_deg: f64,
+    },
+    /// The rotation residuals are large: the poses' directions are probably wrong.
+    RotationResiduals {
+        /// RMS of the per-motion rotation residuals, degrees.
+        rms_deg: f64,
+    },
+    /// The translation residuals are large against the scene's size: units or time pairing.
+    TranslationResiduals {
+        /// Median per-pose translation residual over the scene's size.
+        relative: f64,
+    },
+    /// Poses disagree with the others and were kept.
+    Outliers {
+        /// How many.
+        count: usize,
+        /// The first [`SHOWN`] of them.
+        shown: Vec<OutlierPose>,
+    },
+    /// Poses the others predict poorly (the held-out check).
+    PoorlyPredicted {
+        /// How many.
+        count: usize,
+        /// The median held-out gap: degrees.
+        median_rotation_deg: f64,
+        /// The median held-out gap: input units.
+        median_translation: f64,
+        /// The names of the first [`SHOWN`] of them.
+        shown: Vec<String>,
+    },
+    /// A direction of X is only weakly determined.
+    WeakDirection {
+        /// Rotation about or translation along the axis.
+        part: Part,
+        /// The axis in X's reference frame.
+        axis: [f64; 3],
+        /// One-sigma along it: degrees or input units.
+        sigma: f64,
+        /// The setup (it names the reference frame).
+        setup: Setup,
+    },
+    /// The input was read another way, which fits far better (on request).
+    ReadAs {
+        /// The reading applied.
+        reading: Reading,
+        /// What was found, in words.
+        finding: String,
+    },
+    /// Another reading fits far better but the input was kept as given (on request).
+    KeptAsGiven {
+        /// The reading that fits better.
+        better: Reading,
+        /// What was found, in words.
+        finding: String,
+    },
+    /// X and the target have the sizes the setup makes unlikely: both inputs may be inverted.
+    SwappedSizes {
+        /// X's translation length.
+        x_translation: f64,
+        /// The target pose's translation length.
+        y_translation: f64,
+        /// The setup.
+        setup: Setup,
+    },
+}
+
+/// The one option of the call that would fix what a [`Warning`] describes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Remedy {
+    /// Leave the disagreeing poses out (`reject_outliers`).
+    RejectOutliers,
+    /// Read the input another way (`fix`).
+    Fix(Reading),
+}
+
+impl Remedy {
+    /// The option's name, as Python spells it (the command line's flag is `--` and the name
+    /// with `-` for `_`).
+    pub fn option(self) -> &'static str {
+        match self {
+            Self::RejectOutliers => "reject_outliers",
+            Self::Fix(_) => "fix",
+        }
+    }
+
+    /// The option's value, as JSON.
+    pub fn value(self) -> serde_json::Value {
+        match self {
+            Self::RejectOutliers => true.into(),
+            Self::Fix(reading) => reading.name().into(),
+        }
+    }
+
+    /// The remedy in the words of both faces, for an error's message (errors are text):
+    /// "pass `--reject-outliers` (`reject_outliers=True` in Python) to leave them out".
+    pub fn in_words(self) -> String {
+        let flag = format!("--{}", self.option().replace('_', "-"));
+        let (cli, py) = match self {
+            Self::RejectOutliers => (flag, format!("{}=True", self.option())),
+            Self::Fix(r) => (
+                format!("{flag} {}", r.name()),
+                format!("{}=\"{}\"", self.option(), r.name()),
+            ),
+        };
+        format!("pass `{cli}` (`{py}` in Python) {}", self.purpose())
+    }
+
+    /// What it does, in words ("to leave them out").
+    pub fn purpose(self) -> &'static str {
+        match self {
+            Self::RejectOutliers => "to leave them out",
+            Self::Fix(_) => "to read the input that way",
+        }
+    }
+}
+
+impl Serialize for Remedy {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let mut map = serializer.serialize_map(Some(3))?;
+        map.serialize_entry("option", self.option())?;
+        map.serialize_entry("value", &self.value())?;
+        map.serialize_entry("purpose", self.purpose())?;
+        map.end()
+    }
+}
+
+impl Warning {
+    /// The machine code (the JSON's `code`).
+    pub fn code(&self) -> &'static str {
+        match self {
+            Self::WeakConditioning { .. } => "weak_conditioning",
+            Self::SmallRotations { .. } => "small_rotations",
+            Self::OneAxis { .. } => "one_axis",
+            Self::RotationResiduals { .. } => "rotation_residuals",
+            Self::TranslationResiduals { .. } => "translation_residuals",
+            Self::Outliers { .. } => "outliers",
+            Self::PoorlyPredicted { .. } => "poorly_predicted",
+            Self::WeakDirection { .. } => "weak_direction",
+            Self::ReadAs { .. } => "read_as",
+            Self::KeptAsGiven { .. } => "kept_as_given",
+            Self::SwappedSizes { .. } => "swapped_sizes",
+        }
+    }
+
+    /// The option that would fix it, if one would.
+    pub fn remedy(&self) -> Option<Remedy> {
+        match self {
+            Self::Outliers { .. } => Some(Remedy::RejectOutliers),
+            Self::KeptAsGiven { better, .. } => Some(Remedy::Fix(*better)),
+            Self::SwappedSizes { .. } => Some(Remedy::Fix(Reading::BothInverted)),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::WeakConditioning { conditioning } => write!(
+                f,
+                "weakly conditioned rotation system ({conditioning:.2e}): the rotation axes are nearly parallel; rotate about other axes"
+            ),
+            Self::SmallRotations { largest_deg } => write!(
+                f,
+                "all rotations are small (largest {largest_deg:.2}°): noise is amplified; use rotations of 10° or more"
+            ),
+            Self::OneAxis { axis_spread_deg } => write!(
+                f,
+                "all rotation axes within {axis_spread_deg:.1}° of one direction: rotate about another axis"
+            ),
+            Self::RotationResiduals { rms_deg } => write!(
+                f,
+                "rotation residuals of {rms_deg:.1}° RMS: check the directions of the poses (the setup, base_from_gripper vs gripper_from_base, camera_from_target vs target_from_camera) or leave the outliers out"
+            ),
+            Self::TranslationResiduals { relative } => write!(
+                f,
+                "translation residuals of {:.1}% of the scene's size (median per pose, against the hand's spread or the camera's distance): check the units of both inputs and the time pairing",
+                100.0 * relative
+            ),
+            Self::Outliers { count, shown } => {
+                let listed: Vec<String> = shown
+                    .iter()
+                    .map(|p| {
+                        format!(
+                            "{} (angle gap {:.2}°, pitch gap {:.3})",
+                            p.name, p.angle_gap_deg, p.pitch_gap
+                        )
+                    })
+                    .collect();
+                write!(
+                    f,
+                    "{count} pose(s) disagree with the others (a bad detection, a flipped target pose, a wrong time stamp or a typo): {}{}",
+                    listed.join(", "),
+                    more(*count, shown.len())
+                )
+            }
+            Self::PoorlyPredicted {
+                count,
+                median_rotation_deg,
+                median_translation,
+                shown,
+            } => write!(
+                f,
+                "{count} pose(s) are predicted poorly by the others (6× the median gap of {median_rotation_deg:.2}° / {median_translation:.4}): a frame paired with the wrong robot pose, or a failed detection: {}{}",
+                shown.join(", "),
+                more(*count, shown.len())
+            ),
+            Self::WeakDirection {
+                part,
+                axis,
+                sigma,
+                setup,
+            } => {
+                let d = Direction {
+                    axis: *axis,
+                    sigma: *sigma,
+                    verdict: Verdict::Weak,
+                };
+                f.write_str(&advice(*part, &d, *setup))
+            }
+            Self::ReadAs { reading, finding } => {
+                write!(f, "read as {} (fix auto): {finding}", reading.name())
+            }
+            Self::KeptAsGiven { finding, .. } => {
+                write!(f, "kept as given (fix as-given), but {finding}")
+            }
+            Self::SwappedSizes {
+                x_translation,
+                y_translation,
+                setup,
+            } => {
+                let (x_is, y_is) = match setup {
+                    Setup::EyeInHand => (
+                        "the camera's distance from the gripper",
+                        "the target's distance from the robot base",
+                    ),
+                    Setup::EyeToHand => (
+                        "the camera's distance from the robot base",
+                        "the target's distance from the gripper",
+                    ),
+                };
+                write!(
+                    f,
+                    "X puts {x_is} at {x_translation:.3} and {y_is} at {y_translation:.3}, the reverse of what the {} setup usually has: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions",
+                    setup.name(),
+                )
+            }
+        }
+    }
+}
+
+/// " and N more" when a list shows fewer than it has.
+fn more(count: usize, shown: usize) -> String {
+    match count.saturating_sub(shown) {
+        0 => String::new(),
+        n => format!(" and {n} more"),
+    }
+}
+
+/// One warning as its JSON object: its code and data, `message`, and `remedy` when there is one.
+struct Described<'a>(&'a Warning);
+
+impl Serialize for Described<'_> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        let data = serde_json::to_value(self.0).map_err(serde::ser::Error::custom)?;
+        let mut map = serializer.serialize_map(None)?;
+        if let serde_json::Value::Object(fields) = data {
+            for (k, v) in &fields {
+                map.serialize_entry(k, v)?;
+            }
+        }
+        map.serialize_entry("message", &self.0.to_string())?;
+        if let Some(remedy) = self.0.remedy() {
+            map.serialize_entry("remedy", &remedy)?;
+        }
+        map.end()
+    }
+}
+
+/// Serialises a list of warnings with their messages and remedies (`serialize_with` of the
+/// reports' `warnings`); they read back as plain [`Warning`]s, the extra fields ignored.
+pub fn described<S: Serializer>(warnings: &[Warning], serializer: S) -> Result<S::Ok, S::Error> {
+    let mut seq = serializer.serialize_seq(Some(warnings.len()))?;
+    for w in warnings {
+        seq.serialize_element(&Described(w))?;
+    }
+    seq.end()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Serialize, Deserialize)]
+    struct Holder {
+        #[serde(serialize_with = "described")]
+        warnings: Vec<Warning>,
+    }
+
+    #[test]
+    fn warnings_carry_code_message_and_remedy_and_read_back() {
+        let warnings = vec![
+            Warning::OneAxis {
+                axis_spread_deg: 2.5,
+            },
+            Warning::SwappedSizes {
+                x_translation: 1.2,
+                y_translation: 0.1,
+                setup: Setup::EyeInHand,
+            },
+        ];
+        let json = serde_json::to_value(Holder {
+            warnings: warnings.clone(),
+        })
+        .unwrap();
+        let w = &json["warnings"];
+        assert_eq!(w[0]["code"], "one_axis");
+        assert_eq!(w[0]["axis_spread_deg"], 2.5);
+        assert!(w[0]["message"].as_str().unwrap().contains("2.5°"));
+        assert!(w[0].get("remedy").is_none());
+        assert_eq!(w[1]["remedy"]["option"], "fix");
+        assert_eq!(w[1]["remedy"]["value"], "both-inverted");
+        let back: Holder = serde_json::from_value(json).unwrap();
+        assert_eq!(back.warnings, warnings);
+    }
+
+    #[test]
+    fn no_message_names_a_command_line_flag() {
+        let every = [
+            Warning::WeakConditioning { conditioning: 0.01 },
+            Warning::SmallRotations { largest_deg: 1.0 },
+            Warning::OneAxis {
+                axis_spread_deg: 1.0,
+            },
+            Warning::RotationResiduals { rms_deg: 9.0 },
+            Warning::TranslationResiduals { relative: 0.2 },
+            Warning::Outliers {
+                count: 7,
+                shown: vec![],
+            },
+            Warning::PoorlyPredicted {
+                count: 1,
+                median_rotation_deg: 0.1,
+                median_translation: 0.001,
+                shown: vec!["a.jsonl:3".into()],
+            },
+            Warning::WeakDirection {
+                part: Part::Rotation,
+                axis: [0.0, 0.0, 1.0],
+                sigma: 1.0,
+                setup: Setup::EyeToHand,
+            },
+            Warning::ReadAs {
+                reading: Reading::RobotInverted,
+                finding: "f".into(),
+            },
+            Warning::KeptAsGiven {
+                better: Reading::CameraMm,
+                finding: "f".into(),
+            },
+            Warning::SwappedSizes {
+                x_translation: 1.0,
+                y_translation: 0.1,
+                setup: Setup::EyeToHand,
+            },
+        ];
+        for w in &every {
+            let text = w.to_string();
+            assert!(!text.contains("--"), "{}: {text}", w.code());
+            let json = serde_json::to_value(w).unwrap();
+            assert_eq!(json["code"], w.code(), "serde's tag is code()");
+        }
+    }
+}

@@ -1,0 +1,575 @@
+//! The online calibrator: pose pairs in, one at a time; calibration events out as they happen.
+//!
+//! [`OnlineCalibrator::push`] offers each pose pair to the selection policy ([`crate::select`]);
+//! when a pair of motions is selected it solves X with Andreff's method on those two motions,
+//! measures rmsR and rmsT with the configured [`ErrorSource`], tells the adaptive policy, and
+//! returns an [`Event`]. With `optimal` set it also refines X over the last five selected motions
+//! (the paper's "optimal method", sec. 4.1.3). With [`Estimator::Accumulate`] every pose also goes
+//! to a [`Tracker`] (all pairs of poses, gated, watched for change, reported on its own schedule:
+//! [`OnlineCalibrator::step`], [`OnlineCalibrator::finish`]). The one length threshold, `d_max`,
+//! follows the input's unit, inferred from the first pose unless given ([`Unit`]). The state is
+//! constant in size, and serialisable (serde) so that a run can be saved and resumed.
+
+pub mod experiment;
+pub mod select;
+
+use std::collections::VecDeque;
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::check::quality::{errors_against_truth, residual_rms};
+use crate::model::error::{Error, Result};
+use crate::model::motion::{MotionPair, PosePair, Setup};
+use crate::model::pose::Transform;
+use crate::model::pose::TransformJson;
+use crate::online::select::{AdaptiveParams, Selected, Selection, Selector, Thresholds};
+use crate::solve::{RefineOptions, andreff, refine_from};
+use crate::track::{Pending, Report, Step, TrackEstimate, TrackOptions, Tracker};
+
+/// Number of selected motions the optimal method refines over (sec. 4.1.3).
+pub const OPTIMAL_WINDOW: usize = 5;
+
+/// Where rmsR and rmsT come from (SPEC sec. 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ErrorSource {
+    /// Against the true X (simulation): rmsR = ‖R̂ − R‖_F / 3, rmsT = ‖t − t̂‖ / ‖t‖.
+    Truth,
+    /// The A X − X B residuals of the two motions used (real data; the paper's sec. 4.2).
+    #[default]
+    Residual,
+}
+
+/// Settings of an online run; `Default` is eye-in-hand, adaptive, residual errors, no optimal.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct OnlineConfig {
+    /// Mounting of the camera. Default eye-in-hand.
+    pub setup: Setup,
+    /// Selection policy. Default adaptive.
+    pub selection: Selection,
+    /// Parameters of the adaptive (and, for `n_init`, the fixed) policy. Default: the paper's.
+    pub params: AdaptiveParams,
+    /// Source of rmsR and rmsT. Default residual.
+    pub error_source: ErrorSource,
+    /// The true X (`gripper_from_camera`, or `base_from_camera` for eye-to-hand); required by
+    /// [`ErrorSource::Truth`]. Default none.
+    pub truth: Option<Transform>,
+    /// Also run the optimal method (sec. 4.5). Default false.
+    pub optimal: bool,
+    /// Whether the accumulating estimator runs beside the paper's calibrations. Default `Paper`.
+    pub estimator: Estimator,
+    /// The accumulating estimator's gates, change test and schedule. Default:
+    /// [`TrackOptions::default`].
+    pub tracking: TrackOptions,
+    /// The input's length unit, which sets `params.d_max` (0.1 m in that unit). Default `Auto`:
+    /// inferred from the first pose.
+    pub unit: Unit,
+}
+
+/// The length unit of the input, for the one threshold that has a unit (`d_max`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Unit {
+    /// Inferred from the first pose whose translations fit a unit: metres when they are 0.05–10,
+    /// millimetres when they are 50–10,000 ([`Unit::infer`]).
+    #[default]
+    Auto,
+    /// Metres: `d_max` = 0.1.
+    Metre,
+    /// Millimetres: `d_max` = 100.
+    Millimetre,
+    /// `params.d_max` as given, in the input's unit.
+    AsGiven,
+}
+
+impl Unit {
+    /// Metres or millimetres from the size of a pose's translations (the robot's reach and the
+    /// camera's distance to the target), or `None` when the size fits neither.
+    pub fn infer(pose: &PosePair) -> Option<Self> {
+        let size = pose
+            .base_from_gripper
+            .translation
+            .vector
+            .norm()
+            .max(pose.camera_from_target.translation.vector.norm());
+        if (0.05..=10.0).contains(&size) {
+            Some(Self::Metre)
+        } else if (50.0..=10_000.0).contains(&size) {
+            Some(Self::Millimetre)
+        } else {
+            None
+        }
+    }
+
+    /// `d_max` in this unit, or `None` for `Auto` and `AsGiven`.
+    pub fn d_max(self) -> Option<f64> {
+        match self {
+            Self::Metre => Some(0.1),
+            Self::Millimetre => Some(100.0),
+            Self::Auto | Self::AsGiven => None,
+        }
+    }
+}
+
+// The serde names (`metre`, `millimetre`) are older than these and stay, for saved states; they
+// parse as aliases.
+crate::named_enum!(Unit, "unit", "unit" {
+    Auto => "auto",
+    Metre => "m" | "metre" | "meter" | "metres" | "meters",
+    Millimetre => "mm" | "millimetre" | "millimeter" | "millimetres" | "millimeters",
+    AsGiven => "as-given",
+});
+
+/// The estimator behind the selection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Estimator {
+    /// The paper: Andreff on the two selected motions of each calibration.
+    #[default]
+    Paper,
+    /// Normal equations over every pair of poses since the last detected change of X, updated in
+    /// O(1) per pose and reported on their own schedule ([`crate::tracking`]); the paper's
+    /// calibrations still run beside it.
+    Accumulate,
+}
+
+crate::named_enum!(ErrorSource, "error source", "error_source" {
+    Residual => "residual",
+    Truth => "truth",
+});
+
+crate::named_enum!(Estimator, "estimator", "estimator" {
+    Paper => "paper",
+    Accumulate => "accumulate",
+});
+
+/// rmsR and rmsT of a calibration, from the configured [`ErrorSource`]: against the truth, or
+/// the residual form ([`crate::check::quality::ResidualRms`], the same type).
+pub type Rms = crate::check::quality::ResidualRms;
+
+/// The optimal method's estimate at one calibration (SPEC sec. 4.5).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct OptimalEstimate {
+    /// Number of this optimal result (1 at the first calibration with five selected motions).
+    pub number: usize,
+    /// X refined over the last five selected motions.
+    pub x: Transform,
+    /// The five motions as pose-number pairs, oldest first.
+    pub motions: [[usize; 2]; OPTIMAL_WINDOW],
+    /// Wall time of the refinement, including its Andreff start, seconds.
+    pub seconds: f64,
+}
+
+/// One calibration of an online run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Event {
+    /// Number of this calibration (1, 2, …).
+    pub calibration: usize,
+    /// Pose numbers (a, i, j) of A' = Q_a⁻¹ Q_i and A'' = Q_i⁻¹ Q_j.
+    pub poses: [usize; 3],
+    /// Thresholds in force when the pair was accepted (adaptive only).
+    pub thresholds: Option<Thresholds>,
+    /// X from Andreff's method on (A', A'').
+    pub x: Transform,
+    /// rmsR and rmsT of X from the error source.
+    pub rms: Rms,
+    /// Conditioning of the two-motion rotation system.
+    pub conditioning: f64,
+    /// Wall time of the calibration (solve, errors, threshold update), seconds.
+    pub seconds: f64,
+    /// The optimal method's X, when enabled and five motions have been selected.
+    pub optimal: Option<OptimalEstimate>,
+}
+
+impl Event {
+    /// The event as its JSON line (SPEC sec. 7), the one output of every face: `calibration`,
+    /// `poses`, `thresholds` (adaptive and fixed selection), `rms_r`, `rms_t`, X (`translation`,
+    /// `quaternion_xyzw`, `matrix`), `conditioning`, `optimal` (X, `number`, `motions`) when
+    /// enabled, `seconds`; and `time_offset_s`, the clock offset applied, when one was.
+    ///
+    /// The CLI serialises it straight to its output; [`Self::json`] is the same line as a value.
+    pub fn line(&self, time_offset_s: Option<f64>) -> EventLine {
+        EventLine {
+            calibration: self.calibration,
+            poses: self.poses,
+            thresholds: self.thresholds,
+            rms_r: self.rms.rms_r,
+            rms_t: self.rms.rms_t,
+            x: TransformJson::from(&self.x),
+            conditioning: self.conditioning,
+            optimal: self.optimal.as_ref().map(|o| OptimalLine {
+                x: TransformJson::from(&o.x),
+                number: o.number,
+                motions: o.motions,
+            }),
+            seconds: self.seconds,
+            time_offset_s,
+        }
+    }
+
+    /// [`Self::line`] without a clock offset, as a JSON value.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::to_value(self.line(None)).unwrap_or_default()
+    }
+}
+
+/// An [`Event`] as its JSON line ([`Event::line`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EventLine {
+    /// Number of the calibration, from 1.
+    pub calibration: usize,
+    /// The three pose numbers of the two selected motions.
+    pub poses: [usize; 3],
+    /// The thresholds the motions passed (not with selection `none`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thresholds: Option<Thresholds>,
+    /// rmsR of the calibration.
+    pub rms_r: f64,
+    /// rmsT of the calibration.
+    pub rms_t: f64,
+    /// X.
+    #[serde(flatten)]
+    pub x: TransformJson,
+    /// The conditioning of the two motions.
+    pub conditioning: f64,
+    /// The optimal method's X, when enabled.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub optimal: Option<OptimalLine>,
+    /// Wall time of the calibration, seconds.
+    pub seconds: f64,
+    /// The clock offset applied to a second stream, seconds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time_offset_s: Option<f64>,
+}
+
+/// The optimal method's part of an [`EventLine`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OptimalLine {
+    /// X refined over the last five selected motions.
+    #[serde(flatten)]
+    pub x: TransformJson,
+    /// Number of this optimal result.
+    pub number: usize,
+    /// The five motions as pose-number pairs, oldest first.
+    pub motions: [[usize; 2]; OPTIMAL_WINDOW],
+}
+
+/// The online calibrator (see the module documentation).
+///
+/// # Example
+/// ```
+/// use handeye::online::{OnlineCalibrator, OnlineConfig};
+/// use handeye::{PosePair, Transform};
+/// let mut calibrator = OnlineCalibrator::new(OnlineConfig::default())?;
+/// let still = PosePair { base_from_gripper: Transform::identity(), camera_from_target: Transform::identity() };
+/// // A robot that never moves gives no calibration.
+/// for _ in 0..20 {
+///     assert!(calibrator.push(&still)?.is_empty());
+/// }
+/// assert_eq!(calibrator.poses(), 20);
+/// # Ok::<(), handeye::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OnlineCalibrator {
+    config: OnlineConfig,
+    selector: Selector,
+    poses: usize,
+    calibrations: usize,
+    /// Selections that Andreff refused as degenerate.
+    refused: usize,
+    /// The last selected motions with their pose numbers (optimal method only).
+    window: VecDeque<([usize; 2], MotionPair)>,
+    optimal_results: usize,
+    last_x: Option<Transform>,
+    /// Pose number of the last calibration, and the previous hand pose with the largest rotation
+    /// between consecutive poses since then (radians): what `quiet` says.
+    last_calibration: usize,
+    previous: Option<Transform>,
+    largest_step: f64,
+    /// The unit in force: `config.unit`, or the one inferred from the first pose.
+    unit: Unit,
+    /// The accumulating estimator and what it did with the last pose.
+    tracker: Option<Tracker>,
+    step: Step,
+}
+
+impl OnlineCalibrator {
+    /// A calibrator for `config`; errors on invalid parameters or `Truth` without a truth.
+    pub fn new(config: OnlineConfig) -> Result<Self> {
+        if config.error_source == ErrorSource::Truth && config.truth.is_none() {
+            return Err(Error::InvalidParameter {
+                name: "error_source",
+                message: "`truth` needs the true X (give a truth file)".to_string(),
+            });
+        }
+        Ok(Self {
+            selector: Selector::new(config.selection, config.setup, config.params)?,
+            config,
+            poses: 0,
+            calibrations: 0,
+            refused: 0,
+            window: VecDeque::with_capacity(OPTIMAL_WINDOW + 1),
+            optimal_results: 0,
+            last_x: None,
+            last_calibration: 0,
+            previous: None,
+            largest_step: 0.0,
+            unit: config.unit,
+            tracker: (config.estimator == Estimator::Accumulate)
+                .then(|| Tracker::new(config.setup, config.tracking)),
+            step: Step::default(),
+        })
+    }
+
+    /// The length unit in force: the configured one, or the one inferred from the poses (`Auto`
+    /// while none fitted a unit; `params.d_max` is then in force).
+    pub fn unit(&self) -> Unit {
+        self.unit
+    }
+
+    /// `d_max` in force, in the input's unit.
+    pub fn d_max(&self) -> f64 {
+        self.unit.d_max().unwrap_or(self.config.params.d_max)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &OnlineConfig {
+        &self.config
+    }
+
+    /// Poses pushed so far.
+    pub fn poses(&self) -> usize {
+        self.poses
+    }
+
+    /// Calibrations made so far.
+    pub fn calibrations(&self) -> usize {
+        self.calibrations
+    }
+
+    /// Selected pairs that Andreff refused as degenerate (no event was emitted for them).
+    pub fn refused(&self) -> usize {
+        self.refused
+    }
+
+    /// The latest X, if any calibration happened.
+    pub fn last_x(&self) -> Option<Transform> {
+        self.last_x
+    }
+
+    /// The adaptive thresholds in force now.
+    pub fn thresholds(&self) -> Option<Thresholds> {
+        self.selector.thresholds()
+    }
+
+    /// Why the paper's selection has made no calibration for a while, in words: `None` when a
+    /// calibration came within the last `poses` poses (or fewer were pushed).
+    pub fn quiet(&self, poses: usize) -> Option<String> {
+        let since = self.poses - self.last_calibration;
+        if since < poses.max(1) {
+            return None;
+        }
+        let largest = self.largest_step.to_degrees();
+        let what = if self.calibrations == 0 {
+            format!("no calibration in {} poses", self.poses)
+        } else {
+            format!("no calibration in the last {since} poses")
+        };
+        Some(match self.selector.thresholds() {
+            Some(t) => format!(
+                "{what}: the selection needs motions turning β₀ = {:.2}° or more, with axes at least {:.1}° apart and translations within d₀ = {:.4}; the largest turn between consecutive poses was {largest:.2}°",
+                t.beta.to_degrees(),
+                t.sin_alpha.clamp(-1.0, 1.0).asin().to_degrees(),
+                t.d
+            ),
+            None => format!(
+                "{what}: the largest turn between consecutive poses was {largest:.2}° (the selection needs rotations about different axes)"
+            ),
+        })
+    }
+
+    /// Pushes the next pose pair; returns the calibrations it completes (usually none, at most one
+    /// except at the end of the fixed method's initial window). A pose with a non-finite entry is
+    /// refused with an error and leaves the state untouched.
+    ///
+    /// With `Unit::Auto`, the first pose whose size fits a unit fixes it ([`Unit::infer`]);
+    /// until then `params.d_max` is in force ([`OnlineCalibrator::unit`] tells which).
+    pub fn push(&mut self, pose: &PosePair) -> Result<Vec<Event>> {
+        check_finite(pose)?;
+        if self.poses == 0 || self.unit == Unit::Auto {
+            self.fix_unit(pose);
+        }
+        self.poses += 1;
+        let hand = self.config.setup.hand_pose(&pose.base_from_gripper);
+        if let Some(previous) = self.previous {
+            let step =
+                crate::model::pose::rotation_angle_between(&previous.rotation, &hand.rotation);
+            self.largest_step = self.largest_step.max(step);
+        }
+        self.previous = Some(hand);
+        if let Some(tracker) = &mut self.tracker {
+            self.step = tracker.push(pose);
+        }
+        let selections = self.selector.offer(self.poses, pose);
+        Ok(selections
+            .into_iter()
+            .filter_map(|s| self.calibrate(&s))
+            .collect())
+    }
+
+    /// Step 14 of the Main Algorithm: Andreff on (A', A''), the errors, the threshold update.
+    fn calibrate(&mut self, selected: &Selected) -> Option<Event> {
+        let started = Instant::now();
+        let pair = [selected.first, selected.second];
+        let Ok(calibration) = andreff(&pair) else {
+            self.refused += 1;
+            return None;
+        };
+        let x = calibration.x;
+        let rms = self.errors(&pair, &x);
+        self.selector.record(rms.rms_r, rms.rms_t);
+        let seconds = started.elapsed().as_secs_f64();
+        self.calibrations += 1;
+        self.last_x = Some(x);
+        self.last_calibration = self.poses;
+        self.largest_step = 0.0;
+        let optimal = self
+            .config
+            .optimal
+            .then(|| self.optimal(selected))
+            .flatten();
+        Some(Event {
+            calibration: self.calibrations,
+            poses: selected.poses,
+            thresholds: selected.thresholds,
+            x,
+            rms,
+            conditioning: calibration.conditioning,
+            seconds,
+            optimal,
+        })
+    }
+
+    /// Fixes the unit from the pose when it is `Auto`, and sets the selector's `d_max` from it.
+    fn fix_unit(&mut self, pose: &PosePair) {
+        if self.unit == Unit::Auto {
+            self.unit = Unit::infer(pose).unwrap_or(Unit::Auto);
+        }
+        if let Some(d_max) = self.unit.d_max() {
+            self.selector.set_d_max(d_max);
+        }
+    }
+
+    /// What the accumulating estimator did with the last pose: held it out, confirmed a change,
+    /// reported an estimate. `None` with the paper's estimator.
+    pub fn step(&self) -> Option<&Step> {
+        self.tracker.as_ref().map(|_| &self.step)
+    }
+
+    /// The accumulating estimator's report at the end of the stream (the current estimate, if it
+    /// is determined and was not just reported).
+    pub fn finish(&mut self) -> Option<Report> {
+        self.tracker.as_mut()?.finish()
+    }
+
+    /// The accumulating estimator's current estimate, determined or not; `None` before it has
+    /// one or with the paper's estimator.
+    pub fn accumulated(&self) -> Option<TrackEstimate> {
+        self.tracker.as_ref()?.estimate()
+    }
+
+    /// Why the accumulating estimator has nothing to report now; `None` when it has.
+    pub fn pending(&self) -> Option<Pending> {
+        self.tracker.as_ref()?.pending()
+    }
+
+    /// The accumulating estimator itself (its counts), if it runs.
+    pub fn tracker(&self) -> Option<&Tracker> {
+        self.tracker.as_ref()
+    }
+
+    /// The pose number where a change of X began, when the last `push` confirmed one.
+    pub fn change_detected(&self) -> Option<usize> {
+        self.step()?.change.map(|c| c.at)
+    }
+
+    /// rmsR and rmsT of `x` from the configured source.
+    fn errors(&self, pair: &[MotionPair; 2], x: &Transform) -> Rms {
+        match (self.config.error_source, self.config.truth) {
+            (ErrorSource::Truth, Some(truth)) => {
+                let e = errors_against_truth(x, &truth);
+                Rms {
+                    rms_r: e.rms_r(),
+                    rms_t: e.rms_t(),
+                }
+            }
+            _ => residual_rms(pair, x),
+        }
+    }
+
+    /// Sec. 4.5: once five motions have been selected (the first A' and every accepted A''),
+    /// refine over the last five, started from Andreff on them.
+    fn optimal(&mut self, selected: &Selected) -> Option<OptimalEstimate> {
+        let [a, i, j] = selected.poses;
+        if self.window.is_empty() {
+            self.window.push_back(([a, i], selected.first));
+        }
+        self.window.push_back(([i, j], selected.second));
+        while self.window.len() > OPTIMAL_WINDOW {
+            self.window.pop_front();
+        }
+        if self.window.len() < OPTIMAL_WINDOW {
+            return None;
+        }
+        let started = Instant::now();
+        let mut motions = [selected.first; OPTIMAL_WINDOW];
+        let mut numbers = [[0; 2]; OPTIMAL_WINDOW];
+        for (k, (n, m)) in self.window.iter().enumerate() {
+            motions[k] = *m;
+            numbers[k] = *n;
+        }
+        let start = andreff(&motions).ok()?;
+        let refined = refine_from(&motions, &start.x, &RefineOptions::default()).ok()?;
+        self.optimal_results += 1;
+        Some(OptimalEstimate {
+            number: self.optimal_results,
+            x: refined.calibration.x,
+            motions: numbers,
+            seconds: started.elapsed().as_secs_f64(),
+        })
+    }
+}
+
+/// Refuses a pose pair with a NaN or infinite entry.
+fn check_finite(pose: &PosePair) -> Result<()> {
+    let finite = |t: &Transform| {
+        t.translation
+            .vector
+            .iter()
+            .chain(t.rotation.matrix().iter())
+            .all(|v| v.is_finite())
+    };
+    for (what, t) in [
+        ("base_from_gripper", &pose.base_from_gripper),
+        ("camera_from_target", &pose.camera_from_target),
+    ] {
+        if !finite(t) {
+            return Err(Error::InvalidTransform {
+                what: what.to_string(),
+                problem: crate::model::error::TransformProblem::NotFinite,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Convenience for whole series: pushes every pose and collects all events.
+pub fn run_series(config: OnlineConfig, poses: &[PosePair]) -> Result<Vec<Event>> {
+    let mut calibrator = OnlineCalibrator::new(config)?;
+    let mut events = Vec::new();
+    for p in poses {
+        events.extend(calibrator.push(p)?);
+    }
+    Ok(events)
+}

@@ -1,0 +1,325 @@
+//! What the tracker tells: its estimates, reports, changes, held-out poses and why it has nothing
+//! to report, with the JSON lines every face prints.
+
+use std::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::findings::Reading;
+use crate::model::motion::Setup;
+use crate::model::pose::Transform;
+
+/// The estimate of one segment of the stream (since the start or the last change).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrackEstimate {
+    /// X from every pair of accepted poses of the segment (all-pairs Andreff).
+    pub x: Transform,
+    /// The fixed frame every pose sees under X: `base_from_target` eye-in-hand,
+    /// `gripper_from_target` eye-to-hand.
+    pub target: Transform,
+    /// Accepted poses it rests on.
+    pub poses: usize,
+    /// First pose number (from 1) of the segment.
+    pub since: usize,
+    /// Conditioning of its rotation system.
+    pub conditioning: f64,
+    /// RMS disagreement of the accepted poses with (X, target): rotation in degrees, translation in
+    /// input units. The data's own noise level.
+    pub noise_rotation_deg: f64,
+    /// See `noise_rotation_deg`.
+    pub noise_translation: f64,
+    /// Expected size of the error of X, rotation in degrees (split-half: the poses are dealt
+    /// alternately to two more accumulators, and half the difference of their estimates has the
+    /// distribution of the full estimate's error). `None` until both halves have an estimate.
+    pub uncertainty_rotation_deg: Option<f64>,
+    /// The same for the translation, input units.
+    pub uncertainty_translation: Option<f64>,
+    /// The robot-world solution (Shah's A X = Z B over the same accepted poses of the segment,
+    /// [`crate::solve::accumulate::RobotWorldAccumulator`]): X and the target solved together rather than
+    /// the target as the mean fixed frame under the hand–eye X. `None` while its system is
+    /// degenerate.
+    pub robot_world: Option<RobotWorldPair>,
+}
+
+/// X and the target pose of a robot-world solution.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RobotWorldPair {
+    /// X.
+    pub x: Transform,
+    /// The target pose (`base_from_target` / `gripper_from_target`).
+    pub target: Transform,
+}
+
+/// Why a pose was held out of the sums.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "test")]
+pub enum HeldOut {
+    /// Its motions to recent poses break the screw invariants.
+    Screw {
+        /// Median rotation-angle gap, degrees.
+        angle_gap_deg: f64,
+        /// Median pitch gap, input units.
+        pitch_gap: f64,
+    },
+    /// Its fixed frame disagrees with the mature estimate.
+    Residual {
+        /// Residual in RMS of the accepted poses' residuals.
+        statistic: f64,
+    },
+}
+
+impl fmt::Display for HeldOut {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Screw {
+                angle_gap_deg,
+                pitch_gap,
+            } => write!(
+                f,
+                "its motions to the recent poses break the rigid-motion invariants (angle gap {angle_gap_deg:.2}°, pitch gap {pitch_gap:.2e}): a bad detection, a flipped target pose or a wrong stamp"
+            ),
+            Self::Residual { statistic } => write!(
+                f,
+                "it disagrees with the current estimate by {statistic:.1} times the typical residual"
+            ),
+        }
+    }
+}
+
+/// A confirmed change of X or of the target.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Change {
+    /// First pose number of the new segment (where the disagreement began).
+    pub at: usize,
+    /// Pose number at which the change was confirmed.
+    pub confirmed: usize,
+    /// Rotation between the old and the new X, degrees.
+    pub x_rotation_deg: f64,
+    /// Distance between the old and the new X's translations, input units.
+    pub x_translation: f64,
+    /// Rotation between the old and the new target pose, degrees.
+    pub target_rotation_deg: f64,
+    /// Distance between the old and the new target positions, input units.
+    pub target_translation: f64,
+}
+
+/// Why an estimate was reported.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reason {
+    /// The first determined estimate of a segment.
+    Determined,
+    /// `every` poses since the last report.
+    Every,
+    /// Both uncertainties shrank to `shrink` of the last report's.
+    Shrunk,
+    /// The end of the stream.
+    End,
+}
+
+/// A reported estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Number of this report (1, 2, …).
+    pub number: usize,
+    /// Pose number at which it was made.
+    pub pose: usize,
+    /// Why now.
+    pub reason: Reason,
+    /// The estimate.
+    pub estimate: TrackEstimate,
+    /// Set on a final report whose uncertainty is above the reporting bounds (but below the batch
+    /// refusal's, 10° and half the scene): why it is weak. `None`: determined.
+    pub weak: Option<Pending>,
+    /// X and the target pose have the sizes the setup makes unlikely (the camera farther from
+    /// the gripper than the target from the base, eye-in-hand): the data fit exactly as well with
+    /// both inputs inverted, X and the target swapped.
+    pub implausible: bool,
+}
+
+/// What one pose did.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Step {
+    /// Pose number (from 1).
+    pub pose: usize,
+    /// Set when the pose was held out of the sums.
+    pub held_out: Option<HeldOut>,
+    /// Earlier poses held out now: the first poses, judged together once the gate has learned
+    /// (pose number, why).
+    pub earlier: Vec<(usize, HeldOut)>,
+    /// Set when this pose confirmed a change.
+    pub change: Option<Change>,
+    /// Set when an estimate is reported at this pose.
+    pub report: Option<Report>,
+}
+
+/// Why there is no estimate to report.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "why")]
+pub enum Pending {
+    /// Fewer than three accepted poses since the start or the last change.
+    FewPoses {
+        /// Accepted poses.
+        poses: usize,
+    },
+    /// The gripper has not turned by more than 2° from the segment's first pose.
+    NoRotation {
+        /// Largest rotation so far, degrees.
+        largest_deg: f64,
+    },
+    /// Every rotation so far is about one axis: X's rotation about it is not determined.
+    ParallelAxes,
+    /// The poses fit far better read another way (the batch's check of the readings,
+    /// [`crate::check::readings::check_readings`], on the first poses): an inverted pose, `w, x, y, z` quaternions, or
+    /// millimetres on one side. Nothing is reported from data read wrongly.
+    Misread {
+        /// The reading that fits.
+        reading: Reading,
+        /// The setup the poses are read in.
+        setup: Setup,
+    },
+    /// An estimate exists but its uncertainty is above the bound.
+    Undetermined {
+        /// Rotation uncertainty, degrees (`None`: too few poses for the split-half estimate).
+        rotation_deg: Option<f64>,
+        /// Translation uncertainty, input units.
+        translation: Option<f64>,
+        /// The bound on the rotation, degrees.
+        bound_rotation_deg: f64,
+        /// The bound on the translation, input units.
+        bound_translation: f64,
+    },
+}
+
+impl fmt::Display for Pending {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::FewPoses { poses } => write!(f, "only {poses} usable pose(s) so far"),
+            Self::NoRotation { largest_deg } => write!(
+                f,
+                "no rotation above 2° yet (the largest is {largest_deg:.2}°): turn the gripper"
+            ),
+            Self::ParallelAxes => write!(
+                f,
+                "all rotation axes parallel so far: rotate the gripper about another axis"
+            ),
+            Self::Misread { reading, setup } => write!(
+                f,
+                "the poses fit far better read as {}: correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",
+                reading.meaning(*setup),
+                reading.name()
+            ),
+            Self::Undetermined {
+                rotation_deg,
+                translation,
+                bound_rotation_deg,
+                bound_translation,
+            } => match (rotation_deg, translation) {
+                (Some(r), Some(t)) => write!(
+                    f,
+                    "X not determined yet: uncertainty {r:.2}° and {t:.4} (reported below {bound_rotation_deg:.2}° and {bound_translation:.4}); add rotations about other axes"
+                ),
+                _ => write!(
+                    f,
+                    "X not determined yet: too few poses to measure its uncertainty"
+                ),
+            },
+        }
+    }
+}
+
+impl Report {
+    /// The report as its JSON line (SPEC sec. 7), the one output of every face: `estimate`,
+    /// `pose`, `reason`, `frame`, X (`translation`, `quaternion_xyzw`, `matrix`), `poses`,
+    /// `since`, `uncertainty`, `noise`, `conditioning`, `target` (the fixed frame), `robot_world`
+    /// (X and the target solved together by Shah over the same poses, when determined) and, on a
+    /// weak final report, `weak` with the reason in words; last, `time_offset_s` when a clock
+    /// offset was applied to a second stream (as [`crate::online::EventLine`] carries it).
+    pub fn json(&self, setup: Setup, time_offset_s: Option<f64>) -> serde_json::Value {
+        let e = &self.estimate;
+        let mut out = serde_json::Map::new();
+        out.insert("estimate".into(), self.number.into());
+        out.insert("pose".into(), self.pose.into());
+        out.insert("reason".into(), serde_json::json!(self.reason));
+        out.insert("estimator".into(), "accumulate".into());
+        out.insert("frame".into(), setup.x_frame().into());
+        insert_transform(&mut out, &e.x);
+        out.insert("poses".into(), e.poses.into());
+        out.insert("since".into(), e.since.into());
+        out.insert(
+            "uncertainty".into(),
+            serde_json::json!({"rotation_deg": e.uncertainty_rotation_deg, "translation": e.uncertainty_translation}),
+        );
+        out.insert(
+            "noise".into(),
+            serde_json::json!({"rotation_deg": e.noise_rotation_deg, "translation": e.noise_translation}),
+        );
+        out.insert("conditioning".into(), e.conditioning.into());
+        let mut target = serde_json::Map::new();
+        target.insert("frame".into(), target_frame(setup).into());
+        insert_transform(&mut target, &e.target);
+        out.insert("target".into(), target.into());
+        if let Some(rw) = &e.robot_world {
+            let mut x = serde_json::Map::new();
+            x.insert("method".into(), "shah".into());
+            x.insert("frame".into(), setup.x_frame().into());
+            insert_transform(&mut x, &rw.x);
+            let mut target = serde_json::Map::new();
+            target.insert("frame".into(), target_frame(setup).into());
+            insert_transform(&mut target, &rw.target);
+            x.insert("target".into(), target.into());
+            out.insert("robot_world".into(), x.into());
+        }
+        if let Some(w) = &self.weak {
+            out.insert("weak".into(), w.to_string().into());
+        }
+        if self.implausible {
+            out.insert(
+                "warning".into(),
+                "X and the target pose have the sizes the setup makes unlikely: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions".into(),
+            );
+        }
+        if let Some(t) = time_offset_s {
+            out.insert("time_offset_s".into(), t.into());
+        }
+        out.into()
+    }
+}
+
+impl Change {
+    /// The change as its JSON line: `change` (the first pose of the new segment), `confirmed`,
+    /// and how far X and the target moved.
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "change": self.at,
+            "confirmed": self.confirmed,
+            "x_rotation_deg": self.x_rotation_deg,
+            "x_translation": self.x_translation,
+            "target_rotation_deg": self.target_rotation_deg,
+            "target_translation": self.target_translation,
+        })
+    }
+}
+
+/// The fixed frame the poses agree on: the target in the base eye-in-hand, on the gripper
+/// eye-to-hand.
+pub fn target_frame(setup: Setup) -> &'static str {
+    match setup {
+        Setup::EyeInHand => "base_from_target",
+        Setup::EyeToHand => "gripper_from_target",
+    }
+}
+
+/// Inserts `translation`, `quaternion_xyzw` and `matrix` of `t` into a JSON object.
+pub(crate) fn insert_transform(
+    object: &mut serde_json::Map<String, serde_json::Value>,
+    t: &Transform,
+) {
+    let j = crate::model::pose::TransformJson::from(t);
+    object.insert("translation".into(), serde_json::json!(j.translation));
+    object.insert(
+        "quaternion_xyzw".into(),
+        serde_json::json!(j.quaternion_xyzw),
+    );
+    object.insert("matrix".into(), serde_json::json!(j.matrix));
+}

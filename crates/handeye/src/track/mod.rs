@@ -1,0 +1,559 @@
+//! The accumulating estimator on a live stream: every pose gated, the estimate watched for a change
+//! of X or of the target, and reported on its own schedule with the reason when there is none.
+//!
+//! One [`Tracker`] takes the poses one at a time ([`Tracker::push`]). Each pose passes two tests
+//! before it enters the all-pairs sums of [`crate::solve::accumulate::PoseAccumulator`]:
+//!
+//! 1. **The screw gate** (X-free, from the second pose on): the median screw-invariant gaps of the
+//!    pose against up to eight recent accepted poses (`consistency::screw_gaps`, the test
+//!    of batch `--reject-outliers`) above `max(outlier_deg, 6 × typical)` in angle, or 6 × typical
+//!    in pitch, hold it out: a flipped or random target pose, a gross error, a bad stamp. Eight
+//!    held out in a row mean the partners are stale (the rig changed): they are dropped.
+//! 2. **The residual gate**, once the estimate is mature: the pose's own fixed frame
+//!    Y_k = H_k X C_k against the accumulated Y, normalised by the scatter of all accepted poses
+//!    under the same X ([`crate::solve::accumulate::PoseAccumulator::residual_scatter`], O(1)): the larger of rotation and
+//!    translation in units of their RMS. Above `gate` the pose is held out.
+//!
+//! **Change of X (or of the target).** A pose above `elevated` opens a *challenger*: a second
+//! accumulator fed with every pose from then on. It is dismissed when fewer than half of its poses
+//! stay elevated under the incumbent after `confirm_poses` (a burst of bad frames, a region where
+//! the robot's model is worse), and confirmed when at least 60% are elevated, its own estimate is
+//! determined, and it explains its poses at the incumbent's noise level. Then it replaces the
+//! incumbent (the restart keeps the poses since the change) and the change is reported with the
+//! pose where it began. A systematic error that only shows in one region of the workspace cannot
+//! confirm: the challenger's data are local, so its estimate is not determined before the robot
+//! leaves the region and the incumbent fits again.
+//!
+//! **Reporting.** An estimate is reported only when it is determined (split-half uncertainty below
+//! `max_rotation_deg` and `max_translation` × the scene's size): first when it becomes so, then
+//! every `every` poses, whenever both uncertainties have shrunk to `shrink` of the last reported
+//! ones, and at the end of the stream ([`Tracker::finish`]). Until then [`Tracker::pending`] says
+//! why there is none.
+
+mod events;
+mod segment;
+
+use std::collections::VecDeque;
+
+use serde::{Deserialize, Serialize};
+
+use crate::check::outliers::{OUTLIER_FACTOR, median_in, pose_outliers, screw_gaps};
+use crate::check::readings::check_readings;
+use crate::check::uncertainty::{UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION};
+use crate::model::findings::Reading;
+use crate::model::motion::{PosePair, Setup};
+use crate::model::pose::rotation_angle_between;
+
+pub use events::{
+    Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate, target_frame,
+};
+use segment::{Segment, Snapshot};
+
+/// Settings of the tracker; `Default` gives the values on each field.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrackOptions {
+    /// Report the estimate at least every this many poses. Default 100.
+    pub every: usize,
+    /// Also report when both uncertainties have shrunk to this fraction of the last reported ones.
+    /// Default 0.5.
+    pub shrink: f64,
+    /// An estimate is reported only when its rotation uncertainty is at most this, degrees.
+    /// Default 2.
+    pub max_rotation_deg: f64,
+    /// … and its translation uncertainty at most this fraction of the scene's size (the RMS spread
+    /// of the hand positions; not ‖t_x‖, which a wrong estimate would inflate), or what
+    /// `max_rotation_deg` moves at the camera's viewing distance if that is more. Default 0.1.
+    pub max_translation: f64,
+    /// A mature estimate holds out a pose whose residual exceeds this many RMS. Default 5.
+    pub gate: f64,
+    /// A residual above this many RMS opens or feeds the case for a change. Default 3.
+    pub elevated: f64,
+    /// Poses a challenger needs before it is judged. Default 10.
+    pub confirm_poses: usize,
+    /// Poses the incumbent needs before new poses are tested against it. Default 30.
+    pub mature_poses: usize,
+    /// Least screw-invariant angle gap that holds a pose out, degrees (`--outlier-deg`).
+    /// Default 3.
+    pub outlier_deg: f64,
+}
+
+impl Default for TrackOptions {
+    fn default() -> Self {
+        Self {
+            every: 100,
+            shrink: 0.5,
+            max_rotation_deg: 2.0,
+            max_translation: 0.1,
+            gate: 5.0,
+            elevated: 3.0,
+            confirm_poses: 10,
+            mature_poses: 30,
+            outlier_deg: 3.0,
+        }
+    }
+}
+
+/// Recent accepted poses the screw gate compares a new pose with.
+const PARTNER_RING: usize = 32;
+/// Of those, every this-many-th is a partner (up to eight motions per pose).
+const PARTNER_STRIDE: usize = 4;
+/// Screw gaps kept to learn their typical size.
+const GAP_RING: usize = 64;
+/// Held out in a row by the screw gate before its partners are taken to be stale.
+const STALE_RUN: usize = 8;
+/// Incumbent poses below which the estimate is refreshed at every pose (then every 10th).
+const REFRESH_ALWAYS: usize = 200;
+/// The first accepted poses are kept and judged again together by the batch test when this many
+/// have come, the gate having learned its typical gaps by then (it lets the very first poses
+/// through untested): at 16, 64 and 256 poses, each time over all of them.
+const WARMUP: [usize; 3] = [16, 64, 256];
+/// A challenger unconfirmed after this many times `confirm_poses` poses is dropped.
+const CHALLENGER_LIFE: usize = 10;
+
+/// The case for a change: a second segment since the first elevated pose.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct Challenger {
+    segment: Segment,
+    current: Option<Snapshot>,
+    poses: usize,
+    elevated: usize,
+    /// Elevated poses kept out of the incumbent meanwhile, with their numbers and statistics.
+    pending: Vec<(usize, PosePair, f64)>,
+}
+
+/// The accumulating estimator on a stream (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Tracker {
+    options: TrackOptions,
+    setup: Setup,
+    poses: usize,
+    incumbent: Segment,
+    current: Option<Snapshot>,
+    challenger: Option<Challenger>,
+    partners: VecDeque<PosePair>,
+    gaps: VecDeque<[f64; 2]>,
+    /// The first accepted poses with their numbers, until they are judged together.
+    warmup: Option<Vec<(usize, PosePair)>>,
+    /// What the last check of the readings on them found: a reading that fits far better, and
+    /// whether X and Y have sizes the setup makes unlikely (both poses inverted fit as well).
+    misread: Option<Reading>,
+    implausible: bool,
+    /// The poses held out in a row by the screw gate, with their numbers.
+    screw_run: Vec<(usize, PosePair)>,
+    /// Pose number and uncertainties of the last report of this segment.
+    last_report: Option<(usize, f64, f64)>,
+    reports: usize,
+    held_out: usize,
+    changes: usize,
+}
+
+impl Tracker {
+    /// A tracker for poses read in `setup`.
+    pub fn new(setup: Setup, options: TrackOptions) -> Self {
+        Self {
+            options,
+            setup,
+            poses: 0,
+            incumbent: Segment::new(setup, 1),
+            current: None,
+            challenger: None,
+            partners: VecDeque::with_capacity(PARTNER_RING),
+            gaps: VecDeque::with_capacity(GAP_RING),
+            warmup: Some(Vec::new()),
+            misread: None,
+            implausible: false,
+            screw_run: Vec::with_capacity(STALE_RUN),
+            last_report: None,
+            reports: 0,
+            held_out: 0,
+            changes: 0,
+        }
+    }
+
+    /// Poses pushed so far.
+    pub fn poses(&self) -> usize {
+        self.poses
+    }
+
+    /// Poses held out so far.
+    pub fn held_out(&self) -> usize {
+        self.held_out
+    }
+
+    /// Changes confirmed so far.
+    pub fn changes(&self) -> usize {
+        self.changes
+    }
+
+    /// The current segment's estimate, reportable or not.
+    pub fn estimate(&self) -> Option<TrackEstimate> {
+        self.current.map(|c| c.estimate)
+    }
+
+    /// The current estimate if it is determined (what a report would carry).
+    pub fn determined(&self) -> Option<TrackEstimate> {
+        self.estimate().filter(|_| self.pending().is_none())
+    }
+
+    /// Why there is no estimate to report now; `None` when there is one.
+    pub fn pending(&self) -> Option<Pending> {
+        if let Some(reading) = self.misread {
+            return Some(Pending::Misread {
+                reading,
+                setup: self.setup,
+            });
+        }
+        self.incumbent
+            .pending(self.estimate().as_ref(), &self.options)
+    }
+
+    /// Takes the next pose (module documentation).
+    pub fn push(&mut self, pose: &PosePair) -> Step {
+        self.poses += 1;
+        let mut step = Step {
+            pose: self.poses,
+            ..Step::default()
+        };
+        match self.screw_gate(pose) {
+            Some(h) => {
+                self.held_out += 1;
+                step.held_out = Some(h);
+                if self.screw_run.len() == STALE_RUN {
+                    // The partners are stale (the rig changed): start again from the held run.
+                    self.partners.clear();
+                    self.gaps.clear();
+                    step.held_out = None;
+                    for (number, held) in std::mem::take(&mut self.screw_run) {
+                        self.screw_gate(&held);
+                        self.held_out -= 1;
+                        self.accept(&held, number, &mut step);
+                    }
+                }
+            }
+            None => {
+                self.screw_run.clear();
+                self.accept(pose, self.poses, &mut step);
+            }
+        }
+        if step.change.is_none()
+            && (self.incumbent.all.poses() < REFRESH_ALWAYS || self.poses.is_multiple_of(10))
+        {
+            self.current = self.incumbent.refresh();
+        }
+        step.report = self.report_due().map(|reason| self.report(reason));
+        step
+    }
+
+    /// A pose past the screw gate: tested against the mature incumbent, or simply added.
+    fn accept(&mut self, pose: &PosePair, number: usize, step: &mut Step) {
+        let Some(s) = self.residual(self.raw_residual(pose)) else {
+            step.earlier = self.add(pose, number);
+            return;
+        };
+        self.feed_challenger(pose, s, number);
+        if s <= self.options.elevated || (s <= self.options.gate && self.challenger.is_none()) {
+            step.earlier = self.add(pose, number);
+        } else {
+            // Kept out of the incumbent while the case for a change is open (it would pull the
+            // incumbent towards a new X); given back if the case is dismissed.
+            if let Some(c) = &mut self.challenger {
+                c.pending.push((number, *pose, s));
+            }
+            if s > self.options.gate {
+                self.held_out += 1;
+                step.held_out = Some(HeldOut::Residual { statistic: s });
+            }
+        }
+        step.change = step.change.or(self.judge_challenger());
+    }
+
+    /// The final report at the end of the stream, unless the last pose was just reported: the
+    /// current estimate when it is determined, or flagged `weak` when its uncertainty is above the
+    /// reporting bounds but below the batch refusal's (10°, half the scene). `None` when there is
+    /// no estimate or it is not determined at all ([`Tracker::pending`] says why).
+    pub fn finish(&mut self) -> Option<Report> {
+        self.current = self.incumbent.refresh();
+        if self.last_report.is_some_and(|(p, _, _)| p == self.poses) {
+            return None;
+        }
+        let e = self.estimate()?;
+        let weak = self.pending();
+        // Only an estimate that is merely not determined enough may be reported as weak.
+        if weak.is_some_and(|w| !matches!(w, Pending::Undetermined { .. })) {
+            return None;
+        }
+        if weak.is_some() {
+            let scene = self.incumbent.all.scene_scale();
+            let usable = matches!(
+                (e.uncertainty_rotation_deg, e.uncertainty_translation),
+                (Some(r), Some(t)) if r <= UNDETERMINED_ROTATION_DEG && t <= UNDETERMINED_TRANSLATION * scene
+            );
+            if !usable {
+                return None;
+            }
+        }
+        let mut report = self.report(Reason::End);
+        report.weak = weak;
+        Some(report)
+    }
+
+    /// Adds a pose to the incumbent. The first ones are kept and judged together by the batch
+    /// test ([`pose_outliers`]) at each count of [`WARMUP`], and the segment rebuilt from those it
+    /// keeps; returns the ones it holds out.
+    fn add(&mut self, pose: &PosePair, number: usize) -> Vec<(usize, HeldOut)> {
+        self.incumbent.add(pose);
+        let Some(warmup) = &mut self.warmup else {
+            return Vec::new();
+        };
+        warmup.push((number, *pose));
+        if !WARMUP.contains(&warmup.len()) {
+            return Vec::new();
+        }
+        let mut warmup = self.warmup.take().unwrap_or_default();
+        let last = warmup.len() == WARMUP[WARMUP.len() - 1];
+        let poses: Vec<PosePair> = warmup.iter().map(|(_, p)| *p).collect();
+        let found = pose_outliers(&poses, self.setup, self.options.outlier_deg);
+        // The batch's check of the readings, on the poses that agree with the others (outliers
+        // could make a mirror-image reading look better).
+        let kept: Vec<PosePair> = (0..poses.len())
+            .filter(|i| found.poses.iter().all(|g| g.pose != *i))
+            .map(|i| poses[i])
+            .collect();
+        let readings = check_readings(&kept, self.setup);
+        if readings.as_given.is_some() {
+            self.misread = readings.better.map(|b| b.reading);
+            self.implausible = readings.size_warning(self.setup).is_some();
+        }
+        let mut held = Vec::new();
+        if !found.poses.is_empty() {
+            let mut segment = Segment::new(self.setup, self.incumbent.since);
+            let mut gaps = found.poses.iter().peekable();
+            let mut k = 0;
+            warmup.retain(|(n, p)| {
+                let outlier = gaps.next_if(|g| g.pose == k);
+                k += 1;
+                match outlier {
+                    Some(g) => {
+                        held.push((
+                            *n,
+                            HeldOut::Screw {
+                                angle_gap_deg: g.angle_gap_deg,
+                                pitch_gap: g.pitch_gap,
+                            },
+                        ));
+                        false
+                    }
+                    None => {
+                        segment.add(p);
+                        true
+                    }
+                }
+            });
+            self.incumbent = segment;
+            self.held_out += held.len();
+            self.current = self.incumbent.refresh();
+        }
+        if !last {
+            self.warmup = Some(warmup);
+        }
+        held
+    }
+
+    /// The pose's own disagreement with the current (X, Y): rotation (radians) and translation.
+    fn raw_residual(&self, pose: &PosePair) -> Option<[f64; 2]> {
+        let Snapshot {
+            estimate: e,
+            scatter,
+            ..
+        } = self.current?;
+        let y_k = self.setup.hand_pose(&pose.base_from_gripper) * e.x * pose.camera_from_target;
+        let d = scatter.y.inverse() * y_k;
+        Some([d.rotation.angle(), d.translation.vector.norm()])
+    }
+
+    /// The typical residual: the RMS scatter of the accepted poses under the current estimate
+    /// (the screw gate keeps gross outliers out of it).
+    fn typical_scale(&self) -> Option<[f64; 2]> {
+        let Snapshot {
+            estimate: e,
+            scatter,
+            ..
+        } = self.current?;
+        let scale = e.target.translation.vector.norm().max(1.0);
+        Some([
+            scatter.rotation.max(1e-12),
+            scatter.translation.max(1e-12 * scale),
+        ])
+    }
+
+    /// The residual statistic of a pose, the larger of its rotation and translation ratios to the
+    /// typical ones, when the incumbent is mature (enough poses, determined).
+    fn residual(&self, raw: Option<[f64; 2]>) -> Option<f64> {
+        let snapshot = self.current?;
+        let bound = self.incumbent.translation_bound(&self.options);
+        let local = snapshot
+            .local
+            .is_some_and(|(r, t)| r <= self.options.max_rotation_deg && t <= bound);
+        if self.incumbent.all.poses() < self.options.mature_poses || !local {
+            return None;
+        }
+        let [r, t] = raw?;
+        let [sr, st] = self.typical_scale()?;
+        Some((r / sr).max(t / st))
+    }
+
+    fn feed_challenger(&mut self, pose: &PosePair, s: f64, number: usize) {
+        let elevated = s > self.options.elevated;
+        if elevated && self.challenger.is_none() {
+            self.challenger = Some(Challenger {
+                segment: Segment::new(self.setup, number),
+                current: None,
+                poses: 0,
+                elevated: 0,
+                pending: Vec::new(),
+            });
+        }
+        if let Some(c) = &mut self.challenger {
+            c.segment.add(pose);
+            c.current = c.segment.refresh();
+            c.poses += 1;
+            c.elevated += usize::from(elevated);
+        }
+    }
+
+    /// Dismisses, keeps or confirms the challenger (module documentation).
+    fn judge_challenger(&mut self) -> Option<Change> {
+        let c = self.challenger.as_ref()?;
+        if c.poses < self.options.confirm_poses {
+            return None;
+        }
+        let old = self.current?.estimate;
+        let [typical_r, typical_t] = self.typical_scale()?;
+        // Dismissed: a few elevated poses among normal ones were the noise's tail or outliers
+        // (those above the gate stay out); a long misfit that determines no new X says the
+        // incumbent was not yet right for this part of the workspace (all of them go in).
+        let sporadic = 2 * c.elevated < c.poses;
+        if sporadic || c.poses > CHALLENGER_LIFE * self.options.confirm_poses {
+            let dismissed = self.challenger.take()?;
+            for (number, pose, s) in dismissed.pending {
+                if !sporadic || s <= self.options.gate {
+                    self.held_out -= usize::from(s > self.options.gate);
+                    self.add(&pose, number);
+                }
+            }
+            return None;
+        }
+        if 10 * c.elevated < 6 * c.poses {
+            return None;
+        }
+        let snapshot = c.current?;
+        let (new, scatter) = (snapshot.estimate, snapshot.scatter);
+        // It must explain its own poses at the incumbent's noise level, and its rotation must be
+        // determined: a local fit to one region of the workspace is not.
+        let fits = scatter.rotation <= 2.0 * typical_r && scatter.translation <= 2.0 * typical_t;
+        let bound = c.segment.translation_bound(&self.options);
+        let determined = snapshot
+            .local
+            .is_some_and(|(r, t)| r <= self.options.max_rotation_deg && t <= bound);
+        if !(fits && determined) {
+            return None;
+        }
+        let c = self.challenger.take()?;
+        let change = Change {
+            at: c.segment.since,
+            confirmed: self.poses,
+            x_rotation_deg: rotation_angle_between(&old.x.rotation, &new.x.rotation).to_degrees(),
+            x_translation: (old.x.translation.vector - new.x.translation.vector).norm(),
+            target_rotation_deg: rotation_angle_between(&old.target.rotation, &new.target.rotation)
+                .to_degrees(),
+            target_translation: (old.target.translation.vector - new.target.translation.vector)
+                .norm(),
+        };
+        self.incumbent = c.segment;
+        self.current = Some(snapshot);
+        self.warmup = None;
+        self.last_report = None;
+        self.changes += 1;
+        Some(change)
+    }
+
+    /// The screw gate (module documentation): `Some` when the pose is held out.
+    fn screw_gate(&mut self, pose: &PosePair) -> Option<HeldOut> {
+        let partners = self
+            .partners
+            .iter()
+            .rev()
+            .step_by(PARTNER_STRIDE)
+            .take(PARTNER_RING / PARTNER_STRIDE);
+        let (angle, pitch) = screw_gaps(self.setup, pose, partners);
+        if self.partners.len() >= PARTNER_STRIDE && self.gaps.len() >= 8 {
+            let typical = |k: usize| {
+                let mut v = [0.0; GAP_RING];
+                let n = self.gaps.len();
+                v.iter_mut().zip(&self.gaps).for_each(|(d, g)| *d = g[k]);
+                median_in(&mut v[..n])
+            };
+            let (typical_angle, typical_pitch) = (typical(0), typical(1));
+            let angle_limit = (OUTLIER_FACTOR * typical_angle).max(self.options.outlier_deg);
+            let scale = pose.base_from_gripper.translation.vector.norm();
+            let pitch_limit = OUTLIER_FACTOR * typical_pitch.max(1e-9 * scale);
+            if angle > angle_limit || pitch > pitch_limit {
+                self.screw_run.push((self.poses, *pose));
+                return Some(HeldOut::Screw {
+                    angle_gap_deg: angle,
+                    pitch_gap: pitch,
+                });
+            }
+        }
+        if !self.partners.is_empty() {
+            if self.gaps.len() == GAP_RING {
+                self.gaps.pop_front();
+            }
+            self.gaps.push_back([angle, pitch]);
+        }
+        if self.partners.len() == PARTNER_RING {
+            self.partners.pop_front();
+        }
+        self.partners.push_back(*pose);
+        None
+    }
+
+    /// Whether the current estimate is due for a report, and why.
+    fn report_due(&self) -> Option<Reason> {
+        let e = self.current?.estimate;
+        // Nothing before the first poses have been judged together (outliers, readings).
+        let judged = self.warmup.as_ref().is_none_or(|w| w.len() >= WARMUP[0]);
+        if self.pending().is_some() || !judged {
+            return None;
+        }
+        let (ur, ut) = (e.uncertainty_rotation_deg?, e.uncertainty_translation?);
+        match self.last_report {
+            None => Some(Reason::Determined),
+            Some((pose, _, _)) if self.poses >= pose + self.options.every.max(1) => {
+                Some(Reason::Every)
+            }
+            Some((_, r, t)) if ur <= self.options.shrink * r && ut <= self.options.shrink * t => {
+                Some(Reason::Shrunk)
+            }
+            Some(_) => None,
+        }
+    }
+
+    fn report(&mut self, reason: Reason) -> Report {
+        let estimate = self.current.expect("a report needs an estimate").estimate;
+        self.reports += 1;
+        self.last_report = Some((
+            self.poses,
+            estimate.uncertainty_rotation_deg.unwrap_or(f64::INFINITY),
+            estimate.uncertainty_translation.unwrap_or(f64::INFINITY),
+        ));
+        Report {
+            number: self.reports,
+            pose: self.poses,
+            reason,
+            estimate,
+            weak: None,
+            implausible: self.implausible,
+        }
+    }
+}
