@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""The library's shape in numbers, as docs/DECISIONS.md quotes them (issue 31).
+
+    python3 scripts/architecture_counts.py [--doc]
+
+- public items: item pages of `cargo doc -p handeye --no-deps` (structs, enums, functions, traits,
+  types, constants, macros, statics): what a user can name. With --doc the docs are built first
+  (otherwise target/doc/handeye is read as it is).
+- public modules: module pages of the same docs.
+- files over 400 lines: crates/handeye/src/**/*.rs.
+- upward imports: `crate::` paths that climb a layer (the rule of crates/handeye/tests/layers.rs).
+"""
+import os
+import re
+import subprocess
+import sys
+from collections import Counter
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SRC = os.path.join(ROOT, "crates", "handeye", "src")
+KINDS = ("struct", "enum", "fn", "trait", "type", "constant", "macro", "static")
+
+
+def doc_dir():
+    target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
+    return os.path.join(target, "doc", "handeye")
+
+
+def public_items(doc):
+    kinds = Counter()
+    modules = 0
+    for dirpath, _, files in os.walk(doc):
+        for name in files:
+            kind = name.split(".", 1)[0]
+            if kind in KINDS and name.endswith(".html"):
+                kinds[kind] += 1
+            elif name == "index.html" and dirpath != doc:
+                modules += 1
+    return kinds, modules
+
+
+def long_files():
+    out = []
+    for dirpath, _, files in os.walk(SRC):
+        for name in files:
+            if name.endswith(".rs"):
+                path = os.path.join(dirpath, name)
+                with open(path, encoding="utf-8") as f:
+                    lines = sum(1 for _ in f)
+                if lines > 400:
+                    out.append((lines, os.path.relpath(path, SRC)))
+    return sorted(out, reverse=True)
+
+
+def main():
+    if "--doc" in sys.argv:
+        subprocess.run(["cargo", "doc", "-p", "handeye", "--no-deps", "-q"], cwd=ROOT, check=True)
+    doc = doc_dir()
+    if not os.path.isdir(doc):
+        sys.exit(f"no docs at {doc}: run with --doc")
+    kinds, modules = public_items(doc)
+    total = sum(kinds.values())
+    print(f"public items: {total} ({', '.join(f'{n} {k}' for k, n in kinds.most_common())})")
+    print(f"public modules: {modules}")
+    files = long_files()
+    print(f"files over 400 lines: {len(files)}")
+    for lines, path in files:
+        print(f"  {lines:5} {path}")
+
+
+if __name__ == "__main__":
+    main()
