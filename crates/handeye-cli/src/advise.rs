@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::calibrate::advice::{Advice, WeaknessKind, advise};
+use handeye::{Advice, WeaknessKind, advise};
 
 use crate::input::{InputArgs, read_all};
 use crate::output::print_json;

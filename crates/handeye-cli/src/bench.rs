@@ -11,12 +11,13 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::check::quality::errors_against_truth;
-use handeye::io::{Format, TransformJson, parse_pose_line, read_pose_file, read_truth};
-use handeye::online::select::AdaptiveParams;
-use handeye::online::{OnlineCalibrator, OnlineConfig};
+use handeye::AdaptiveParams;
+use handeye::TransformJson;
+use handeye::errors_against_truth;
+use handeye::io::{Format, parse_pose_line, read_pose_file, read_truth};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{AllPairs, Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
+use handeye::{OnlineCalibrator, OnlineConfig};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::{Value, json};
 
@@ -279,7 +280,10 @@ fn online_throughput(budget: Duration, progress: &Progress) -> Result<Value> {
     );
     progress.case("online calibration");
     let pairs = motion_pairs(&s.poses[..3], Pairing::Consecutive, Setup::EyeInHand);
-    let (calibration, _) = time(|| handeye::andreff(black_box(&pairs)).is_ok(), budget);
+    let (calibration, _) = time(
+        || handeye::solve(Method::Andreff, black_box(&pairs)).is_ok(),
+        budget,
+    );
     progress.case("online parse line");
     // A record as `handeye simulate` writes it: what `online -` reads per pose.
     let matrix = |t| json!(TransformJson::from(t).matrix);

@@ -4,14 +4,14 @@
 use anyhow::Result;
 use clap::Args as ClapArgs;
 use clap::builder::PossibleValuesParser;
-use handeye::calibrate::batch::{Fix, Options, calibrate};
-use handeye::calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
-use handeye::check::quality::OUTLIER_DEG;
-use handeye::check::uncertainty::REPLICATES;
-use handeye::model::names;
-use handeye::solve::RobotWorldMethod;
-use handeye::solve::TsaiOptions;
+use handeye::OUTLIER_DEG;
+use handeye::REPLICATES;
+use handeye::{Fix, Options, calibrate};
+use handeye::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
+
+use handeye::TsaiOptions;
 use handeye::{Error, Method, Pairing};
+use handeye::{Named, RobotWorldMethod};
 
 use crate::faces::{self, Face, Published, length_unit};
 use crate::input::{InputArgs, read_all};
@@ -160,7 +160,7 @@ pub fn run(args: Args) -> Result<()> {
             faces::static_transform_publisher(published, &frames)
         );
     }
-    if unit == Some(handeye::online::Unit::Millimetre)
+    if unit == Some(handeye::Unit::Millimetre)
         && matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf)
     {
         eprintln!(
@@ -203,7 +203,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
                 name: "method",
                 message: format!(
                     "`{name}` is a hand–eye method; with --robot-world use one of {}",
-                    names::list::<RobotWorldMethod>()
+                    RobotWorldMethod::list_names()
                 ),
             })?,
     };
@@ -260,9 +260,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
 
 /// The robot-world result as ROS-style YAML: X and the target pose.
 fn robot_world_yaml(r: &RobotWorldReport) -> String {
-    let pose = |name: &str,
-                t: &handeye::io::TransformJson,
-                u: &handeye::check::uncertainty::Uncertainty| {
+    let pose = |name: &str, t: &handeye::TransformJson, u: &handeye::Uncertainty| {
         let [tx, ty, tz] = t.translation;
         let [qx, qy, qz, qw] = t.quaternion_xyzw;
         format!(

@@ -6,10 +6,10 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::check::quality::errors_against_truth;
-use handeye::online::select::{AdaptiveParams, Selection};
-use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig};
+use handeye::errors_against_truth;
 use handeye::sim::{SimConfig, simulate};
+use handeye::{AdaptiveParams, Selection};
+use handeye::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig};
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
 
 use crate::{outln, values};

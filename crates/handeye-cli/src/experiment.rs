@@ -6,9 +6,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use clap::builder::PossibleValuesParser;
-use handeye::online::experiment::{
-    Experiment, ExperimentConfig, TrackingConfig, markdown_table, run_experiment, run_tracking,
-    tracking_table,
+use handeye::experiment::{
+    Experiment, ExperimentConfig, ExperimentReport, TrackingConfig, TrackingReport, run_experiment,
+    run_tracking,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -94,7 +94,7 @@ pub fn run(args: Args) -> Result<()> {
         publish(&args.out, "tracking", &table, &report, &figures)?;
     }
     if matches!(study, Some(Study::All | Study::Advice)) {
-        let report = handeye::calibrate::advice::closed_loop(args.series.unwrap_or(20), args.seed);
+        let report = handeye::closed_loop(args.series.unwrap_or(20), args.seed);
         publish(&args.out, "advice", &advice_table(&report), &report, &[])?;
     }
     Ok(())
@@ -115,7 +115,7 @@ fn series_bar(series: usize, name: &str) -> ProgressBar {
 }
 
 /// The closed loop of the advice as Markdown.
-fn advice_table(r: &handeye::calibrate::advice::ClosedLoop) -> String {
+fn advice_table(r: &handeye::ClosedLoop) -> String {
     let cell = |n: Option<usize>| n.map_or(format!("> {}", r.most), |n| n.to_string());
     format!(
         "### advice ({} series of the paper's protocol, from its first 3 poses)\n\nPoses needed to reach a rotation one-sigma of {:.4}° (what the paper's walk reaches after {} poses), median over the series:\n\n| the paper's walk | turns about random axes | the advice |\n|---|---|---|\n| {} | {} | {} |\n",
@@ -147,4 +147,72 @@ fn publish(
         eprintln!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// The report as a Markdown table.
+fn markdown_table(report: &ExperimentReport) -> String {
+    let mut out = format!(
+        "### {} ({} series × {} poses, seed {})\n\n| method | series with calibration | calibrations (mean / median) | ‖ΔR‖_F | rotation (°) | t_rel | time per calibration (µs) |\n|---|---|---|---|---|---|---|\n",
+        report.experiment, report.config.series, report.config.sim.poses, report.config.seed
+    );
+    for m in &report.methods {
+        let name = if m.batch {
+            format!("batch `{}` (all poses)", m.method)
+        } else {
+            format!("**{}**", m.method)
+        };
+        out += &format!(
+            "| {name} | {}/{} | {:.2} / {:.1} | {:.4} | {:.3} | {:.4} | {:.2} |\n",
+            m.series_with_calibration,
+            m.series,
+            m.calibrations_mean,
+            m.calibrations_median,
+            m.rot_fro_mean,
+            m.rot_deg_mean,
+            m.trans_rel_mean,
+            m.time_per_calibration_s * 1e6
+        );
+    }
+    out
+}
+
+/// The tracking report as Markdown.
+fn tracking_table(report: &TrackingReport) -> String {
+    let mut out = format!(
+        "### tracking ({} series × {} poses, seed {})\n\n| poses |",
+        report.config.series, report.config.poses, report.config.seed
+    );
+    for c in &report.curves {
+        out += &format!(" {} ‖ΔR‖_F / t_rel |", c.method);
+    }
+    out += "\n|---|";
+    out += &"---|".repeat(report.curves.len());
+    out += "\n";
+    let n = report.curves.first().map_or(0, |c| c.poses.len());
+    for k in (0..n).filter(|k| (k + 1) % 2 == 0 || *k == 0) {
+        out += &format!("| {} |", report.curves[0].poses[k]);
+        for c in &report.curves {
+            out += &format!(" {:.4} / {:.3} |", c.rot_fro[k], c.trans_rel[k]);
+        }
+        out += "\n";
+    }
+    out += &format!(
+        "\n### change detection ({} series × {} poses, jump at pose {})\n\n| jump | detected within 30 poses | median delay (poses) | false alarms / stationary poses | final error vs new X (°) |\n|---|---|---|---|---|\n",
+        report.config.series,
+        report.config.jump_poses,
+        report.config.jump_poses / 2
+    );
+    for d in &report.detection {
+        out += &format!(
+            "| {}° / {} mm | {:.0}% | {} | {} / {} | {:.3} |\n",
+            d.rotation_deg,
+            d.translation,
+            100.0 * d.detected_within_30,
+            d.median_delay.map_or("–".to_string(), |m| m.to_string()),
+            d.false_alarms,
+            d.stationary_poses,
+            d.final_rot_deg
+        );
+    }
+    out
 }

@@ -4,8 +4,8 @@
 
 use std::fmt::Write as _;
 
-use handeye::calibrate::batch::Report;
-use handeye::online::Unit;
+use handeye::Report;
+use handeye::Unit;
 use handeye::{Error, Setup};
 
 use crate::input::InputArgs;
@@ -84,12 +84,12 @@ impl<'a> Published<'a> {
     }
 
     fn translation(&self) -> [f64; 3] {
-        handeye::io::TransformJson::from(self.x).translation
+        handeye::TransformJson::from(self.x).translation
     }
 
     /// The quaternion as the JSON gives it.
     fn quaternion_xyzw(&self) -> [f64; 4] {
-        handeye::io::TransformJson::from(self.x).quaternion_xyzw
+        handeye::TransformJson::from(self.x).quaternion_xyzw
     }
 }
 

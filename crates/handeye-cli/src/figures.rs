@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use anyhow::{Context, Result, anyhow};
-use handeye::online::experiment::{Experiment, ExperimentReport, MethodSummary};
+use handeye::experiment::{Experiment, ExperimentReport, MethodSummary};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -61,7 +61,7 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-    let per = |name: &str, f: fn(&handeye::online::experiment::SeriesResult) -> f64| -> Vec<f64> {
+    let per = |name: &str, f: fn(&handeye::experiment::SeriesResult) -> f64| -> Vec<f64> {
         report
             .method(name)
             .map(|m| m.per_series.iter().map(f).collect())
@@ -76,8 +76,8 @@ where
     match report.experiment {
         Experiment::Accuracy => {
             let (left, right) = root.split_horizontally(SIZE.0 / 2);
-            let rot = |r: &handeye::online::experiment::SeriesResult| r.rot_fro;
-            let trans = |r: &handeye::online::experiment::SeriesResult| r.trans_rel;
+            let rot = |r: &handeye::experiment::SeriesResult| r.rot_fro;
+            let trans = |r: &handeye::experiment::SeriesResult| r.trans_rel;
             lines(
                 &left,
                 "(a) mean rotation error ‖R_est − R‖_F per series",
@@ -96,7 +96,7 @@ where
             )?;
         }
         Experiment::Adaptability => {
-            let n = |r: &handeye::online::experiment::SeriesResult| r.calibrations as f64;
+            let n = |r: &handeye::experiment::SeriesResult| r.calibrations as f64;
             lines(
                 &root,
                 "calibrations per series",
@@ -260,7 +260,7 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 /// The tracking experiment's figure: mean rotation and translation error against the poses seen,
 /// log scale, one curve per estimator.
 pub fn write_tracking_figures(
-    report: &handeye::online::experiment::TrackingReport,
+    report: &handeye::experiment::TrackingReport,
     dir: &Path,
 ) -> Result<Vec<PathBuf>> {
     REGISTER.call_once(|| {
@@ -274,7 +274,7 @@ pub fn write_tracking_figures(
 }
 
 fn draw_tracking<DB: DrawingBackend>(
-    report: &handeye::online::experiment::TrackingReport,
+    report: &handeye::experiment::TrackingReport,
     root: DrawingArea<DB, Shift>,
 ) -> Result<()>
 where
@@ -287,7 +287,7 @@ where
         (&left, "mean ‖R_est − R‖_F vs poses seen", 0usize),
         (&right, "mean ‖t − t_est‖ / ‖t‖ vs poses seen", 1usize),
     ] {
-        let values = |c: &handeye::online::experiment::TrackingCurve| {
+        let values = |c: &handeye::experiment::TrackingCurve| {
             if pick == 0 {
                 c.rot_fro.clone()
             } else {

@@ -8,9 +8,9 @@ use std::rc::Rc;
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
-use handeye::online::select::{AdaptiveParams, MAX_N_INIT, Selection};
-use handeye::online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
-use handeye::track::{Report, Step, TrackOptions};
+use handeye::{AdaptiveParams, MAX_N_INIT, Selection, StreamReading};
+use handeye::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
+use handeye::{Step, TrackOptions, TrackReport as Report};
 
 use crate::faces::{self, Face, Published};
 use crate::input::{InputArgs, read_ahead};
@@ -399,28 +399,16 @@ const READINGS_SAMPLE: usize = 64;
 /// Warns when the poses fit far better read another way (an inverted pose, `w, x, y, z`
 /// quaternions, millimetres on one side), or with sizes the setup makes unlikely.
 fn warn_misread(poses: &[handeye::PosePair], setup: handeye::Setup) {
-    if handeye::check::outliers::axis_scatter(poses, setup)
-        < handeye::check::readings::DEGENERATE_SCATTER
-    {
-        eprintln!(
+    match handeye::check_stream_readings(poses, setup) {
+        Some(StreamReading::OneAxis) => eprintln!(
             "warning: every rotation of the first {} poses is about one axis: X's rotation about it, and its translation along it, are not determined by them, whatever the calibrations below say; rotate the gripper about other axes",
             poses.len()
-        );
-        return;
-    }
-    // As batch does: on the poses that agree with the others.
-    let outliers = handeye::check::outliers::pose_outliers(poses, setup, 3.0).indices();
-    let kept: Vec<handeye::PosePair> = (0..poses.len())
-        .filter(|i| !outliers.contains(i))
-        .map(|i| poses[i])
-        .collect();
-    let check = handeye::check::readings::check_readings(&kept, setup);
-    if let Some(advice) = check.advice(setup) {
-        eprintln!(
+        ),
+        Some(StreamReading::ReadWrongly(advice)) => eprintln!(
             "warning: the calibrations are from data read wrongly: {advice} (`handeye calibrate` checks this too)"
-        );
-    } else if let Some(w) = check.size_warning(setup) {
-        eprintln!("warning: {w}");
+        ),
+        Some(StreamReading::UnlikelySizes(w)) => eprintln!("warning: {w}"),
+        None => {}
     }
 }
 

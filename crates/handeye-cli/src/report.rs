@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use anyhow::{Result, anyhow};
-use handeye::calibrate::batch::Report;
-use handeye::check::holdout::leave_one_out;
+use handeye::Report;
+use handeye::leave_one_out;
 use handeye::{MotionFeatures, MotionPair, PosePair, Setup};
 use plotters::prelude::*;
 
@@ -259,7 +259,7 @@ pub struct OnlineTrace {
 
 impl OnlineTrace {
     /// Keeps what a paper's calibration says.
-    pub fn calibration(&mut self, e: &handeye::online::Event) {
+    pub fn calibration(&mut self, e: &handeye::Event) {
         let thresholds = e.thresholds.map(|t| {
             (
                 t.beta.to_degrees(),
@@ -270,7 +270,7 @@ impl OnlineTrace {
     }
 
     /// Keeps what the tracker did with a pose.
-    pub fn step(&mut self, step: &handeye::track::Step) {
+    pub fn step(&mut self, step: &handeye::Step) {
         if let Some(r) = &step.report {
             let e = &r.estimate;
             self.reports.push((
@@ -308,8 +308,7 @@ pub fn write_online(path: &Path, trace: &OnlineTrace, summary: &str) -> Result<(
         .map(|(p, x, _, _)| {
             let (dr, dt) = last.map_or((0.0, 0.0), |l| {
                 (
-                    handeye::model::pose::rotation_angle_between(&x.rotation, &l.rotation)
-                        .to_degrees(),
+                    handeye::rotation_angle_between(&x.rotation, &l.rotation).to_degrees(),
                     (x.translation.vector - l.translation.vector).norm(),
                 )
             });

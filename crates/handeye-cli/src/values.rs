@@ -7,7 +7,7 @@ use std::ffi::OsStr;
 use clap::builder::{PossibleValue, PossibleValuesParser, RangedU64ValueParser, TypedValueParser};
 use clap::error::ErrorKind;
 use clap::{Arg, Command};
-use handeye::model::names::Named;
+use handeye::Named;
 
 /// The most poses `simulate`, `demo` and `bench` make (each pose is about a hundred bytes, and
 /// `bench --pairs all` grows with the square).
@@ -168,7 +168,7 @@ mod tests {
     #[test]
     fn named_values_parse_from_the_library_names_only() {
         use handeye::Setup;
-        use handeye::online::Unit;
+        use handeye::Unit;
         let cmd = Command::new("t")
             .arg(
                 Arg::new("setup")

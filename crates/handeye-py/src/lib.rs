@@ -4,10 +4,10 @@
 //! Conventions: `base_from_gripper` (OpenCV `gripper2base`), `camera_from_target` (`target2cam`),
 //! X = `gripper_from_camera` (`cam2gripper`) for eye-in-hand, `base_from_camera` for eye-to-hand.
 
-use handeye::model::pose::transform_from_matrix4;
-use handeye::online::select::{AdaptiveParams, Selection};
-use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
-use handeye::track::TrackOptions;
+use handeye::TrackOptions;
+use handeye::transform_from_matrix4;
+use handeye::{AdaptiveParams, Selection};
+use handeye::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::{Method, Pairing, PosePair, Setup, Transform};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use numpy::{
@@ -102,7 +102,7 @@ fn solve_x<'py>(
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let c = py
-        .allow_threads(|| handeye::calibrate::batch::solve_poses(&poses, setup, &options))
+        .allow_threads(|| handeye::solve_poses(&poses, setup, &options))
         .map_err(value_error)?;
     Ok(matrix(py, &c.x))
 }
@@ -167,7 +167,7 @@ fn solve_opencv_poses<'py>(
         })
         .collect();
     let c = py
-        .allow_threads(|| handeye::calibrate::batch::solve_poses_checked(&poses, setup, &options))
+        .allow_threads(|| handeye::solve_poses_checked(&poses, setup, &options))
         .map_err(|e| value_error(opencv_words::error(&e, said)))?;
     let (r, t) = (c.x.rotation.matrix(), c.x.translation.vector);
     Ok((
@@ -346,10 +346,10 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::identity() + kx * theta.sin() + kx * kx * (1.0 - theta.cos())
 }
 
-/// The whole batch calibration ([`handeye::calibrate::batch::calibrate`]): its report as JSON, the same
+/// The whole batch calibration ([`handeye::calibrate`]): its report as JSON, the same
 /// object `handeye calibrate` prints (the Python layer parses it).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::check::uncertainty::REPLICATES))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,
@@ -363,10 +363,10 @@ fn calibrate_report<'py>(
     fix: Option<&str>,
     bootstrap: usize,
 ) -> PyResult<String> {
-    let options = handeye::calibrate::batch::Options {
+    let options = handeye::Options {
         reject_outliers,
         fix: match fix {
-            None => handeye::calibrate::batch::Fix::Refuse,
+            None => handeye::Fix::Refuse,
             Some(name) => name.parse().map_err(value_error)?,
         },
         replicates: bootstrap.max(8),
@@ -375,15 +375,15 @@ fn calibrate_report<'py>(
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let report = py
-        .allow_threads(|| handeye::calibrate::batch::calibrate(&poses, setup, &options))
+        .allow_threads(|| handeye::calibrate(&poses, setup, &options))
         .map_err(value_error)?;
     serde_json::to_string(&report).map_err(value_error)
 }
 
-/// The robot-world calibration ([`handeye::calibrate::robot_world::calibrate_robot_world`]): its report as
+/// The robot-world calibration ([`handeye::calibrate_robot_world`]): its report as
 /// JSON, the same object `handeye calibrate --robot-world` prints.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::check::uncertainty::REPLICATES, reject_outliers=false))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::REPLICATES, reject_outliers=false))]
 #[allow(clippy::too_many_arguments)]
 fn robot_world_report<'py>(
     py: Python<'py>,
@@ -395,10 +395,10 @@ fn robot_world_report<'py>(
     bootstrap: usize,
     reject_outliers: bool,
 ) -> PyResult<String> {
-    let options = handeye::calibrate::robot_world::RobotWorldOptions {
+    let options = handeye::RobotWorldOptions {
         method: method.parse().map_err(value_error)?,
         fix: match fix {
-            None => handeye::calibrate::batch::Fix::Refuse,
+            None => handeye::Fix::Refuse,
             Some(name) => name.parse().map_err(value_error)?,
         },
         replicates: bootstrap.max(8),
@@ -408,9 +408,7 @@ fn robot_world_report<'py>(
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let report = py
-        .allow_threads(|| {
-            handeye::calibrate::robot_world::calibrate_robot_world(&poses, setup, &options)
-        })
+        .allow_threads(|| handeye::calibrate_robot_world(&poses, setup, &options))
         .map_err(value_error)?;
     serde_json::to_string(&report).map_err(value_error)
 }
@@ -431,7 +429,7 @@ fn advise_report<'py>(
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let advice = py
-        .allow_threads(|| handeye::calibrate::advice::advise(&poses, setup, count))
+        .allow_threads(|| handeye::advise(&poses, setup, count))
         .map_err(value_error)?;
     serde_json::to_string(&advice).map_err(value_error)
 }
@@ -441,11 +439,11 @@ fn calibration_options(
     method: &str,
     pairs: &str,
     tsai_opencv_filter: bool,
-) -> PyResult<handeye::calibrate::batch::Options> {
-    Ok(handeye::calibrate::batch::Options {
+) -> PyResult<handeye::Options> {
+    Ok(handeye::Options {
         method: method.parse::<Method>().map_err(value_error)?,
         pairing: pairs.parse::<Pairing>().map_err(value_error)?,
-        tsai: handeye::solve::TsaiOptions {
+        tsai: handeye::TsaiOptions {
             opencv_filter: tsai_opencv_filter,
         },
         ..Default::default()

@@ -2,7 +2,7 @@
 //! callers have no `fix=` and, unless they pass `setup=`, no setup, so the library's advice
 //! (`--fix robot-inverted`, "the file gives …") is worded again for them here.
 
-use handeye::model::findings::Reading;
+use handeye::Reading;
 use handeye::{Error, Setup, Warning};
 
 /// The drop-in's message for a library error: a misread input in OpenCV's terms, any other error

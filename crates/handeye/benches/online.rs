@@ -6,7 +6,8 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use handeye::online::select::{AdaptiveParams, Selection};
 use handeye::online::{OnlineCalibrator, OnlineConfig};
 use handeye::sim::{SimConfig, SimSeries, simulate};
-use handeye::{PosePair, Transform, andreff};
+use handeye::solve::andreff;
+use handeye::{PosePair, Transform};
 use std::hint::black_box;
 
 /// The poses both benches run on: one simulated series of 1,000 poses (fixed seed).

@@ -6,7 +6,8 @@
 //! `cargo bench -p handeye --bench parse_line`
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use handeye::io::{TransformJson, parse_pose_line};
+use handeye::TransformJson;
+use handeye::io::parse_pose_line;
 use handeye::sim::{SimConfig, simulate};
 use std::hint::black_box;
 

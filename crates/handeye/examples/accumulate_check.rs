@@ -3,10 +3,10 @@
 //!
 //! `cargo run --release -p handeye --example accumulate_check`
 
-use handeye::check::quality::errors_against_truth;
-use handeye::online::select::AdaptiveParams;
-use handeye::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig};
+use handeye::AdaptiveParams;
+use handeye::errors_against_truth;
 use handeye::sim::{SimConfig, simulate};
+use handeye::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig};
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
 
 fn main() -> Result<(), handeye::Error> {

@@ -1,8 +1,9 @@
-//! Runs the paper's three simulated experiments with few series and prints their tables.
+//! Runs the paper's three simulated experiments with few series and prints each method's mean
+//! errors (`handeye experiment` prints the full tables).
 //!
 //! `cargo run --release -p handeye --example experiment_quick`
 
-use handeye::online::experiment::{Experiment, ExperimentConfig, markdown_table, run_experiment};
+use handeye::experiment::{Experiment, ExperimentConfig, run_experiment};
 
 fn main() -> Result<(), handeye::Error> {
     for experiment in Experiment::ALL {
@@ -13,7 +14,16 @@ fn main() -> Result<(), handeye::Error> {
             .unwrap_or(config.series);
         config.batch = std::env::var("NO_BATCH").is_err();
         let report = run_experiment(experiment, &config, || {})?;
-        println!("{}", markdown_table(&report));
+        println!("{experiment} ({} series):", config.series);
+        for m in &report.methods {
+            println!(
+                "  {:<14} calibrations {:6.1}  rotation {:.3}°  t_rel {:.4}",
+                m.method.to_string() + if m.batch { " (batch)" } else { "" },
+                m.calibrations_mean,
+                m.rot_deg_mean,
+                m.trans_rel_mean
+            );
+        }
     }
     Ok(())
 }

@@ -4,10 +4,10 @@
 //!
 //! `cargo run --release -p handeye --example uncertainty_check [consecutive|all]`
 
-use handeye::calibrate::batch::{Options, calibrate};
-use handeye::check::quality::errors_against_truth;
+use handeye::errors_against_truth;
 use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, Pairing, Setup};
+use handeye::{Options, calibrate};
 
 fn main() -> Result<(), handeye::Error> {
     let pairing_of = |p: &str| match p {

@@ -16,36 +16,37 @@
 //!   unit (parameters such as `d_max` too).
 //! - **Quaternions** in files are `x y z w` (ROS/TUM order); nalgebra's `Quaternion::new` takes
 //!   `w, x, y, z`. Matrices in files are row-major.
-//! - **Errors against truth** ([`check::quality`]): `‖R̂ − R‖_F`, the angle of R̂ᵀR in degrees, and
+//! - **Errors against truth** (`check::quality`): `‖R̂ − R‖_F`, the angle of R̂ᵀR in degrees, and
 //!   `‖t − t̂‖ / ‖t‖`; rmsR = `‖R̂ − R‖_F / 3`. Without truth, the A X − X B residuals.
 //!
 //! # Entry points
-//! - Batch: [`calibrate::batch::calibrate`] (readings, outliers, uncertainty, held-out check: the
+//! - Batch: [`calibrate()`] (readings, outliers, uncertainty, held-out check: the
 //!   report every face prints) on top of [`solve()`] with a [`Method`] over
 //!   [`motion_pairs`].
-//! - Online: [`online::OnlineCalibrator`] (the paper's selection, and with
-//!   [`online::Estimator::Accumulate`] the [`track::Tracker`]).
+//! - Online: [`OnlineCalibrator`] (the paper's selection, and with
+//!   [`Estimator::Accumulate`] the `track::Tracker`).
 //! - Robot-world (X and the target pose together, A X = Z B):
-//!   [`calibrate::robot_world::calibrate_robot_world`] on top of [`solve::shah`], [`solve::li`],
-//!   [`solve::refine_robot_world`]; online, the sums of
-//!   [`solve::accumulate::RobotWorldAccumulator`] in every [`track::Tracker`] report.
-//! - What to record next: [`calibrate::advice::advise`]. Reading files: [`io`]; two streams:
+//!   [`calibrate_robot_world`] on top of `solve::shah`, `solve::li`,
+//!   `solve::refine_robot_world`; online, the sums of
+//!   `solve::accumulate::RobotWorldAccumulator` in every `track::Tracker` report.
+//! - What to record next: [`advise`]. Reading files: [`io`]; two streams:
 //!   [`io::sync::pair_stream_files`].
 //!
 //! # Layers
-//! The folders are the layers; each uses only itself and the layers above it in this table
+//! The folders are the layers (private modules but [`io`], [`sim`] and [`experiment`]: the
+//! items a user needs are re-exported here); each uses only itself and the layers above it in this table
 //! (unit tests included; `tests/layers.rs` fails on an import that climbs or crosses to a
 //! sibling). Errors and warnings carry plain data of the bottom layer, so no layer needs the
 //! types of the one that raised them.
 //!
 //! | rank | layer | what it holds |
 //! |---|---|---|
-//! | 0 | [`model`] | poses, motions, the setup; errors, warnings and the findings they carry; named enums |
+//! | 0 | `model/` | poses, motions, the setup; errors, warnings and the findings they carry; named enums |
 //! | 1 | [`sim`] | the paper's simulation (model only), so every layer's tests can use it |
-//! | 2 | [`solve`] | [`Method`] and [`solve()`], every solver, the motion sources, the residuals, the accumulated all-pairs sums |
-//! | 3 | [`check`] | readings, outliers, the bootstrap uncertainty, held-out poses, the motions' quality |
-//! | 4 | [`track`] | the accumulating estimator on a stream: gating, change detection, reports |
-//! | 5 | [`calibrate`], [`online`] | the jobs: batch, robot-world and advice; the paper's online calibrator, its selection and experiments |
+//! | 2 | `solve/` | [`Method`] and [`solve()`], every solver, the motion sources, the residuals, the accumulated all-pairs sums |
+//! | 3 | `check/` | readings, outliers, the bootstrap uncertainty, held-out poses, the motions' quality |
+//! | 4 | `track/` | the accumulating estimator on a stream: gating, change detection, reports |
+//! | 5 | `calibrate/`, `online/` | the jobs: batch, robot-world and advice; the paper's online calibrator, its selection and experiments |
 //! | 6 | [`io`] | files, two streams and their clock, ROS 2 recordings, truth files |
 //!
 //! # The paper in the code
@@ -56,41 +57,87 @@
 //! | Eq. (1): initial thresholds, means of the first N motions | `select::InitialStats::means`, Main Algorithm step 1 in `online/select/adaptive.rs` (`AdaptiveSelector::initial`) |
 //! | Main Algorithm steps 2–7: the search for A′ and its relaxation | `AdaptiveSelector::search_first` (`online/select/adaptive.rs`) |
 //! | steps 8–13: the search for A″ with the axis test | `AdaptiveSelector::search_second` |
-//! | step 14: Andreff on (A′, A″), rmsR and rmsT | `OnlineCalibrator::calibrate` ([`online`]), [`andreff`] (`solve/andreff.rs`), [`check::quality`] |
-//! | step 15: the prediction after four calibrations | `AdaptiveSelector::record` → [`online::select::predict`] |
+//! | step 14: Andreff on (A′, A″), rmsR and rmsT | `OnlineCalibrator::calibrate` (`online/`), `andreff` (`solve/andreff.rs`), `check::quality` |
+//! | step 15: the prediction after four calibrations | `AdaptiveSelector::record` → `online::select::predict` |
 //! | steps 16–17: A′ ← A″ | `AdaptiveSelector::search_second` |
-//! | Eq. (2)–(5): the cubic regression and its normal equations | [`online::select::fit`] (`online/select/regression.rs`) |
-//! | Algorithms I, II, III: sin α₀, β₀, d₀ from rmsR / rmsT | [`online::select::predict`] (`online/select/adaptive.rs`) |
+//! | Eq. (2)–(5): the cubic regression and its normal equations | `online::select::fit` (`online/select/regression.rs`) |
+//! | Algorithms I, II, III: sin α₀, β₀, d₀ from rmsR / rmsT | `online::select::predict` (`online/select/adaptive.rs`) |
 //! | sec. 2 (Shi et al.): fixed thresholds | `select::FixedSelector` (`online/select/fixed.rs`) |
 //! | sec. 4.1: the conventional method (no selection) | `select::ConventionalSelector` (`online/select/conventional.rs`) |
 //! | sec. 4.1: the simulation protocol | [`sim::simulate`] |
-//! | sec. 4.1.1–4.1.3: accuracy, adaptability, real-time tests | [`online::experiment::run_experiment`] |
-//! | sec. 4.1.3 / 4.5: the optimal method (refine over five motions) | `OnlineCalibrator::optimal`, [`solve::refine_from`] |
-//! | sec. 4.2: residual errors on real data (no truth) | [`online::ErrorSource::Residual`], [`check::quality::residual_rms`] |
+//! | sec. 4.1.1–4.1.3: accuracy, adaptability, real-time tests | [`experiment::run_experiment`] |
+//! | sec. 4.1.3 / 4.5: the optimal method (refine over five motions) | `OnlineCalibrator::optimal`, `solve::refine_from` |
+//! | sec. 4.2: residual errors on real data (no truth) | [`ErrorSource::Residual`], `check::quality::residual_rms` |
 //!
-//! Beyond the paper: [`solve::accumulate`] (all pairs in O(1) per pose), [`track`] (gating,
-//! change, schedule), [`check`] (readings, outliers, uncertainty, held-out poses),
-//! [`calibrate::advice`].
+//! Beyond the paper: `solve::accumulate` (all pairs in O(1) per pose), `track/` (gating,
+//! change, schedule), `check/` (readings, outliers, uncertainty, held-out poses),
+//! `calibrate::advice`.
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-pub mod calibrate;
-pub mod check;
-pub mod io;
-pub mod model;
-pub mod online;
-pub mod sim;
-pub mod solve;
-pub mod track;
+/// Declares the layer modules: private, with the root's re-exports below as the public surface;
+/// public with the `internals` feature (this crate's own tests, benches and examples).
+macro_rules! layers {
+    ($($(#[$doc:meta])* $layer:ident;)*) => {$(
+        $(#[$doc])*
+        #[cfg(feature = "internals")]
+        pub mod $layer;
+        $(#[$doc])*
+        #[cfg(not(feature = "internals"))]
+        mod $layer;
+    )*};
+}
 
+layers! {
+    /// Rank 5: the batch jobs.
+    calibrate;
+    /// Rank 3: the checks that judge an X.
+    check;
+    /// Rank 5: the paper's online calibrator, its selection and experiments.
+    online;
+    /// Rank 2: the solvers.
+    solve;
+    /// Rank 4: the accumulating estimator on a stream.
+    track;
+}
+// Written out rather than through `layers!`: a `macro_export` macro (`named_enum!`) inside a
+// macro-expanded module could not be named by its path.
+pub mod io;
+/// Rank 0: poses, motions, errors, warnings and findings.
+#[cfg(feature = "internals")]
+pub mod model;
+#[cfg(not(feature = "internals"))]
+mod model;
+pub mod sim;
+
+pub use online::experiment;
+
+// # The public surface, layer by layer.
+// Model: poses, motions, the setup, errors, warnings and what they carry.
 pub use model::error::{Degeneracy, Error, Result, TransformProblem};
+pub use model::findings::{Direction, OutlierPose, Part, Reading, Verdict};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
-pub use model::pose::Transform;
-pub use model::warning::Warning;
-pub use solve::motions::{AllPairs, MotionSource};
-pub use solve::{
-    Calibration, Method, andreff, andreff_joint, daniilidis, horaud, park, refine, solve, tsai,
+pub use model::names::Named;
+pub use model::pose::{
+    Transform, TransformJson, quaternion_xyzw, rotation_angle_between, transform_from_matrix4,
 };
+pub use model::warning::{Remedy, Warning};
+// Solve: one entry, `solve(Method, motions)`.
+pub use solve::motions::{AllPairs, MotionSource};
+pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
+// Check.
+pub use check::holdout::leave_one_out;
+pub use check::quality::{OUTLIER_DEG, errors_against_truth};
+pub use check::stream::{StreamReading, check_stream_readings};
+pub use check::uncertainty::{REPLICATES, Uncertainty};
+// The jobs: batch, robot-world, advice.
+pub use calibrate::advice::{Advice, ClosedLoop, WeaknessKind, advise, closed_loop};
+pub use calibrate::batch::{Fix, Options, Report, calibrate, solve_poses, solve_poses_checked};
+pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
+// Online: the paper's calibrator and the accumulating estimator.
+pub use online::select::{AdaptiveParams, MAX_N_INIT, Selection};
+pub use online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
+pub use track::{Report as TrackReport, Step, TrackOptions};
 
 /// The README's Rust examples, compiled and run as doctests.
 #[cfg(doctest)]

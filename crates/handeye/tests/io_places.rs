@@ -15,10 +15,11 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
 use handeye::io::{
-    Format, PoseReader, TransformJson, Truth, read_pose_file, read_stamped_poses, read_truth,
-    write_truth,
+    Format, PoseReader, Truth, read_pose_file, read_stamped_poses, read_truth, write_truth,
 };
-use handeye::{Error, Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
+use handeye::{
+    Error, Method, Pairing, PosePair, Setup, Transform, TransformJson, motion_pairs, solve,
+};
 use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
 use rand_xoshiro::Xoshiro256PlusPlus;

@@ -152,6 +152,44 @@ fn no_import_climbs_a_layer() {
     );
 }
 
+/// The layers a user's code may not name: private without the `internals` feature.
+const PRIVATE_LAYERS: &[&str] = &["model", "solve", "check", "track", "calibrate", "online"];
+
+/// What a user reads first uses only the public surface (the root's re-exports, `io`, `sim`,
+/// `experiment`): the examples and the README's Rust. This crate's tests are built with
+/// `internals` and would compile either way, so the scan is what keeps them honest.
+#[test]
+fn examples_and_the_readme_use_only_the_public_surface() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut texts = vec![root.join("../../README.md")];
+    for entry in fs::read_dir(root.join("examples")).expect("examples/ is readable") {
+        texts.push(entry.expect("a directory entry").path());
+    }
+    let mut private = Vec::new();
+    for path in &texts {
+        let text = fs::read_to_string(path).expect("a readable file");
+        for (number, line) in text.lines().enumerate() {
+            for layer in PRIVATE_LAYERS {
+                if line.contains(&format!("handeye::{layer}::")) {
+                    private.push(format!(
+                        "{}:{}: {}",
+                        path.display(),
+                        number + 1,
+                        line.trim()
+                    ));
+                }
+            }
+        }
+    }
+    assert!(texts.len() >= 3, "no examples found");
+    assert!(
+        private.is_empty(),
+        "{} line(s) name a private layer (use the root's re-export):\n{}",
+        private.len(),
+        private.join("\n")
+    );
+}
+
 #[test]
 fn the_scan_sees_paths_groups_and_skips_comments() {
     assert_eq!(layers_named("use crate::solve::andreff;"), ["solve"]);

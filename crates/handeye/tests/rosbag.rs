@@ -406,7 +406,7 @@ fn a_truncated_or_foreign_file_is_an_error_not_a_panic() {
         assert!(e.to_string().contains("not a"), "{e}");
     }
     // A directory with no storage file.
-    let e = handeye::io::rosbag::Bag::open(dir.path().join("missing").as_path()).unwrap_err();
+    let e = handeye::io::rosbag::inspect_bag(dir.path().join("missing").as_path()).unwrap_err();
     assert!(matches!(e, Error::Io { .. }));
 }
 

@@ -2,7 +2,8 @@
 
 use handeye::check::quality::errors_against_truth;
 use handeye::sim::{SimConfig, simulate};
-use handeye::{MotionFeatures, Pairing, Setup, andreff, motion_pairs};
+use handeye::solve::andreff;
+use handeye::{MotionFeatures, Pairing, Setup, motion_pairs};
 use nalgebra::Matrix3;
 
 #[test]

@@ -340,9 +340,9 @@ fn refine_reports_in_the_input_unit() {
             Setup::EyeInHand,
         )
     };
-    let one = handeye::refine(&motions(1.0)).expect("solvable");
+    let one = handeye::solve::refine(&motions(1.0)).expect("solvable");
     let k = 2f64.powi(-30);
-    let small = handeye::refine(&motions(k)).expect("solvable");
+    let small = handeye::solve::refine(&motions(k)).expect("solvable");
     assert_eq!(one.iterations, small.iterations);
     assert_eq!(one.termination, small.termination);
     assert_eq!(one.scales[0], small.scales[0]);

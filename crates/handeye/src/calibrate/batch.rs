@@ -98,7 +98,7 @@ impl std::str::FromStr for Fix {
     type Err = Error;
 
     fn from_str(s: &str) -> Result<Self> {
-        crate::model::names::parse(s)
+        <Fix as crate::model::names::Named>::parse_name(s)
     }
 }
 
@@ -233,7 +233,7 @@ pub struct Report {
     #[serde(skip)]
     pub transform: Transform,
     /// The held-out check: each camera observation predicted from the other poses
-    /// ([`crate::holdout`]); `None` with fewer than four poses.
+    /// (`crate::holdout`); `None` with fewer than four poses.
     pub held_out: Option<HeldOutSummary>,
 }
 
@@ -410,17 +410,17 @@ pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
 /// read wrongly, that hold outliers, or that do not determine it:
 /// - the poses fit far better read another way (an inverted pose, `w, x, y, z` quaternions,
 ///   millimetres on one side): [`Error::Misread`], judged on the poses that agree with the others,
-///   as [`calibrate`] judges it ([`read_poses`]);
-/// - some poses disagree with the others ([`pose_outliers`]): [`Error::Untrusted`] naming them.
+///   as [`calibrate`] judges it (`read_poses`);
+/// - some poses disagree with the others (`pose_outliers`): [`Error::Untrusted`] naming them.
 ///   [`calibrate`] answers with a warning and the uncertainty they cause; X alone cannot carry
 ///   either, and a few random poses move it by degrees (kinhec's `outliers_random_pose` series:
 ///   10–15° and 7–13 cm from the truth);
 /// - a direction of X is undetermined, judged from a first-order covariance instead of the
 ///   bootstrap (noisy motions about one axis, say, where a solver's own conditioning test sees
-///   nothing singular). The covariance is [`PoseAccumulator::covariance`] over all pairs at the
+///   nothing singular). The covariance is `PoseAccumulator::covariance` over all pairs at the
 ///   solved X, each pose's fixed frame carrying the noise the poses themselves show under it (as
 ///   the accumulating estimator's reports do), judged with the bootstrap's bounds
-///   ([`crate::check::uncertainty::UNDETERMINED_ROTATION_DEG`], and half the scene for the translation).
+///   (`crate::check::uncertainty::UNDETERMINED_ROTATION_DEG`, and half the scene for the translation).
 ///   Noise-free data (no scatter to measure) are not refused by it: the solvers' own tests see
 ///   their degeneracy.
 ///

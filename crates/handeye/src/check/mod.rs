@@ -5,4 +5,5 @@ pub mod holdout;
 pub mod outliers;
 pub mod quality;
 pub mod readings;
+pub mod stream;
 pub mod uncertainty;

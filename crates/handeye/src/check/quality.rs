@@ -75,6 +75,7 @@ pub struct ResidualSummary {
 }
 
 /// Summarises the A X − X B residuals of `motions` under `x`.
+#[cfg(any(test, feature = "internals"))]
 pub fn residual_summary(motions: &(impl MotionSource + ?Sized), x: &Transform) -> ResidualSummary {
     let mut s = ResidualSummary::default();
     motions.for_each_motion(|m| {

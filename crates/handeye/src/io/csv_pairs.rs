@@ -54,6 +54,7 @@ fn split_line(line: &[u8]) -> std::result::Result<csv::ByteRecord, csv::Error> {
 
 impl<R: BufRead> CsvPairs<R> {
     /// Reads the header of `input` (named `source` in messages) and finds the pose columns.
+    #[cfg(test)]
     pub fn new(input: R, source: &str) -> Result<Self> {
         Self::from_lines(Lines::new(input), source)
     }

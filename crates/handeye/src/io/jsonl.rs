@@ -30,6 +30,7 @@ pub struct JsonlPairs<R: BufRead> {
 
 impl<R: BufRead> JsonlPairs<R> {
     /// A reader of `input`, named `source` in messages.
+    #[cfg(test)]
     pub fn new(input: R, source: &str) -> Self {
         Self::from_lines(Lines::new(input), source)
     }

@@ -26,14 +26,28 @@ use crate::model::motion::PosePair;
 use crate::model::pose::ReadTransform;
 use lines::{Line, Lines};
 
-pub use csv_pairs::CsvPairs;
-pub use jsonl::{JsonlPairs, parse_pose_line};
-pub use lines::MAX_LINE;
-pub use peer::{read_moveit_json, read_opencv_yaml, read_visp_dir, read_visp_pose};
-pub use stamped::{read_camera_stream, read_stamped_poses};
-pub use transform::{CONSISTENCY_TOL, TransformJson, transform_from_json};
+// What the faces use: one reader for every pose-file format (`read_pose_file`, `open_poses`,
+// `PoseReader`), the truth files, the recordings (`rosbag`) and the two-stream pairing (`sync`).
+pub use jsonl::parse_pose_line;
+pub use truth::{Truth, read_truth, truth_json};
+// Each format's own reader and the io helpers: crate-internal; public with `internals` for this
+// crate's tests.
+use csv_pairs::CsvPairs;
+use jsonl::JsonlPairs;
 pub(crate) use transform::{FieldProblem, read_transform_json};
-pub use truth::{Truth, parse_truth, read_truth, truth_json, write_truth};
+#[cfg(not(feature = "internals"))]
+use {
+    lines::MAX_LINE,
+    stamped::{read_camera_stream, read_stamped_poses},
+    transform::transform_from_json,
+};
+#[cfg(feature = "internals")]
+pub use {
+    lines::MAX_LINE,
+    stamped::{read_camera_stream, read_stamped_poses},
+    transform::transform_from_json,
+    truth::{parse_truth, write_truth},
+};
 
 /// The names a pose may have in a file, and whether the file's transform is the inverse of ours.
 pub(crate) const ROBOT_FRAMES: [(&str, bool); 2] =
@@ -95,8 +109,8 @@ pub struct PoseSeries {
 }
 
 /// The rotation matrices of one input that were orthonormal only to the precision they were
-/// printed with (between [`KEEP_AS_GIVEN_TOL`](crate::model::pose::KEEP_AS_GIVEN_TOL) and
-/// [`ORTHONORMAL_TOL`](crate::model::pose::ORTHONORMAL_TOL)) and were projected onto the nearest rotation.
+/// printed with (between `KEEP_AS_GIVEN_TOL` and
+/// `ORTHONORMAL_TOL`) and were projected onto the nearest rotation.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Projections {
     /// How many matrices were projected.
@@ -139,7 +153,7 @@ impl Projections {
 /// A streaming reader of pose pairs: one record at a time, so that a pipe can be processed as it
 /// arrives. Yields `Err` for a bad record and goes on with the next one.
 ///
-/// Lines are read with a bounded buffer ([`MAX_LINE`] bytes; a longer line is a bad line, skipped
+/// Lines are read with a bounded buffer (`MAX_LINE` bytes; a longer line is a bad line, skipped
 /// without being kept) and CSV lines are parsed one at a time (a stray quote costs its line only),
 /// so that no input can make the reader lose the stream or grow without bound.
 pub struct PoseReader<R: BufRead> {
@@ -401,7 +415,7 @@ fn text_of(bytes: Vec<u8>, file: &str) -> Result<String> {
 }
 
 /// Opens a file for reading, naming it in the error.
-pub fn open(path: &Path) -> Result<BufReader<File>> {
+pub(crate) fn open(path: &Path) -> Result<BufReader<File>> {
     File::open(path).map(BufReader::new).map_err(|e| Error::Io {
         file: path.display().to_string(),
         source: e,

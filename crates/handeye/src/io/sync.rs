@@ -27,7 +27,7 @@ pub struct StampedPose {
 
 /// How camera samples are paired with the robot stream; `Default` gives the values on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct SyncOptions {
+pub(crate) struct SyncOptions {
     /// Camera clock minus robot clock, seconds: a camera stamp t is looked up at t − offset in the
     /// robot stream. Default 0.
     pub time_offset: f64,
@@ -60,7 +60,7 @@ pub struct Synced {
 
 /// What a stream holds at a given time.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Lookup {
+pub(crate) enum Lookup {
     /// The interpolated pose.
     Pose(Transform),
     /// The time lies outside the stream.
@@ -71,7 +71,7 @@ pub enum Lookup {
 
 /// Interpolates a stream (sorted by stamp) at time `t`: slerp between the bracketing rotations,
 /// linear between the translations.
-pub fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Lookup {
+pub(crate) fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Lookup {
     let (Some(first), Some(last)) = (stream.first(), stream.last()) else {
         return Lookup::Outside;
     };
@@ -110,7 +110,7 @@ pub fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Lookup {
 
 /// Pairs each camera sample (`camera_from_target`) with the robot pose (`base_from_gripper`)
 /// interpolated at its stamp. Both streams must be sorted by stamp.
-pub fn pair_streams(
+pub(crate) fn pair_streams(
     robot: &[StampedPose],
     camera: &[StampedPose],
     options: &SyncOptions,
@@ -348,7 +348,7 @@ fn median_period(s: &[StampedPose]) -> f64 {
 /// camera period, and outlier frames can mislead it entirely; what is left biases X. Here, at each
 /// candidate offset (around `initial`, and coarsely over ±`max_offset`) the streams are paired,
 /// X is the all-pairs Andreff solution from the accumulated normal equations (O(n)), and the cost
-/// is the mean squared per-pose rotation residual ([`crate::check::outliers::PoseResiduals`]) over the
+/// is the mean squared per-pose rotation residual (`crate::check::outliers::PoseResiduals`) over the
 /// best 80% of the poses (a few bad samples do not steer it). The grids find the basin,
 /// golden-section search its bottom. Returns `initial` when no candidate can be solved.
 pub fn refine_time_offset(

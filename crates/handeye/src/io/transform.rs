@@ -4,7 +4,6 @@ use nalgebra::Matrix4;
 use serde_json::{Map, Value};
 
 use crate::model::error::TransformProblem;
-pub use crate::model::pose::TransformJson;
 use crate::model::pose::{
     ReadTransform, Transform, check_translation, read_matrix4, transform_from_xyz_quat_xyzw,
 };
@@ -216,6 +215,7 @@ fn number(v: &Value, field: &str) -> Result<f64, FieldProblem> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::pose::TransformJson;
     use crate::model::pose::quaternion_xyzw;
     use serde_json::json;
 

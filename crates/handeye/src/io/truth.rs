@@ -14,9 +14,10 @@ use std::path::Path;
 use serde_json::{Value, json};
 
 use crate::io::json_text::{line_of, repeated_key, steps};
-use crate::io::{TransformJson, parse_error, read_text, transform_from_json};
-use crate::model::error::{Error, Result};
+use crate::io::{parse_error, read_text, transform_from_json};
+use crate::model::error::Result;
 use crate::model::pose::Transform;
+use crate::model::pose::TransformJson;
 
 /// The names X may have in a truth file.
 const X_FRAMES: [&str; 2] = ["gripper_from_camera", "base_from_camera"];
@@ -123,8 +124,9 @@ pub fn truth_json(truth: &Truth) -> Value {
 }
 
 /// Writes a truth file (pretty JSON, see [`truth_json`]).
+#[cfg(any(test, feature = "internals"))]
 pub fn write_truth(path: &Path, truth: &Truth) -> Result<()> {
-    let io_error = |e: std::io::Error| Error::Io {
+    let io_error = |e: std::io::Error| crate::model::error::Error::Io {
         file: path.display().to_string(),
         source: e,
     };
@@ -136,6 +138,7 @@ pub fn write_truth(path: &Path, truth: &Truth) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::error::Error;
     use nalgebra::Vector3;
 
     fn field_and_line(e: Error) -> (usize, String) {

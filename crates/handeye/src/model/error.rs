@@ -9,7 +9,7 @@ pub enum TransformProblem {
     /// A NaN or infinite entry.
     NotFinite,
     /// `RᵀR` differs from the identity by more than
-    /// [`ORTHONORMAL_TOL`](crate::model::pose::ORTHONORMAL_TOL) (the largest entry deviation is given).
+    /// `ORTHONORMAL_TOL` (the largest entry deviation is given).
     NotOrthonormal {
         /// Largest absolute entry of `RᵀR − I`.
         deviation: f64,
@@ -29,7 +29,7 @@ pub enum TransformProblem {
         /// Largest entry difference between the two.
         difference: f64,
     },
-    /// A translation component beyond [`MAX_TRANSLATION`](crate::model::pose::MAX_TRANSLATION) in size:
+    /// A translation component beyond `MAX_TRANSLATION` in size:
     /// not a length in any unit (a corrupt field), and one whose products could overflow.
     ImplausibleTranslation {
         /// The value found.
@@ -87,7 +87,7 @@ pub enum Degeneracy {
         largest: f64,
     },
     /// Under the data's own noise one direction of X moves beyond the refusal threshold
-    /// ([`crate::uncertainty`]): the motions do not determine it.
+    /// (`crate::uncertainty`): the motions do not determine it.
     Undetermined {
         /// The direction (rotation about `axis`, or translation along it).
         part: crate::model::findings::Part,

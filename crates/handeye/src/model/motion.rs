@@ -154,7 +154,7 @@ pub struct MotionFeatures {
 }
 
 impl MotionFeatures {
-    /// Features of a motion `a_from_b`: θ and k by Rodrigues' formula ([`axis_angle`]).
+    /// Features of a motion `a_from_b`: θ and k by Rodrigues' formula (`axis_angle`).
     pub fn of(motion: &Transform) -> Self {
         let (angle, axis) = axis_angle(motion.rotation.matrix());
         Self {

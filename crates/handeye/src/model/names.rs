@@ -22,34 +22,34 @@ pub trait Named: Copy + Sized + 'static {
     fn from_name(s: &str) -> Option<Self> {
         Self::ALL.iter().copied().find(|v| v.name() == s)
     }
-}
 
-/// The names of every variant of `T`, comma separated.
-pub fn list<T: Named>() -> String {
-    T::ALL
-        .iter()
-        .map(|v| v.name())
-        .collect::<Vec<_>>()
-        .join(", ")
-}
+    /// The names of every variant, comma separated.
+    fn list_names() -> String {
+        Self::ALL
+            .iter()
+            .map(|v| v.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 
-/// Parses a name of `T`; an unknown one is an [`Error::InvalidParameter`] listing the names
-/// (`a or b` for two, `one of a, b, c` for more).
-pub fn parse<T: Named>(s: &str) -> Result<T> {
-    T::from_name(s).ok_or_else(|| {
-        let choices = match T::ALL {
-            [a, b] => format!("{} or {}", a.name(), b.name()),
-            _ => format!("one of {}", list::<T>()),
-        };
-        Error::InvalidParameter {
-            name: T::PARAM,
-            message: format!("unknown {} `{s}`; {choices}", T::WHAT),
-        }
-    })
+    /// Parses a name; an unknown one is an [`Error::InvalidParameter`] listing the names
+    /// (`a or b` for two, `one of a, b, c` for more).
+    fn parse_name(s: &str) -> Result<Self> {
+        Self::from_name(s).ok_or_else(|| {
+            let choices = match Self::ALL {
+                [a, b] => format!("{} or {}", a.name(), b.name()),
+                _ => format!("one of {}", Self::list_names()),
+            };
+            Error::InvalidParameter {
+                name: Self::PARAM,
+                message: format!("unknown {} `{s}`; {choices}", Self::WHAT),
+            }
+        })
+    }
 }
 
 /// Gives a fieldless enum its names from one list: `ALL` (every variant, in the listed order),
-/// `name()`, [`Named`], `Display` (the name) and `FromStr` ([`parse`]: the name or an alias).
+/// `name()`, [`Named`], `Display` (the name) and `FromStr` ([`Named::parse_name`]: the name or an alias).
 ///
 /// ```ignore
 /// named_enum!(Unit, "unit", "unit" {
@@ -77,7 +77,7 @@ macro_rules! named_enum {
             }
         }
 
-        impl $crate::model::names::Named for $ty {
+        impl $crate::Named for $ty {
             const WHAT: &'static str = $what;
             const PARAM: &'static str = $param;
             const ALL: &'static [Self] = &<$ty>::ALL;
@@ -101,10 +101,10 @@ macro_rules! named_enum {
         }
 
         impl ::core::str::FromStr for $ty {
-            type Err = $crate::model::error::Error;
+            type Err = $crate::Error;
 
-            fn from_str(s: &str) -> $crate::model::error::Result<Self> {
-                $crate::model::names::parse(s)
+            fn from_str(s: &str) -> $crate::Result<Self> {
+                <$ty as $crate::Named>::parse_name(s)
             }
         }
     };

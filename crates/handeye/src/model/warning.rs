@@ -54,7 +54,7 @@ pub enum Warning {
     Outliers {
         /// How many.
         count: usize,
-        /// The first [`SHOWN`] of them.
+        /// The first `SHOWN` of them.
         shown: Vec<OutlierPose>,
     },
     /// Poses the others predict poorly (the held-out check).
@@ -65,7 +65,7 @@ pub enum Warning {
         median_rotation_deg: f64,
         /// The median held-out gap: input units.
         median_translation: f64,
-        /// The names of the first [`SHOWN`] of them.
+        /// The names of the first `SHOWN` of them.
         shown: Vec<String>,
     },
     /// A direction of X is only weakly determined.

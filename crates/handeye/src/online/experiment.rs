@@ -341,33 +341,6 @@ fn summarise(method: String, batch: bool, per_series: Vec<SeriesResult>) -> Meth
     }
 }
 
-/// The report as a Markdown table.
-pub fn markdown_table(report: &ExperimentReport) -> String {
-    let mut out = format!(
-        "### {} ({} series × {} poses, seed {})\n\n| method | series with calibration | calibrations (mean / median) | ‖ΔR‖_F | rotation (°) | t_rel | time per calibration (µs) |\n|---|---|---|---|---|---|---|\n",
-        report.experiment, report.config.series, report.config.sim.poses, report.config.seed
-    );
-    for m in &report.methods {
-        let name = if m.batch {
-            format!("batch `{}` (all poses)", m.method)
-        } else {
-            format!("**{}**", m.method)
-        };
-        out += &format!(
-            "| {name} | {}/{} | {:.2} / {:.1} | {:.4} | {:.3} | {:.4} | {:.2} |\n",
-            m.series_with_calibration,
-            m.series,
-            m.calibrations_mean,
-            m.calibrations_median,
-            m.rot_fro_mean,
-            m.rot_deg_mean,
-            m.trans_rel_mean,
-            m.time_per_calibration_s * 1e6
-        );
-    }
-    out
-}
-
 /// Settings of the tracking experiment (beyond the paper): how the running estimates improve with
 /// the poses, and how fast a change of X is noticed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -624,43 +597,3 @@ fn detect(config: &TrackingConfig, rotation_deg: f64, translation: f64) -> Resul
     })
 }
 
-/// The tracking report as Markdown.
-pub fn tracking_table(report: &TrackingReport) -> String {
-    let mut out = format!(
-        "### tracking ({} series × {} poses, seed {})\n\n| poses |",
-        report.config.series, report.config.poses, report.config.seed
-    );
-    for c in &report.curves {
-        out += &format!(" {} ‖ΔR‖_F / t_rel |", c.method);
-    }
-    out += "\n|---|";
-    out += &"---|".repeat(report.curves.len());
-    out += "\n";
-    let n = report.curves.first().map_or(0, |c| c.poses.len());
-    for k in (0..n).filter(|k| (k + 1) % 2 == 0 || *k == 0) {
-        out += &format!("| {} |", report.curves[0].poses[k]);
-        for c in &report.curves {
-            out += &format!(" {:.4} / {:.3} |", c.rot_fro[k], c.trans_rel[k]);
-        }
-        out += "\n";
-    }
-    out += &format!(
-        "\n### change detection ({} series × {} poses, jump at pose {})\n\n| jump | detected within 30 poses | median delay (poses) | false alarms / stationary poses | final error vs new X (°) |\n|---|---|---|---|---|\n",
-        report.config.series,
-        report.config.jump_poses,
-        report.config.jump_poses / 2
-    );
-    for d in &report.detection {
-        out += &format!(
-            "| {}° / {} mm | {:.0}% | {} | {} / {} | {:.3} |\n",
-            d.rotation_deg,
-            d.translation,
-            100.0 * d.detected_within_30,
-            d.median_delay.map_or("–".to_string(), |m| m.to_string()),
-            d.false_alarms,
-            d.stationary_poses,
-            d.final_rot_deg
-        );
-    }
-    out
-}

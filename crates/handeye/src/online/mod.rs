@@ -129,7 +129,7 @@ pub enum Estimator {
     #[default]
     Paper,
     /// Normal equations over every pair of poses since the last detected change of X, updated in
-    /// O(1) per pose and reported on their own schedule ([`crate::tracking`]); the paper's
+    /// O(1) per pose and reported on their own schedule (`crate::tracking`); the paper's
     /// calibrations still run beside it.
     Accumulate,
 }

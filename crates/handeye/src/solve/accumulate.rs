@@ -299,6 +299,7 @@ impl PoseAccumulator {
     }
 
     /// Forgets every pose (after a detected change).
+    #[cfg(any(test, feature = "internals"))]
     pub fn reset(&mut self) {
         *self = Self::new(self.setup);
     }
@@ -678,11 +679,13 @@ impl RobotWorldAccumulator {
     }
 
     /// Poses accumulated.
+    #[cfg(any(test, feature = "internals"))]
     pub fn poses(&self) -> usize {
         self.n
     }
 
     /// Forgets every pose (after a detected change).
+    #[cfg(any(test, feature = "internals"))]
     pub fn reset(&mut self) {
         *self = Self::new(self.setup);
     }

@@ -20,13 +20,13 @@ use crate::solve::{
 ///
 /// # Example
 /// ```
-/// use handeye::{MotionPair, Transform, andreff};
+/// use handeye::{Method, MotionPair, Transform, solve};
 /// use nalgebra::{Rotation3, Translation3, Vector3};
 /// let x = Transform::from_parts(Translation3::new(0.1, 0.0, 0.05), Rotation3::from_euler_angles(0.1, 0.2, 0.3));
 /// let a1 = Transform::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.5, 0.0, 0.0));
 /// let a2 = Transform::new(Vector3::new(-0.2, 0.1, 0.4), Vector3::new(0.0, 0.4, 0.1));
 /// let motions: Vec<_> = [a1, a2].iter().map(|a| MotionPair { a: *a, b: x.inverse() * a * x }).collect();
-/// let cal = andreff(&motions)?;
+/// let cal = solve(Method::Andreff, &motions)?;
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```

@@ -31,11 +31,16 @@ pub use andreff_joint::andreff_joint;
 pub use daniilidis::daniilidis;
 pub use horaud::horaud;
 pub use park::park;
-pub use refine::{RefineOptions, Refinement, Termination, covariance_at, refine, refine_from};
+pub use refine::{RefineOptions, Termination, refine, refine_from};
+#[cfg(feature = "internals")]
+pub use refine::{Refinement, covariance_at};
 pub use robot_world::{
-    JointCovariance, PoseResidual, RobotWorld, RobotWorldMethod, RobotWorldRefinement,
-    joint_covariance, li, pose_residuals, refine_robot_world, refine_robot_world_from, robot_world,
-    shah, target_frame,
+    JointCovariance, PoseResidual, RobotWorld, RobotWorldMethod, joint_covariance, pose_residuals,
+    robot_world, target_frame,
+};
+#[cfg(feature = "internals")]
+pub use robot_world::{
+    RobotWorldRefinement, li, refine_robot_world, refine_robot_world_from, shah,
 };
 pub(crate) use rotation_system::{RotationSolution, RotationSystem};
 #[cfg(test)]

@@ -85,7 +85,8 @@ pub struct Refinement {
 ///
 /// # Example
 /// ```
-/// use handeye::{MotionPair, Transform, refine};
+/// use handeye::solve::refine;
+/// use handeye::{MotionPair, Transform};
 /// use nalgebra::{Rotation3, Translation3, Vector3};
 /// let x = Transform::from_parts(Translation3::new(0.1, 0.0, 0.05), Rotation3::from_euler_angles(0.1, 0.2, 0.3));
 /// let a1 = Transform::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.5, 0.0, 0.0));
@@ -235,6 +236,7 @@ fn levenberg_marquardt(
 /// Covariance of X's parameters (rotation increment of `R_x exp([δ]×)` in radians, then t_x) at a
 /// given X, as [`Refinement::covariance`]: the uncertainty of a solution from its residuals
 /// (Gauss–Newton, each residual block's noise estimated from its own residuals).
+#[cfg(any(test, feature = "internals"))]
 pub fn covariance_at(
     motions: &(impl MotionSource + ?Sized),
     x: &Transform,

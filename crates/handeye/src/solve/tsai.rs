@@ -13,7 +13,7 @@ use crate::solve::{
     Calibration, Method, MotionCheck, check_motions, finish, singular, translation_least_squares,
 };
 
-/// Options of [`tsai_with`]; `Default` gives the values on each field.
+/// Options of `tsai_with`; `Default` gives the values on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct TsaiOptions {
     /// Drop the motions whose gripper rotation (A) or camera rotation (B) has 2·sin(θ/2) outside
@@ -41,13 +41,13 @@ const FILTER_RANGE: (f64, f64) = (0.3, 1.7);
 ///
 /// # Example
 /// ```
-/// use handeye::{MotionPair, Transform, tsai};
+/// use handeye::{Method, MotionPair, Transform, solve};
 /// use nalgebra::{Rotation3, Translation3, Vector3};
 /// let x = Transform::from_parts(Translation3::new(0.1, 0.0, 0.05), Rotation3::from_euler_angles(0.1, 0.2, 0.3));
 /// let a1 = Transform::new(Vector3::new(0.1, 0.2, 0.3), Vector3::new(0.5, 0.0, 0.0));
 /// let a2 = Transform::new(Vector3::new(-0.2, 0.1, 0.4), Vector3::new(0.0, 0.4, 0.1));
 /// let motions: Vec<_> = [a1, a2].iter().map(|a| MotionPair { a: *a, b: x.inverse() * a * x }).collect();
-/// let cal = tsai(&motions)?;
+/// let cal = solve(Method::Tsai, &motions)?;
 /// assert!((cal.x.to_homogeneous() - x.to_homogeneous()).norm() < 1e-9);
 /// # Ok::<(), handeye::Error>(())
 /// ```

@@ -44,9 +44,9 @@ use crate::model::findings::Reading;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::rotation_angle_between;
 
-pub use events::{
-    Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate, target_frame,
-};
+pub use events::{Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate};
+#[cfg(feature = "internals")]
+pub use events::target_frame;
 use segment::{Segment, Snapshot};
 
 /// Settings of the tracker; `Default` gives the values on each field.

@@ -62,7 +62,7 @@ pub fn is_bag(path: &Path) -> bool {
 
 /// The files of a recording, in reading order, and their storage.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Bag {
+pub(crate) struct Bag {
     /// The path given.
     pub path: PathBuf,
     /// The storage files: the path itself, or those of the directory by split number.
@@ -173,7 +173,7 @@ pub struct BagOptions {
 }
 
 /// Default `max_gap`, seconds.
-pub const DEFAULT_MAX_GAP: f64 = 0.1;
+pub(crate) const DEFAULT_MAX_GAP: f64 = 0.1;
 
 /// The pose pairs of a recording.
 #[derive(Debug, Clone, PartialEq)]
