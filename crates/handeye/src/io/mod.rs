@@ -11,6 +11,7 @@ mod jsonl;
 mod jsonl_fast;
 mod lines;
 mod peer;
+#[cfg(feature = "rosbag")]
 pub mod rosbag;
 mod stamped;
 pub mod sync;
