@@ -100,7 +100,6 @@ pub fn run(args: Args) -> Result<()> {
     let (poses, pose_names, time_offset) = read_all(&args.input)?;
     enough(&args.input, poses.len(), 2, "to make a motion")?;
     let face = Face::chosen(args.output);
-    let unit = length_unit(&poses);
     let report = match calibrate(
         &poses,
         setup,
@@ -124,6 +123,8 @@ pub fn run(args: Args) -> Result<()> {
             return Err(e.into());
         }
     };
+    // The unit of the poses as solved: a `--fix robot-mm` (or `auto`) reading has made them metres.
+    let unit = length_unit(&report.reading.applied.apply(&poses));
     if let Some(path) = &args.report {
         crate::report::write_calibrate(path, &poses, setup, &report)?;
         eprintln!("wrote {}", path.display());
