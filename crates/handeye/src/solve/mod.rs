@@ -12,6 +12,7 @@ mod andreff_joint;
 mod daniilidis;
 mod horaud;
 mod least_squares;
+mod lm;
 pub mod motions;
 mod park;
 mod quaternion;
@@ -30,8 +31,9 @@ pub use andreff::andreff;
 pub use andreff_joint::andreff_joint;
 pub use daniilidis::daniilidis;
 pub use horaud::horaud;
+pub use lm::{RefineOptions, Termination};
 pub use park::park;
-pub use refine::{RefineOptions, Refinement, Termination, covariance_at, refine, refine_from};
+pub use refine::{Refinement, covariance_at, refine, refine_from};
 pub use robot_world::{
     JointCovariance, PoseResidual, RobotWorld, RobotWorldMethod, RobotWorldRefinement,
     joint_covariance, li, pose_residuals, refine_robot_world, refine_robot_world_from, robot_world,

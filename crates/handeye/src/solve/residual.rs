@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::motion::MotionPair;
 use crate::model::pose::{Transform, rotation_angle_between, rotation_matrix, skew};
+use crate::solve::lm::Linearisation;
 use crate::solve::motions::{AllPairs, MotionSource};
 
 /// Smallest ‖t‖ used as a divisor in relative translation errors (an X with zero translation
@@ -178,17 +179,6 @@ impl BlockRms {
     }
 }
 
-/// Normal equations of the weighted residuals at one iterate, for the increment
-/// `R_x exp([δ]×)`, `t_x + Δt`.
-pub(crate) struct Linearisation {
-    /// JᵀJ.
-    pub(crate) jtj: Matrix6<f64>,
-    /// Jᵀr.
-    pub(crate) jtr: Vector6<f64>,
-    /// ½Σr².
-    pub(crate) cost: f64,
-}
-
 /// The residuals of a set of motions as the refinement sees them. `weights` multiply the ΔR and
 /// the ΔT block.
 pub(crate) trait Residuals {
@@ -197,8 +187,12 @@ pub(crate) trait Residuals {
     /// Σ‖ΔR‖² and Σ‖ΔT‖² at (R_x, t_x).
     fn block_rms(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>) -> BlockRms;
     /// JᵀJ, Jᵀr and ½Σr² at (R_x, t_x).
-    fn linearise(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>, weights: [f64; 2])
-    -> Linearisation;
+    fn linearise(
+        &self,
+        r_x: &Matrix3<f64>,
+        t_x: &Vector3<f64>,
+        weights: [f64; 2],
+    ) -> Linearisation<6>;
 
     /// Weighted cost ½Σr² at (R_x, t_x).
     fn cost(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>, weights: [f64; 2]) -> f64;
@@ -248,7 +242,7 @@ impl<M: MotionSource + ?Sized> Residuals for PerMotion<'_, M> {
         r_x: &Matrix3<f64>,
         t_x: &Vector3<f64>,
         weights: [f64; 2],
-    ) -> Linearisation {
+    ) -> Linearisation<6> {
         let mut jtj = Matrix6::zeros();
         let mut jtr = Vector6::zeros();
         let mut cost = 0.0;
@@ -372,7 +366,7 @@ impl Residuals for Quadratic {
         r_x: &Matrix3<f64>,
         t_x: &Vector3<f64>,
         weights: [f64; 2],
-    ) -> Linearisation {
+    ) -> Linearisation<6> {
         let z = z_of(r_x, t_x);
         let j = z_jacobian(r_x);
         let m = self.weighted(weights);
