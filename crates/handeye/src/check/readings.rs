@@ -301,8 +301,8 @@ fn fit(poses: &[PosePair], setup: Setup, reading: Reading) -> Option<ReadingFit>
         poses
             .iter()
             .zip(&r.residuals)
-            .map(|(p, (w, t))| {
-                let d = transform_from_parts(&exp_so3(w), t);
+            .map(|(p, r)| {
+                let d = transform_from_parts(&exp_so3(&r.rotation), &r.translation);
                 let c = p.camera_from_target;
                 (c * d.inverse() * c.inverse()).translation.vector.norm()
             })

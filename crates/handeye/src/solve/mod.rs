@@ -34,10 +34,10 @@ pub use horaud::horaud;
 pub use lm::{RefineOptions, Termination};
 pub use park::park;
 pub use refine::{Refinement, covariance_at, refine, refine_from};
+pub use residual::PoseResidual;
 pub use robot_world::{
-    JointCovariance, PoseResidual, RobotWorld, RobotWorldMethod, RobotWorldRefinement,
-    joint_covariance, li, pose_residuals, refine_robot_world, refine_robot_world_from, robot_world,
-    shah, target_frame,
+    JointCovariance, RobotWorld, RobotWorldMethod, RobotWorldRefinement, joint_covariance, li,
+    pose_residuals, refine_robot_world, refine_robot_world_from, robot_world, shah, target_frame,
 };
 pub(crate) use rotation_system::{RotationSolution, RotationSystem};
 #[cfg(test)]

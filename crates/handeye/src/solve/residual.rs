@@ -13,7 +13,7 @@ use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use crate::model::motion::MotionPair;
-use crate::model::pose::{Transform, rotation_angle_between, rotation_matrix, skew};
+use crate::model::pose::{Transform, axis_angle, rotation_angle_between, rotation_matrix, skew};
 use crate::solve::lm::Linearisation;
 use crate::solve::motions::{AllPairs, MotionSource};
 
@@ -58,6 +58,43 @@ impl MotionResidual {
             )
             .to_degrees(),
         }
+    }
+}
+
+/// One pose's disagreement with the fixed frame Y that all poses share: Y_i = Q_i X C_i (the fixed
+/// frame as pose i and X see it, Q_i the hand pose) against Y, as a rotation and a translation.
+/// The hand–eye checks take it in the target frame, D_i = Y⁻¹ Y_i
+/// ([`crate::check::outliers::PoseResiduals`]); the robot-world report in the fixed frame,
+/// R_Yᵀ R_Yi and t_Yi − t_Y ([`crate::solve::pose_residuals`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseResidual {
+    /// The rotation as a rotation vector θk, radians ([`crate::model::pose::log_so3`]).
+    pub rotation: Vector3<f64>,
+    /// The rotation angle θ, radians (‖`rotation`‖ up to rounding).
+    pub angle: f64,
+    /// The translation, input units.
+    pub translation: Vector3<f64>,
+}
+
+impl PoseResidual {
+    /// The residual of a rotation (a rotation matrix) and a translation.
+    pub fn new(rotation: &Matrix3<f64>, translation: Vector3<f64>) -> Self {
+        let (angle, axis) = axis_angle(rotation);
+        Self {
+            rotation: axis.map_or_else(Vector3::zeros, |k| k * angle),
+            angle,
+            translation,
+        }
+    }
+
+    /// The rotation angle θ, degrees.
+    pub fn angle_deg(&self) -> f64 {
+        self.angle.to_degrees()
+    }
+
+    /// The length of the translation, input units.
+    pub fn distance(&self) -> f64 {
+        self.translation.norm()
     }
 }
 

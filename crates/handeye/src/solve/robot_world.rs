@@ -46,7 +46,7 @@ use crate::model::pose::{
 };
 use crate::model::warning::Warning;
 use crate::solve::lm::{LeastSquares, Linearisation, levenberg_marquardt};
-use crate::solve::residual::BlockRms;
+use crate::solve::residual::{BlockRms, PoseResidual};
 use crate::solve::scale::weighting_from_scale;
 use crate::solve::{RefineOptions, Termination, check_motions, singular};
 
@@ -399,16 +399,8 @@ pub(crate) fn pose_residual(
     (dr, dt)
 }
 
-/// One pose's residual in a report.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct PoseResidual {
-    /// Angle between R_Y and R_Q R_X R_C, degrees.
-    pub rotation_deg: f64,
-    /// ‖ΔT‖: how far pose i puts the target's origin from Y's, input units.
-    pub translation: f64,
-}
-
-/// The per-pose residuals of Q_i X C_i = Y at (X, Y).
+/// The per-pose residuals of Q_i X C_i = Y at (X, Y), in the fixed frame: the rotation
+/// R_Yᵀ R_Q R_X R_C and the translation ΔT of [`pose_residual`].
 pub fn pose_residuals(
     poses: &[PosePair],
     setup: Setup,
@@ -423,12 +415,7 @@ pub fn pose_residuals(
             let q = setup.hand_pose(&p.base_from_gripper);
             let (_, dt) = pose_residual(&q, &p.camera_from_target, (&r_x, &t_x), (&r_y, &t_y));
             let predicted = rotation_matrix(&q) * r_x * rotation_matrix(&p.camera_from_target);
-            PoseResidual {
-                rotation_deg: crate::model::pose::axis_angle(&(r_y.transpose() * predicted))
-                    .0
-                    .to_degrees(),
-                translation: dt.norm(),
-            }
+            PoseResidual::new(&(r_y.transpose() * predicted), dt)
         })
         .collect()
 }
