@@ -194,7 +194,7 @@ pub enum Error {
     #[error("the input looks misread: {}", misread_advice(.finding, .readings, .setup))]
     Misread {
         /// What fits better, how well, and the other readings that fit as well, in words (no
-        /// face's spelling of the fix): [`crate::check::readings::ReadingCheck::finding`].
+        /// face's spelling of the fix), as `ReadingCheck::finding` words it.
         finding: String,
         /// The readings that fit far better, the one the finding leads with first.
         readings: Vec<Reading>,
@@ -255,8 +255,8 @@ pub enum Error {
 
 impl Error {
     /// The one option of the call that would fix the refusal, if one would (as
-    /// [`Warning::remedy`] for a caution): the better
-    /// reading of a misread input, or the first remedy of what makes X untrusted.
+    /// [`Warning::remedy`] for a caution): the better reading of a misread input, or the first
+    /// remedy of what makes X untrusted.
     pub fn remedy(&self) -> Option<Remedy> {
         match self {
             Self::Misread { readings, .. } => readings.first().map(|&r| Remedy::Fix(r)),

@@ -5,7 +5,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::error::Result;
 use crate::model::pose::{Transform, exp_so3, proj_so3, rotation_matrix, transform_from_parts};
-use crate::solve::lm::{self, LeastSquares, Linearisation, RefineOptions, Termination};
+use crate::solve::lm::{
+    LeastSquares, Linearisation, RefineOptions, Termination, levenberg_marquardt,
+};
 use crate::solve::motions::MotionSource;
 use crate::solve::residual::{PerMotion, Residuals, covariance};
 use crate::solve::scale::{Scaled, length_scale};
@@ -90,7 +92,7 @@ fn with_residuals<T>(
     }
 }
 
-/// Levenberg–Marquardt ([`lm::levenberg_marquardt`]) in the data's length unit.
+/// Levenberg–Marquardt ([`levenberg_marquardt`]) in the data's length unit.
 fn run(
     motions: &(impl MotionSource + ?Sized),
     start: &Transform,
@@ -104,7 +106,7 @@ fn run(
     // or micrometres.
     let unit = length_scale(motions);
     with_residuals(motions, unit, |residuals| {
-        levenberg_marquardt(residuals, unit, start, check, options)
+        refine_in_unit(residuals, unit, start, check, options)
     })
 }
 
@@ -142,7 +144,7 @@ impl LeastSquares<6> for HandEye<'_> {
 }
 
 /// [`run`] on the residuals of the motions in units of `unit`.
-fn levenberg_marquardt(
+fn refine_in_unit(
     residuals: &dyn Residuals,
     unit: f64,
     start: &Transform,
@@ -156,7 +158,7 @@ fn levenberg_marquardt(
         residuals,
         weights: [1.0 / scales[0], 1.0 / scales[1]],
     };
-    let end = lm::levenberg_marquardt(&problem, (r_x, t_x), options);
+    let end = levenberg_marquardt(&problem, (r_x, t_x), options);
     let (r_x, t_x) = end.state;
     let covariance = in_input_unit(covariance(residuals, &r_x, &t_x), unit);
     Refinement {

@@ -64,11 +64,11 @@ impl MotionResidual {
 /// One pose's disagreement with the fixed frame Y that all poses share: Y_i = Q_i X C_i (the fixed
 /// frame as pose i and X see it, Q_i the hand pose) against Y, as a rotation and a translation.
 /// The hand–eye checks take it in the target frame, D_i = Y⁻¹ Y_i
-/// ([`crate::check::outliers::PoseResiduals`]); the robot-world report in the fixed frame,
-/// R_Yᵀ R_Yi and t_Yi − t_Y ([`crate::solve::pose_residuals`]).
+/// (`check::outliers::PoseResiduals`); the robot-world report in the fixed frame,
+/// R_Yᵀ R_Yi and t_Yi − t_Y (`solve::pose_residuals`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PoseResidual {
-    /// The rotation as a rotation vector θk, radians ([`crate::model::pose::log_so3`]).
+    /// The rotation as a rotation vector θk, radians (`log_so3` of the rotation).
     pub rotation: Vector3<f64>,
     /// The rotation angle θ, radians (‖`rotation`‖ up to rounding).
     pub angle: f64,

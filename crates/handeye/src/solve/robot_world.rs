@@ -400,7 +400,7 @@ pub(crate) fn pose_residual(
 }
 
 /// The per-pose residuals of Q_i X C_i = Y at (X, Y), in the fixed frame: the rotation
-/// R_Yᵀ R_Q R_X R_C and the translation ΔT of [`pose_residual`].
+/// R_Yᵀ R_Q R_X R_C and the translation ΔT of `pose_residual`.
 pub fn pose_residuals(
     poses: &[PosePair],
     setup: Setup,
