@@ -114,7 +114,7 @@ fn generic_noise_free_data_are_solved_by_every_method_in_both_setups() {
             let res = pose_residuals(&poses, setup, &rw.x, &rw.target);
             assert!(
                 res.iter()
-                    .all(|r| r.rotation_deg < 1e-6 && r.translation < 1e-9)
+                    .all(|r| r.angle_deg() < 1e-6 && r.distance() < 1e-9)
             );
         }
     }

@@ -187,8 +187,13 @@ fn every_mistake_is_refused_or_flagged_with_its_fix() {
             _ => None,
         };
         match (mistake, &result) {
-            (_, Err(Error::Misread { advice, .. })) if fix.is_some() => {
+            (_, Err(refusal @ Error::Misread { readings, .. })) if fix.is_some() => {
+                let advice = refusal.to_string();
                 assert!(advice.contains(fix.unwrap()), "{file}: {advice}");
+                // The fix the words give is the typed remedy.
+                let remedy = Remedy::Fix(readings[0]);
+                assert_eq!(refusal.remedy(), Some(remedy), "{file}");
+                assert!(advice.contains(&remedy.in_words()), "{file}: {advice}");
                 // Read as the advice says, the answer is right within its uncertainty.
                 let reading: Reading = fix.unwrap()["--fix ".len()..].parse().unwrap();
                 let fixed = run(
@@ -213,7 +218,9 @@ fn every_mistake_is_refused_or_flagged_with_its_fix() {
                     r.warnings
                 );
             }
-            ("typo_x1000", Err(Error::Untrusted { advice })) => {
+            ("typo_x1000", Err(refusal @ Error::Untrusted { .. })) => {
+                let advice = refusal.to_string();
+                assert_eq!(refusal.remedy(), Some(Remedy::RejectOutliers), "{file}");
                 let line = e["bad_lines"][0].as_u64().unwrap();
                 assert!(
                     advice.contains(&format!("{file}:{line} ")),

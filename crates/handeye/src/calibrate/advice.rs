@@ -101,11 +101,8 @@ pub fn advise(poses: &[PosePair], setup: Setup, count: usize) -> Result<Advice> 
         .map(|i| poses[i])
         .collect();
     let check = check_readings(&kept, setup);
-    if let Some(advice) = check.advice(setup) {
-        return Err(Error::Misread {
-            advice,
-            readings: check.fitting_better(),
-        });
+    if let Some(misread) = check.misread(setup) {
+        return Err(misread);
     }
     let poses = &kept[..];
     let mut acc = PoseAccumulator::new(setup);

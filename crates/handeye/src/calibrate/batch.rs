@@ -441,10 +441,8 @@ pub fn solve_poses_checked(
     )?;
     if !found.poses.is_empty() {
         return Err(Error::Untrusted {
-            advice: format!(
-                "{}; X would follow them: leave them out, or calibrate with `reject_outliers=True` (`handeye.calibrate` in Python, `--reject-outliers` on the command line)",
-                outlier_warning(&outlier_report(&found, options))
-            ),
+            refusal: None,
+            why: vec![outlier_warning(&outlier_report(&found, options))],
         });
     }
     let mut calibration = solve_poses(&read, setup, options)?;
@@ -581,8 +579,9 @@ pub(crate) fn choose_reading(
             Ok((Reading::AsGiven, Some(check)))
         }
         _ => Err(Error::Misread {
-            advice: check.advice(setup).unwrap_or(finding),
+            finding,
             readings: check.fitting_better(),
+            setup,
         }),
     }
 }
@@ -615,19 +614,13 @@ pub(crate) fn explained(
     warnings: &[Warning],
     kept_outliers: Option<&Warning>,
 ) -> Error {
-    let why: Vec<String> = warnings
-        .iter()
-        .chain(kept_outliers)
-        .map(|w| match w.remedy() {
-            Some(remedy) => format!("{w}; {}", remedy.in_words()),
-            None => w.to_string(),
-        })
-        .collect();
+    let why: Vec<Warning> = warnings.iter().chain(kept_outliers).cloned().collect();
     if why.is_empty() {
         return refusal;
     }
     Error::Untrusted {
-        advice: format!("{refusal}; {}", why.join("; ")),
+        refusal: Some(Box::new(refusal)),
+        why,
     }
 }
 

@@ -100,8 +100,53 @@ pub struct PoseResidualSummary {
     pub translation_rms: f64,
     /// The largest translation residual, input units.
     pub translation_max: f64,
-    /// Per pose, in input order.
+    /// Per pose, in input order; printed as `{"rotation_deg", "translation"}` (the angle and the
+    /// distance), so that a report read back keeps these two, not the directions: its rotations
+    /// and translations lie along x.
+    #[serde(with = "printed")]
     pub per_pose: Vec<PoseResidual>,
+}
+
+/// A pose's residual as a report prints it: its angle and its distance.
+#[derive(Serialize, Deserialize)]
+struct Printed {
+    rotation_deg: f64,
+    translation: f64,
+}
+
+/// `serde(with)` of [`PoseResidualSummary::per_pose`].
+mod printed {
+    use nalgebra::Vector3;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    use super::{PoseResidual, Printed};
+
+    pub(super) fn serialize<S: Serializer>(
+        rows: &[PoseResidual],
+        serializer: S,
+    ) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq(rows.iter().map(|r| Printed {
+            rotation_deg: r.angle_deg(),
+            translation: r.distance(),
+        }))
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        deserializer: D,
+    ) -> Result<Vec<PoseResidual>, D::Error> {
+        let rows = Vec::<Printed>::deserialize(deserializer)?;
+        Ok(rows
+            .into_iter()
+            .map(|p| {
+                let angle = p.rotation_deg.to_radians();
+                PoseResidual {
+                    rotation: Vector3::x() * angle,
+                    angle,
+                    translation: Vector3::x() * p.translation,
+                }
+            })
+            .collect())
+    }
 }
 
 /// The result of [`calibrate_robot_world`]: X, the target's pose, how far to trust both.
@@ -215,10 +260,10 @@ pub fn calibrate_robot_world(
     };
     let max = |f: fn(&PoseResidual) -> f64| per_pose.iter().map(f).fold(0.0, f64::max);
     let residual = PoseResidualSummary {
-        rotation_deg_rms: rms(|r| r.rotation_deg),
-        rotation_deg_max: max(|r| r.rotation_deg),
-        translation_rms: rms(|r| r.translation),
-        translation_max: max(|r| r.translation),
+        rotation_deg_rms: rms(PoseResidual::angle_deg),
+        rotation_deg_max: max(PoseResidual::angle_deg),
+        translation_rms: rms(PoseResidual::distance),
+        translation_max: max(PoseResidual::distance),
         per_pose,
     };
     Ok(RobotWorldReport {

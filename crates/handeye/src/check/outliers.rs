@@ -18,7 +18,8 @@ use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::model::motion::{MotionFeatures, MotionPair, PosePair, Setup};
-use crate::model::pose::{Transform, axis_angle, exp_so3, log_so3, proj_so3, transform_from_parts};
+use crate::model::pose::{Transform, axis_angle, exp_so3, proj_so3, transform_from_parts};
+use crate::solve::residual::PoseResidual;
 
 /// Partners each pose is compared with in [`pose_outliers`] (all others when there are fewer).
 const PARTNERS: usize = 32;
@@ -275,16 +276,13 @@ pub(crate) fn translation_scale(poses: &[PosePair], setup: Setup) -> f64 {
     median(hand.iter().map(|v| (v - centre).norm()).collect())
 }
 
-/// One pose's disagreement D_i as (rotation vector, radians; translation, input units).
-pub type PoseResidual = (Vector3<f64>, Vector3<f64>);
-
 /// Each pose's disagreement D_i = Y⁻¹ Y_i with the common fixed frame Y under a given X.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseResiduals {
     /// The common frame Y (`base_from_target` eye-in-hand, `gripper_from_target` eye-to-hand):
     /// a robust mean of the Y_i.
     pub y: Transform,
-    /// D_i per pose as (rotation vector, radians; translation, input units), in the target frame.
+    /// D_i per pose, in the target frame.
     pub residuals: Vec<PoseResidual>,
 }
 
@@ -299,12 +297,12 @@ impl PoseResiduals {
         let mut y = mean_of(ys.iter()).unwrap_or_else(Transform::identity);
         for _ in 0..2 {
             let d: Vec<_> = ys.iter().map(|yi| residual(&y, yi)).collect();
-            let limit_r = 5.0 * median(d.iter().map(|r| r.0.norm()).collect());
-            let limit_t = 5.0 * median(d.iter().map(|r| r.1.norm()).collect());
+            let limit_r = 5.0 * median(d.iter().map(|r| r.rotation.norm()).collect());
+            let limit_t = 5.0 * median(d.iter().map(PoseResidual::distance).collect());
             let kept = ys
                 .iter()
                 .zip(&d)
-                .filter(|(_, r)| r.0.norm() <= limit_r && r.1.norm() <= limit_t)
+                .filter(|(_, r)| r.rotation.norm() <= limit_r && r.distance() <= limit_t)
                 .map(|(yi, _)| yi);
             if let Some(mean) = mean_of(kept) {
                 y = mean;
@@ -318,12 +316,12 @@ impl PoseResiduals {
 
     /// Median rotation residual, degrees.
     pub fn median_rotation_deg(&self) -> f64 {
-        median(self.residuals.iter().map(|r| r.0.norm()).collect()).to_degrees()
+        median(self.residuals.iter().map(|r| r.rotation.norm()).collect()).to_degrees()
     }
 
     /// Median translation residual, input units.
     pub fn median_translation(&self) -> f64 {
-        median(self.residuals.iter().map(|r| r.1.norm()).collect())
+        median(self.residuals.iter().map(PoseResidual::distance).collect())
     }
 
     /// The pose `camera_from_target` that agrees exactly with X and Y, with the residual
@@ -341,10 +339,10 @@ impl PoseResiduals {
     }
 }
 
-/// D = Y⁻¹ Y_i as (rotation vector, translation).
+/// D = Y⁻¹ Y_i.
 fn residual(y: &Transform, yi: &Transform) -> PoseResidual {
     let d = y.inverse() * yi;
-    (log_so3(d.rotation.matrix()), d.translation.vector)
+    PoseResidual::new(d.rotation.matrix(), d.translation.vector)
 }
 
 /// Chordal mean: the rotation nearest to the summed rotation matrices, the mean translation.
@@ -440,8 +438,8 @@ mod tests {
                 &poses[3],
                 setup,
                 &s.gripper_from_camera,
-                &r.residuals[3].0,
-                &r.residuals[3].1,
+                &r.residuals[3].rotation,
+                &r.residuals[3].translation,
             );
             let diff = rebuilt.to_homogeneous() - s.poses[3].camera_from_target.to_homogeneous();
             assert!(diff.norm() < 1e-10, "{diff}");

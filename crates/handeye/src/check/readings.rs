@@ -10,10 +10,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::check::outliers::{PoseResiduals, gripper_rotations, median, translation_scale};
+use crate::model::error::{Error, misread_advice};
 use crate::model::findings::Reading;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{exp_so3, transform_from_parts};
-use crate::model::warning::{Remedy, Warning};
+use crate::model::warning::Warning;
 use crate::solve::REFUSE_ANGLE;
 use crate::solve::accumulate::PoseAccumulator;
 
@@ -147,26 +148,23 @@ impl ReadingCheck {
         Some(text)
     }
 
-    /// The finding with the fix in the words of both faces, for the refusal
-    /// ([`crate::model::error::Error::Misread`]).
+    /// The refusal of the input as given when a reading fits far better
+    /// ([`crate::model::error::Error::Misread`]): the finding and the readings, typed.
+    pub fn misread(&self, setup: Setup) -> Option<Error> {
+        Some(Error::Misread {
+            finding: self.finding(setup)?,
+            readings: self.fitting_better(),
+            setup,
+        })
+    }
+
+    /// The finding with the fix in the words of both faces: the advice of [`Self::misread`].
     pub fn advice(&self, setup: Setup) -> Option<String> {
-        let better = self.better?;
-        let mut text = format!(
-            "{}: correct the input, or {}",
-            self.finding(setup)?,
-            Remedy::Fix(better.reading).in_words()
-        );
-        if better.reading == Reading::RobotInverted {
-            let other = match setup {
-                Setup::EyeInHand => Setup::EyeToHand,
-                Setup::EyeToHand => Setup::EyeInHand,
-            }
-            .name();
-            text.push_str(&format!(
-                "; if the setup is {other}, pass `--setup {other}` (`setup=\"{other}\"` in Python)"
-            ));
-        }
-        Some(text)
+        Some(misread_advice(
+            &self.finding(setup)?,
+            &self.fitting_better(),
+            &setup,
+        ))
     }
 
     /// The readings that fit far better than the as-given one: the better one, then the others
@@ -301,8 +299,8 @@ fn fit(poses: &[PosePair], setup: Setup, reading: Reading) -> Option<ReadingFit>
         poses
             .iter()
             .zip(&r.residuals)
-            .map(|(p, (w, t))| {
-                let d = transform_from_parts(&exp_so3(w), t);
+            .map(|(p, r)| {
+                let d = transform_from_parts(&exp_so3(&r.rotation), &r.translation);
                 let c = p.camera_from_target;
                 (c * d.inverse() * c.inverse()).translation.vector.norm()
             })

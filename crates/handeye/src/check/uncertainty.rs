@@ -19,11 +19,12 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 
-use crate::check::outliers::{PoseResidual, PoseResiduals};
+use crate::check::outliers::PoseResiduals;
 use crate::model::error::Result;
 use crate::model::findings::{Direction, Verdict};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, log_so3};
+use crate::solve::residual::PoseResidual;
 
 /// Default number of bootstrap replicates: the one-sigma is known to about ±1/√(2·40) ≈ 11%.
 pub const REPLICATES: usize = 40;
@@ -106,7 +107,7 @@ pub fn bootstrap(
                 .iter()
                 .zip(&residuals.residuals)
                 .enumerate()
-                .map(|(i, (p, (r, t)))| {
+                .map(|(i, (p, d))| {
                     if i % block == 0 {
                         s = if rng.next_u64() & 1 == 0 {
                             inflate
@@ -120,8 +121,8 @@ pub fn bootstrap(
                             p,
                             setup,
                             x,
-                            &(r * s),
-                            &(t * s),
+                            &(d.rotation * s),
+                            &(d.translation * s),
                         ),
                     }
                 })
@@ -183,7 +184,7 @@ fn block_length(residuals: &[PoseResidual]) -> usize {
             })
             .unwrap_or(most)
     };
-    lag(|r| r.0).max(lag(|r| r.1))
+    lag(|r| r.rotation).max(lag(|r| r.translation))
 }
 
 /// See [`block_length`].

@@ -447,7 +447,7 @@ fn offset_cost(
     let mut squares: Vec<f64> = residuals
         .residuals
         .iter()
-        .map(|r| r.0.norm_squared())
+        .map(|r| r.rotation.norm_squared())
         .collect();
     squares.sort_by(f64::total_cmp);
     let kept = &squares[..(squares.len() * 4).div_ceil(5)];

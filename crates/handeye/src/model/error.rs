@@ -2,6 +2,10 @@
 
 use std::fmt;
 
+use crate::model::findings::Reading;
+use crate::model::motion::Setup;
+use crate::model::warning::{Remedy, Warning};
+
 /// What is wrong with a transform read from data.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
@@ -183,20 +187,30 @@ pub enum Error {
     },
     /// The poses fit far better read another way (inverted, another quaternion order, another
     /// unit): the as-given reading would give a wrong X.
-    #[error("the input looks misread: {advice}")]
+    ///
+    /// It carries the finding in words and the readings as data; its message adds the fix in the
+    /// words of both faces ([`Error::remedy`] gives it typed, for a face that words it in its own
+    /// terms: the OpenCV drop-in names OpenCV's arguments).
+    #[error("the input looks misread: {}", misread_advice(.finding, .readings, .setup))]
     Misread {
-        /// What fits better, and the fix.
-        advice: String,
-        /// The readings that fit far better, the one the advice leads with first: for a face
-        /// that words the fix in its own terms (the OpenCV drop-in names OpenCV's arguments).
-        readings: Vec<crate::model::findings::Reading>,
+        /// What fits better, how well, and the other readings that fit as well, in words (no
+        /// face's spelling of the fix), as `ReadingCheck::finding` words it.
+        finding: String,
+        /// The readings that fit far better, the one the finding leads with first.
+        readings: Vec<Reading>,
+        /// The setup the poses were read in (a robot pose inverted may be the other setup).
+        setup: Setup,
     },
     /// X is not determined, and the input shows why: outlier poses, or a reading of the input
-    /// that fits far better (kept by request).
-    #[error("X cannot be trusted: {advice}")]
+    /// that fits far better (kept by request). Its message gives each cause with its fix in the
+    /// words of both faces ([`Error::remedy`] gives the first fix typed).
+    #[error("X cannot be trusted: {}", untrusted_advice(.refusal, .why))]
     Untrusted {
-        /// What is undetermined, what the input shows, and the fix.
-        advice: String,
+        /// The refusal the input explains; `None` when the outlier poses alone refuse X (the
+        /// drop-in for OpenCV's `calibrateHandEye`, which returns X alone).
+        refusal: Option<Box<Error>>,
+        /// What the input shows: the warnings that explain the refusal, each with its remedy.
+        why: Vec<Warning>,
     },
     /// Malformed input data, with its place.
     #[error("{file}:{line}: field `{field}`: {message}")]
@@ -239,5 +253,133 @@ pub enum Error {
     },
 }
 
+impl Error {
+    /// The one option of the call that would fix the refusal, if one would (as
+    /// [`Warning::remedy`] for a caution): the better reading of a misread input, or the first
+    /// remedy of what makes X untrusted.
+    pub fn remedy(&self) -> Option<Remedy> {
+        match self {
+            Self::Misread { readings, .. } => readings.first().map(|&r| Remedy::Fix(r)),
+            Self::Untrusted { why, .. } => why.iter().find_map(|w| w.remedy()),
+            _ => None,
+        }
+    }
+}
+
+/// The advice of [`Error::Misread`]: the finding, then the fix in the words of both faces; for a
+/// robot pose inverted, also the other setup (which reads the robot poses the other way).
+pub(crate) fn misread_advice(finding: &str, readings: &[Reading], setup: &Setup) -> String {
+    let Some(&better) = readings.first() else {
+        return finding.to_string();
+    };
+    let mut text = format!(
+        "{finding}: correct the input, or {}",
+        Remedy::Fix(better).in_words()
+    );
+    if better == Reading::RobotInverted {
+        let other = match setup {
+            Setup::EyeInHand => Setup::EyeToHand,
+            Setup::EyeToHand => Setup::EyeInHand,
+        }
+        .name();
+        text.push_str(&format!(
+            "; if the setup is {other}, pass `--setup {other}` (`setup=\"{other}\"` in Python)"
+        ));
+    }
+    text
+}
+
+/// The advice of [`Error::Untrusted`]: the refusal, then each warning that explains it with its
+/// remedy in the words of both faces; without a refusal, the outliers and how to leave them out
+/// (for the drop-in, whose callers calibrate in Python or on the command line to do so).
+fn untrusted_advice(refusal: &Option<Box<Error>>, why: &[Warning]) -> String {
+    let Some(refusal) = refusal else {
+        return why
+            .iter()
+            .map(|w| format!("{w}; X would follow them: leave them out, or calibrate with `reject_outliers=True` (`handeye.calibrate` in Python, `--reject-outliers` on the command line)"))
+            .collect::<Vec<_>>()
+            .join("; ");
+    };
+    let mut parts = vec![refusal.to_string()];
+    parts.extend(why.iter().map(|w| match w.remedy() {
+        Some(remedy) => format!("{w}; {}", remedy.in_words()),
+        None => w.to_string(),
+    }));
+    parts.join("; ")
+}
+
 /// Result alias of the library.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::findings::OutlierPose;
+
+    fn outliers() -> Warning {
+        Warning::Outliers {
+            count: 1,
+            shown: vec![OutlierPose {
+                pose: 3,
+                name: "pose 3".into(),
+                angle_gap_deg: 2.0,
+                pitch_gap: 0.01,
+            }],
+        }
+    }
+
+    /// The words of each refusal, as the faces print them, and the typed remedy they name.
+    #[test]
+    fn refusals_word_their_typed_remedy() {
+        let misread = Error::Misread {
+            finding: "the poses fit far better read as x".into(),
+            readings: vec![Reading::RobotInverted, Reading::CameraInverted],
+            setup: Setup::EyeInHand,
+        };
+        assert_eq!(
+            misread.to_string(),
+            "the input looks misread: the poses fit far better read as x: correct the input, or \
+             pass `--fix robot-inverted` (`fix=\"robot-inverted\"` in Python) to read the input \
+             that way; if the setup is eye-to-hand, pass `--setup eye-to-hand` \
+             (`setup=\"eye-to-hand\"` in Python)"
+        );
+        assert_eq!(misread.remedy(), Some(Remedy::Fix(Reading::RobotInverted)));
+        let drop_in = Error::Untrusted {
+            refusal: None,
+            why: vec![outliers()],
+        };
+        assert_eq!(
+            drop_in.to_string(),
+            format!(
+                "X cannot be trusted: {}; X would follow them: leave them out, or calibrate with \
+                 `reject_outliers=True` (`handeye.calibrate` in Python, `--reject-outliers` on the \
+                 command line)",
+                outliers()
+            )
+        );
+        assert_eq!(drop_in.remedy(), Some(Remedy::RejectOutliers));
+        let explained = Error::Untrusted {
+            refusal: Some(Box::new(Error::TooFewMotions { got: 1, need: 2 })),
+            why: vec![
+                Warning::OneAxis {
+                    axis_spread_deg: 1.0,
+                },
+                outliers(),
+            ],
+        };
+        assert_eq!(
+            explained.to_string(),
+            format!(
+                "X cannot be trusted: 1 motion(s) given, at least 2 needed: record more poses \
+                 (each motion joins two poses); {}; {}; pass `--reject-outliers` \
+                 (`reject_outliers=True` in Python) to leave them out",
+                Warning::OneAxis {
+                    axis_spread_deg: 1.0
+                },
+                outliers()
+            )
+        );
+        assert_eq!(explained.remedy(), Some(Remedy::RejectOutliers));
+        assert_eq!(Error::TooFewMotions { got: 1, need: 2 }.remedy(), None);
+    }
+}

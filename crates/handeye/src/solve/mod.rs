@@ -12,6 +12,7 @@ mod andreff_joint;
 mod daniilidis;
 mod horaud;
 mod least_squares;
+mod lm;
 pub mod motions;
 mod park;
 mod quaternion;
@@ -30,13 +31,15 @@ pub use andreff::andreff;
 pub use andreff_joint::andreff_joint;
 pub use daniilidis::daniilidis;
 pub use horaud::horaud;
+pub use lm::{RefineOptions, Termination};
 pub use park::park;
-pub use refine::{RefineOptions, Termination, refine, refine_from};
+pub use refine::{refine, refine_from};
 #[cfg(feature = "internals")]
 pub use refine::{Refinement, covariance_at};
+pub use residual::PoseResidual;
 pub use robot_world::{
-    JointCovariance, PoseResidual, RobotWorld, RobotWorldMethod, joint_covariance, pose_residuals,
-    robot_world, target_frame,
+    JointCovariance, RobotWorld, RobotWorldMethod, joint_covariance, pose_residuals, robot_world,
+    target_frame,
 };
 #[cfg(feature = "internals")]
 pub use robot_world::{

@@ -1,55 +1,17 @@
 //! Nonlinear refinement of X: Levenberg–Marquardt on the A X − X B residuals.
 
-use nalgebra::{Matrix6, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use crate::model::error::Result;
 use crate::model::pose::{Transform, exp_so3, proj_so3, rotation_matrix, transform_from_parts};
+use crate::solve::lm::{
+    LeastSquares, Linearisation, RefineOptions, Termination, levenberg_marquardt,
+};
 use crate::solve::motions::MotionSource;
 use crate::solve::residual::{PerMotion, Residuals, covariance};
 use crate::solve::scale::{Scaled, length_scale};
 use crate::solve::{Calibration, Method, MotionCheck, andreff, check_motions};
-
-/// Levenberg–Marquardt settings; `Default` gives the values documented on each field.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct RefineOptions {
-    /// Iteration limit. Default 100.
-    pub max_iterations: usize,
-    /// Stop when the largest entry of the scaled gradient Jᵀr falls below this. Default 1e-14.
-    pub gradient_tolerance: f64,
-    /// Stop when a step changes the parameters by less than this (relative). Default 1e-15.
-    pub step_tolerance: f64,
-    /// Stop when an accepted step lowers the cost by less than this fraction. Default 1e-15.
-    pub cost_tolerance: f64,
-    /// Initial damping, relative to the largest diagonal entry of JᵀJ. Default 1e-3.
-    pub initial_damping: f64,
-}
-
-impl Default for RefineOptions {
-    fn default() -> Self {
-        Self {
-            max_iterations: 100,
-            gradient_tolerance: 1e-14,
-            step_tolerance: 1e-15,
-            cost_tolerance: 1e-15,
-            initial_damping: 1e-3,
-        }
-    }
-}
-
-/// Why the refinement stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Termination {
-    /// The gradient vanished (a stationary point).
-    GradientSmall,
-    /// Steps became negligible.
-    StepSmall,
-    /// The cost stopped decreasing.
-    CostConverged,
-    /// The iteration limit was reached; the last accepted iterate is returned.
-    MaxIterations,
-}
 
 /// The outcome of [`refine`] or [`refine_from`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -131,7 +93,7 @@ fn with_residuals<T>(
     }
 }
 
-/// Levenberg–Marquardt with Nielsen's damping update.
+/// Levenberg–Marquardt ([`levenberg_marquardt`]) in the data's length unit.
 fn run(
     motions: &(impl MotionSource + ?Sized),
     start: &Transform,
@@ -145,76 +107,60 @@ fn run(
     // or micrometres.
     let unit = length_scale(motions);
     with_residuals(motions, unit, |residuals| {
-        levenberg_marquardt(residuals, unit, start, check, options)
+        refine_in_unit(residuals, unit, start, check, options)
     })
 }
 
+/// The hand–eye refinement as a problem of the Levenberg–Marquardt loop: the iterate (R_x, t_x),
+/// t_x in units of the data's length scale, and the residuals weighted block by block.
+struct HandEye<'a> {
+    residuals: &'a dyn Residuals,
+    weights: [f64; 2],
+}
+
+impl LeastSquares<6> for HandEye<'_> {
+    type State = (Matrix3<f64>, Vector3<f64>);
+
+    fn linearise(&self, (r_x, t_x): &Self::State) -> Linearisation<6> {
+        self.residuals.linearise(r_x, t_x, self.weights)
+    }
+
+    fn step(&self, (r_x, t_x): &Self::State, delta: &Vector6<f64>) -> Self::State {
+        let rotation_step: Vector3<f64> = delta.fixed_rows::<3>(0).into_owned();
+        (
+            proj_so3(&(r_x * exp_so3(&rotation_step))),
+            t_x + delta.fixed_rows::<3>(3),
+        )
+    }
+
+    fn cost_drop(&self, from: &Self::State, to: &Self::State, cost: f64) -> f64 {
+        -self
+            .residuals
+            .cost_change((&from.0, &from.1), (&to.0, &to.1), cost, self.weights)
+    }
+
+    fn size(&self, (_, t_x): &Self::State) -> f64 {
+        t_x.norm() + 1.0
+    }
+}
+
 /// [`run`] on the residuals of the motions in units of `unit`.
-fn levenberg_marquardt(
+fn refine_in_unit(
     residuals: &dyn Residuals,
     unit: f64,
     start: &Transform,
     check: MotionCheck,
     options: &RefineOptions,
 ) -> Refinement {
-    let mut r_x = rotation_matrix(start);
-    let mut t_x = start.translation.vector / unit;
+    let r_x = rotation_matrix(start);
+    let t_x = start.translation.vector / unit;
     let scales = residuals.block_rms(&r_x, &t_x).scales();
-    let weights = [1.0 / scales[0], 1.0 / scales[1]];
-
-    let mut lin = residuals.linearise(&r_x, &t_x, weights);
-    let initial_cost = lin.cost;
-    let mut damping = options.initial_damping * lin.jtj.diagonal().max();
-    let mut growth = 2.0;
-    let mut termination = Termination::MaxIterations;
-    let mut iterations = 0;
-    while iterations < options.max_iterations {
-        if lin.jtr.amax() <= options.gradient_tolerance {
-            termination = Termination::GradientSmall;
-            break;
-        }
-        iterations += 1;
-        let mut lhs = lin.jtj;
-        for d in 0..6 {
-            lhs[(d, d)] += damping;
-        }
-        let Some(step) = lhs.cholesky().map(|c| -c.solve(&lin.jtr)) else {
-            damping *= growth;
-            growth *= 2.0;
-            continue;
-        };
-        let rotation_step: Vector3<f64> = step.fixed_rows::<3>(0).into_owned();
-        let new_r = proj_so3(&(r_x * exp_so3(&rotation_step)));
-        let new_t = t_x + step.fixed_rows::<3>(3);
-        let drop = -residuals.cost_change((&r_x, &t_x), (&new_r, &new_t), lin.cost, weights);
-        // Predicted reduction of the linear model: −δᵀJᵀr − ½δᵀJᵀJδ = ½δᵀ(λδ − Jᵀr).
-        let predicted = 0.5 * step.dot(&(step * damping - lin.jtr));
-        let gain = drop / predicted.max(f64::MIN_POSITIVE);
-        if drop > 0.0 && gain > 0.0 {
-            let relative_drop = drop / lin.cost.max(f64::MIN_POSITIVE);
-            let step_size = step.norm() / (t_x.norm() + 1.0);
-            r_x = new_r;
-            t_x = new_t;
-            lin = residuals.linearise(&r_x, &t_x, weights);
-            damping *= (1.0_f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
-            growth = 2.0;
-            if step_size <= options.step_tolerance {
-                termination = Termination::StepSmall;
-                break;
-            }
-            if relative_drop <= options.cost_tolerance {
-                termination = Termination::CostConverged;
-                break;
-            }
-        } else {
-            damping *= growth;
-            growth *= 2.0;
-            if step.norm() / (t_x.norm() + 1.0) <= options.step_tolerance {
-                termination = Termination::StepSmall;
-                break;
-            }
-        }
-    }
+    let problem = HandEye {
+        residuals,
+        weights: [1.0 / scales[0], 1.0 / scales[1]],
+    };
+    let end = levenberg_marquardt(&problem, (r_x, t_x), options);
+    let (r_x, t_x) = end.state;
     let covariance = in_input_unit(covariance(residuals, &r_x, &t_x), unit);
     Refinement {
         calibration: Calibration {
@@ -224,10 +170,10 @@ fn levenberg_marquardt(
             conditioning: check.conditioning,
             warnings: check.warnings,
         },
-        initial_cost,
-        final_cost: lin.cost,
-        iterations,
-        termination,
+        initial_cost: end.initial_cost,
+        final_cost: end.final_cost,
+        iterations: end.iterations,
+        termination: end.termination,
         scales: [scales[0], scales[1] * unit],
         covariance,
     }

@@ -13,7 +13,8 @@ use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 use crate::model::motion::MotionPair;
-use crate::model::pose::{Transform, rotation_angle_between, rotation_matrix, skew};
+use crate::model::pose::{Transform, axis_angle, rotation_angle_between, rotation_matrix, skew};
+use crate::solve::lm::Linearisation;
 use crate::solve::motions::{AllPairs, MotionSource};
 
 /// Smallest ‖t‖ used as a divisor in relative translation errors (an X with zero translation
@@ -57,6 +58,43 @@ impl MotionResidual {
             )
             .to_degrees(),
         }
+    }
+}
+
+/// One pose's disagreement with the fixed frame Y that all poses share: Y_i = Q_i X C_i (the fixed
+/// frame as pose i and X see it, Q_i the hand pose) against Y, as a rotation and a translation.
+/// The hand–eye checks take it in the target frame, D_i = Y⁻¹ Y_i
+/// (`check::outliers::PoseResiduals`); the robot-world report in the fixed frame,
+/// R_Yᵀ R_Yi and t_Yi − t_Y (`solve::pose_residuals`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseResidual {
+    /// The rotation as a rotation vector θk, radians (`log_so3` of the rotation).
+    pub rotation: Vector3<f64>,
+    /// The rotation angle θ, radians (‖`rotation`‖ up to rounding).
+    pub angle: f64,
+    /// The translation, input units.
+    pub translation: Vector3<f64>,
+}
+
+impl PoseResidual {
+    /// The residual of a rotation (a rotation matrix) and a translation.
+    pub fn new(rotation: &Matrix3<f64>, translation: Vector3<f64>) -> Self {
+        let (angle, axis) = axis_angle(rotation);
+        Self {
+            rotation: axis.map_or_else(Vector3::zeros, |k| k * angle),
+            angle,
+            translation,
+        }
+    }
+
+    /// The rotation angle θ, degrees.
+    pub fn angle_deg(&self) -> f64 {
+        self.angle.to_degrees()
+    }
+
+    /// The length of the translation, input units.
+    pub fn distance(&self) -> f64 {
+        self.translation.norm()
     }
 }
 
@@ -178,17 +216,6 @@ impl BlockRms {
     }
 }
 
-/// Normal equations of the weighted residuals at one iterate, for the increment
-/// `R_x exp([δ]×)`, `t_x + Δt`.
-pub(crate) struct Linearisation {
-    /// JᵀJ.
-    pub(crate) jtj: Matrix6<f64>,
-    /// Jᵀr.
-    pub(crate) jtr: Vector6<f64>,
-    /// ½Σr².
-    pub(crate) cost: f64,
-}
-
 /// The residuals of a set of motions as the refinement sees them. `weights` multiply the ΔR and
 /// the ΔT block.
 pub(crate) trait Residuals {
@@ -197,8 +224,12 @@ pub(crate) trait Residuals {
     /// Σ‖ΔR‖² and Σ‖ΔT‖² at (R_x, t_x).
     fn block_rms(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>) -> BlockRms;
     /// JᵀJ, Jᵀr and ½Σr² at (R_x, t_x).
-    fn linearise(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>, weights: [f64; 2])
-    -> Linearisation;
+    fn linearise(
+        &self,
+        r_x: &Matrix3<f64>,
+        t_x: &Vector3<f64>,
+        weights: [f64; 2],
+    ) -> Linearisation<6>;
 
     /// Weighted cost ½Σr² at (R_x, t_x).
     fn cost(&self, r_x: &Matrix3<f64>, t_x: &Vector3<f64>, weights: [f64; 2]) -> f64;
@@ -248,7 +279,7 @@ impl<M: MotionSource + ?Sized> Residuals for PerMotion<'_, M> {
         r_x: &Matrix3<f64>,
         t_x: &Vector3<f64>,
         weights: [f64; 2],
-    ) -> Linearisation {
+    ) -> Linearisation<6> {
         let mut jtj = Matrix6::zeros();
         let mut jtr = Vector6::zeros();
         let mut cost = 0.0;
@@ -372,7 +403,7 @@ impl Residuals for Quadratic {
         r_x: &Matrix3<f64>,
         t_x: &Vector3<f64>,
         weights: [f64; 2],
-    ) -> Linearisation {
+    ) -> Linearisation<6> {
         let z = z_of(r_x, t_x);
         let j = z_jacobian(r_x);
         let m = self.weighted(weights);

@@ -45,7 +45,8 @@ use crate::model::pose::{
     Transform, exp_so3, proj_so3, rotation_matrix, skew, transform_from_parts,
 };
 use crate::model::warning::Warning;
-use crate::solve::residual::BlockRms;
+use crate::solve::lm::{LeastSquares, Linearisation, levenberg_marquardt};
+use crate::solve::residual::{BlockRms, PoseResidual};
 use crate::solve::scale::weighting_from_scale;
 use crate::solve::{RefineOptions, Termination, check_motions, singular};
 
@@ -398,16 +399,8 @@ pub(crate) fn pose_residual(
     (dr, dt)
 }
 
-/// One pose's residual in a report.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct PoseResidual {
-    /// Angle between R_Y and R_Q R_X R_C, degrees.
-    pub rotation_deg: f64,
-    /// ‖ΔT‖: how far pose i puts the target's origin from Y's, input units.
-    pub translation: f64,
-}
-
-/// The per-pose residuals of Q_i X C_i = Y at (X, Y).
+/// The per-pose residuals of Q_i X C_i = Y at (X, Y), in the fixed frame: the rotation
+/// R_Yᵀ R_Q R_X R_C and the translation ΔT of `pose_residual`.
 pub fn pose_residuals(
     poses: &[PosePair],
     setup: Setup,
@@ -422,12 +415,7 @@ pub fn pose_residuals(
             let q = setup.hand_pose(&p.base_from_gripper);
             let (_, dt) = pose_residual(&q, &p.camera_from_target, (&r_x, &t_x), (&r_y, &t_y));
             let predicted = rotation_matrix(&q) * r_x * rotation_matrix(&p.camera_from_target);
-            PoseResidual {
-                rotation_deg: crate::model::pose::axis_angle(&(r_y.transpose() * predicted))
-                    .0
-                    .to_degrees(),
-                translation: dt.norm(),
-            }
+            PoseResidual::new(&(r_y.transpose() * predicted), dt)
         })
         .collect()
 }
@@ -606,8 +594,12 @@ impl Joint {
             })
             .sum::<f64>()
     }
+}
 
-    fn linearise(&self, s: &State) -> (SMatrix<f64, 12, 12>, SVector<f64, 12>, f64) {
+impl LeastSquares<12> for Joint {
+    type State = State;
+
+    fn linearise(&self, s: &State) -> Linearisation<12> {
         let mut jtj = SMatrix::<f64, 12, 12>::zeros();
         let mut jtr = SVector::<f64, 12>::zeros();
         let mut cost = 0.0;
@@ -617,10 +609,24 @@ impl Joint {
             jtr += j.transpose() * r;
             cost += 0.5 * r.norm_squared();
         }
-        (jtj, jtr, cost)
+        Linearisation { jtj, jtr, cost }
+    }
+
+    fn step(&self, s: &State, delta: &SVector<f64, 12>) -> State {
+        s.step(delta)
+    }
+
+    fn cost_drop(&self, _: &State, to: &State, cost: f64) -> f64 {
+        cost - self.cost(to)
+    }
+
+    fn size(&self, s: &State) -> f64 {
+        s.size()
     }
 }
 
+/// [`refine_robot_world_from`]: Levenberg–Marquardt ([`levenberg_marquardt`]) in the data's length
+/// unit.
 fn run(
     poses: &[PosePair],
     setup: Setup,
@@ -628,7 +634,7 @@ fn run(
     options: &RefineOptions,
 ) -> RobotWorldRefinement {
     let (qc, unit) = scaled_problem(poses, setup);
-    let mut s = State {
+    let s = State {
         r_x: rotation_matrix(&start.x),
         t_x: start.x.translation.vector / unit,
         r_y: rotation_matrix(&start.target),
@@ -639,55 +645,8 @@ fn run(
         qc,
         weights: [1.0 / scales[0], 1.0 / scales[1]],
     };
-    let (mut jtj, mut jtr, mut cost) = problem.linearise(&s);
-    let initial_cost = cost;
-    let mut damping = options.initial_damping * jtj.diagonal().max();
-    let mut growth = 2.0;
-    let mut termination = Termination::MaxIterations;
-    let mut iterations = 0;
-    while iterations < options.max_iterations {
-        if jtr.amax() <= options.gradient_tolerance {
-            termination = Termination::GradientSmall;
-            break;
-        }
-        iterations += 1;
-        let mut lhs = jtj;
-        for d in 0..12 {
-            lhs[(d, d)] += damping;
-        }
-        let Some(step) = lhs.cholesky().map(|c| -c.solve(&jtr)) else {
-            damping *= growth;
-            growth *= 2.0;
-            continue;
-        };
-        let next = s.step(&step);
-        let new_cost = problem.cost(&next);
-        let predicted = 0.5 * step.dot(&(step * damping - jtr));
-        let gain = (cost - new_cost) / predicted.max(f64::MIN_POSITIVE);
-        let step_size = step.norm() / s.size();
-        if new_cost < cost && gain > 0.0 {
-            let relative_drop = (cost - new_cost) / cost.max(f64::MIN_POSITIVE);
-            s = next;
-            (jtj, jtr, cost) = problem.linearise(&s);
-            damping *= (1.0_f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
-            growth = 2.0;
-            if step_size <= options.step_tolerance {
-                termination = Termination::StepSmall;
-                break;
-            }
-            if relative_drop <= options.cost_tolerance {
-                termination = Termination::CostConverged;
-                break;
-            }
-        } else {
-            damping *= growth;
-            growth *= 2.0;
-            if step_size <= options.step_tolerance {
-                termination = Termination::StepSmall;
-                break;
-            }
-        }
-    }
+    let end = levenberg_marquardt(&problem, s, options);
+    let s = end.state;
     let covariance = covariance_scaled(&problem.qc, &s, unit);
     RobotWorldRefinement {
         solution: RobotWorld {
@@ -698,10 +657,10 @@ fn run(
             conditioning: start.conditioning,
             warnings: start.warnings,
         },
-        initial_cost,
-        final_cost: cost,
-        iterations,
-        termination,
+        initial_cost: end.initial_cost,
+        final_cost: end.final_cost,
+        iterations: end.iterations,
+        termination: end.termination,
         covariance,
     }
 }
@@ -739,7 +698,7 @@ fn covariance_scaled(
         qc: qc.to_vec(),
         weights: [1.0 / scales[0], 1.0 / scales[1]],
     };
-    let (jtj, _, cost) = problem.linearise(s);
+    let Linearisation { jtj, cost, .. } = problem.linearise(s);
     let s2 = 2.0 * cost / (12 * qc.len() - 12) as f64;
     let inv = jtj.try_inverse()?;
     let mut d = SVector::<f64, 12>::repeat(1.0);
