@@ -62,3 +62,86 @@ fn a_millimetre_fix_gives_metres_and_says_metres() {
     let (code, _, err) = run(&["calibrate", path, "--output", "ros2"]);
     assert_eq!(code, 3, "{err}");
 }
+
+/// Item 1: a recording of one setup calibrated as the other. The robot poses read inverted fit
+/// (what the other setup reads), and so does their mirror, the camera poses inverted, which makes
+/// the target's pose X under a "good" verdict. The refusal now leads with `--setup`, and
+/// following it gives the true X.
+#[test]
+fn a_forgotten_setup_is_steered_to_the_setup_not_to_a_wrong_fix() {
+    for (file, wrong, right, frame) in [
+        (
+            "kinhec/pairs/nominal_stations_eth_s1.jsonl",
+            "eye-in-hand",
+            "eye-to-hand",
+            "base_from_camera",
+        ),
+        (
+            "kinhec/pairs/nominal_stations_eih_s0.jsonl",
+            "eye-to-hand",
+            "eye-in-hand",
+            "gripper_from_camera",
+        ),
+    ] {
+        let path = testdata(file);
+        let path = path.to_str().unwrap();
+        let (code, _, err) = run(&["calibrate", path, "--setup", wrong, "--output", "json"]);
+        assert_eq!(code, 3, "{file} as {wrong}: {err}");
+        let setup = err
+            .find(&format!("pass `--setup {right}`"))
+            .unwrap_or_else(|| panic!("{file} as {wrong}: no --setup {right}: {err}"));
+        let fix = err.find("pass `--fix").unwrap_or(usize::MAX);
+        assert!(setup < fix, "{file} as {wrong}: a --fix comes first: {err}");
+        // Following the advice gives the truth.
+        let (code, out, err) = run(&["calibrate", path, "--setup", right, "--output", "json"]);
+        assert_eq!(code, 0, "{file} as {right}: {err}");
+        let out: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(out["frame"], frame);
+        let truth = std::fs::read_to_string(testdata(file).with_extension("truth.json")).unwrap();
+        let truth: serde_json::Value = serde_json::from_str(&truth).unwrap();
+        let off = (0..3)
+            .map(|i| {
+                out["translation"][i].as_f64().unwrap()
+                    - truth[frame]["translation"][i].as_f64().unwrap()
+            })
+            .map(|d| d * d)
+            .sum::<f64>()
+            .sqrt();
+        assert!(off < 0.01, "{file} as {right}: {off} m from the truth");
+    }
+}
+
+/// Item 1's mirror: a recording of the setup given, with its camera poses inverted, is the same
+/// numbers as a recording of the other setup. The refusal asks where the camera is and names both
+/// fixes; the one for a camera on the gripper gives the true X.
+#[test]
+fn the_same_numbers_from_inverted_camera_poses_name_both_fixes() {
+    let file = "kinhec/mistakes/camera_inverted__nominal_stations_eih_s0.jsonl";
+    let path = testdata(file);
+    let path = path.to_str().unwrap();
+    let (code, _, err) = run(&["calibrate", path, "--output", "json"]);
+    assert_eq!(code, 3, "{err}");
+    for words in [
+        "if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand`",
+        "if the camera rides on the gripper (eye-in-hand), correct the input, or pass `--fix camera-inverted`",
+    ] {
+        assert!(err.contains(words), "no `{words}`: {err}");
+    }
+    let (code, out, err) = run(&[
+        "calibrate",
+        path,
+        "--fix",
+        "camera-inverted",
+        "--output",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let out: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let t = [0, 1, 2].map(|i| out["translation"][i].as_f64().unwrap());
+    let truth = true_translation(file);
+    let off = (0..3)
+        .map(|i| (t[i] - truth[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(off < 0.01, "{off} m from the truth");
+}

@@ -582,6 +582,7 @@ pub(crate) fn choose_reading(
             finding,
             readings: check.fitting_better(),
             setup,
+            other_setup: check.other_setup(setup),
         }),
     }
 }

@@ -155,7 +155,23 @@ impl ReadingCheck {
             finding: self.finding(setup)?,
             readings: self.fitting_better(),
             setup,
+            other_setup: self.other_setup(setup),
         })
+    }
+
+    /// Whether the poses may be a recording of the other setup: a reading that fits far better
+    /// is the robot poses inverted (what the other setup reads), with X and Y of the sizes the
+    /// other setup makes likely and this one does not.
+    ///
+    /// Its mirror, the camera poses inverted, then fits as well with plausible sizes for this
+    /// setup, and no pose tells the two apart (a recording of the other setup, and one of this
+    /// setup with its camera poses inverted, are the same numbers), but the user can: whether the
+    /// camera is fixed or rides on the gripper.
+    pub fn other_setup(&self, setup: Setup) -> bool {
+        self.better
+            .iter()
+            .chain(&self.also)
+            .any(|f| f.reading == Reading::RobotInverted && f.plausible(setup) == Some(false))
     }
 
     /// The finding with the fix in the words of both faces: the advice of [`Self::misread`].
@@ -164,6 +180,7 @@ impl ReadingCheck {
             &self.finding(setup)?,
             &self.fitting_better(),
             &setup,
+            &self.other_setup(setup),
         ))
     }
 

@@ -191,7 +191,10 @@ pub enum Error {
     /// It carries the finding in words and the readings as data; its message adds the fix in the
     /// words of both faces ([`Error::remedy`] gives it typed, for a face that words it in its own
     /// terms: the OpenCV drop-in names OpenCV's arguments).
-    #[error("the input looks misread: {}", misread_advice(.finding, .readings, .setup))]
+    #[error(
+        "the input looks misread: {}",
+        misread_advice(.finding, .readings, .setup, .other_setup)
+    )]
     Misread {
         /// What fits better, how well, and the other readings that fit as well, in words (no
         /// face's spelling of the fix), as `ReadingCheck::finding` words it.
@@ -200,6 +203,10 @@ pub enum Error {
         readings: Vec<Reading>,
         /// The setup the poses were read in (a robot pose inverted may be the other setup).
         setup: Setup,
+        /// The poses may be a recording of the other setup: the robot poses read inverted (what
+        /// the other setup reads) fit far better, with X and Y of the sizes the other setup makes
+        /// likely (`ReadingCheck::other_setup`). The first remedy is then `setup`.
+        other_setup: bool,
     },
     /// X is not determined, and the input shows why: outlier poses, or a reading of the input
     /// that fits far better (kept by request). Its message gives each cause with its fix in the
@@ -259,6 +266,11 @@ impl Error {
     /// remedy of what makes X untrusted.
     pub fn remedy(&self) -> Option<Remedy> {
         match self {
+            Self::Misread {
+                setup,
+                other_setup: true,
+                ..
+            } => Some(Remedy::Setup(setup.other())),
             Self::Misread { readings, .. } => readings.first().map(|&r| Remedy::Fix(r)),
             Self::Untrusted { why, .. } => why.iter().find_map(|w| w.remedy()),
             _ => None,
@@ -267,26 +279,55 @@ impl Error {
 }
 
 /// The advice of [`Error::Misread`]: the finding, then the fix in the words of both faces; for a
-/// robot pose inverted, also the other setup (which reads the robot poses the other way).
-pub(crate) fn misread_advice(finding: &str, readings: &[Reading], setup: &Setup) -> String {
+/// robot pose inverted, also the other setup (which reads the robot poses the other way). When the
+/// poses may be the other setup's (`other_setup`), the user is asked where the camera is, the
+/// other setup first: a recording of the other setup and one of this setup with the camera poses
+/// inverted are the same numbers, and the wrong one of the two fixes gives the target's pose as X
+/// under a good verdict.
+pub(crate) fn misread_advice(
+    finding: &str,
+    readings: &[Reading],
+    setup: &Setup,
+    other_setup: &bool,
+) -> String {
     let Some(&better) = readings.first() else {
         return finding.to_string();
     };
+    if *other_setup {
+        let other = setup.other();
+        let mirror = readings
+            .iter()
+            .copied()
+            .find(|&r| r != Reading::RobotInverted)
+            .unwrap_or(better);
+        return format!(
+            "{finding}: the poses cannot tell these apart, but you can: if {}, {}; if {}, correct the input, or {}",
+            camera_in_words(other),
+            Remedy::Setup(other).in_words(),
+            camera_in_words(*setup),
+            Remedy::Fix(mirror).in_words()
+        );
+    }
     let mut text = format!(
         "{finding}: correct the input, or {}",
         Remedy::Fix(better).in_words()
     );
     if better == Reading::RobotInverted {
-        let other = match setup {
-            Setup::EyeInHand => Setup::EyeToHand,
-            Setup::EyeToHand => Setup::EyeInHand,
-        }
-        .name();
+        let other = setup.other().name();
         text.push_str(&format!(
             "; if the setup is {other}, pass `--setup {other}` (`setup=\"{other}\"` in Python)"
         ));
     }
     text
+}
+
+/// Where the camera is in a setup, in words: "the camera is fixed (eye-to-hand)".
+fn camera_in_words(setup: Setup) -> String {
+    let camera = match setup {
+        Setup::EyeInHand => "the camera rides on the gripper",
+        Setup::EyeToHand => "the camera is fixed",
+    };
+    format!("{camera} ({})", setup.name())
 }
 
 /// The advice of [`Error::Untrusted`]: the refusal, then each warning that explains it with its
@@ -335,6 +376,7 @@ mod tests {
             finding: "the poses fit far better read as x".into(),
             readings: vec![Reading::RobotInverted, Reading::CameraInverted],
             setup: Setup::EyeInHand,
+            other_setup: false,
         };
         assert_eq!(
             misread.to_string(),

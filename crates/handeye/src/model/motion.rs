@@ -18,6 +18,14 @@ pub enum Setup {
 }
 
 impl Setup {
+    /// The other setup.
+    pub fn other(self) -> Setup {
+        match self {
+            Setup::EyeInHand => Setup::EyeToHand,
+            Setup::EyeToHand => Setup::EyeInHand,
+        }
+    }
+
     /// The frame name of X for this setup: `gripper_from_camera` or `base_from_camera`.
     pub fn x_frame(self) -> &'static str {
         match self {

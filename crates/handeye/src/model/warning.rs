@@ -111,6 +111,8 @@ pub enum Remedy {
     RejectOutliers,
     /// Read the input another way (`fix`).
     Fix(Reading),
+    /// Read the poses as a recording of this setup (`setup`).
+    Setup(Setup),
 }
 
 impl Remedy {
@@ -120,6 +122,7 @@ impl Remedy {
         match self {
             Self::RejectOutliers => "reject_outliers",
             Self::Fix(_) => "fix",
+            Self::Setup(_) => "setup",
         }
     }
 
@@ -128,6 +131,7 @@ impl Remedy {
         match self {
             Self::RejectOutliers => true.into(),
             Self::Fix(reading) => reading.name().into(),
+            Self::Setup(setup) => setup.name().into(),
         }
     }
 
@@ -141,6 +145,10 @@ impl Remedy {
                 format!("{flag} {}", r.name()),
                 format!("{}=\"{}\"", self.option(), r.name()),
             ),
+            Self::Setup(s) => (
+                format!("{flag} {}", s.name()),
+                format!("{}=\"{}\"", self.option(), s.name()),
+            ),
         };
         format!("pass `{cli}` (`{py}` in Python) {}", self.purpose())
     }
@@ -150,6 +158,7 @@ impl Remedy {
         match self {
             Self::RejectOutliers => "to leave them out",
             Self::Fix(_) => "to read the input that way",
+            Self::Setup(_) => "to calibrate that setup",
         }
     }
 }
