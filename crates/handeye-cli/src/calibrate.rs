@@ -73,6 +73,10 @@ pub struct Args {
     /// files].
     #[arg(long)]
     child_frame: Option<String>,
+    /// The calibration's name in the yaml output (easy_handeye2's `parameters.name`, the file
+    /// name it loads: ~/.ros2/easy_handeye2/calibrations/NAME.calib).
+    #[arg(long, default_value = "handeye")]
+    name: String,
     /// Also write a page for a person: the held-out gap of every pose, the rotation axes and the
     /// rotation angles of the motions (one self-contained HTML file).
     #[arg(long, value_name = "FILE.html")]
@@ -97,6 +101,13 @@ pub fn run(args: Args) -> Result<()> {
     }
     let options = options(&args)?;
     let setup = args.input.setup();
+    // The frame names and the name are checked before the input is read.
+    let frames = faces::frames(
+        &args.input,
+        args.parent_frame.as_deref(),
+        args.child_frame.as_deref(),
+    )?;
+    let name = faces::calibration_name(&args.name)?;
     let (poses, pose_names, time_offset) = read_all(&args.input)?;
     enough(&args.input, poses.len(), 2, "to make a motion")?;
     let face = Face::chosen(args.output);
@@ -148,29 +159,22 @@ pub fn run(args: Args) -> Result<()> {
             eprintln!("warning: {}", faces::warning(w));
         }
     }
-    let frames = faces::frames(
-        &args.input,
-        args.parent_frame.as_deref(),
-        args.child_frame.as_deref(),
-    );
     let source = format!("calibrate, method {}", report.method);
-    let published = Published::of(&report, &source);
+    // The ROS outputs are in metres whatever the input (the text and JSON keep its unit).
+    let ros = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf) || args.input.is_bag();
+    let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
+    let published = Published::of(&report, &source, ros_unit);
     if args.input.is_bag() && face != Face::Ros2 {
         eprintln!(
             "publish X in tf with: {}",
             faces::static_transform_publisher(published, &frames)
         );
     }
-    if unit == Some(handeye::Unit::Millimetre)
-        && matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf)
-    {
-        eprintln!(
-            "warning: the translation is in millimetres, as the input; ROS expects metres (divide it by 1000)"
-        );
-    }
     match face {
         Face::Text => return print_text(&faces::text(&report, &frames, unit)),
-        Face::Yaml => return print_text(&faces::yaml(published, &frames, Some(&report))),
+        Face::Yaml => {
+            return print_text(&faces::yaml(published, &frames, &name, Some(&report)));
+        }
         Face::Ros2 => return print_text(&faces::ros2(published, &frames)),
         Face::Urdf => return print_text(&faces::urdf(published, &frames)),
         Face::Json => {}

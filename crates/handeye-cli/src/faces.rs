@@ -7,6 +7,8 @@ use std::fmt::Write as _;
 use handeye::Report;
 use handeye::Unit;
 use handeye::{Error, Setup};
+use quick_xml::events::{BytesText, Event};
+use yaml_rust2::{Yaml, YamlEmitter};
 
 use crate::input::InputArgs;
 
@@ -44,7 +46,8 @@ impl Face {
     }
 }
 
-/// The tf frames X connects: `parent_from_child`.
+/// The tf frames X connects: `parent_from_child`, each a checked, normalised frame name
+/// ([`frame_name`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Frames {
     /// The parent frame (the gripper's for eye-in-hand, the base's for eye-to-hand).
@@ -70,27 +73,154 @@ pub struct Published<'a> {
     pub setup: Setup,
     /// What made it, for the comment line (e.g. `calibrate, method andreff`).
     pub source: &'a str,
+    /// The input's length unit, when known: a translation in millimetres is published in metres
+    /// ([`ros_unit`]).
+    pub unit: Option<Unit>,
 }
 
 impl<'a> Published<'a> {
-    /// A batch result.
-    pub fn of(r: &'a Report, source: &'a str) -> Self {
+    /// A batch result; `unit` from [`ros_unit`].
+    pub fn of(r: &'a Report, source: &'a str, unit: Option<Unit>) -> Self {
         Self {
             x: &r.transform,
             frame: &r.frame,
             setup: r.setup,
             source,
+            unit,
         }
     }
 
+    /// What a length of the input is in metres, or 1 when the unit is not known.
+    fn scale(&self) -> f64 {
+        match self.unit {
+            Some(Unit::Millimetre) => 1e-3,
+            _ => 1.0,
+        }
+    }
+
+    /// The unit of the lengths published, for a comment.
+    fn unit_words(&self) -> &'static str {
+        match self.unit {
+            Some(Unit::Millimetre) => "metres (converted from millimetres)",
+            Some(Unit::Metre) => "metres",
+            _ => "the input's unit (not told by its poses)",
+        }
+    }
+
+    /// X's translation, in metres when the input's unit is known to be millimetres.
     fn translation(&self) -> [f64; 3] {
-        handeye::TransformJson::from(self.x).translation
+        let t = handeye::TransformJson::from(self.x).translation;
+        match self.unit {
+            Some(Unit::Millimetre) => t.map(|v| v * 1e-3),
+            _ => t,
+        }
     }
 
     /// The quaternion as the JSON gives it.
     fn quaternion_xyzw(&self) -> [f64; 4] {
         handeye::TransformJson::from(self.x).quaternion_xyzw
     }
+}
+
+/// The input's length unit for the ROS faces, which are in metres whatever the input, saying on
+/// stderr what they do: a translation in millimetres is converted, one in a unit that cannot be
+/// told is left as it is, with a warning.
+pub fn ros_unit(unit: Option<Unit>) -> Option<Unit> {
+    match unit {
+        Some(Unit::Millimetre) => {
+            eprintln!("translation converted from millimetres to metres for ROS");
+            Some(Unit::Millimetre)
+        }
+        Some(Unit::Metre) => Some(Unit::Metre),
+        _ => {
+            eprintln!(
+                "warning: the input's length unit cannot be told from its poses; the translation is in the input's unit, and ROS expects metres (divide it by 1000 if the input is in millimetres)"
+            );
+            None
+        }
+    }
+}
+
+/// The characters a frame name may have, after its leading `/`: see [`frame_name`].
+fn frame_char(c: char) -> bool {
+    c.is_ascii_alphanumeric() || matches!(c, '_' | '/' | '.' | '-')
+}
+
+/// A frame name as the ROS faces print it, from the flag that gave it; the rule of
+/// `docs/DECISIONS.md` (ROS frame names).
+///
+/// Normalised as the recording's reader keys frames (and as tf2 does): surrounding whitespace
+/// trimmed, one leading `/` dropped. Then refused (exit 2, naming the flag and the character)
+/// unless it is a ROS name: it starts with a letter or `_` and has only ASCII letters, digits,
+/// `_`, `/`, `.` and `-` (tf2 itself takes any string, but a frame name outside ROS names is a
+/// typo or a hostile recording: quotes, whitespace, `$`, `;`, `<`, `#`, `:` and control
+/// characters would change what the printed YAML, URDF, shell line or launch file means). The
+/// whitespace is checked before trimming, so that a name is printed as it was typed or not at all.
+pub fn frame_name(flag: &'static str, value: &str) -> Result<String, Error> {
+    let refuse = |what: String| Error::InvalidParameter {
+        name: flag,
+        message: format!(
+            "{what}: a frame name starts with a letter or `_` and has only letters, digits, `_`, `/`, `.` and `-` (ROS names; a leading `/` is dropped, as tf2 does)"
+        ),
+    };
+    if let Some(c) = value.chars().find(|&c| !frame_char(c)) {
+        return Err(refuse(format!(
+            "--{} has {}",
+            flag.replace('_', "-"),
+            shown(c)
+        )));
+    }
+    let name = value.trim();
+    let name = name.strip_prefix('/').unwrap_or(name);
+    match name.chars().next() {
+        None => Err(refuse(format!("--{} is empty", flag.replace('_', "-")))),
+        Some(c) if !(c.is_ascii_alphabetic() || c == '_') => Err(refuse(format!(
+            "--{} starts with {}",
+            flag.replace('_', "-"),
+            shown(c)
+        ))),
+        Some(_) => Ok(name.to_string()),
+    }
+}
+
+/// A character for a message: printable ones in backticks, the others as their code point.
+fn shown(c: char) -> String {
+    if c.is_control() || c.is_whitespace() {
+        format!(
+            "the character U+{:04X}{}",
+            u32::from(c),
+            match c {
+                '\n' => " (a newline)",
+                '\r' => " (a carriage return)",
+                '\t' => " (a tab)",
+                ' ' => " (a space)",
+                _ => "",
+            }
+        )
+    } else {
+        format!("`{c}`")
+    }
+}
+
+/// Checks easy_handeye2's calibration name (`--name`): it names the file easy_handeye2 loads
+/// (`~/.ros2/easy_handeye2/calibrations/NAME.calib`), so letters, digits, `_` and `-`, not
+/// starting with `-`.
+pub fn calibration_name(value: &str) -> Result<String, Error> {
+    let bad = value
+        .chars()
+        .find(|&c| !(c.is_ascii_alphanumeric() || c == '_' || c == '-'));
+    let message = match (bad, value.chars().next()) {
+        (Some(c), _) => format!("--name has {}", shown(c)),
+        (None, None) => "--name is empty".to_string(),
+        (None, Some('-')) => "--name starts with `-`".to_string(),
+        (None, Some(_)) => return Ok(value.to_string()),
+    };
+    Err(Error::InvalidParameter {
+        name: "name",
+        message: format!(
+            "{message}: the calibration's name is a file name for easy_handeye2 (letters, digits, `_` and `-`)"
+        ),
+    })
 }
 
 /// The input's length unit as far as the first poses tell (metres or millimetres).
@@ -113,63 +243,185 @@ pub fn rpy(x: &handeye::Transform) -> [f64; 3] {
     [roll, pitch, yaw]
 }
 
-/// easy_handeye2's calibration file (`parameters` and `transform`), with handeye's own fields
-/// after it (`frame`, `parent_frame`, `child_frame`, and for a batch result its uncertainty and
-/// residual).
-pub fn yaml(p: Published<'_>, f: &Frames, batch: Option<&Report>) -> String {
+/// A YAML scalar for a number, as Rust prints it (the shortest text that reads back the same).
+fn yaml_number(v: f64) -> Yaml {
+    if v.is_finite() {
+        Yaml::Real(format!("{v}"))
+    } else {
+        Yaml::Real(
+            if v.is_nan() {
+                ".nan"
+            } else if v > 0.0 {
+                ".inf"
+            } else {
+                "-.inf"
+            }
+            .into(),
+        )
+    }
+}
+
+/// A YAML mapping of `(key, value)` in order.
+fn yaml_map<const N: usize>(entries: [(&str, Yaml); N]) -> Yaml {
+    Yaml::Hash(
+        entries
+            .into_iter()
+            .map(|(k, v)| (Yaml::String(k.to_string()), v))
+            .collect(),
+    )
+}
+
+/// easy_handeye2's calibration file: exactly the fields of its `HandeyeCalibration` message
+/// (`parameters` and `transform`, which its loader sets one by one, refusing any other key), in
+/// metres, written by a YAML emitter (each frame name quoted where YAML would read it otherwise).
+/// handeye's own fields (X's frame name, the parent and child frames, and for a batch result its
+/// uncertainty, residuals and motions) are comments above it.
+pub fn yaml(p: Published<'_>, f: &Frames, name: &str, batch: Option<&Report>) -> String {
     let [tx, ty, tz] = p.translation();
     let [qx, qy, qz, qw] = p.quaternion_xyzw();
     let kind = match p.setup {
         Setup::EyeInHand => "eye_in_hand",
         Setup::EyeToHand => "eye_on_base",
     };
-    let mut s = format!(
-        "# handeye {source}, setup {setup}; easy_handeye2's layout\n\
-         parameters:\n  name: handeye\n  calibration_type: {kind}\n  robot_base_frame: {base}\n  \
-         robot_effector_frame: {gripper}\n  tracking_base_frame: {camera}\n  \
-         tracking_marker_frame: {target}\n  freehand_robot_movement: true\n\
-         transform:\n  translation: {{x: {tx}, y: {ty}, z: {tz}}}\n  \
-         rotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\n\
-         frame: {frame}\nparent_frame: {parent}\nchild_frame: {camera}\n\
-         translation: {{x: {tx}, y: {ty}, z: {tz}}}\nrotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\n",
-        source = p.source,
-        setup = p.setup.name(),
-        base = f.base,
-        gripper = f.gripper,
-        camera = f.child,
-        target = f.target,
-        parent = f.parent,
-        frame = p.frame,
-    );
+    let string = |s: &str| Yaml::String(s.to_string());
+    let doc = yaml_map([
+        (
+            "parameters",
+            yaml_map([
+                ("name", string(name)),
+                ("calibration_type", string(kind)),
+                ("robot_base_frame", string(&f.base)),
+                ("robot_effector_frame", string(&f.gripper)),
+                ("tracking_base_frame", string(&f.child)),
+                ("tracking_marker_frame", string(&f.target)),
+                ("freehand_robot_movement", Yaml::Boolean(true)),
+                // The message's defaults, as easy_handeye2 writes them.
+                ("move_group_namespace", string("/")),
+                ("move_group", string("manipulator")),
+            ]),
+        ),
+        (
+            "transform",
+            yaml_map([
+                (
+                    "translation",
+                    yaml_map([
+                        ("x", yaml_number(tx)),
+                        ("y", yaml_number(ty)),
+                        ("z", yaml_number(tz)),
+                    ]),
+                ),
+                (
+                    "rotation",
+                    yaml_map([
+                        ("x", yaml_number(qx)),
+                        ("y", yaml_number(qy)),
+                        ("z", yaml_number(qz)),
+                        ("w", yaml_number(qw)),
+                    ]),
+                ),
+            ]),
+        ),
+    ]);
+    let mut body = String::new();
+    YamlEmitter::new(&mut body)
+        .dump(&doc)
+        .expect("a YAML emitter writing to a String cannot fail");
+    let mut s = String::new();
+    let mut comment = |line: String| {
+        // The comment's text is ours and checked frame names; a line break would end it.
+        s.push_str("# ");
+        s.push_str(&line.replace(['\n', '\r'], " "));
+        s.push('\n');
+    };
+    comment(format!(
+        "handeye {}, setup {}: easy_handeye2's calibration file (save it as ~/.ros2/easy_handeye2/calibrations/{name}.calib)",
+        p.source,
+        p.setup.name()
+    ));
+    comment(format!(
+        "frame: {} ({} -> {}); translation in {}",
+        p.frame,
+        f.parent,
+        f.child,
+        p.unit_words()
+    ));
     if let Some(r) = batch {
-        let _ = write!(
-            s,
-            "uncertainty: {{rotation_deg: {}, translation: {}}}\n\
-             residual: {{rotation_deg_rms: {}, translation_rms: {}}}\nmotions: {}\n",
+        let unit = if p.unit.is_some() { " m" } else { "" };
+        comment(format!(
+            "uncertainty (one sigma): rotation_deg {}, translation {}{unit}",
             r.uncertainty.rotation_deg,
-            r.uncertainty.translation,
+            r.uncertainty.translation * p.scale()
+        ));
+        comment(format!(
+            "residual: rotation_deg_rms {}, translation_rms {}{unit}; motions {}",
             r.residual.rotation_deg_rms,
-            r.residual.translation_rms,
-            r.motions,
-        );
+            r.residual.translation_rms * p.scale(),
+            r.motions
+        ));
     }
+    s.push_str(&body);
+    s.push('\n');
     s
 }
 
-/// The `ros2 run tf2_ros static_transform_publisher` command that puts X in the tf tree.
-pub fn static_transform_publisher(p: Published<'_>, f: &Frames) -> String {
+/// The arguments of `static_transform_publisher` for X, in metres.
+fn publisher_arguments(p: Published<'_>, f: &Frames) -> Vec<String> {
     let [x, y, z] = p.translation();
     let [qx, qy, qz, qw] = p.quaternion_xyzw();
-    format!(
-        "ros2 run tf2_ros static_transform_publisher --x {x} --y {y} --z {z} --qx {qx} --qy {qy} --qz {qz} --qw {qw} --frame-id {} --child-frame-id {}",
-        f.parent, f.child
-    )
+    let mut args = Vec::with_capacity(18);
+    for (flag, v) in [
+        ("--x", x),
+        ("--y", y),
+        ("--z", z),
+        ("--qx", qx),
+        ("--qy", qy),
+        ("--qz", qz),
+        ("--qw", qw),
+    ] {
+        args.push(flag.to_string());
+        args.push(format!("{v}"));
+    }
+    args.extend([
+        "--frame-id".to_string(),
+        f.parent.clone(),
+        "--child-frame-id".to_string(),
+        f.child.clone(),
+    ]);
+    args
+}
+
+/// The `ros2 run tf2_ros static_transform_publisher` command that puts X in the tf tree: one
+/// POSIX shell line, each word quoted where the shell would read it otherwise.
+pub fn static_transform_publisher(p: Published<'_>, f: &Frames) -> String {
+    let mut argv: Vec<String> = ["ros2", "run", "tf2_ros", "static_transform_publisher"]
+        .map(String::from)
+        .into();
+    argv.extend(publisher_arguments(p, f));
+    shlex::try_join(argv.iter().map(String::as_str))
+        .expect("checked frame names and numbers have no NUL byte")
+}
+
+/// A Python string literal: JSON's string escaping, which Python reads the same for every
+/// character (`\"`, `\\`, `\n`, `\uXXXX`, …).
+fn python_string(s: &str) -> String {
+    serde_json::to_string(s).expect("a string is valid JSON")
+}
+
+/// A ROS node name from free text: letters, digits and `_` (the others become `_`).
+fn node_name(s: &str) -> String {
+    s.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
 }
 
 /// The command line and a Python launch snippet publishing X.
 pub fn ros2(p: Published<'_>, f: &Frames) -> String {
-    let [x, y, z] = p.translation();
-    let [qx, qy, qz, qw] = p.quaternion_xyzw();
+    let arguments = publisher_arguments(p, f)
+        .iter()
+        .map(|a| python_string(a))
+        .collect::<Vec<_>>();
+    let list = |a: &[String]| a.join(", ");
     format!(
         "# handeye {source}: {frame} ({parent} -> {child})\n\
          {line}\n\
@@ -178,32 +430,54 @@ pub fn ros2(p: Published<'_>, f: &Frames) -> String {
          from launch_ros.actions import Node\n\
          \n\
          handeye_tf = Node(\n    package=\"tf2_ros\",\n    executable=\"static_transform_publisher\",\n    \
-         name=\"handeye_{parent}_to_{child}\",\n    arguments=[\n        \
-         \"--x\", \"{x}\", \"--y\", \"{y}\", \"--z\", \"{z}\",\n        \
-         \"--qx\", \"{qx}\", \"--qy\", \"{qy}\", \"--qz\", \"{qz}\", \"--qw\", \"{qw}\",\n        \
-         \"--frame-id\", \"{parent}\", \"--child-frame-id\", \"{child}\",\n    ],\n)\n",
+         name={name},\n    arguments=[\n        \
+         {xyz},\n        \
+         {q},\n        \
+         {frames},\n    ],\n)\n",
         frame = p.frame,
         parent = f.parent,
         child = f.child,
         source = p.source,
         line = static_transform_publisher(p, f),
+        name = python_string(&node_name(&format!("handeye_{}_to_{}", f.parent, f.child))),
+        xyz = list(&arguments[0..6]),
+        q = list(&arguments[6..14]),
+        frames = list(&arguments[14..18]),
     )
 }
 
-/// A URDF fixed `<joint>` from the parent to the child link.
+/// A URDF fixed `<joint>` from the parent to the child link, in metres, written by an XML writer
+/// (attribute values escaped).
 pub fn urdf(p: Published<'_>, f: &Frames) -> String {
     let [x, y, z] = p.translation();
     let [roll, pitch, yaw] = rpy(p.x);
-    format!(
-        "<!-- handeye {source}: {frame} -->\n\
-         <joint name=\"{parent}_to_{child}\" type=\"fixed\">\n  \
-         <parent link=\"{parent}\"/>\n  <child link=\"{child}\"/>\n  \
-         <origin xyz=\"{x} {y} {z}\" rpy=\"{roll} {pitch} {yaw}\"/>\n</joint>\n",
-        frame = p.frame,
-        source = p.source,
-        parent = f.parent,
-        child = f.child,
-    )
+    let mut w = quick_xml::Writer::new_with_indent(Vec::new(), b' ', 2);
+    let comment = format!(" handeye {}: {} ", p.source, p.frame).replace("--", "- -");
+    let xyz = format!("{x} {y} {z}");
+    let rpy = format!("{roll} {pitch} {yaw}");
+    let joint = format!("{}_to_{}", f.parent, f.child);
+    let written: std::io::Result<()> = (|| {
+        w.write_event(Event::Comment(BytesText::from_escaped(comment.as_str())))?;
+        w.create_element("joint")
+            .with_attributes([("name", joint.as_str()), ("type", "fixed")])
+            .write_inner_content(|w| {
+                w.create_element("parent")
+                    .with_attribute(("link", f.parent.as_str()))
+                    .write_empty()?;
+                w.create_element("child")
+                    .with_attribute(("link", f.child.as_str()))
+                    .write_empty()?;
+                w.create_element("origin")
+                    .with_attributes([("xyz", xyz.as_str()), ("rpy", rpy.as_str())])
+                    .write_empty()?;
+                Ok(())
+            })?;
+        Ok(())
+    })();
+    written.expect("an XML writer writing to memory cannot fail");
+    let mut s = String::from_utf8(w.into_inner()).expect("the XML written is UTF-8");
+    s.push('\n');
+    s
 }
 
 /// The summary for a person: X, the verdict and its reasons, the uncertainty, the residuals, and
@@ -297,7 +571,7 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
     if unit == Some(Unit::Millimetre) {
         let _ = writeln!(
             s,
-            "  the input is in millimetres: ROS expects metres (divide the translation by 1000)"
+            "  the input is in millimetres: the ros2, urdf and yaml outputs give the translation in metres"
         );
     }
     s
@@ -318,36 +592,42 @@ fn short(v: f64) -> String {
 }
 
 /// The frames of X: `--parent-frame`/`--child-frame`, else the recording's names, else the
-/// frames of X's name.
-pub fn frames(input: &InputArgs, parent: Option<&str>, child: Option<&str>) -> Frames {
-    let named = |flag: &Option<String>, generic: &str| {
-        flag.clone()
-            .filter(|_| input.is_bag())
-            .unwrap_or_else(|| generic.to_string())
+/// frames of X's name; each checked and normalised ([`frame_name`]), or refused naming its flag.
+pub fn frames(
+    input: &InputArgs,
+    parent: Option<&str>,
+    child: Option<&str>,
+) -> Result<Frames, Error> {
+    let named = |flag: &'static str, value: &Option<String>, generic: &str| match value {
+        Some(v) if input.is_bag() => frame_name(flag, v),
+        _ => Ok(generic.to_string()),
     };
-    let base = named(&input.base_frame, "base");
-    let gripper = named(&input.gripper_frame, "gripper");
-    let camera = named(&input.camera_frame, "camera");
-    let target = named(&input.target_frame, "target");
-    let parent = parent.map_or_else(
-        || match input.setup() {
+    let base = named("base_frame", &input.base_frame, "base")?;
+    let gripper = named("gripper_frame", &input.gripper_frame, "gripper")?;
+    let camera = named("camera_frame", &input.camera_frame, "camera")?;
+    let target = named("target_frame", &input.target_frame, "target")?;
+    let parent = match parent {
+        Some(p) => frame_name("parent_frame", p)?,
+        None => match input.setup() {
             Setup::EyeInHand => gripper.clone(),
             Setup::EyeToHand => base.clone(),
         },
-        str::to_string,
-    );
-    let child = child.map_or(camera, str::to_string);
+    };
+    let child = match child {
+        Some(c) => frame_name("child_frame", c)?,
+        None => camera,
+    };
     let (base, gripper) = match input.setup() {
         Setup::EyeInHand => (base, parent.clone()),
         Setup::EyeToHand => (parent.clone(), gripper),
     };
-    Frames {
+    Ok(Frames {
         parent,
         child,
         base,
         gripper,
         target,
-    }
+    })
 }
 
 /// A warning as the command line says it: its words, then its remedy as a flag

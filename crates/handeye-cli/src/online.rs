@@ -111,6 +111,10 @@ pub struct Args {
     /// files].
     #[arg(long)]
     child_frame: Option<String>,
+    /// The calibration's name in the yaml output (easy_handeye2's `parameters.name`, the file
+    /// name it loads: ~/.ros2/easy_handeye2/calibrations/NAME.calib).
+    #[arg(long, default_value = "handeye")]
+    name: String,
     /// Also write a page for a person at the end: the estimate's convergence with its uncertainty
     /// band, changes and held-out poses, and the paper's thresholds (one self-contained HTML
     /// file).
@@ -188,6 +192,13 @@ pub fn run(args: Args) -> Result<()> {
     }
     let accumulate = config.estimator == Estimator::Accumulate;
     let face = Face::chosen(args.output);
+    // The frame names and the name are checked before the input is read.
+    let frames = faces::frames(
+        &args.input,
+        args.parent_frame.as_deref(),
+        args.child_frame.as_deref(),
+    )?;
+    let name = faces::calibration_name(&args.name)?;
     let mut calibrator = OnlineCalibrator::new(config)?;
     // Event lines are buffered, and written out before the input is waited for.
     let out = LineOut::stdout();
@@ -208,6 +219,8 @@ pub fn run(args: Args) -> Result<()> {
         .as_ref()
         .map(|_| crate::report::OnlineTrace::default());
     let mut told_unit = false;
+    // The input's length unit as the first poses tell, for the ROS outputs (in metres).
+    let mut pose_unit: Option<Unit> = None;
     // The paper's estimator has no checks of its own: the batch's check of the readings runs on
     // the first poses (the accumulating estimator runs it itself).
     let mut first: Vec<handeye::PosePair> = Vec::with_capacity(READINGS_SAMPLE);
@@ -240,6 +253,9 @@ pub fn run(args: Args) -> Result<()> {
         };
         if !told_unit {
             told_unit = tell_unit(&calibrator, &record);
+        }
+        if pose_unit.is_none() {
+            pose_unit = Unit::infer(&record.pose);
         }
         if !accumulate && first.len() < READINGS_SAMPLE {
             first.push(record.pose);
@@ -327,24 +343,21 @@ pub fn run(args: Args) -> Result<()> {
                 .into());
             }
         };
-        if calibrator.unit() == Unit::Millimetre {
-            eprintln!(
-                "warning: the translation is in millimetres, as the input; ROS expects metres (divide it by 1000)"
-            );
-        }
-        let frames = faces::frames(
-            &args.input,
-            args.parent_frame.as_deref(),
-            args.child_frame.as_deref(),
-        );
+        // In metres whatever the input.
+        let unit = faces::ros_unit(match calibrator.unit() {
+            Unit::Millimetre => Some(Unit::Millimetre),
+            Unit::Metre => Some(Unit::Metre),
+            Unit::Auto | Unit::AsGiven => pose_unit,
+        });
         let published = Published {
             x: &x,
             frame: setup.x_frame(),
             setup,
             source: &source,
+            unit,
         };
         print_text(&match face {
-            Face::Yaml => faces::yaml(published, &frames, None),
+            Face::Yaml => faces::yaml(published, &frames, &name, None),
             Face::Ros2 => faces::ros2(published, &frames),
             _ => faces::urdf(published, &frames),
         })?;

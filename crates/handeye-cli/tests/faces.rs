@@ -211,7 +211,7 @@ fn the_renamed_flags_keep_their_old_spellings() {
     assert_eq!(datasets(&a), ["sim10", "sim20"]);
     assert_eq!(datasets(&a), datasets(&b));
 
-    // The YAML keeps the fields it had.
+    // The YAML is easy_handeye2's (its `transform`), X's frame name in a comment.
     let (code, yaml, err) = run(&[
         "calibrate",
         testdata(NOISY).to_str().unwrap(),
@@ -219,9 +219,14 @@ fn the_renamed_flags_keep_their_old_spellings() {
         "yaml",
     ]);
     assert_eq!(code, 0, "{err}");
-    assert!(yaml.contains("\nframe: gripper_from_camera\n"), "{yaml}");
+    assert!(yaml.contains("\n# frame: gripper_from_camera "), "{yaml}");
+    let doc = &yaml_rust2::YamlLoader::load_from_str(&yaml).unwrap()[0];
     assert!(
-        yaml.contains("\ntranslation: {x: ") && yaml.contains("\nrotation: {x: "),
+        doc["transform"]["translation"]["x"].as_f64().is_some(),
+        "{yaml}"
+    );
+    assert!(
+        doc["transform"]["rotation"]["w"].as_f64().is_some(),
         "{yaml}"
     );
 }
@@ -394,18 +399,23 @@ fn ros2_yaml_and_urdf_parse_back_to_the_transform() {
         )));
 
         let yaml = face("yaml");
-        let transform = &yaml[yaml.find("\ntransform:\n").unwrap()..];
+        let doc = &yaml_rust2::YamlLoader::load_from_str(&yaml).unwrap()[0];
+        let number = |section: &str, key: &str| {
+            doc["transform"][section][key]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{section}.{key}: {yaml}"))
+        };
         let from_yaml = quaternion(
             [
-                number_after(transform, "translation: {x"),
-                number_after(transform, ", y"),
-                number_after(transform, ", z"),
+                number("translation", "x"),
+                number("translation", "y"),
+                number("translation", "z"),
             ],
             [
-                number_after(transform, "rotation: {x"),
-                number_after(&transform[transform.find("rotation").unwrap()..], ", y"),
-                number_after(&transform[transform.find("rotation").unwrap()..], ", z"),
-                number_after(transform, ", w"),
+                number("rotation", "x"),
+                number("rotation", "y"),
+                number("rotation", "z"),
+                number("rotation", "w"),
             ],
         );
         assert!((from_yaml - x).abs().max() < 1e-12, "{yaml}");
@@ -537,8 +547,12 @@ fn online_writes_its_last_x_for_ros_and_a_line_per_calibration_for_a_person() {
             "cam",
         ]);
         assert_eq!(code, 0, "{err}");
-        assert!(err.contains("millimetres"), "{err}");
-        let xyz = attribute(&urdf, "xyz");
+        assert!(
+            err.contains("translation converted from millimetres to metres for ROS"),
+            "{err}"
+        );
+        // In metres: the millimetres of the JSON / 1000.
+        let xyz: Vec<f64> = attribute(&urdf, "xyz").iter().map(|v| v * 1e3).collect();
         let rpy = attribute(&urdf, "rpy");
         let r = Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]);
         let from_urdf = homogeneous([xyz[0], xyz[1], xyz[2]], r);

@@ -206,11 +206,22 @@ fn results_can_be_written_as_ros_yaml() {
         "yaml",
     ]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("frame: base_from_camera"));
-    assert!(
-        out.contains("translation: {x: ")
-            && out.contains("rotation: {x: ")
-            && out.contains(", w: "),
-        "{out}"
+    assert!(out.contains("# frame: base_from_camera "), "{out}");
+    let doc = &yaml_rust2::YamlLoader::load_from_str(&out).unwrap()[0];
+    assert_eq!(
+        doc["parameters"]["calibration_type"].as_str(),
+        Some("eye_on_base")
     );
+    for key in ["x", "y", "z"] {
+        assert!(
+            doc["transform"]["translation"][key].as_f64().is_some(),
+            "{out}"
+        );
+    }
+    for key in ["x", "y", "z", "w"] {
+        assert!(
+            doc["transform"]["rotation"][key].as_f64().is_some(),
+            "{out}"
+        );
+    }
 }
