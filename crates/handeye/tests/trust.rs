@@ -187,11 +187,27 @@ fn every_mistake_is_refused_or_flagged_with_its_fix() {
             _ => None,
         };
         match (mistake, &result) {
-            (_, Err(refusal @ Error::Misread { readings, .. })) if fix.is_some() => {
+            (
+                _,
+                Err(
+                    refusal @ Error::Misread {
+                        readings,
+                        setup,
+                        other_setup,
+                        ..
+                    },
+                ),
+            ) if fix.is_some() => {
                 let advice = refusal.to_string();
                 assert!(advice.contains(fix.unwrap()), "{file}: {advice}");
-                // The fix the words give is the typed remedy.
-                let remedy = Remedy::Fix(readings[0]);
+                // The fix the words give first is the typed remedy: the other setup when the
+                // same numbers may be the other setup's recording (the camera inverted is its
+                // mirror), else the reading.
+                let remedy = if *other_setup {
+                    Remedy::Setup(setup.other())
+                } else {
+                    Remedy::Fix(readings[0])
+                };
                 assert_eq!(refusal.remedy(), Some(remedy), "{file}");
                 assert!(advice.contains(&remedy.in_words()), "{file}: {advice}");
                 // Read as the advice says, the answer is right within its uncertainty.
