@@ -11,6 +11,7 @@ mod jsonl;
 mod jsonl_fast;
 mod lines;
 mod peer;
+mod recording;
 #[cfg(feature = "rosbag")]
 pub mod rosbag;
 mod stamped;
@@ -30,6 +31,9 @@ use lines::{Line, Lines};
 // What the faces use: one reader for every pose-file format (`read_pose_file`, `open_poses`,
 // `PoseReader`), the truth files, the recordings (`rosbag`) and the two-stream pairing (`sync`).
 pub use jsonl::parse_pose_line;
+#[cfg(feature = "rosbag")]
+pub use recording::BagFrames;
+pub use recording::{Note, Recording, RecordingOptions, Source};
 pub use truth::{Truth, read_truth, truth_json};
 // Each format's own reader and the io helpers: crate-internal; public with `internals` for this
 // crate's tests.
