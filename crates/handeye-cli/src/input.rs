@@ -12,10 +12,9 @@ use std::thread::JoinHandle;
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::is_bag;
-use handeye::io::sync::TimeOffset;
 use handeye::io::{
     BagFrames, Format, PoseInput, PoseReader, Projections, Recording, RecordingOptions, Source,
-    StampedPosePair, open_pose_stream, open_poses,
+    StampedPosePair, TimeOffset, open_pose_stream, open_poses,
 };
 use handeye::{PosePair, Setup};
 

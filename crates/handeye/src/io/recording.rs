@@ -218,7 +218,7 @@ impl Note {
 /// ```
 /// use handeye::io::{Format, Recording, RecordingOptions, Source};
 ///
-/// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../testdata/real/hand_eye_calib_data.jsonl");
+/// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../testdata/opencv/opencv_eye-in-hand_exact_10_11.jsonl");
 /// let source = Source::File { path: path.into(), format: Format::Auto };
 /// let recording = Recording::read(&source, &RecordingOptions::default())?;
 /// assert!(recording.poses.len() >= 2);

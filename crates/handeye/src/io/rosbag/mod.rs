@@ -10,11 +10,12 @@
 //! `P_from_C` (the pose of C in P); a `PoseStamped` whose header names the camera frame is
 //! `camera_from_target`. Stamps are the messages' header stamps (`sec`, `nanosec`).
 //!
-//! [`read_bag_pairs`] gives, at each stamp of the target's pose, `base_from_gripper` looked up in
-//! the tf tree (composed along the tree path, every dynamic transform interpolated in time) and
-//! `camera_from_target`: the same pose pairs a pose file gives, for either setup (for eye-to-hand
-//! the camera is fixed and the target rides on the gripper; the setup is applied afterwards, as for
-//! any input). [`inspect_bag`] lists the topics and the tf tree.
+//! A [`Recording`](crate::io::Recording) of a [`Source::Bag`](crate::io::Source::Bag) gives, at
+//! each stamp of the target's pose, `base_from_gripper` looked up in the tf tree (composed along
+//! the tree path, every dynamic transform interpolated in time) and `camera_from_target`: the same
+//! pose pairs a pose file gives, for either setup (for eye-to-hand the camera is fixed and the
+//! target rides on the gripper; the setup is applied afterwards, as for any input).
+//! [`inspect_bag`] lists the topics and the tf tree.
 
 mod cdr;
 mod msg;
@@ -31,7 +32,11 @@ use crate::model::error::{Error, Result};
 use crate::model::pose::{Transform, transform_from_xyz_quat_xyzw};
 
 pub(crate) use msg::{POSE_STAMPED, TF_MESSAGE, TRANSFORM_STAMPED};
+// Read through `io::Recording`: crate-internal; public with `internals` for this crate's tests.
+#[cfg(feature = "internals")]
 pub use pairs::{BagOptions, BagPairs, read_bag_pairs};
+#[cfg(not(feature = "internals"))]
+pub(crate) use pairs::{BagOptions, read_bag_pairs};
 pub use storage::Storage;
 pub use tf::TfEdge;
 

@@ -83,7 +83,7 @@ fn nanoseconds(name: &'static str, value: f64) -> Result<i64> {
 }
 
 /// The pose pairs of a recording: at each stamp of the target's pose, `base_from_gripper` from
-/// the tf tree and `camera_from_target` (see the [module](self) documentation).
+/// the tf tree and `camera_from_target` (see the [module](super) documentation).
 ///
 /// Errors ([`Error::Bag`], naming the file and, for a message, its topic and number): a file that
 /// is not a complete recording, a message that does not decode, a frame that is in no transform
