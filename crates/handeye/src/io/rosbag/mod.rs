@@ -11,11 +11,10 @@
 //! `camera_from_target`. Stamps are the messages' header stamps (`sec`, `nanosec`).
 //!
 //! A [`Recording`](crate::io::Recording) of a [`Source::Bag`](crate::io::Source::Bag) gives, at
-//! each stamp of the target's pose, `base_from_gripper` looked up in the tf tree (composed along
-//! the tree path, every dynamic transform interpolated in time) and `camera_from_target`: the same
-//! pose pairs a pose file gives, for either setup (for eye-to-hand the camera is fixed and the
-//! target rides on the gripper; the setup is applied afterwards, as for any input).
-//! [`inspect_bag`] lists the topics and the tf tree.
+//! each stamp of the target's pose, `base_from_gripper` from the tf tree (composed along its path,
+//! every dynamic transform interpolated in time) and `camera_from_target`: the pose pairs a pose
+//! file gives, for either setup (for eye-to-hand the camera is fixed and the target rides on the
+//! gripper; the setup is applied afterwards). [`inspect_bag`] lists the topics and the tf tree.
 
 mod cdr;
 mod msg;

@@ -2,18 +2,21 @@
 //! input), two stamped streams, or a ROS 2 recording, read into a [`Recording`] of pose pairs with
 //! their names, stamps, the clock offset used and the notes a face shows.
 
-use std::fmt;
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
-#[cfg(feature = "rosbag")]
-use crate::io::sync::{OffsetOptions, StampedPose, estimate_time_offset, refine_time_offset};
 use crate::io::sync::{TimeOffset, pair_stream_files};
 use crate::io::{
-    Format, PoseInput, PoseReader, PoseSeries, Preamble, Projections, StampedPosePair, open_poses,
+    Format, PoseInput, PoseReader, PoseSeries, Projections, StampedPosePair, open_poses,
 };
 use crate::model::error::{Error, Result};
 use crate::model::motion::{PosePair, Setup};
+
+#[cfg(feature = "rosbag")]
+mod bag;
+mod note;
+
+pub use note::Note;
 
 /// Where a [`Recording`] is read from.
 #[derive(Debug, Clone, PartialEq)]
@@ -86,132 +89,6 @@ impl Default for RecordingOptions {
     }
 }
 
-/// What reading an input found worth telling, in the words the command line prints (see
-/// `Display`).
-#[derive(Debug, Clone, PartialEq)]
-pub enum Note {
-    /// Lines skipped before the first pose record of `source`.
-    Preamble {
-        /// The file (`-` for standard input).
-        source: String,
-        /// What was skipped.
-        preamble: Preamble,
-    },
-    /// Rotation matrices of `source` projected onto the nearest rotation.
-    Projections {
-        /// The file.
-        source: String,
-        /// How many, and the largest deviation.
-        projections: Projections,
-    },
-    /// Samples of a stream out of time order, put in order.
-    Reordered {
-        /// The stream's file.
-        file: String,
-        /// How many samples.
-        count: usize,
-    },
-    /// The clock offset found by `auto`.
-    TimeOffset {
-        /// The offset used, seconds: the correlation's, refined by the paired poses' agreement.
-        offset: f64,
-        /// Where the angular speeds correlate best, seconds.
-        correlated_at: f64,
-        /// Their correlation there.
-        correlation: f64,
-    },
-    /// Camera samples of two streams that found no robot pose.
-    Dropped {
-        /// Outside the robot stream's time span.
-        outside: usize,
-        /// In its gaps longer than `max_gap`.
-        gap: usize,
-        /// The longest gap interpolated across, seconds.
-        max_gap: f64,
-    },
-    /// The pose pairs a ROS 2 recording gave.
-    BagPairs {
-        /// The recording.
-        path: String,
-        /// Pose pairs made.
-        pairs: usize,
-        /// Observations of the target read.
-        observations: usize,
-        /// Where the target's pose came from.
-        target_source: String,
-        /// Observations outside the robot's transforms.
-        outside: usize,
-        /// Observations in the robot's transforms' gaps longer than `max_gap`.
-        gap: usize,
-        /// The longest gap interpolated across, seconds.
-        max_gap: f64,
-    },
-}
-
-impl fmt::Display for Note {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::Preamble { source, preamble } => write!(f, "{source}: {}", preamble.note()),
-            Self::Projections {
-                source,
-                projections,
-            } => write!(f, "{source}: {}", projections.note().unwrap_or_default()),
-            Self::Reordered { file, count } => {
-                write!(
-                    f,
-                    "{file}: {count} sample(s) out of time order, put in order"
-                )
-            }
-            Self::TimeOffset {
-                offset,
-                correlated_at,
-                correlation,
-            } => write!(
-                f,
-                "time offset: {offset:.4} s (angular speeds correlate best at {correlated_at:.4} s, {correlation:.3}; refined by the agreement of the paired poses)"
-            ),
-            Self::Dropped {
-                outside,
-                gap,
-                max_gap,
-            } => write!(
-                f,
-                "dropped {outside} camera sample(s) outside the robot stream and {gap} in gaps longer than {max_gap} s"
-            ),
-            Self::BagPairs { .. } => self.fmt_bag_pairs(f),
-        }
-    }
-}
-
-impl Note {
-    /// [`Note::BagPairs`] in words.
-    fn fmt_bag_pairs(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let Self::BagPairs {
-            path,
-            pairs,
-            observations,
-            target_source,
-            outside,
-            gap,
-            max_gap,
-        } = self
-        else {
-            return Ok(());
-        };
-        write!(
-            f,
-            "{path}: {pairs} pose pair(s) from {observations} observation(s) of the target ({target_source})"
-        )?;
-        if outside + gap > 0 {
-            write!(
-                f,
-                "; dropped {outside} outside the robot's transforms and {gap} in their gaps longer than {max_gap} s"
-            )?;
-        }
-        Ok(())
-    }
-}
-
 /// The pose pairs of an input, read whole, with what a face needs to name and report them.
 ///
 /// # Example
@@ -276,7 +153,7 @@ impl Recording {
             Source::File { path, format } => read_file(path, *format, &mut notes)?,
             Source::Streams { robot, camera } => read_streams(robot, camera, options, &mut notes)?,
             #[cfg(feature = "rosbag")]
-            Source::Bag { path, frames } => read_bag(path, frames, options, &mut notes)?,
+            Source::Bag { path, frames } => bag::read_bag(path, frames, options, &mut notes)?,
         };
         recording.notes = notes.notes;
         Ok(recording)
@@ -482,102 +359,5 @@ fn read_streams(
         time_offset: Some(pairing.time_offset),
         offset_curve: pairing.correlated.map(|e| e.curve),
         ..Recording::default()
-    })
-}
-
-#[cfg(feature = "rosbag")]
-/// The clock offset (camera − robot, seconds) of two streams: the angular speeds' correlation,
-/// refined by how well the paired poses agree on one X, with its note and the correlation curve.
-/// `streams` names them in an error.
-fn auto_offset(
-    robot: &[StampedPose],
-    camera: &[StampedPose],
-    options: &RecordingOptions,
-    streams: impl FnOnce() -> String,
-    notes: &mut Notes<'_>,
-) -> Result<(f64, Vec<[f64; 2]>)> {
-    let search = OffsetOptions::default();
-    let e = estimate_time_offset(robot, camera, &search).map_err(|e| Error::TimeOffset {
-        streams: streams(),
-        source: Box::new(e),
-    })?;
-    let refined = refine_time_offset(
-        robot,
-        camera,
-        options.setup,
-        e.offset,
-        search.max_offset,
-        options.max_gap,
-    );
-    notes.add(Note::TimeOffset {
-        offset: refined,
-        correlated_at: e.offset,
-        correlation: e.correlation,
-    });
-    Ok((refined, e.curve))
-}
-
-/// A ROS 2 recording: with `auto`, read once as it is to find the offset, then with it.
-#[cfg(feature = "rosbag")]
-fn read_bag(
-    path: &Path,
-    frames: &BagFrames,
-    options: &RecordingOptions,
-    notes: &mut Notes<'_>,
-) -> Result<Recording> {
-    use crate::io::rosbag::{BagOptions, read_bag_pairs};
-    let mut bag_options = BagOptions {
-        base_frame: frames.base.clone(),
-        gripper_frame: frames.gripper.clone(),
-        camera_frame: frames.camera.clone(),
-        target_frame: frames.target.clone(),
-        target_topic: frames.target_topic.clone(),
-        time_offset: 0.0,
-        max_gap: options.max_gap,
-    };
-    let (time_offset, offset_curve) = match options.time_offset {
-        None => (0.0, None),
-        Some(TimeOffset::Fixed(t)) => (t, None),
-        Some(TimeOffset::Auto) => {
-            // Stamped by another clock (a detector that stamps on arrival, say): find the offset
-            // on the streams of the recording read as it is.
-            let first = read_bag_pairs(path, &bag_options)?;
-            let streams = || {
-                format!(
-                    "the robot's tf and {} in {}",
-                    first.target_source,
-                    path.display()
-                )
-            };
-            let (offset, curve) = auto_offset(
-                &first.robot_stream,
-                &first.camera_stream,
-                options,
-                streams,
-                notes,
-            )?;
-            (offset, Some(curve))
-        }
-    };
-    bag_options.time_offset = time_offset;
-    let pairs = read_bag_pairs(path, &bag_options)?;
-    notes.add(Note::BagPairs {
-        path: path.display().to_string(),
-        pairs: pairs.pairs.len(),
-        observations: pairs.observations,
-        target_source: pairs.target_source.clone(),
-        outside: pairs.dropped_outside,
-        gap: pairs.dropped_gap,
-        max_gap: options.max_gap,
-    });
-    Ok(Recording {
-        poses: pairs.poses(),
-        lines: pairs.pairs.iter().map(|p| p.line).collect(),
-        stamps: pairs.pairs.iter().map(|p| p.stamp).collect(),
-        names: pairs.names,
-        time_offset: options.time_offset.map(|_| time_offset),
-        offset_curve,
-        target_source: Some(pairs.target_source),
-        notes: Vec::new(),
     })
 }
