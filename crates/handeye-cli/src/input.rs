@@ -11,13 +11,10 @@ use std::thread::JoinHandle;
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
-use handeye::io::rosbag::{BagOptions, BagPairs, is_bag, read_bag_pairs};
-use handeye::io::sync::{
-    OffsetOptions, StampedPose, TimeOffset, estimate_time_offset, pair_stream_files,
-    refine_time_offset,
-};
+use handeye::io::rosbag::is_bag;
 use handeye::io::{
-    Format, PoseInput, PoseReader, Projections, StampedPosePair, open_pose_stream, open_poses,
+    BagFrames, Format, PoseInput, PoseReader, Projections, Recording, RecordingOptions, Source,
+    StampedPosePair, TimeOffset, open_pose_stream, open_poses,
 };
 use handeye::{PosePair, Setup};
 
@@ -97,8 +94,9 @@ impl InputArgs {
     }
 }
 
-/// The pose pairs of a ROS 2 recording, or `None` when INPUT is not one.
-pub fn bag(args: &InputArgs) -> Result<Option<(BagPairs, Option<f64>)>> {
+/// The source of a ROS 2 recording and its frames, or `None` when INPUT is not one (and no
+/// recording flag is given).
+fn bag_source(args: &InputArgs) -> Result<Option<Source>> {
     let flags = [
         ("--base-frame", &args.base_frame),
         ("--gripper-frame", &args.gripper_frame),
@@ -139,260 +137,111 @@ pub fn bag(args: &InputArgs) -> Result<Option<(BagPairs, Option<f64>)>> {
         }
         .into());
     }
-    let mut options = BagOptions {
-        base_frame: args.base_frame.clone().unwrap_or_default(),
-        gripper_frame: args.gripper_frame.clone().unwrap_or_default(),
-        camera_frame: args.camera_frame.clone().unwrap_or_default(),
-        target_frame: args.target_frame.clone(),
+    let frames = BagFrames {
+        base: args.base_frame.clone().unwrap_or_default(),
+        gripper: args.gripper_frame.clone().unwrap_or_default(),
+        camera: args.camera_frame.clone().unwrap_or_default(),
+        target: args.target_frame.clone(),
         target_topic: args.target_topic.clone(),
-        time_offset: 0.0,
-        max_gap: args.max_gap,
     };
-    let time_offset = if args.time_offset == "auto" {
-        // Stamped by another clock (a detector that stamps on arrival, say): find the offset on
-        // the streams of the recording read as it is, then read it again with that offset.
-        let first = read_bag_pairs(path, &options)?;
-        auto_offset(
-            &first.robot_stream,
-            &first.camera_stream,
-            args,
-            &format!(
-                "the robot's tf and {} in {}",
-                first.target_source,
-                path.display()
-            ),
-        )?
-    } else {
-        args.time_offset
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| handeye::Error::InvalidParameter {
-                name: "time_offset",
-                message: format!(
-                    "expected `auto` or seconds (camera clock minus robot clock), found `{}`",
-                    args.time_offset
-                ),
-            })?
-    };
-    options.time_offset = time_offset;
-    let pairs = read_bag_pairs(path, &options)?;
-    eprintln!(
-        "{}: {} pose pair(s) from {} observation(s) of the target ({}){}",
-        path.display(),
-        pairs.pairs.len(),
-        pairs.observations,
-        pairs.target_source,
-        if pairs.dropped_outside + pairs.dropped_gap > 0 {
-            format!(
-                "; dropped {} outside the robot's transforms and {} in their gaps longer than {} s",
-                pairs.dropped_outside, pairs.dropped_gap, args.max_gap
-            )
-        } else {
-            String::new()
-        }
-    );
-    // The offset is reported when one was asked for.
-    Ok(Some((
-        pairs,
-        (args.time_offset != "0").then_some(time_offset),
-    )))
-}
-
-/// Pose pairs from two streams, with what the pairing did.
-pub struct Synced {
-    /// The pairs.
-    pub pairs: Vec<StampedPosePair>,
-    /// Offset used, seconds.
-    pub time_offset: f64,
-    /// With `--time-offset auto`: the angular speeds' correlation at each offset searched.
-    pub offset_curve: Option<Vec<[f64; 2]>>,
-}
-
-/// Reads and pairs the two streams of `args`.
-pub fn synced(args: &InputArgs) -> Result<Option<Synced>> {
-    let (Some(robot_path), Some(camera_path)) = (&args.robot, &args.camera) else {
-        return Ok(None);
-    };
-    let offset = if args.time_offset == "auto" {
-        TimeOffset::Auto
-    } else {
-        TimeOffset::Fixed(
-            args.time_offset
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .with_context(|| {
-                    format!(
-                        "--time-offset: expected `auto` or seconds, found `{}`",
-                        args.time_offset
-                    )
-                })?,
-        )
-    };
-    let pairing = pair_stream_files(robot_path, camera_path, args.setup(), offset, args.max_gap)
-        .map_err(|e| match e {
-            // The offset search's own refusals say nothing of the files: name them.
-            handeye::Error::InvalidParameter { .. } => anyhow::Error::new(e).context(format!(
-                "--time-offset auto on {} and {}",
-                robot_path.display(),
-                camera_path.display()
-            )),
-            e => e.into(),
-        })?;
-    for (name, count) in [robot_path, camera_path].iter().zip(pairing.reordered) {
-        if count > 0 {
-            eprintln!(
-                "{}: {count} sample(s) out of time order, put in order",
-                name.display()
-            );
-        }
-    }
-    let time_offset = pairing.time_offset;
-    let offset_curve = pairing.correlated.as_ref().map(|e| e.curve.clone());
-    if let Some(e) = pairing.correlated {
-        eprintln!(
-            "time offset: {time_offset:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
-            e.offset, e.correlation
-        );
-    }
-    let s = pairing.synced;
-    if s.dropped_outside + s.dropped_gap > 0 {
-        eprintln!(
-            "dropped {} camera sample(s) outside the robot stream and {} in gaps longer than {} s",
-            s.dropped_outside, s.dropped_gap, args.max_gap
-        );
-    }
-    if s.pairs.len() < 2 {
-        // The camera stamps decide the pairs: name that file (not `-`, there is no INPUT).
-        return Err(handeye::Error::Parse {
-            file: camera_path.display().to_string(),
-            line: 0,
-            field: "t".into(),
-            message: format!(
-                "{} camera sample(s) within the robot stream {} ({} outside it, {} in its gaps longer than {} s): at least 2 pose pairs are needed",
-                s.pairs.len(),
-                robot_path.display(),
-                s.dropped_outside,
-                s.dropped_gap,
-                args.max_gap
-            ),
-        }
-        .into());
-    }
-    let pairs = s
-        .pairs
-        .iter()
-        .zip(&s.stamps)
-        .enumerate()
-        .map(|(k, (p, t))| StampedPosePair {
-            line: k + 1,
-            stamp: Some(*t),
-            pose: *p,
-        })
-        .collect();
-    Ok(Some(Synced {
-        pairs,
-        time_offset,
-        offset_curve,
+    Ok(Some(Source::Bag {
+        path: path.clone(),
+        frames,
     }))
 }
 
-/// The clock offset (camera − robot, seconds) of two streams: the angular speeds' correlation,
-/// refined by how well the paired poses agree on one X. `what` names the streams in messages.
-fn auto_offset(
-    robot: &[StampedPose],
-    camera: &[StampedPose],
-    args: &InputArgs,
-    what: &str,
-) -> Result<f64> {
-    let e = estimate_time_offset(robot, camera, &OffsetOptions::default())
-        .with_context(|| format!("--time-offset auto on {what}"))?;
-    let max_offset = OffsetOptions::default().max_offset;
-    let refined = refine_time_offset(
-        robot,
-        camera,
-        args.setup(),
-        e.offset,
-        max_offset,
-        args.max_gap,
-    );
-    eprintln!(
-        "time offset: {refined:.4} s (angular speeds correlate best at {:.4} s, {:.3}; refined by the agreement of the paired poses)",
-        e.offset, e.correlation
-    );
-    Ok(refined)
+/// `--time-offset` for a recording: none for `0` (no offset reported), else `auto` or seconds.
+fn bag_offset(args: &InputArgs) -> Result<Option<TimeOffset>> {
+    if args.time_offset == "0" {
+        return Ok(None);
+    }
+    if args.time_offset == "auto" {
+        return Ok(Some(TimeOffset::Auto));
+    }
+    let seconds = args
+        .time_offset
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| handeye::Error::InvalidParameter {
+            name: "time_offset",
+            message: format!(
+                "expected `auto` or seconds (camera clock minus robot clock), found `{}`",
+                args.time_offset
+            ),
+        })?;
+    Ok(Some(TimeOffset::Fixed(seconds)))
+}
+
+/// `--time-offset` for two streams: `auto` or seconds.
+fn stream_offset(args: &InputArgs) -> Result<Option<TimeOffset>> {
+    if args.time_offset == "auto" {
+        return Ok(Some(TimeOffset::Auto));
+    }
+    let seconds = args
+        .time_offset
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .with_context(|| {
+            format!(
+                "--time-offset: expected `auto` or seconds, found `{}`",
+                args.time_offset
+            )
+        })?;
+    Ok(Some(TimeOffset::Fixed(seconds)))
+}
+
+/// The options of [`Recording::read`] from the flags, with the time offset given.
+fn options(args: &InputArgs, time_offset: Option<TimeOffset>) -> RecordingOptions {
+    RecordingOptions {
+        setup: args.setup(),
+        time_offset,
+        max_gap: args.max_gap,
+    }
+}
+
+/// Reads `source`, telling its notes on stderr as they come; a failed `auto` offset search is
+/// named by the flag.
+fn read(source: &Source, options: &RecordingOptions) -> Result<Recording> {
+    Recording::read_telling(source, options, &mut |note| eprintln!("{note}")).map_err(|e| match e {
+        handeye::Error::TimeOffset { streams, source } => {
+            anyhow::Error::new(*source).context(format!("--time-offset auto on {streams}"))
+        }
+        e => e.into(),
+    })
+}
+
+/// The ROS 2 recording or the two streams of `args` read whole, or `None` for a pose file (or
+/// stdin).
+fn read_recorded(args: &InputArgs) -> Result<Option<Recording>> {
+    if let Some(source) = bag_source(args)? {
+        return read(&source, &options(args, bag_offset(args)?)).map(Some);
+    }
+    let (Some(robot), Some(camera)) = (&args.robot, &args.camera) else {
+        return Ok(None);
+    };
+    let source = Source::Streams {
+        robot: robot.clone(),
+        camera: camera.clone(),
+    };
+    read(&source, &options(args, stream_offset(args)?)).map(Some)
 }
 
 /// All pose pairs of the input (a batch solve), each pose's name for messages (`file:line`, or
 /// the camera stream's file and time stamp), and the time offset used for streams.
 pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Vec<String>, Option<f64>)> {
-    if let Some((b, offset)) = bag(args)? {
-        return Ok((b.poses(), b.names, offset));
-    }
-    if let Some(s) = synced(args)? {
-        let camera = args.camera.as_ref().map(|p| p.display().to_string());
-        let names = s
-            .pairs
-            .iter()
-            .map(|p| {
-                format!(
-                    "{} at t = {:.3} s",
-                    camera.as_deref().unwrap_or("camera"),
-                    p.stamp.unwrap_or(f64::NAN)
-                )
-            })
-            .collect();
-        return Ok((
-            s.pairs.iter().map(|p| p.pose).collect(),
-            names,
-            Some(s.time_offset),
-        ));
-    }
-    let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
-    let source = path.display().to_string();
-    let name = |line: usize| format!("{source}:{line}");
-    let (mut pairs, mut names) = (Vec::new(), Vec::new());
-    let mut take = |r: StampedPosePair| {
-        pairs.push(r.pose);
-        names.push(name(r.line));
+    let recording = match read_recorded(args)? {
+        Some(recording) => recording,
+        None => {
+            let source = Source::File {
+                path: args.input.clone().unwrap_or_else(|| PathBuf::from("-")),
+                format: args.format,
+            };
+            read(&source, &options(args, None))?
+        }
     };
-    if path.as_os_str() == "-" {
-        let mut reader = PoseReader::new(std::io::stdin().lock(), "-", args.format)?;
-        preamble(&reader, "-");
-        for r in reader.by_ref() {
-            take(r?);
-        }
-        note("-", &reader.projections());
-    } else {
-        match open_poses(&path, args.format)? {
-            PoseInput::Whole(series) => {
-                note(&source, &series.projections);
-                let names = series.lines.iter().map(|&l| name(l)).collect();
-                return Ok((series.pairs, names, None));
-            }
-            PoseInput::Stream(mut reader) => {
-                preamble(&reader, &source);
-                for r in reader.by_ref() {
-                    take(r?);
-                }
-                note(&source, &reader.projections());
-            }
-        }
-    }
-    if pairs.len() < 2 {
-        return Err(handeye::Error::Parse {
-            file: source,
-            line: 0,
-            field: "-".to_string(),
-            message: format!(
-                "{} pose pair(s): at least 2 are needed to make a motion",
-                pairs.len()
-            ),
-        }
-        .into());
-    }
-    Ok((pairs, names, None))
+    Ok((recording.poses, recording.names, recording.time_offset))
 }
 
 /// Tells on stderr the lines skipped before the first record, if any was not blank nor a comment.
@@ -488,30 +337,31 @@ pub fn records(
     args: &InputArgs,
     before_wait: Rc<dyn Fn()>,
 ) -> Result<(Records, String, Option<Offset>)> {
-    if let Some((b, offset)) = bag(args)? {
-        let source = format!(
-            "{} {}",
-            args.input
+    if let Some(recording) = read_recorded(args)? {
+        let source = match (&recording.target_source, &args.camera) {
+            (Some(target), _) => format!(
+                "{} {target}",
+                args.input
+                    .as_ref()
+                    .map_or(String::new(), |p| p.display().to_string())
+            ),
+            (None, camera) => camera
                 .as_ref()
-                .map_or(String::new(), |p| p.display().to_string()),
-            b.target_source
-        );
-        let offset = offset.map(|seconds| Offset {
-            seconds,
-            curve: None,
-        });
-        return Ok((Box::new(b.pairs.into_iter().map(Ok)), source, offset));
-    }
-    if let Some(s) = synced(args)? {
-        let camera = args
-            .camera
-            .as_ref()
-            .map_or("camera".to_string(), |p| p.display().to_string());
-        let offset = Offset {
-            seconds: s.time_offset,
-            curve: s.offset_curve,
+                .map_or("camera".to_string(), |p| p.display().to_string()),
         };
-        return Ok((Box::new(s.pairs.into_iter().map(Ok)), camera, Some(offset)));
+        let offset = recording.time_offset.map(|seconds| Offset {
+            seconds,
+            // The correlation curve of two streams only: a recording's is not drawn (yet).
+            curve: recording
+                .offset_curve
+                .clone()
+                .filter(|_| recording.target_source.is_none()),
+        });
+        return Ok((
+            Box::new(recording.records().into_iter().map(Ok)),
+            source,
+            offset,
+        ));
     }
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
     let source = path.display().to_string();

@@ -4,7 +4,10 @@
 //! Conventions: `base_from_gripper` (OpenCV `gripper2base`), `camera_from_target` (`target2cam`),
 //! X = `gripper_from_camera` (`cam2gripper`) for eye-in-hand, `base_from_camera` for eye-to-hand.
 
+use std::path::PathBuf;
+
 use handeye::TrackOptions;
+use handeye::io::{BagFrames, Format, Recording, RecordingOptions, Source, TimeOffset};
 use handeye::transform_from_matrix4;
 use handeye::{AdaptiveParams, Selection};
 use handeye::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
@@ -434,6 +437,156 @@ fn advise_report<'py>(
     serde_json::to_string(&advice).map_err(value_error)
 }
 
+/// Where `read_recording` reads: two streams, a ROS 2 recording (with its frames) or a pose file.
+fn recording_source(
+    path: Option<PathBuf>,
+    format: &str,
+    robot: Option<PathBuf>,
+    camera: Option<PathBuf>,
+    frames: [Option<String>; 5],
+) -> PyResult<Source> {
+    let named = [
+        "base_frame",
+        "gripper_frame",
+        "camera_frame",
+        "target_frame",
+        "target_topic",
+    ];
+    match (path, robot, camera) {
+        (None, Some(robot), Some(camera)) => Ok(Source::Streams { robot, camera }),
+        (Some(path), None, None) if handeye::io::rosbag::is_bag(&path) => {
+            let [base, gripper, camera, target, target_topic] = frames;
+            let missing: Vec<&str> = [&base, &gripper, &camera]
+                .iter()
+                .zip(named)
+                .filter(|(v, _)| v.is_none())
+                .map(|(_, name)| name)
+                .chain(
+                    (target.is_none() && target_topic.is_none())
+                        .then_some("target_frame (or target_topic)"),
+                )
+                .collect();
+            if !missing.is_empty() {
+                return Err(value_error(format!(
+                    "{} is a ROS 2 recording: name its frames with {}",
+                    path.display(),
+                    missing.join(", ")
+                )));
+            }
+            let frames = BagFrames {
+                base: base.unwrap_or_default(),
+                gripper: gripper.unwrap_or_default(),
+                camera: camera.unwrap_or_default(),
+                target,
+                target_topic,
+            };
+            Ok(Source::Bag { path, frames })
+        }
+        (Some(path), None, None) => {
+            if let Some((_, name)) = frames.iter().zip(named).find(|(v, _)| v.is_some()) {
+                return Err(value_error(format!(
+                    "{name} is for a ROS 2 recording (a rosbag2 directory, an .mcap or a .db3 file), and {} is not one",
+                    path.display()
+                )));
+            }
+            let format = format.parse::<Format>().map_err(value_error)?;
+            Ok(Source::File { path, format })
+        }
+        _ => Err(value_error(
+            "give a path (a pose file, a ViSP directory or a ROS 2 recording), or robot and camera (two stamped streams), not both",
+        )),
+    }
+}
+
+/// `time_offset`: none, seconds, or "auto".
+fn time_offset(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<TimeOffset>> {
+    let Some(value) = value.filter(|v| !v.is_none()) else {
+        return Ok(None);
+    };
+    if let Ok(text) = value.extract::<String>() {
+        return match text.as_str() {
+            "auto" => Ok(Some(TimeOffset::Auto)),
+            _ => Err(value_error(format!(
+                "time_offset: expected \"auto\" or seconds, found \"{text}\""
+            ))),
+        };
+    }
+    let seconds: f64 = value
+        .extract()
+        .map_err(|_| value_error("time_offset: expected \"auto\" or seconds"))?;
+    Ok(Some(TimeOffset::Fixed(seconds)))
+}
+
+/// (N, 4, 4) arrays of the pose pairs' two transforms.
+fn pose_arrays<'py>(py: Python<'py>, poses: &[PosePair]) -> [Bound<'py, numpy::PyArray3<f64>>; 2] {
+    let stack = |pick: fn(&PosePair) -> &Transform| {
+        let homogeneous: Vec<_> = poses.iter().map(|p| pick(p).to_homogeneous()).collect();
+        numpy::ndarray::Array3::from_shape_fn((poses.len(), 4, 4), |(k, r, c)| {
+            homogeneous[k][(r, c)]
+        })
+        .into_pyarray(py)
+    };
+    [
+        stack(|p| &p.base_from_gripper),
+        stack(|p| &p.camera_from_target),
+    ]
+}
+
+/// Reads any input (the library's `io::Recording`): a pose file, a ViSP directory, two stamped
+/// streams or a ROS 2 recording; a dict of the pose pairs and what reading found.
+#[pyfunction]
+#[pyo3(signature = (path=None, *, format="auto", robot=None, camera=None, base_frame=None, gripper_frame=None, camera_frame=None, target_frame=None, target_topic=None, setup="eye-in-hand", time_offset=None, max_gap=0.1))]
+#[allow(clippy::too_many_arguments)]
+fn read_recording<'py>(
+    py: Python<'py>,
+    path: Option<PathBuf>,
+    format: &str,
+    robot: Option<PathBuf>,
+    camera: Option<PathBuf>,
+    base_frame: Option<String>,
+    gripper_frame: Option<String>,
+    camera_frame: Option<String>,
+    target_frame: Option<String>,
+    target_topic: Option<String>,
+    setup: &str,
+    time_offset: Option<&Bound<'py, PyAny>>,
+    max_gap: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let frames = [
+        base_frame,
+        gripper_frame,
+        camera_frame,
+        target_frame,
+        target_topic,
+    ];
+    let source = recording_source(path, format, robot, camera, frames)?;
+    let options = RecordingOptions {
+        setup: parse_setup(setup)?,
+        time_offset: self::time_offset(time_offset)?,
+        max_gap,
+    };
+    let r = py
+        .allow_threads(|| Recording::read(&source, &options))
+        .map_err(value_error)?;
+    let [g, c] = pose_arrays(py, &r.poses);
+    let d = PyDict::new(py);
+    d.set_item("base_from_gripper", g)?;
+    d.set_item("camera_from_target", c)?;
+    d.set_item("names", &r.names)?;
+    d.set_item("lines", &r.lines)?;
+    d.set_item("stamps", &r.stamps)?;
+    d.set_item("time_offset", r.time_offset)?;
+    let curve = r.offset_curve.as_ref().map(|curve| {
+        numpy::ndarray::Array2::from_shape_fn((curve.len(), 2), |(k, j)| curve[k][j])
+            .into_pyarray(py)
+    });
+    d.set_item("offset_curve", curve)?;
+    d.set_item("target_source", &r.target_source)?;
+    let notes: Vec<String> = r.notes.iter().map(ToString::to_string).collect();
+    d.set_item("notes", notes)?;
+    Ok(d)
+}
+
 /// The method, pairing and Tsai options by name.
 fn calibration_options(
     method: &str,
@@ -608,6 +761,7 @@ fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
     m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
     m.add_function(wrap_pyfunction!(advise_report, m)?)?;
+    m.add_function(wrap_pyfunction!(read_recording, m)?)?;
     m.add_class::<PyOnline>()?;
     Ok(())
 }

@@ -468,3 +468,90 @@ def test_the_command_line_and_python_give_the_same_online_events(tmp_path):
     py = [e for k in range(len(q)) if (e := cal.push(q[k], c[k])) is not None]
     assert len(cli) > 3 and any("optimal" in e for e in cli)
     _same(cli, _plain(py))
+
+
+# read_recording: every input through the library's Recording, as the command line reads it.
+
+GOLDEN = TESTDATA / "golden" / "outputs.jsonl"
+
+
+def golden(args):
+    """The command line's recorded output of `args` (paths relative to the repository)."""
+    for line in GOLDEN.read_text().splitlines():
+        entry = json.loads(line)
+        if " ".join(entry["args"]) == args:
+            return entry
+    raise KeyError(args)
+
+
+def test_read_recording_of_a_jsonl_file_names_each_pose_by_line():
+    path = TESTDATA / "opencv" / "opencv_eye-in-hand_exact_10_11.jsonl"
+    r = handeye.read_recording(path)
+    assert r["base_from_gripper"].shape == (10, 4, 4) == r["camera_from_target"].shape
+    assert r["names"] == [f"{path}:{k}" for k in range(1, 11)]
+    assert r["lines"] == list(range(1, 11))
+    assert r["time_offset"] is None and r["offset_curve"] is None and r["notes"] == []
+    first = json.loads(path.read_text().splitlines()[0])
+    np.testing.assert_allclose(r["base_from_gripper"][0], first["base_from_gripper"], atol=1e-12)
+    X = handeye.calibrate(r["base_from_gripper"], r["camera_from_target"])["matrix"]
+    assert X.shape == (4, 4)
+
+
+def test_read_recording_of_two_streams_finds_the_cli_offset():
+    robot = "real/ethz-asl/robot_arm_sim_B_H.csv"
+    camera = "real/ethz-asl/robot_arm_sim_W_E.csv"
+    entry = golden(f"calibrate --robot testdata/{robot} --camera testdata/{camera} --time-offset auto --output json")
+    r = handeye.read_recording(robot=TESTDATA / robot, camera=TESTDATA / camera, time_offset="auto")
+    report = json.loads(entry["stdout"])
+    assert r["time_offset"] == report["time_offset_s"]
+    assert len(r["names"]) == report["poses"] == r["camera_from_target"].shape[0]
+    notes = [line.replace("testdata/", f"{TESTDATA}/") for line in entry["stderr"].splitlines()[:3]]
+    assert r["notes"] == notes
+    assert r["offset_curve"].shape[1] == 2
+    assert r["names"][0] == f"{TESTDATA / camera} at t = {r['stamps'][0]:.3f} s"
+
+
+def test_read_recording_of_a_ros2_bag_with_auto_offset():
+    bag = TESTDATA / "rosbag" / "eih_pose_offset_mcap"
+    entry = golden(
+        "calibrate testdata/rosbag/eih_pose_offset_mcap --base-frame base_link --gripper-frame tool0 "
+        "--camera-frame camera_link --target-topic /board_pose --time-offset auto --pairs consecutive --output json"
+    )
+    r = handeye.read_recording(
+        bag, base_frame="base_link", gripper_frame="tool0", camera_frame="camera_link",
+        target_topic="/board_pose", time_offset="auto",
+    )
+    assert r["time_offset"] == json.loads(entry["stdout"])["time_offset_s"]
+    assert r["base_from_gripper"].shape == (80, 4, 4)
+    assert r["target_source"] == "/board_pose"
+    assert r["notes"][1] == f"{bag}: 80 pose pair(s) from 80 observation(s) of the target (/board_pose)"
+    fixed = handeye.read_recording(
+        bag, base_frame="base_link", gripper_frame="tool0", camera_frame="camera_link",
+        target_topic="/board_pose", time_offset=0.037,
+    )
+    assert fixed["time_offset"] == 0.037 and fixed["offset_curve"] is None
+
+
+def test_read_recording_refuses_bad_input_with_a_clear_message(tmp_path):
+    missing = tmp_path / "missing.jsonl"
+    with pytest.raises(ValueError, match="missing.jsonl"):
+        handeye.read_recording(missing)
+    bag = TESTDATA / "rosbag" / "eih_tf_mcap"
+    with pytest.raises(ValueError, match="name its frames with base_frame"):
+        handeye.read_recording(bag)
+    with pytest.raises(ValueError, match="base_lnk"):
+        handeye.read_recording(bag, base_frame="base_lnk", gripper_frame="tool0", camera_frame="camera_link", target_frame="board")
+    with pytest.raises(ValueError, match="is for a ROS 2 recording"):
+        handeye.read_recording(TESTDATA / "opencv" / "opencv_eye-in-hand_exact_10_11.jsonl", base_frame="base_link")
+    with pytest.raises(ValueError, match="not both"):
+        handeye.read_recording(bag, robot=bag, camera=bag)
+    with pytest.raises(ValueError, match="time_offset"):
+        handeye.read_recording(robot=bag, camera=bag, time_offset="soon")
+    still = tmp_path / "still.txt"
+    still.write_text("".join(f"{0.1 * k:.1f} 0 0 0 0 0 0 1\n" for k in range(30)))
+    with pytest.raises(ValueError, match="time offset `auto` on .*still.txt"):
+        handeye.read_recording(robot=still, camera=still, time_offset="auto")
+    one = tmp_path / "one.jsonl"
+    one.write_text((TESTDATA / "opencv" / "opencv_eye-in-hand_exact_10_11.jsonl").read_text().splitlines()[0])
+    with pytest.raises(ValueError, match="at least 2"):
+        handeye.read_recording(one)

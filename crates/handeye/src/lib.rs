@@ -29,8 +29,8 @@
 //!   [`calibrate_robot_world`] on top of `solve::shah`, `solve::li`,
 //!   `solve::refine_robot_world`; online, the sums of
 //!   `solve::accumulate::RobotWorldAccumulator` in every `track::Tracker` report.
-//! - What to record next: [`advise`]. Reading files: [`io`]; two streams:
-//!   [`io::sync::pair_stream_files`].
+//! - What to record next: [`advise`]. Reading any input (a pose file, two stamped streams, a
+//!   ROS 2 recording): [`io::Recording`]; the readers of each format: [`io`].
 //!
 //! # Layers
 //! The folders are the layers (private modules but [`io`], [`sim`] and [`experiment`]: the

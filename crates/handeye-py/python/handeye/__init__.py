@@ -22,11 +22,12 @@ import numpy as np
 from ._handeye import _OnlineCalibrator
 from ._handeye import advise_report as _advise_report
 from ._handeye import calibrate_report as _calibrate_report
+from ._handeye import read_recording as _read_recording
 from ._handeye import robot_world_report as _robot_world_report
 from ._handeye import solve_opencv as _solve_opencv
 from ._handeye import solve_opencv_sequences as _solve_opencv_sequences
 
-__all__ = ["calibrate_hand_eye", "calibrate", "advise", "OnlineCalibrator", "METHODS"]
+__all__ = ["calibrate_hand_eye", "calibrate", "advise", "read_recording", "OnlineCalibrator", "METHODS"]
 
 #: OpenCV's constants (cv2.CALIB_HAND_EYE_*) and handeye's names.
 METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
@@ -162,6 +163,53 @@ def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3):
     if g.ndim != 3 or c.ndim != 3:
         raise ValueError("expected (N, 4, 4) arrays of transforms")
     return json.loads(_advise_report(g, c, setup=setup, count=count))
+
+
+def read_recording(
+    path=None,
+    *,
+    format="auto",
+    robot=None,
+    camera=None,
+    base_frame=None,
+    gripper_frame=None,
+    camera_frame=None,
+    target_frame=None,
+    target_topic=None,
+    setup="eye-in-hand",
+    time_offset=None,
+    max_gap=0.1,
+) -> dict:
+    """Reads any input as ``handeye calibrate`` does (the library's ``io::Recording``): a pose
+    file (``format`` "auto", "jsonl", "csv", "opencv-yaml", "moveit" or "visp"; a directory of
+    ViSP pose files), two stamped streams ``robot`` and ``camera`` (``t x y z qx qy qz qw``,
+    paired at the camera's stamps), or a ROS 2 recording (a rosbag2 directory, an ``.mcap`` or a
+    ``.db3`` file) with ``base_frame``, ``gripper_frame``, ``camera_frame`` and ``target_frame``
+    (or ``target_topic``). ``time_offset`` (streams and recordings): camera clock minus robot
+    clock in seconds, or "auto" to estimate it; ``max_gap``: the longest gap of the robot's poses
+    interpolated across, seconds.
+
+    Returns a dict: ``base_from_gripper`` and ``camera_from_target`` ((N, 4, 4) arrays, ready for
+    ``calibrate``), ``names`` (each pose's name in messages), ``lines`` (its line, sample or
+    message number), ``stamps`` (seconds, or None), ``time_offset`` (the offset used, or None),
+    ``offset_curve`` (with "auto": a (K, 2) array of offset and correlation, else None),
+    ``target_source`` (a recording's target topic or tf edge, else None) and ``notes`` (what
+    ``handeye`` prints on stderr while reading). Bad input raises ValueError naming the file,
+    line and field."""
+    return _read_recording(
+        None if path is None else str(path),
+        format=format,
+        robot=None if robot is None else str(robot),
+        camera=None if camera is None else str(camera),
+        base_frame=base_frame,
+        gripper_frame=gripper_frame,
+        camera_frame=camera_frame,
+        target_frame=target_frame,
+        target_topic=target_topic,
+        setup=setup,
+        time_offset=time_offset,
+        max_gap=max_gap,
+    )
 
 
 def _with_arrays(event):

@@ -1,6 +1,7 @@
 """Type stubs of handeye. Frames: base_from_gripper (OpenCV gripper2base), camera_from_target
 (target2cam); X = gripper_from_camera (cam2gripper) for eye-in-hand, base_from_camera for
 eye-to-hand."""
+import os
 from typing import Optional, Any, Sequence, Union
 
 import numpy as np
@@ -26,6 +27,22 @@ def calibrate(
     fix: Optional[str] = None,
     bootstrap: int = 40,
     robot_world: bool = False,
+) -> dict[str, Any]: ...
+
+def read_recording(
+    path: Optional[Union[str, "os.PathLike[str]"]] = None,
+    *,
+    format: str = "auto",
+    robot: Optional[Union[str, "os.PathLike[str]"]] = None,
+    camera: Optional[Union[str, "os.PathLike[str]"]] = None,
+    base_frame: Optional[str] = None,
+    gripper_frame: Optional[str] = None,
+    camera_frame: Optional[str] = None,
+    target_frame: Optional[str] = None,
+    target_topic: Optional[str] = None,
+    setup: str = "eye-in-hand",
+    time_offset: Optional[Union[float, str]] = None,
+    max_gap: float = 0.1,
 ) -> dict[str, Any]: ...
 
 class OnlineCalibrator:

@@ -11,10 +11,14 @@ mod jsonl;
 mod jsonl_fast;
 mod lines;
 mod peer;
+mod recording;
 #[cfg(feature = "rosbag")]
 pub mod rosbag;
 mod stamped;
+#[cfg(feature = "internals")]
 pub mod sync;
+#[cfg(not(feature = "internals"))]
+mod sync;
 mod transform;
 mod truth;
 
@@ -27,9 +31,16 @@ use crate::model::motion::PosePair;
 use crate::model::pose::ReadTransform;
 use lines::{Line, Lines};
 
-// What the faces use: one reader for every pose-file format (`read_pose_file`, `open_poses`,
-// `PoseReader`), the truth files, the recordings (`rosbag`) and the two-stream pairing (`sync`).
+// What the faces use: one entry for every input (`Recording`: a pose file, two streams, a ROS 2
+// recording), one reader for every pose-file format (`read_pose_file`, `open_poses`,
+// `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
+// two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
+// public with `internals` for this crate's tests.
 pub use jsonl::parse_pose_line;
+#[cfg(feature = "rosbag")]
+pub use recording::BagFrames;
+pub use recording::{Note, Recording, RecordingOptions, Source};
+pub use sync::TimeOffset;
 pub use truth::{Truth, read_truth, truth_json};
 // Each format's own reader and the io helpers: crate-internal; public with `internals` for this
 // crate's tests.

@@ -250,6 +250,14 @@ pub enum Error {
         /// Underlying error.
         source: std::io::Error,
     },
+    /// The clock offset of two streams could not be found (`auto`): which streams, and why.
+    #[error("time offset `auto` on {streams}: {source}")]
+    TimeOffset {
+        /// The streams searched (two files, or a recording's robot and target).
+        streams: String,
+        /// Why the search failed.
+        source: Box<Error>,
+    },
     /// A parameter out of its valid range.
     #[error("parameter `{name}`: {message}")]
     InvalidParameter {

@@ -1,0 +1,363 @@
+//! One entry for reading every input: a pose file (any [`Format`], a ViSP directory, standard
+//! input), two stamped streams, or a ROS 2 recording, read into a [`Recording`] of pose pairs with
+//! their names, stamps, the clock offset used and the notes a face shows.
+
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
+
+use crate::io::sync::{TimeOffset, pair_stream_files};
+use crate::io::{
+    Format, PoseInput, PoseReader, PoseSeries, Projections, StampedPosePair, open_poses,
+};
+use crate::model::error::{Error, Result};
+use crate::model::motion::{PosePair, Setup};
+
+#[cfg(feature = "rosbag")]
+mod bag;
+mod note;
+
+pub use note::Note;
+
+/// Where a [`Recording`] is read from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Source {
+    /// A pose-pair file in `format` (JSON Lines, CSV, OpenCV-YAML pairs, moveit JSON), a
+    /// directory of ViSP pose files, or `-` for standard input.
+    File {
+        /// The file or directory; `-` reads standard input.
+        path: PathBuf,
+        /// Its format ([`Format::Auto`]: by extension, else by content).
+        format: Format,
+    },
+    /// Two stamped streams `t x y z qx qy qz qw` (the ethz-asl and TUM layout), paired at the
+    /// camera's stamps.
+    Streams {
+        /// The robot stream (`base_from_gripper`).
+        robot: PathBuf,
+        /// The camera stream (`target_from_camera`).
+        camera: PathBuf,
+    },
+    /// A ROS 2 recording (a rosbag2 directory, an `.mcap` or a `.db3` file) and its frames.
+    #[cfg(feature = "rosbag")]
+    Bag {
+        /// The recording.
+        path: PathBuf,
+        /// The frames (and target topic) the pose pairs are made of.
+        frames: BagFrames,
+    },
+}
+
+/// The frames of a ROS 2 recording that make the pose pairs.
+#[cfg(feature = "rosbag")]
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BagFrames {
+    /// The robot's base frame in `/tf` (e.g. `base_link`).
+    pub base: String,
+    /// The gripper's frame (e.g. `tool0`).
+    pub gripper: String,
+    /// The camera frame X is found for (e.g. `camera_color_optical_frame`).
+    pub camera: String,
+    /// The target's frame in `/tf` (e.g. `board`); with a `TransformStamped` target topic its
+    /// `child_frame_id` must be it.
+    pub target: Option<String>,
+    /// A `geometry_msgs/msg/PoseStamped` or `TransformStamped` topic of the target's pose; none:
+    /// the target is in `/tf`.
+    pub target_topic: Option<String>,
+}
+
+/// How a [`Recording`] is read; `Default` gives the values on each field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RecordingOptions {
+    /// Camera on the gripper or fixed: the `auto` offset search pairs the poses for it. Default
+    /// eye-in-hand.
+    pub setup: Setup,
+    /// The clock offset (camera clock − robot clock) of two streams or a recording; none: 0 s,
+    /// and a recording reports no offset. Ignored for a pose file. Default none.
+    pub time_offset: Option<TimeOffset>,
+    /// A camera sample in a gap of the robot's poses longer than this is dropped, seconds.
+    /// Default 0.1.
+    pub max_gap: f64,
+}
+
+impl Default for RecordingOptions {
+    fn default() -> Self {
+        Self {
+            setup: Setup::EyeInHand,
+            time_offset: None,
+            max_gap: 0.1,
+        }
+    }
+}
+
+/// The pose pairs of an input, read whole, with what a face needs to name and report them.
+///
+/// # Example
+/// ```
+/// use handeye::io::{Format, Recording, RecordingOptions, Source};
+///
+/// let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../testdata/opencv/opencv_eye-in-hand_exact_10_11.jsonl");
+/// let source = Source::File { path: path.into(), format: Format::Auto };
+/// let recording = Recording::read(&source, &RecordingOptions::default())?;
+/// assert!(recording.poses.len() >= 2);
+/// assert!(recording.names[0].ends_with(".jsonl:1"));
+/// # Ok::<(), handeye::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Recording {
+    /// The pose pairs (`base_from_gripper`, `camera_from_target`), in input order.
+    pub poses: Vec<PosePair>,
+    /// A name for each pair, for messages: `file:line`, `camera at t = … s`, or the recording's
+    /// topic, message number and stamp.
+    pub names: Vec<String>,
+    /// Each pair's place: its line in a file, its sample number among the paired camera samples
+    /// (from 1), or its message number in the recording's target topic.
+    pub lines: Vec<usize>,
+    /// Each pair's time stamp, seconds, where the input gives one.
+    pub stamps: Vec<Option<f64>>,
+    /// The clock offset used (camera − robot, seconds): always for two streams, for a recording
+    /// when one was asked for, never for a pose file.
+    pub time_offset: Option<f64>,
+    /// With `auto`: the angular speeds' correlation at each offset searched,
+    /// `[offset s, correlation]`.
+    pub offset_curve: Option<Vec<[f64; 2]>>,
+    /// For a ROS 2 recording: where the target's pose came from (`/board_pose`, or
+    /// `/tf camera → board`).
+    pub target_source: Option<String>,
+    /// What reading found worth telling, in order.
+    pub notes: Vec<Note>,
+}
+
+impl Recording {
+    /// Reads `source` whole.
+    ///
+    /// Errors: the reader's own (file, line and field named); fewer than 2 pose pairs in a pose
+    /// file read as a stream or in two streams; an `auto` offset that cannot be found
+    /// ([`Error::TimeOffset`], naming the streams); a non-finite offset or a `max_gap` not above 0.
+    pub fn read(source: &Source, options: &RecordingOptions) -> Result<Self> {
+        Self::read_telling(source, options, &mut |_| {})
+    }
+
+    /// [`Recording::read`], telling each note to `tell` as it is found: a face shows the notes
+    /// found before an error too.
+    pub fn read_telling(
+        source: &Source,
+        options: &RecordingOptions,
+        tell: &mut dyn FnMut(&Note),
+    ) -> Result<Self> {
+        check_options(options)?;
+        let mut notes = Notes {
+            tell,
+            notes: Vec::new(),
+        };
+        let mut recording = match source {
+            Source::File { path, format } => read_file(path, *format, &mut notes)?,
+            Source::Streams { robot, camera } => read_streams(robot, camera, options, &mut notes)?,
+            #[cfg(feature = "rosbag")]
+            Source::Bag { path, frames } => bag::read_bag(path, frames, options, &mut notes)?,
+        };
+        recording.notes = notes.notes;
+        Ok(recording)
+    }
+
+    /// The pose pairs with their places and stamps, as a pose file's reader gives them.
+    pub fn records(&self) -> Vec<StampedPosePair> {
+        self.poses
+            .iter()
+            .zip(&self.lines)
+            .zip(&self.stamps)
+            .map(|((&pose, &line), &stamp)| StampedPosePair { line, stamp, pose })
+            .collect()
+    }
+}
+
+/// Refuses a non-finite time offset and a `max_gap` not above 0.
+fn check_options(options: &RecordingOptions) -> Result<()> {
+    if let Some(TimeOffset::Fixed(t)) = options.time_offset
+        && !t.is_finite()
+    {
+        return Err(Error::InvalidParameter {
+            name: "time_offset",
+            message: format!("expected a finite number of seconds, found {t}"),
+        });
+    }
+    if !(options.max_gap > 0.0 && options.max_gap.is_finite()) {
+        return Err(Error::InvalidParameter {
+            name: "max_gap",
+            message: format!("expected seconds above 0, found {}", options.max_gap),
+        });
+    }
+    Ok(())
+}
+
+/// The notes found so far, each told as it is added.
+struct Notes<'a> {
+    tell: &'a mut dyn FnMut(&Note),
+    notes: Vec<Note>,
+}
+
+impl Notes<'_> {
+    fn add(&mut self, note: Note) {
+        (self.tell)(&note);
+        self.notes.push(note);
+    }
+
+    /// Lines skipped before the first record of a stream, if any was not blank nor a comment.
+    fn preamble<R: BufRead>(&mut self, reader: &PoseReader<R>, source: &str) {
+        if let Some(p) = reader.preamble() {
+            self.add(Note::Preamble {
+                source: source.to_string(),
+                preamble: p.clone(),
+            });
+        }
+    }
+
+    /// Rotation matrices projected, if any.
+    fn projections(&mut self, source: &str, projections: Projections) {
+        if projections.count > 0 {
+            self.add(Note::Projections {
+                source: source.to_string(),
+                projections,
+            });
+        }
+    }
+}
+
+/// A pose file, a ViSP directory or standard input (`-`).
+fn read_file(path: &Path, format: Format, notes: &mut Notes<'_>) -> Result<Recording> {
+    let source = path.display().to_string();
+    let series = if path.as_os_str() == "-" {
+        let reader = PoseReader::new(std::io::stdin().lock(), "-", format)?;
+        read_stream(reader, &source, notes)?
+    } else {
+        match open_poses(path, format)? {
+            PoseInput::Whole(series) => {
+                // Read whole: as many pairs as the file has, the count checked by the solver.
+                notes.projections(&source, series.projections);
+                return Ok(file_recording(series, &source));
+            }
+            PoseInput::Stream(reader) => read_stream(reader, &source, notes)?,
+        }
+    };
+    if series.pairs.len() < 2 {
+        return Err(Error::Parse {
+            file: source,
+            line: 0,
+            field: "-".to_string(),
+            message: format!(
+                "{} pose pair(s): at least 2 are needed to make a motion",
+                series.pairs.len()
+            ),
+        });
+    }
+    Ok(file_recording(series, &source))
+}
+
+/// Every record of a streaming reader, the first bad one an error.
+fn read_stream<R: BufRead>(
+    mut reader: PoseReader<R>,
+    source: &str,
+    notes: &mut Notes<'_>,
+) -> Result<PoseSeries> {
+    notes.preamble(&reader, source);
+    let mut series = PoseSeries {
+        pairs: Vec::new(),
+        stamps: Vec::new(),
+        lines: Vec::new(),
+        projections: Projections::default(),
+    };
+    for record in reader.by_ref() {
+        let record = record?;
+        series.pairs.push(record.pose);
+        series.stamps.push(record.stamp);
+        series.lines.push(record.line);
+    }
+    notes.projections(source, reader.projections());
+    Ok(series)
+}
+
+/// A pose file's recording: each pair named `file:line`.
+fn file_recording(series: PoseSeries, source: &str) -> Recording {
+    Recording {
+        names: series
+            .lines
+            .iter()
+            .map(|line| format!("{source}:{line}"))
+            .collect(),
+        poses: series.pairs,
+        lines: series.lines,
+        stamps: series.stamps,
+        ..Recording::default()
+    }
+}
+
+/// Two stamped streams, paired at the camera's stamps.
+fn read_streams(
+    robot: &Path,
+    camera: &Path,
+    options: &RecordingOptions,
+    notes: &mut Notes<'_>,
+) -> Result<Recording> {
+    let offset = options.time_offset.unwrap_or(TimeOffset::Fixed(0.0));
+    let pairing = pair_stream_files(robot, camera, options.setup, offset, options.max_gap)
+        .map_err(|e| match e {
+            // The offset search's own refusals say nothing of the files: name them.
+            Error::InvalidParameter { .. } => Error::TimeOffset {
+                streams: format!("{} and {}", robot.display(), camera.display()),
+                source: Box::new(e),
+            },
+            e => e,
+        })?;
+    for (file, count) in [robot, camera].iter().zip(pairing.reordered) {
+        if count > 0 {
+            notes.add(Note::Reordered {
+                file: file.display().to_string(),
+                count,
+            });
+        }
+    }
+    if let Some(e) = &pairing.correlated {
+        notes.add(Note::TimeOffset {
+            offset: pairing.time_offset,
+            correlated_at: e.offset,
+            correlation: e.correlation,
+        });
+    }
+    let s = pairing.synced;
+    if s.dropped_outside + s.dropped_gap > 0 {
+        notes.add(Note::Dropped {
+            outside: s.dropped_outside,
+            gap: s.dropped_gap,
+            max_gap: options.max_gap,
+        });
+    }
+    if s.pairs.len() < 2 {
+        // The camera stamps decide the pairs: name that file.
+        return Err(Error::Parse {
+            file: camera.display().to_string(),
+            line: 0,
+            field: "t".into(),
+            message: format!(
+                "{} camera sample(s) within the robot stream {} ({} outside it, {} in its gaps longer than {} s): at least 2 pose pairs are needed",
+                s.pairs.len(),
+                robot.display(),
+                s.dropped_outside,
+                s.dropped_gap,
+                options.max_gap
+            ),
+        });
+    }
+    let camera = camera.display().to_string();
+    Ok(Recording {
+        names: s
+            .stamps
+            .iter()
+            .map(|t| format!("{camera} at t = {t:.3} s"))
+            .collect(),
+        lines: (1..=s.pairs.len()).collect(),
+        stamps: s.stamps.iter().copied().map(Some).collect(),
+        poses: s.pairs,
+        time_offset: Some(pairing.time_offset),
+        offset_curve: pairing.correlated.map(|e| e.curve),
+        ..Recording::default()
+    })
+}

@@ -1,0 +1,131 @@
+//! What reading an input found worth telling ([`Note`]), in the command line's words.
+
+use std::fmt;
+
+use crate::io::{Preamble, Projections};
+
+/// What reading an input found worth telling, in the words the command line prints (see
+/// `Display`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Note {
+    /// Lines skipped before the first pose record of `source`.
+    Preamble {
+        /// The file (`-` for standard input).
+        source: String,
+        /// What was skipped.
+        preamble: Preamble,
+    },
+    /// Rotation matrices of `source` projected onto the nearest rotation.
+    Projections {
+        /// The file.
+        source: String,
+        /// How many, and the largest deviation.
+        projections: Projections,
+    },
+    /// Samples of a stream out of time order, put in order.
+    Reordered {
+        /// The stream's file.
+        file: String,
+        /// How many samples.
+        count: usize,
+    },
+    /// The clock offset found by `auto`.
+    TimeOffset {
+        /// The offset used, seconds: the correlation's, refined by the paired poses' agreement.
+        offset: f64,
+        /// Where the angular speeds correlate best, seconds.
+        correlated_at: f64,
+        /// Their correlation there.
+        correlation: f64,
+    },
+    /// Camera samples of two streams that found no robot pose.
+    Dropped {
+        /// Outside the robot stream's time span.
+        outside: usize,
+        /// In its gaps longer than `max_gap`.
+        gap: usize,
+        /// The longest gap interpolated across, seconds.
+        max_gap: f64,
+    },
+    /// The pose pairs a ROS 2 recording gave.
+    BagPairs {
+        /// The recording.
+        path: String,
+        /// Pose pairs made.
+        pairs: usize,
+        /// Observations of the target read.
+        observations: usize,
+        /// Where the target's pose came from.
+        target_source: String,
+        /// Observations outside the robot's transforms.
+        outside: usize,
+        /// Observations in the robot's transforms' gaps longer than `max_gap`.
+        gap: usize,
+        /// The longest gap interpolated across, seconds.
+        max_gap: f64,
+    },
+}
+
+impl fmt::Display for Note {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Preamble { source, preamble } => write!(f, "{source}: {}", preamble.note()),
+            Self::Projections {
+                source,
+                projections,
+            } => write!(f, "{source}: {}", projections.note().unwrap_or_default()),
+            Self::Reordered { file, count } => {
+                write!(
+                    f,
+                    "{file}: {count} sample(s) out of time order, put in order"
+                )
+            }
+            Self::TimeOffset {
+                offset,
+                correlated_at,
+                correlation,
+            } => write!(
+                f,
+                "time offset: {offset:.4} s (angular speeds correlate best at {correlated_at:.4} s, {correlation:.3}; refined by the agreement of the paired poses)"
+            ),
+            Self::Dropped {
+                outside,
+                gap,
+                max_gap,
+            } => write!(
+                f,
+                "dropped {outside} camera sample(s) outside the robot stream and {gap} in gaps longer than {max_gap} s"
+            ),
+            Self::BagPairs { .. } => self.fmt_bag_pairs(f),
+        }
+    }
+}
+
+impl Note {
+    /// [`Note::BagPairs`] in words.
+    fn fmt_bag_pairs(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Self::BagPairs {
+            path,
+            pairs,
+            observations,
+            target_source,
+            outside,
+            gap,
+            max_gap,
+        } = self
+        else {
+            return Ok(());
+        };
+        write!(
+            f,
+            "{path}: {pairs} pose pair(s) from {observations} observation(s) of the target ({target_source})"
+        )?;
+        if outside + gap > 0 {
+            write!(
+                f,
+                "; dropped {outside} outside the robot's transforms and {gap} in their gaps longer than {max_gap} s"
+            )?;
+        }
+        Ok(())
+    }
+}

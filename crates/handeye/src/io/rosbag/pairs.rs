@@ -1,0 +1,318 @@
+//! The pose pairs of a recording ([`read_bag_pairs`]): the target's observations, the robot's
+//! pose looked up in the tf tree at each of their stamps.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use super::msg::{NS, POSE_STAMPED, TRANSFORM_STAMPED, frame_name};
+use super::storage::bag_error;
+use super::tf::{self, TfError, seconds};
+use super::{Bag, TF_STATIC_TOPIC, TF_TOPIC, at, load, topic_list};
+use crate::io::StampedPosePair;
+use crate::io::sync::{Lookup, StampedPose};
+use crate::model::error::{Error, Result};
+use crate::model::motion::PosePair;
+
+/// Which frames and topics make the pose pairs; `Default` gives the values on each field.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BagOptions {
+    /// The robot's base frame (e.g. `base_link`). No default: required.
+    pub base_frame: String,
+    /// The gripper's frame (e.g. `tool0`). No default: required.
+    pub gripper_frame: String,
+    /// The camera frame whose pose X is (e.g. `camera_color_optical_frame`). No default:
+    /// required.
+    pub camera_frame: String,
+    /// The target's frame (e.g. `board`): needed when the target is in `/tf`; with a
+    /// `TransformStamped` topic its `child_frame_id` must be it. Default none.
+    pub target_frame: Option<String>,
+    /// A `geometry_msgs/msg/PoseStamped` or `TransformStamped` topic of the target's pose
+    /// (e.g. `/board_pose`); none: the target is in `/tf`. Default none.
+    pub target_topic: Option<String>,
+    /// Camera clock minus robot clock, seconds: the robot is looked up at t − offset for a target
+    /// stamped t. Default 0.
+    pub time_offset: f64,
+    /// A dynamic transform is not interpolated across a gap between samples longer than this,
+    /// seconds (the observation is dropped). Default 0 counts as 0.1.
+    pub max_gap: f64,
+}
+
+/// Default `max_gap`, seconds.
+pub(crate) const DEFAULT_MAX_GAP: f64 = 0.1;
+
+/// The pose pairs of a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BagPairs {
+    /// The pairs (`base_from_gripper`, `camera_from_target`) in time order; `line` is the
+    /// target's message number in its topic (or its sample number in `/tf`), from 1, and `stamp`
+    /// its header stamp, seconds.
+    pub pairs: Vec<StampedPosePair>,
+    /// A name for each pair, for messages: topic, message number and stamp.
+    pub names: Vec<String>,
+    /// Where the target's pose came from (`/board_pose`, or `/tf camera → board`).
+    pub target_source: String,
+    /// Observations of the target read.
+    pub observations: usize,
+    /// Observations whose stamp lies outside a dynamic transform they need.
+    pub dropped_outside: usize,
+    /// Observations in a gap, longer than `max_gap`, of a dynamic transform they need.
+    pub dropped_gap: usize,
+    /// `base_from_gripper` at every stamp of the robot's dynamic transforms (robot clock), for an
+    /// estimate of the clock offset ([`crate::io::sync::estimate_time_offset`]).
+    pub robot_stream: Vec<StampedPose>,
+    /// `camera_from_target` at every observation (camera clock), in time order.
+    pub camera_stream: Vec<StampedPose>,
+}
+
+impl BagPairs {
+    /// The pose pairs alone.
+    pub fn poses(&self) -> Vec<PosePair> {
+        self.pairs.iter().map(|p| p.pose).collect()
+    }
+}
+
+/// Seconds as nanoseconds, for an offset or a gap given in seconds.
+fn nanoseconds(name: &'static str, value: f64) -> Result<i64> {
+    if !(value.is_finite() && value.abs() <= 1e6) {
+        return Err(Error::InvalidParameter {
+            name,
+            message: format!("{value} s is not a usable time (finite, at most 1e6 s in size)"),
+        });
+    }
+    Ok((value * NS as f64).round() as i64)
+}
+
+/// The pose pairs of a recording: at each stamp of the target's pose, `base_from_gripper` from
+/// the tf tree and `camera_from_target` (see the [module](super) documentation).
+///
+/// Errors ([`Error::Bag`], naming the file and, for a message, its topic and number): a file that
+/// is not a complete recording, a message that does not decode, a frame that is in no transform
+/// (the frames that are are listed), frames in different trees, a target topic that is missing or
+/// of another type, fewer than 2 pose pairs.
+///
+/// # Example
+/// ```
+/// use handeye::io::rosbag::{BagOptions, read_bag_pairs};
+/// use handeye::{Method, Pairing, Setup, motion_pairs, solve};
+///
+/// let bag = concat!(env!("CARGO_MANIFEST_DIR"), "/../../testdata/rosbag/eih_tf_mcap");
+/// let pairs = read_bag_pairs(
+///     std::path::Path::new(bag),
+///     &BagOptions {
+///         base_frame: "base_link".into(),
+///         gripper_frame: "tool0".into(),
+///         camera_frame: "camera_link".into(),
+///         target_frame: Some("board".into()),
+///         ..BagOptions::default()
+///     },
+/// )?;
+/// assert_eq!(pairs.pairs.len(), 80);
+/// let motions = motion_pairs(&pairs.poses(), Pairing::All, Setup::EyeInHand);
+/// let x = solve(Method::Andreff, &motions)?.x; // tool0_from_camera_link
+/// assert!((x.translation.vector.z - 0.08).abs() < 1e-9);
+/// # Ok::<(), handeye::Error>(())
+/// ```
+pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
+    let bag = Bag::open(path)?;
+    let frame = |name: &'static str, value: &str| {
+        let f = frame_name(value.trim());
+        if f.is_empty() {
+            Err(Error::InvalidParameter {
+                name,
+                message: "a frame name is needed to read a ROS 2 recording".into(),
+            })
+        } else {
+            Ok(f)
+        }
+    };
+    let base = frame("base_frame", &options.base_frame)?;
+    let gripper = frame("gripper_frame", &options.gripper_frame)?;
+    let camera = frame("camera_frame", &options.camera_frame)?;
+    let target_frame = options
+        .target_frame
+        .as_deref()
+        .map(|t| frame("target_frame", t))
+        .transpose()?;
+    let target_topic = options.target_topic.as_deref().map(str::trim);
+    let offset_ns = nanoseconds("time_offset", options.time_offset)?;
+    let max_gap = if options.max_gap > 0.0 {
+        options.max_gap
+    } else {
+        DEFAULT_MAX_GAP
+    };
+    let max_gap_ns = nanoseconds("max_gap", max_gap)?;
+    let loaded = load(&bag, target_topic)?;
+    let whole = |message: String| bag_error(path, None, message);
+    let tf_error = |what: &str, e: TfError| whole(format!("{what}: {e}"));
+    let tf = &loaded.tf;
+
+    if !loaded.topics.contains_key(TF_TOPIC) && !loaded.topics.contains_key(TF_STATIC_TOPIC) {
+        return Err(whole(format!(
+            "no /tf or /tf_static topic; the topics are: {}",
+            topic_list(&loaded.topics)
+        )));
+    }
+    let robot_path = tf
+        .path(&base, &gripper)
+        .map_err(|e| tf_error("the robot's pose", e))?;
+    if tf.dynamic_on(&robot_path).is_empty() {
+        return Err(whole(format!(
+            "the pose of `{gripper}` in `{base}` never changes: every transform between them is in /tf_static (is the gripper frame right?)"
+        )));
+    }
+
+    // The target's observations: (number, stamp, camera_from_target or why not).
+    let mut observations: Vec<(usize, i64, Lookup)> = Vec::new();
+    let target_source;
+    match target_topic {
+        Some(topic) => {
+            match loaded.topics.get(topic) {
+                None => {
+                    let names: Vec<String> = loaded.topics.keys().cloned().collect();
+                    let near = tf::nearest(topic, &names)
+                        .map_or(String::new(), |n| format!(" (did you mean `{n}`?)"));
+                    return Err(whole(format!(
+                        "no topic `{topic}` in the recording{near}; the topics are: {}",
+                        topic_list(&loaded.topics)
+                    )));
+                }
+                Some(info)
+                    if info.msg_type != POSE_STAMPED && info.msg_type != TRANSFORM_STAMPED =>
+                {
+                    return Err(whole(format!(
+                        "topic `{topic}` has type `{}`; a target topic must be `{POSE_STAMPED}` or `{TRANSFORM_STAMPED}`",
+                        info.msg_type
+                    )));
+                }
+                Some(_) => {}
+            }
+            target_source = topic.to_string();
+            let mut paths: HashMap<String, tf::TfPath> = HashMap::new();
+            for o in &loaded.target {
+                if let (Some(child), Some(target)) = (&o.child, &target_frame)
+                    && frame_name(child) != *target
+                {
+                    return Err(bag_error(
+                        path,
+                        at(topic, o.index),
+                        format!("child_frame_id is `{child}`, not the target frame `{target}`"),
+                    ));
+                }
+                let camera_from_target = if o.frame == camera {
+                    Lookup::Pose(o.frame_from_target)
+                } else {
+                    if !paths.contains_key(&o.frame) {
+                        let p = tf.path(&camera, &o.frame).map_err(|e| {
+                            bag_error(
+                                path,
+                                at(topic, o.index),
+                                format!(
+                                    "the target's pose is given in `{}`, not in the camera frame `{camera}`, and tf cannot relate them: {e}",
+                                    o.frame
+                                ),
+                            )
+                        })?;
+                        paths.insert(o.frame.clone(), p);
+                    }
+                    match tf.lookup(&paths[&o.frame], o.stamp_ns, max_gap_ns) {
+                        Lookup::Pose(camera_from_frame) => {
+                            Lookup::Pose(camera_from_frame * o.frame_from_target)
+                        }
+                        other => other,
+                    }
+                };
+                observations.push((o.index, o.stamp_ns, camera_from_target));
+            }
+        }
+        None => {
+            let Some(target) = &target_frame else {
+                return Err(Error::InvalidParameter {
+                    name: "target_frame",
+                    message: "the target's frame is needed when its pose is in /tf (or name the topic of its pose)".into(),
+                });
+            };
+            let target_path = tf
+                .path(&camera, target)
+                .map_err(|e| tf_error("the target's pose", e))?;
+            let Some(edge) = tf.dynamic_on(&target_path).into_iter().next() else {
+                return Err(whole(format!(
+                    "the pose of `{target}` in `{camera}` never changes: every transform between them is in /tf_static (is the target published on a topic of its own?)"
+                )));
+            };
+            let parent = tf.parent_of(&edge).unwrap_or_default();
+            target_source = format!("/tf `{parent}` → `{edge}`");
+            for (k, t) in tf.stamps_of(&edge).into_iter().enumerate() {
+                observations.push((k + 1, t, tf.lookup(&target_path, t, max_gap_ns)));
+            }
+        }
+    }
+    observations.sort_by_key(|o| o.1);
+
+    let mut robot_stamps: Vec<i64> = tf
+        .dynamic_on(&robot_path)
+        .iter()
+        .flat_map(|edge| tf.stamps_of(edge))
+        .collect();
+    robot_stamps.sort_unstable();
+    robot_stamps.dedup();
+    let robot_stream = robot_stamps
+        .into_iter()
+        .filter_map(|t| match tf.lookup(&robot_path, t, max_gap_ns) {
+            Lookup::Pose(pose) => Some(StampedPose {
+                stamp: seconds(t),
+                pose,
+            }),
+            _ => None,
+        })
+        .collect();
+    let camera_stream = observations
+        .iter()
+        .filter_map(|(_, t, o)| match o {
+            Lookup::Pose(pose) => Some(StampedPose {
+                stamp: seconds(*t),
+                pose: *pose,
+            }),
+            _ => None,
+        })
+        .collect();
+    let mut out = BagPairs {
+        pairs: Vec::new(),
+        names: Vec::new(),
+        target_source: target_source.clone(),
+        observations: observations.len(),
+        dropped_outside: 0,
+        dropped_gap: 0,
+        robot_stream,
+        camera_stream,
+    };
+    for (index, stamp_ns, camera_from_target) in observations {
+        let robot = tf.lookup(&robot_path, stamp_ns.saturating_sub(offset_ns), max_gap_ns);
+        match (robot, camera_from_target) {
+            (Lookup::Pose(base_from_gripper), Lookup::Pose(camera_from_target)) => {
+                let stamp = seconds(stamp_ns);
+                out.pairs.push(StampedPosePair {
+                    line: index,
+                    stamp: Some(stamp),
+                    pose: PosePair {
+                        base_from_gripper,
+                        camera_from_target,
+                    },
+                });
+                out.names
+                    .push(format!("{target_source} #{index} (t = {stamp:.3} s)"));
+            }
+            (Lookup::Gap, _) | (_, Lookup::Gap) => out.dropped_gap += 1,
+            _ => out.dropped_outside += 1,
+        }
+    }
+    if out.pairs.len() < 2 {
+        return Err(whole(format!(
+            "{} observation(s) of the target ({target_source}), {} within the robot's transforms ({} outside them, {} in their gaps longer than {max_gap} s): at least 2 pose pairs are needed",
+            out.observations,
+            out.pairs.len(),
+            out.dropped_outside,
+            out.dropped_gap
+        )));
+    }
+    Ok(out)
+}
