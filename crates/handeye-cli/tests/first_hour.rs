@@ -145,3 +145,27 @@ fn the_same_numbers_from_inverted_camera_poses_name_both_fixes() {
         .sqrt();
     assert!(off < 0.01, "{off} m from the truth");
 }
+
+/// Item 1 online: the accumulating estimator's check of the first poses asks the same question
+/// rather than naming only the mirror reading's `--fix`.
+#[test]
+fn online_asks_where_the_camera_is_too() {
+    let path = testdata("kinhec/pairs/nominal_stations_eth_s1.jsonl");
+    let (_, out, err) = run(&[
+        "online",
+        path.to_str().unwrap(),
+        "--estimator",
+        "accumulate",
+        "--output",
+        "text",
+    ]);
+    let all = format!("{out}{err}");
+    assert!(
+        all.contains("if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand`"),
+        "{all}"
+    );
+    assert!(
+        !all.contains("calibration 1 "),
+        "an estimate from misread poses: {all}"
+    );
+}

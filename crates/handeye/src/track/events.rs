@@ -177,6 +177,10 @@ pub enum Pending {
         reading: Reading,
         /// The setup the poses are read in.
         setup: Setup,
+        /// The poses may be the other setup's recording (the same numbers; see
+        /// `ReadingCheck::other_setup`): the user is asked where the camera is.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        other_setup: bool,
     },
     /// An estimate exists but its uncertainty is above the bound.
     Undetermined {
@@ -191,6 +195,15 @@ pub enum Pending {
     },
 }
 
+/// Where the camera is in a setup: "fixed (eye-to-hand)".
+fn where_camera(setup: Setup) -> String {
+    let camera = match setup {
+        Setup::EyeInHand => "on the gripper",
+        Setup::EyeToHand => "fixed",
+    };
+    format!("{camera} ({})", setup.name())
+}
+
 impl fmt::Display for Pending {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -203,7 +216,20 @@ impl fmt::Display for Pending {
                 f,
                 "all rotation axes parallel so far: rotate the gripper about another axis"
             ),
-            Self::Misread { reading, setup } => write!(
+            Self::Misread {
+                reading,
+                setup,
+                other_setup: true,
+            } => write!(
+                f,
+                "the poses fit far better read as {}, and as well read the other way round: if the camera is {}, pass `--setup {}`; if it is {}, correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",
+                reading.meaning(*setup),
+                where_camera(setup.other()),
+                setup.other().name(),
+                where_camera(*setup),
+                reading.name()
+            ),
+            Self::Misread { reading, setup, .. } => write!(
                 f,
                 "the poses fit far better read as {}: correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",
                 reading.meaning(*setup),

@@ -134,9 +134,10 @@ pub struct Tracker {
     gaps: VecDeque<[f64; 2]>,
     /// The first accepted poses with their numbers, until they are judged together.
     warmup: Option<Vec<(usize, PosePair)>>,
-    /// What the last check of the readings on them found: a reading that fits far better, and
-    /// whether X and Y have sizes the setup makes unlikely (both poses inverted fit as well).
-    misread: Option<Reading>,
+    /// What the last check of the readings on them found: a reading that fits far better (and
+    /// whether the poses may be the other setup's), and whether X and Y have sizes the setup makes
+    /// unlikely (both poses inverted fit as well).
+    misread: Option<(Reading, bool)>,
     implausible: bool,
     /// The poses held out in a row by the screw gate, with their numbers.
     screw_run: Vec<(usize, PosePair)>,
@@ -197,10 +198,11 @@ impl Tracker {
 
     /// Why there is no estimate to report now; `None` when there is one.
     pub fn pending(&self) -> Option<Pending> {
-        if let Some(reading) = self.misread {
+        if let Some((reading, other_setup)) = self.misread {
             return Some(Pending::Misread {
                 reading,
                 setup: self.setup,
+                other_setup,
             });
         }
         self.incumbent
@@ -321,7 +323,8 @@ impl Tracker {
             .collect();
         let readings = check_readings(&kept, self.setup);
         if readings.as_given.is_some() {
-            self.misread = readings.better.map(|b| b.reading);
+            let other_setup = readings.other_setup(self.setup);
+            self.misread = readings.better.map(|b| (b.reading, other_setup));
             self.implausible = readings.size_warning(self.setup).is_some();
         }
         let mut held = Vec::new();
