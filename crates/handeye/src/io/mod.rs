@@ -484,13 +484,9 @@ pub fn open_pose_stream<R: BufRead>(
     })
 }
 
-/// Reads a whole pose-pair file; errors on the first bad record, or with fewer than 2 poses.
-pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
-    let source = path.display().to_string();
-    let mut reader = match open_poses(path, format)? {
-        PoseInput::Whole(series) => return Ok(series),
-        PoseInput::Stream(reader) => reader,
-    };
+/// Every record of a streaming reader as a series (its projections left to the caller); the
+/// first bad record is the error.
+pub(crate) fn read_records<R: BufRead>(reader: &mut PoseReader<R>) -> Result<PoseSeries> {
     let mut series = PoseSeries {
         pairs: Vec::new(),
         stamps: Vec::new(),
@@ -498,11 +494,22 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
         projections: Projections::default(),
     };
     for record in reader.by_ref() {
-        let r = record?;
-        series.pairs.push(r.pose);
-        series.stamps.push(r.stamp);
-        series.lines.push(r.line);
+        let record = record?;
+        series.pairs.push(record.pose);
+        series.stamps.push(record.stamp);
+        series.lines.push(record.line);
     }
+    Ok(series)
+}
+
+/// Reads a whole pose-pair file; errors on the first bad record, or with fewer than 2 poses.
+pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
+    let source = path.display().to_string();
+    let mut reader = match open_poses(path, format)? {
+        PoseInput::Whole(series) => return Ok(series),
+        PoseInput::Stream(reader) => reader,
+    };
+    let mut series = read_records(&mut reader)?;
     series.projections = reader.projections();
     if series.pairs.len() < 2 {
         return Err(Error::Parse {

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use crate::io::sync::{TimeOffset, pair_stream_files};
 use crate::io::{
     Format, PoseInput, PoseReader, PoseSeries, Projections, StampedPosePair, open_poses,
+    read_records,
 };
 use crate::model::error::{Error, Result};
 use crate::model::motion::{PosePair, Setup};
@@ -259,18 +260,7 @@ fn read_stream<R: BufRead>(
     notes: &mut Notes<'_>,
 ) -> Result<PoseSeries> {
     notes.preamble(&reader, source);
-    let mut series = PoseSeries {
-        pairs: Vec::new(),
-        stamps: Vec::new(),
-        lines: Vec::new(),
-        projections: Projections::default(),
-    };
-    for record in reader.by_ref() {
-        let record = record?;
-        series.pairs.push(record.pose);
-        series.stamps.push(record.stamp);
-        series.lines.push(record.line);
-    }
+    let series = read_records(&mut reader)?;
     notes.projections(source, reader.projections());
     Ok(series)
 }
