@@ -8,7 +8,7 @@ use std::rc::Rc;
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
-use handeye::{AdaptiveParams, MAX_N_INIT, Selection, StreamReading};
+use handeye::{AdaptiveParams, MAX_N_INIT, Selection, StreamReading, StreamReadings};
 use handeye::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::{Step, TrackOptions, TrackReport as Report};
 
@@ -223,7 +223,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut pose_unit: Option<Unit> = None;
     // The paper's estimator has no checks of its own: the batch's check of the readings runs on
     // the first poses (the accumulating estimator runs it itself).
-    let mut first: Vec<handeye::PosePair> = Vec::with_capacity(READINGS_SAMPLE);
+    let mut readings = StreamReadings::new(setup);
     // Input lines of the recent poses, for naming the ones held out (the tracker may hold out a
     // pose up to 256 poses after it came, when it judges its first poses together).
     let mut lines: VecDeque<(usize, usize, Option<f64>)> = VecDeque::with_capacity(LINES_KEPT);
@@ -257,12 +257,9 @@ pub fn run(args: Args) -> Result<()> {
         if pose_unit.is_none() {
             pose_unit = Unit::infer(&record.pose);
         }
-        if !accumulate && first.len() < READINGS_SAMPLE {
-            first.push(record.pose);
-            if first.len() == READINGS_SAMPLE {
-                out.flush_quietly();
-                warn_misread(&first, setup);
-            }
+        if !accumulate && let Some(found) = readings.push(&record.pose) {
+            out.flush_quietly();
+            warn_misread(found);
         }
         if lines.len() == LINES_KEPT {
             lines.pop_front();
@@ -304,8 +301,8 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
-    if !accumulate && (16..READINGS_SAMPLE).contains(&first.len()) {
-        warn_misread(&first, setup);
+    if !accumulate && let Some(found) = readings.finish() {
+        warn_misread(found);
     }
     if let Some(report) = calibrator.finish() {
         print_report(&report, setup, time_offset, face, &out)?;
@@ -406,22 +403,15 @@ fn event_text(e: &Event) -> String {
 /// it during the run too, at every multiple).
 const QUIET_POSES: usize = 200;
 
-/// Poses the readings are checked on with the paper's estimator.
-const READINGS_SAMPLE: usize = 64;
-
-/// Warns when the poses fit far better read another way (an inverted pose, `w, x, y, z`
-/// quaternions, millimetres on one side), or with sizes the setup makes unlikely.
-fn warn_misread(poses: &[handeye::PosePair], setup: handeye::Setup) {
-    match handeye::check_stream_readings(poses, setup) {
-        Some(StreamReading::OneAxis) => eprintln!(
-            "warning: every rotation of the first {} poses is about one axis: X's rotation about it, and its translation along it, are not determined by them, whatever the calibrations below say; rotate the gripper about other axes",
-            poses.len()
-        ),
-        Some(StreamReading::ReadWrongly(advice)) => eprintln!(
-            "warning: the calibrations are from data read wrongly: {advice} (`handeye calibrate` checks this too)"
-        ),
-        Some(StreamReading::UnlikelySizes(w)) => eprintln!("warning: {w}"),
-        None => {}
+/// Warns that the poses fit far better read another way (an inverted pose, `w, x, y, z`
+/// quaternions, millimetres on one side), have sizes the setup makes unlikely, or turn about one
+/// axis.
+fn warn_misread(found: StreamReading) {
+    match found {
+        StreamReading::ReadWrongly(_) => {
+            eprintln!("warning: {found} (`handeye calibrate` checks this too)")
+        }
+        _ => eprintln!("warning: {found}"),
     }
 }
 

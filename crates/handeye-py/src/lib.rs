@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use handeye::TrackOptions;
 use handeye::io::{BagFrames, Format, Recording, RecordingOptions, Source, TimeOffset};
 use handeye::transform_from_matrix4;
-use handeye::{AdaptiveParams, Selection};
+use handeye::{AdaptiveParams, Selection, StreamReadings};
 use handeye::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::{Method, Pairing, PosePair, Setup, Transform};
 use nalgebra::{Matrix3, Matrix4, Vector3};
@@ -612,6 +612,11 @@ fn parse_setup(setup: &str) -> PyResult<Setup> {
 #[pyclass(name = "_OnlineCalibrator")]
 struct PyOnline {
     inner: OnlineCalibrator,
+    /// The readings check of the first poses, as the command line runs it (the paper's estimator
+    /// has none of its own; the accumulating one runs it itself).
+    readings: StreamReadings,
+    /// What it found, until Python takes it as a warning.
+    found: Option<String>,
 }
 
 #[pymethods]
@@ -678,8 +683,15 @@ impl PyOnline {
                 None => unit.parse::<Unit>().map_err(value_error)?,
             },
         };
+        let checks = config.estimator != Estimator::Accumulate;
+        let mut readings = StreamReadings::new(config.setup);
+        if !checks {
+            readings.finish(); // nothing to check: the tracker checks its own first poses
+        }
         Ok(Self {
             inner: OnlineCalibrator::new(config).map_err(value_error)?,
+            readings,
+            found: None,
         })
     }
 
@@ -695,6 +707,9 @@ impl PyOnline {
             camera_from_target: transform(camera_from_target.as_array(), "camera_from_target")?,
         };
         let events = self.inner.push(&pose).map_err(value_error)?;
+        if let Some(found) = self.readings.push(&pose) {
+            self.found = Some(found.to_string());
+        }
         let setup = self.inner.config().setup;
         match self.inner.step() {
             // The accumulating estimator's own lines: a change, a report.
@@ -710,8 +725,17 @@ impl PyOnline {
         }
     }
 
-    /// The accumulating estimator's final report (JSON text), or None.
+    /// What the readings check of the first poses found (once), or None.
+    fn take_warning(&mut self) -> Option<String> {
+        self.found.take()
+    }
+
+    /// The accumulating estimator's final report (JSON text), or None; a readings check not run
+    /// yet runs on a short stream (see `take_warning`).
     fn finish(&mut self) -> Option<String> {
+        if let Some(found) = self.readings.finish() {
+            self.found = Some(found.to_string());
+        }
         let setup = self.inner.config().setup;
         self.inner.finish().map(|r| r.json(setup, None).to_string())
     }
@@ -739,8 +763,14 @@ impl PyOnline {
     /// A calibrator restored from `state()`.
     #[staticmethod]
     fn from_state(state: &str) -> PyResult<Self> {
+        let inner: OnlineCalibrator = serde_json::from_str(state).map_err(value_error)?;
+        // A restored calibrator has had its first poses: their check is not repeated.
+        let mut readings = StreamReadings::new(inner.config().setup);
+        readings.finish();
         Ok(Self {
-            inner: serde_json::from_str(state).map_err(value_error)?,
+            inner,
+            readings,
+            found: None,
         })
     }
 }

@@ -555,3 +555,26 @@ def test_read_recording_refuses_bad_input_with_a_clear_message(tmp_path):
     one.write_text((TESTDATA / "opencv" / "opencv_eye-in-hand_exact_10_11.jsonl").read_text().splitlines()[0])
     with pytest.raises(ValueError, match="at least 2"):
         handeye.read_recording(one)
+
+
+def _push_all(calibrator, path):
+    r = handeye.read_recording(path)
+    for a, b in zip(r["base_from_gripper"], r["camera_from_target"]):
+        calibrator.push(a, b)
+    calibrator.finish()  # these files have 40 poses: a stream under 64 is checked at its end
+
+
+def test_online_checks_the_first_poses_as_the_command_line_does():
+    # The paper's estimator has no checks of its own: the first 64 poses (a shorter stream's, at
+    # finish) get the command line's readings check (issue 31: Python's online calibrator has every check the CLI has).
+    inverted = TESTDATA / "kinhec" / "mistakes" / "camera_inverted__nominal_stations_eih_s0.jsonl"
+    with pytest.warns(UserWarning, match="read wrongly.*--fix camera-inverted"):
+        _push_all(handeye.OnlineCalibrator(), inverted)
+    one_axis = TESTDATA / "kinhec" / "pairs" / "degenerate_single_joint_continuous_eih_s0.jsonl"
+    with pytest.warns(UserWarning, match="about one axis"):
+        _push_all(handeye.OnlineCalibrator(), one_axis)
+    # Data read right: no warning.
+    right = TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.jsonl"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _push_all(handeye.OnlineCalibrator(), right)

@@ -128,7 +128,7 @@ pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 // Check.
 pub use check::holdout::leave_one_out;
 pub use check::quality::{OUTLIER_DEG, errors_against_truth};
-pub use check::stream::{StreamReading, check_stream_readings};
+pub use check::stream::{StreamReading, StreamReadings};
 pub use check::uncertainty::{REPLICATES, Uncertainty};
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, ClosedLoop, WeaknessKind, advise, closed_loop};

@@ -231,7 +231,10 @@ class OnlineCalibrator:
     ``d_max`` in your length unit;
     left out, it is 0.1 m in the ``unit``: "auto" infers metres or millimetres from the first
     pose, "m", "mm"), ``unfreeze``; for ``estimator="accumulate"`` also ``every`` and ``shrink``
-    (how often it reports). With ``estimator="accumulate"``, ``push`` returns the estimator's own
+    (how often it reports). With the paper's estimator, the first 64 poses (a shorter stream's, at
+    ``finish()``) are checked as ``handeye online`` checks them: a ``UserWarning`` when they fit far
+    better read another way, have sizes the setup makes unlikely, or turn about one axis.
+    With ``estimator="accumulate"``, ``push`` returns the estimator's own
     reports (``estimate``, X as ``matrix``, ``uncertainty``, ``target``, ...) and changes
     (``change``), the same fields as ``handeye online --estimator accumulate`` prints."""
 
@@ -261,6 +264,7 @@ class OnlineCalibrator:
             np.ascontiguousarray(base_from_gripper, dtype=np.float64),
             np.ascontiguousarray(camera_from_target, dtype=np.float64),
         )
+        self._warn_readings()
         events = [_with_arrays(e) for e in events]
         if not events:
             return None
@@ -268,9 +272,18 @@ class OnlineCalibrator:
 
     def finish(self):
         """The accumulating estimator's final report (a dict), or None: call it at the end of the
-        stream. A report whose uncertainty is above the reporting bounds carries ``weak``."""
+        stream (with either estimator: a short stream's readings are checked then). A report whose
+        uncertainty is above the reporting bounds carries ``weak``."""
         text = self._inner.finish()
+        self._warn_readings()
         return None if text is None else _with_arrays(json.loads(text))
+
+    def _warn_readings(self):
+        # The command line's check of the first 64 poses (of a shorter stream of 16 or more, at
+        # finish()): data read wrongly, implausible sizes, or rotations about one axis.
+        found = self._inner.take_warning()
+        if found is not None:
+            warnings.warn(found, UserWarning, stacklevel=3)
 
     def pending(self):
         """Why the accumulating estimator has nothing to report now (a sentence), or None."""
