@@ -6,7 +6,7 @@ use clap::Args as ClapArgs;
 use clap::builder::PossibleValuesParser;
 use handeye::OUTLIER_DEG;
 use handeye::REPLICATES;
-use handeye::{Fix, Options, calibrate};
+use handeye::{Assessment, Fix, Options, calibrate};
 use handeye::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 
 use handeye::TsaiOptions;
@@ -15,7 +15,7 @@ use handeye::{Named, RobotWorldMethod};
 
 use crate::faces::{self, Face, Published, length_unit};
 use crate::input::{InputArgs, read_all};
-use crate::output::{print_json, print_text};
+use crate::output::{Questionable, print_json, print_text};
 use crate::values;
 
 /// Options of `handeye calibrate`.
@@ -65,6 +65,10 @@ pub struct Args {
     /// JSON otherwise].
     #[arg(long, value_parser = values::named::<Face>())]
     output: Option<Face>,
+    /// Exit 5 when X is found but the verdict is questionable (a caution stands), after printing
+    /// the result: for scripts that must not use such an X.
+    #[arg(long)]
+    strict: bool,
     /// The parent frame of X in the yaml, ros2 and urdf outputs [default: the recording's gripper
     /// frame (eye-in-hand) or base frame (eye-to-hand); `gripper` or `base` for files].
     #[arg(long)]
@@ -171,18 +175,19 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     match face {
-        Face::Text => return print_text(&faces::text(&report, &frames, unit)),
-        Face::Yaml => {
-            return print_text(&faces::yaml(published, &frames, &name, Some(&report)));
-        }
-        Face::Ros2 => return print_text(&faces::ros2(published, &frames)),
-        Face::Urdf => return print_text(&faces::urdf(published, &frames)),
-        Face::Json => {}
+        Face::Text => print_text(&faces::text(&report, &frames, unit))?,
+        Face::Yaml => print_text(&faces::yaml(published, &frames, &name, Some(&report)))?,
+        Face::Ros2 => print_text(&faces::ros2(published, &frames))?,
+        Face::Urdf => print_text(&faces::urdf(published, &frames))?,
+        Face::Json => print_json(&WithTimeOffset {
+            report: &report,
+            time_offset_s: time_offset,
+        })?,
     }
-    print_json(&WithTimeOffset {
-        report: &report,
-        time_offset_s: time_offset,
-    })
+    if args.strict && report.verdict == Assessment::Questionable {
+        return Err(Questionable.into());
+    }
+    Ok(())
 }
 
 /// `calibrate --robot-world`: X and the target's pose together.

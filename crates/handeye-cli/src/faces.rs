@@ -513,12 +513,7 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
         s,
         "  quaternion   x {qx:.8}, y {qy:.8}, z {qz:.8}, w {qw:.8}"
     );
-    let verdict = if r.warnings.is_empty() {
-        "good"
-    } else {
-        "questionable"
-    };
-    let _ = writeln!(s, "\nVerdict: {verdict}");
+    let _ = writeln!(s, "\nVerdict: {}", r.verdict.name());
     for w in &r.warnings {
         let _ = writeln!(s, "  - {}", warning(w));
     }

@@ -33,7 +33,7 @@ struct Cli {
 }
 
 /// The exit codes, in every command's `--help`.
-const EXIT_CODES: &str = "Exit codes: 0 success (also when the reader of a pipe closes it early); 1 an unexpected failure (a file that cannot be written); 2 bad input or an out-of-range option (the file, line and field, or the flag, named); 3 valid input from which X cannot be determined (degenerate motions, or data that fit far better read another way: the message says what to do).";
+const EXIT_CODES: &str = "Exit codes: 0 success (also when the reader of a pipe closes it early); 1 an unexpected failure (a file that cannot be written); 2 bad input or an out-of-range option (the file, line and field, or the flag, named); 3 valid input from which X cannot be determined (degenerate motions, or data that fit far better read another way: the message says what to do); 5 with `calibrate --strict`, an X whose verdict is questionable (printed, with its cautions).";
 
 #[derive(Subcommand)]
 enum Command {

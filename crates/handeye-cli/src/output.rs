@@ -9,8 +9,29 @@ pub const BAD_INPUT: u8 = 2;
 /// Exit code 3: X cannot be determined from valid input.
 pub const DEGENERATE: u8 = 3;
 
-/// The exit code for an error: 2 for bad input, 3 for degenerate data, 1 otherwise.
+/// Exit code 5: X was found, but its verdict is questionable and `--strict` was given.
+pub const QUESTIONABLE: u8 = 5;
+
+/// The end of a `--strict` run whose verdict is questionable (exit 5).
+#[derive(Debug)]
+pub struct Questionable;
+
+impl std::fmt::Display for Questionable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(
+            "the verdict is questionable (--strict): act on the cautions, then calibrate again",
+        )
+    }
+}
+
+impl std::error::Error for Questionable {}
+
+/// The exit code for an error: 2 for bad input, 3 for degenerate data, 5 for a questionable
+/// verdict under `--strict`, 1 otherwise.
 pub fn exit_code(e: &anyhow::Error) -> u8 {
+    if e.downcast_ref::<Questionable>().is_some() {
+        return QUESTIONABLE;
+    }
     match e.downcast_ref::<Error>() {
         Some(
             Error::Degenerate { .. }

@@ -169,3 +169,37 @@ fn online_asks_where_the_camera_is_too() {
         "an estimate from misread poses: {all}"
     );
 }
+
+/// Item 7 (in part): every report carries its `verdict`, the same as the text face's, and
+/// `--strict` exits 5 on a questionable X (after printing it) and 0 on a good one.
+#[test]
+fn the_verdict_is_in_every_face_and_strict_exits_five_on_questionable() {
+    for (file, verdict, strict_exit) in [
+        (
+            "kinhec/pairs/outliers_gross_stations_eih_s0.jsonl",
+            "questionable",
+            5,
+        ),
+        ("kinhec/pairs/nominal_stations_eih_s0.jsonl", "good", 0),
+    ] {
+        let path = testdata(file);
+        let path = path.to_str().unwrap();
+        let (code, json, err) = run(&["calibrate", path, "--output", "json"]);
+        assert_eq!(code, 0, "{file}: {err}");
+        let json: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(json["verdict"], verdict, "{file}");
+        let warned = !json["warnings"].as_array().unwrap().is_empty();
+        assert_eq!(warned, verdict == "questionable", "{file}");
+        let (_, text, _) = run(&["calibrate", path, "--output", "text"]);
+        assert!(
+            text.contains(&format!("Verdict: {verdict}")),
+            "{file}: {text}"
+        );
+        let (code, out, err) = run(&["calibrate", path, "--strict", "--output", "json"]);
+        assert_eq!(code, strict_exit, "{file}: {err}");
+        assert!(
+            out.contains(&format!("\"verdict\": \"{verdict}\"")),
+            "printed first: {out}"
+        );
+    }
+}

@@ -191,9 +191,41 @@ impl Default for Units {
     }
 }
 
+/// The verdict on an X that [`calibrate`] found, the same in every face: good, or questionable
+/// while a caution of [`Report::warnings`] stands (a refusal is an error, not a verdict).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Assessment {
+    /// No caution: X is as good as its uncertainty says.
+    Good,
+    /// At least one caution: read them before using X.
+    Questionable,
+}
+
+impl Assessment {
+    /// The verdict of a result with these cautions.
+    pub fn of(warnings: &[Warning]) -> Self {
+        if warnings.is_empty() {
+            Self::Good
+        } else {
+            Self::Questionable
+        }
+    }
+
+    /// Its name in every face: `good` or `questionable`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Good => "good",
+            Self::Questionable => "questionable",
+        }
+    }
+}
+
 /// The result of [`calibrate`]: X, how far to trust it, and why.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Report {
+    /// The verdict: `good`, or `questionable` while a caution of `warnings` stands.
+    pub verdict: Assessment,
     /// The solver.
     pub method: Method,
     /// The setup.
@@ -333,6 +365,7 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         .collect();
     let held_out = held_out.map(|check| held_out_of(&check, &used_names, &mut warnings));
     Ok(Report {
+        verdict: Assessment::of(&warnings),
         method: options.method,
         setup,
         pairing: options.pairing,
