@@ -578,3 +578,15 @@ def test_online_checks_the_first_poses_as_the_command_line_does():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         _push_all(handeye.OnlineCalibrator(), right)
+
+
+def test_the_report_says_its_verdict_as_every_face_does():
+    # Issue 33 item 7: the verdict is the library's, in Python's dict as in the CLI's JSON.
+    for name, verdict in [
+        ("outliers_gross_stations_eih_s0.jsonl", "questionable"),
+        ("nominal_stations_eih_s0.jsonl", "good"),
+    ]:
+        r = handeye.read_recording(TESTDATA / "kinhec" / "pairs" / name)
+        report = handeye.calibrate(r["base_from_gripper"], r["camera_from_target"])
+        assert report["verdict"] == verdict, name
+        assert (report["verdict"] == "questionable") == bool(report["warnings"]), name

@@ -107,7 +107,8 @@ def calibrate(
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
-    dict: ``matrix`` (X, a (4,4) array), ``translation``, ``quaternion_xyzw``, ``frame``,
+    dict: ``verdict`` ("good", or "questionable" while a caution of ``warnings`` stands, as every
+    face says it), ``matrix`` (X, a (4,4) array), ``translation``, ``quaternion_xyzw``, ``frame``,
     ``method``, ``setup``, ``poses``, ``motions``, ``conditioning``, ``uncertainty``
     (``rotation_deg`` and ``translation``: one-sigma sizes of the error; ``weakest_rotation``,
     ``weakest_translation``, ``covariance``), ``reading`` (the readings of the input tried),
