@@ -170,8 +170,9 @@ fn online_asks_where_the_camera_is_too() {
     );
 }
 
-/// Item 7 (in part): every report carries its `verdict`, the same as the text face's, and
-/// `--strict` exits 5 on a questionable X (after printing it) and 0 on a good one.
+/// Item 7 (in part): every report carries its `verdict`, the same as the text face's, the
+/// cautions one option fixes come first, and `--strict` exits 5 on a questionable X (after
+/// printing it) and 0 on a good one.
 #[test]
 fn the_verdict_is_in_every_face_and_strict_exits_five_on_questionable() {
     for (file, verdict, strict_exit) in [
@@ -188,8 +189,20 @@ fn the_verdict_is_in_every_face_and_strict_exits_five_on_questionable() {
         assert_eq!(code, 0, "{file}: {err}");
         let json: serde_json::Value = serde_json::from_str(&json).unwrap();
         assert_eq!(json["verdict"], verdict, "{file}");
-        let warned = !json["warnings"].as_array().unwrap().is_empty();
-        assert_eq!(warned, verdict == "questionable", "{file}");
+        let warnings = json["warnings"].as_array().unwrap();
+        assert_eq!(!warnings.is_empty(), verdict == "questionable", "{file}");
+        // The real fix first: the cautions one option fixes lead (here the outliers').
+        let first_without = warnings.iter().position(|w| w.get("remedy").is_none());
+        let last_with = warnings.iter().rposition(|w| w.get("remedy").is_some());
+        if let (Some(without), Some(with)) = (first_without, last_with) {
+            assert!(
+                with < without,
+                "{file}: a fix after a caution without one: {warnings:?}"
+            );
+        }
+        if verdict == "questionable" {
+            assert_eq!(warnings[0]["remedy"]["option"], "reject_outliers", "{file}");
+        }
         let (_, text, _) = run(&["calibrate", path, "--output", "text"]);
         assert!(
             text.contains(&format!("Verdict: {verdict}")),

@@ -364,6 +364,9 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         })
         .collect();
     let held_out = held_out.map(|check| held_out_of(&check, &used_names, &mut warnings));
+    // The cautions that one option fixes come first (the outliers' `--reject-outliers`, a
+    // reading's `--fix`), the others after them, each group in the order found.
+    warnings.sort_by_key(|w| w.remedy().is_none());
     Ok(Report {
         verdict: Assessment::of(&warnings),
         method: options.method,
