@@ -110,8 +110,8 @@ pub fn run(args: Args) -> Result<()> {
         &args.input,
         args.parent_frame.as_deref(),
         args.child_frame.as_deref(),
+        &args.name,
     )?;
-    let name = faces::calibration_name(&args.name)?;
     let (poses, pose_names, time_offset) = read_all(&args.input)?;
     enough(&args.input, poses.len(), 2, "to make a motion")?;
     let face = Face::chosen(args.output);
@@ -176,7 +176,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     match face {
         Face::Text => print_text(&faces::text(&report, &frames, unit))?,
-        Face::Yaml => print_text(&faces::yaml(published, &frames, &name, Some(&report)))?,
+        Face::Yaml => print_text(&faces::yaml(published, &frames, Some(&report)))?,
         Face::Ros2 => print_text(&faces::ros2(published, &frames))?,
         Face::Urdf => print_text(&faces::urdf(published, &frames))?,
         Face::Json => print_json(&WithTimeOffset {

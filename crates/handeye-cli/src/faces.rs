@@ -60,6 +60,8 @@ pub struct Frames {
     pub gripper: String,
     /// The target's frame (`tracking_marker_frame`).
     pub target: String,
+    /// The calibration's name (easy_handeye2's `parameters.name`, its file name).
+    pub name: String,
 }
 
 /// X as the ROS faces publish it: the transform, its frame name and where it came from.
@@ -276,7 +278,7 @@ fn yaml_map<const N: usize>(entries: [(&str, Yaml); N]) -> Yaml {
 /// metres, written by a YAML emitter (each frame name quoted where YAML would read it otherwise).
 /// handeye's own fields (X's frame name, the parent and child frames, and for a batch result its
 /// uncertainty, residuals and motions) are comments above it.
-pub fn yaml(p: Published<'_>, f: &Frames, name: &str, batch: Option<&Report>) -> String {
+pub fn yaml(p: Published<'_>, f: &Frames, batch: Option<&Report>) -> String {
     let [tx, ty, tz] = p.translation();
     let [qx, qy, qz, qw] = p.quaternion_xyzw();
     let kind = match p.setup {
@@ -288,7 +290,7 @@ pub fn yaml(p: Published<'_>, f: &Frames, name: &str, batch: Option<&Report>) ->
         (
             "parameters",
             yaml_map([
-                ("name", string(name)),
+                ("name", string(&f.name)),
                 ("calibration_type", string(kind)),
                 ("robot_base_frame", string(&f.base)),
                 ("robot_effector_frame", string(&f.gripper)),
@@ -335,9 +337,10 @@ pub fn yaml(p: Published<'_>, f: &Frames, name: &str, batch: Option<&Report>) ->
         s.push('\n');
     };
     comment(format!(
-        "handeye {}, setup {}: easy_handeye2's calibration file (save it as ~/.ros2/easy_handeye2/calibrations/{name}.calib)",
+        "handeye {}, setup {}: easy_handeye2's calibration file (save it as ~/.ros2/easy_handeye2/calibrations/{}.calib)",
         p.source,
-        p.setup.name()
+        p.setup.name(),
+        f.name
     ));
     comment(format!(
         "frame: {} ({} -> {}); translation in {}",
@@ -587,12 +590,15 @@ fn short(v: f64) -> String {
 }
 
 /// The frames of X: `--parent-frame`/`--child-frame`, else the recording's names, else the
-/// frames of X's name; each checked and normalised ([`frame_name`]), or refused naming its flag.
+/// frames of X's name; each checked and normalised ([`frame_name`]), or refused naming its flag;
+/// and the calibration's `--name` ([`calibration_name`]). Checked before the input is read.
 pub fn frames(
     input: &InputArgs,
     parent: Option<&str>,
     child: Option<&str>,
+    name: &str,
 ) -> Result<Frames, Error> {
+    let name = calibration_name(name)?;
     let named = |flag: &'static str, value: &Option<String>, generic: &str| match value {
         Some(v) if input.is_bag() => frame_name(flag, v),
         _ => Ok(generic.to_string()),
@@ -622,6 +628,7 @@ pub fn frames(
         base,
         gripper,
         target,
+        name,
     })
 }
 

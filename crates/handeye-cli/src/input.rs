@@ -150,6 +150,11 @@ fn bag_source(args: &InputArgs) -> Result<Option<Source>> {
     }))
 }
 
+/// `--time-offset` as seconds, if it is a finite number.
+fn seconds(value: &str) -> Option<f64> {
+    value.parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
 /// `--time-offset` for a recording: none for `0` (no offset reported), else `auto` or seconds.
 fn bag_offset(args: &InputArgs) -> Result<Option<TimeOffset>> {
     if args.time_offset == "0" {
@@ -158,18 +163,13 @@ fn bag_offset(args: &InputArgs) -> Result<Option<TimeOffset>> {
     if args.time_offset == "auto" {
         return Ok(Some(TimeOffset::Auto));
     }
-    let seconds = args
-        .time_offset
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| handeye::Error::InvalidParameter {
-            name: "time_offset",
-            message: format!(
-                "expected `auto` or seconds (camera clock minus robot clock), found `{}`",
-                args.time_offset
-            ),
-        })?;
+    let seconds = seconds(&args.time_offset).ok_or_else(|| handeye::Error::InvalidParameter {
+        name: "time_offset",
+        message: format!(
+            "expected `auto` or seconds (camera clock minus robot clock), found `{}`",
+            args.time_offset
+        ),
+    })?;
     Ok(Some(TimeOffset::Fixed(seconds)))
 }
 
@@ -178,17 +178,12 @@ fn stream_offset(args: &InputArgs) -> Result<Option<TimeOffset>> {
     if args.time_offset == "auto" {
         return Ok(Some(TimeOffset::Auto));
     }
-    let seconds = args
-        .time_offset
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .with_context(|| {
-            format!(
-                "--time-offset: expected `auto` or seconds, found `{}`",
-                args.time_offset
-            )
-        })?;
+    let seconds = seconds(&args.time_offset).with_context(|| {
+        format!(
+            "--time-offset: expected `auto` or seconds, found `{}`",
+            args.time_offset
+        )
+    })?;
     Ok(Some(TimeOffset::Fixed(seconds)))
 }
 

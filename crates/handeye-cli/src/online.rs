@@ -197,8 +197,8 @@ pub fn run(args: Args) -> Result<()> {
         &args.input,
         args.parent_frame.as_deref(),
         args.child_frame.as_deref(),
+        &args.name,
     )?;
-    let name = faces::calibration_name(&args.name)?;
     let mut calibrator = OnlineCalibrator::new(config)?;
     // Event lines are buffered, and written out before the input is waited for.
     let out = LineOut::stdout();
@@ -354,7 +354,7 @@ pub fn run(args: Args) -> Result<()> {
             unit,
         };
         print_text(&match face {
-            Face::Yaml => faces::yaml(published, &frames, &name, None),
+            Face::Yaml => faces::yaml(published, &frames, None),
             Face::Ros2 => faces::ros2(published, &frames),
             _ => faces::urdf(published, &frames),
         })?;

@@ -612,9 +612,10 @@ fn parse_setup(setup: &str) -> PyResult<Setup> {
 #[pyclass(name = "_OnlineCalibrator")]
 struct PyOnline {
     inner: OnlineCalibrator,
-    /// The readings check of the first poses, as the command line runs it (the paper's estimator
-    /// has none of its own; the accumulating one runs it itself).
-    readings: StreamReadings,
+    /// The readings check of the first poses, as the command line runs it: for the paper's
+    /// estimator, which has none of its own (the accumulating one runs it itself, and a restored
+    /// calibrator has had its first poses).
+    readings: Option<StreamReadings>,
     /// What it found, until Python takes it as a warning.
     found: Option<String>,
 }
@@ -683,11 +684,8 @@ impl PyOnline {
                 None => unit.parse::<Unit>().map_err(value_error)?,
             },
         };
-        let checks = config.estimator != Estimator::Accumulate;
-        let mut readings = StreamReadings::new(config.setup);
-        if !checks {
-            readings.finish(); // nothing to check: the tracker checks its own first poses
-        }
+        let readings =
+            (config.estimator != Estimator::Accumulate).then(|| StreamReadings::new(config.setup));
         Ok(Self {
             inner: OnlineCalibrator::new(config).map_err(value_error)?,
             readings,
@@ -707,7 +705,7 @@ impl PyOnline {
             camera_from_target: transform(camera_from_target.as_array(), "camera_from_target")?,
         };
         let events = self.inner.push(&pose).map_err(value_error)?;
-        if let Some(found) = self.readings.push(&pose) {
+        if let Some(found) = self.readings.as_mut().and_then(|r| r.push(&pose)) {
             self.found = Some(found.to_string());
         }
         let setup = self.inner.config().setup;
@@ -733,7 +731,7 @@ impl PyOnline {
     /// The accumulating estimator's final report (JSON text), or None; a readings check not run
     /// yet runs on a short stream (see `take_warning`).
     fn finish(&mut self) -> Option<String> {
-        if let Some(found) = self.readings.finish() {
+        if let Some(found) = self.readings.as_mut().and_then(StreamReadings::finish) {
             self.found = Some(found.to_string());
         }
         let setup = self.inner.config().setup;
@@ -763,13 +761,9 @@ impl PyOnline {
     /// A calibrator restored from `state()`.
     #[staticmethod]
     fn from_state(state: &str) -> PyResult<Self> {
-        let inner: OnlineCalibrator = serde_json::from_str(state).map_err(value_error)?;
-        // A restored calibrator has had its first poses: their check is not repeated.
-        let mut readings = StreamReadings::new(inner.config().setup);
-        readings.finish();
         Ok(Self {
-            inner,
-            readings,
+            inner: serde_json::from_str(state).map_err(value_error)?,
+            readings: None,
             found: None,
         })
     }

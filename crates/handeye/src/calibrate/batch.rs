@@ -211,15 +211,12 @@ impl Assessment {
             Self::Questionable
         }
     }
-
-    /// Its name in every face: `good` or `questionable`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::Good => "good",
-            Self::Questionable => "questionable",
-        }
-    }
 }
+
+crate::named_enum!(Assessment, "verdict", "verdict" {
+    Good => "good",
+    Questionable => "questionable",
+});
 
 /// The result of [`calibrate`]: X, how far to trust it, and why.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -502,6 +502,19 @@ pub(crate) fn read_records<R: BufRead>(reader: &mut PoseReader<R>) -> Result<Pos
     Ok(series)
 }
 
+/// Refuses a file of fewer than 2 pose pairs (no motion), naming it.
+pub(crate) fn at_least_two_pairs(pairs: usize, source: String) -> Result<()> {
+    if pairs >= 2 {
+        return Ok(());
+    }
+    Err(Error::Parse {
+        file: source,
+        line: 0,
+        field: "-".to_string(),
+        message: format!("{pairs} pose pair(s): at least 2 are needed to make a motion"),
+    })
+}
+
 /// Reads a whole pose-pair file; errors on the first bad record, or with fewer than 2 poses.
 pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     let source = path.display().to_string();
@@ -511,17 +524,7 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     };
     let mut series = read_records(&mut reader)?;
     series.projections = reader.projections();
-    if series.pairs.len() < 2 {
-        return Err(Error::Parse {
-            file: source,
-            line: 0,
-            field: "-".to_string(),
-            message: format!(
-                "{} pose pair(s): at least 2 are needed to make a motion",
-                series.pairs.len()
-            ),
-        });
-    }
+    at_least_two_pairs(series.pairs.len(), source)?;
     Ok(series)
 }
 

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use crate::io::sync::{TimeOffset, pair_stream_files};
 use crate::io::{
-    Format, PoseInput, PoseReader, PoseSeries, Projections, StampedPosePair, open_poses,
-    read_records,
+    Format, PoseInput, PoseReader, PoseSeries, Projections, StampedPosePair, at_least_two_pairs,
+    open_poses, read_records,
 };
 use crate::model::error::{Error, Result};
 use crate::model::motion::{PosePair, Setup};
@@ -239,17 +239,7 @@ fn read_file(path: &Path, format: Format, notes: &mut Notes<'_>) -> Result<Recor
             PoseInput::Stream(reader) => read_stream(reader, &source, notes)?,
         }
     };
-    if series.pairs.len() < 2 {
-        return Err(Error::Parse {
-            file: source,
-            line: 0,
-            field: "-".to_string(),
-            message: format!(
-                "{} pose pair(s): at least 2 are needed to make a motion",
-                series.pairs.len()
-            ),
-        });
-    }
+    at_least_two_pairs(series.pairs.len(), source.clone())?;
     Ok(file_recording(series, &source))
 }
 
