@@ -1,5 +1,6 @@
 """handeye from Python: parity with cv2.calibrateHandEye, the paper fixtures, bad input."""
 import json
+import os
 import pathlib
 import sys
 import warnings
@@ -372,7 +373,8 @@ def test_advise_names_the_next_motions_and_what_they_would_give():
 
 
 REPO = pathlib.Path(__file__).resolve().parents[3]
-CLI = REPO / "target" / "release" / "handeye"
+# The command line built by `cargo build --release`, in cargo's target directory.
+CLI = REPO / os.environ.get("CARGO_TARGET_DIR", "target") / "release" / "handeye"
 
 
 def _cli_json(*args):
