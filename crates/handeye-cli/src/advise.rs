@@ -19,8 +19,9 @@ pub struct Args {
 
 /// Runs the command: the advice as JSON on stdout, in words on stderr.
 pub fn run(args: Args) -> Result<()> {
-    let (poses, _, _) = read_all(&args.input)?;
-    let advice = advise(&poses, args.input.setup(), args.count)?;
+    let recording = read_all(&args.input, handeye::Reading::AsGiven)?;
+    let poses = recording.poses;
+    let advice = advise(&poses, args.input.setup(), recording.written, args.count)?;
     eprint!("{}", in_words(&advice));
     print_json(&advice)
 }

@@ -5,8 +5,8 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use clap::builder::PossibleValuesParser;
 use handeye::OUTLIER_DEG;
-use handeye::REPLICATES;
 use handeye::{Assessment, Fix, Options, calibrate};
+use handeye::{REPLICATES, REPLICATES_RANGE};
 use handeye::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 
 use handeye::TsaiOptions;
@@ -53,7 +53,7 @@ pub struct Args {
     #[arg(long, value_parser = values::named::<Fix>())]
     fix: Option<Fix>,
     /// Bootstrap replicates behind the reported uncertainty.
-    #[arg(long, default_value_t = REPLICATES, value_parser = values::count(MIN_REPLICATES as u64, values::MAX_REPLICATES))]
+    #[arg(long, default_value_t = REPLICATES, value_parser = values::count(*REPLICATES_RANGE.start() as u64, *REPLICATES_RANGE.end() as u64))]
     bootstrap: usize,
     /// Drop the motions OpenCV's Tsai drops: robot or camera rotation with 2·sin(θ/2) outside
     /// [0.3, 1.7] (with --method tsai).
@@ -95,9 +95,6 @@ fn any_method() -> PossibleValuesParser {
     PossibleValuesParser::new(names)
 }
 
-/// Fewest bootstrap replicates that give a usable one-sigma.
-const MIN_REPLICATES: usize = 8;
-
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     if args.robot_world {
@@ -112,14 +109,17 @@ pub fn run(args: Args) -> Result<()> {
         args.child_frame.as_deref(),
         &args.name,
     )?;
-    let (poses, pose_names, time_offset) = read_all(&args.input)?;
+    let recording = read_all(&args.input, options.fix.reading())?;
+    let (poses, written) = (recording.poses, recording.written);
+    let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
     enough(&args.input, poses.len(), 2, "to make a motion")?;
     let face = Face::chosen(args.output);
     let report = match calibrate(
         &poses,
         setup,
         &Options {
-            pose_names,
+            pose_names: recording.names,
+            written,
             ..options
         },
     ) {
@@ -139,7 +139,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     // The unit of the poses as solved: a `--fix robot-mm` (or `auto`) reading has made them metres.
-    let unit = length_unit(&report.reading.applied.apply(&poses));
+    let unit = length_unit(&report.reading.applied.apply(&poses, written));
     if let Some(path) = &args.report {
         crate::report::write_calibrate(path, &poses, setup, &report)?;
         eprintln!("wrote {}", path.display());
@@ -182,6 +182,7 @@ pub fn run(args: Args) -> Result<()> {
         Face::Json => print_json(&WithTimeOffset {
             report: &report,
             time_offset_s: time_offset,
+            time_offset_sigma_s: time_offset_sigma,
         })?,
     }
     if args.strict && report.verdict == Assessment::Questionable {
@@ -217,9 +218,11 @@ fn run_robot_world(args: &Args) -> Result<()> {
                 ),
             })?,
     };
-    let (fix, replicates) = (args.fix.unwrap_or_default(), replicates(args)?);
+    let (fix, replicates) = (args.fix.unwrap_or_default(), args.bootstrap);
     let setup = args.input.setup();
-    let (poses, pose_names, time_offset) = read_all(&args.input)?;
+    let recording = read_all(&args.input, fix.reading())?;
+    let poses = recording.poses;
+    let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
     enough(
         &args.input,
         poses.len(),
@@ -235,7 +238,8 @@ fn run_robot_world(args: &Args) -> Result<()> {
             replicates,
             reject_outliers: args.reject_outliers,
             outlier_deg: args.outlier_deg,
-            pose_names,
+            pose_names: recording.names,
+            written: recording.written,
         },
     )?;
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
@@ -265,6 +269,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
     print_json(&WithTimeOffset {
         report: &report,
         time_offset_s: time_offset,
+        time_offset_sigma_s: time_offset_sigma,
     })
 }
 
@@ -290,23 +295,9 @@ fn robot_world_yaml(r: &RobotWorldReport) -> String {
     )
 }
 
-fn replicates(args: &Args) -> Result<usize> {
-    if args.bootstrap < MIN_REPLICATES {
-        return Err(Error::InvalidParameter {
-            name: "bootstrap",
-            message: format!(
-                "at least {MIN_REPLICATES} replicates, got {}",
-                args.bootstrap
-            ),
-        }
-        .into());
-    }
-    Ok(args.bootstrap)
-}
-
 /// The library's options from the command line.
 fn options(args: &Args) -> Result<Options> {
-    let replicates = replicates(args)?;
+    let replicates = args.bootstrap;
     let method = match args.method.as_deref() {
         None => Method::Andreff,
         Some(name) => name.parse::<Method>().map_err(|e| {
@@ -336,7 +327,7 @@ fn options(args: &Args) -> Result<Options> {
         outlier_deg: args.outlier_deg,
         fix: args.fix.unwrap_or_default(),
         replicates,
-        pose_names: Vec::new(),
+        ..Options::default()
     })
 }
 
@@ -364,4 +355,7 @@ struct WithTimeOffset<'a, T> {
     report: &'a T,
     #[serde(skip_serializing_if = "Option::is_none")]
     time_offset_s: Option<f64>,
+    /// Its one-sigma, seconds, when it was estimated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    time_offset_sigma_s: Option<f64>,
 }

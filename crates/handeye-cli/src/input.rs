@@ -9,14 +9,14 @@ use std::rc::Rc;
 use std::sync::mpsc::{Receiver, TryRecvError, sync_channel};
 use std::thread::JoinHandle;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::is_bag;
 use handeye::io::{
     BagFrames, Format, PoseInput, PoseReader, Projections, Recording, RecordingOptions, Source,
     StampedPosePair, TimeOffset, open_pose_stream, open_poses,
 };
-use handeye::{PosePair, Setup};
+use handeye::{Reading, Setup};
 
 /// Input options shared by `calibrate` and `online`.
 #[derive(ClapArgs, Debug, Clone)]
@@ -35,9 +35,10 @@ pub struct InputArgs {
     /// Camera stream `t x y z qx qy qz qw` (target_from_camera), paired with --robot.
     #[arg(long, requires = "robot")]
     pub camera: Option<PathBuf>,
-    /// Camera clock minus robot clock, seconds, or `auto` to estimate it from the angular speeds.
-    #[arg(long, default_value = "0", value_parser = crate::values::time_offset)]
-    pub time_offset: String,
+    /// Camera clock minus robot clock, seconds, or `auto` to estimate it (an error when the
+    /// streams cannot tell). Default: estimated when the streams allow it, else 0 (said on stderr).
+    #[arg(long, value_parser = crate::values::time_offset)]
+    pub time_offset: Option<TimeOffset>,
     /// Drop camera samples in gaps of the robot stream longer than this, seconds.
     #[arg(long, default_value_t = 0.1, value_parser = crate::values::positive)]
     pub max_gap: f64,
@@ -150,48 +151,12 @@ fn bag_source(args: &InputArgs) -> Result<Option<Source>> {
     }))
 }
 
-/// `--time-offset` as seconds, if it is a finite number.
-fn seconds(value: &str) -> Option<f64> {
-    value.parse::<f64>().ok().filter(|v| v.is_finite())
-}
-
-/// `--time-offset` for a recording: none for `0` (no offset reported), else `auto` or seconds.
-fn bag_offset(args: &InputArgs) -> Result<Option<TimeOffset>> {
-    if args.time_offset == "0" {
-        return Ok(None);
-    }
-    if args.time_offset == "auto" {
-        return Ok(Some(TimeOffset::Auto));
-    }
-    let seconds = seconds(&args.time_offset).ok_or_else(|| handeye::Error::InvalidParameter {
-        name: "time_offset",
-        message: format!(
-            "expected `auto` or seconds (camera clock minus robot clock), found `{}`",
-            args.time_offset
-        ),
-    })?;
-    Ok(Some(TimeOffset::Fixed(seconds)))
-}
-
-/// `--time-offset` for two streams: `auto` or seconds.
-fn stream_offset(args: &InputArgs) -> Result<Option<TimeOffset>> {
-    if args.time_offset == "auto" {
-        return Ok(Some(TimeOffset::Auto));
-    }
-    let seconds = seconds(&args.time_offset).with_context(|| {
-        format!(
-            "--time-offset: expected `auto` or seconds, found `{}`",
-            args.time_offset
-        )
-    })?;
-    Ok(Some(TimeOffset::Fixed(seconds)))
-}
-
-/// The options of [`Recording::read`] from the flags, with the time offset given.
-fn options(args: &InputArgs, time_offset: Option<TimeOffset>) -> RecordingOptions {
+/// The options of [`Recording::read`] from the flags, for poses to be solved read as `reading`.
+fn options(args: &InputArgs, reading: Reading) -> RecordingOptions {
     RecordingOptions {
         setup: args.setup(),
-        time_offset,
+        time_offset: args.time_offset,
+        reading,
         max_gap: args.max_gap,
     }
 }
@@ -209,9 +174,9 @@ fn read(source: &Source, options: &RecordingOptions) -> Result<Recording> {
 
 /// The ROS 2 recording or the two streams of `args` read whole, or `None` for a pose file (or
 /// stdin).
-fn read_recorded(args: &InputArgs) -> Result<Option<Recording>> {
+fn read_recorded(args: &InputArgs, reading: Reading) -> Result<Option<Recording>> {
     if let Some(source) = bag_source(args)? {
-        return read(&source, &options(args, bag_offset(args)?)).map(Some);
+        return read(&source, &options(args, reading)).map(Some);
     }
     let (Some(robot), Some(camera)) = (&args.robot, &args.camera) else {
         return Ok(None);
@@ -220,23 +185,23 @@ fn read_recorded(args: &InputArgs) -> Result<Option<Recording>> {
         robot: robot.clone(),
         camera: camera.clone(),
     };
-    read(&source, &options(args, stream_offset(args)?)).map(Some)
+    read(&source, &options(args, reading)).map(Some)
 }
 
 /// All pose pairs of the input (a batch solve), each pose's name for messages (`file:line`, or
 /// the camera stream's file and time stamp), and the time offset used for streams.
-pub fn read_all(args: &InputArgs) -> Result<(Vec<PosePair>, Vec<String>, Option<f64>)> {
-    let recording = match read_recorded(args)? {
+pub fn read_all(args: &InputArgs, reading: Reading) -> Result<Recording> {
+    let recording = match read_recorded(args, reading)? {
         Some(recording) => recording,
         None => {
             let source = Source::File {
                 path: args.input.clone().unwrap_or_else(|| PathBuf::from("-")),
                 format: args.format,
             };
-            read(&source, &options(args, None))?
+            read(&source, &options(args, reading))?
         }
     };
-    Ok((recording.poses, recording.names, recording.time_offset))
+    Ok(recording)
 }
 
 /// Tells on stderr the lines skipped before the first record, if any was not blank nor a comment.
@@ -332,7 +297,7 @@ pub fn records(
     args: &InputArgs,
     before_wait: Rc<dyn Fn()>,
 ) -> Result<(Records, String, Option<Offset>)> {
-    if let Some(recording) = read_recorded(args)? {
+    if let Some(recording) = read_recorded(args, Reading::AsGiven)? {
         let source = match (&recording.target_source, &args.camera) {
             (Some(target), _) => format!(
                 "{} {target}",
@@ -390,11 +355,13 @@ fn file_records<R: BufRead + 'static>(input: PoseInput<R>, source: &str) -> Reco
     match input {
         PoseInput::Whole(series) => {
             note(source, &series.projections);
-            let records = series.pairs.into_iter().enumerate().map(|(k, pose)| {
+            let written = series.written;
+            let records = series.pairs.into_iter().enumerate().map(move |(k, pose)| {
                 Ok(StampedPosePair {
                     line: k + 1,
                     stamp: None,
                     pose,
+                    written,
                 })
             });
             Box::new(records.collect::<Vec<_>>().into_iter())

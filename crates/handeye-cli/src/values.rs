@@ -8,13 +8,11 @@ use clap::builder::{PossibleValue, PossibleValuesParser, RangedU64ValueParser, T
 use clap::error::ErrorKind;
 use clap::{Arg, Command};
 use handeye::Named;
+use handeye::io::TimeOffset;
 
 /// The most poses `simulate`, `demo` and `bench` make (each pose is about a hundred bytes, and
 /// `bench --pairs all` grows with the square).
 pub const MAX_POSES: u64 = 1_000_000;
-
-/// The most bootstrap replicates of `calibrate` (each a full solve).
-pub const MAX_REPLICATES: u64 = 100_000;
 
 /// The most series of `experiment`.
 pub const MAX_SERIES: u64 = 100_000;
@@ -100,12 +98,12 @@ pub fn budget_s(s: &str) -> Result<f64, String> {
     }
 }
 
-/// `auto` or a finite number of seconds (kept as given: `input` reads it).
-pub fn time_offset(s: &str) -> Result<String, String> {
+/// `auto` or a finite number of seconds.
+pub fn time_offset(s: &str) -> Result<TimeOffset, String> {
     if s == "auto" {
-        Ok(s.to_string())
+        Ok(TimeOffset::Auto)
     } else {
-        number(s).map(|_| s.to_string())
+        number(s).map(TimeOffset::Fixed)
     }
 }
 
@@ -161,8 +159,8 @@ mod tests {
         assert!(axis_angle_deg("91").is_err() && axis_angle_deg("15").is_ok());
         assert!(budget_s("1e308").is_err() && budget_s("0.3").is_ok());
         assert!(at_least_one("0.99").is_err() && at_least_one("1").is_ok());
-        assert_eq!(time_offset("auto"), Ok("auto".to_string()));
-        assert_eq!(time_offset("-0.25"), Ok("-0.25".to_string()));
+        assert_eq!(time_offset("auto"), Ok(TimeOffset::Auto));
+        assert_eq!(time_offset("-0.25"), Ok(TimeOffset::Fixed(-0.25)));
     }
 
     #[test]

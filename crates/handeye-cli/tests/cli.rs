@@ -118,7 +118,7 @@ fn calibrate_eye_to_hand_and_all_pairs_match_opencv() {
 /// The exact fixture rewritten as CSV with quaternions (and the camera direction inverted).
 fn fixture_as_csv(dir: &Path) -> PathBuf {
     use handeye::io::{Format, read_pose_file};
-    use handeye::model::pose::quaternion_xyzw;
+    use handeye::quaternion_xyzw;
     let series = read_pose_file(
         &testdata("opencv/opencv_eye-in-hand_exact_10_11.jsonl"),
         Format::Auto,

@@ -344,7 +344,7 @@ fn a_clock_offset_is_given_or_found() {
         assert!((found - 0.037).abs() < 1e-3, "{found}");
         assert!(d < tolerance, "{offset}: X off by {d:e}");
     }
-    // Ignored, the offset shows in the residuals.
+    // Not given: found all the same (the default), with its sigma.
     let mut a = vec!["calibrate"];
     a.extend(args(
         &path,
@@ -354,6 +354,17 @@ fn a_clock_offset_is_given_or_found() {
     let (code, out, _) = run(&a);
     assert_eq!(code, 0);
     let v: Value = serde_json::from_str(&out).unwrap();
-    assert!(v.get("time_offset_s").is_none());
+    assert!(
+        (v["time_offset_s"].as_f64().unwrap() - 0.037).abs() < 1e-6,
+        "{v}"
+    );
+    assert!(v["time_offset_sigma_s"].as_f64().is_some());
+    assert!(max_diff(&flat(&v["matrix"]), &expected) < 1e-6);
+    // Set to 0 s: ignored, the offset shows in the residuals.
+    a.extend(["--time-offset", "0"]);
+    let (code, out, _) = run(&a);
+    assert_eq!(code, 0);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["time_offset_s"].as_f64(), Some(0.0));
     assert!(max_diff(&flat(&v["matrix"]), &expected) > 1e-4);
 }

@@ -111,7 +111,7 @@ fn clean_streams() -> [(Vec<String>, &'static str); 2] {
         let mut v = Vec::new();
         for t in [p.base_from_gripper, p.camera_from_target] {
             v.extend(t.translation.vector.iter().copied());
-            v.extend(handeye::model::pose::quaternion_xyzw(&t));
+            v.extend(handeye::quaternion_xyzw(&t));
         }
         csv.push(
             v.iter()

@@ -372,7 +372,7 @@ fn calibrate_report<'py>(
             None => handeye::Fix::Refuse,
             Some(name) => name.parse().map_err(value_error)?,
         },
-        replicates: bootstrap.max(8),
+        replicates: bootstrap,
         ..calibration_options(method, pairs, tsai_opencv_filter)?
     };
     let setup = parse_setup(setup)?;
@@ -404,7 +404,7 @@ fn robot_world_report<'py>(
             None => handeye::Fix::Refuse,
             Some(name) => name.parse().map_err(value_error)?,
         },
-        replicates: bootstrap.max(8),
+        replicates: bootstrap,
         reject_outliers,
         ..Default::default()
     };
@@ -432,7 +432,7 @@ fn advise_report<'py>(
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let advice = py
-        .allow_threads(|| handeye::advise(&poses, setup, count))
+        .allow_threads(|| handeye::advise(&poses, setup, handeye::Written::NAMED, count))
         .map_err(value_error)?;
     serde_json::to_string(&advice).map_err(value_error)
 }
@@ -564,6 +564,7 @@ fn read_recording<'py>(
         setup: parse_setup(setup)?,
         time_offset: self::time_offset(time_offset)?,
         max_gap,
+        ..RecordingOptions::default()
     };
     let r = py
         .allow_threads(|| Recording::read(&source, &options))
@@ -576,6 +577,7 @@ fn read_recording<'py>(
     d.set_item("lines", &r.lines)?;
     d.set_item("stamps", &r.stamps)?;
     d.set_item("time_offset", r.time_offset)?;
+    d.set_item("time_offset_sigma", r.time_offset_sigma)?;
     let curve = r.offset_curve.as_ref().map(|curve| {
         numpy::ndarray::Array2::from_shape_fn((curve.len(), 2), |(k, j)| curve[k][j])
             .into_pyarray(py)

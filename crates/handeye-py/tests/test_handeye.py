@@ -280,6 +280,14 @@ def test_bad_inputs_raise_and_never_crash():
     with pytest.raises(ValueError):
         c.push(np.eye(3), eye)
     assert c.poses == 0
+    # The bootstrap's bounds are the command line's (issue 34 item 5: 2**30 aborted the
+    # interpreter with a 60 GB allocation, 2**62 raised a PanicException).
+    q, cam = load_series("series_2007_000_200")[:2]
+    for bootstrap in (2**30, 2**62, 7, 0):
+        with pytest.raises(ValueError, match="bootstrap"):
+            handeye.calibrate(q[:20], cam[:20], bootstrap=bootstrap)
+        with pytest.raises(ValueError, match="bootstrap"):
+            handeye.calibrate(q[:20], cam[:20], bootstrap=bootstrap, robot_world=True)
 
 
 def load_series(name):

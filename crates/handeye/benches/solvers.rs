@@ -105,7 +105,7 @@ fn drop_in(c: &mut Criterion) {
             b.iter(|| solve_poses_checked(black_box(p), Setup::EyeInHand, &options))
         });
         group.bench_with_input(BenchmarkId::new("readings", name), &poses, |b, p| {
-            b.iter(|| check_readings(black_box(p), Setup::EyeInHand))
+            b.iter(|| check_readings(black_box(p), Setup::EyeInHand, handeye::Written::NAMED))
         });
         group.bench_with_input(BenchmarkId::new("outliers", name), &poses, |b, p| {
             b.iter(|| pose_outliers(black_box(p), Setup::EyeInHand, OUTLIER_DEG))

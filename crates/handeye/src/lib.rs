@@ -115,7 +115,7 @@ pub use online::experiment;
 // # The public surface, layer by layer.
 // Model: poses, motions, the setup, errors, warnings and what they carry.
 pub use model::error::{Degeneracy, Error, Result, TransformProblem};
-pub use model::findings::{Direction, OutlierPose, Part, Reading, Verdict};
+pub use model::findings::{Direction, OutlierPose, Part, Reading, Verdict, Written, WrittenAs};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
 pub use model::names::Named;
 pub use model::pose::{
@@ -129,7 +129,7 @@ pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 pub use check::holdout::leave_one_out;
 pub use check::quality::{OUTLIER_DEG, errors_against_truth};
 pub use check::stream::{StreamReading, StreamReadings};
-pub use check::uncertainty::{REPLICATES, Uncertainty};
+pub use check::uncertainty::{REPLICATES, REPLICATES_RANGE, Uncertainty};
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, ClosedLoop, WeaknessKind, advise, closed_loop};
 pub use calibrate::batch::{

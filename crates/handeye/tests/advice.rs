@@ -6,7 +6,7 @@ use handeye::calibrate::advice::advise;
 use handeye::check::quality::errors_against_truth;
 use handeye::model::pose::{exp_so3, proj_so3, transform_from_parts};
 use handeye::sim::{SimConfig, simulate};
-use handeye::{Method, MotionFeatures, MotionPair, Pairing, PosePair, Setup, Transform};
+use handeye::{Method, MotionFeatures, MotionPair, Pairing, PosePair, Setup, Transform, Written};
 use handeye::{motion_pairs, solve};
 use nalgebra::{Matrix3, Vector3};
 use rand::{RngExt, SeedableRng};
@@ -45,7 +45,7 @@ fn when_every_rotation_shares_one_axis_the_first_suggestion_turns_far_from_it() 
         let poses = handeye::io::read_pose_file(&path, handeye::io::Format::Auto)
             .unwrap()
             .pairs;
-        let advice = advise(&poses, setup, 3).unwrap();
+        let advice = advise(&poses, setup, Written::NAMED, 3).unwrap();
         let axis = dominant_axis(&poses, setup);
         let first = Vector3::from(advice.suggestions[0].axis_gripper);
         let angle = axis.dot(&first).abs().min(1.0).acos().to_degrees();
@@ -83,7 +83,7 @@ fn following_the_advice_shrinks_the_error_as_predicted() {
         let sim = simulate(&SimConfig::default(), 41, s);
         let truth = sim.gripper_from_camera;
         let mut poses = sim.poses[..12].to_vec();
-        let advice = advise(&poses, Setup::EyeInHand, 3).unwrap();
+        let advice = advise(&poses, Setup::EyeInHand, Written::NAMED, 3).unwrap();
         let now = advice.current.expect("determined after 12 poses");
         let predicted = advice.suggestions.last().unwrap().predicted.unwrap();
         let x0 = solve(
@@ -255,13 +255,14 @@ fn no_advice_from_misread_input_and_outliers_left_out() {
         "mistakes/quat_wxyz_camera__nominal_stations_eih_s0.jsonl",
         "mistakes/robot_mm__nominal_stations_eih_s0.jsonl",
     ] {
-        let e = advise(&read(f), Setup::EyeInHand, 3).unwrap_err();
+        let e = advise(&read(f), Setup::EyeInHand, Written::NAMED, 3).unwrap_err();
         assert!(matches!(e, handeye::Error::Misread { .. }), "{f}: {e}");
         assert!(e.to_string().contains("--fix"), "{f}: {e}");
     }
     let advice = advise(
         &read("pairs/outliers_gross_stations_eih_s0.jsonl"),
         Setup::EyeInHand,
+        Written::NAMED,
         2,
     )
     .unwrap();

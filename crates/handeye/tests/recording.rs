@@ -118,19 +118,29 @@ fn two_streams_with_auto_give_the_cli_offset_notes_and_names() {
 }
 
 #[test]
-fn two_streams_without_an_offset_pair_at_zero_and_say_so() {
+fn two_streams_without_an_offset_flag_are_searched_by_default_with_its_sigma() {
     let robot = "testdata/real/ethz-asl/prime_sense_1_B_H.csv";
     let camera = "testdata/real/ethz-asl/prime_sense_1_W_E.csv";
     let r = Recording::read(&streams(robot, camera), &RecordingOptions::default()).unwrap();
-    assert_eq!(r.time_offset, Some(0.0));
-    assert!(r.offset_curve.is_none());
     let entry = golden(&format!(
         "calibrate --robot {robot} --camera {camera} --output json"
     ));
     let report: Value = serde_json::from_str(entry["stdout"].as_str().unwrap()).unwrap();
+    // The default is the search: the same offset and sigma as the command line's.
+    assert_eq!(r.time_offset, report["time_offset_s"].as_f64());
+    assert_eq!(r.time_offset_sigma, report["time_offset_sigma_s"].as_f64());
+    assert!(r.time_offset_sigma.unwrap() > 0.0 && r.offset_curve.is_some());
     assert_eq!(r.poses.len() as u64, report["poses"].as_u64().unwrap());
     let notes = golden_notes(&entry, r.notes.len());
     assert_eq!(texts(&r.notes), notes);
+    // Asked for 0 s: paired at 0 s, no sigma, no curve.
+    let zero = RecordingOptions {
+        time_offset: Some(TimeOffset::Fixed(0.0)),
+        ..RecordingOptions::default()
+    };
+    let r = Recording::read(&streams(robot, camera), &zero).unwrap();
+    assert_eq!(r.time_offset, Some(0.0));
+    assert!(r.time_offset_sigma.is_none() && r.offset_curve.is_none());
 }
 
 fn offset_bag() -> Source {
@@ -163,9 +173,14 @@ fn a_bag_with_auto_gives_the_cli_offset_and_notes() {
 }
 
 #[test]
-fn a_bag_reports_an_offset_only_when_one_is_asked_for() {
-    let none = Recording::read(&offset_bag(), &RecordingOptions::default()).unwrap();
-    assert_eq!(none.time_offset, None);
+fn a_bag_finds_its_offset_by_default_and_keeps_a_given_one() {
+    let found = Recording::read(&offset_bag(), &RecordingOptions::default()).unwrap();
+    // The recording's camera is stamped 37 ms late; it is noise-free.
+    assert!(
+        (found.time_offset.unwrap() - 0.037).abs() < 1e-6,
+        "{found:?}"
+    );
+    assert!(found.time_offset_sigma.unwrap() < 1e-6);
     let fixed = RecordingOptions {
         time_offset: Some(TimeOffset::Fixed(0.037)),
         ..RecordingOptions::default()
@@ -173,8 +188,14 @@ fn a_bag_reports_an_offset_only_when_one_is_asked_for() {
     let r = Recording::read(&offset_bag(), &fixed).unwrap();
     assert_eq!(r.time_offset, Some(0.037));
     assert!(r.offset_curve.is_none());
-    // The offset moves the robot's lookups, so the pairs differ.
-    assert_ne!(r.poses, none.poses);
+    // The offset moves the robot's lookups, so the pairs at 0 s differ.
+    let zero = RecordingOptions {
+        time_offset: Some(TimeOffset::Fixed(0.0)),
+        ..RecordingOptions::default()
+    };
+    let zero = Recording::read(&offset_bag(), &zero).unwrap();
+    assert_eq!(zero.time_offset, Some(0.0));
+    assert_ne!(r.poses, zero.poses);
 }
 
 #[test]
@@ -283,9 +304,14 @@ fn streams_that_do_not_overlap_name_the_camera_file() {
         ),
         other => panic!("expected a Parse error, got {other:?}"),
     }
-    // What was found before the error is told all the same.
+    // What was found before the error is told all the same: the offset could not be searched
+    // (the streams do not overlap), and the camera samples were dropped.
+    assert!(
+        matches!(&told[0], Note::NoTimeOffset { why } if why.contains("overlap")),
+        "{told:?}"
+    );
     assert_eq!(
-        told,
+        told[1..],
         [Note::Dropped {
             outside: 20,
             gap: 0,

@@ -71,7 +71,7 @@ fn the_ethz_recordings_raise_no_alarm_and_end_at_the_batch_answer() {
             &dir.join(format!("{name}_B_H.csv")),
             &dir.join(format!("{name}_W_E.csv")),
             Setup::EyeInHand,
-            TimeOffset::Auto,
+            (TimeOffset::Auto, handeye::Reading::AsGiven),
             0.1,
         )
         .unwrap();
@@ -150,7 +150,7 @@ fn the_kinhec_streams_raise_no_alarm_hold_out_the_outliers_and_beat_opencv() {
             &file("robot_file"),
             &file("camera_file"),
             setup,
-            TimeOffset::Auto,
+            (TimeOffset::Auto, handeye::Reading::AsGiven),
             0.1,
         )
         .unwrap();

@@ -187,12 +187,14 @@ def read_recording(
     paired at the camera's stamps), or a ROS 2 recording (a rosbag2 directory, an ``.mcap`` or a
     ``.db3`` file) with ``base_frame``, ``gripper_frame``, ``camera_frame`` and ``target_frame``
     (or ``target_topic``). ``time_offset`` (streams and recordings): camera clock minus robot
-    clock in seconds, or "auto" to estimate it; ``max_gap``: the longest gap of the robot's poses
+    clock in seconds, or "auto" to estimate it (ValueError when the streams cannot tell); None
+    (the default) estimates it when the streams allow, else pairs at 0 s with a note; ``max_gap``: the longest gap of the robot's poses
     interpolated across, seconds.
 
     Returns a dict: ``base_from_gripper`` and ``camera_from_target`` ((N, 4, 4) arrays, ready for
     ``calibrate``), ``names`` (each pose's name in messages), ``lines`` (its line, sample or
-    message number), ``stamps`` (seconds, or None), ``time_offset`` (the offset used, or None),
+    message number), ``stamps`` (seconds, or None), ``time_offset`` (the offset used, or None for a pose
+    file), ``time_offset_sigma`` (its one-sigma in seconds when it was estimated, else None),
     ``offset_curve`` (with "auto": a (K, 2) array of offset and correlation, else None),
     ``target_source`` (a recording's target topic or tf edge, else None) and ``notes`` (what
     ``handeye`` prints on stderr while reading). Bad input raises ValueError naming the file,

@@ -18,6 +18,7 @@ use crate::check::outliers::pose_outliers;
 use crate::check::quality::OUTLIER_DEG;
 use crate::check::readings::check_readings;
 use crate::model::error::{Error, Result};
+use crate::model::findings::Written;
 use crate::model::motion::{MotionFeatures, PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, transform_from_parts};
 use crate::solve::accumulate::PoseAccumulator;
@@ -87,8 +88,10 @@ pub struct Advice {
 ///
 /// Errors with [`Error::TooFewMotions`] for fewer than two poses, and with [`Error::Misread`]
 /// when the poses fit far better read another way (an inverted pose, `w, x, y, z` quaternions,
-/// millimetres on one side): no advice from data read wrongly.
-pub fn advise(poses: &[PosePair], setup: Setup, count: usize) -> Result<Advice> {
+/// millimetres on one side): no advice from data read wrongly. `written` is the directions in
+/// which the input wrote its poses (`io::PoseSeries::written`; [`Written::NAMED`] for poses as
+/// handeye names them).
+pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) -> Result<Advice> {
     if poses.len() < 2 {
         return Err(Error::TooFewMotions {
             got: poses.len().saturating_sub(1),
@@ -100,7 +103,7 @@ pub fn advise(poses: &[PosePair], setup: Setup, count: usize) -> Result<Advice> 
         .filter(|i| !outliers.contains(i))
         .map(|i| poses[i])
         .collect();
-    let check = check_readings(&kept, setup);
+    let check = check_readings(&kept, setup, written);
     if let Some(misread) = check.misread(setup) {
         return Err(misread);
     }
@@ -371,7 +374,7 @@ pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
             let mut reached = usize::MAX;
             while poses.len() < MOST {
                 let (axis, angle) = if advised {
-                    match advise(&poses, Setup::EyeInHand, 1)
+                    match advise(&poses, Setup::EyeInHand, Written::NAMED, 1)
                         .ok()
                         .and_then(|a| a.suggestions.first().copied())
                     {

@@ -18,10 +18,10 @@ use crate::check::holdout::{HeldOutCheck, leave_one_out};
 use crate::check::outliers::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::check::quality::{MotionQuality, QualityReport, ResidualSummary, quality_report};
 use crate::check::readings::{ReadingCheck, check_readings};
-use crate::check::uncertainty::{Uncertainty, bootstrap};
+use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::OutlierPose;
-use crate::model::findings::Reading;
+use crate::model::findings::{Reading, Written};
 use crate::model::findings::{Part, Verdict};
 use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
 use crate::model::pose::Transform;
@@ -66,6 +66,14 @@ impl Fix {
         }
         all
     };
+
+    /// The reading this fix reads the input as, before any check: the named one, else as given.
+    pub fn reading(self) -> Reading {
+        match self {
+            Fix::Read(r) => r,
+            Fix::Refuse | Fix::Auto => Reading::AsGiven,
+        }
+    }
 
     /// The name on the command line and in the Python bindings: `refuse`, `auto`, or the
     /// reading's name (`as-given`, `robot-inverted`, …).
@@ -123,6 +131,10 @@ pub struct Options {
     /// How each pose is named in messages (e.g. `file:line`), by input index; `pose i` when
     /// shorter than the input.
     pub pose_names: Vec<String>,
+    /// The directions in which the input wrote its poses (`io::PoseSeries::written`, or
+    /// [`Written::NAMED`] for poses given as handeye names them), where a quaternion-order reading
+    /// undoes the mix-up.
+    pub written: Written,
 }
 
 impl Default for Options {
@@ -136,6 +148,7 @@ impl Default for Options {
             fix: Fix::Refuse,
             replicates: crate::check::uncertainty::REPLICATES,
             pose_names: Vec::new(),
+            written: Written::NAMED,
         }
     }
 }
@@ -295,11 +308,12 @@ pub struct HeldOutName {
 /// Errors: [`Error::Misread`] when another reading fits far better (and [`Fix::Refuse`]),
 /// [`Error::Degenerate`] when the motions do not determine X, [`Error::TooFewMotions`].
 pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
+    check_replicates(options.replicates)?;
     let mut warnings = Vec::new();
     let (applied, check, read, found) = read_poses(
         poses,
         setup,
-        options.fix,
+        (options.fix, options.written),
         options.outlier_deg,
         &mut warnings,
     )?;
@@ -468,7 +482,7 @@ pub fn solve_poses_checked(
     let (_, _, read, found) = read_poses(
         poses,
         setup,
-        options.fix,
+        (options.fix, options.written),
         options.outlier_deg,
         &mut warnings,
     )?;
@@ -562,16 +576,18 @@ fn solve_motions(motions: &(impl MotionSource + ?Sized), options: &Options) -> R
 /// The poses as they are to be read, with the reading chosen, its check and the outliers of the
 /// poses so read. The readings are judged on the poses that agree with the others, so that
 /// outliers do not make a mirror-image reading look better.
+/// `fix` is what to do about a better reading, and the directions the input wrote its poses in.
 pub(crate) fn read_poses(
     poses: &[PosePair],
     setup: Setup,
-    fix: Fix,
+    (fix, written): (Fix, Written),
     outlier_deg: f64,
     warnings: &mut Vec<Warning>,
 ) -> Result<(Reading, Option<ReadingCheck>, Vec<PosePair>, PoseOutliers)> {
     let as_given = pose_outliers(poses, setup, outlier_deg);
-    let (applied, check) = choose_reading(&without(poses, &as_given), setup, fix, warnings)?;
-    let read = applied.apply(poses);
+    let (applied, check) =
+        choose_reading(&without(poses, &as_given), setup, (fix, written), warnings)?;
+    let read = applied.apply(poses, written);
     let found = match applied {
         Reading::AsGiven => as_given,
         _ => pose_outliers(&read, setup, outlier_deg),
@@ -583,15 +599,24 @@ pub(crate) fn read_poses(
 pub(crate) fn choose_reading(
     poses: &[PosePair],
     setup: Setup,
-    fix: Fix,
+    (fix, written): (Fix, Written),
     warnings: &mut Vec<Warning>,
 ) -> Result<(Reading, Option<ReadingCheck>)> {
     if let Fix::Read(r) = fix
         && r != Reading::AsGiven
     {
+        if !r.applies_to(written) {
+            return Err(Error::InvalidParameter {
+                name: "fix",
+                message: format!(
+                    "`{}` undoes a quaternion order on the poses as the input wrote them, and this input writes them in both directions (some `_from_` names one way, some the other): write every record in one direction",
+                    r.name()
+                ),
+            });
+        }
         return Ok((r, None));
     }
-    let check = check_readings(poses, setup);
+    let check = check_readings(poses, setup, written);
     let (Some(finding), Some(better)) = (check.finding(setup), check.better) else {
         warnings.extend(check.size_warning(setup));
         return Ok((Reading::AsGiven, Some(check)));

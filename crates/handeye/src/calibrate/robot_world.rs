@@ -31,9 +31,9 @@ use crate::calibrate::batch::{
 };
 use crate::check::outliers::translation_scale;
 use crate::check::quality::OUTLIER_DEG;
-use crate::check::uncertainty::{Uncertainty, bootstrap, summarise};
+use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, summarise};
 use crate::model::error::{Degeneracy, Error, Result};
-use crate::model::findings::{Part, Verdict};
+use crate::model::findings::{Part, Verdict, Written};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::TransformJson;
 use crate::model::pose::{Transform, rotation_matrix};
@@ -61,6 +61,8 @@ pub struct RobotWorldOptions {
     /// How each pose is named in messages (e.g. `file:line`), by input index. Default empty
     /// (`pose i`).
     pub pose_names: Vec<String>,
+    /// The directions in which the input wrote its poses (see `Options::written`).
+    pub written: Written,
 }
 
 impl Default for RobotWorldOptions {
@@ -72,6 +74,7 @@ impl Default for RobotWorldOptions {
             reject_outliers: false,
             outlier_deg: OUTLIER_DEG,
             pose_names: Vec::new(),
+            written: Written::NAMED,
         }
     }
 }
@@ -211,11 +214,12 @@ pub fn calibrate_robot_world(
     setup: Setup,
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
+    check_replicates(options.replicates)?;
     let mut warnings = Vec::new();
     let (applied, check, read, found) = read_poses(
         poses,
         setup,
-        options.fix,
+        (options.fix, options.written),
         options.outlier_deg,
         &mut warnings,
     )?;

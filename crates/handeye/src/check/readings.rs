@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::check::outliers::{PoseResiduals, gripper_rotations, median, translation_scale};
 use crate::model::error::{Error, misread_advice};
-use crate::model::findings::Reading;
+use crate::model::findings::{Reading, Written};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{exp_so3, transform_from_parts};
 use crate::model::warning::Warning;
@@ -221,10 +221,13 @@ impl ReadingCheck {
 /// residuals; the millimetre readings are judged only by which side's translations are the larger
 /// (they fit equally well up to the unit of X).
 ///
+/// `written` is the directions in which the input wrote its poses (where a quaternion-order
+/// reading undoes the mix-up, [`Reading::apply`]); a reading that cannot apply to them is not tried.
+///
 /// The as-given reading is solved first: when it fits well (not [`ReadingFit::poor`]) no other
 /// reading can be far better, by the rule itself, and the other eight are not tried. The result
 /// is the same as trying them all, for one solve instead of nine.
-pub fn check_readings(poses: &[PosePair], setup: Setup) -> ReadingCheck {
+pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> ReadingCheck {
     let sample = spread(poses);
     let none = |as_given| ReadingCheck {
         as_given,
@@ -246,8 +249,8 @@ pub fn check_readings(poses: &[PosePair], setup: Setup) -> ReadingCheck {
     let mm = mm_side(&sample, setup);
     let mut candidates: Vec<ReadingFit> = Reading::ALL
         .iter()
-        .filter(|&&r| r != Reading::AsGiven)
-        .filter_map(|&r| fit(&r.apply(&sample), setup, r))
+        .filter(|&&r| r != Reading::AsGiven && r.applies_to(written))
+        .filter_map(|&r| fit(&r.apply(&sample, written), setup, r))
         // A unit mix-up of 1000× leaves translation residuals of the size of the motions; a few
         // percent come from noise, or from motions that leave the translation free (a gripper
         // turning about one point fits any camera unit).
@@ -368,7 +371,7 @@ mod tests {
     #[test]
     fn correct_data_raises_nothing() {
         for seed in 0..5 {
-            let c = check_readings(&poses(seed), Setup::EyeInHand);
+            let c = check_readings(&poses(seed), Setup::EyeInHand, Written::NAMED);
             // (The simulation's target sits closer to the base than the camera to the gripper,
             // so the size warning is tested on the realistic suite, tests/trust.rs.)
             assert!(c.better.is_none(), "seed {seed}: {c:?}");
@@ -386,7 +389,11 @@ mod tests {
             ] {
                 // Inverting is its own undoing. Robot and camera inverted mirror each other (the
                 // same fit with X and Y swapped): the true one must lead, the mirror follow.
-                let c = check_readings(&mistake.apply(&good), Setup::EyeInHand);
+                let c = check_readings(
+                    &mistake.apply(&good, Written::NAMED),
+                    Setup::EyeInHand,
+                    Written::NAMED,
+                );
                 if mistake == Reading::BothInverted {
                     // Fits exactly as given, with X and Y swapped: only sizes can tell.
                     assert!(c.better.is_none(), "seed {seed}: {c:?}");
@@ -405,7 +412,7 @@ mod tests {
                     camera_from_target: p.camera_from_target,
                 })
                 .collect();
-            let c = check_readings(&mm, Setup::EyeInHand);
+            let c = check_readings(&mm, Setup::EyeInHand, Written::NAMED);
             assert_eq!(c.better.map(|f| f.reading), Some(Reading::RobotMm), "{c:?}");
         }
     }

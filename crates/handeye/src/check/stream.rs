@@ -3,6 +3,7 @@
 
 use crate::check::outliers::{axis_scatter, pose_outliers};
 use crate::check::readings::{DEGENERATE_SCATTER, check_readings};
+use crate::model::findings::Written;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::warning::Warning;
 
@@ -96,7 +97,7 @@ pub(crate) fn check_stream_readings(poses: &[PosePair], setup: Setup) -> Option<
         .filter(|i| !outliers.contains(i))
         .map(|i| poses[i])
         .collect();
-    let check = check_readings(&kept, setup);
+    let check = check_readings(&kept, setup, Written::NAMED);
     if let Some(advice) = check.advice(setup) {
         Some(StreamReading::ReadWrongly(advice))
     } else {

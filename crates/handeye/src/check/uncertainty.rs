@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 
 use crate::check::outliers::PoseResiduals;
-use crate::model::error::Result;
+use crate::model::error::{Error, Result};
 use crate::model::findings::{Direction, Verdict};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, log_so3};
@@ -28,6 +28,25 @@ use crate::solve::residual::PoseResidual;
 
 /// Default number of bootstrap replicates: the one-sigma is known to about ±1/√(2·40) ≈ 11%.
 pub const REPLICATES: usize = 40;
+
+/// The bootstrap replicates a calibration accepts: fewer than 8 give no usable one-sigma, and
+/// more than 100,000 only cost memory and time (each keeps an X).
+pub const REPLICATES_RANGE: std::ops::RangeInclusive<usize> = 8..=100_000;
+
+/// Refuses a number of replicates outside [`REPLICATES_RANGE`] (before any is allocated).
+pub(crate) fn check_replicates(replicates: usize) -> Result<()> {
+    if REPLICATES_RANGE.contains(&replicates) {
+        return Ok(());
+    }
+    Err(Error::InvalidParameter {
+        name: "bootstrap",
+        message: format!(
+            "{} to {} replicates, got {replicates}",
+            REPLICATES_RANGE.start(),
+            REPLICATES_RANGE.end()
+        ),
+    })
+}
 
 /// The bootstrap's seed: results are reproducible run to run.
 const SEED: u64 = 0x5EED_4A11_0E5E;

@@ -4,8 +4,11 @@
 use std::io::BufRead;
 
 use crate::io::lines::{Line, Lines};
-use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error, too_long};
+use crate::io::{
+    CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error, too_long, written_as,
+};
 use crate::model::error::{Error, Result};
+use crate::model::findings::Written;
 use crate::model::motion::PosePair;
 use crate::model::pose::{Transform, check_translation, transform_from_xyz_quat_xyzw};
 
@@ -179,6 +182,10 @@ impl<R: BufRead> CsvPairs<R> {
             pose: PosePair {
                 base_from_gripper,
                 camera_from_target,
+            },
+            written: Written {
+                robot: written_as(self.robot.inverted),
+                camera: written_as(self.camera.inverted),
             },
         })
     }

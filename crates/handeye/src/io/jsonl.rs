@@ -11,9 +11,10 @@ use crate::io::lines::Lines;
 use crate::io::transform::TransformNumbers;
 use crate::io::{
     CAMERA_FRAMES, Projections, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error,
-    read_transform_json,
+    read_transform_json, written_as,
 };
 use crate::model::error::Result;
+use crate::model::findings::{Written, WrittenAs};
 use crate::model::motion::PosePair;
 use crate::model::pose::ReadTransform;
 
@@ -103,6 +104,10 @@ fn fast_record(text: &str, line: usize, projections: &mut Projections) -> Option
             read
         })
     };
+    let written = Written {
+        robot: written_as(scanned.robot.1),
+        camera: written_as(scanned.camera.1),
+    };
     let robot = read(scanned.robot)?;
     let camera = read(scanned.camera)?;
     projections.add(&robot);
@@ -114,6 +119,7 @@ fn fast_record(text: &str, line: usize, projections: &mut Projections) -> Option
             base_from_gripper: robot.transform,
             camera_from_target: camera.transform,
         },
+        written,
     })
 }
 
@@ -165,8 +171,8 @@ fn parse_record(
                 .map_err(|message| parse_error(source, line, "stamp", message))?,
         ),
     };
-    let robot = frame(&object, &ROBOT_FRAMES, source, line)?;
-    let camera = frame(&object, &CAMERA_FRAMES, source, line)?;
+    let (robot, robot_written) = frame(&object, &ROBOT_FRAMES, source, line)?;
+    let (camera, camera_written) = frame(&object, &CAMERA_FRAMES, source, line)?;
     projections.add(&robot);
     projections.add(&camera);
     let (base_from_gripper, camera_from_target) = (robot.transform, camera.transform);
@@ -177,17 +183,21 @@ fn parse_record(
             base_from_gripper,
             camera_from_target,
         },
+        written: Written {
+            robot: robot_written,
+            camera: camera_written,
+        },
     })
 }
 
 /// Reads the one transform of a pair of alternative names, inverting when the file gives the
-/// other direction.
+/// other direction, with the direction the file wrote.
 fn frame(
     object: &Map<String, Value>,
     names: &[(&str, bool); 2],
     source: &str,
     line: usize,
-) -> Result<ReadTransform> {
+) -> Result<(ReadTransform, WrittenAs)> {
     let present: Vec<_> = names
         .iter()
         .filter(|(n, _)| object.contains_key(*n))
@@ -215,14 +225,15 @@ fn frame(
         let field = p.path_under(name);
         parse_error(source, line, field, p.message)
     })?;
-    Ok(if inverted {
+    let read = if inverted {
         ReadTransform {
             transform: read.transform.inverse(),
             ..read
         }
     } else {
         read
-    })
+    };
+    Ok((read, written_as(inverted)))
 }
 
 #[cfg(test)]

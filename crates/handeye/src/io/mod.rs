@@ -27,6 +27,7 @@ use std::io::{BufRead, BufReader, Chain, Cursor, Read};
 use std::path::Path;
 
 use crate::model::error::{Error, Result};
+use crate::model::findings::{Written, WrittenAs};
 use crate::model::motion::PosePair;
 use crate::model::pose::ReadTransform;
 use lines::{Line, Lines};
@@ -68,6 +69,15 @@ pub(crate) const ROBOT_FRAMES: [(&str, bool); 2] =
 pub(crate) const CAMERA_FRAMES: [(&str, bool); 2] =
     [("camera_from_target", false), ("target_from_camera", true)];
 
+/// The direction of a transform the file gave inverted (`true`) or as named.
+pub(crate) fn written_as(inverted: bool) -> WrittenAs {
+    if inverted {
+        WrittenAs::Inverse
+    } else {
+        WrittenAs::Named
+    }
+}
+
 /// Pose-pair file formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Format {
@@ -104,6 +114,8 @@ pub struct StampedPosePair {
     pub stamp: Option<f64>,
     /// The pose pair.
     pub pose: PosePair,
+    /// The directions in which the record wrote its two poses.
+    pub written: Written,
 }
 
 /// A whole pose file.
@@ -118,6 +130,8 @@ pub struct PoseSeries {
     /// The rotation matrices that were orthonormal only to the precision they were printed with
     /// and were projected onto the nearest rotation.
     pub projections: Projections,
+    /// The directions in which the file wrote its poses (for `Options::written`).
+    pub written: Written,
 }
 
 /// The rotation matrices of one input that were orthonormal only to the precision they were
@@ -492,9 +506,15 @@ pub(crate) fn read_records<R: BufRead>(reader: &mut PoseReader<R>) -> Result<Pos
         stamps: Vec::new(),
         lines: Vec::new(),
         projections: Projections::default(),
+        written: Written::NAMED,
     };
-    for record in reader.by_ref() {
+    for (k, record) in reader.by_ref().enumerate() {
         let record = record?;
+        series.written = if k == 0 {
+            record.written
+        } else {
+            series.written.and(record.written)
+        };
         series.pairs.push(record.pose);
         series.stamps.push(record.stamp);
         series.lines.push(record.line);

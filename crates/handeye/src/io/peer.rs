@@ -12,6 +12,7 @@ use crate::io::{
     FieldProblem, PoseSeries, Projections, parse_error, read_text, read_transform_json,
 };
 use crate::model::error::{Error, Result};
+use crate::model::findings::{Written, WrittenAs};
 use crate::model::motion::PosePair;
 use crate::model::pose::{
     ReadTransform, Transform, check_translation, exp_so3, read_matrix4, transform_from_parts,
@@ -62,7 +63,14 @@ pub fn read_opencv_yaml(text: &str, file: &str) -> Result<PoseSeries> {
             (pair, line)
         })
         .unzip();
-    series_at(pairs, lines, file, projections)
+    let series = series_at(pairs, lines, file, projections)?;
+    Ok(PoseSeries {
+        written: Written {
+            robot: WrittenAs::Inverse,
+            camera: WrittenAs::Inverse,
+        },
+        ..series
+    })
 }
 
 /// One `T1_i` or `T2_i` matrix of an OpenCV-YAML file, with its place.
@@ -505,6 +513,7 @@ fn series_at(
         stamps: vec![None; n],
         lines,
         projections,
+        written: Written::NAMED,
     })
 }
 

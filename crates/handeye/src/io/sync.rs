@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::model::error::{Error, Result};
+use crate::model::findings::{Reading, Written, WrittenAs};
 use crate::model::motion::PosePair;
 use crate::model::pose::{Transform, rotation_angle_between, transform_from_parts};
 
@@ -153,8 +154,9 @@ pub struct StreamPairing {
     pub synced: Synced,
     /// Offset used, seconds.
     pub time_offset: f64,
-    /// With [`TimeOffset::Auto`]: the correlation's own estimate before refinement.
-    pub correlated: Option<OffsetEstimate>,
+    /// With [`TimeOffset::Auto`]: the offset found, its sigma and the correlation's own
+    /// estimate before refinement.
+    pub correlated: Option<FoundOffset>,
     /// Samples of the robot and the camera file that were out of time order (put in order).
     pub reordered: [usize; 2],
 }
@@ -162,11 +164,15 @@ pub struct StreamPairing {
 /// Reads a robot stream (`base_from_gripper`) and a camera stream (`target_from_camera`, the
 /// ethz-asl and TUM layout) and pairs them at the camera stamps, with the given or an estimated
 /// clock offset.
+///
+/// The offset is searched on the streams read as `reading` (the reading the poses will be solved
+/// under: a quaternion order mixed up changes the angular speeds); the pairs are as the files give
+/// them.
 pub fn pair_stream_files(
     robot: &std::path::Path,
     camera: &std::path::Path,
     setup: crate::model::motion::Setup,
-    offset: TimeOffset,
+    (offset, reading): (TimeOffset, Reading),
     max_gap: f64,
 ) -> Result<StreamPairing> {
     let robot_stream = crate::io::read_stamped_poses(robot)?;
@@ -176,17 +182,14 @@ pub fn pair_stream_files(
     let (time_offset, correlated) = match offset {
         TimeOffset::Fixed(t) => (t, None),
         TimeOffset::Auto => {
-            let options = OffsetOptions::default();
-            let e = estimate_time_offset(&robot, &camera, &options)?;
-            let refined = refine_time_offset(
-                &robot,
-                &camera,
-                setup,
-                e.offset,
-                options.max_offset,
-                max_gap,
-            );
-            (refined, Some(e))
+            // A camera stream holds `target_from_camera`.
+            let written = Written {
+                robot: WrittenAs::Named,
+                camera: WrittenAs::Inverse,
+            };
+            let (r, c) = read_as(reading, written, &robot, &camera);
+            let found = find_time_offset(&r, &c, setup, max_gap)?;
+            (found.offset, Some(found))
         }
     };
     let synced = pair_streams(
@@ -325,6 +328,134 @@ pub fn estimate_time_offset(
     })
 }
 
+/// The robot and camera streams read as `reading`, from an input that wrote them `written`.
+pub(crate) fn read_as(
+    reading: Reading,
+    written: Written,
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+) -> (Vec<StampedPose>, Vec<StampedPose>) {
+    let map = |s: &[StampedPose], f: &dyn Fn(&Transform) -> Transform| -> Vec<StampedPose> {
+        s.iter()
+            .map(|p| StampedPose {
+                stamp: p.stamp,
+                pose: f(&p.pose),
+            })
+            .collect()
+    };
+    (
+        map(robot, &|t| reading.robot(t, written.robot)),
+        map(camera, &|t| reading.camera(t, written.camera)),
+    )
+}
+
+/// A clock offset found by [`find_time_offset`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FoundOffset {
+    /// Camera clock minus robot clock, seconds: the correlation's, refined by the agreement of
+    /// the paired poses ([`refine_time_offset`]).
+    pub offset: f64,
+    /// Its one-sigma, seconds ([`time_offset_sigma`]); infinite when the poses do not pin it.
+    pub sigma: f64,
+    /// The angular speeds' correlation, before refinement.
+    pub correlated: OffsetEstimate,
+}
+
+/// The clock offset of two streams (camera − robot, seconds) and its sigma: the angular speeds'
+/// correlation ([`estimate_time_offset`], within about a camera period), refined by how well the
+/// paired poses agree on one X ([`refine_time_offset`]).
+///
+/// Errors as [`estimate_time_offset`].
+pub fn find_time_offset(
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+    setup: crate::model::motion::Setup,
+    max_gap: f64,
+) -> Result<FoundOffset> {
+    // Stamps since the epoch (1.7e9 s) are resolved to 2.4e-7 s in f64: searched from the first
+    // robot stamp, an offset resolves to rounding (a common shift changes no offset).
+    let t0 = robot.first().map_or(0.0, |p| p.stamp);
+    let shifted = |s: &[StampedPose]| -> Vec<StampedPose> {
+        s.iter()
+            .map(|p| StampedPose {
+                stamp: p.stamp - t0,
+                pose: p.pose,
+            })
+            .collect()
+    };
+    let (robot, camera) = (&shifted(robot)[..], &shifted(camera)[..]);
+    let search = OffsetOptions::default();
+    let correlated = estimate_time_offset(robot, camera, &search)?;
+    let offset = refine_time_offset(
+        robot,
+        camera,
+        setup,
+        correlated.offset,
+        search.max_offset,
+        max_gap,
+    );
+    Ok(FoundOffset {
+        offset,
+        sigma: time_offset_sigma(robot, camera, setup, offset, max_gap),
+        correlated,
+    })
+}
+
+/// The one-sigma of a clock offset found by [`refine_time_offset`], from the curvature of its
+/// cost at the minimum (Gauss–Newton): the cost C(o) is the mean of the m kept per-pose squared
+/// rotation residuals (3 components each), so var(o) = σ² / Σ(∂r/∂o)² with σ² = C/3 and
+/// Σ(∂r/∂o)² = m C''/2: var(o) = 2C / (3 m C''). C'' is the curvature of a parabola fitted by
+/// least squares to C over ±half a camera period (the cost is only piecewise smooth, as pairs
+/// change with the offset). C is a trimmed mean (the best 80% of the poses), which underestimates
+/// the residuals' variance: for Gaussian residuals ‖r‖²/σ² is χ²(3), and the mean of its lowest
+/// 80% is E[χ²(3) | below its 0.8 quantile] = 3 F₅(q₀.₈)/0.8 (F₅ the χ²(5) CDF) ≈ 0.67 of the
+/// full mean: σ² is C/3 divided by that fraction. Infinite when the cost does not curve up.
+pub fn time_offset_sigma(
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+    setup: crate::model::motion::Setup,
+    offset: f64,
+    max_gap: f64,
+) -> f64 {
+    let period = median_period(camera);
+    let Some((c0, kept)) = offset_fit(robot, camera, setup, offset, max_gap) else {
+        return f64::INFINITY;
+    };
+    if !(period.is_finite() && period > 0.0) {
+        return f64::INFINITY;
+    }
+    // Least-squares parabola C(o + d) ≈ a + b d + c d² over symmetric points d_k.
+    const POINTS: usize = 9;
+    let half = 0.5 * period;
+    let samples: Vec<(f64, f64)> = (0..POINTS)
+        .map(|k| -half + 2.0 * half * k as f64 / (POINTS - 1) as f64)
+        .filter_map(|d| offset_fit(robot, camera, setup, offset + d, max_gap).map(|(c, _)| (d, c)))
+        .collect();
+    if samples.len() < 5 {
+        return f64::INFINITY;
+    }
+    let design = nalgebra::DMatrix::from_fn(samples.len(), 3, |i, j| samples[i].0.powi(j as i32));
+    let costs = nalgebra::DVector::from_iterator(samples.len(), samples.iter().map(|s| s.1));
+    let Ok(fit) = design.svd(true, true).solve(&costs, 1e-15) else {
+        return f64::INFINITY;
+    };
+    let curvature = 2.0 * fit[2];
+    if curvature.is_nan() || curvature <= 0.0 {
+        return f64::INFINITY;
+    }
+    (2.0 * c0 / (trimmed_fraction_of_mean() * 3.0 * kept as f64 * curvature)).sqrt()
+}
+
+/// The mean of the lowest [`KEPT`] of χ²(3) over its full mean (see [`time_offset_sigma`]).
+fn trimmed_fraction_of_mean() -> f64 {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let q = ChiSquared::new(3.0).map_or(f64::NAN, |c| c.inverse_cdf(KEPT));
+    ChiSquared::new(5.0).map_or(f64::NAN, |c| c.cdf(q)) / KEPT
+}
+
+/// The fraction of the poses [`offset_cost`] keeps (the best).
+const KEPT: f64 = 0.8;
+
 /// Median difference of consecutive stamps.
 fn median_period(s: &[StampedPose]) -> f64 {
     let mut d: Vec<f64> = s
@@ -395,7 +526,12 @@ pub fn refine_time_offset(
     let g = (5f64.sqrt() - 1.0) / 2.0;
     let (mut a, mut b) = (hi - g * (hi - lo), lo + g * (hi - lo));
     let (mut fa, mut fb) = (cost(a), cost(b));
-    for _ in 0..24 {
+    // To a picosecond (or 80 steps): on noise-free streams the offset, and so X, is then exact to
+    // rounding; 24 steps left 4e-8 s, and X 2e-8 off.
+    for _ in 0..80 {
+        if hi - lo < 1e-12 {
+            break;
+        }
         if fa <= fb {
             hi = b;
             (b, fb) = (a, fa);
@@ -427,6 +563,18 @@ fn offset_cost(
     offset: f64,
     max_gap: f64,
 ) -> f64 {
+    offset_fit(robot, camera, setup, offset, max_gap).map_or(f64::INFINITY, |(cost, _)| cost)
+}
+
+/// The cost of [`offset_cost`] and how many poses it keeps; `None` when fewer than 10 pairs or no
+/// X.
+fn offset_fit(
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+    setup: crate::model::motion::Setup,
+    offset: f64,
+    max_gap: f64,
+) -> Option<(f64, usize)> {
     let synced = pair_streams(
         robot,
         camera,
@@ -436,13 +584,11 @@ fn offset_cost(
         },
     );
     if synced.pairs.len() < 10 {
-        return f64::INFINITY;
+        return None;
     }
     let mut acc = crate::solve::accumulate::PoseAccumulator::new(setup);
     synced.pairs.iter().for_each(|p| acc.add(p));
-    let Some(estimate) = acc.estimate() else {
-        return f64::INFINITY;
-    };
+    let estimate = acc.estimate()?;
     let residuals = crate::check::outliers::PoseResiduals::at(&synced.pairs, setup, &estimate.x);
     let mut squares: Vec<f64> = residuals
         .residuals
@@ -450,8 +596,9 @@ fn offset_cost(
         .map(|r| r.rotation.norm_squared())
         .collect();
     squares.sort_by(f64::total_cmp);
+    // The best KEPT = 4/5.
     let kept = &squares[..(squares.len() * 4).div_ceil(5)];
-    kept.iter().sum::<f64>() / kept.len() as f64
+    Some((kept.iter().sum::<f64>() / kept.len() as f64, kept.len()))
 }
 
 /// Grid points allowed per stream sample in [`estimate_time_offset`].

@@ -128,27 +128,53 @@ impl Reading {
         }
     }
 
-    /// The poses read this way.
-    pub fn apply(self, poses: &[PosePair]) -> Vec<PosePair> {
-        poses.iter().map(|p| self.apply_one(p)).collect()
+    /// The poses read this way, from an input that wrote them in the directions `written`.
+    ///
+    /// A quaternion-order mix-up happened to the transform as the file wrote it: on a
+    /// `target_from_camera` input the order is undone on that transform, before the inversion that
+    /// made it `camera_from_target` (undone after it, the fix gives a wrong rotation). The other
+    /// readings commute with inversion. A side written in both directions ([`WrittenAs::Mixed`])
+    /// cannot be read in the other order: see [`Reading::applies_to`].
+    pub fn apply(self, poses: &[PosePair], written: Written) -> Vec<PosePair> {
+        poses.iter().map(|p| self.apply_one(p, written)).collect()
     }
 
-    fn apply_one(self, p: &PosePair) -> PosePair {
-        let (robot, camera) = (p.base_from_gripper, p.camera_from_target);
-        let (base_from_gripper, camera_from_target) = match self {
-            Self::AsGiven => (robot, camera),
-            Self::RobotInverted => (robot.inverse(), camera),
-            Self::CameraInverted => (robot, camera.inverse()),
-            Self::BothInverted => (robot.inverse(), camera.inverse()),
-            Self::RobotWxyz => (wxyz(&robot), camera),
-            Self::CameraWxyz => (robot, wxyz(&camera)),
-            Self::BothWxyz => (wxyz(&robot), wxyz(&camera)),
-            Self::RobotMm => (scaled(&robot, 1e-3), camera),
-            Self::CameraMm => (robot, scaled(&camera, 1e-3)),
-        };
+    /// Whether this reading can be applied to an input written as `written`: the quaternion-order
+    /// readings need each side they touch written in one direction.
+    pub fn applies_to(self, written: Written) -> bool {
+        let mixed = |side: WrittenAs| side != WrittenAs::Mixed;
+        match self {
+            Self::RobotWxyz => mixed(written.robot),
+            Self::CameraWxyz => mixed(written.camera),
+            Self::BothWxyz => mixed(written.robot) && mixed(written.camera),
+            _ => true,
+        }
+    }
+
+    fn apply_one(self, p: &PosePair, written: Written) -> PosePair {
         PosePair {
-            base_from_gripper,
-            camera_from_target,
+            base_from_gripper: self.robot(&p.base_from_gripper, written.robot),
+            camera_from_target: self.camera(&p.camera_from_target, written.camera),
+        }
+    }
+
+    /// A robot pose (`base_from_gripper`) read this way, from an input that wrote it `written`.
+    pub fn robot(self, t: &Transform, written: WrittenAs) -> Transform {
+        match self {
+            Self::RobotInverted | Self::BothInverted => t.inverse(),
+            Self::RobotWxyz | Self::BothWxyz => written.undo_wxyz(t),
+            Self::RobotMm => scaled(t, 1e-3),
+            _ => *t,
+        }
+    }
+
+    /// A camera pose (`camera_from_target`) read this way, from an input that wrote it `written`.
+    pub fn camera(self, t: &Transform, written: WrittenAs) -> Transform {
+        match self {
+            Self::CameraInverted | Self::BothInverted => t.inverse(),
+            Self::CameraWxyz | Self::BothWxyz => written.undo_wxyz(t),
+            Self::CameraMm => scaled(t, 1e-3),
+            _ => *t,
         }
     }
 }
@@ -164,6 +190,64 @@ crate::named_enum!(Reading, "reading", "fix" {
     RobotMm => "robot-mm",
     CameraMm => "camera-mm",
 });
+
+/// The direction in which an input wrote one side's poses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum WrittenAs {
+    /// As handeye names it: `base_from_gripper`, `camera_from_target`.
+    #[default]
+    Named,
+    /// The inverse: `gripper_from_base`, `target_from_camera` (the camera stream of `--camera`).
+    Inverse,
+    /// Some records one way, some the other.
+    Mixed,
+}
+
+impl WrittenAs {
+    /// The direction of a side written `self` in one record and `other` in another.
+    pub fn and(self, other: WrittenAs) -> WrittenAs {
+        if self == other {
+            self
+        } else {
+            WrittenAs::Mixed
+        }
+    }
+
+    /// `t` (in handeye's direction) with the quaternion order undone where it was written.
+    fn undo_wxyz(self, t: &Transform) -> Transform {
+        match self {
+            WrittenAs::Inverse => wxyz(&t.inverse()).inverse(),
+            WrittenAs::Named | WrittenAs::Mixed => wxyz(t),
+        }
+    }
+}
+
+/// The directions in which an input wrote its robot and camera poses (where a quaternion-order
+/// mix-up is undone: [`Reading::apply`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
+pub struct Written {
+    /// The robot poses: `base_from_gripper` ([`WrittenAs::Named`]) or `gripper_from_base`.
+    pub robot: WrittenAs,
+    /// The camera poses: `camera_from_target` ([`WrittenAs::Named`]) or `target_from_camera`.
+    pub camera: WrittenAs,
+}
+
+impl Written {
+    /// Both sides as handeye names them.
+    pub const NAMED: Written = Written {
+        robot: WrittenAs::Named,
+        camera: WrittenAs::Named,
+    };
+
+    /// The directions of an input of which one part was written `self` and another `other`.
+    pub fn and(self, other: Written) -> Written {
+        Written {
+            robot: self.robot.and(other.robot),
+            camera: self.camera.and(other.camera),
+        }
+    }
+}
 
 /// The rotation whose `x, y, z, w` fields held `w, x, y, z`: the stored quaternion
 /// (x', y', z', w') = (w, x, y, z), so the meant one is (x, y, z, w) = (y', z', w', x').

@@ -41,6 +41,7 @@ use crate::check::outliers::{OUTLIER_FACTOR, median_in, pose_outliers, screw_gap
 use crate::check::readings::check_readings;
 use crate::check::uncertainty::{UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION};
 use crate::model::findings::Reading;
+use crate::model::findings::Written;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::rotation_angle_between;
 
@@ -321,7 +322,7 @@ impl Tracker {
             .filter(|i| found.poses.iter().all(|g| g.pose != *i))
             .map(|i| poses[i])
             .collect();
-        let readings = check_readings(&kept, self.setup);
+        let readings = check_readings(&kept, self.setup, Written::NAMED);
         if readings.as_given.is_some() {
             let other_setup = readings.other_setup(self.setup);
             self.misread = readings.better.map(|b| (b.reading, other_setup));

@@ -4,40 +4,28 @@ use std::path::Path;
 
 use super::{BagFrames, Note, Notes, Recording, RecordingOptions};
 use crate::io::rosbag::{BagOptions, read_bag_pairs};
-use crate::io::sync::{
-    OffsetOptions, StampedPose, TimeOffset, estimate_time_offset, refine_time_offset,
-};
+use crate::io::sync::{FoundOffset, StampedPose, TimeOffset, find_time_offset, read_as};
 use crate::model::error::{Error, Result};
+use crate::model::findings::Written;
 
-/// The clock offset (camera − robot, seconds) of two streams: the angular speeds' correlation,
-/// refined by how well the paired poses agree on one X, with its note and the correlation curve.
-/// `streams` names them in an error.
+/// The clock offset (camera − robot, seconds) of two streams, its sigma and the correlation
+/// curve ([`find_time_offset`]), with its note. `streams` names them in an error.
 fn auto_offset(
     robot: &[StampedPose],
     camera: &[StampedPose],
     options: &RecordingOptions,
     streams: impl FnOnce() -> String,
     notes: &mut Notes<'_>,
-) -> Result<(f64, Vec<[f64; 2]>)> {
-    let search = OffsetOptions::default();
-    let e = estimate_time_offset(robot, camera, &search).map_err(|e| Error::TimeOffset {
-        streams: streams(),
-        source: Box::new(e),
+) -> Result<FoundOffset> {
+    let (robot, camera) = read_as(options.reading, Written::NAMED, robot, camera);
+    let found = find_time_offset(&robot, &camera, options.setup, options.max_gap).map_err(|e| {
+        Error::TimeOffset {
+            streams: streams(),
+            source: Box::new(e),
+        }
     })?;
-    let refined = refine_time_offset(
-        robot,
-        camera,
-        options.setup,
-        e.offset,
-        search.max_offset,
-        options.max_gap,
-    );
-    notes.add(Note::TimeOffset {
-        offset: refined,
-        correlated_at: e.offset,
-        correlation: e.correlation,
-    });
-    Ok((refined, e.curve))
+    notes.add(Note::time_offset(&found));
+    Ok(found)
 }
 
 /// A ROS 2 recording: with `auto`, read once as it is to find the offset, then with it.
@@ -56,10 +44,9 @@ pub(super) fn read_bag(
         time_offset: 0.0,
         max_gap: options.max_gap,
     };
-    let (time_offset, offset_curve) = match options.time_offset {
-        None => (0.0, None),
+    let (time_offset, found) = match options.time_offset {
         Some(TimeOffset::Fixed(t)) => (t, None),
-        Some(TimeOffset::Auto) => {
+        requested => {
             // Stamped by another clock (a detector that stamps on arrival, say): find the offset
             // on the streams of the recording read as it is.
             let first = read_bag_pairs(path, &bag_options)?;
@@ -70,14 +57,26 @@ pub(super) fn read_bag(
                     path.display()
                 )
             };
-            let (offset, curve) = auto_offset(
+            match auto_offset(
                 &first.robot_stream,
                 &first.camera_stream,
                 options,
                 streams,
                 notes,
-            )?;
-            (offset, Some(curve))
+            ) {
+                Ok(found) => (found.offset, Some(found)),
+                // By default, a recording that does not tell its offset is paired at 0 s.
+                Err(Error::TimeOffset { source, .. }) if requested.is_none() => {
+                    notes.add(Note::NoTimeOffset {
+                        why: match *source {
+                            Error::InvalidParameter { message, .. } => message,
+                            e => e.to_string(),
+                        },
+                    });
+                    (0.0, None)
+                }
+                Err(e) => return Err(e),
+            }
         }
     };
     bag_options.time_offset = time_offset;
@@ -96,9 +95,11 @@ pub(super) fn read_bag(
         lines: pairs.pairs.iter().map(|p| p.line).collect(),
         stamps: pairs.pairs.iter().map(|p| p.stamp).collect(),
         names: pairs.names,
-        time_offset: options.time_offset.map(|_| time_offset),
-        offset_curve,
+        time_offset: Some(time_offset),
+        time_offset_sigma: found.as_ref().map(|f| f.sigma),
+        offset_curve: found.map(|f| f.correlated.curve),
         target_source: Some(pairs.target_source),
         notes: Vec::new(),
+        written: Written::NAMED,
     })
 }

@@ -11,6 +11,7 @@ use crate::io::{
     open_poses, read_records,
 };
 use crate::model::error::{Error, Result};
+use crate::model::findings::{Reading, Written, WrittenAs};
 use crate::model::motion::{PosePair, Setup};
 
 #[cfg(feature = "rosbag")]
@@ -72,12 +73,18 @@ pub struct RecordingOptions {
     /// Camera on the gripper or fixed: the `auto` offset search pairs the poses for it. Default
     /// eye-in-hand.
     pub setup: Setup,
-    /// The clock offset (camera clock − robot clock) of two streams or a recording; none: 0 s,
-    /// and a recording reports no offset. Ignored for a pose file. Default none.
+    /// The clock offset (camera clock − robot clock) of two streams or a recording. None (the
+    /// default): estimated as with [`TimeOffset::Auto`] when the streams allow it, else 0 s with
+    /// a note saying why ([`Note::NoTimeOffset`]); an unnoticed offset of a few tens of
+    /// milliseconds moves X by millimetres. Ignored for a pose file.
     pub time_offset: Option<TimeOffset>,
     /// A camera sample in a gap of the robot's poses longer than this is dropped, seconds.
     /// Default 0.1.
     pub max_gap: f64,
+    /// The reading the poses will be solved under (a `fix`): the clock offset is searched on the
+    /// streams so read, since a quaternion order mixed up changes their angular speeds. The poses
+    /// returned are as the input gives them. Default [`Reading::AsGiven`].
+    pub reading: Reading,
 }
 
 impl Default for RecordingOptions {
@@ -86,6 +93,7 @@ impl Default for RecordingOptions {
             setup: Setup::EyeInHand,
             time_offset: None,
             max_gap: 0.1,
+            reading: Reading::AsGiven,
         }
     }
 }
@@ -115,9 +123,11 @@ pub struct Recording {
     pub lines: Vec<usize>,
     /// Each pair's time stamp, seconds, where the input gives one.
     pub stamps: Vec<Option<f64>>,
-    /// The clock offset used (camera − robot, seconds): always for two streams, for a recording
-    /// when one was asked for, never for a pose file.
+    /// The clock offset used (camera − robot, seconds): always for two streams and a recording,
+    /// never for a pose file.
     pub time_offset: Option<f64>,
+    /// Its one-sigma, seconds, when it was estimated.
+    pub time_offset_sigma: Option<f64>,
     /// With `auto`: the angular speeds' correlation at each offset searched,
     /// `[offset s, correlation]`.
     pub offset_curve: Option<Vec<[f64; 2]>>,
@@ -126,6 +136,8 @@ pub struct Recording {
     pub target_source: Option<String>,
     /// What reading found worth telling, in order.
     pub notes: Vec<Note>,
+    /// The directions in which the input wrote its poses (`Options::written` of a calibration).
+    pub written: Written,
 }
 
 impl Recording {
@@ -166,7 +178,12 @@ impl Recording {
             .iter()
             .zip(&self.lines)
             .zip(&self.stamps)
-            .map(|((&pose, &line), &stamp)| StampedPosePair { line, stamp, pose })
+            .map(|((&pose, &line), &stamp)| StampedPosePair {
+                line,
+                stamp,
+                pose,
+                written: self.written,
+            })
             .collect()
     }
 }
@@ -266,6 +283,7 @@ fn file_recording(series: PoseSeries, source: &str) -> Recording {
         poses: series.pairs,
         lines: series.lines,
         stamps: series.stamps,
+        written: series.written,
         ..Recording::default()
     }
 }
@@ -277,16 +295,34 @@ fn read_streams(
     options: &RecordingOptions,
     notes: &mut Notes<'_>,
 ) -> Result<Recording> {
-    let offset = options.time_offset.unwrap_or(TimeOffset::Fixed(0.0));
-    let pairing = pair_stream_files(robot, camera, options.setup, offset, options.max_gap)
-        .map_err(|e| match e {
-            // The offset search's own refusals say nothing of the files: name them.
-            Error::InvalidParameter { .. } => Error::TimeOffset {
-                streams: format!("{} and {}", robot.display(), camera.display()),
-                source: Box::new(e),
-            },
-            e => e,
-        })?;
+    let pair = |offset| {
+        pair_stream_files(
+            robot,
+            camera,
+            options.setup,
+            (offset, options.reading),
+            options.max_gap,
+        )
+    };
+    let pairing = match options.time_offset {
+        Some(offset) => pair(offset),
+        None => match pair(TimeOffset::Auto) {
+            // The search's own refusals: the streams do not tell their offset.
+            Err(Error::InvalidParameter { message, .. }) => {
+                notes.add(Note::NoTimeOffset { why: message });
+                pair(TimeOffset::Fixed(0.0))
+            }
+            result => result,
+        },
+    }
+    .map_err(|e| match e {
+        // The offset search's own refusals say nothing of the files: name them.
+        Error::InvalidParameter { .. } => Error::TimeOffset {
+            streams: format!("{} and {}", robot.display(), camera.display()),
+            source: Box::new(e),
+        },
+        e => e,
+    })?;
     for (file, count) in [robot, camera].iter().zip(pairing.reordered) {
         if count > 0 {
             notes.add(Note::Reordered {
@@ -295,12 +331,8 @@ fn read_streams(
             });
         }
     }
-    if let Some(e) = &pairing.correlated {
-        notes.add(Note::TimeOffset {
-            offset: pairing.time_offset,
-            correlated_at: e.offset,
-            correlation: e.correlation,
-        });
+    if let Some(found) = &pairing.correlated {
+        notes.add(Note::time_offset(found));
     }
     let s = pairing.synced;
     if s.dropped_outside + s.dropped_gap > 0 {
@@ -337,7 +369,13 @@ fn read_streams(
         stamps: s.stamps.iter().copied().map(Some).collect(),
         poses: s.pairs,
         time_offset: Some(pairing.time_offset),
-        offset_curve: pairing.correlated.map(|e| e.curve),
+        time_offset_sigma: pairing.correlated.as_ref().map(|f| f.sigma),
+        offset_curve: pairing.correlated.map(|f| f.correlated.curve),
+        // A camera stream holds `target_from_camera`.
+        written: Written {
+            robot: WrittenAs::Named,
+            camera: WrittenAs::Inverse,
+        },
         ..Recording::default()
     })
 }

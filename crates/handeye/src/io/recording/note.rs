@@ -2,6 +2,7 @@
 
 use std::fmt;
 
+use crate::io::sync::FoundOffset;
 use crate::io::{Preamble, Projections};
 
 /// What reading an input found worth telling, in the words the command line prints (see
@@ -29,14 +30,21 @@ pub enum Note {
         /// How many samples.
         count: usize,
     },
-    /// The clock offset found by `auto`.
+    /// The clock offset found by `auto` (or by default).
     TimeOffset {
         /// The offset used, seconds: the correlation's, refined by the paired poses' agreement.
         offset: f64,
+        /// Its one-sigma, seconds.
+        sigma: f64,
         /// Where the angular speeds correlate best, seconds.
         correlated_at: f64,
         /// Their correlation there.
         correlation: f64,
+    },
+    /// The clock offset could not be estimated (by default): the streams are paired at 0 s.
+    NoTimeOffset {
+        /// Why the search failed.
+        why: String,
     },
     /// Camera samples of two streams that found no robot pose.
     Dropped {
@@ -82,11 +90,17 @@ impl fmt::Display for Note {
             }
             Self::TimeOffset {
                 offset,
+                sigma,
                 correlated_at,
                 correlation,
             } => write!(
                 f,
-                "time offset: {offset:.4} s (angular speeds correlate best at {correlated_at:.4} s, {correlation:.3}; refined by the agreement of the paired poses)"
+                "time offset: {offset:.4} s ± {:.1} ms (camera clock minus robot clock; angular speeds correlate best at {correlated_at:.4} s, {correlation:.3}; refined by the agreement of the paired poses; `--time-offset SECONDS` sets it)",
+                1e3 * sigma
+            ),
+            Self::NoTimeOffset { why } => write!(
+                f,
+                "time offset: not estimated ({why}): paired at 0 s; give `--time-offset SECONDS` if the clocks differ"
             ),
             Self::Dropped {
                 outside,
@@ -102,6 +116,16 @@ impl fmt::Display for Note {
 }
 
 impl Note {
+    /// The note of an offset found by the search.
+    pub(crate) fn time_offset(found: &FoundOffset) -> Self {
+        Self::TimeOffset {
+            offset: found.offset,
+            sigma: found.sigma,
+            correlated_at: found.correlated.offset,
+            correlation: found.correlated.correlation,
+        }
+    }
+
     /// [`Note::BagPairs`] in words.
     fn fmt_bag_pairs(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let Self::BagPairs {

@@ -11,6 +11,7 @@ use super::{Bag, TF_STATIC_TOPIC, TF_TOPIC, at, load, topic_list};
 use crate::io::StampedPosePair;
 use crate::io::sync::{Lookup, StampedPose};
 use crate::model::error::{Error, Result};
+use crate::model::findings::Written;
 use crate::model::motion::PosePair;
 
 /// Which frames and topics make the pose pairs; `Default` gives the values on each field.
@@ -58,9 +59,12 @@ pub struct BagPairs {
     /// Observations in a gap, longer than `max_gap`, of a dynamic transform they need.
     pub dropped_gap: usize,
     /// `base_from_gripper` at every stamp of the robot's dynamic transforms (robot clock), for an
-    /// estimate of the clock offset ([`crate::io::sync::estimate_time_offset`]).
+    /// estimate of the clock offset ([`crate::io::sync::estimate_time_offset`]). Stamps are seconds
+    /// from the robot's first stamp, so that they keep their nanoseconds (seconds since the epoch
+    /// resolve to 2.4e-7 s in f64).
     pub robot_stream: Vec<StampedPose>,
-    /// `camera_from_target` at every observation (camera clock), in time order.
+    /// `camera_from_target` at every observation (camera clock), in time order; stamps from the
+    /// same origin as `robot_stream`'s.
     pub camera_stream: Vec<StampedPose>,
 }
 
@@ -255,11 +259,13 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         .collect();
     robot_stamps.sort_unstable();
     robot_stamps.dedup();
+    let origin = robot_stamps.first().copied().unwrap_or(0);
+    let since_origin = |t: i64| seconds(t.saturating_sub(origin));
     let robot_stream = robot_stamps
         .into_iter()
         .filter_map(|t| match tf.lookup(&robot_path, t, max_gap_ns) {
             Lookup::Pose(pose) => Some(StampedPose {
-                stamp: seconds(t),
+                stamp: since_origin(t),
                 pose,
             }),
             _ => None,
@@ -269,7 +275,7 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         .iter()
         .filter_map(|(_, t, o)| match o {
             Lookup::Pose(pose) => Some(StampedPose {
-                stamp: seconds(*t),
+                stamp: since_origin(*t),
                 pose: *pose,
             }),
             _ => None,
@@ -297,6 +303,7 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
                         base_from_gripper,
                         camera_from_target,
                     },
+                    written: Written::NAMED,
                 });
                 out.names
                     .push(format!("{target_source} #{index} (t = {stamp:.3} s)"));

@@ -99,15 +99,22 @@ fn scan_mcap(
         ));
     }
     // Streamed, so that a recording with camera images is not held in memory: the magic is
-    // skipped (read above), and no record may claim more than the file holds.
+    // skipped (read above). No record may claim more than the file holds, or, inside a compressed
+    // chunk (where a camera image may be larger than the whole file), more than
+    // MAX_DECOMPRESSED_RECORD. Chunk CRCs are checked.
+    let limit = usize::try_from(length)
+        .unwrap_or(usize::MAX)
+        .max(MAX_DECOMPRESSED_RECORD);
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default()
             .with_skip_start_magic(true)
-            .with_record_length_limit(usize::try_from(length).unwrap_or(usize::MAX)),
+            .with_validate_chunk_crcs(true)
+            .with_record_length_limit(limit),
     );
     let mut schemas: HashMap<u16, String> = HashMap::new();
     let mut channels: HashMap<u16, (String, String, u16)> = HashMap::new();
     let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
+    let mut counts = MessageCounts::default();
     let mut k = 0usize;
     while let Some(event) = reader.next_event() {
         match event.map_err(|e| mcap_error(file, k, e))? {
@@ -126,6 +133,7 @@ fn scan_mcap(
                     }
                     Record::Message { header, data } => {
                         k += 1;
+                        counts.message(header.channel_id);
                         let Some((topic, encoding, schema_id)) = channels.get(&header.channel_id)
                         else {
                             return Err(bag_error(
@@ -153,16 +161,98 @@ fn scan_mcap(
                             })?;
                         }
                     }
+                    Record::MessageIndex(index) => counts
+                        .indexed(index.channel_id, index.records.len())
+                        .map_err(|lost| lost_error(file, k, &lost))?,
+                    Record::Statistics(statistics) => counts.statistics = Some(statistics),
                     _ => {}
                 }
             }
         }
     }
+    counts.check().map_err(|lost| lost_error(file, k, &lost))?;
     Ok(topics)
 }
 
 /// Bytes read from an MCAP file at a time.
 const READ_SIZE: usize = 1 << 20;
+
+/// The largest record read from inside a compressed chunk, bytes (a 4K camera image is about
+/// 25 MB): a decompression cannot make the reader hold more.
+const MAX_DECOMPRESSED_RECORD: usize = 512 << 20;
+
+/// The messages read from an MCAP file against those its indexes and statistics record, so that
+/// no message is lost without a word: a chunk the linear reader skips (a damaged header that
+/// claims no uncompressed data, say) leaves its messages in the chunk's message indexes and in the
+/// summary's statistics.
+#[derive(Default)]
+struct MessageCounts {
+    /// Per channel, messages read since that channel's last message index.
+    since_index: HashMap<u16, usize>,
+    /// Per channel, all messages read.
+    read: HashMap<u16, u64>,
+    /// The summary's statistics record, if the file has one.
+    statistics: Option<mcap::records::Statistics>,
+}
+
+/// Messages an MCAP file records that were not read.
+struct Lost {
+    recorded: u64,
+    read: u64,
+    by: &'static str,
+}
+
+impl MessageCounts {
+    fn message(&mut self, channel: u16) {
+        *self.since_index.entry(channel).or_default() += 1;
+        *self.read.entry(channel).or_default() += 1;
+    }
+
+    /// A chunk's message index for `channel`, listing `entries` messages: as many must have been
+    /// read from the chunk just before it.
+    fn indexed(&mut self, channel: u16, entries: usize) -> std::result::Result<(), Lost> {
+        let read = self.since_index.remove(&channel).unwrap_or(0);
+        if read < entries {
+            return Err(Lost {
+                recorded: entries as u64,
+                read: read as u64,
+                by: "a chunk's message index",
+            });
+        }
+        Ok(())
+    }
+
+    /// The whole file against its statistics, per channel.
+    fn check(&self) -> std::result::Result<(), Lost> {
+        let Some(statistics) = &self.statistics else {
+            return Ok(());
+        };
+        let read: u64 = self.read.values().sum();
+        let short = statistics
+            .channel_message_counts
+            .iter()
+            .any(|(channel, &n)| self.read.get(channel).copied().unwrap_or(0) < n);
+        if read < statistics.message_count || short {
+            return Err(Lost {
+                recorded: statistics.message_count,
+                read,
+                by: "the file's statistics",
+            });
+        }
+        Ok(())
+    }
+}
+
+fn lost_error(file: &Path, k: usize, lost: &Lost) -> Error {
+    bag_error(
+        file,
+        Some(format!("after {k} message(s)")),
+        format!(
+            "{} records {} message(s), {} could be read: a chunk is damaged and was skipped (`mcap recover` rescues the complete chunks into a new file)",
+            lost.by, lost.recorded, lost.read
+        ),
+    )
+}
 
 fn mcap_error(file: &Path, k: usize, e: mcap::McapError) -> Error {
     let hint = match e {
@@ -188,6 +278,11 @@ fn sqlite_error(file: &Path, what: &str, e: rusqlite::Error) -> Error {
         {
             ": the file is truncated or damaged (was the recording stopped cleanly?)"
         }
+        rusqlite::Error::SqliteFailure(f, _)
+            if f.code == rusqlite::ErrorCode::OperationInterrupted =>
+        {
+            ": stopped after more work than a recording of its size needs (a damaged database?)"
+        }
         _ => "",
     };
     bag_error(
@@ -195,6 +290,54 @@ fn sqlite_error(file: &Path, what: &str, e: rusqlite::Error) -> Error {
         None,
         format!("cannot read the SQLite3 recording ({what}): {e}{hint}"),
     )
+}
+
+/// SQLite virtual-machine steps allowed per byte of a recording, and in any case: far above what
+/// reading a recording takes (tens of steps per message of at least tens of bytes), so that only a
+/// query that does not end reaches it.
+const SQLITE_OPS_PER_BYTE: u64 = 1_000;
+/// See [`SQLITE_OPS_PER_BYTE`].
+const SQLITE_OPS_BASE: u64 = 100_000_000;
+/// Steps between two calls of the progress handler.
+const SQLITE_OPS_PER_CALL: i32 = 10_000;
+
+/// Refuses a recording whose `topics` or `messages` is not a plain table: a view (or a virtual
+/// table) runs whatever query the file holds, which may never end.
+fn check_tables(file: &Path, db: &rusqlite::Connection) -> Result<()> {
+    for name in ["topics", "messages"] {
+        let found: Option<(String, String)> = db
+            .query_row(
+                "SELECT type, coalesce(sql, '') FROM sqlite_master WHERE name = ?1",
+                [name],
+                |r| Ok((r.get(0)?, r.get(1)?)),
+            )
+            .map(Some)
+            .or_else(|e| match e {
+                rusqlite::Error::QueryReturnedNoRows => Ok(None),
+                e => Err(e),
+            })
+            .map_err(|e| sqlite_error(file, "its schema", e))?;
+        let plain = found.as_ref().is_some_and(|(kind, sql)| {
+            kind == "table"
+                && !sql
+                    .trim_start()
+                    .to_ascii_uppercase()
+                    .starts_with("CREATE VIRTUAL")
+        });
+        if !plain {
+            let what = match &found {
+                None => "is missing".to_string(),
+                Some((kind, _)) if kind != "table" => format!("is a {kind}, not a table"),
+                Some(_) => "is a virtual table".to_string(),
+            };
+            return Err(bag_error(
+                file,
+                None,
+                format!("not a rosbag2 SQLite3 recording: `{name}` {what}"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 fn scan_sqlite(
@@ -223,6 +366,19 @@ fn scan_sqlite(
         OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
     )
     .map_err(|e| sqlite_error(file, "open", e))?;
+    check_tables(file, &db)?;
+    // A database can hold a query that never ends even over tables (a recursive trigger cannot
+    // run on a read, but a damaged page can loop): the work is bounded by the file's size.
+    let length = std::fs::metadata(file).map_or(0, |m| m.len());
+    let budget = SQLITE_OPS_PER_BYTE.saturating_mul(length) + SQLITE_OPS_BASE;
+    let mut spent = 0u64;
+    db.progress_handler(
+        SQLITE_OPS_PER_CALL,
+        Some(move || {
+            spent += SQLITE_OPS_PER_CALL as u64;
+            spent > budget
+        }),
+    );
     let mut by_id: BTreeMap<i64, (String, TopicInfo)> = BTreeMap::new();
     {
         let mut q = db
