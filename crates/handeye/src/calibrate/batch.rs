@@ -438,66 +438,6 @@ pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
     }
 }
 
-/// [`solve_poses`] with the refusals of [`calibrate`] that need no bootstrap, for the drop-in for
-/// OpenCV's `calibrateHandEye`, which returns X alone and so must not return it for data that were
-/// read wrongly, that hold outliers, or that do not determine it:
-/// - the poses fit far better read another way (an inverted pose, `w, x, y, z` quaternions,
-///   millimetres on one side): [`Error::Misread`], judged on the poses that agree with the others,
-///   as [`calibrate`] judges it (`read_poses`);
-/// - some poses disagree with the others (`pose_outliers`): [`Error::Untrusted`] naming them.
-///   [`calibrate`] answers with a warning and the uncertainty they cause; X alone cannot carry
-///   either, and a few random poses move it by degrees (kinhec's `outliers_random_pose` series:
-///   10–15° and 7–13 cm from the truth);
-/// - a direction of X is undetermined, judged from a first-order covariance instead of the
-///   bootstrap (noisy motions about one axis, say, where a solver's own conditioning test sees
-///   nothing singular). The covariance is `PoseAccumulator::covariance` over all pairs at the
-///   solved X, each pose's fixed frame carrying the noise the poses themselves show under it (as
-///   the accumulating estimator's reports do), judged with the bootstrap's bounds
-///   (`crate::check::uncertainty::UNDETERMINED_ROTATION_DEG`, and half the scene for the translation).
-///   Noise-free data (no scatter to measure) are not refused by it: the solvers' own tests see
-///   their degeneracy.
-///
-/// The warnings of the reading and of the solve are the result's, and a weakly determined direction
-/// of X ([`Warning::WeakDirection`], from the same covariance) is one of them.
-pub fn solve_poses_checked(
-    poses: &[PosePair],
-    setup: Setup,
-    options: &Options,
-) -> Result<Calibration> {
-    let mut warnings = Vec::new();
-    let (_, _, read, found) = read_poses(
-        poses,
-        setup,
-        options.fix,
-        options.outlier_deg,
-        &mut warnings,
-    )?;
-    if !found.poses.is_empty() {
-        return Err(Error::Untrusted {
-            refusal: None,
-            why: vec![outlier_warning(&outlier_report(&found, options))],
-        });
-    }
-    let mut calibration = solve_poses(&read, setup, options)?;
-    calibration.warnings.splice(0..0, warnings);
-    let sums = PoseAccumulator::of(&read, setup);
-    let x = &calibration.x;
-    let Some(covariance) = sums.residual_scatter(x).and_then(|noise| {
-        sums.covariance(
-            x,
-            noise.rotation / 3f64.sqrt(),
-            noise.translation / 3f64.sqrt(),
-        )
-    }) else {
-        return Ok(calibration);
-    };
-    let scene = translation_scale(&read, setup).max(working_distance(&read));
-    let first_order = crate::check::uncertainty::summarise(covariance, 0, 0, scene);
-    refuse_if_undetermined(&first_order, setup, calibration.conditioning)?;
-    warn_weak(&first_order, setup, &mut calibration.warnings);
-    Ok(calibration)
-}
-
 /// Bootstrap replicates: the same method and pairing as [`solve_poses`], made cheaper where the
 /// answer is the same or bounds it. All-pairs Andreff comes from the O(n) accumulated normal
 /// equations ([`PoseAccumulator`], equal to the batch solve to ~1e-12). Refine, Tsai, Park and
