@@ -135,11 +135,15 @@ fn solve_opencv<'py>(
     solve_opencv_poses(py, robot, camera, method, tsai_opencv_filter, setup)
 }
 
-/// X from OpenCV's two sides, read and checked. Without a `setup` the arrays are read as
+/// X from OpenCV's two sides, decided as `handeye calibrate --method M --pairs all` decides it:
+/// the library's [`handeye::calibrate`] over every pose pair (the command line's entry), so that
+/// the drop-in refuses where the command line refuses (a `ValueError` with the library's
+/// reason), warns where it warns (each caution of the report, for a `UserWarning`) and answers the
+/// same X; it quotes no sigma but the report's bootstrap. Without a `setup` the arrays are read as
 /// eye-in-hand, which serves both setups (OpenCV's eye-to-hand callers pass base2gripper and get
 /// cam2base); with `setup="eye-to-hand"` the robot poses are base2gripper, inverted here, and the
 /// checks judge the sizes of X and the target for a fixed camera. The messages name OpenCV's
-/// arguments ([`opencv_words`]).
+/// arguments where the library's name the command line's options ([`opencv_words`]).
 fn solve_opencv_poses<'py>(
     py: Python<'py>,
     robot: Vec<Transform>,
@@ -169,14 +173,18 @@ fn solve_opencv_poses<'py>(
             camera_from_target,
         })
         .collect();
-    let c = py
-        .allow_threads(|| handeye::solve_poses_checked(&poses, setup, &options))
+    let report = py
+        .allow_threads(|| handeye::calibrate(&poses, setup, &options))
         .map_err(|e| value_error(opencv_words::error(&e, said)))?;
-    let (r, t) = (c.x.rotation.matrix(), c.x.translation.vector);
+    let (r, t) = (
+        report.transform.rotation.matrix(),
+        report.transform.translation.vector,
+    );
     Ok((
         numpy::ndarray::Array2::from_shape_fn((3, 3), |(i, j)| r[(i, j)]).into_pyarray(py),
         numpy::ndarray::Array2::from_shape_fn((3, 1), |(i, _)| t[i]).into_pyarray(py),
-        c.warnings
+        report
+            .warnings
             .iter()
             .map(|w| opencv_words::warning(w, said))
             .collect(),

@@ -33,6 +33,10 @@ pub fn warning(w: &Warning, setup: Option<Setup>) -> String {
             y_translation,
             ..
         } => swapped_sizes(*x_translation, *y_translation, setup),
+        Warning::Outliers { .. } => format!(
+            "{w}; X follows them: leave them out of the arrays, or call \
+             `handeye.calibrate(..., reject_outliers=True)`"
+        ),
         _ => w.to_string(),
     }
 }

@@ -1,12 +1,13 @@
 //! Every batch solver at 2, 10, 100 and 1,000 motions on the paper's simulated data (fixed seed),
-//! the robot-world solvers at 3, 10, 100 and 1,000 poses, and the OpenCV drop-in's path
-//! (`solve_poses_checked`: the outlier test, the readings check, the all-pairs solve and the
-//! first-order covariance) beside the bare all-pairs solve and its two checks alone.
+//! the robot-world solvers at 3, 10, 100 and 1,000 poses, and the OpenCV drop-in's path (the
+//! command line's `calibrate` over all pairs: the readings check, the outlier test, the solve, the
+//! bootstrap and the held-out check) beside the bare all-pairs solve and its two first checks
+//! alone.
 //!
 //! `cargo bench -p handeye --bench solvers`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use handeye::calibrate::batch::{Options, solve_poses, solve_poses_checked};
+use handeye::calibrate::batch::{Options, calibrate, solve_poses};
 use handeye::check::outliers::pose_outliers;
 use handeye::check::quality::OUTLIER_DEG;
 use handeye::check::readings::check_readings;
@@ -101,8 +102,8 @@ fn drop_in(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("solve", name), &poses, |b, p| {
             b.iter(|| solve_poses(black_box(p), Setup::EyeInHand, &options))
         });
-        group.bench_with_input(BenchmarkId::new("checked", name), &poses, |b, p| {
-            b.iter(|| solve_poses_checked(black_box(p), Setup::EyeInHand, &options))
+        group.bench_with_input(BenchmarkId::new("calibrate", name), &poses, |b, p| {
+            b.iter(|| calibrate(black_box(p), Setup::EyeInHand, &options))
         });
         group.bench_with_input(BenchmarkId::new("readings", name), &poses, |b, p| {
             b.iter(|| check_readings(black_box(p), Setup::EyeInHand, handeye::Written::NAMED))

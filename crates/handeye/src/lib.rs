@@ -132,9 +132,7 @@ pub use check::stream::{StreamReading, StreamReadings};
 pub use check::uncertainty::{REPLICATES, REPLICATES_RANGE, Uncertainty};
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, ClosedLoop, WeaknessKind, advise, closed_loop};
-pub use calibrate::batch::{
-    Assessment, Fix, Options, Report, calibrate, solve_poses, solve_poses_checked,
-};
+pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 // Online: the paper's calibrator and the accumulating estimator.
 pub use online::select::{AdaptiveParams, MAX_N_INIT, Selection};

@@ -187,6 +187,20 @@ fn shared_methods_give_opencvs_answer() {
                 );
                 continue;
             }
+            // andreff-joint and Daniilidis weigh rotation rows against translation rows: OpenCV
+            // in the input's unit, handeye in the data's own RMS length (so that millimetres and
+            // metres give one X). On noisy data the answers differ by that weighting (7e-4 here);
+            // on exact data they agree, and crates/handeye-py/tests compares them with OpenCV's
+            // on the data in units of their RMS length.
+            if matches!(method, Method::AndreffJoint | Method::Daniilidis)
+                && case.truth.is_none_or(|_| !case.name.contains("exact"))
+            {
+                println!(
+                    "{} {method}: weighted in the data's own unit, not compared",
+                    case.name
+                );
+                continue;
+            }
             let ours = solve(method, &case.motions)
                 .unwrap_or_else(|e| panic!("{} {method}: {e}", case.name))
                 .x;

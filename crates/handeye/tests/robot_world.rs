@@ -161,6 +161,17 @@ fn shah_and_li_match_opencv() {
         .pairs;
         let setup = setup_of(expected["setup"].as_str().unwrap());
         for (name, solved) in [("shah", shah(&poses, setup)), ("li", li(&poses, setup))] {
+            // Li's rows weigh rotations against lengths: OpenCV in the input's unit, handeye in
+            // the data's own RMS length (so that metres and millimetres give one X). On noisy
+            // data that weighting moves the answer; crates/handeye-py/tests compares Li with
+            // OpenCV's on the data in units of their RMS length.
+            if name == "li" && !case.to_string_lossy().contains("exact") {
+                println!(
+                    "{} li: weighted in the data's own unit, not compared",
+                    case.display()
+                );
+                continue;
+            }
             let solved = solved.unwrap();
             let cv = &expected["opencv"][name];
             let dx = max_entry_diff(&solved.x, &matrix_transform(&cv["x"]));

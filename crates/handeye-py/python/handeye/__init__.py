@@ -48,12 +48,15 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     ``UserWarning`` says so; an eye-to-hand call with all four arrays inverted looks exactly like a
     correct eye-in-hand one, and only ``setup="eye-to-hand"`` lets it be caught. Pass it.
 
-    Raises ValueError on bad input, on poses that fit far better read another way (inverted
-    arrays, millimetres on one side, rotations made from quaternions in the other order: the
-    message says which arrays to change), on poses that disagree with the others (the message
-    names them; ``calibrate(..., reject_outliers=True)`` leaves them out) and on motions that leave
-    X undetermined, where OpenCV answers. What ``calibrate`` would warn about (weak conditioning,
-    small rotations, a weakly determined direction of X) is issued as a ``UserWarning``."""
+    The decision is the command line's, made once in the library: the drop-in runs
+    ``handeye calibrate --method M --pairs all`` (``--tsai-opencv-filter`` too for OpenCV's Tsai
+    constant) and answers, warns or refuses as it does, with the same X. It raises ValueError on
+    bad input, on poses that fit far better read another way (inverted arrays, millimetres on one
+    side, rotations made from quaternions in the other order: the message says which arrays to
+    change) and on motions that leave X undetermined, where OpenCV answers. Every caution of the
+    command line's report (poses that disagree with the others, a weakly determined direction of
+    X with the bootstrap's one-sigma, poses the others predict poorly, ...) is issued as a
+    ``UserWarning``: use ``calibrate`` for the whole report."""
     name = METHODS.get(method, method) if isinstance(method, int) else method
     if not isinstance(name, str):
         raise ValueError(f"unknown method {method!r}")
@@ -104,6 +107,7 @@ def calibrate(
     fix=None,
     bootstrap=40,
     robot_world=False,
+    tsai_opencv_filter=False,
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
@@ -116,7 +120,8 @@ def calibrate(
     ``warnings`` (each a dict: ``code``, its data, ``message`` in words and, when one argument
     of this call would fix it, ``remedy``: ``option`` (the keyword), ``value`` and ``purpose``). ``fix`` reads the input another way ("auto", "as-given", "robot-inverted",
     "camera-inverted", "both-inverted", "robot-wxyz", "camera-wxyz", "both-wxyz", "robot-mm",
-    "camera-mm"). ``method`` defaults to "andreff".
+    "camera-mm"). ``method`` defaults to "andreff". ``tsai_opencv_filter`` (with ``method="tsai"``)
+    drops the motions OpenCV's Tsai drops, as ``--tsai-opencv-filter`` does.
 
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
     (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
@@ -145,6 +150,7 @@ def calibrate(
             method=method,
             setup=setup,
             pairs=pairs,
+            tsai_opencv_filter=tsai_opencv_filter,
             reject_outliers=reject_outliers,
             fix=fix,
             bootstrap=bootstrap,

@@ -27,6 +27,7 @@ def calibrate(
     fix: Optional[str] = None,
     bootstrap: int = 40,
     robot_world: bool = False,
+    tsai_opencv_filter: bool = False,
 ) -> dict[str, Any]: ...
 
 def read_recording(

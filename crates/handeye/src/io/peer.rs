@@ -299,12 +299,18 @@ fn brief(v: &Value) -> String {
     }
 }
 
-/// Reads a ViSP recording: the files `pose_fPe_<i>.yaml` (effector in the fixed frame,
-/// `base_from_gripper`) and `pose_cPo_<i>.yaml` (object in the camera, `camera_from_target`) of a
-/// directory, each a 6-vector `tx ty tz θux θuy θuz` (metres, radians), paired by index.
+/// Reads a ViSP recording: a directory of robot poses `<prefix>pose_rPe_<i>.yaml` (the end
+/// effector in the robot's reference frame, as ViSP's hand-eye apps name them today, e.g.
+/// `franka_pose_rPe_1.yaml`) or `<prefix>pose_fPe_<i>.yaml` (in the fixed frame, the older
+/// tutorials' name), both `base_from_gripper`, and camera poses `<prefix>pose_cPo_<i>.yaml`
+/// (the object in the camera, `camera_from_target`), each a 6-vector `tx ty tz θux θuy θuz`
+/// (metres, radians), paired by index. The prefix is anything (empty by default in ViSP); the
+/// robot's and the camera's may differ (ViSP's acquisition app writes `franka_pose_rPe_<i>`, its
+/// pose computation `pose_cPo_<i>`).
 ///
-/// An index given twice (`pose_fPe_03.yaml` beside `pose_fPe_3.yaml`), a file of either kind
-/// without its partner, or an index that is not a number is refused, naming the files.
+/// Two namings of one kind in a directory (two recordings, or `fPe` beside `rPe`), an index given
+/// twice (`pose_fPe_03.yaml` beside `pose_fPe_3.yaml`), a file of either kind without its partner,
+/// or an index that is not a number is refused, naming the files.
 pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
     let name = dir.display().to_string();
     let io_error = |e| Error::Io {
@@ -322,23 +328,26 @@ pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
         );
     }
     files.sort();
-    let robot = visp_indices(&files, VISP_ROBOT, &name)?;
-    let camera = visp_indices(&files, VISP_CAMERA, &name)?;
+    let (robot_stem, robot) = visp_indices(&files, &VISP_ROBOT, &name)?;
+    let (camera_stem, camera) = visp_indices(&files, &[VISP_CAMERA], &name)?;
     if robot.is_empty() {
         return Err(parse_error(
             &name,
             0,
-            "pose_fPe_*.yaml",
-            "no ViSP robot pose files in this directory",
+            "pose_rPe_*.yaml",
+            "no ViSP robot pose files in this directory (expected `<prefix>pose_rPe_<i>.yaml` or \
+             `<prefix>pose_fPe_<i>.yaml`, each with its `<prefix>pose_cPo_<i>.yaml`)",
         ));
     }
+    let camera_stem = camera_stem.unwrap_or_else(|| VISP_CAMERA.to_owned());
+    let robot_stem = robot_stem.unwrap_or_else(|| VISP_ROBOT[0].to_owned());
     for (index, file) in &camera {
         if !robot.contains_key(index) {
             return Err(parse_error(
                 &name,
                 0,
                 file.as_str(),
-                format!("no `{VISP_ROBOT}{index}.yaml` to pair it with"),
+                format!("no `{robot_stem}{index}.yaml` to pair it with"),
             ));
         }
     }
@@ -349,7 +358,7 @@ pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
                 &name,
                 0,
                 file.as_str(),
-                format!("no `{VISP_CAMERA}{index}.yaml` to pair it with"),
+                format!("no `{camera_stem}{index}.yaml` to pair it with"),
             ));
         };
         pairs.push(PosePair {
@@ -363,22 +372,48 @@ pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
 /// Largest norm of a ViSP θu rotation vector accepted, radians (a full turn; ViSP writes θ ≤ π).
 const MAX_VISP_ANGLE: f64 = 2.0 * std::f64::consts::PI;
 
-/// File-name prefix of ViSP robot poses (`base_from_gripper`).
-const VISP_ROBOT: &str = "pose_fPe_";
-/// File-name prefix of ViSP camera poses (`camera_from_target`).
+/// File-name markers of ViSP robot poses (`base_from_gripper`): the apps' current name, then the
+/// older tutorials'.
+const VISP_ROBOT: [&str; 2] = ["pose_rPe_", "pose_fPe_"];
+/// File-name marker of ViSP camera poses (`camera_from_target`).
 const VISP_CAMERA: &str = "pose_cPo_";
 
-/// The files `<prefix><index>.yaml` among `files` (sorted), by index; an index that is not a
-/// number, or one given twice, is refused.
-fn visp_indices(files: &[String], prefix: &str, dir: &str) -> Result<BTreeMap<usize, String>> {
+/// The files `<prefix><marker><index>.yaml` among `files` (sorted), by index, with the naming
+/// (`<prefix><marker>`) they share; an index that is not a number, one given twice, or two
+/// namings are refused.
+fn visp_indices(
+    files: &[String],
+    markers: &[&str],
+    dir: &str,
+) -> Result<(Option<String>, BTreeMap<usize, String>)> {
     let mut out: BTreeMap<usize, String> = BTreeMap::new();
+    let mut naming: Option<String> = None;
     for file in files {
-        let Some(digits) = file
-            .strip_prefix(prefix)
-            .and_then(|s| s.strip_suffix(".yaml"))
+        let Some(stem) = file.strip_suffix(".yaml") else {
+            continue;
+        };
+        let Some((at, marker)) = markers
+            .iter()
+            .filter_map(|m| stem.rfind(m).map(|at| (at, *m)))
+            .max_by_key(|(at, _)| *at)
         else {
             continue;
         };
+        let (stem, digits) = stem.split_at(at + marker.len());
+        match &naming {
+            None => naming = Some(stem.to_owned()),
+            Some(first) if first != stem => {
+                return Err(parse_error(
+                    dir,
+                    0,
+                    file.as_str(),
+                    format!(
+                        "two ViSP namings in one directory, `{first}<i>.yaml` and `{stem}<i>.yaml`: keep one recording per directory"
+                    ),
+                ));
+            }
+            Some(_) => {}
+        }
         let index = digits
             .bytes()
             .all(|b| b.is_ascii_digit())
@@ -389,7 +424,7 @@ fn visp_indices(files: &[String], prefix: &str, dir: &str) -> Result<BTreeMap<us
                     dir,
                     0,
                     file.as_str(),
-                    format!("expected `{prefix}<number>.yaml`: `{digits}` is not a pose number"),
+                    format!("expected `{stem}<number>.yaml`: `{digits}` is not a pose number"),
                 )
             })?;
         if let Some(first) = out.insert(index, file.clone()) {
@@ -403,7 +438,7 @@ fn visp_indices(files: &[String], prefix: &str, dir: &str) -> Result<BTreeMap<us
             ));
         }
     }
-    Ok(out)
+    Ok((naming, out))
 }
 
 /// One ViSP pose file: `data:` followed by six numbers, as `- [v]` lines or one `[…]` list.
@@ -591,6 +626,56 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn reads_visps_current_names_with_any_prefix() {
+        let dir = std::env::temp_dir().join(format!("handeye-visp3-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let pose = |k: usize| {
+            let v = 0.1 * k as f64;
+            format!(
+                "rows: 6\ncols: 1\ndata: \n  - [{v}]\n  - [0]\n  - [0.5]\n  - [{v}]\n  - [0]\n  - [-0.2]\n"
+            )
+        };
+        let write = |file: String, text: &str| std::fs::write(dir.join(file), text).unwrap();
+        // As ViSP's apps write them: the acquisition's `franka_pose_rPe_<i>`, the pose
+        // computation's `pose_cPo_<i>`, and an image beside them.
+        for k in 1..=4 {
+            write(format!("franka_pose_rPe_{k}.yaml"), &pose(k));
+            write(
+                format!("pose_cPo_{k}.yaml"),
+                "rows: 6\ncols: 1\ndata: [0, 0, 1, 0, 3.1, 0]\n",
+            );
+            write(format!("franka_image-{k}.png"), "");
+        }
+        write("franka_camera.xml".into(), "");
+        let s = read_visp_dir(&dir).unwrap();
+        assert_eq!(s.pairs.len(), 4);
+        assert!((s.pairs[2].base_from_gripper.translation.vector.x - 0.3).abs() < 1e-15);
+        assert!((s.pairs[2].camera_from_target.translation.vector.z - 1.0).abs() < 1e-15);
+        // A second naming of the robot poses, or a camera pose without its robot pose.
+        let name = dir.display().to_string();
+        for (extra, says) in [
+            ("pose_fPe_1.yaml", "two ViSP namings"),
+            ("ur_pose_rPe_1.yaml", "two ViSP namings"),
+            ("calib_pose_cPo_9.yaml", "two ViSP namings"),
+            ("pose_cPo_5.yaml", "no `franka_pose_rPe_5.yaml`"),
+        ] {
+            write(extra.into(), &pose(1));
+            let e = read_visp_dir(&dir);
+            std::fs::remove_file(dir.join(extra)).unwrap();
+            let message = format!("{e:?}");
+            assert!(message.contains(says), "{extra}: {message}");
+            assert_eq!(place(e).0, name, "{extra}");
+        }
+        // Robot poses alone.
+        for k in 1..=4 {
+            std::fs::remove_file(dir.join(format!("pose_cPo_{k}.yaml"))).unwrap();
+        }
+        let message = format!("{:?}", read_visp_dir(&dir));
+        assert!(message.contains("no `pose_cPo_1.yaml`"), "{message}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -100,7 +100,12 @@ pub(crate) fn interpolate(stream: &[StampedPose], t: f64, max_gap: f64) -> Looku
     if qa.coords.dot(&qb.coords) < 0.0 {
         qb = UnitQuaternion::new_unchecked(-qb.into_inner());
     }
-    let q = qa.slerp(&qb, s);
+    // nalgebra's slerp leaves its result unnormalised by up to ~1e-8 between nearly equal
+    // rotations (acos near 1): a rotation matrix off orthonormal by 7e-9 on ethz-asl's streams,
+    // which a 4×4 copy of the poses (Python's arrays, a JSON Lines dump) then projected, so that
+    // the command line on the streams and Python on their poses disagreed (andreff-joint's X by
+    // 1e-8).
+    let q = UnitQuaternion::new_normalize(qa.slerp(&qb, s).into_inner());
     let p = a
         .pose
         .translation
@@ -708,6 +713,43 @@ mod tests {
             }
         });
         (robot.collect(), camera.collect())
+    }
+
+    #[test]
+    fn interpolated_rotations_are_orthonormal_between_nearly_equal_poses() {
+        // Two rotations 1e-9 rad apart (a robot at rest, read at 100 Hz): the slerp's result was
+        // unnormalised by up to ~1e-8.
+        let a = crate::model::pose::Transform::new(
+            Vector3::new(0.1, 0.2, 0.3),
+            Vector3::new(0.4, -1.1, 2.0),
+        );
+        let b = crate::model::pose::Transform::new(
+            Vector3::new(0.1, 0.2, 0.3),
+            Vector3::new(0.4, -1.1, 2.0 + 1e-9),
+        );
+        let stream = [
+            StampedPose {
+                stamp: 0.0,
+                pose: a,
+            },
+            StampedPose {
+                stamp: 0.01,
+                pose: b,
+            },
+        ];
+        let mut worst = 0.0_f64;
+        for k in 0..100 {
+            let Lookup::Pose(p) = interpolate(&stream, 0.0001 * k as f64, 1.0) else {
+                panic!("inside the stream");
+            };
+            let r = p.rotation.matrix();
+            worst = worst.max(
+                (r * r.transpose() - nalgebra::Matrix3::identity())
+                    .abs()
+                    .max(),
+            );
+        }
+        assert!(worst < 1e-15, "{worst:e}");
     }
 
     #[test]

@@ -102,6 +102,17 @@ pub enum Degeneracy {
         /// The setup, which names X's reference frame.
         setup: crate::model::motion::Setup,
     },
+    /// The method leaves X undetermined under the data's own noise, but the same motions
+    /// determine it with `andreff` (its bootstrap judged with the same bounds): the method, not
+    /// the motions, is at fault.
+    MethodUndetermined {
+        /// The method's name.
+        method: &'static str,
+        /// `andreff`'s one-sigma of X's rotation, degrees.
+        rotation_deg: f64,
+        /// `andreff`'s one-sigma of X's translation, input units.
+        translation: f64,
+    },
     /// Re-solving under the data's own noise was refused too often: X is at the edge of what the
     /// motions determine.
     Unstable {
@@ -143,6 +154,16 @@ impl fmt::Display for Degeneracy {
                 },
                 *setup,
             )),
+            Self::MethodUndetermined {
+                method,
+                rotation_deg,
+                translation,
+            } => write!(
+                f,
+                "{method} does not determine X from these motions under their own noise, but the motions do: \
+                 `andreff` determines X from them (one-sigma {rotation_deg:.2}° and {translation:.3e} in the input's \
+                 length unit); use `--method andreff` (`method=\"andreff\"` in Python), or another method"
+            ),
             Self::Unstable { refused, tried } => write!(
                 f,
                 "{refused} of {tried} re-solves under the data's own noise were refused: X is at the edge of what these motions determine; add motions with larger rotations about different axes"

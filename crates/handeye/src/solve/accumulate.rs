@@ -475,6 +475,8 @@ pub(crate) struct PairSums {
     centred: Vec<PoseParts>,
     /// Σ_{i<j} ‖t_a‖² + ‖t_b‖².
     pub(crate) length_squares: f64,
+    /// Σ_{i<j} ‖t_b‖², the camera motions' share.
+    pub(crate) camera_length_squares: f64,
 }
 
 /// A 4×3 matrix.
@@ -501,7 +503,7 @@ impl PairSums {
             .sum::<Vector3<f64>>()
             / n;
         let mut poses = PoseAccumulator::new(Setup::EyeInHand);
-        let mut spread = 0.0;
+        let (mut spread, mut camera_spread) = (0.0, 0.0);
         let centred: Vec<PoseParts> = hand
             .iter()
             .zip(camera)
@@ -510,7 +512,9 @@ impl PairSums {
                 let p = q.translation.vector - p_mean;
                 // The target frame moved by −ō: c ← c − S ō, so that o = Sᵀc ← o − ō.
                 let cv = c.translation.vector - s * o_mean;
-                spread += p.norm_squared() + (s.transpose() * cv).norm_squared();
+                let o = (s.transpose() * cv).norm_squared();
+                spread += p.norm_squared() + o;
+                camera_spread += o;
                 poses.add(&PosePair {
                     base_from_gripper: transform_from_parts(&r, &p),
                     camera_from_target: transform_from_parts(&s, &cv),
@@ -523,6 +527,7 @@ impl PairSums {
             quadratic: OnceLock::new(),
             centred,
             length_squares: n * spread,
+            camera_length_squares: n * camera_spread,
         }
     }
 

@@ -37,9 +37,9 @@ pub fn andreff_joint(motions: &(impl MotionSource + ?Sized)) -> Result<Calibrati
     // Eq. (10) stacks rotation rows (entries of order 1) on translation rows (entries of the
     // order of the data's lengths, in the input's unit): in kilometres or micrometres its normal
     // equations lose the smaller block entirely (X 1e-2 off at lengths ×1e8, t_x 100 % off at
-    // ×1e-8, on exact data). Within 2^5 of the input's unit it is solved as OpenCV solves it;
-    // beyond, in units that keep the two blocks within 2^5 of each other, and t_x scaled back
-    // (see `weighting_unit`).
+    // ×1e-8, on exact data), and on noisy data the answer depends on the unit. It is solved in
+    // units of the data's own RMS length, where both blocks are of order 1 whatever the input's
+    // unit, and t_x scaled back (see `weighting_unit`).
     let unit = weighting_unit(motions);
     let scaled = Scaled::new(motions, unit);
     // Eq. (10) has more solutions than X whenever the gripper translations are explained by

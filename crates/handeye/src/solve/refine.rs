@@ -100,7 +100,7 @@ fn run(
     check: MotionCheck,
     options: &RefineOptions,
 ) -> Refinement {
-    // Lengths are measured in the data's own unit (a power of two near its RMS translation): the
+    // Lengths are measured in the data's own unit (its RMS translation): the
     // tolerances below mix rotation (radians) with translation (the gradient's t entries carry
     // 1/length, the step size adds |t_x| to 1, the ΔT floor is a length), so in the input's unit
     // they would stop the solve early, or never, depending on whether the data is in kilometres

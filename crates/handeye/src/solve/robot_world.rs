@@ -249,8 +249,8 @@ pub(crate) fn kron9(m: &Matrix3<f64>, n: &Matrix3<f64>) -> SMatrix<f64, 9, 9> {
 /// `(R_A ⊗ I) vec R_X' − (I ⊗ R_Bᵀ) vec R_Z' = 0` (that is R_A R_X' = R_Z' R_B) and
 /// `R_Z' t_B − R_A t_X' + t_Z' = t_A`, stacked and solved in least squares; both rotations are then
 /// normalised to unit determinant and projected onto SO(3), the translations kept as solved. The
-/// rows weigh rotations against lengths as OpenCV does, in the input's unit (within 2⁵ of the
-/// data's own scale; beyond, as the hand–eye `andreff-joint` does).
+/// rows weigh rotations against lengths in units of the data's own RMS translation length (as the
+/// hand–eye `andreff-joint` does), so that the answer does not depend on the input's unit.
 ///
 /// Refused with [`Degeneracy::NoTranslation`] when the solved rotations have (near) zero
 /// determinant: the scale of the rotation block is fixed by the translations only.
@@ -280,7 +280,7 @@ pub(crate) fn kron9(m: &Matrix3<f64>, n: &Matrix3<f64>) -> SMatrix<f64, 9, 9> {
 /// ```
 pub fn li(poses: &[PosePair], setup: Setup) -> Result<RobotWorld> {
     let p = prepare(poses, setup)?;
-    let unit = weighting_from_scale(pose_length_scale(&p.ab));
+    let unit = weighting_from_scale(pose_rms(&p.ab));
     let i3 = Matrix3::identity();
     let rows = |(a, b): &(Transform, Transform)| {
         let r_a = rotation_matrix(a);
@@ -352,19 +352,19 @@ macro_rules! stacked_items {
 stacked_items!(least_squares_6, 3, 6);
 stacked_items!(least_squares_24, 12, 24);
 
-/// The data's length unit: the power of two nearest the RMS translation of the A_i and B_i (1 when
-/// all are 0).
+/// The data's length unit: the RMS translation of the A_i and B_i (1 when all are 0), so that the
+/// solution does not depend on the input's unit.
 fn pose_length_scale(ab: &[(Transform, Transform)]) -> f64 {
+    weighting_from_scale(pose_rms(ab))
+}
+
+/// The RMS translation length of the A_i and B_i.
+fn pose_rms(ab: &[(Transform, Transform)]) -> f64 {
     let sum: f64 = ab
         .iter()
         .map(|(a, b)| a.translation.vector.norm_squared() + b.translation.vector.norm_squared())
         .sum();
-    let rms = (sum / (2 * ab.len().max(1)) as f64).sqrt();
-    if !(rms.is_finite() && rms > 0.0) {
-        return 1.0;
-    }
-    let k = rms.log2().round().clamp(-1000.0, 1000.0) as i32;
-    2.0_f64.powi(k)
+    (sum / (2 * ab.len().max(1)) as f64).sqrt()
 }
 
 /// Solves with the given method (Refine runs [`refine_robot_world`]).

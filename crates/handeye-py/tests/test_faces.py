@@ -1,0 +1,193 @@
+"""One verdict in every face: every real and realistic pose set in testdata, every method, through
+the command line (`handeye calibrate --method M --pairs all`), Python's `calibrate(...,
+pairs="all")` and the OpenCV drop-in `calibrate_hand_eye(..., method=M, setup=...)` gives one
+decision (answer, warn, refuse), one X (to 1e-9), one sigma and the same words.
+
+The drop-in's OpenCV constant for Tsai is the command line's `--method tsai --tsai-opencv-filter`.
+The faces name poses in their own vocabulary (the command line `file:line`, Python `pose i`), and
+the drop-in words a misread input and swapped sizes in OpenCV's arguments; everything else is the
+same text.
+"""
+import json
+import os
+import pathlib
+import subprocess
+import warnings
+
+import cv2
+import numpy as np
+import pytest
+
+import handeye
+
+REPO = pathlib.Path(__file__).resolve().parents[3]
+TESTDATA = REPO / "testdata"
+CLI = REPO / os.environ.get("CARGO_TARGET_DIR", "target") / "release" / "handeye"
+
+#: handeye's methods; ("tsai", True) is OpenCV's Tsai (its motion filter).
+METHODS = [("andreff", False), ("tsai", False), ("tsai", True), ("park", False), ("horaud", False),
+           ("andreff-joint", False), ("daniilidis", False), ("refine", False)]
+
+
+def _sets():
+    """(id, CLI input arguments, read_recording keywords, setup) of every real and realistic set."""
+    sets = []
+    for path in sorted((TESTDATA / "kinhec" / "pairs").glob("*.jsonl")):
+        setup = "eye-to-hand" if "_eth_" in path.name else "eye-in-hand"
+        sets.append((f"kinhec/{path.stem}", [str(path)], {"path": str(path)}, setup))
+    for path in sorted((TESTDATA / "opencv").glob("*.jsonl")):
+        setup = "eye-to-hand" if "eye-to-hand" in path.name else "eye-in-hand"
+        sets.append((f"opencv/{path.stem}", [str(path)], {"path": str(path)}, setup))
+    camodocal = TESTDATA / "real" / "camodocal" / "TransformPairsInput.yml"
+    sets.append(("real/camodocal", [str(camodocal)], {"path": str(camodocal)}, "eye-in-hand"))
+    for name in ("robot_arm_sim", "prime_sense_1"):
+        robot, camera = (TESTDATA / "real" / "ethz-asl" / f"{name}_{s}.csv" for s in ("B_H", "W_E"))
+        sets.append((f"real/ethz-asl/{name}", ["--robot", str(robot), "--camera", str(camera)],
+                     {"robot": str(robot), "camera": str(camera)}, "eye-in-hand"))
+    for readme in sorted((TESTDATA / "peers").glob("*/README.md")) if (TESTDATA / "peers").exists() else []:
+        for path in sorted(readme.parent.glob("*.jsonl")):
+            setup = "eye-to-hand" if "eye-to-hand" in path.name or "_eth" in path.name else "eye-in-hand"
+            sets.append((f"peers/{readme.parent.name}/{path.stem}", [str(path)], {"path": str(path)}, setup))
+    return sets
+
+
+SETS = _sets()
+
+
+def _cli(args, setup, method, opencv_filter):
+    """The command line's decision: ("answer", report) or ("refuse", message)."""
+    assert CLI.exists(), f"build the command line first ({CLI}): cargo build --release"
+    extra = ["--tsai-opencv-filter"] if opencv_filter else []
+    out = subprocess.run([str(CLI), "calibrate", *args, "--setup", setup, "--method", method, "--pairs", "all",
+                          *extra, "--output", "json"], capture_output=True, text=True)
+    if out.returncode == 0:
+        return "answer", json.loads(out.stdout)
+    assert out.returncode in (2, 3), out.stderr
+    lines = [l for l in out.stderr.splitlines() if l.startswith("error: ")]
+    assert lines, out.stderr
+    return "refuse", lines[-1][len("error: "):]
+
+
+def _python(g, c, setup, method, opencv_filter):
+    try:
+        return "answer", handeye.calibrate(g, c, method=method, setup=setup, pairs="all",
+                                           tsai_opencv_filter=opencv_filter)
+    except ValueError as e:
+        return "refuse", str(e)
+
+
+def _drop_in(g, c, setup, method, opencv_filter):
+    """The drop-in on OpenCV's arguments: gripper2base (base2gripper for a fixed camera) and target2cam."""
+    robot = g if setup == "eye-in-hand" else np.linalg.inv(g)
+    code = {v: k for k, v in handeye.METHODS.items()}["tsai"] if opencv_filter else method
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        try:
+            r, t = handeye.calibrate_hand_eye(list(robot[:, :3, :3]), list(robot[:, :3, 3]), list(c[:, :3, :3]),
+                                              list(c[:, :3, 3]), method=code, setup=setup)
+        except ValueError as e:
+            return "refuse", str(e)
+    assert all(w.category is UserWarning for w in said), said
+    x = np.eye(4)
+    x[:3, :3], x[:3, 3] = r, t.ravel()
+    return "answer", (x, [str(w.message) for w in said])
+
+
+#: The poses' names differ by face: the command line's `file:line` (or `file at t = ...`), Python's `pose i`.
+def _unnamed(text):
+    import re
+
+    text = re.sub(r"\S+\.(jsonl|yml|csv)(:\d+| at t = [\d.]+ s)", "POSE", text)
+    return re.sub(r"pose \d+", "POSE", text)
+
+
+def _close(a, b, what):
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    assert a.shape == b.shape and np.allclose(a, b, rtol=1e-9, atol=1e-9), f"{what}: {a} != {b}"
+
+
+@pytest.mark.parametrize("name, args, source, setup", SETS, ids=[s[0] for s in SETS])
+def test_every_face_gives_one_verdict(name, args, source, setup):
+    read = handeye.read_recording(**source, setup=setup)
+    g, c = read["base_from_gripper"], read["camera_from_target"]
+    for method, opencv_filter in METHODS:
+        what = f"{name} {method}{' (OpenCV filter)' if opencv_filter else ''}"
+        cli, py, drop = (_cli(args, setup, method, opencv_filter), _python(g, c, setup, method, opencv_filter),
+                         _drop_in(g, c, setup, method, opencv_filter))
+        assert cli[0] == py[0] == drop[0], f"{what}: CLI {cli[0]}, Python {py[0]}, drop-in {drop[0]}: {cli[1] if cli[0] == 'refuse' else py[1] if py[0] == 'refuse' else drop[1]}"
+        if cli[0] == "refuse":
+            assert _unnamed(cli[1]) == _unnamed(py[1]), f"{what}: the refusal's words"
+            if "misread" not in py[1]:
+                assert _unnamed(drop[1]) == _unnamed(py[1]), f"{what}: the drop-in's refusal"
+            continue
+        report, ours = cli[1], py[1]
+        x, said = drop[1]
+        assert report["verdict"] == ours["verdict"], what
+        _close(report["matrix"], ours["matrix"], f"{what}: X, CLI and Python")
+        _close(report["matrix"], x, f"{what}: X, CLI and drop-in")
+        for key in ("rotation_deg", "translation"):
+            _close(report["uncertainty"][key], ours["uncertainty"][key], f"{what}: sigma {key}")
+        # The drop-in warns exactly where the command line warns, with its words (its own for
+        # the sizes that fit another setup, and the Python remedy for outliers).
+        assert (len(said) > 0) == (report["verdict"] == "questionable"), f"{what}: {said}"
+        assert len(said) == len(report["warnings"]) == len(ours["warnings"]), f"{what}: {said} / {report['warnings']}"
+        for cli_w, py_w, text in zip(report["warnings"], ours["warnings"], said):
+            assert cli_w["code"] == py_w["code"], what
+            assert _unnamed(cli_w["message"]) == _unnamed(py_w["message"]), f"{what}: {cli_w['code']}"
+            if cli_w["code"] != "swapped_sizes":
+                assert _unnamed(text).startswith(_unnamed(py_w["message"])), f"{what}: {text!r} / {py_w['message']!r}"
+
+
+def _camera_rms(c):
+    """The RMS translation of the camera motions over every pair of poses (the unit handeye weighs
+    Daniilidis' and andreff-joint's rows in)."""
+    o = np.array([m[:3, :3].T @ m[:3, 3] for m in c])
+    d = o[:, None, :] - o[None, :, :]
+    n = len(o)
+    return np.sqrt((d ** 2).sum() / 2 / (n * (n - 1) / 2))
+
+
+@pytest.mark.parametrize("path", sorted((TESTDATA / "opencv").glob("*noisy*.jsonl")), ids=lambda p: p.stem)
+def test_the_weighted_solvers_give_opencvs_answer_in_the_datas_own_unit(path):
+    # OpenCV weighs rotation rows against translation rows in the input's unit, handeye in the
+    # camera motions' RMS length L (so that metres and millimetres give one X): handeye on the
+    # data is OpenCV on the data in units of L, its translation times L.
+    rows = [json.loads(l) for l in path.read_text().splitlines() if l.strip()]
+    g = np.array([r["base_from_gripper"] for r in rows], dtype=np.float64)
+    c = np.array([r["camera_from_target"] for r in rows], dtype=np.float64)
+    if "eye-to-hand" in path.name:
+        g = np.linalg.inv(g)
+    unit = _camera_rms(c)
+    args = (list(g[:, :3, :3]), list(g[:, :3, 3]), list(c[:, :3, :3]), list(c[:, :3, 3]))
+    scaled = (args[0], [t / unit for t in args[1]], args[2], [t / unit for t in args[3]])
+    for name, code in (("andreff-joint", cv2.CALIB_HAND_EYE_ANDREFF), ("daniilidis", cv2.CALIB_HAND_EYE_DANIILIDIS)):
+        r_cv, t_cv = cv2.calibrateHandEye(*scaled, method=code)
+        plain = (args[0], args[1], args[2], args[3])
+        import handeye._handeye as native
+
+        x = native.solve_x(g, c, method=name, pairs="all")
+        assert np.abs(x[:3, :3] - r_cv).max() <= 1e-6, name
+        assert np.abs(x[:3, 3] - t_cv.ravel() * unit).max() <= 1e-6 * unit, name
+        r_in, _ = cv2.calibrateHandEye(*plain, method=code)
+        # And OpenCV's own answer in the input's unit is another one (the weighting matters here).
+        assert np.abs(r_in - r_cv).max() > 1e-6, name
+
+
+def test_millimetres_and_metres_give_one_x_in_every_face():
+    # A real recording (camodocal's, robot poses inverted as it stores them) in metres and in
+    # millimetres: the same X (its translation ×1000) and sigma by every method, where
+    # Daniilidis came out 26° apart.
+    read = handeye.read_recording(TESTDATA / "real" / "camodocal" / "TransformPairsInput.yml")
+    g, c = read["base_from_gripper"], read["camera_from_target"]
+    g = np.linalg.inv(g)
+    mm_g, mm_c = g.copy(), c.copy()
+    mm_g[:, :3, 3] *= 1000
+    mm_c[:, :3, 3] *= 1000
+    for method, _ in METHODS[:2] + METHODS[3:]:
+        m = handeye.calibrate(g, c, method=method, pairs="all")
+        mm = handeye.calibrate(mm_g, mm_c, method=method, pairs="all")
+        _close(m["matrix"][:3, :3], mm["matrix"][:3, :3], method)
+        _close(m["matrix"][:3, 3] * 1000, mm["matrix"][:3, 3], method)
+        assert m["uncertainty"]["rotation_deg"] == pytest.approx(mm["uncertainty"]["rotation_deg"], rel=1e-9)
+        assert m["uncertainty"]["translation"] * 1000 == pytest.approx(mm["uncertainty"]["translation"], rel=1e-9)
+        assert m["verdict"] == mm["verdict"], method
