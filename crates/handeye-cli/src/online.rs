@@ -1,5 +1,5 @@
-//! `handeye online`: the online calibrator on a stream, one JSON line per calibration (the
-//! paper's estimator) or per reported estimate and change (`--estimator accumulate`).
+//! `handeye online`: the online calibrator on a stream, one JSON line per reported estimate and
+//! change (the accumulating estimator, the default) or per calibration (`--estimator paper`).
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
