@@ -1,5 +1,5 @@
-//! `handeye online`: the online calibrator on a stream, one JSON line per calibration (the
-//! paper's estimator) or per reported estimate and change (`--estimator accumulate`).
+//! `handeye online`: the online calibrator on a stream, one JSON line per reported estimate and
+//! change (the accumulating estimator, the default) or per calibration (`--estimator paper`).
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -26,10 +26,12 @@ pub struct Args {
     /// conventional method).
     #[arg(long, default_value_t = Selection::Adaptive, value_parser = values::named::<Selection>())]
     selection: Selection,
-    /// Estimator: `paper` (Andreff on the two selected motions of each calibration) or
-    /// `accumulate` (every pair of poses since the last detected change of X, outliers held out,
-    /// reported on its own schedule: --every, --shrink, and at the end).
-    #[arg(long, default_value_t = Estimator::Paper, value_parser = values::named::<Estimator>())]
+    /// Estimator: `accumulate` (every pair of poses since the last detected change of X, outliers
+    /// held out, the readings checked, each estimate with its uncertainty, reported on its own
+    /// schedule: --every, --shrink, and at the end) or `paper` (the paper's method: Andreff on the
+    /// two selected motions of each calibration, no uncertainty; not published by --output
+    /// yaml|ros2|urdf).
+    #[arg(long, default_value_t = Estimator::Accumulate, value_parser = values::named::<Estimator>())]
     estimator: Estimator,
     /// With --estimator accumulate: report the estimate at least every N poses.
     #[arg(long, default_value_t = TrackOptions::default().every, value_parser = values::count(1, u64::MAX))]
@@ -98,9 +100,10 @@ pub struct Args {
     #[arg(long)]
     unfreeze: bool,
     /// Output: JSON Lines; a line for a person per calibration or estimate (`text`); or, at the
-    /// end of the stream, the last X as easy_handeye2's YAML, a `static_transform_publisher` line
-    /// and launch snippet (`ros2`) or a URDF `<joint>` (`urdf`) [default: text on a terminal,
-    /// JSON otherwise].
+    /// end of the stream, the last estimate (with its uncertainty: the accumulating estimator's
+    /// only) as easy_handeye2's YAML, a `static_transform_publisher` line and launch snippet
+    /// (`ros2`) or a URDF `<joint>` (`urdf`); exit 3 when the stream gave none, saying why
+    /// [default: text on a terminal, JSON otherwise].
     #[arg(long, value_parser = values::named::<Face>())]
     output: Option<Face>,
     /// The parent frame of X in the yaml, ros2 and urdf outputs [default: the recording's gripper
@@ -192,6 +195,11 @@ pub fn run(args: Args) -> Result<()> {
     }
     let accumulate = config.estimator == Estimator::Accumulate;
     let face = Face::chosen(args.output);
+    let publish = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
+    // Only an X with an uncertainty, from checked readings, is published.
+    if publish {
+        config.estimator.publishable()?;
+    }
     // The frame names and the name are checked before the input is read.
     let frames = faces::frames(
         &args.input,
@@ -325,20 +333,13 @@ pub fn run(args: Args) -> Result<()> {
         crate::report::write_online(path, &trace, &summary)?;
         eprintln!("wrote {}", path.display());
     }
-    if matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf) {
-        let (x, source) = match (&last, calibrator.last_x()) {
-            (Some(r), _) => (r.estimate.x, format!("online, estimate {}", r.number)),
-            (None, Some(x)) if !accumulate => (
-                x,
-                format!("online, calibration {}", calibrator.calibrations()),
-            ),
-            _ => {
-                return Err(handeye::Error::TooFewMotions {
-                    got: calibrator.calibrations(),
-                    need: 1,
-                }
-                .into());
+    if publish {
+        let Some(report) = &last else {
+            return Err(handeye::Error::NoEstimate {
+                poses: calibrator.poses(),
+                why: no_estimate(&calibrator),
             }
+            .into());
         };
         // In metres whatever the input.
         let unit = faces::ros_unit(match calibrator.unit() {
@@ -346,6 +347,20 @@ pub fn run(args: Args) -> Result<()> {
             Unit::Metre => Some(Unit::Metre),
             Unit::Auto | Unit::AsGiven => pose_unit,
         });
+        let e = &report.estimate;
+        let (scale, unit_name) = match unit {
+            Some(Unit::Millimetre) => (1e-3, " m"),
+            Some(_) => (1.0, " m"),
+            None => (1.0, " (input unit)"),
+        };
+        let x = e.x;
+        let source = format!(
+            "online, estimate {} from {} poses, uncertainty (one sigma) {:.4}° / {:.6}{unit_name}",
+            report.number,
+            e.poses,
+            e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
+            e.uncertainty_translation.unwrap_or(f64::NAN) * scale,
+        );
         let published = Published {
             x: &x,
             frame: setup.x_frame(),
@@ -617,8 +632,16 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
                 e.uncertainty_translation.unwrap_or(f64::NAN)
             )
         }
-        (None, Some(why)) => format!("no estimate from {counts}: {why}"),
-        (None, None) => format!("no estimate from {counts}"),
+        (None, _) => format!("no estimate from {counts}: {}", no_estimate(calibrator)),
+    }
+}
+
+/// Why the accumulating estimator reported no estimate.
+fn no_estimate(calibrator: &OnlineCalibrator) -> String {
+    match calibrator.pending() {
+        Some(why) => why.to_string(),
+        None if calibrator.poses() == 0 => "the input gave no pose".to_string(),
+        None => "no estimate was determined".to_string(),
     }
 }
 

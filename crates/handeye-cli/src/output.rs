@@ -37,7 +37,8 @@ pub fn exit_code(e: &anyhow::Error) -> u8 {
             Error::Degenerate { .. }
             | Error::TooFewMotions { .. }
             | Error::Misread { .. }
-            | Error::Untrusted { .. },
+            | Error::Untrusted { .. }
+            | Error::NoEstimate { .. },
         ) => DEGENERATE,
         Some(_) => BAD_INPUT,
         None => 1,

@@ -334,6 +334,8 @@ fn online_reproduces_the_paper_fixture_from_stdin() {
             .args([
                 "online",
                 "-",
+                "--estimator",
+                "paper",
                 "--selection",
                 selection,
                 "--error-source",
@@ -574,14 +576,23 @@ fn online_infers_the_unit_and_refuses_to_guess() {
     };
     let mm = write("mm.jsonl", 1.0);
     let m = write("m.jsonl", 1e-3);
-    let (code, by_mm, err) = run(handeye().args(["online", mm.to_str().unwrap()]));
+    let (code, by_mm, err) =
+        run(handeye().args(["online", mm.to_str().unwrap(), "--estimator", "paper"]));
     assert_eq!(code, 0, "{err}");
     assert!(
         err.contains("millimetres") && err.contains("d_max = 100"),
         "{err}"
     );
-    let (_, given, _) = run(handeye().args(["online", mm.to_str().unwrap(), "--d-max", "100"]));
-    let (code, by_m, err) = run(handeye().args(["online", m.to_str().unwrap()]));
+    let (_, given, _) = run(handeye().args([
+        "online",
+        mm.to_str().unwrap(),
+        "--d-max",
+        "100",
+        "--estimator",
+        "paper",
+    ]));
+    let (code, by_m, err) =
+        run(handeye().args(["online", m.to_str().unwrap(), "--estimator", "paper"]));
     assert_eq!(code, 0, "{err}");
     assert!(
         err.contains("metres") && err.contains("d_max = 0.1"),
@@ -609,10 +620,12 @@ fn online_infers_the_unit_and_refuses_to_guess() {
 fn online_with_the_papers_estimator_warns_about_misread_and_degenerate_input() {
     let kinhec = testdata("kinhec");
     let warnings = |file: &str, setup: &str| {
-        let (code, _, err) = run(handeye()
-            .arg("online")
-            .arg(kinhec.join(file))
-            .args(["--setup", setup]));
+        let (code, _, err) = run(handeye().arg("online").arg(kinhec.join(file)).args([
+            "--setup",
+            setup,
+            "--estimator",
+            "paper",
+        ]));
         assert_eq!(code, 0, "{err}");
         err.lines()
             .filter(|l| l.starts_with("warning:"))

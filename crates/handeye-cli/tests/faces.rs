@@ -546,6 +546,15 @@ fn online_writes_its_last_x_for_ros_and_a_line_per_calibration_for_a_person() {
             "--child-frame",
             "cam",
         ]);
+        // The paper's calibrations carry no uncertainty: they are not published (issue 33).
+        if estimator == "paper" {
+            assert_eq!(code, 2, "{err}");
+            assert!(
+                urdf.is_empty() && err.contains("--estimator accumulate"),
+                "{err}"
+            );
+            continue;
+        }
         assert_eq!(code, 0, "{err}");
         assert!(
             err.contains("translation converted from millimetres to metres for ROS"),

@@ -171,11 +171,11 @@ fn a_storage_file_and_its_directory_give_the_same_result() {
 
 #[test]
 fn online_replays_a_recording_as_a_stream() {
-    // Noise-free: every conventional calibration is exact.
+    // Noise-free: every conventional calibration of the paper's estimator is exact.
     let path = bag("eih_tf_mcap").display().to_string();
     let mut a = vec!["online"];
     a.extend(args(&path, &["--target-frame", "board"], "eye-in-hand"));
-    a.extend(["--selection", "none"]);
+    a.extend(["--selection", "none", "--estimator", "paper"]);
     let (code, out, err) = run(&a);
     assert_eq!(code, 0, "{err}");
     let events: Vec<Value> = out

@@ -3,6 +3,7 @@
 
 pub mod holdout;
 pub mod outliers;
+pub mod precision;
 pub mod quality;
 pub mod readings;
 pub mod stream;

@@ -17,6 +17,7 @@
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::check::precision::resolution;
 use crate::model::motion::{MotionFeatures, MotionPair, PosePair, Setup};
 use crate::model::pose::{Transform, axis_angle, exp_so3, proj_so3, transform_from_parts};
 use crate::solve::residual::PoseResidual;
@@ -68,15 +69,16 @@ impl PoseOutliers {
 ///
 /// Each pose is compared with up to 32 partners spread over the sequence (O(n) work). A pose is
 /// an outlier when its median angle gap is above `max(min_angle_gap_deg, 6 × typical)` or its
-/// median pitch gap above `6 × typical` (typical: the median over all poses, floored at 1e-9 of the
-/// motions' translation scale so that noise-free data has no outliers).
+/// median pitch gap above `6 × typical` (typical: the median over all poses, floored at the data's
+/// numerical precision, [`crate::check::precision::resolution`] of the motions' translation scale,
+/// so that noise-free data has no outliers).
 pub fn pose_outliers(poses: &[PosePair], setup: Setup, min_angle_gap_deg: f64) -> PoseOutliers {
     let gaps = pose_gaps(poses, setup);
     let typical_angle = median(gaps.iter().map(|g| g.angle_gap_deg).collect());
     let typical_pitch = median(gaps.iter().map(|g| g.pitch_gap).collect());
     let scale = translation_scale(poses, setup);
     let angle_threshold_deg = (OUTLIER_FACTOR * typical_angle).max(min_angle_gap_deg);
-    let pitch_threshold = OUTLIER_FACTOR * typical_pitch.max(1e-9 * scale);
+    let pitch_threshold = OUTLIER_FACTOR * typical_pitch.max(resolution(scale));
     PoseOutliers {
         poses: gaps
             .into_iter()

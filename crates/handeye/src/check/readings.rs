@@ -34,6 +34,13 @@ const UNIT_RATIO: f64 = 30.0;
 /// the reading). The realistic suite measures ≤ 6.5e-6 for one joint or parallel axes, ≥ 1.8e-2
 /// otherwise.
 pub const DEGENERATE_SCATTER: f64 = 1e-4;
+/// Below this turn of the gripper (degrees, the widest rotation from the first pose) the poses
+/// are a robot standing still, whose residuals are the sensors' noise: the ratio of that noise to
+/// the motion range says nothing about how the input is read, and no reading is judged. The
+/// accumulating estimator reports nothing below it either ([`crate::track`]'s "no rotation
+/// above 2° yet"). Issue 32: the ethz-asl simulation starts with about 100 poses of a still robot
+/// (0.003°) and a jittering camera, which fit "far better" with the camera in millimetres.
+pub const LEAST_TURN_DEG: f64 = 2.0;
 /// The as-given reading is questioned only when its median rotation residual is above this
 /// (degrees) …
 const POOR_ROTATION_DEG: f64 = 0.5;
@@ -235,9 +242,11 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         also: Vec::new(),
     };
     let rotations = gripper_rotations(&sample, setup);
-    // Below DEGENERATE_SCATTER, and when every rotation is below about REFUSE_ANGLE (where no
-    // solver answers), the rotations leave X free: no reading can be judged.
-    if rotations.scatter < DEGENERATE_SCATTER || rotations.widest_from_first < REFUSE_ANGLE {
+    // Below DEGENERATE_SCATTER the rotations leave X free, and below LEAST_TURN_DEG the gripper
+    // stood still (the residuals are noise, whatever the reading): no reading can be judged.
+    if rotations.scatter < DEGENERATE_SCATTER
+        || rotations.widest_from_first < LEAST_TURN_DEG.to_radians().max(REFUSE_ANGLE)
+    {
         return none(None);
     }
     let Some(given) = fit(&sample, setup, Reading::AsGiven) else {

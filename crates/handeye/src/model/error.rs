@@ -240,6 +240,14 @@ pub enum Error {
         /// What the input shows: the warnings that explain the refusal, each with its remedy.
         why: Vec<Warning>,
     },
+    /// A stream ended without an X to publish, and why (what the estimator was waiting for).
+    #[error("no X to publish from {poses} pose(s): {why}")]
+    NoEstimate {
+        /// Poses read.
+        poses: usize,
+        /// Why there is no estimate, in words.
+        why: String,
+    },
     /// Malformed input data, with its place.
     #[error("{file}:{line}: field `{field}`: {message}")]
     Parse {

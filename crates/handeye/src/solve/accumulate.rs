@@ -197,6 +197,13 @@ impl PoseAccumulator {
         (self.pp / n - (self.p / n).norm_squared()).max(0.0).sqrt()
     }
 
+    /// The RMS size of the translations the scatter's sums hold (the camera's distance from the
+    /// target and the hand positions, ‖c_k‖² + ‖w_k‖²), input units: what the precision of
+    /// [`Self::residual_scatter`]'s translation is relative to.
+    pub fn translation_magnitude(&self) -> f64 {
+        (self.cc_ww / self.n.max(1) as f64).sqrt()
+    }
+
     /// RMS distance of the camera from the target, input units.
     pub fn viewing_distance(&self) -> f64 {
         (self.cc / self.n.max(1) as f64).sqrt()

@@ -182,6 +182,10 @@ pub enum Pending {
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         other_setup: bool,
     },
+    /// The readings of the input (inverted poses, quaternion order, units) could not be checked
+    /// yet: the poses so far are a gripper standing still or turning about one axis. Nothing is
+    /// reported before they are.
+    ReadingsUnchecked,
     /// An estimate exists but its uncertainty is above the bound.
     Undetermined {
         /// Rotation uncertainty, degrees (`None`: too few poses for the split-half estimate).
@@ -215,6 +219,10 @@ impl fmt::Display for Pending {
             Self::ParallelAxes => write!(
                 f,
                 "all rotation axes parallel so far: rotate the gripper about another axis"
+            ),
+            Self::ReadingsUnchecked => write!(
+                f,
+                "the readings of the input (pose directions, quaternion order, units) are not checked yet: the poses sampled so far turn the gripper less than 2° or about one axis only; turn it about other axes"
             ),
             Self::Misread {
                 reading,

@@ -38,12 +38,13 @@ use std::collections::VecDeque;
 use serde::{Deserialize, Serialize};
 
 use crate::check::outliers::{OUTLIER_FACTOR, median_in, pose_outliers, screw_gaps};
+use crate::check::precision::resolution;
 use crate::check::readings::check_readings;
 use crate::check::uncertainty::{UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION};
 use crate::model::findings::Reading;
 use crate::model::findings::Written;
 use crate::model::motion::{PosePair, Setup};
-use crate::model::pose::rotation_angle_between;
+use crate::model::pose::{axis_angle, rotation_angle_between};
 
 pub use events::{Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate};
 #[cfg(feature = "internals")]
@@ -108,8 +109,17 @@ const REFRESH_ALWAYS: usize = 200;
 /// have come, the gate having learned its typical gaps by then (it lets the very first poses
 /// through untested): at 16, 64 and 256 poses, each time over all of them.
 const WARMUP: [usize; 3] = [16, 64, 256];
+/// Poses kept for checking the readings after the first ones could not be judged (a robot
+/// standing still, or turning about one axis): a sample thinned by half, its stride doubled, each
+/// time it fills, and checked then (constant memory, a check every doubling of the stream).
+const READINGS_SAMPLE: usize = 128;
 /// A challenger unconfirmed after this many times `confirm_poses` poses is dropped.
 const CHALLENGER_LIFE: usize = 10;
+
+/// Saved states from before `readings_judged` had their readings judged by the rule then.
+fn judged_before() -> bool {
+    true
+}
 
 /// The case for a change: a second segment since the first elevated pose.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -140,6 +150,14 @@ pub struct Tracker {
     /// unlikely (both poses inverted fit as well).
     misread: Option<(Reading, bool)>,
     implausible: bool,
+    /// Whether a check of the readings could judge them (the gripper turned, about more than one
+    /// axis): nothing is reported before (a saved state from before this field was judged).
+    #[serde(default = "judged_before")]
+    readings_judged: bool,
+    /// After the first poses, until the readings are judged: a thinned sample of the accepted
+    /// poses and its stride.
+    #[serde(default)]
+    readings_sample: Option<(Vec<PosePair>, usize)>,
     /// The poses held out in a row by the screw gate, with their numbers.
     screw_run: Vec<(usize, PosePair)>,
     /// Pose number and uncertainties of the last report of this segment.
@@ -164,6 +182,8 @@ impl Tracker {
             warmup: Some(Vec::new()),
             misread: None,
             implausible: false,
+            readings_judged: false,
+            readings_sample: None,
             screw_run: Vec::with_capacity(STALE_RUN),
             last_report: None,
             reports: 0,
@@ -208,6 +228,7 @@ impl Tracker {
         }
         self.incumbent
             .pending(self.estimate().as_ref(), &self.options)
+            .or((!self.readings_judged).then_some(Pending::ReadingsUnchecked))
     }
 
     /// Takes the next pose (module documentation).
@@ -241,7 +262,7 @@ impl Tracker {
         if step.change.is_none()
             && (self.incumbent.all.poses() < REFRESH_ALWAYS || self.poses.is_multiple_of(10))
         {
-            self.current = self.incumbent.refresh();
+            self.current = self.incumbent.refresh(&self.options);
         }
         step.report = self.report_due().map(|reason| self.report(reason));
         step
@@ -275,7 +296,23 @@ impl Tracker {
     /// reporting bounds but below the batch refusal's (10°, half the scene). `None` when there is
     /// no estimate or it is not determined at all ([`Tracker::pending`] says why).
     pub fn finish(&mut self) -> Option<Report> {
-        self.current = self.incumbent.refresh();
+        // A stream too short for the checks of the readings so far: they run on what came.
+        if !self.readings_judged {
+            let poses: Vec<PosePair> = match (&self.warmup, &self.readings_sample) {
+                (Some(w), _) => w.iter().map(|(_, p)| *p).collect(),
+                (None, Some((sample, _))) => sample.clone(),
+                (None, None) => Vec::new(),
+            };
+            if poses.len() >= WARMUP[0] {
+                self.judge_readings(&poses);
+            }
+        }
+        // Nothing from readings never checked ([`Tracker::pending`] says so).
+        if !self.readings_judged {
+            self.current = self.incumbent.refresh(&self.options);
+            return None;
+        }
+        self.current = self.incumbent.refresh(&self.options);
         if self.last_report.is_some_and(|(p, _, _)| p == self.poses) {
             return None;
         }
@@ -306,6 +343,7 @@ impl Tracker {
     fn add(&mut self, pose: &PosePair, number: usize) -> Vec<(usize, HeldOut)> {
         self.incumbent.add(pose);
         let Some(warmup) = &mut self.warmup else {
+            self.sample_readings(pose);
             return Vec::new();
         };
         warmup.push((number, *pose));
@@ -322,11 +360,12 @@ impl Tracker {
             .filter(|i| found.poses.iter().all(|g| g.pose != *i))
             .map(|i| poses[i])
             .collect();
-        let readings = check_readings(&kept, self.setup, Written::NAMED);
-        if readings.as_given.is_some() {
-            let other_setup = readings.other_setup(self.setup);
-            self.misread = readings.better.map(|b| (b.reading, other_setup));
-            self.implausible = readings.size_warning(self.setup).is_some();
+        self.judge_readings(&kept);
+        if last && !self.readings_judged {
+            // Not judged by the first poses: a thinned sample of them, and of those to come.
+            let stride = kept.len().div_ceil(READINGS_SAMPLE / 2).max(1);
+            let sample = kept.iter().step_by(stride).copied().collect();
+            self.readings_sample = Some((sample, stride));
         }
         let mut held = Vec::new();
         if !found.poses.is_empty() {
@@ -355,12 +394,53 @@ impl Tracker {
             });
             self.incumbent = segment;
             self.held_out += held.len();
-            self.current = self.incumbent.refresh();
+            self.current = self.incumbent.refresh(&self.options);
         }
         if !last {
             self.warmup = Some(warmup);
         }
         held
+    }
+
+    /// The batch's check of the readings on `poses`: what it finds stands when it could judge them
+    /// (an input read wrongly is reported as such, and nothing else is reported from it).
+    fn judge_readings(&mut self, poses: &[PosePair]) {
+        let readings = check_readings(poses, self.setup, Written::NAMED);
+        if readings.as_given.is_some() {
+            let other_setup = readings.other_setup(self.setup);
+            self.misread = readings.better.map(|b| (b.reading, other_setup));
+            self.implausible = readings.size_warning(self.setup).is_some();
+            self.readings_judged = true;
+            self.readings_sample = None;
+        }
+    }
+
+    /// Keeps every stride-th accepted pose for the check of the readings while they are not
+    /// judged; checks, thins by half and doubles the stride when the sample is full.
+    fn sample_readings(&mut self, pose: &PosePair) {
+        let Some((sample, stride)) = &mut self.readings_sample else {
+            return;
+        };
+        if !self.incumbent.all.poses().is_multiple_of(*stride) {
+            return;
+        }
+        sample.push(*pose);
+        if sample.len() < READINGS_SAMPLE {
+            return;
+        }
+        let poses = std::mem::take(sample);
+        let kept: Vec<PosePair> = {
+            let found = pose_outliers(&poses, self.setup, self.options.outlier_deg).indices();
+            (0..poses.len())
+                .filter(|i| !found.contains(i))
+                .map(|i| poses[i])
+                .collect()
+        };
+        self.judge_readings(&kept);
+        if let Some((sample, stride)) = &mut self.readings_sample {
+            *sample = poses.into_iter().step_by(2).collect();
+            *stride *= 2;
+        }
     }
 
     /// The pose's own disagreement with the current (X, Y): rotation (radians) and translation.
@@ -372,22 +452,23 @@ impl Tracker {
         } = self.current?;
         let y_k = self.setup.hand_pose(&pose.base_from_gripper) * e.x * pose.camera_from_target;
         let d = scatter.y.inverse() * y_k;
-        Some([d.rotation.angle(), d.translation.vector.norm()])
+        // The angle from atan2 (accurate to ε near the identity, where an arccosine is not).
+        Some([axis_angle(d.rotation.matrix()).0, d.translation.vector.norm()])
     }
 
     /// The typical residual: the RMS scatter of the accepted poses under the current estimate
-    /// (the screw gate keeps gross outliers out of it).
+    /// (the screw gate keeps gross outliers out of it), floored at the data's numerical precision
+    /// ([`crate::check::precision`]): the scatter comes from running sums of translations of the
+    /// size of the camera's distance, the hand positions and X's translation, and resolves no
+    /// finer than √(64 ε) of them. On exact data the residuals are rounding, below the floor: no pose
+    /// is elevated, none held out.
     fn typical_scale(&self) -> Option<[f64; 2]> {
         let Snapshot {
             estimate: e,
             scatter,
             ..
         } = self.current?;
-        let scale = e.target.translation.vector.norm().max(1.0);
-        Some([
-            scatter.rotation.max(1e-12),
-            scatter.translation.max(1e-12 * scale),
-        ])
+        Some(self.incumbent.noise_unit(&scatter, &e.x))
     }
 
     /// The residual statistic of a pose, the larger of its rotation and translation ratios to the
@@ -407,6 +488,7 @@ impl Tracker {
     }
 
     fn feed_challenger(&mut self, pose: &PosePair, s: f64, number: usize) {
+        let options = self.options;
         let elevated = s > self.options.elevated;
         if elevated && self.challenger.is_none() {
             self.challenger = Some(Challenger {
@@ -419,7 +501,7 @@ impl Tracker {
         }
         if let Some(c) = &mut self.challenger {
             c.segment.add(pose);
-            c.current = c.segment.refresh();
+            c.current = c.segment.refresh(&options);
             c.poses += 1;
             c.elevated += usize::from(elevated);
         }
@@ -500,7 +582,7 @@ impl Tracker {
             let (typical_angle, typical_pitch) = (typical(0), typical(1));
             let angle_limit = (OUTLIER_FACTOR * typical_angle).max(self.options.outlier_deg);
             let scale = pose.base_from_gripper.translation.vector.norm();
-            let pitch_limit = OUTLIER_FACTOR * typical_pitch.max(1e-9 * scale);
+            let pitch_limit = OUTLIER_FACTOR * typical_pitch.max(resolution(scale));
             if angle > angle_limit || pitch > pitch_limit {
                 self.screw_run.push((self.poses, *pose));
                 return Some(HeldOut::Screw {

@@ -4,6 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::{Pending, RobotWorldPair, TrackEstimate, TrackOptions};
+use crate::check::precision::{resolution, rotation_resolution};
+use crate::check::readings::LEAST_TURN_DEG;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, rotation_angle_between};
 use crate::solve::accumulate::{PoseAccumulator, RobotWorldAccumulator, Scatter};
@@ -32,6 +34,13 @@ pub(super) struct Segment {
     /// Earlier estimates (pose count, X), each at 1.5 times the count of the one before, those of
     /// at least a quarter of the poses now.
     pub(super) checkpoints: Vec<(usize, Transform)>,
+    /// The local uncertainty of each checkpoint's estimate (rotation in degrees, translation), in
+    /// the order of `checkpoints`, when it was above the reporting bounds: a checkpoint whose own
+    /// estimate was not determined (the poses before it stood still or turned about one axis)
+    /// differs from the estimate now by its own error, which is no drift. (Empty in a state saved
+    /// before it: every checkpoint counts as determined.)
+    #[serde(default)]
+    pub(super) checkpoint_local: Vec<Option<(f64, f64)>>,
 }
 
 impl Segment {
@@ -44,6 +53,7 @@ impl Segment {
             first: None,
             largest: 0.0,
             checkpoints: Vec::new(),
+            checkpoint_local: Vec::new(),
         }
     }
 
@@ -60,20 +70,31 @@ impl Segment {
 
     /// The segment's estimate now, kept as a checkpoint when its pose count has grown by half
     /// since the last one.
-    pub(super) fn refresh(&mut self) -> Option<Snapshot> {
+    pub(super) fn refresh(&mut self, options: &TrackOptions) -> Option<Snapshot> {
         let current = self.estimate();
         let n = self.all.poses();
         let due = self
             .checkpoints
             .last()
             .is_none_or(|(c, _)| 2 * n >= 3 * c && n >= c + 2);
-        if let Some(Snapshot { estimate: e, .. }) = current
+        if let Some(Snapshot {
+            estimate: e, local, ..
+        }) = current
             && due
             && n >= 6
         {
+            // (A state saved before the local uncertainties were kept: none for the old ones.)
+            self.checkpoint_local.resize(self.checkpoints.len(), None);
+            let bound = self.translation_bound(options);
+            let loose = local.filter(|(r, t)| *r > options.max_rotation_deg || *t > bound);
             self.checkpoints.push((n, e.x));
+            self.checkpoint_local.push(loose);
             // Those below n/4 are of no more use (constant memory: about four are kept).
-            self.checkpoints.retain(|(c, _)| 4 * c >= n);
+            let keep: Vec<bool> = self.checkpoints.iter().map(|(c, _)| 4 * c >= n).collect();
+            let mut k = keep.iter();
+            self.checkpoints.retain(|_| *k.next().unwrap_or(&true));
+            let mut k = keep.iter();
+            self.checkpoint_local.retain(|_| *k.next().unwrap_or(&true));
         }
         current
     }
@@ -83,16 +104,35 @@ impl Segment {
     /// more when the estimate still moves as the robot reaches new parts of the workspace (real
     /// data). The largest over those checkpoints (two or three), so that one lucky agreement
     /// does not pass for certainty.
-    pub(super) fn drift(&self, x: &Transform) -> Option<(f64, f64)> {
+    ///
+    /// The √(n/c − 1) is what independent errors give: σ_c² − σ_n² = σ_n²(n/c − 1) for the
+    /// difference of nested estimates. A checkpoint that was not determined when it was taken (its
+    /// local uncertainty u_c above the reporting bounds: the poses before it stood still or turned
+    /// about one axis) differs by its own error: the difference is then scaled by
+    /// √(u_c²/u_n² − 1), per part, when that is larger, so that it counts as drift only beyond
+    /// what X_c's own uncertainty explains.
+    pub(super) fn drift(&self, x: &Transform, local: Option<(f64, f64)>) -> Option<(f64, f64)> {
         let n = self.all.poses();
         self.checkpoints
             .iter()
-            .filter(|(c, _)| 2 * c <= n && 4 * c >= n)
-            .map(|(c, x_c)| {
-                let scale = ((n as f64 / *c as f64) - 1.0).max(1e-9).sqrt();
+            .enumerate()
+            .filter(|(_, (c, _))| 2 * c <= n && 4 * c >= n)
+            .map(|(k, (c, x_c))| {
+                let independent = (n as f64 / *c as f64) - 1.0;
+                let own = |part: fn(&(f64, f64)) -> f64| {
+                    let u_c = self.checkpoint_local.get(k).copied().flatten();
+                    match (u_c, local) {
+                        (Some(u_c), Some(u_n)) if part(&u_n) > 0.0 => {
+                            (part(&u_c) / part(&u_n)).powi(2) - 1.0
+                        }
+                        _ => 0.0,
+                    }
+                };
+                let scale_r = independent.max(own(|u| u.0)).max(1e-9).sqrt();
+                let scale_t = independent.max(own(|u| u.1)).max(1e-9).sqrt();
                 (
-                    rotation_angle_between(&x_c.rotation, &x.rotation).to_degrees() / scale,
-                    (x_c.translation.vector - x.translation.vector).norm() / scale,
+                    rotation_angle_between(&x_c.rotation, &x.rotation).to_degrees() / scale_r,
+                    (x_c.translation.vector - x.translation.vector).norm() / scale_t,
                 )
             })
             .reduce(|a, b| (a.0.max(b.0), a.1.max(b.1)))
@@ -112,19 +152,22 @@ impl Segment {
             )),
             _ => None,
         };
+        // At the noise unit: on exact data the scatter is rounding, or 0, which would make the
+        // information matrix infinite and leave the estimate without an uncertainty.
+        let [noise_rotation, noise_translation] = self.noise_unit(&scatter, &e.x);
         let linear = self
             .all
             .covariance(
                 &e.x,
-                scatter.rotation / 3f64.sqrt(),
-                scatter.translation / 3f64.sqrt(),
+                noise_rotation / 3f64.sqrt(),
+                noise_translation / 3f64.sqrt(),
             )
             .map(|c| {
                 let rotation = (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees();
                 (rotation, (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt())
             });
-        let drift = self.drift(&e.x);
         let local = split.zip(linear).map(|(a, b)| (a.0.max(b.0), a.1.max(b.1)));
+        let drift = self.drift(&e.x, local);
         let (ur, ut) = match (local, drift) {
             (Some(a), Some(b)) => (Some(a.0.max(b.0)), Some(a.1.max(b.1))),
             _ => (None, None),
@@ -150,6 +193,19 @@ impl Segment {
         })
     }
 
+    /// The noise unit of the poses under `x`: their RMS scatter (rotation in radians, translation
+    /// in input units), floored at the data's numerical precision ([`crate::check::precision`]).
+    /// The scatter comes from running sums of translations of the size of the camera's distance,
+    /// the hand positions and X's translation, and resolves no finer than √(64 ε) of them; on exact
+    /// data it is rounding, and a residual measured in it would mean nothing.
+    pub(super) fn noise_unit(&self, scatter: &Scatter, x: &Transform) -> [f64; 2] {
+        let magnitude = self.all.translation_magnitude() + x.translation.vector.norm();
+        [
+            scatter.rotation.max(rotation_resolution()),
+            scatter.translation.max(resolution(magnitude)),
+        ]
+    }
+
     /// The translation bound for `e`, input units.
     pub(super) fn translation_bound(&self, options: &TrackOptions) -> f64 {
         (options.max_translation * self.all.scene_scale())
@@ -167,7 +223,7 @@ impl Segment {
                 Pending::FewPoses {
                     poses: self.all.poses(),
                 }
-            } else if self.largest < 2f64.to_radians() {
+            } else if self.largest < LEAST_TURN_DEG.to_radians() {
                 Pending::NoRotation {
                     largest_deg: self.largest.to_degrees(),
                 }
