@@ -81,6 +81,10 @@ pub struct Args {
     /// name it loads: ~/.ros2/easy_handeye2/calibrations/NAME.calib).
     #[arg(long, default_value = "handeye")]
     name: String,
+    /// The point whose error through X `uncertainty.at_point` gives: X,Y,Z in the camera frame,
+    /// the input's unit [default: the median target position seen by the camera].
+    #[arg(long, value_name = "X,Y,Z", value_parser = values::point)]
+    point: Option<[f64; 3]>,
     /// Also write a page for a person: the held-out gap of every pose, the rotation axes and the
     /// rotation angles of the motions (one self-contained HTML file).
     #[arg(long, value_name = "FILE.html")]
@@ -236,6 +240,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             reject_outliers: args.reject_outliers,
             outlier_deg: args.outlier_deg,
             pose_names,
+            point: args.point,
         },
     )?;
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
@@ -337,6 +342,7 @@ fn options(args: &Args) -> Result<Options> {
         fix: args.fix.unwrap_or_default(),
         replicates,
         pose_names: Vec::new(),
+        point: args.point,
     })
 }
 

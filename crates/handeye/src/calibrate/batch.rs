@@ -18,7 +18,7 @@ use crate::check::holdout::{HeldOutCheck, leave_one_out};
 use crate::check::outliers::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::check::quality::{MotionQuality, QualityReport, ResidualSummary, quality_report};
 use crate::check::readings::{ReadingCheck, check_readings};
-use crate::check::uncertainty::{Uncertainty, bootstrap};
+use crate::check::uncertainty::{Uncertainty, bootstrap, median_target};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::OutlierPose;
 use crate::model::findings::Reading;
@@ -123,6 +123,9 @@ pub struct Options {
     /// How each pose is named in messages (e.g. `file:line`), by input index; `pose i` when
     /// shorter than the input.
     pub pose_names: Vec<String>,
+    /// The point (camera frame, input unit) whose error through X `uncertainty.at_point` gives;
+    /// `None`: the median target position seen by the camera ([`median_target`]).
+    pub point: Option<[f64; 3]>,
 }
 
 impl Default for Options {
@@ -136,6 +139,7 @@ impl Default for Options {
             fix: Fix::Refuse,
             replicates: crate::check::uncertainty::REPLICATES,
             pose_names: Vec::new(),
+            point: None,
         }
     }
 }
@@ -335,6 +339,11 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
             )
         },
     );
+    let mut uncertainty = uncertainty;
+    uncertainty.at_point = Some(uncertainty.place(
+        &calibration.x,
+        options.point.unwrap_or_else(|| median_target(&used)),
+    ));
     let outliers = outlier_report(&found, options);
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));
