@@ -32,9 +32,8 @@ pub struct Args {
     /// instead of X alone from motions between poses.
     #[arg(long)]
     robot_world: bool,
-    /// Motions from consecutive poses, or from every pair i < j (as OpenCV does). Default:
-    /// consecutive for pose-pair files, all for two streams (`--robot/--camera`) and ROS 2
-    /// recordings, whose consecutive camera frames barely move.
+    /// Motions from every pair i < j (the default, as OpenCV does: the most accurate on real and
+    /// realistic pose sets, and O(n)), or from consecutive poses (the paper's pairing).
     #[arg(long, value_parser = values::named::<Pairing>())]
     pairs: Option<Pairing>,
     /// Leave out the poses that disagree with the others (their motions' robot and camera
@@ -155,7 +154,7 @@ pub fn run(args: Args) -> Result<()> {
             report.outliers.poses.len() + report.poses
         );
     }
-    if args.pairs.is_none() && report.pairing == Pairing::All {
+    if args.pairs.is_none() && (args.input.robot.is_some() || args.input.is_bag()) {
         eprintln!(
             "pairs: every pair of the {} stream samples (consecutive frames barely move; `--pairs consecutive` for the paper's pairing)",
             report.poses
@@ -327,13 +326,10 @@ fn options(args: &Args) -> Result<Options> {
     };
     Ok(Options {
         method,
-        pairing: match args.pairs {
-            Some(pairing) => pairing,
-            // Consecutive samples of a stream are a camera period apart: tiny motions whose
-            // noise dominates. Every pair of samples carries the information.
-            None if args.input.robot.is_some() || args.input.is_bag() => Pairing::All,
-            None => Pairing::Consecutive,
-        },
+        // Every pair by default: on pose files it is the more accurate (docs/DECISIONS.md, "all
+        // pairs by default"); on streams consecutive samples are a camera period apart, tiny
+        // motions whose noise dominates.
+        pairing: args.pairs.unwrap_or(Pairing::All),
         tsai: TsaiOptions {
             opencv_filter: args.tsai_opencv_filter,
         },
