@@ -32,9 +32,8 @@ pub struct Args {
     /// instead of X alone from motions between poses.
     #[arg(long)]
     robot_world: bool,
-    /// Motions from consecutive poses, or from every pair i < j (as OpenCV does). Default:
-    /// consecutive for pose-pair files, all for two streams (`--robot/--camera`) and ROS 2
-    /// recordings, whose consecutive camera frames barely move.
+    /// Motions from every pair i < j (the default, as OpenCV does: the most accurate on real and
+    /// realistic pose sets, and O(n)), or from consecutive poses (the paper's pairing).
     #[arg(long, value_parser = values::named::<Pairing>())]
     pairs: Option<Pairing>,
     /// Leave out the poses that disagree with the others (their motions' robot and camera
@@ -81,6 +80,10 @@ pub struct Args {
     /// name it loads: ~/.ros2/easy_handeye2/calibrations/NAME.calib).
     #[arg(long, default_value = "handeye")]
     name: String,
+    /// The point whose error through X `uncertainty.at_point` gives: X,Y,Z in the camera frame,
+    /// the input's unit [default: the median target position seen by the camera].
+    #[arg(long, value_name = "X,Y,Z", value_parser = values::point)]
+    point: Option<[f64; 3]>,
     /// Also write a page for a person: the held-out gap of every pose, the rotation axes and the
     /// rotation angles of the motions (one self-contained HTML file).
     #[arg(long, value_name = "FILE.html")]
@@ -151,7 +154,7 @@ pub fn run(args: Args) -> Result<()> {
             report.outliers.poses.len() + report.poses
         );
     }
-    if args.pairs.is_none() && report.pairing == Pairing::All {
+    if args.pairs.is_none() && (args.input.robot.is_some() || args.input.is_bag()) {
         eprintln!(
             "pairs: every pair of the {} stream samples (consecutive frames barely move; `--pairs consecutive` for the paper's pairing)",
             report.poses
@@ -240,6 +243,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             outlier_deg: args.outlier_deg,
             pose_names: recording.names,
             written: recording.written,
+            point: args.point,
         },
     )?;
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
@@ -313,13 +317,10 @@ fn options(args: &Args) -> Result<Options> {
     };
     Ok(Options {
         method,
-        pairing: match args.pairs {
-            Some(pairing) => pairing,
-            // Consecutive samples of a stream are a camera period apart: tiny motions whose
-            // noise dominates. Every pair of samples carries the information.
-            None if args.input.robot.is_some() || args.input.is_bag() => Pairing::All,
-            None => Pairing::Consecutive,
-        },
+        // Every pair by default: on pose files it is the more accurate (docs/DECISIONS.md, "all
+        // pairs by default"); on streams consecutive samples are a camera period apart, tiny
+        // motions whose noise dominates.
+        pairing: args.pairs.unwrap_or(Pairing::All),
         tsai: TsaiOptions {
             opencv_filter: args.tsai_opencv_filter,
         },
@@ -327,6 +328,7 @@ fn options(args: &Args) -> Result<Options> {
         outlier_deg: args.outlier_deg,
         fix: args.fix.unwrap_or_default(),
         replicates,
+        point: args.point,
         ..Options::default()
     })
 }

@@ -483,6 +483,27 @@ pub fn urdf(p: Published<'_>, f: &Frames) -> String {
     s
 }
 
+/// The error where it matters, in one line: "a point at 0.45 m from the camera is placed within
+/// ±0.8 mm (one sigma)".
+pub fn at_point(p: &handeye::AtPoint, unit: Option<Unit>) -> String {
+    let distance = nalgebra::Vector3::from(p.point).norm();
+    let (far, within) = match unit {
+        Some(Unit::Metre) => (
+            format!("{distance:.3} m"),
+            format!("{:.2} mm", p.sigma * 1e3),
+        ),
+        Some(Unit::Millimetre) => (
+            format!("{:.3} m", distance * 1e-3),
+            format!("{:.2} mm", p.sigma),
+        ),
+        _ => (
+            format!("{} (input units)", short(distance)),
+            format!("{} (input units)", short(p.sigma)),
+        ),
+    };
+    format!("A point at {far} from the camera is placed within ±{within} (one sigma)")
+}
+
 /// The summary for a person: X, the verdict and its reasons, the uncertainty, the residuals, and
 /// what to do next.
 pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
@@ -538,6 +559,9 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
         r.uncertainty.rotation_deg,
         short(r.uncertainty.translation)
     );
+    if let Some(p) = &r.uncertainty.at_point {
+        let _ = writeln!(s, "{}", at_point(p, unit));
+    }
     let _ = writeln!(
         s,
         "Residuals of AX = XB: rotation {:.4}° RMS ({:.4}° max), translation {} {u} RMS ({} {u} max)",
@@ -581,7 +605,7 @@ pub fn refused(e: &Error) -> String {
 }
 
 /// A length to four significant digits.
-fn short(v: f64) -> String {
+pub fn short(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
     }

@@ -18,6 +18,7 @@ mod output;
 mod report;
 mod simulate;
 mod values;
+mod verify;
 
 use std::process::ExitCode;
 
@@ -33,7 +34,7 @@ struct Cli {
 }
 
 /// The exit codes, in every command's `--help`.
-const EXIT_CODES: &str = "Exit codes: 0 success (also when the reader of a pipe closes it early); 1 an unexpected failure (a file that cannot be written); 2 bad input or an out-of-range option (the file, line and field, or the flag, named); 3 valid input from which X cannot be determined (degenerate motions, or data that fit far better read another way: the message says what to do); 5 with `calibrate --strict`, an X whose verdict is questionable (printed, with its cautions).";
+const EXIT_CODES: &str = "Exit codes: 0 success (also when the reader of a pipe closes it early); 1 an unexpected failure (a file that cannot be written); 2 bad input or an out-of-range option (the file, line and field, or the flag, named); 3 valid input from which X cannot be determined (degenerate motions, or data that fit far better read another way: the message says what to do; `verify`: the recording cannot tell); 4 `verify`: the saved X does not fit the recording; 5 with `calibrate --strict` or `verify --strict`, an X whose verdict is questionable (printed, with its cautions).";
 
 #[derive(Subcommand)]
 enum Command {
@@ -50,6 +51,11 @@ enum Command {
     /// would shrink its uncertainty most.
     #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Advise(advise::Args),
+    /// Check a saved X against a new recording: exit 0 when it fits (consistent), 4 when it does
+    /// not (the camera moved, another rig, or the saved X was wrong), 3 when the recording cannot
+    /// tell.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
+    Verify(verify::Args),
     /// Write a simulated series (the paper's protocol) and its truth.
     #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Simulate(simulate::Args),
@@ -72,6 +78,7 @@ fn main() -> ExitCode {
         Command::Online(a) => online::run(a),
         Command::Inspect(a) => inspect::run(a),
         Command::Advise(a) => advise::run(a),
+        Command::Verify(a) => verify::run(a),
         Command::Simulate(a) => simulate::run(a),
         Command::Experiment(a) => experiment::run(a),
         Command::Demo(a) => demo::run(a),

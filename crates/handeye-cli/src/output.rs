@@ -9,6 +9,27 @@ pub const BAD_INPUT: u8 = 2;
 /// Exit code 3: X cannot be determined from valid input.
 pub const DEGENERATE: u8 = 3;
 
+/// Exit code 4 (`verify`): the saved X does not fit the recording.
+pub const INCONSISTENT: u8 = 4;
+
+/// The end of a run with a verdict that has its own exit code (`verify`: 3 or 4), after printing
+/// the result.
+#[derive(Debug)]
+pub struct Verdict {
+    /// The exit code.
+    pub code: u8,
+    /// What it means.
+    pub message: String,
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for Verdict {}
+
 /// Exit code 5: X was found, but its verdict is questionable and `--strict` was given.
 pub const QUESTIONABLE: u8 = 5;
 
@@ -31,6 +52,9 @@ impl std::error::Error for Questionable {}
 pub fn exit_code(e: &anyhow::Error) -> u8 {
     if e.downcast_ref::<Questionable>().is_some() {
         return QUESTIONABLE;
+    }
+    if let Some(v) = e.downcast_ref::<Verdict>() {
+        return v.code;
     }
     match e.downcast_ref::<Error>() {
         Some(

@@ -142,6 +142,15 @@ impl<T: Named + Send + Sync> TypedValueParser for NamedParser<T> {
     }
 }
 
+/// A point `X,Y,Z`: three finite numbers.
+pub fn point(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("expected X,Y,Z (three numbers), got `{s}`"));
+    }
+    Ok([number(parts[0])?, number(parts[1])?, number(parts[2])?])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -68,7 +68,7 @@ fn calibrate_recovers_the_truth_of_the_exact_fixture() {
         assert_eq!(v["method"], method);
         assert_eq!(v["setup"], "eye-in-hand");
         assert_eq!(v["frame"], "gripper_from_camera");
-        assert_eq!(v["motions"], 9);
+        assert_eq!(v["motions"], 45, "every pair of 10 poses by default");
         for key in ["translation", "quaternion_xyzw", "conditioning", "warnings"] {
             assert!(!v[key].is_null(), "{key}");
         }
@@ -249,7 +249,7 @@ fn csv_on_stdin_after_comments_is_detected_and_lines_are_counted() {
         .write_stdin(commented.clone()));
     assert_eq!(code, 0, "{err}");
     let v: Value = serde_json::from_str(&out).unwrap();
-    assert_eq!(v["motions"], 9);
+    assert_eq!(v["motions"], 45, "every pair of 10 poses by default");
     // Break the fifth data row (line 2 + 1 + 5 = 8): a NaN in the last column.
     let mut lines: Vec<String> = commented.split("\r\n").map(str::to_string).collect();
     let row = lines[7].rsplit_once(',').unwrap().0.to_string();

@@ -184,13 +184,26 @@ fn camodocal_outliers_are_found_and_rejecting_them_lowers_the_residuals() {
         err.contains("--setup eye-to-hand") && err.contains("--fix robot-inverted"),
         "{err}"
     );
-    // Kept as given on request, its own noise leaves X undetermined, and the refusal says why.
-    let (code, _, err) = run(&["calibrate", f, "--fix", "as-given"]);
+    // Kept as given on request, over consecutive motions its own noise leaves X undetermined,
+    // and the refusal says why.
+    let (code, _, err) = run(&[
+        "calibrate",
+        f,
+        "--fix",
+        "as-given",
+        "--pairs",
+        "consecutive",
+    ]);
     assert_eq!(code, 3, "{err}");
     assert!(
         err.contains("not determined") && err.contains("--fix robot-inverted"),
         "{err}"
     );
+    // Over every pair (the default) X is determined, and answered as questionable: the better
+    // reading kept as given comes first among the cautions.
+    let kept = calibrate(&[f, "--fix", "as-given"]);
+    assert_eq!(kept["verdict"], "questionable");
+    assert_eq!(kept["warnings"][0]["code"], "kept_as_given");
     // The outlier is named by its place in the file.
     let name = outliers[0]["name"].as_str().unwrap();
     assert!(

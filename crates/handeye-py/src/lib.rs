@@ -360,7 +360,7 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
 /// The whole batch calibration ([`handeye::calibrate`]): its report as JSON, the same
 /// object `handeye calibrate` prints (the Python layer parses it).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="consecutive", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,

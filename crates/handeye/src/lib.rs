@@ -129,11 +129,12 @@ pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 pub use check::holdout::leave_one_out;
 pub use check::quality::{OUTLIER_DEG, errors_against_truth};
 pub use check::stream::{StreamReading, StreamReadings};
-pub use check::uncertainty::{REPLICATES, REPLICATES_RANGE, Uncertainty};
+pub use check::uncertainty::{AtPoint, REPLICATES, REPLICATES_RANGE, Uncertainty, median_target};
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, ClosedLoop, WeaknessKind, advise, closed_loop};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
+pub use calibrate::verify::{Consistency, SavedUnit, SavedX, Sizes, Verification, verify};
 // Online: the paper's calibrator and the accumulating estimator.
 pub use online::select::{AdaptiveParams, MAX_N_INIT, Selection};
 pub use online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};

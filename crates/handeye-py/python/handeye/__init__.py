@@ -102,7 +102,7 @@ def calibrate(
     camera_from_target,
     method=None,
     setup="eye-in-hand",
-    pairs="consecutive",
+    pairs=None,
     reject_outliers=False,
     fix=None,
     bootstrap=40,
@@ -115,13 +115,15 @@ def calibrate(
     face says it), ``matrix`` (X, a (4,4) array), ``translation``, ``quaternion_xyzw``, ``frame``,
     ``method``, ``setup``, ``poses``, ``motions``, ``conditioning``, ``uncertainty``
     (``rotation_deg`` and ``translation``: one-sigma sizes of the error; ``weakest_rotation``,
-    ``weakest_translation``, ``covariance``), ``reading`` (the readings of the input tried),
+    ``weakest_translation``, ``covariance``, ``at_point``: the one-sigma error of the median target
+    position mapped through X), ``reading`` (the readings of the input tried),
     ``outliers`` (poses that disagree with the others), ``residual``, ``quality`` and
     ``warnings`` (each a dict: ``code``, its data, ``message`` in words and, when one argument
     of this call would fix it, ``remedy``: ``option`` (the keyword), ``value`` and ``purpose``). ``fix`` reads the input another way ("auto", "as-given", "robot-inverted",
     "camera-inverted", "both-inverted", "robot-wxyz", "camera-wxyz", "both-wxyz", "robot-mm",
-    "camera-mm"). ``method`` defaults to "andreff". ``tsai_opencv_filter`` (with ``method="tsai"``)
-    drops the motions OpenCV's Tsai drops, as ``--tsai-opencv-filter`` does.
+    "camera-mm"). ``method`` defaults to "andreff", ``pairs`` to "all" (every pair of poses, as
+    ``handeye calibrate``; "consecutive" for the paper's pairing). ``tsai_opencv_filter`` (with
+    ``method="tsai"``) drops the motions OpenCV's Tsai drops, as ``--tsai-opencv-filter`` does.
 
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
     (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
@@ -132,7 +134,7 @@ def calibrate(
     if g.ndim != 3 or c.ndim != 3:
         raise ValueError("expected (N, 4, 4) arrays of transforms")
     if robot_world:
-        if pairs != "consecutive":
+        if pairs is not None:
             raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
         result = json.loads(
             _robot_world_report(
@@ -149,7 +151,7 @@ def calibrate(
             c,
             method=method,
             setup=setup,
-            pairs=pairs,
+            pairs=pairs or "all",
             tsai_opencv_filter=tsai_opencv_filter,
             reject_outliers=reject_outliers,
             fix=fix,

@@ -5,3 +5,4 @@
 pub mod advice;
 pub mod batch;
 pub mod robot_world;
+pub mod verify;

@@ -31,7 +31,7 @@ use crate::calibrate::batch::{
 };
 use crate::check::outliers::translation_scale;
 use crate::check::quality::OUTLIER_DEG;
-use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, summarise};
+use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, median_target, summarise};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::{Part, Verdict, Written};
 use crate::model::motion::{PosePair, Setup};
@@ -63,6 +63,9 @@ pub struct RobotWorldOptions {
     pub pose_names: Vec<String>,
     /// The directions in which the input wrote its poses (see `Options::written`).
     pub written: Written,
+    /// The point (camera frame, input unit) of X's `uncertainty.at_point`. Default `None`: the
+    /// median target position seen by the camera.
+    pub point: Option<[f64; 3]>,
 }
 
 impl Default for RobotWorldOptions {
@@ -75,6 +78,7 @@ impl Default for RobotWorldOptions {
             outlier_deg: OUTLIER_DEG,
             pose_names: Vec::new(),
             written: Written::NAMED,
+            point: None,
         }
     }
 }
@@ -249,7 +253,11 @@ pub fn calibrate_robot_world(
     let scene = translation_scale(&used, setup).max(working_distance(&used));
     let method = options.method;
     let solve_x = |p: &[PosePair]| robot_world(method, p, setup).map(|r| r.x);
-    let x_unc = bootstrap(&used, setup, &solved.x, &solve_x, options.replicates, scene);
+    let mut x_unc = bootstrap(&used, setup, &solved.x, &solve_x, options.replicates, scene);
+    x_unc.at_point = Some(x_unc.place(
+        &solved.x,
+        options.point.unwrap_or_else(|| median_target(&used)),
+    ));
     let y_unc = summarise(left_block(&cov, 6, &solved.target), 0, 0, scene);
     for u in [&x_unc, &y_unc] {
         refuse_if_undetermined(u, setup, solved.conditioning).map_err(explain)?;

@@ -23,7 +23,7 @@ use crate::check::outliers::PoseResiduals;
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Direction, Verdict};
 use crate::model::motion::{PosePair, Setup};
-use crate::model::pose::{Transform, log_so3};
+use crate::model::pose::{Transform, exp_so3, log_so3};
 use crate::solve::residual::PoseResidual;
 
 /// Default number of bootstrap replicates: the one-sigma is known to about ±1/√(2·40) ≈ 11%.
@@ -82,6 +82,26 @@ pub struct Uncertainty {
     pub replicates: usize,
     /// Replicates the solver refused (degenerate); many means X is at the edge of determinable.
     pub refused: usize,
+    /// The error where it matters: how far a point seen by the camera is off once mapped
+    /// through X ([`Uncertainty::place`]); absent where no point was chosen.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at_point: Option<AtPoint>,
+    /// The bootstrap's replicate errors of X, (log(R_b R̂ᵀ), t_b − t̂) each, already widened by
+    /// the few-poses factor; empty for a first-order covariance. Not serialised.
+    #[serde(skip)]
+    pub samples: Vec<[f64; 6]>,
+}
+
+/// The expected error of a point seen by the camera, mapped through X (SPEC sec. 9).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AtPoint {
+    /// The point, in the camera frame, input unit.
+    pub point: [f64; 3],
+    /// Its frame: always `camera`.
+    pub frame: String,
+    /// √trace of the covariance of X·point: the expected distance by which the point is
+    /// misplaced, input unit (one sigma).
+    pub sigma: f64,
 }
 
 impl Uncertainty {
@@ -99,6 +119,52 @@ impl Uncertainty {
             _ => Verdict::Determined,
         }
     }
+
+    /// The error of `point` (camera frame) mapped through `x`: the spread of `x_b · point` over
+    /// the bootstrap's replicates X_b (each replicate's exact image, not a linearisation), or,
+    /// for a first-order covariance without replicates, its first-order image
+    /// J C Jᵀ with J = [−[R̂p]ₓ, I].
+    pub fn place(&self, x: &Transform, point: [f64; 3]) -> AtPoint {
+        let p = Vector3::from(point);
+        let rp = x.rotation.matrix() * p;
+        let cov: Matrix3<f64> = if self.samples.is_empty() {
+            let c = Matrix6::from_fn(|i, j| self.covariance[i][j]);
+            let mut jac = nalgebra::Matrix3x6::zeros();
+            jac.fixed_view_mut::<3, 3>(0, 0)
+                .copy_from(&(-rp.cross_matrix()));
+            jac.fixed_view_mut::<3, 3>(0, 3)
+                .copy_from(&Matrix3::identity());
+            jac * c * jac.transpose()
+        } else {
+            let mut cov = Matrix3::zeros();
+            for e in &self.samples {
+                let dr = Vector3::new(e[0], e[1], e[2]);
+                let dt = Vector3::new(e[3], e[4], e[5]);
+                let d = (exp_so3(&dr) - Matrix3::identity()) * rp + dt;
+                cov += d * d.transpose();
+            }
+            cov / self.samples.len() as f64
+        };
+        AtPoint {
+            point,
+            frame: "camera".into(),
+            sigma: cov.trace().max(0.0).sqrt(),
+        }
+    }
+}
+
+/// The default point of [`Uncertainty::place`]: the median target position seen by the camera
+/// (per coordinate, over `camera_from_target`'s translations), the data's working distance.
+pub fn median_target(poses: &[PosePair]) -> [f64; 3] {
+    let coordinate = |k: usize| {
+        crate::check::outliers::median(
+            poses
+                .iter()
+                .map(|p| p.camera_from_target.translation.vector[k])
+                .collect(),
+        )
+    };
+    [coordinate(0), coordinate(1), coordinate(2)]
 }
 
 /// The bootstrap uncertainty of `x` (solved from `poses` by `solve`) with `replicates` re-solves.
@@ -154,8 +220,17 @@ pub fn bootstrap(
     for e in &solved {
         cov += e * e.transpose();
     }
-    cov *= few_poses_factor(poses.len()).powi(2) / solved.len().max(1) as f64;
-    summarise(cov, solved.len(), replicates - solved.len(), scene)
+    let widen = few_poses_factor(poses.len());
+    cov *= widen.powi(2) / solved.len().max(1) as f64;
+    let mut u = summarise(cov, solved.len(), replicates - solved.len(), scene);
+    u.samples = solved
+        .iter()
+        .map(|e| {
+            let e = e * widen;
+            [e[0], e[1], e[2], e[3], e[4], e[5]]
+        })
+        .collect();
+    u
 }
 
 /// The factor that widens a one-sigma the bootstrap estimated from few poses.
@@ -266,6 +341,8 @@ pub(crate) fn summarise(
         covariance,
         replicates,
         refused,
+        at_point: None,
+        samples: Vec::new(),
     }
 }
 

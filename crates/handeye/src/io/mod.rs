@@ -14,6 +14,7 @@ mod peer;
 mod recording;
 #[cfg(feature = "rosbag")]
 pub mod rosbag;
+mod saved;
 mod stamped;
 #[cfg(feature = "internals")]
 pub mod sync;
@@ -41,6 +42,7 @@ pub use jsonl::parse_pose_line;
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
 pub use recording::{Note, Recording, RecordingOptions, Source};
+pub use saved::{parse_saved_x, read_saved_x};
 pub use sync::TimeOffset;
 pub use truth::{Truth, read_truth, truth_json};
 // Each format's own reader and the io helpers: crate-internal; public with `internals` for this

@@ -1,0 +1,147 @@
+//! `handeye verify`: does a saved X still fit a new recording? The decision is the library's
+//! ([`handeye::verify`]); this prints it and exits 0 (consistent), 4 (inconsistent) or 3 (the
+//! recording cannot tell).
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args as ClapArgs;
+use handeye::{
+    Assessment, Consistency, Fix, Method, Options, Pairing, REPLICATES, REPLICATES_RANGE,
+};
+
+use crate::faces::{self, Face};
+use crate::input::{InputArgs, read_all};
+use crate::output::{DEGENERATE, INCONSISTENT, Questionable, Verdict, print_json, print_text};
+use crate::values;
+
+/// Options of `handeye verify`.
+#[derive(ClapArgs, Debug)]
+pub struct Args {
+    /// The saved X: what `calibrate --output json` or `--output yaml` wrote (or easy_handeye2's
+    /// calibration file).
+    #[arg(long = "x", value_name = "SAVED")]
+    saved: PathBuf,
+    #[command(flatten)]
+    input: InputArgs,
+    /// The hand–eye method the recording is calibrated with.
+    #[arg(long, default_value_t = Method::Andreff, value_parser = values::named::<Method>())]
+    method: Method,
+    /// Motions from every pair of poses (default) or from consecutive ones.
+    #[arg(long, default_value_t = Pairing::All, value_parser = values::named::<Pairing>())]
+    pairs: Pairing,
+    /// Leave out the recording's poses that disagree with the others.
+    #[arg(long)]
+    reject_outliers: bool,
+    /// Read the recording another way (as `calibrate --fix`).
+    #[arg(long, value_parser = values::named::<Fix>())]
+    fix: Option<Fix>,
+    /// Bootstrap replicates behind the recording's uncertainty.
+    #[arg(long, default_value_t = REPLICATES, value_parser = values::count(*REPLICATES_RANGE.start() as u64, *REPLICATES_RANGE.end() as u64))]
+    bootstrap: usize,
+    /// Output: the JSON object, or a summary for a person (`text`) [default: text on a terminal,
+    /// JSON otherwise].
+    #[arg(long, value_parser = values::named::<Face>())]
+    output: Option<Face>,
+    /// Exit 5 when the saved X is consistent but the recording's own calibration is questionable.
+    #[arg(long)]
+    strict: bool,
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let face = match Face::chosen(args.output) {
+        f @ (Face::Json | Face::Text) => f,
+        other => {
+            return Err(handeye::Error::InvalidParameter {
+                name: "output",
+                message: format!("`{}`: verify prints json or text", other.name()),
+            }
+            .into());
+        }
+    };
+    let saved = handeye::io::read_saved_x(&args.saved)?;
+    let fix = args.fix.unwrap_or_default();
+    let recording = read_all(&args.input, fix.reading())?;
+    let options = Options {
+        method: args.method,
+        pairing: args.pairs,
+        reject_outliers: args.reject_outliers,
+        fix,
+        replicates: args.bootstrap,
+        pose_names: recording.names,
+        written: recording.written,
+        ..Options::default()
+    };
+    let v = handeye::verify(&saved, &recording.poses, args.input.setup(), &options)?;
+    match face {
+        Face::Text => print_text(&text(&v))?,
+        _ => {
+            for note in &v.notes {
+                eprintln!("note: {note}");
+            }
+            if let Some(r) = &v.recording {
+                for w in &r.warnings {
+                    eprintln!("warning: {}", faces::warning(w));
+                }
+            }
+            print_json(&v)?
+        }
+    }
+    match v.verdict {
+        Consistency::Consistent if args.strict && v.quality == Assessment::Questionable => {
+            Err(Questionable.into())
+        }
+        Consistency::Consistent => Ok(()),
+        Consistency::Inconsistent => Err(Verdict {
+            code: INCONSISTENT,
+            message: v.message,
+        }
+        .into()),
+        Consistency::Undetermined => Err(Verdict {
+            code: DEGENERATE,
+            message: v.message,
+        }
+        .into()),
+    }
+}
+
+/// The summary for a person.
+fn text(v: &handeye::Verification) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "Verdict: {}", v.verdict.name());
+    let _ = writeln!(s, "  {}", v.message);
+    if v.distance_sigmas.is_finite() {
+        let u = match v.length_unit.as_str() {
+            "unknown" => "(input units)",
+            u => u,
+        };
+        let _ = writeln!(
+            s,
+            "Difference: rotation {:.4}°, translation {} {u} (one sigma {:.4}°, {} {u}); {:.2} sigmas, at most {:.2} for the same rig",
+            v.difference.rotation_deg,
+            faces::short(v.difference.translation),
+            v.sigma.rotation_deg,
+            faces::short(v.sigma.translation),
+            v.distance_sigmas,
+            v.limit_sigmas
+        );
+    }
+    for note in &v.notes {
+        let _ = writeln!(s, "Note: {note}");
+    }
+    if let Some(r) = &v.recording {
+        let _ = writeln!(
+            s,
+            "The recording's own calibration: {} ({} poses, {} motions)",
+            r.verdict.name(),
+            r.poses,
+            r.motions
+        );
+        for w in &r.warnings {
+            let _ = writeln!(s, "  - {}", faces::warning(w));
+        }
+    }
+    s
+}

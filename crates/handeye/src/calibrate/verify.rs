@@ -1,0 +1,393 @@
+//! Does a saved X still fit? `handeye verify`: a new recording against the X a calibration wrote.
+//!
+//! The recording is calibrated as [`calibrate`] does it (same method and pairing), and the two X
+//! are compared with the covariance of their difference: the recording's bootstrap covariance plus
+//! the saved X's own when the file has one. The squared Mahalanobis distance d² = eᵀ C⁻¹ e of the
+//! difference e = (log(R_saved R_newᵀ), t_saved − t_new) follows χ² with 6 degrees of freedom when
+//! both X describe the same rig; beyond its [`LEVEL`] quantile (d > 4.74 sigmas) the saved X does not
+//! fit. The choice and its measurements are in `docs/DECISIONS.md` ("verify").
+//!
+//! A recording that cannot determine X (degenerate motions), or that determines it so weakly that a
+//! difference of a degree would pass, cannot tell: the verdict is then `undetermined`.
+
+use nalgebra::{Matrix6, SymmetricEigen, Vector3, Vector6};
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+use crate::calibrate::batch::{Assessment, Options, Report, calibrate, working_distance};
+use crate::model::error::{Error, Result};
+use crate::model::findings::Verdict;
+use crate::model::motion::{PosePair, Setup};
+use crate::model::pose::{Transform, TransformJson, log_so3};
+
+/// The probability of the χ² test's acceptance region for a saved X of the same rig: one
+/// same-rig recording in a thousand is refused.
+pub const LEVEL: f64 = 0.999;
+
+/// The length unit a saved X is in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SavedUnit {
+    /// Metres (a ROS file: easy_handeye2's YAML is in metres).
+    Metre,
+    /// Millimetres.
+    Millimetre,
+    /// The unit of the recording it came from, not told by the file (`calibrate`'s JSON).
+    Unknown,
+}
+
+/// An X that a calibration saved: `calibrate --output json` or `--output yaml`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SavedX {
+    /// X.
+    pub x: Transform,
+    /// The setup it was calibrated for, when the file says.
+    pub setup: Option<Setup>,
+    /// Its covariance, (rotation vector in radians, translation) in [`Uncertainty`]'s convention
+    /// and in the file's unit, when the file carries one.
+    ///
+    /// [`Uncertainty`]: crate::check::uncertainty::Uncertainty
+    pub covariance: Option<[[f64; 6]; 6]>,
+    /// The unit of its translation.
+    pub unit: SavedUnit,
+}
+
+/// The verdict of [`verify`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Consistency {
+    /// The saved X fits the recording within the uncertainty of both.
+    Consistent,
+    /// It does not: the camera moved, the rig is another, or the saved X was wrong.
+    Inconsistent,
+    /// The recording cannot tell (too little motion).
+    Undetermined,
+}
+
+crate::named_enum!(Consistency, "verify verdict", "verdict" {
+    Consistent => "consistent",
+    Inconsistent => "inconsistent",
+    Undetermined => "undetermined",
+});
+
+/// A rotation and a translation size.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Sizes {
+    /// Degrees.
+    pub rotation_deg: f64,
+    /// The recording's length unit.
+    pub translation: f64,
+}
+
+/// What [`verify`] found: the verdict, the difference, its one-sigma and the words.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Verification {
+    /// `consistent`, `inconsistent` or `undetermined`.
+    pub verdict: Consistency,
+    /// The saved X minus the recording's: the rotation angle between them (degrees) and the
+    /// distance between their translations (the recording's unit).
+    pub difference: Sizes,
+    /// One sigma of that difference: √trace of the rotation and translation blocks of the
+    /// combined covariance (the recording's, plus the saved X's when known).
+    pub sigma: Sizes,
+    /// The difference in sigmas: the Mahalanobis distance √(eᵀ C⁻¹ e) over the six parameters.
+    pub distance_sigmas: f64,
+    /// The largest distance of a consistent X: √ of χ²₆'s 0.999 quantile (4.74).
+    pub limit_sigmas: f64,
+    /// Whether the saved X's own uncertainty counted (the file carried one).
+    pub saved_uncertainty: bool,
+    /// The saved X, in the recording's unit.
+    pub saved: TransformJson,
+    /// The recording's length unit, as told by the size of its poses: `m`, `mm`, or `unknown`.
+    pub length_unit: String,
+    /// The factor the saved translation was multiplied by to be in the recording's unit (1000:
+    /// metres to millimetres).
+    pub unit_scale: f64,
+    /// The quality of the recording's own calibration: `good`, or `questionable` while a caution
+    /// of `recording.warnings` stands.
+    pub quality: Assessment,
+    /// What the verdict means and what to do, in words.
+    pub message: String,
+    /// Notes on how the comparison was made (a unit conversion, a saved X without uncertainty).
+    pub notes: Vec<String>,
+    /// The recording's own calibration (absent when it was refused).
+    pub recording: Option<Report>,
+}
+
+/// Checks a saved X against a recording of poses (see the module docs).
+///
+/// Errors: those of [`calibrate`] but a refusal for degenerate motions or too few motions, which
+/// is the verdict `undetermined`.
+pub fn verify(
+    saved: &SavedX,
+    poses: &[PosePair],
+    setup: Setup,
+    options: &Options,
+) -> Result<Verification> {
+    let mut notes = Vec::new();
+    if let Some(s) = saved.setup
+        && s != setup
+    {
+        notes.push(format!(
+            "the saved X is for {}, the recording is read as {}",
+            s.name(),
+            setup.name()
+        ));
+    }
+    let report = match calibrate(poses, setup, options) {
+        Ok(r) => r,
+        Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
+            return Ok(cannot_tell(saved, poses, &e, notes));
+        }
+        Err(e) => return Err(e),
+    };
+    let new = report.transform;
+    let scale = unit_scale(saved, poses, &new, &mut notes);
+    let mut x = saved.x;
+    x.translation.vector *= scale;
+    let e = difference(&x, &new);
+    let mut cov = Matrix6::from_fn(|i, j| report.uncertainty.covariance[i][j]);
+    match &saved.covariance {
+        Some(c) => {
+            let factor = |i: usize| if i < 3 { 1.0 } else { scale };
+            cov += Matrix6::from_fn(|i, j| c[i][j] * factor(i) * factor(j));
+        }
+        None => notes.push(
+            "the saved X carries no uncertainty: the recording's alone counts".to_string(),
+        ),
+    }
+    let length = x
+        .translation
+        .vector
+        .norm()
+        .max(new.translation.vector.norm())
+        .max(working_distance(poses));
+    let distance = mahalanobis(&e, &cov, length);
+    let limit = limit_sigmas();
+    let difference = Sizes {
+        rotation_deg: e.fixed_rows::<3>(0).norm().to_degrees(),
+        translation: e.fixed_rows::<3>(3).norm(),
+    };
+    let sigma = Sizes {
+        rotation_deg: trace3(&cov, 0).sqrt().to_degrees(),
+        translation: trace3(&cov, 3).sqrt(),
+    };
+    let weak = report.uncertainty.verdict() != Verdict::Determined;
+    let unit = recording_unit(poses);
+    let len = |v: f64| length_words(v, unit);
+    let (verdict, message) = if distance > limit {
+        (
+            Consistency::Inconsistent,
+            inconsistent_words(&difference, distance, length, unit),
+        )
+    } else if weak && !report.outliers.poses.is_empty() && !report.outliers.rejected {
+        (
+            Consistency::Undetermined,
+            format!(
+                "this recording cannot tell: {} of its poses disagree with the others and blur X (one sigma {:.3}° and {}), so a difference of up to {:.2}° or {} would pass; pass `--reject-outliers` to leave them out",
+                report.outliers.poses.len(),
+                sigma.rotation_deg,
+                len(sigma.translation),
+                limit * sigma.rotation_deg,
+                len(limit * sigma.translation)
+            ),
+        )
+    } else if weak {
+        (
+            Consistency::Undetermined,
+            format!(
+                "this recording cannot tell: it determines X only weakly (one sigma {:.3}° and {}), so a difference of up to {:.2}° or {} would pass; record motions that rotate the hand about several different axes (20° or more each) and move it across the working volume",
+                sigma.rotation_deg,
+                len(sigma.translation),
+                limit * sigma.rotation_deg,
+                len(limit * sigma.translation)
+            ),
+        )
+    } else {
+        (
+            Consistency::Consistent,
+            format!(
+                "the saved X fits this recording: it differs by {:.3}° and {}, {distance:.1} sigmas (at most {limit:.2} for the same rig)",
+                difference.rotation_deg,
+                len(difference.translation)
+            ),
+        )
+    };
+    Ok(Verification {
+        verdict,
+        difference,
+        sigma,
+        distance_sigmas: distance,
+        limit_sigmas: limit,
+        saved_uncertainty: saved.covariance.is_some(),
+        saved: TransformJson::from(&x),
+        length_unit: unit_name(unit).into(),
+        unit_scale: scale,
+        quality: report.verdict,
+        message,
+        notes,
+        recording: Some(report),
+    })
+}
+
+/// The verdict of a recording whose own calibration was refused by `refusal`.
+fn cannot_tell(
+    saved: &SavedX,
+    poses: &[PosePair],
+    refusal: &Error,
+    notes: Vec<String>,
+) -> Verification {
+    Verification {
+        verdict: Consistency::Undetermined,
+        difference: Sizes {
+            rotation_deg: f64::NAN,
+            translation: f64::NAN,
+        },
+        sigma: Sizes {
+            rotation_deg: f64::INFINITY,
+            translation: f64::INFINITY,
+        },
+        distance_sigmas: f64::NAN,
+        limit_sigmas: limit_sigmas(),
+        saved_uncertainty: saved.covariance.is_some(),
+        saved: TransformJson::from(&saved.x),
+        length_unit: unit_name(recording_unit(poses)).into(),
+        unit_scale: 1.0,
+        quality: Assessment::Questionable,
+        message: format!(
+            "this recording cannot tell whether the saved X fits: it does not determine X ({refusal}); record motions that rotate the hand about several different axes (20° or more each) and move it across the working volume"
+        ),
+        notes,
+        recording: None,
+    }
+}
+
+/// The words of an inconsistent X: by how much, and the likely cause.
+fn inconsistent_words(d: &Sizes, distance: f64, length: f64, unit: Option<SavedUnit>) -> String {
+    let cause = if d.rotation_deg > LARGE_ROTATION_DEG || d.translation > LARGE_TRANSLATION * length
+    {
+        "far more than a bump moves a camera: a different rig or setup, or a saved X that was wrong"
+    } else {
+        "the camera moved on its mount since X was saved (a bump, a re-mount), or the saved X was calibrated from poor data"
+    };
+    format!(
+        "the saved X does not fit this recording: it differs by {:.3}° and {} ({distance:.1} sigmas); likely cause: {cause}; recalibrate from this recording",
+        d.rotation_deg,
+        length_words(d.translation, unit)
+    )
+}
+
+fn unit_name(unit: Option<SavedUnit>) -> &'static str {
+    match unit {
+        Some(SavedUnit::Metre) => "m",
+        Some(SavedUnit::Millimetre) => "mm",
+        _ => "unknown",
+    }
+}
+
+/// A length in millimetres when the recording's unit is known, else in its own unit.
+fn length_words(v: f64, unit: Option<SavedUnit>) -> String {
+    match unit {
+        Some(SavedUnit::Metre) => format!("{:.2} mm", v * 1e3),
+        Some(SavedUnit::Millimetre) => format!("{v:.2} mm"),
+        _ => format!("{v:.4} (the input's unit)"),
+    }
+}
+
+/// A difference above this many degrees is more than a bump.
+const LARGE_ROTATION_DEG: f64 = 10.0;
+/// A difference above this fraction of the scene's size (X's translation or the working distance)
+/// is more than a bump.
+const LARGE_TRANSLATION: f64 = 0.25;
+
+/// √ of χ²₆'s [`LEVEL`] quantile.
+pub fn limit_sigmas() -> f64 {
+    ChiSquared::new(6.0)
+        .map(|c| c.inverse_cdf(LEVEL))
+        .unwrap_or(22.458)
+        .sqrt()
+}
+
+/// The factor bringing the saved translation into the recording's unit, with a note when it is
+/// not 1.
+fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, notes: &mut Vec<String>) -> f64 {
+    let recording = recording_unit(poses);
+    let (scale, words) = match (saved.unit, recording) {
+        (SavedUnit::Metre, Some(SavedUnit::Millimetre)) => (1000.0, "metres, the recording in millimetres"),
+        (SavedUnit::Millimetre, Some(SavedUnit::Metre)) => (1e-3, "millimetres, the recording in metres"),
+        (SavedUnit::Unknown, _) => {
+            // A file that does not say: the unit whose X is nearer the recording's, when a factor
+            // of 1000 brings it ten times nearer.
+            let gap = |k: f64| (saved.x.translation.vector * k - new.translation.vector).norm();
+            if gap(1000.0) * 10.0 < gap(1.0) {
+                (1000.0, "metres (by its size), the recording in millimetres")
+            } else if gap(1e-3) * 10.0 < gap(1.0) {
+                (1e-3, "millimetres (by its size), the recording in metres")
+            } else {
+                (1.0, "")
+            }
+        }
+        _ => (1.0, ""),
+    };
+    if scale != 1.0 {
+        notes.push(format!(
+            "the saved X is in {words}: its translation was multiplied by {scale}"
+        ));
+    }
+    scale
+}
+
+/// Metres or millimetres from the size of the poses' translations (the median of each pose's
+/// larger translation), `None` when it fits neither.
+fn recording_unit(poses: &[PosePair]) -> Option<SavedUnit> {
+    let size = crate::check::outliers::median(
+        poses
+            .iter()
+            .map(|p| {
+                p.base_from_gripper
+                    .translation
+                    .vector
+                    .norm()
+                    .max(p.camera_from_target.translation.vector.norm())
+            })
+            .collect(),
+    );
+    if (0.05..=10.0).contains(&size) {
+        Some(SavedUnit::Metre)
+    } else if (50.0..=10_000.0).contains(&size) {
+        Some(SavedUnit::Millimetre)
+    } else {
+        None
+    }
+}
+
+/// (log(R_a R_bᵀ), t_a − t_b): the convention of the bootstrap's replicate errors.
+fn difference(a: &Transform, b: &Transform) -> Vector6<f64> {
+    let dr = log_so3(&(a.rotation.matrix() * b.rotation.matrix().transpose()));
+    let dt: Vector3<f64> = a.translation.vector - b.translation.vector;
+    Vector6::new(dr.x, dr.y, dr.z, dt.x, dt.y, dt.z)
+}
+
+/// √(eᵀ C⁻¹ e), C floored at 1e-9 rad and 1e-9 × `length` one-sigma per coordinate (noise-free
+/// data would otherwise make any rounding infinitely many sigmas).
+fn mahalanobis(e: &Vector6<f64>, cov: &Matrix6<f64>, length: f64) -> f64 {
+    let mut c = *cov;
+    for i in 0..6 {
+        let floor = if i < 3 { 1e-9 } else { 1e-9 * length.max(f64::MIN_POSITIVE) };
+        c[(i, i)] += floor * floor;
+    }
+    let eigen = SymmetricEigen::new(c);
+    let mut d2 = 0.0;
+    for k in 0..6 {
+        let v = eigen.eigenvectors.column(k);
+        let lambda = eigen.eigenvalues[k];
+        if lambda > 0.0 {
+            d2 += v.dot(e).powi(2) / lambda;
+        }
+    }
+    d2.sqrt()
+}
+
+fn trace3(c: &Matrix6<f64>, from: usize) -> f64 {
+    (from..from + 3).map(|i| c[(i, i)]).sum::<f64>().max(0.0)
+}

@@ -1,0 +1,390 @@
+//! `verify` on realistic recordings (the kinhec suite, `testdata/kinhec`): a saved X of the same rig
+//! fits, a bumped camera or a turned X does not, a recording without motion cannot tell; and the
+//! error of a point at the working distance (`uncertainty.at_point`) is as large as it says.
+//!
+//! `cargo test --release -p handeye --test verify -- --nocapture` prints the measurements.
+
+use std::path::{Path, PathBuf};
+
+use handeye::calibrate::batch::{Options, calibrate};
+use handeye::calibrate::verify::{Consistency, SavedUnit, SavedX, Verification, verify};
+use handeye::io::{Format, read_pose_file, transform_from_json};
+use handeye::model::pose::{exp_so3, transform_from_parts};
+use handeye::{Pairing, PosePair, Setup, Transform};
+use nalgebra::Vector3;
+use serde_json::Value;
+
+fn suite() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec")
+}
+
+/// The manifest's pose-pair entries whose file name starts with `kind`.
+fn entries(kind: &str) -> Vec<Value> {
+    let text = std::fs::read_to_string(suite().join("manifest.json")).unwrap();
+    let manifest: Value = serde_json::from_str(&text).unwrap();
+    manifest["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| {
+            e["type"] == "pose_pairs"
+                && e["file"]
+                    .as_str()
+                    .unwrap()
+                    .starts_with(&format!("pairs/{kind}"))
+        })
+        .cloned()
+        .collect()
+}
+
+fn setup(e: &Value) -> Setup {
+    if e["setup"] == "eye-to-hand" {
+        Setup::EyeToHand
+    } else {
+        Setup::EyeInHand
+    }
+}
+
+fn poses(e: &Value) -> Vec<PosePair> {
+    read_pose_file(&suite().join(e["file"].as_str().unwrap()), Format::Auto)
+        .unwrap()
+        .pairs
+}
+
+fn options() -> Options {
+    Options {
+        pairing: Pairing::All,
+        ..Options::default()
+    }
+}
+
+/// The X calibrated from `poses` as `calibrate --output json` saves it (with its covariance).
+fn saved(poses: &[PosePair], setup: Setup) -> SavedX {
+    let r = calibrate(poses, setup, &options()).unwrap();
+    SavedX {
+        x: r.transform,
+        setup: Some(setup),
+        covariance: Some(r.uncertainty.covariance),
+        unit: SavedUnit::Unknown,
+    }
+}
+
+/// The recording as it is after the camera moved on its mount by `delta` (X becomes X·delta):
+/// each observation becomes delta⁻¹ · camera_from_target.
+fn bumped(poses: &[PosePair], delta: &Transform) -> Vec<PosePair> {
+    poses
+        .iter()
+        .map(|p| PosePair {
+            base_from_gripper: p.base_from_gripper,
+            camera_from_target: delta.inverse() * p.camera_from_target,
+        })
+        .collect()
+}
+
+fn transform(r: Vector3<f64>, t: Vector3<f64>) -> Transform {
+    transform_from_parts(&exp_so3(&r), &t)
+}
+
+/// A unit vector from a seed, spread over the sphere.
+fn direction(k: usize) -> Vector3<f64> {
+    let golden = 2.399_963_229_728_653;
+    let z = 1.0 - 2.0 * ((k as f64 + 0.5) / 7.0).fract();
+    let r = (1.0 - z * z).sqrt();
+    let phi = golden * k as f64;
+    Vector3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// The kinds whose halves (20 to 25 poses) determine X: realistic noise, several robots.
+const SAME_RIG: [&str; 3] = ["nominal", "student_t", "robot_error"];
+
+fn halves(e: &Value) -> (Vec<PosePair>, Vec<PosePair>) {
+    let p = poses(e);
+    let h = p.len() / 2;
+    (p[..h].to_vec(), p[h..].to_vec())
+}
+
+fn show(name: &str, v: &Verification) {
+    println!(
+        "{name:48} {:13} {:5.2} sigmas; difference {:.3}° {:.2} mm; sigma {:.3}° {:.2} mm",
+        v.verdict.name(),
+        v.distance_sigmas,
+        v.difference.rotation_deg,
+        v.difference.translation * 1e3,
+        v.sigma.rotation_deg,
+        v.sigma.translation * 1e3
+    );
+}
+
+#[test]
+fn the_same_rig_is_consistent_and_a_bumped_camera_is_not() {
+    let (mut same, mut bumps) = (Vec::new(), Vec::new());
+    for kind in SAME_RIG {
+        for (k, e) in entries(kind).iter().enumerate() {
+            let name = e["file"].as_str().unwrap();
+            let (first, second) = halves(e);
+            let s = saved(&first, setup(e));
+            let v = verify(&s, &second, setup(e), &options()).unwrap();
+            show(name, &v);
+            same.push((name.to_string(), v.verdict, v.distance_sigmas));
+            // The camera knocked by 0.5° about some axis and 2 mm along another.
+            let delta = transform(direction(k) * 0.5f64.to_radians(), direction(k + 3) * 0.002);
+            let v = verify(&s, &bumped(&second, &delta), setup(e), &options()).unwrap();
+            show("  bumped 0.5° / 2 mm", &v);
+            bumps.push((name.to_string(), v.verdict, v.distance_sigmas));
+        }
+    }
+    assert!(same.len() >= 20, "{same:?}");
+    for (name, verdict, d) in &same {
+        assert_eq!(*verdict, Consistency::Consistent, "{name}: {d} sigmas");
+    }
+    // Recordings at stations see a 0.5° / 2 mm bump at 9 sigmas or more: every one is refused.
+    // The continuous ones (X's one sigma up to 0.4°: the bump is about one sigma of X) see most.
+    for (name, verdict, d) in &bumps {
+        if name.contains("stations") {
+            assert_eq!(
+                *verdict,
+                Consistency::Inconsistent,
+                "{name} bumped: {d} sigmas"
+            );
+        }
+    }
+    let refused = bumps
+        .iter()
+        .filter(|b| b.1 == Consistency::Inconsistent)
+        .count();
+    println!("bumps refused: {refused} of {}", bumps.len());
+    assert!(refused * 10 >= bumps.len() * 8, "{bumps:?}");
+    // The distances of the same rig follow χ²₆ (median √5.35 = 2.31) roughly: not all tiny.
+    let mut d: Vec<f64> = same.iter().map(|s| s.2).collect();
+    d.sort_by(f64::total_cmp);
+    let median = d[d.len() / 2];
+    assert!(
+        (1.2..3.5).contains(&median),
+        "median distance {median}: {d:?}"
+    );
+}
+
+#[test]
+fn a_saved_x_turned_by_one_degree_is_refused_and_its_cause_named() {
+    for (k, e) in entries("nominal").iter().enumerate() {
+        let (first, second) = halves(e);
+        let mut s = saved(&first, setup(e));
+        s.x = transform(direction(k) * 1f64.to_radians(), Vector3::zeros()) * s.x;
+        let v = verify(&s, &second, setup(e), &options()).unwrap();
+        show(e["file"].as_str().unwrap(), &v);
+        assert_eq!(v.verdict, Consistency::Inconsistent);
+        assert!((v.difference.rotation_deg - 1.0).abs() < 0.5, "{v:?}");
+        assert!(
+            v.message.contains("the camera moved on its mount"),
+            "{}",
+            v.message
+        );
+    }
+}
+
+#[test]
+fn a_recording_about_one_joint_cannot_tell() {
+    for e in entries("degenerate_single_joint") {
+        let all = poses(&e);
+        let good = &entries("nominal_continuous")
+            .into_iter()
+            .find(|n| n["setup"] == e["setup"])
+            .unwrap();
+        let s = saved(&poses(good), setup(&e));
+        let v = verify(&s, &all, setup(&e), &options()).unwrap();
+        show(e["file"].as_str().unwrap(), &v);
+        assert_eq!(v.verdict, Consistency::Undetermined);
+        assert!(v.message.contains("record motions"), "{}", v.message);
+    }
+}
+
+#[test]
+fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
+    let e = &entries("nominal_stations")[0];
+    let (first, second) = halves(e);
+    let mut s = saved(&first, setup(e));
+    s.unit = SavedUnit::Metre;
+    let mm: Vec<PosePair> = second
+        .iter()
+        .map(|p| {
+            let mut p = *p;
+            p.base_from_gripper.translation.vector *= 1e3;
+            p.camera_from_target.translation.vector *= 1e3;
+            p
+        })
+        .collect();
+    let v = verify(&s, &mm, setup(e), &options()).unwrap();
+    show("metres against millimetres", &v);
+    assert_eq!(v.verdict, Consistency::Consistent);
+    assert_eq!(v.unit_scale, 1000.0);
+    assert!(
+        v.notes.iter().any(|n| n.contains("millimetres")),
+        "{:?}",
+        v.notes
+    );
+    // The difference is in millimetres now: a thousand times the metres' one.
+    let metres = verify(&saved(&first, setup(e)), &second, setup(e), &options()).unwrap();
+    let ratio = v.difference.translation / metres.difference.translation;
+    assert!((ratio - 1000.0).abs() < 50.0, "{ratio}");
+    // A file that does not say its unit is converted by its size.
+    s.unit = SavedUnit::Unknown;
+    let v = verify(&s, &mm, setup(e), &options()).unwrap();
+    assert_eq!(v.verdict, Consistency::Consistent, "{v:?}");
+    assert_eq!(v.unit_scale, 1000.0);
+}
+
+#[test]
+fn without_the_saved_uncertainty_the_recordings_alone_counts() {
+    let e = &entries("nominal_stations")[1];
+    let (first, second) = halves(e);
+    let with = saved(&first, setup(e));
+    let without = SavedX {
+        covariance: None,
+        ..with.clone()
+    };
+    let a = verify(&with, &second, setup(e), &options()).unwrap();
+    let b = verify(&without, &second, setup(e), &options()).unwrap();
+    assert!(!b.saved_uncertainty && a.saved_uncertainty);
+    assert!(b.sigma.rotation_deg < a.sigma.rotation_deg, "{a:?} {b:?}");
+    assert!(b.distance_sigmas > a.distance_sigmas);
+    assert!(b.notes.iter().any(|n| n.contains("no uncertainty")));
+}
+
+#[test]
+fn an_inverted_recording_is_refused_as_misread() {
+    let e = &entries("nominal_stations")[0];
+    let (first, second) = halves(e);
+    let inverted: Vec<PosePair> = second
+        .iter()
+        .map(|p| PosePair {
+            base_from_gripper: p.base_from_gripper.inverse(),
+            camera_from_target: p.camera_from_target,
+        })
+        .collect();
+    let err = verify(&saved(&first, setup(e)), &inverted, setup(e), &options()).unwrap_err();
+    assert!(matches!(err, handeye::Error::Misread { .. }), "{err}");
+}
+
+#[test]
+fn outliers_in_the_recording_are_named_and_rejecting_them_restores_consistency() {
+    for e in entries("outliers_gross") {
+        let p = poses(&e);
+        // The truth is the reference: the saved X is the true one, without uncertainty.
+        let s = SavedX {
+            x: transform_from_json(&e["x"]).unwrap(),
+            setup: Some(setup(&e)),
+            covariance: None,
+            unit: SavedUnit::Unknown,
+        };
+        let kept = verify(&s, &p, setup(&e), &options()).unwrap();
+        let rejected = verify(
+            &s,
+            &p,
+            setup(&e),
+            &Options {
+                reject_outliers: true,
+                ..options()
+            },
+        )
+        .unwrap();
+        show(e["file"].as_str().unwrap(), &kept);
+        show("  --reject-outliers", &rejected);
+        let r = kept.recording.as_ref().unwrap();
+        assert!(!r.outliers.poses.is_empty(), "the outliers are named");
+        assert_eq!(kept.quality.name(), "questionable");
+        // Kept, they blur X beyond telling, or move it: never a silent "consistent".
+        assert_ne!(kept.verdict, Consistency::Consistent, "{kept:?}");
+        if kept.verdict == Consistency::Undetermined {
+            assert!(
+                kept.message.contains("--reject-outliers"),
+                "{}",
+                kept.message
+            );
+        }
+        assert_eq!(rejected.verdict, Consistency::Consistent);
+    }
+}
+
+#[test]
+fn the_error_at_the_working_distance_is_as_large_as_it_says() {
+    // The true error of the median target position mapped through X, over its sigma, on every
+    // realistic recording of both setups (three seeds each kind).
+    let mut ratios = Vec::new();
+    for kind in ["nominal", "student_t", "pnp", "robot_error", "high_noise"] {
+        for e in entries(kind) {
+            let p = poses(&e);
+            let r = match calibrate(&p, setup(&e), &options()) {
+                Ok(r) => r,
+                Err(err) => {
+                    println!("{}: refused ({err})", e["file"]);
+                    continue;
+                }
+            };
+            let at = r.uncertainty.at_point.as_ref().unwrap();
+            assert_eq!(at.frame, "camera");
+            let truth = transform_from_json(&e["x"]).unwrap();
+            let point = nalgebra::Point3::from(Vector3::from(at.point));
+            let error = (r.transform * point - truth * point).norm();
+            println!(
+                "{:48} point at {:.3} m: error {:.2} mm, sigma {:.2} mm",
+                e["file"].as_str().unwrap(),
+                Vector3::from(at.point).norm(),
+                error * 1e3,
+                at.sigma * 1e3
+            );
+            ratios.push(error / at.sigma);
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    let within = ratios.iter().filter(|r| **r <= 3.0).count() as f64 / ratios.len() as f64;
+    println!(
+        "{} results: error/sigma median {median:.2}, {:.0}% within 3 sigma",
+        ratios.len(),
+        within * 100.0
+    );
+    assert!(ratios.len() >= 30, "{ratios:?}");
+    assert!((0.5..=1.5).contains(&median), "median {median}: {ratios:?}");
+    assert!(within >= 0.9, "{within}: {ratios:?}");
+}
+
+#[test]
+fn the_point_can_be_chosen_and_its_sigma_grows_with_its_distance() {
+    let e = &entries("nominal_stations")[0];
+    let p = poses(e);
+    let near = calibrate(
+        &p,
+        setup(e),
+        &Options {
+            point: Some([0.0, 0.0, 0.1]),
+            ..options()
+        },
+    )
+    .unwrap();
+    let far = calibrate(
+        &p,
+        setup(e),
+        &Options {
+            point: Some([0.0, 0.0, 3.0]),
+            ..options()
+        },
+    )
+    .unwrap();
+    let (a, b) = (
+        near.uncertainty.at_point.clone().unwrap(),
+        far.uncertainty.at_point.unwrap(),
+    );
+    assert_eq!(a.point, [0.0, 0.0, 0.1]);
+    // Beyond the working distance the rotation's error adds to the translation's.
+    let working = calibrate(&p, setup(e), &options()).unwrap();
+    let w = working.uncertainty.at_point.unwrap();
+    assert!(b.sigma > w.sigma && a.sigma > 0.0, "{a:?} {w:?} {b:?}");
+    // The first-order image of the covariance agrees with the replicates' own.
+    let mut u = near.uncertainty.clone();
+    u.samples.clear();
+    let linear = u.place(&near.transform, [0.0, 0.0, 3.0]);
+    assert!(
+        (linear.sigma / b.sigma - 1.0).abs() < 0.05,
+        "{linear:?} {b:?}"
+    );
+}
