@@ -42,10 +42,21 @@ fn motions_about_one_joint_are_still_blamed_by_every_method() {
     // Daniilidis and Tsai included: Daniilidis's own bootstrap did not see the degeneracy, and it
     // answered 113° / 3 m off with a verdict of questionable; whether the motions determine X is
     // now judged on them, whatever the method.
-    let methods = ["andreff", "andreff-joint", "park", "horaud", "tsai", "daniilidis", "refine"];
-    for (set, method) in ["degenerate_single_joint_continuous_eih_s0", "degenerate_single_joint_continuous_eih_s2"]
-        .iter()
-        .flat_map(|s| methods.map(|m| (*s, m)))
+    let methods = [
+        "andreff",
+        "andreff-joint",
+        "park",
+        "horaud",
+        "tsai",
+        "daniilidis",
+        "refine",
+    ];
+    for (set, method) in [
+        "degenerate_single_joint_continuous_eih_s0",
+        "degenerate_single_joint_continuous_eih_s2",
+    ]
+    .iter()
+    .flat_map(|s| methods.map(|m| (*s, m)))
     {
         let words = refusal(set, method);
         assert!(
