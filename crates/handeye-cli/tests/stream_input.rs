@@ -20,13 +20,14 @@ fn handeye() -> Command {
     Command::new(env!("CARGO_BIN_EXE_handeye"))
 }
 
-/// Runs `handeye online INPUT --d-max 100` with `stdin` fed from another thread; returns
-/// (exit code, stdout, stderr).
+/// Runs `handeye online INPUT --d-max 100 --estimator paper` (the paper's estimator prints an
+/// event per calibration, which these tests of streaming count) with `stdin` fed from another
+/// thread; returns (exit code, stdout, stderr).
 fn online(input: &Path, stdin: Vec<u8>) -> (i32, String, String) {
     let mut child = handeye()
         .arg("online")
         .arg(input)
-        .args(["--d-max", "100"])
+        .args(["--d-max", "100", "--estimator", "paper"])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -244,7 +245,16 @@ fn events_come_out_before_the_next_pose_is_awaited() {
     let all = events(&out);
     assert!(all.len() > 3, "{out}");
     let mut child = handeye()
-        .args(["online", "-", "--d-max", "100", "--output", "json"])
+        .args([
+            "online",
+            "-",
+            "--d-max",
+            "100",
+            "--estimator",
+            "paper",
+            "--output",
+            "json",
+        ])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
