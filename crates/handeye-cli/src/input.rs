@@ -338,22 +338,31 @@ pub fn records(
     }
     let format = args.format;
     let records = if format == Format::Visp || path.is_dir() {
-        file_records(open_poses(&path, format)?, &source)
+        file_records(open_poses(&path, format)?, &source, args.setup())?
     } else {
         let file = File::open(&path).map_err(|e| handeye::Error::Io {
             file: source.clone(),
             source: e,
         })?;
         let input = WaitHook::new(file, before_wait);
-        file_records(open_pose_stream(input, &source, format)?, &source)
+        file_records(
+            open_pose_stream(input, &source, format)?,
+            &source,
+            args.setup(),
+        )?
     };
     Ok((records, source, None))
 }
 
 /// The records of a file opened by [`open_poses`] or [`open_pose_stream`].
-fn file_records<R: BufRead + 'static>(input: PoseInput<R>, source: &str) -> Records {
-    match input {
+fn file_records<R: BufRead + 'static>(
+    input: PoseInput<R>,
+    source: &str,
+    setup: Setup,
+) -> Result<Records> {
+    Ok(match input {
         PoseInput::Whole(series) => {
+            series.check_setup(setup, source)?;
             note(source, &series.projections);
             let written = series.written;
             let records = series.pairs.into_iter().enumerate().map(move |(k, pose)| {
@@ -374,7 +383,7 @@ fn file_records<R: BufRead + 'static>(input: PoseInput<R>, source: &str) -> Reco
                 told: false,
             })
         }
-    }
+    })
 }
 
 /// The records of [`records`], read and parsed on a second thread while this one calibrates.

@@ -34,16 +34,20 @@ enum Kind {
     Csv,
     OpencvYaml,
     Moveit,
+    MoveitYaml,
+    EasyHandeye,
     Visp,
     Stream,
     Truth,
 }
 
-const KINDS: [Kind; 7] = [
+const KINDS: [Kind; 9] = [
     Kind::Jsonl,
     Kind::Csv,
     Kind::OpencvYaml,
     Kind::Moveit,
+    Kind::MoveitYaml,
+    Kind::EasyHandeye,
     Kind::Visp,
     Kind::Stream,
     Kind::Truth,
@@ -155,6 +159,42 @@ fn valid_files(kind: Kind, rng: &mut Xoshiro256PlusPlus) -> Vec<(String, String)
                 "moveit.json".into(),
                 format!("[\n{}\n]\n", items.join(",\n")),
             )]
+        }
+        Kind::MoveitYaml => {
+            // As yaml-cpp's emitter writes moveit_calibration's "Save samples".
+            let mut text = String::new();
+            for (a, b) in poses(3) {
+                for (k, (key, t)) in [("effector_wrt_world", a), ("object_wrt_sensor", b)]
+                    .into_iter()
+                    .enumerate()
+                {
+                    text.push_str(if k == 0 { "- " } else { "  " });
+                    text.push_str(&format!("{key}:\n"));
+                    for v in flat(&t) {
+                        text.push_str(&format!("    - {v}\n"));
+                    }
+                }
+            }
+            vec![("samples.yaml".into(), text)]
+        }
+        Kind::EasyHandeye => {
+            // As rosidl's message_to_yaml writes easy_handeye2's SampleList.
+            let mut text = "parameters:\n  name: cell\n  calibration_type: eye_in_hand\n  robot_base_frame: base_link\nsamples:\n".to_string();
+            for (a, b) in poses(3) {
+                for (k, (key, t)) in [("robot", a), ("tracking", b)].into_iter().enumerate() {
+                    let j = TransformJson::from(&t);
+                    text.push_str(if k == 0 { "- " } else { "  " });
+                    text.push_str(&format!("{key}:\n    translation:\n"));
+                    for (c, v) in ["x", "y", "z"].iter().zip(j.translation) {
+                        text.push_str(&format!("      {c}: {v}\n"));
+                    }
+                    text.push_str("    rotation:\n");
+                    for (c, v) in ["x", "y", "z", "w"].iter().zip(j.quaternion_xyzw) {
+                        text.push_str(&format!("      {c}: {v}\n"));
+                    }
+                }
+            }
+            vec![("cell.samples".into(), text)]
         }
         Kind::Visp => {
             let mut files = Vec::new();
@@ -290,8 +330,10 @@ struct Tally {
 }
 
 /// Messages of the problems that concern a whole file, the only ones reported at line 0.
-const WHOLE_FILE: [&str; 7] = [
+const WHOLE_FILE: [&str; 9] = [
     "at least 2",
+    "missing (moveit_calibration's samples",
+    "missing (easy_handeye2's samples",
     "missing: give",
     "no ViSP robot pose files",
     "missing `data:`",
@@ -375,6 +417,8 @@ fn read_and_check(
             Kind::Csv => read_pose_file(path, Format::Csv)?.pairs,
             Kind::OpencvYaml => read_pose_file(path, Format::OpencvYaml)?.pairs,
             Kind::Moveit => read_pose_file(path, Format::Moveit)?.pairs,
+            Kind::MoveitYaml => read_pose_file(path, Format::MoveitYaml)?.pairs,
+            Kind::EasyHandeye => read_pose_file(path, Format::EasyHandeye)?.pairs,
             Kind::Visp => read_pose_file(path, Format::Visp)?.pairs,
             Kind::Stream => {
                 let s = read_stamped_poses(path)?;

@@ -22,6 +22,7 @@ pub mod sync;
 mod sync;
 mod transform;
 mod truth;
+mod yaml_tree;
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Chain, Cursor, Read};
@@ -29,7 +30,7 @@ use std::path::Path;
 
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Written, WrittenAs};
-use crate::model::motion::PosePair;
+use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::ReadTransform;
 use lines::{Line, Lines};
 
@@ -96,6 +97,10 @@ pub enum Format {
     Moveit,
     /// A directory of ViSP `pose_fPe_*.yaml` / `pose_cPo_*.yaml` files.
     Visp,
+    /// moveit_calibration's "Save samples" YAML (`effector_wrt_world` / `object_wrt_sensor`).
+    MoveitYaml,
+    /// easy_handeye2's saved samples (`NAME.samples`: `parameters` and `samples`).
+    EasyHandeye,
 }
 
 crate::named_enum!(Format, "format", "format" {
@@ -105,6 +110,8 @@ crate::named_enum!(Format, "format", "format" {
     OpencvYaml => "opencv-yaml" | "yaml",
     Moveit => "moveit",
     Visp => "visp",
+    MoveitYaml => "moveit-yaml",
+    EasyHandeye => "easy-handeye",
 });
 
 /// One pose pair read from a file, with its place.
@@ -134,6 +141,45 @@ pub struct PoseSeries {
     pub projections: Projections,
     /// The directions in which the file wrote its poses (for `Options::written`).
     pub written: Written,
+    /// The setup the file declares, if it declares one (easy_handeye2's samples do).
+    pub setup: Option<DeclaredSetup>,
+}
+
+/// The setup a pose file declares, and the line where it does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DeclaredSetup {
+    /// The setup.
+    pub setup: Setup,
+    /// Its line, from 1.
+    pub line: usize,
+}
+
+/// A setup as a sample file's reader says it.
+fn setup_words(setup: Setup) -> &'static str {
+    match setup {
+        Setup::EyeInHand => "eye-in-hand (a camera on the gripper)",
+        Setup::EyeToHand => "eye-to-hand (a fixed camera)",
+    }
+}
+
+impl PoseSeries {
+    /// Refuses to read the file `source` for `setup` when it declares the other one: its robot
+    /// poses were written for that one, and an X solved the other way would be meaningless.
+    pub fn check_setup(&self, setup: Setup, source: &str) -> Result<()> {
+        match self.setup {
+            Some(declared) if declared.setup != setup => Err(parse_error(
+                source,
+                declared.line,
+                "parameters.calibration_type",
+                format!(
+                    "the file declares {}, and this run asks for {}: calibrate it with the setup it declares",
+                    setup_words(declared.setup),
+                    setup_words(setup)
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
 }
 
 /// The rotation matrices of one input that were orthonormal only to the precision they were
@@ -496,6 +542,10 @@ pub fn open_pose_stream<R: BufRead>(
     Ok(match format {
         Format::OpencvYaml => PoseInput::Whole(peer::read_opencv_yaml(&text(input)?, source)?),
         Format::Moveit => PoseInput::Whole(peer::read_moveit_json(&text(input)?, source)?),
+        Format::MoveitYaml => PoseInput::Whole(peer::read_moveit_yaml(&text(input)?, source)?),
+        Format::EasyHandeye => {
+            PoseInput::Whole(peer::read_easy_handeye_samples(&text(input)?, source)?)
+        }
         f => PoseInput::Stream(PoseReader::new(input, source, f)?),
     })
 }
@@ -509,6 +559,7 @@ pub(crate) fn read_records<R: BufRead>(reader: &mut PoseReader<R>) -> Result<Pos
         lines: Vec::new(),
         projections: Projections::default(),
         written: Written::NAMED,
+        setup: None,
     };
     for (k, record) in reader.by_ref().enumerate() {
         let record = record?;
@@ -551,9 +602,11 @@ pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
 }
 
 /// Tells the format of `input` from its head: `%YAML` first or `!!opencv-matrix` in the first
-/// content lines is OpenCV YAML, a JSON list (`[` then `[`, `{` or `]`) is moveit; otherwise [`Format::Auto`] (decided per
+/// content lines is OpenCV YAML, a JSON list (`[` then `[`, `{` or `]`) is moveit,
+/// `effector_wrt_world:` is moveit's YAML, a first line `parameters:` or `samples:` is
+/// easy_handeye2's samples; otherwise [`Format::Auto`] (decided per
 /// record by [`PoseReader`]). The head read (up to the first line that is neither blank nor a `#`
-/// comment, or the next one after a YAML `---` or `key:` line; at most 2 × [`MAX_LINE`] bytes) is
+/// comment, or up to two more after YAML `---` or `key:` lines; at most 2 × [`MAX_LINE`] bytes) is
 /// returned chained before the rest of `input`, so that nothing is lost and nothing reopened.
 pub(crate) fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Format, Sniffed<R>)> {
     let mut head = Vec::new();
@@ -592,7 +645,7 @@ pub(crate) fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Fo
             .unwrap_or(line)
             .trim_ascii();
         if !line.is_empty() && !line.starts_with(b"#") {
-            let more = content == 0 && (line == b"---" || line.ends_with(b":"));
+            let more = content < 2 && (line == b"---" || line.ends_with(b":"));
             content += 1;
             if !more {
                 break;
@@ -612,6 +665,15 @@ pub(crate) fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Fo
     }) {
         // A JSON list (not a log line such as `[INFO] driver started`).
         Format::Moveit
+    } else if text.contains("effector_wrt_world:") || text.contains("object_wrt_sensor:") {
+        Format::MoveitYaml
+    } else if text
+        .lines()
+        .map(|l| l.trim_start_matches('\u{feff}').trim_end())
+        .find(|l| !l.trim_start().is_empty() && !l.trim_start().starts_with('#') && *l != "---")
+        .is_some_and(|l| l == "parameters:" || l == "samples:")
+    {
+        Format::EasyHandeye
     } else {
         Format::Auto
     };

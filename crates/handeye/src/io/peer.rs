@@ -8,14 +8,17 @@ use nalgebra::{Matrix4, Vector3};
 use serde_json::Value;
 
 use crate::io::json_text::{Step, line_of, path_name, repeated_key, steps};
+use crate::io::yaml_tree::YamlTree;
 use crate::io::{
-    FieldProblem, PoseSeries, Projections, parse_error, read_text, read_transform_json,
+    DeclaredSetup, FieldProblem, PoseSeries, Projections, parse_error, read_text,
+    read_transform_json,
 };
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Written, WrittenAs};
-use crate::model::motion::PosePair;
+use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{
     ReadTransform, Transform, check_translation, exp_so3, read_matrix4, transform_from_parts,
+    transform_from_xyz_quat_xyzw,
 };
 
 /// Reads OpenCV-YAML pose pairs as camodocal writes them: `T1_i` and `T2_i`, each a 4×4
@@ -290,6 +293,141 @@ fn moveit_matrix(
     })
 }
 
+/// Reads moveit_calibration's "Save samples" YAML: a list of `{effector_wrt_world: [16 numbers],
+/// object_wrt_sensor: [16 numbers]}`, each a 4×4 matrix row by row: the effector in the robot's
+/// base (`base_from_gripper`) and the target in the camera (`camera_from_target`). Errors name the
+/// line and the place (`[pair].effector_wrt_world[k]`).
+pub fn read_moveit_yaml(text: &str, file: &str) -> Result<PoseSeries> {
+    let tree = YamlTree::parse(text, file)?;
+    const WHAT: &str =
+        "moveit_calibration's samples: a list of effector_wrt_world and object_wrt_sensor";
+    let n = tree.sequence("", WHAT)?;
+    let mut pairs = Vec::with_capacity(n);
+    let mut lines = Vec::with_capacity(n);
+    let mut projections = Projections::default();
+    for k in 0..n {
+        let robot = yaml_matrix16(&tree, &format!("[{k}].effector_wrt_world"), file)?;
+        let camera = yaml_matrix16(&tree, &format!("[{k}].object_wrt_sensor"), file)?;
+        projections.add(&robot);
+        projections.add(&camera);
+        pairs.push(PosePair {
+            base_from_gripper: robot.transform,
+            camera_from_target: camera.transform,
+        });
+        lines.push(
+            tree.line_of_sequence(&format!("[{k}].effector_wrt_world"))
+                .unwrap_or(0),
+        );
+    }
+    series_at(pairs, lines, file, projections)
+}
+
+/// A 4×4 matrix written as a YAML list of 16 numbers, row by row.
+fn yaml_matrix16(tree: &YamlTree, path: &str, file: &str) -> Result<ReadTransform> {
+    let count = tree.sequence(path, "a list of 16 numbers, a 4×4 matrix row by row")?;
+    let line = tree.line_of_sequence(path).unwrap_or(0);
+    if count != 16 {
+        return Err(parse_error(
+            file,
+            line,
+            path,
+            format!("{count} numbers: expected 16, a 4×4 matrix row by row"),
+        ));
+    }
+    let mut m = Matrix4::zeros();
+    for k in 0..16 {
+        m[(k / 4, k % 4)] = tree.number(&format!("{path}[{k}]"), "a number")?;
+    }
+    read_matrix4(&m).map_err(|p| parse_error(file, line, path, p.to_string()))
+}
+
+/// Reads easy_handeye2's saved samples (`~/.ros2/easy_handeye2/calibrations/NAME.samples`, the
+/// YAML of its `SampleList` message): `parameters.calibration_type` and a list of `samples`, each a
+/// `robot` and a `tracking` transform (`translation {x, y, z}`, `rotation {x, y, z, w}`).
+///
+/// easy_handeye2 looks the robot transform up from the base to the effector for `eye_in_hand`
+/// (`base_from_gripper`) and from the effector to the base for `eye_on_base` (`gripper_from_base`,
+/// read as written: inverted); `tracking` is the marker in the tracking system (`camera_from_target`).
+/// The setup the file declares is returned with the series, to be checked against the one asked.
+pub fn read_easy_handeye_samples(text: &str, file: &str) -> Result<PoseSeries> {
+    let tree = YamlTree::parse(text, file)?;
+    let setup = match tree.text("parameters.calibration_type") {
+        None => None,
+        Some((kind, line)) => Some(DeclaredSetup {
+            setup: match kind {
+                "eye_in_hand" => Setup::EyeInHand,
+                "eye_on_base" | "eye_to_hand" => Setup::EyeToHand,
+                other => {
+                    return Err(parse_error(
+                        file,
+                        line,
+                        "parameters.calibration_type",
+                        format!("`{other}`: expected eye_in_hand or eye_on_base"),
+                    ));
+                }
+            },
+            line,
+        }),
+    };
+    let robot_inverted = setup.is_some_and(|s| s.setup == Setup::EyeToHand);
+    let n = tree.sequence(
+        "samples",
+        "easy_handeye2's samples: a list of robot and tracking transforms",
+    )?;
+    let mut pairs = Vec::with_capacity(n);
+    let mut lines = Vec::with_capacity(n);
+    for k in 0..n {
+        let robot = yaml_transform(&tree, &format!("samples[{k}].robot"), file)?;
+        let tracking = yaml_transform(&tree, &format!("samples[{k}].tracking"), file)?;
+        pairs.push(PosePair {
+            base_from_gripper: if robot_inverted {
+                robot.inverse()
+            } else {
+                robot
+            },
+            camera_from_target: tracking,
+        });
+        lines.push(
+            tree.text(&format!("samples[{k}].robot.translation.x"))
+                .map_or(0, |(_, line)| line.saturating_sub(2)),
+        );
+    }
+    let series = series_at(pairs, lines, file, Projections::default())?;
+    Ok(PoseSeries {
+        written: Written {
+            robot: if robot_inverted {
+                WrittenAs::Inverse
+            } else {
+                WrittenAs::Named
+            },
+            camera: WrittenAs::Named,
+        },
+        setup,
+        ..series
+    })
+}
+
+/// A `geometry_msgs/Transform` in YAML: `translation {x, y, z}` and `rotation {x, y, z, w}`.
+fn yaml_transform(tree: &YamlTree, path: &str, file: &str) -> Result<Transform> {
+    let t = ["x", "y", "z"].map(|c| format!("{path}.translation.{c}"));
+    let q = ["x", "y", "z", "w"].map(|c| format!("{path}.rotation.{c}"));
+    let mut translation = [0.0; 3];
+    for (v, at) in translation.iter_mut().zip(&t) {
+        *v = tree.number(at, "a geometry_msgs/Transform: translation {x, y, z}")?;
+        check_translation(*v).map_err(|p| {
+            parse_error(file, tree.text(at).map_or(0, |(_, l)| l), at, p.to_string())
+        })?;
+    }
+    let mut quaternion = [0.0; 4];
+    for (v, at) in quaternion.iter_mut().zip(&q) {
+        *v = tree.number(at, "a geometry_msgs/Transform: rotation {x, y, z, w}")?;
+    }
+    transform_from_xyz_quat_xyzw(translation, quaternion).map_err(|p| {
+        let line = tree.text(&q[3]).map_or(0, |(_, l)| l);
+        parse_error(file, line, format!("{path}.rotation"), p.to_string())
+    })
+}
+
 /// A short form of a JSON value for messages.
 fn brief(v: &Value) -> String {
     let text = v.to_string();
@@ -549,6 +687,7 @@ fn series_at(
         lines,
         projections,
         written: Written::NAMED,
+        setup: None,
     })
 }
 

@@ -1,11 +1,12 @@
 //! The JSON form of a transform (SPEC sec. 7): `{"translation", "quaternion_xyzw", "matrix"}`.
 
-use nalgebra::Matrix4;
+use nalgebra::{Matrix4, Vector3};
 use serde_json::{Map, Value};
 
 use crate::model::error::TransformProblem;
 use crate::model::pose::{
-    ReadTransform, Transform, check_translation, read_matrix4, transform_from_xyz_quat_xyzw,
+    ReadTransform, Transform, check_translation, exp_so3, read_matrix4, transform_from_parts,
+    transform_from_xyz_quat_xyzw,
 };
 
 /// Largest entry difference accepted between `matrix` and `translation`/`quaternion_xyzw` when both
@@ -49,8 +50,9 @@ impl From<TransformProblem> for FieldProblem {
     }
 }
 
-/// Reads a transform from JSON: a bare 4×4 array, or an object with `matrix` and/or
-/// `translation` + `quaternion_xyzw` (both forms must then agree within [`CONSISTENCY_TOL`], or
+/// Reads a transform from JSON: a bare matrix (4×4, 3×4 with the row `0 0 0 1` implied, or 16
+/// numbers row by row), or an object with `matrix` and/or `translation` + `quaternion_xyzw` (or
+/// `translation` + `rvec`, a rotation vector in radians) (both forms must then agree within [`CONSISTENCY_TOL`], or
 /// within the matrix's deviation from orthonormality when it was printed more coarsely).
 pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
     read_transform_json(v).map(|r| r.transform)
@@ -71,7 +73,7 @@ pub(crate) fn read_transform_json(v: &Value) -> Result<ReadTransform, FieldProbl
         }
         _ => Err(FieldProblem::new(
             "",
-            "expected a 4×4 array or an object with `matrix` or `translation` + `quaternion_xyzw`",
+            "expected a matrix (4×4, 3×4 or 16 numbers) or an object with `matrix`, or `translation` + `quaternion_xyzw` or `rvec`",
         )),
     }
 }
@@ -99,7 +101,7 @@ fn one_transform(
         }),
         (None, None) => Err(FieldProblem::new(
             "",
-            "a transform needs `matrix`, or `translation` and `quaternion_xyzw`",
+            "a transform needs `matrix`, or `translation` and `quaternion_xyzw` (or `rvec`)",
         )),
     }
 }
@@ -135,53 +137,119 @@ impl TransformNumbers {
     }
 }
 
-/// The transform of `translation` + `quaternion_xyzw`, if given; one without the other is an
-/// error unless a `matrix` is given (`has_matrix`).
+/// The transform of `translation` + `quaternion_xyzw` or `translation` + `rvec` (a rotation
+/// vector in radians, as `solvePnP` returns it), if given; a translation without a rotation (or
+/// the reverse) is an error unless a `matrix` is given (`has_matrix`).
 fn transform_from_parts_json(
     o: &Map<String, Value>,
     has_matrix: bool,
 ) -> Result<Option<Transform>, FieldProblem> {
-    match (o.get("translation"), o.get("quaternion_xyzw")) {
-        (Some(t), Some(q)) => {
+    let rotation = match (o.get("quaternion_xyzw"), o.get("rvec")) {
+        (Some(_), Some(_)) => {
+            return Err(FieldProblem::new(
+                "rvec",
+                "give one rotation: `quaternion_xyzw` or `rvec`, not both",
+            ));
+        }
+        (Some(q), None) => Some(Rotation::Quaternion(numbers::<4>(q, "quaternion_xyzw")?)),
+        (None, Some(r)) => Some(Rotation::Vector(rotation_vector(r)?)),
+        (None, None) => None,
+    };
+    match (o.get("translation"), rotation) {
+        (Some(t), Some(rotation)) => {
             let t = numbers::<3>(t, "translation")?;
             for (k, v) in t.iter().enumerate() {
                 check_translation(*v)
                     .map_err(|p| FieldProblem::new(format!("translation[{k}]"), p.to_string()))?;
             }
-            let q = numbers::<4>(q, "quaternion_xyzw")?;
-            Ok(Some(transform_from_xyz_quat_xyzw(t, q).map_err(|p| {
-                FieldProblem::new("quaternion_xyzw", p.to_string())
-            })?))
+            match rotation {
+                Rotation::Quaternion(q) => {
+                    Ok(Some(transform_from_xyz_quat_xyzw(t, q).map_err(|p| {
+                        FieldProblem::new("quaternion_xyzw", p.to_string())
+                    })?))
+                }
+                Rotation::Vector(w) => {
+                    Ok(Some(transform_from_parts(&exp_so3(&w), &Vector3::from(t))))
+                }
+            }
         }
         (Some(_), None) if !has_matrix => Err(FieldProblem::new(
             "quaternion_xyzw",
-            "missing (needed with `translation`)",
+            "missing (needed with `translation`; or give `rvec`)",
         )),
-        (None, Some(_)) if !has_matrix => Err(FieldProblem::new(
+        (None, Some(rotation)) if !has_matrix => Err(FieldProblem::new(
             "translation",
-            "missing (needed with `quaternion_xyzw`)",
+            format!(
+                "missing (needed with `{}`)",
+                match rotation {
+                    Rotation::Quaternion(_) => "quaternion_xyzw",
+                    Rotation::Vector(_) => "rvec",
+                }
+            ),
         )),
         _ => Ok(None),
     }
 }
 
-/// A 4×4 row-major array of numbers; translation entries must pass [`check_translation`].
+/// The rotation of a transform's parts.
+enum Rotation {
+    Quaternion([f64; 4]),
+    Vector(Vector3<f64>),
+}
+
+/// Largest rotation vector accepted, radians: one turn. `solvePnP` returns at most π; a longer
+/// one is almost always degrees.
+const MAX_RVEC_NORM: f64 = std::f64::consts::TAU;
+
+/// A rotation vector (axis × angle, radians).
+fn rotation_vector(v: &Value) -> Result<Vector3<f64>, FieldProblem> {
+    let w = Vector3::from(numbers::<3>(v, "rvec")?);
+    if w.norm() > MAX_RVEC_NORM {
+        return Err(FieldProblem::new(
+            "rvec",
+            format!(
+                "a rotation of {:.1} rad ({:.0}°) is more than a turn: `rvec` is in radians (degrees given?)",
+                w.norm(),
+                w.norm().to_degrees()
+            ),
+        ));
+    }
+    Ok(w)
+}
+
+/// The shapes a matrix may be written in, for messages.
+const MATRIX_SHAPES: &str =
+    "expected 4 rows of 4 numbers, 3 rows of 4 (the row 0 0 0 1 implied), or 16 numbers row by row";
+
+/// A matrix as 4 rows of 4 numbers, 3 rows of 4 (the last row `0 0 0 1` implied), or a flat list
+/// of 16 numbers row by row; translation entries must pass [`check_translation`].
 fn matrix_from_json(v: &Value, field: &str) -> Result<Matrix4<f64>, FieldProblem> {
-    let rows = v
+    let items = v
         .as_array()
-        .filter(|r| r.len() == 4)
-        .ok_or_else(|| FieldProblem::new(field, "expected 4 rows of 4 numbers"))?;
-    let mut m = Matrix4::zeros();
-    for (r, row) in rows.iter().enumerate() {
+        .ok_or_else(|| FieldProblem::new(field, MATRIX_SHAPES))?;
+    let mut m = Matrix4::identity();
+    let mut set = |r: usize, c: usize, x: &Value, at: String| {
+        m[(r, c)] = number(x, &at)?;
+        if c == 3 && r < 3 {
+            check_translation(m[(r, c)]).map_err(|p| FieldProblem::new(at, p.to_string()))?;
+        }
+        Ok::<_, FieldProblem>(())
+    };
+    if items.len() == 16 && !items.iter().any(Value::is_array) {
+        for (k, x) in items.iter().enumerate() {
+            set(k / 4, k % 4, x, format!("{field}[{k}]"))?;
+        }
+        return Ok(m);
+    }
+    if items.len() != 4 && items.len() != 3 {
+        return Err(FieldProblem::new(field, MATRIX_SHAPES));
+    }
+    for (r, row) in items.iter().enumerate() {
         let row = row.as_array().filter(|c| c.len() == 4).ok_or_else(|| {
             FieldProblem::new(format!("{field}[{r}]"), "expected a row of 4 numbers")
         })?;
         for (c, x) in row.iter().enumerate() {
-            let at = format!("{field}[{r}][{c}]");
-            m[(r, c)] = number(x, &at)?;
-            if c == 3 && r < 3 {
-                check_translation(m[(r, c)]).map_err(|p| FieldProblem::new(at, p.to_string()))?;
-            }
+            set(r, c, x, format!("{field}[{r}][{c}]"))?;
         }
     }
     Ok(m)
@@ -244,8 +312,8 @@ mod tests {
         let mut m = json!([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]);
         m[1][2] = json!("x");
         assert_eq!(transform_from_json(&m).unwrap_err().field, "[1][2]");
-        let e = transform_from_json(&json!({"matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]]}))
-            .unwrap_err();
+        // 3×4 is a matrix (SPEC sec. 9); 2 rows are not.
+        let e = transform_from_json(&json!({"matrix": [[1, 0, 0, 0], [0, 1, 0, 0]]})).unwrap_err();
         assert_eq!(e.field, "matrix");
         let e = transform_from_json(&json!({"translation": [0, 0, 0]})).unwrap_err();
         assert_eq!(e.field, "quaternion_xyzw");
@@ -299,6 +367,64 @@ mod tests {
             nalgebra::Vector3::new(0.7, -0.2, 1.901),
         );
         let e = read_transform_json(&both(quaternion_xyzw(&other))).unwrap_err();
+        assert!(e.message.contains("disagree"), "{e:?}");
+    }
+
+    #[test]
+    fn reads_the_shapes_engineers_have() {
+        let t = Transform::new(
+            nalgebra::Vector3::new(0.4, -0.2, 0.9),
+            nalgebra::Vector3::new(0.3, -1.1, 2.5),
+        );
+        let m = t.to_homogeneous();
+        let flat: Vec<f64> = (0..16).map(|k| m[(k / 4, k % 4)]).collect();
+        let rows3: Vec<Vec<f64>> = (0..3)
+            .map(|r| (0..4).map(|c| m[(r, c)]).collect())
+            .collect();
+        let w = t.rotation.scaled_axis();
+        let t3 = [0.4, -0.2, 0.9];
+        for (what, v) in [
+            ("flat", json!(flat)),
+            ("flat matrix", json!({ "matrix": flat })),
+            ("3×4", json!(rows3)),
+            ("3×4 matrix", json!({ "matrix": rows3 })),
+            ("rvec", json!({"translation": t3, "rvec": [w.x, w.y, w.z]})),
+            (
+                "matrix and rvec",
+                json!({"matrix": rows3, "translation": t3, "rvec": [w.x, w.y, w.z]}),
+            ),
+        ] {
+            let read = transform_from_json(&v).unwrap_or_else(|e| panic!("{what}: {e:?}"));
+            let error = (read.to_homogeneous() - m).abs().max();
+            assert!(error < 1e-12, "{what}: {error}");
+        }
+    }
+
+    #[test]
+    fn odd_shapes_and_units_are_named() {
+        let field = |v: Value| transform_from_json(&v).unwrap_err();
+        let e = field(json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0]));
+        assert!(e.message.contains("16 numbers row by row"), "{e:?}");
+        let mut flat = json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+        flat[7] = json!("x");
+        assert_eq!(field(flat).field, "[7]");
+        let e = field(json!({"translation": [0, 0, 0], "rvec": [90, 0, 0]}));
+        assert_eq!(e.field, "rvec");
+        assert!(e.message.contains("degrees given?"), "{e:?}");
+        let e = field(
+            json!({"translation": [0, 0, 0], "rvec": [0, 0, 0], "quaternion_xyzw": [0, 0, 0, 1]}),
+        );
+        assert!(e.message.contains("not both"), "{e:?}");
+        let e = field(json!({"rvec": [0, 0, 0.1]}));
+        assert_eq!(e.field, "translation");
+        assert!(e.message.contains("`rvec`"), "{e:?}");
+        let e = field(json!({"translation": [0, 0, 0], "rvec": [0, 0]}));
+        assert_eq!(e.field, "rvec");
+        // A rotation vector and a matrix that disagree are refused.
+        let e = field(json!({
+            "matrix": [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]],
+            "translation": [0, 0, 0], "rvec": [0, 0, 0.01]
+        }));
         assert!(e.message.contains("disagree"), "{e:?}");
     }
 

@@ -163,7 +163,7 @@ impl Recording {
             notes: Vec::new(),
         };
         let mut recording = match source {
-            Source::File { path, format } => read_file(path, *format, &mut notes)?,
+            Source::File { path, format } => read_file(path, *format, options.setup, &mut notes)?,
             Source::Streams { robot, camera } => read_streams(robot, camera, options, &mut notes)?,
             #[cfg(feature = "rosbag")]
             Source::Bag { path, frames } => bag::read_bag(path, frames, options, &mut notes)?,
@@ -241,7 +241,12 @@ impl Notes<'_> {
 }
 
 /// A pose file, a ViSP directory or standard input (`-`).
-fn read_file(path: &Path, format: Format, notes: &mut Notes<'_>) -> Result<Recording> {
+fn read_file(
+    path: &Path,
+    format: Format,
+    setup: Setup,
+    notes: &mut Notes<'_>,
+) -> Result<Recording> {
     let source = path.display().to_string();
     let series = if path.as_os_str() == "-" {
         let reader = PoseReader::new(std::io::stdin().lock(), "-", format)?;
@@ -249,6 +254,7 @@ fn read_file(path: &Path, format: Format, notes: &mut Notes<'_>) -> Result<Recor
     } else {
         match open_poses(path, format)? {
             PoseInput::Whole(series) => {
+                series.check_setup(setup, &source)?;
                 // Read whole: as many pairs as the file has, the count checked by the solver.
                 notes.projections(&source, series.projections);
                 return Ok(file_recording(series, &source));
