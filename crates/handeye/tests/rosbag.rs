@@ -475,3 +475,63 @@ fn a_clock_offset_is_applied_to_the_robot_lookup() {
     .unwrap();
     assert!((e.offset - 0.037).abs() < 0.05, "{}", e.offset);
 }
+
+/// Issue 33 item 13: poses looked up between named frames cannot be "inverted"; when they fit
+/// inverted, two frame names were given the wrong way round, and the refusal says which to swap
+/// (never `--fix robot-inverted`), with no typed fix (no option of the call repairs frame names).
+#[test]
+fn swapped_frame_names_are_named_as_such_not_as_inverted_poses() {
+    use handeye::io::{BagFrames, Recording, RecordingOptions, Source};
+    use handeye::{Options, calibrate};
+    let run = |base: &str, gripper: &str, camera: &str, target: &str| {
+        let source = Source::Bag {
+            path: bag("eih_tf_mcap"),
+            frames: BagFrames {
+                base: base.into(),
+                gripper: gripper.into(),
+                camera: camera.into(),
+                target: Some(target.into()),
+                target_topic: None,
+            },
+        };
+        let r = Recording::read(&source, &RecordingOptions::default()).unwrap();
+        assert!(r.written.frames);
+        calibrate(
+            &r.poses,
+            Setup::EyeInHand,
+            &Options {
+                written: r.written,
+                replicates: 32,
+                ..Options::default()
+            },
+        )
+    };
+    let camera = "camera_color_optical_frame";
+    assert!(run("base_link", "tool0", camera, "board").is_ok());
+    for (swapped, words) in [
+        (
+            run("tool0", "base_link", camera, "board"),
+            "swap the base and gripper frame names",
+        ),
+        (
+            run("base_link", "tool0", "board", camera),
+            "swap the camera and target frame names",
+        ),
+    ] {
+        let e = swapped.unwrap_err();
+        let Error::Misread { frames, .. } = &e else {
+            panic!("{e}")
+        };
+        assert!(frames);
+        let text = e.to_string();
+        assert!(text.contains(words), "{text}");
+        assert!(text.contains("inverting them is not the fix"), "{text}");
+        assert!(!text.contains("--fix"), "{text}");
+        // The camera may be fixed instead: the setup is the one typed remedy left.
+        assert!(
+            matches!(e.remedy(), None | Some(handeye::Remedy::Setup(_))),
+            "{:?}",
+            e.remedy()
+        );
+    }
+}

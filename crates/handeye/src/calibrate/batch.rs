@@ -595,6 +595,7 @@ pub(crate) fn choose_reading(
             readings: check.fitting_better(),
             setup,
             other_setup: check.other_setup(setup),
+            frames: check.frames,
         }),
     }
 }

@@ -124,6 +124,10 @@ pub struct ReadingCheck {
     pub better: Option<ReadingFit>,
     /// Other readings that fit about as well as `better` (its mirror image, typically).
     pub also: Vec<ReadingFit>,
+    /// The poses were looked up between named frames ([`Written::frames`]): an inverted
+    /// reading means frame names swapped.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub frames: bool,
 }
 
 impl ReadingCheck {
@@ -131,9 +135,16 @@ impl ReadingCheck {
     /// readings that fit as well (no face's spelling of the fix: see [`ReadingCheck::advice`]).
     pub fn finding(&self, setup: Setup) -> Option<String> {
         let (given, better) = (self.as_given?, self.better?);
+        let meaning = |r: Reading| {
+            if self.frames {
+                r.meaning_in_frames(setup)
+            } else {
+                r.meaning(setup)
+            }
+        };
         let mut text = format!(
             "the poses fit far better read as {} (median residual {:.2}° and {:.1}% of the motion range, against {:.2}° and {:.1}% as given)",
-            better.reading.meaning(setup),
+            meaning(better.reading),
             better.rotation_deg,
             100.0 * better.translation_rel,
             given.rotation_deg,
@@ -141,9 +152,13 @@ impl ReadingCheck {
         );
         for other in &self.also {
             text.push_str(&format!(
-                "; it fits as well read as {} (fix {}), which gives an X of {} size for the {} setup",
-                other.reading.meaning(setup),
-                other.reading.name(),
+                "; it fits as well read as {}{}, which gives an X of {} size for the {} setup",
+                meaning(other.reading),
+                if self.frames && other.reading.inverts() {
+                    String::new()
+                } else {
+                    format!(" (fix {})", other.reading.name())
+                },
                 match other.plausible(setup) {
                     Some(true) => "a plausible",
                     Some(false) => "an unlikely",
@@ -163,6 +178,7 @@ impl ReadingCheck {
             readings: self.fitting_better(),
             setup,
             other_setup: self.other_setup(setup),
+            frames: self.frames,
         })
     }
 
@@ -188,6 +204,7 @@ impl ReadingCheck {
             &self.fitting_better(),
             &setup,
             &self.other_setup(setup),
+            &self.frames,
         ))
     }
 
@@ -203,7 +220,9 @@ impl ReadingCheck {
 
     /// Whether the better reading is the only one that fits (so `--fix auto` may apply it).
     pub fn unambiguous(&self) -> bool {
-        self.better.is_some() && self.also.is_empty()
+        self.better.is_some()
+            && self.also.is_empty()
+            && !(self.frames && self.better.is_some_and(|b| b.reading.inverts()))
     }
 
     /// A warning when the as-given reading fits but gives X and Y implausible sizes for the setup:
@@ -240,6 +259,7 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         as_given,
         better: None,
         also: Vec::new(),
+        frames: written.frames,
     };
     let rotations = gripper_rotations(&sample, setup);
     // Below DEGENERATE_SCATTER the rotations leave X free, and below LEAST_TURN_DEG the gripper
@@ -282,6 +302,7 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         as_given: Some(given),
         better: candidates.next(),
         also: candidates.collect(),
+        frames: written.frames,
     }
 }
 

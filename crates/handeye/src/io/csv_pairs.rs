@@ -186,6 +186,7 @@ impl<R: BufRead> CsvPairs<R> {
             written: Written {
                 robot: written_as(self.robot.inverted),
                 camera: written_as(self.camera.inverted),
+                frames: false,
             },
         })
     }

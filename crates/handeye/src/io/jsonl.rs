@@ -107,6 +107,7 @@ fn fast_record(text: &str, line: usize, projections: &mut Projections) -> Option
     let written = Written {
         robot: written_as(scanned.robot.1),
         camera: written_as(scanned.camera.1),
+        frames: false,
     };
     let robot = read(scanned.robot)?;
     let camera = read(scanned.camera)?;
@@ -186,6 +187,7 @@ fn parse_record(
         written: Written {
             robot: robot_written,
             camera: camera_written,
+            frames: false,
         },
     })
 }

@@ -71,6 +71,7 @@ pub fn read_opencv_yaml(text: &str, file: &str) -> Result<PoseSeries> {
         written: Written {
             robot: WrittenAs::Inverse,
             camera: WrittenAs::Inverse,
+            frames: false,
         },
         ..series
     })
@@ -401,6 +402,7 @@ pub fn read_easy_handeye_samples(text: &str, file: &str) -> Result<PoseSeries> {
                 WrittenAs::Named
             },
             camera: WrittenAs::Named,
+            frames: false,
         },
         setup,
         ..series

@@ -191,6 +191,7 @@ pub fn pair_stream_files(
             let written = Written {
                 robot: WrittenAs::Named,
                 camera: WrittenAs::Inverse,
+                frames: false,
             };
             let (r, c) = read_as(reading, written, &robot, &camera);
             let found = find_time_offset(&r, &c, setup, max_gap)?;

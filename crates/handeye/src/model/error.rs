@@ -214,7 +214,7 @@ pub enum Error {
     /// terms: the OpenCV drop-in names OpenCV's arguments).
     #[error(
         "the input looks misread: {}",
-        misread_advice(.finding, .readings, .setup, .other_setup)
+        misread_advice(.finding, .readings, .setup, .other_setup, .frames)
     )]
     Misread {
         /// What fits better, how well, and the other readings that fit as well, in words (no
@@ -228,6 +228,9 @@ pub enum Error {
         /// the other setup reads) fit far better, with X and Y of the sizes the other setup makes
         /// likely (`ReadingCheck::other_setup`). The first remedy is then `setup`.
         other_setup: bool,
+        /// The poses were looked up between named frames (`Written::frames`): an inverted
+        /// reading means two frame names swapped, which no option of the call fixes.
+        frames: bool,
     },
     /// X is not determined, and the input shows why: outlier poses, or a reading of the input
     /// that fits far better (kept by request). Its message gives each cause with its fix in the
@@ -308,6 +311,11 @@ impl Error {
                 other_setup: true,
                 ..
             } => Some(Remedy::Setup(setup.other())),
+            Self::Misread {
+                readings,
+                frames: true,
+                ..
+            } if readings.first().is_some_and(|r| r.inverts()) => None,
             Self::Misread { readings, .. } => readings.first().map(|&r| Remedy::Fix(r)),
             Self::Untrusted { why, .. } => why.iter().find_map(|w| w.remedy()),
             _ => None,
@@ -326,10 +334,14 @@ pub(crate) fn misread_advice(
     readings: &[Reading],
     setup: &Setup,
     other_setup: &bool,
+    frames: &bool,
 ) -> String {
     let Some(&better) = readings.first() else {
         return finding.to_string();
     };
+    if *frames && better.inverts() {
+        return frames_advice(finding, readings, *setup, *other_setup);
+    }
     if *other_setup {
         let other = setup.other();
         let mirror = readings
@@ -357,6 +369,51 @@ pub(crate) fn misread_advice(
     }
     text
 }
+
+/// [`misread_advice`] for poses looked up between named frames, whose directions are right as
+/// named: an inverted reading means two frame names given the wrong way round (swap them), or,
+/// for the robot poses, the other setup. Inverting the poses is never advised.
+fn frames_advice(finding: &str, readings: &[Reading], setup: Setup, other_setup: bool) -> String {
+    let swap = |reading: Reading| match reading {
+        Reading::RobotInverted => Some(SWAP_ROBOT_FRAMES),
+        Reading::CameraInverted => Some(SWAP_CAMERA_FRAMES),
+        Reading::BothInverted => Some(SWAP_BOTH_FRAMES),
+        _ => None,
+    };
+    let swaps: Vec<&str> = readings.iter().filter_map(|&r| swap(r)).collect();
+    let other = setup.other();
+    let robot = readings.contains(&Reading::RobotInverted);
+    let mut text = format!(
+        "{finding}: the poses were looked up between the frames named, so their directions are right as named and inverting them is not the fix"
+    );
+    if robot && other_setup {
+        text.push_str(&format!(
+            "; if {}, {}; if {}, {}",
+            camera_in_words(other),
+            Remedy::Setup(other).in_words(),
+            camera_in_words(setup),
+            swaps.join(", or ")
+        ));
+    } else {
+        text.push_str(&format!("; {}", swaps.join(", or ")));
+        if robot {
+            text.push_str(&format!(
+                "; if {}, {}",
+                camera_in_words(other),
+                Remedy::Setup(other).in_words()
+            ));
+        }
+    }
+    text
+}
+
+/// The swap of the robot's two frame names, in the words of both faces.
+const SWAP_ROBOT_FRAMES: &str = "swap the base and gripper frame names (`--base-frame` and `--gripper-frame`; `base_frame` and `gripper_frame` in Python)";
+/// The swap of the camera's two frame names.
+const SWAP_CAMERA_FRAMES: &str = "swap the camera and target frame names (`--camera-frame` and `--target-frame`; `camera_frame` and `target_frame` in Python)";
+/// Both swaps.
+const SWAP_BOTH_FRAMES: &str =
+    "swap both pairs of frame names (base and gripper, camera and target)";
 
 /// Where the camera is in a setup, in words: "the camera is fixed (eye-to-hand)".
 fn camera_in_words(setup: Setup) -> String {
@@ -414,6 +471,7 @@ mod tests {
             readings: vec![Reading::RobotInverted, Reading::CameraInverted],
             setup: Setup::EyeInHand,
             other_setup: false,
+            frames: false,
         };
         assert_eq!(
             misread.to_string(),

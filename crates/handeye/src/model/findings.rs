@@ -128,6 +128,32 @@ impl Reading {
         }
     }
 
+    /// What this reading means of poses looked up between named frames ([`Written::frames`]),
+    /// whose directions are right as named: an inversion means two frame names swapped.
+    pub fn meaning_in_frames(self, setup: Setup) -> String {
+        let other = setup.other();
+        match self {
+            Self::RobotInverted => format!(
+                "the robot poses inverted: either the base and gripper frame names are swapped, or the setup is {other}"
+            ),
+            Self::CameraInverted => {
+                "the camera poses inverted: the camera and target frame names are swapped".into()
+            }
+            Self::BothInverted => {
+                "both poses inverted: the base and gripper frame names are swapped, and so are the camera and target frame names".into()
+            }
+            other_reading => other_reading.meaning(setup),
+        }
+    }
+
+    /// Whether this reading inverts a pose (what a swap of two frame names does).
+    pub fn inverts(self) -> bool {
+        matches!(
+            self,
+            Self::RobotInverted | Self::CameraInverted | Self::BothInverted
+        )
+    }
+
     /// The poses read this way, from an input that wrote them in the directions `written`.
     ///
     /// A quaternion-order mix-up happened to the transform as the file wrote it: on a
@@ -231,6 +257,11 @@ pub struct Written {
     pub robot: WrittenAs,
     /// The camera poses: `camera_from_target` ([`WrittenAs::Named`]) or `target_from_camera`.
     pub camera: WrittenAs,
+    /// The poses were looked up between named frames (a ROS 2 recording's tf or pose topics):
+    /// their directions are as the frames name them, so a pose that fits inverted means two frame
+    /// names were given the wrong way round, not a file that wrote the inverse.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub frames: bool,
 }
 
 impl Written {
@@ -238,6 +269,13 @@ impl Written {
     pub const NAMED: Written = Written {
         robot: WrittenAs::Named,
         camera: WrittenAs::Named,
+        frames: false,
+    };
+
+    /// Both sides looked up between named frames, as the frames name them.
+    pub const FRAMES: Written = Written {
+        frames: true,
+        ..Written::NAMED
     };
 
     /// The directions of an input of which one part was written `self` and another `other`.
@@ -245,6 +283,7 @@ impl Written {
         Written {
             robot: self.robot.and(other.robot),
             camera: self.camera.and(other.camera),
+            frames: self.frames && other.frames,
         }
     }
 }

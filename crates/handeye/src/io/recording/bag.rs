@@ -100,6 +100,6 @@ pub(super) fn read_bag(
         offset_curve: found.map(|f| f.correlated.curve),
         target_source: Some(pairs.target_source),
         notes: Vec::new(),
-        written: Written::NAMED,
+        written: Written::FRAMES,
     })
 }

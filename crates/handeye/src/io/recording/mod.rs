@@ -381,6 +381,7 @@ fn read_streams(
         written: Written {
             robot: WrittenAs::Named,
             camera: WrittenAs::Inverse,
+            frames: false,
         },
         ..Recording::default()
     })
