@@ -360,7 +360,7 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
 /// The whole batch calibration ([`handeye::calibrate`]): its report as JSON, the same
 /// object `handeye calibrate` prints (the Python layer parses it).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES, point=None))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,
@@ -373,6 +373,7 @@ fn calibrate_report<'py>(
     reject_outliers: bool,
     fix: Option<&str>,
     bootstrap: usize,
+    point: Option<[f64; 3]>,
 ) -> PyResult<String> {
     let options = handeye::Options {
         reject_outliers,
@@ -381,6 +382,7 @@ fn calibrate_report<'py>(
             Some(name) => name.parse().map_err(value_error)?,
         },
         replicates: bootstrap,
+        point: checked_point(point)?,
         ..calibration_options(method, pairs, tsai_opencv_filter)?
     };
     let setup = parse_setup(setup)?;
@@ -394,7 +396,7 @@ fn calibrate_report<'py>(
 /// The robot-world calibration ([`handeye::calibrate_robot_world`]): its report as
 /// JSON, the same object `handeye calibrate --robot-world` prints.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::REPLICATES, reject_outliers=false))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::REPLICATES, reject_outliers=false, point=None))]
 #[allow(clippy::too_many_arguments)]
 fn robot_world_report<'py>(
     py: Python<'py>,
@@ -405,6 +407,7 @@ fn robot_world_report<'py>(
     fix: Option<&str>,
     bootstrap: usize,
     reject_outliers: bool,
+    point: Option<[f64; 3]>,
 ) -> PyResult<String> {
     let options = handeye::RobotWorldOptions {
         method: method.parse().map_err(value_error)?,
@@ -414,6 +417,7 @@ fn robot_world_report<'py>(
         },
         replicates: bootstrap,
         reject_outliers,
+        point: checked_point(point)?,
         ..Default::default()
     };
     let setup = parse_setup(setup)?;
@@ -422,6 +426,47 @@ fn robot_world_report<'py>(
         .allow_threads(|| handeye::calibrate_robot_world(&poses, setup, &options))
         .map_err(value_error)?;
     serde_json::to_string(&report).map_err(value_error)
+}
+
+/// A point given for `uncertainty.at_point`: three finite numbers (the camera frame, the input's
+/// unit), as `--point` checks them.
+fn checked_point(point: Option<[f64; 3]>) -> PyResult<Option<[f64; 3]>> {
+    match point {
+        Some(p) if p.iter().any(|v| !v.is_finite()) => Err(value_error(format!(
+            "point: expected three finite numbers (X, Y, Z in the camera frame), found {p:?}"
+        ))),
+        p => Ok(p),
+    }
+}
+
+/// Whether a saved X still fits a new recording (`handeye verify`): the library's
+/// `Verification` as JSON text, the same object the command line prints.
+#[pyfunction]
+#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::REPLICATES))]
+#[allow(clippy::too_many_arguments)]
+fn verify_report<'py>(
+    py: Python<'py>,
+    saved: &str,
+    base_from_gripper: PyReadonlyArray3<'py, f64>,
+    camera_from_target: PyReadonlyArray3<'py, f64>,
+    setup: &str,
+    method: &str,
+    pairs: &str,
+    reject_outliers: bool,
+    bootstrap: usize,
+) -> PyResult<String> {
+    let saved = handeye::io::read_saved_x(std::path::Path::new(saved)).map_err(value_error)?;
+    let options = handeye::Options {
+        reject_outliers,
+        replicates: bootstrap,
+        ..calibration_options(method, pairs, false)?
+    };
+    let setup = parse_setup(setup)?;
+    let poses = poses(&base_from_gripper, &camera_from_target)?;
+    let verification = py
+        .allow_threads(|| handeye::verify(&saved, &poses, setup, &options))
+        .map_err(value_error)?;
+    serde_json::to_string(&verification).map_err(value_error)
 }
 
 /// What to record next (`handeye advise`): the library's `Advice` as JSON text.
@@ -633,7 +678,7 @@ struct PyOnline {
 #[pymethods]
 impl PyOnline {
     #[new]
-    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="paper", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None))]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         selection: &str,
@@ -795,6 +840,7 @@ fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
     m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
     m.add_function(wrap_pyfunction!(advise_report, m)?)?;
+    m.add_function(wrap_pyfunction!(verify_report, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;
     m.add_class::<PyOnline>()?;
     Ok(())

@@ -325,19 +325,16 @@ def load_series(name):
 
 def test_online_calibrator_reproduces_the_paper_fixture_and_resumes_from_state():
     q, c, truth, expected = load_series("series_2007_000_200")
-    cal = handeye.OnlineCalibrator(selection="adaptive", error_source="truth", truth=truth, d_max=100.0)
+    cal = handeye.OnlineCalibrator(selection="adaptive", estimator="paper", error_source="truth", truth=truth, d_max=100.0)
     events, resumed = [], None
     for k in range(len(q)):
-        e = cal.push(q[k], c[k])
-        if e is not None:
-            events.append(e)
+        events.extend(cal.push(q[k], c[k]))
         if k == 60:
             resumed = handeye.OnlineCalibrator.from_state(cal.state())
     assert [e["poses"] for e in events] == [x["poses"] for x in expected["adaptive"]]
     for e, x in zip(events, expected["adaptive"]):
         assert np.abs(e["matrix"] - np.array(x["matrix"])).max() < 1e-8
-    later = [resumed.push(q[k], c[k]) for k in range(61, len(q))]
-    later = [e for e in later if e is not None]
+    later = [e for k in range(61, len(q)) for e in resumed.push(q[k], c[k])]
     assert [e["poses"] for e in later] == [e["poses"] for e in events if e["poses"][2] > 61]
 
 
@@ -347,9 +344,7 @@ def test_the_accumulating_estimator_reports_on_its_own_schedule_with_an_honest_u
     assert cal.pending() is not None  # nothing yet, and it says why
     reports = []
     for k in range(len(q)):
-        e = cal.push(q[k], c[k])
-        if e is not None:
-            reports.extend(e if isinstance(e, list) else [e])
+        reports.extend(cal.push(q[k], c[k]))
     final = cal.finish()
     reports += [final] if final is not None else []
     estimates = [r for r in reports if "estimate" in r]
@@ -502,11 +497,10 @@ def test_the_command_line_and_python_give_the_same_online_events(tmp_path):
 
     subprocess.run([str(CLI), "simulate", "--poses", "400", "--seed", "5", "--out", str(path)], check=True)
     q, c = _jsonl_poses(path)
-    # The paper's estimator on both faces (the command line's default is the accumulating one;
-    # Python's OnlineCalibrator still defaults to the paper's).
+    # The paper's estimator on both faces (both default to the accumulating one).
     cli = _cli_json("online", path, "--optimal", "--estimator", "paper")
     cal = handeye.OnlineCalibrator(selection="adaptive", optimal=True, estimator="paper")
-    py = [e for k in range(len(q)) if (e := cal.push(q[k], c[k])) is not None]
+    py = [e for k in range(len(q)) for e in cal.push(q[k], c[k])]
     assert len(cli) > 3 and any("optimal" in e for e in cli)
     _same(cli, _plain(py))
 
@@ -609,16 +603,65 @@ def test_online_checks_the_first_poses_as_the_command_line_does():
     # The paper's estimator has no checks of its own: the first 64 poses (a shorter stream's, at
     # finish) get the command line's readings check (issue 31: Python's online calibrator has every check the CLI has).
     inverted = TESTDATA / "kinhec" / "mistakes" / "camera_inverted__nominal_stations_eih_s0.jsonl"
+    paper = lambda: handeye.OnlineCalibrator(estimator="paper")  # noqa: E731
     with pytest.warns(UserWarning, match="read wrongly.*--fix camera-inverted"):
-        _push_all(handeye.OnlineCalibrator(), inverted)
+        _push_all(paper(), inverted)
     one_axis = TESTDATA / "kinhec" / "pairs" / "degenerate_single_joint_continuous_eih_s0.jsonl"
     with pytest.warns(UserWarning, match="about one axis"):
-        _push_all(handeye.OnlineCalibrator(), one_axis)
+        _push_all(paper(), one_axis)
     # Data read right: no warning.
     right = TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.jsonl"
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        _push_all(handeye.OnlineCalibrator(), right)
+        _push_all(paper(), right)
+
+
+def test_online_defaults_to_the_accumulating_estimator_and_push_returns_a_list():
+    # Issue 33 items 2 and 19: Python's default is the command line's (every estimate with its
+    # uncertainty, the readings checked), and push returns one type.
+    cal = handeye.OnlineCalibrator()
+    r = handeye.read_recording(TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.jsonl")
+    truth = json.loads((TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.truth.json").read_text())
+    x_true = np.array(truth["gripper_from_camera"]["matrix"])
+    pushed = [cal.push(a, b) for a, b in zip(r["base_from_gripper"], r["camera_from_target"])]
+    assert all(isinstance(p, list) for p in pushed)
+    final = cal.finish()
+    assert final is not None and "estimate" in final and "uncertainty" in final
+    angle = np.degrees(np.arccos(np.clip((np.trace(x_true[:3, :3].T @ final["matrix"][:3, :3]) - 1) / 2, -1, 1)))
+    assert angle < 3 * final["uncertainty"]["rotation_deg"] + 1e-9, (angle, final["uncertainty"])
+    # An inverted camera stream: the accumulating estimator reports no X, and says why.
+    inverted = handeye.OnlineCalibrator()
+    r = handeye.read_recording(TESTDATA / "kinhec" / "mistakes" / "camera_inverted__nominal_stations_eih_s0.jsonl")
+    reports = [e for a, b in zip(r["base_from_gripper"], r["camera_from_target"]) for e in inverted.push(a, b)]
+    assert not any("estimate" in e for e in reports), reports
+    assert inverted.finish() is None
+    assert "camera" in (inverted.pending() or ""), inverted.pending()
+
+
+def test_verify_decides_as_the_command_line_does(tmp_path):
+    # Issue 28 in Python: X saved from the first half of a recording, checked against its second
+    # half (the same rig), and against the second half with the camera turned 1 degree on its mount.
+    import subprocess
+
+    lines = (TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.jsonl").read_text().splitlines()
+    first, second = tmp_path / "first.jsonl", tmp_path / "second.jsonl"
+    first.write_text("\n".join(lines[:20]) + "\n")
+    second.write_text("\n".join(lines[20:]) + "\n")
+    saved = tmp_path / "x.json"
+    saved.write_text(subprocess.run([str(CLI), "calibrate", str(first), "--output", "json"], check=True, capture_output=True, text=True).stdout)
+    other = handeye.read_recording(second)
+    same = handeye.verify(saved, other["base_from_gripper"], other["camera_from_target"])
+    cli = subprocess.run([str(CLI), "verify", "--x", str(saved), str(second), "--output", "json"], capture_output=True, text=True)
+    assert same["verdict"] == json.loads(cli.stdout)["verdict"] == "consistent", same["message"]
+    assert cli.returncode == 0
+    assert same["saved"]["matrix"].shape == (4, 4)
+    # The camera turned on its mount: camera_from_target changes by the inverse turn.
+    c, s_ = np.cos(np.radians(1.0)), np.sin(np.radians(1.0))
+    turn = np.array([[1, 0, 0, 0], [0, c, -s_, 0], [0, s_, c, 0], [0, 0, 0, 1.0]])
+    moved = np.linalg.inv(turn) @ other["camera_from_target"]
+    bumped = handeye.verify(saved, other["base_from_gripper"], moved)
+    assert bumped["verdict"] == "inconsistent", bumped["message"]
+    assert bumped["difference"]["rotation_deg"] > 0.5
 
 
 def test_the_report_says_its_verdict_as_every_face_does():
@@ -631,3 +674,20 @@ def test_the_report_says_its_verdict_as_every_face_does():
         report = handeye.calibrate(r["base_from_gripper"], r["camera_from_target"])
         assert report["verdict"] == verdict, name
         assert (report["verdict"] == "questionable") == bool(report["warnings"]), name
+
+
+def test_the_error_at_a_chosen_point_as_the_command_line_gives_it():
+    # Issue 28: `point` is `--point`: the one-sigma error of that point (camera frame) through X.
+    path = TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.jsonl"
+    r = handeye.read_recording(path)
+    near = handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], point=[0.0, 0.0, 0.2])
+    far = handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], point=(0.0, 0.0, 2.0))
+    assert near["uncertainty"]["at_point"]["point"] == [0.0, 0.0, 0.2]
+    cli = _cli_json("calibrate", path, "--point", "0,0,2")
+    assert np.isclose(far["uncertainty"]["at_point"]["sigma"], cli["uncertainty"]["at_point"]["sigma"], rtol=1e-9)
+    # Farther from the camera, the rotation's error counts more.
+    assert far["uncertainty"]["at_point"]["sigma"] > near["uncertainty"]["at_point"]["sigma"]
+    with pytest.raises(ValueError, match="point"):
+        handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], point=[0.0, 0.0])
+    with pytest.raises(ValueError, match="point"):
+        handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], point=[0.0, float("nan"), 1.0])

@@ -26,8 +26,9 @@ from ._handeye import read_recording as _read_recording
 from ._handeye import robot_world_report as _robot_world_report
 from ._handeye import solve_opencv as _solve_opencv
 from ._handeye import solve_opencv_sequences as _solve_opencv_sequences
+from ._handeye import verify_report as _verify_report
 
-__all__ = ["calibrate_hand_eye", "calibrate", "advise", "read_recording", "OnlineCalibrator", "METHODS"]
+__all__ = ["calibrate_hand_eye", "calibrate", "advise", "verify", "read_recording", "OnlineCalibrator", "METHODS"]
 
 #: OpenCV's constants (cv2.CALIB_HAND_EYE_*) and handeye's names.
 METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
@@ -108,6 +109,7 @@ def calibrate(
     bootstrap=40,
     robot_world=False,
     tsai_opencv_filter=False,
+    point=None,
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
@@ -124,6 +126,8 @@ def calibrate(
     "camera-mm"). ``method`` defaults to "andreff", ``pairs`` to "all" (every pair of poses, as
     ``handeye calibrate``; "consecutive" for the paper's pairing). ``tsai_opencv_filter`` (with
     ``method="tsai"``) drops the motions OpenCV's Tsai drops, as ``--tsai-opencv-filter`` does.
+    ``point`` (X, Y, Z in the camera frame, the input's unit) is where ``uncertainty.at_point``
+    gives the error, as ``--point`` does (default: the median target position seen).
 
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
     (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
@@ -138,7 +142,14 @@ def calibrate(
             raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
         result = json.loads(
             _robot_world_report(
-                g, c, method=method or "refine", setup=setup, fix=fix, bootstrap=bootstrap, reject_outliers=reject_outliers
+                g,
+                c,
+                method=method or "refine",
+                setup=setup,
+                fix=fix,
+                bootstrap=bootstrap,
+                reject_outliers=reject_outliers,
+                point=_point(point),
             )
         )
         result["matrix"] = np.array(result["matrix"], dtype=np.float64)
@@ -156,9 +167,54 @@ def calibrate(
             reject_outliers=reject_outliers,
             fix=fix,
             bootstrap=bootstrap,
+            point=_point(point),
         )
     )
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)
+    return result
+
+
+def _point(point):
+    """A point as three floats, or None."""
+    if point is None:
+        return None
+    p = np.asarray(point, dtype=np.float64).reshape(-1)
+    if p.shape != (3,):
+        raise ValueError(f"point: expected three numbers (X, Y, Z in the camera frame), got shape {np.shape(point)}")
+    return [float(v) for v in p]
+
+
+def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand", method=None, pairs=None, reject_outliers=False, bootstrap=40):
+    """Whether a saved X still fits a new recording, as ``handeye verify --x SAVED`` decides it.
+    ``saved`` is the path of what ``handeye calibrate --output json`` or ``--output yaml`` wrote
+    (easy_handeye2's calibration file too; metres converted to the recording's millimetres when
+    the sizes say so). Takes (N, 4, 4) arrays of the new recording.
+
+    Returns the command line's object as a dict: ``verdict`` ("consistent", "inconsistent" or
+    "undetermined"), ``difference`` and ``sigma`` (``rotation_deg``, ``translation``: the saved X
+    minus the recording's, and one sigma of that difference from the uncertainty of both),
+    ``distance_sigmas`` against ``limit_sigmas``, ``saved`` (the saved X, ``matrix`` a (4,4)
+    array), ``quality`` of the recording's own calibration, ``message`` (what the verdict means and
+    what to do) and ``notes``. A recording that cannot be read or solved at all raises ValueError."""
+    g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
+    c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
+    if g.ndim != 3 or c.ndim != 3:
+        raise ValueError("expected (N, 4, 4) arrays of transforms")
+    result = json.loads(
+        _verify_report(
+            str(saved),
+            g,
+            c,
+            setup=setup,
+            method=method or "andreff",
+            pairs=pairs or "all",
+            reject_outliers=reject_outliers,
+            bootstrap=bootstrap,
+        )
+    )
+    result["saved"]["matrix"] = np.array(result["saved"]["matrix"], dtype=np.float64)
+    if isinstance(result.get("recording"), dict) and "matrix" in result["recording"]:
+        result["recording"]["matrix"] = np.array(result["recording"]["matrix"], dtype=np.float64)
     return result
 
 
@@ -232,10 +288,12 @@ def _with_arrays(event):
 
 
 class OnlineCalibrator:
-    """The online calibrator: ``push`` one pose pair at a time and get the calibrations it completes.
+    """The online calibrator: ``push`` one pose pair at a time and get what it reports.
 
     Keyword arguments: ``selection`` ("adaptive", "fixed", "none"), ``setup``, ``estimator``
-    ("paper", "accumulate"), ``error_source`` ("residual", "truth"), ``truth`` (4x4 X),
+    ("accumulate", the default as on the command line: every pair of poses, outliers held out,
+    each estimate with its uncertainty; or "paper", the paper's method, no uncertainty),
+    ``error_source`` ("residual", "truth"), ``truth`` (4x4 X),
     ``optimal`` and the adaptive parameters ``n_init, interval, relax_down, relax_up, explore,
     rms_r_max, rms_t_max, alpha_min_deg, beta_min_deg, d_max`` (``alpha_min_deg`` in degrees,
     (0, 90]; the older ``alpha_min``, its sine, still works with a DeprecationWarning;
@@ -269,17 +327,15 @@ class OnlineCalibrator:
         self._inner = _OnlineCalibrator(truth=truth, **params)
 
     def push(self, base_from_gripper, camera_from_target):
-        """Pushes one pose pair (4x4 arrays). Returns the event dict of the calibration it
-        completes, or None (the rare pose that completes several returns the list)."""
+        """Pushes one pose pair (4x4 arrays). Returns a list, usually empty: the reports and
+        changes of the accumulating estimator, or the events of the calibrations the paper's
+        estimator completes (each a dict, X's ``matrix`` a (4,4) array)."""
         events = self._inner.push(
             np.ascontiguousarray(base_from_gripper, dtype=np.float64),
             np.ascontiguousarray(camera_from_target, dtype=np.float64),
         )
         self._warn_readings()
-        events = [_with_arrays(e) for e in events]
-        if not events:
-            return None
-        return events[0] if len(events) == 1 else events
+        return [_with_arrays(e) for e in events]
 
     def finish(self):
         """The accumulating estimator's final report (a dict), or None: call it at the end of the

@@ -22,12 +22,32 @@ def calibrate(
     camera_from_target: npt.ArrayLike,
     method: Optional[str] = None,
     setup: str = "eye-in-hand",
-    pairs: str = "consecutive",
+    pairs: Optional[str] = None,
     reject_outliers: bool = False,
     fix: Optional[str] = None,
     bootstrap: int = 40,
     robot_world: bool = False,
     tsai_opencv_filter: bool = False,
+    point: Optional[npt.ArrayLike] = None,
+) -> dict[str, Any]: ...
+
+def advise(
+    base_from_gripper: npt.ArrayLike,
+    camera_from_target: npt.ArrayLike,
+    setup: str = "eye-in-hand",
+    count: int = 3,
+) -> dict[str, Any]: ...
+
+def verify(
+    saved: Union[str, "os.PathLike[str]"],
+    base_from_gripper: npt.ArrayLike,
+    camera_from_target: npt.ArrayLike,
+    *,
+    setup: str = "eye-in-hand",
+    method: Optional[str] = None,
+    pairs: Optional[str] = None,
+    reject_outliers: bool = False,
+    bootstrap: int = 40,
 ) -> dict[str, Any]: ...
 
 def read_recording(
@@ -48,7 +68,9 @@ def read_recording(
 
 class OnlineCalibrator:
     def __init__(self, **params: Any) -> None: ...
-    def push(self, base_from_gripper: npt.ArrayLike, camera_from_target: npt.ArrayLike) -> Union[dict[str, Any], list[dict[str, Any]], None]: ...
+    def push(self, base_from_gripper: npt.ArrayLike, camera_from_target: npt.ArrayLike) -> list[dict[str, Any]]: ...
+    def finish(self) -> Optional[dict[str, Any]]: ...
+    def pending(self) -> Optional[str]: ...
     @property
     def poses(self) -> int: ...
     @property
