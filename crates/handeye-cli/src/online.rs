@@ -47,6 +47,11 @@ pub struct Args {
     /// Least rotation-angle gap (degrees) that marks a pose as an outlier (accumulate estimator).
     #[arg(long, default_value_t = TrackOptions::default().outlier_deg, value_parser = values::angle_deg)]
     outlier_deg: f64,
+    /// With --estimator accumulate: the point whose error through X each report's
+    /// `uncertainty.at_point` gives: X,Y,Z in the camera frame, input unit (default: the mean
+    /// target position seen, the working distance).
+    #[arg(long, value_name = "X,Y,Z", value_parser = values::point)]
+    point: Option<[f64; 3]>,
     /// Also refine over the last five selected motions (the paper's optimal method).
     #[arg(long)]
     optimal: bool,
@@ -180,6 +185,7 @@ pub fn run(args: Args) -> Result<()> {
             every: args.every,
             shrink: args.shrink,
             outlier_deg: args.outlier_deg,
+            point: args.point,
             ..TrackOptions::default()
         },
         // An explicit --d-max is in the input's unit whatever it is.
@@ -282,6 +288,7 @@ pub fn run(args: Args) -> Result<()> {
             print_step(
                 step,
                 setup,
+                calibrator.unit(),
                 &lines,
                 &source,
                 time_offset,
@@ -297,7 +304,9 @@ pub fn run(args: Args) -> Result<()> {
             for event in events {
                 match face {
                     Face::Json => out.json(&event.line(time_offset))?,
-                    Face::Text => out.text(&format!("{}\n", event_text(&event)))?,
+                    Face::Text => {
+                        out.text(&format!("{}\n", event_text(&event, calibrator.unit())))?
+                    }
                     _ => {}
                 }
             }
@@ -313,7 +322,7 @@ pub fn run(args: Args) -> Result<()> {
         warn_misread(found);
     }
     if let Some(report) = calibrator.finish() {
-        print_report(&report, setup, time_offset, face, &out)?;
+        print_report(&report, setup, time_offset, face, &out, calibrator.unit())?;
         if let Some(t) = &mut trace {
             t.step(&Step {
                 pose: report.pose,
@@ -384,31 +393,63 @@ fn print_report(
     time_offset: Option<f64>,
     face: Face,
     out: &LineOut,
+    unit: Unit,
 ) -> Result<()> {
     match face {
         Face::Json => out.json(&r.json(setup, time_offset)),
-        Face::Text => {
-            let e = &r.estimate;
-            out.text(&format!(
-                "estimate {} from {} poses: {}, uncertainty {:.3}° / {:.4}\n",
-                r.number,
-                e.poses,
-                describe(&e.x),
-                e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
-                e.uncertainty_translation.unwrap_or(f64::NAN)
-            ))
-        }
+        Face::Text => out.text(&format!(
+            "estimate {} from {} poses: {}\n",
+            r.number,
+            r.estimate.poses,
+            estimate_words(r, unit)
+        )),
         _ => Ok(()),
     }
 }
 
+/// A report in words, every length with its unit: X, its uncertainty, the error at the working
+/// distance and the verdict.
+fn estimate_words(r: &Report, unit: Unit) -> String {
+    let e = &r.estimate;
+    let at_point = e.at_point.map_or(String::new(), |(point, sigma)| {
+        let at = handeye::AtPoint {
+            point,
+            frame: "camera".into(),
+            sigma,
+        };
+        let words = faces::at_point(&at, known(unit));
+        format!("; {}{}", words[..1].to_lowercase(), &words[1..])
+    });
+    format!(
+        "{}, uncertainty {:.3}° / {}{at_point}; verdict {}",
+        describe(&e.x, unit),
+        e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
+        length(e.uncertainty_translation.unwrap_or(f64::NAN), unit),
+        r.verdict().name()
+    )
+}
+
+/// The unit when it is known (metres or millimetres).
+fn known(unit: Unit) -> Option<Unit> {
+    matches!(unit, Unit::Metre | Unit::Millimetre).then_some(unit)
+}
+
+/// A length with its unit.
+fn length(v: f64, unit: Unit) -> String {
+    match unit {
+        Unit::Metre => format!("{v:.4} m"),
+        Unit::Millimetre => format!("{v:.2} mm"),
+        _ => format!("{v:.4} (input units)"),
+    }
+}
+
 /// A calibration event for a person.
-fn event_text(e: &Event) -> String {
+fn event_text(e: &Event, unit: Unit) -> String {
     let [a, i, j] = e.poses;
     format!(
         "calibration {} (poses {a}, {i}, {j}): {}, rms_r {:.2e}, rms_t {:.2e}",
         e.calibration,
-        describe(&e.x),
+        describe(&e.x, unit),
         e.rms.rms_r,
         e.rms.rms_t
     )
@@ -529,9 +570,11 @@ fn tell_unit(calibrator: &OnlineCalibrator, record: &handeye::io::StampedPosePai
 
 /// Prints what the accumulating estimator did with a pose: held-out poses on stderr (by their
 /// input line), a change and a report as JSON lines.
+#[allow(clippy::too_many_arguments)]
 fn print_step(
     step: &Step,
     setup: handeye::Setup,
+    unit: Unit,
     lines: &VecDeque<(usize, usize, Option<f64>)>,
     source: &str,
     time_offset: Option<f64>,
@@ -567,7 +610,7 @@ fn print_step(
         }
     }
     if let Some(r) = &step.report {
-        print_report(r, setup, time_offset, face, &out)?;
+        print_report(r, setup, time_offset, face, &out, unit)?;
     }
     Ok(())
 }
@@ -590,7 +633,7 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
     let Some(tracker) = calibrator.tracker() else {
         let last = calibrator
             .last_x()
-            .map_or("none".to_string(), |x| describe(&x));
+            .map_or("none".to_string(), |x| describe(&x, calibrator.unit()));
         let quiet_after = if calibrator.calibrations() == 0 {
             1
         } else {
@@ -624,12 +667,10 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
                 ""
             };
             format!(
-                "last estimate ({}) from {} of {counts}: {}, uncertainty {:.3}° / {:.4}{weak}{implausible}",
+                "last estimate ({}) from {} of {counts}: {}{weak}{implausible}",
                 r.number,
                 e.poses,
-                describe(&e.x),
-                e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
-                e.uncertainty_translation.unwrap_or(f64::NAN)
+                estimate_words(r, calibrator.unit())
             )
         }
         (None, _) => format!("no estimate from {counts}: {}", no_estimate(calibrator)),
@@ -646,10 +687,15 @@ fn no_estimate(calibrator: &OnlineCalibrator) -> String {
 }
 
 /// A transform in a few words.
-fn describe(x: &handeye::Transform) -> String {
+fn describe(x: &handeye::Transform, unit: Unit) -> String {
     let t = x.translation.vector;
+    let unit = match unit {
+        Unit::Metre => " m",
+        Unit::Millimetre => " mm",
+        _ => " (input units)",
+    };
     format!(
-        "t = [{:.6}, {:.6}, {:.6}], rotation {:.4}°",
+        "t = [{:.6}, {:.6}, {:.6}]{unit}, rotation {:.4}°",
         t.x,
         t.y,
         t.z,

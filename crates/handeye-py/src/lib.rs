@@ -678,7 +678,7 @@ struct PyOnline {
 #[pymethods]
 impl PyOnline {
     #[new]
-    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None))]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         selection: &str,
@@ -701,6 +701,7 @@ impl PyOnline {
         unit: &str,
         every: Option<usize>,
         shrink: Option<f64>,
+        point: Option<[f64; 3]>,
     ) -> PyResult<Self> {
         let tracking = TrackOptions::default();
         // A parameter left out takes the library's default.
@@ -731,6 +732,7 @@ impl PyOnline {
             tracking: TrackOptions {
                 every: every.unwrap_or(tracking.every),
                 shrink: shrink.unwrap_or(tracking.shrink),
+                point: checked_point(point)?,
                 ..tracking
             },
             // An explicit d_max is in the input's unit whatever it is.

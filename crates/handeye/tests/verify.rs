@@ -349,6 +349,54 @@ fn the_error_at_the_working_distance_is_as_large_as_it_says() {
 }
 
 #[test]
+fn the_online_estimate_says_its_error_at_the_working_distance_too() {
+    // The accumulating estimator's last report on the same recordings: `at_point` at the mean
+    // target position seen, from its covariance scaled to the reported uncertainty; and the
+    // verdict every report carries.
+    use handeye::track::{TrackOptions, Tracker};
+    let mut ratios = Vec::new();
+    for kind in ["nominal", "student_t", "pnp", "robot_error", "high_noise"] {
+        for e in entries(kind) {
+            let mut tracker = Tracker::new(setup(&e), TrackOptions::default());
+            let mut last = None;
+            for pose in &poses(&e) {
+                last = tracker.push(pose).report.or(last);
+            }
+            let Some(report) = tracker.finish().or(last) else {
+                println!("{}: no estimate ({:?})", e["file"], tracker.pending());
+                continue;
+            };
+            let (point, sigma) = report.estimate.at_point.expect("an estimate has at_point");
+            let json = report.json(setup(&e), None);
+            assert_eq!(json["uncertainty"]["at_point"]["sigma"], sigma);
+            assert!(["good", "questionable"].contains(&json["verdict"].as_str().unwrap()));
+            let truth = transform_from_json(&e["x"]).unwrap();
+            let p = nalgebra::Point3::from(Vector3::from(point));
+            let error = (report.estimate.x * p - truth * p).norm();
+            println!(
+                "{:48} online: error {:.2} mm, sigma {:.2} mm",
+                e["file"].as_str().unwrap(),
+                error * 1e3,
+                sigma * 1e3
+            );
+            ratios.push(error / sigma);
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    let within = ratios.iter().filter(|r| **r <= 3.0).count() as f64 / ratios.len() as f64;
+    println!(
+        "{} online estimates: error/sigma median {median:.2}, {:.0}% within 3 sigma",
+        ratios.len(),
+        within * 100.0
+    );
+    assert!(ratios.len() >= 30, "{ratios:?}");
+    assert!(within >= 0.9, "{within}: {ratios:?}");
+    // Not inflated beyond use: the error is a fair fraction of the sigma.
+    assert!(median >= 0.2, "median {median}: {ratios:?}");
+}
+
+#[test]
 fn the_point_can_be_chosen_and_its_sigma_grows_with_its_distance() {
     let e = &entries("nominal_stations")[0];
     let p = poses(e);

@@ -300,7 +300,8 @@ class OnlineCalibrator:
     ``d_max`` in your length unit;
     left out, it is 0.1 m in the ``unit``: "auto" infers metres or millimetres from the first
     pose, "m", "mm"), ``unfreeze``; for ``estimator="accumulate"`` also ``every`` and ``shrink``
-    (how often it reports). With the paper's estimator, the first 64 poses (a shorter stream's, at
+    (how often it reports) and ``point`` (where each report's ``uncertainty.at_point`` gives the
+    error, camera frame; default the mean target position seen). With the paper's estimator, the first 64 poses (a shorter stream's, at
     ``finish()``) are checked as ``handeye online`` checks them: a ``UserWarning`` when they fit far
     better read another way, have sizes the setup makes unlikely, or turn about one axis.
     With ``estimator="accumulate"``, ``push`` returns the estimator's own

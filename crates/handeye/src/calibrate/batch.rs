@@ -211,32 +211,7 @@ impl Default for Units {
     }
 }
 
-/// The verdict on an X that [`calibrate`] found, the same in every face: good, or questionable
-/// while a caution of [`Report::warnings`] stands (a refusal is an error, not a verdict).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Assessment {
-    /// No caution: X is as good as its uncertainty says.
-    Good,
-    /// At least one caution: read them before using X.
-    Questionable,
-}
-
-impl Assessment {
-    /// The verdict of a result with these cautions.
-    pub fn of(warnings: &[Warning]) -> Self {
-        if warnings.is_empty() {
-            Self::Good
-        } else {
-            Self::Questionable
-        }
-    }
-}
-
-crate::named_enum!(Assessment, "verdict", "verdict" {
-    Good => "good",
-    Questionable => "questionable",
-});
+pub use crate::model::findings::Assessment;
 
 /// The result of [`calibrate`]: X, how far to trust it, and why.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

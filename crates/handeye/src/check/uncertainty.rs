@@ -125,17 +125,11 @@ impl Uncertainty {
     /// for a first-order covariance without replicates, its first-order image
     /// J C Jᵀ with J = [−[R̂p]ₓ, I].
     pub fn place(&self, x: &Transform, point: [f64; 3]) -> AtPoint {
-        let p = Vector3::from(point);
-        let rp = x.rotation.matrix() * p;
-        let cov: Matrix3<f64> = if self.samples.is_empty() {
+        let sigma = if self.samples.is_empty() {
             let c = Matrix6::from_fn(|i, j| self.covariance[i][j]);
-            let mut jac = nalgebra::Matrix3x6::zeros();
-            jac.fixed_view_mut::<3, 3>(0, 0)
-                .copy_from(&(-rp.cross_matrix()));
-            jac.fixed_view_mut::<3, 3>(0, 3)
-                .copy_from(&Matrix3::identity());
-            jac * c * jac.transpose()
+            point_sigma(&c, x, point)
         } else {
+            let rp = x.rotation.matrix() * Vector3::from(point);
             let mut cov = Matrix3::zeros();
             for e in &self.samples {
                 let dr = Vector3::new(e[0], e[1], e[2]);
@@ -143,14 +137,26 @@ impl Uncertainty {
                 let d = (exp_so3(&dr) - Matrix3::identity()) * rp + dt;
                 cov += d * d.transpose();
             }
-            cov / self.samples.len() as f64
+            (cov / self.samples.len() as f64).trace().max(0.0).sqrt()
         };
         AtPoint {
             point,
             frame: "camera".into(),
-            sigma: cov.trace().max(0.0).sqrt(),
+            sigma,
         }
     }
+}
+
+/// √trace of the first-order image of a covariance `c` of X (rotation vector, translation) at
+/// `point` (camera frame): J C Jᵀ with J = [−[R̂p]ₓ, I].
+pub fn point_sigma(c: &Matrix6<f64>, x: &Transform, point: [f64; 3]) -> f64 {
+    let rp = x.rotation.matrix() * Vector3::from(point);
+    let mut jac = nalgebra::Matrix3x6::zeros();
+    jac.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(-rp.cross_matrix()));
+    jac.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&Matrix3::identity());
+    (jac * c * jac.transpose()).trace().max(0.0).sqrt()
 }
 
 /// The default point of [`Uncertainty::place`]: the median target position seen by the camera

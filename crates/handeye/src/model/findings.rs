@@ -315,3 +315,31 @@ pub struct OutlierPose {
     /// Median |k_A·t_A − k_B·t_B| of its motions, input units.
     pub pitch_gap: f64,
 }
+
+/// The verdict on an X that a job found, the same in every face: good, or questionable while a
+/// caution stands (the batch report's `warnings`, a weak online estimate; a refusal is an error,
+/// not a verdict).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Assessment {
+    /// No caution: X is as good as its uncertainty says.
+    Good,
+    /// At least one caution: read them before using X.
+    Questionable,
+}
+
+impl Assessment {
+    /// The verdict of a result with these cautions.
+    pub fn of(warnings: &[crate::model::warning::Warning]) -> Self {
+        if warnings.is_empty() {
+            Self::Good
+        } else {
+            Self::Questionable
+        }
+    }
+}
+
+crate::named_enum!(Assessment, "verdict", "verdict" {
+    Good => "good",
+    Questionable => "questionable",
+});

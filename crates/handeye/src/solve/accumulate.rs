@@ -209,6 +209,12 @@ impl PoseAccumulator {
         (self.cc / self.n.max(1) as f64).sqrt()
     }
 
+    /// The mean target position seen by the camera (the translation of `camera_from_target`,
+    /// camera frame) over the poses accumulated, or `None` before the first.
+    pub fn mean_target(&self) -> Option<Vector3<f64>> {
+        (self.n > 0).then(|| self.c / self.n as f64)
+    }
+
     /// The covariance of X's error to first order, as (rotation about the gripper axes in
     /// radians², translation in units²; 6×6), when every pose's fixed frame Y_k = H_k X C_k carries
     /// independent noise of RMS `noise_rotation` (radians) and `noise_translation` about the

@@ -5,7 +5,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::findings::Reading;
+use crate::model::findings::{Assessment, Reading};
 use crate::model::motion::Setup;
 use crate::model::pose::Transform;
 
@@ -34,6 +34,17 @@ pub struct TrackEstimate {
     pub uncertainty_rotation_deg: Option<f64>,
     /// The same for the translation, input units.
     pub uncertainty_translation: Option<f64>,
+    /// The covariance of X's error (rotation vector in radians, then translation, in X's parent
+    /// frame as the batch `Uncertainty::covariance`): the first-order covariance with each pose
+    /// one measurement at the data's noise level, scaled up until its sizes reach the reported
+    /// uncertainty (which may be the split-half or the drift term). `None` with the uncertainty.
+    #[serde(default)]
+    pub covariance: Option<[[f64; 6]; 6]>,
+    /// The error at the working distance (SPEC sec. 9 `at_point`): a point in the camera frame
+    /// (the mean target position seen in the segment, or the one asked for) and the one-sigma
+    /// distance by which X misplaces it, input unit. `None` with the uncertainty.
+    #[serde(default)]
+    pub at_point: Option<([f64; 3], f64)>,
     /// The robot-world solution (Shah's A X = Z B over the same accepted poses of the segment,
     /// [`crate::solve::accumulate::RobotWorldAccumulator`]): X and the target solved together rather than
     /// the target as the mean fixed frame under the hand–eye X. `None` while its system is
@@ -280,10 +291,13 @@ impl Report {
         insert_transform(&mut out, &e.x);
         out.insert("poses".into(), e.poses.into());
         out.insert("since".into(), e.since.into());
-        out.insert(
-            "uncertainty".into(),
-            serde_json::json!({"rotation_deg": e.uncertainty_rotation_deg, "translation": e.uncertainty_translation}),
-        );
+        let mut uncertainty = serde_json::json!({"rotation_deg": e.uncertainty_rotation_deg, "translation": e.uncertainty_translation});
+        if let Some((point, sigma)) = e.at_point {
+            uncertainty["at_point"] =
+                serde_json::json!({"point": point, "frame": "camera", "sigma": sigma});
+        }
+        out.insert("uncertainty".into(), uncertainty);
+        out.insert("verdict".into(), self.verdict().name().into());
         out.insert(
             "noise".into(),
             serde_json::json!({"rotation_deg": e.noise_rotation_deg, "translation": e.noise_translation}),
@@ -317,6 +331,18 @@ impl Report {
             out.insert("time_offset_s".into(), t.into());
         }
         out.into()
+    }
+}
+
+impl Report {
+    /// The verdict every report carries (SPEC sec. 9): `questionable` for a weak final report or
+    /// sizes the setup makes unlikely, else `good` (an estimate is reported only once determined).
+    pub fn verdict(&self) -> Assessment {
+        if self.weak.is_some() || self.implausible {
+            Assessment::Questionable
+        } else {
+            Assessment::Good
+        }
     }
 }
 

@@ -49,6 +49,7 @@ use crate::model::pose::{axis_angle, rotation_angle_between};
 pub use events::{Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate};
 #[cfg(feature = "internals")]
 pub use events::target_frame;
+use crate::check::uncertainty::point_sigma;
 use segment::{Segment, Snapshot};
 
 /// Settings of the tracker; `Default` gives the values on each field.
@@ -77,6 +78,10 @@ pub struct TrackOptions {
     /// Least screw-invariant angle gap that holds a pose out, degrees (`--outlier-deg`).
     /// Default 3.
     pub outlier_deg: f64,
+    /// The point (camera frame, input unit) whose error through X each report's
+    /// `uncertainty.at_point` gives (`--point`). Default `None`: the mean target position seen.
+    #[serde(default)]
+    pub point: Option<[f64; 3]>,
 }
 
 impl Default for TrackOptions {
@@ -91,6 +96,7 @@ impl Default for TrackOptions {
             confirm_poses: 10,
             mature_poses: 30,
             outlier_deg: 3.0,
+            point: None,
         }
     }
 }
@@ -626,7 +632,11 @@ impl Tracker {
     }
 
     fn report(&mut self, reason: Reason) -> Report {
-        let estimate = self.current.expect("a report needs an estimate").estimate;
+        let mut estimate = self.current.expect("a report needs an estimate").estimate;
+        if let (Some(point), Some(c)) = (self.options.point, estimate.covariance) {
+            let c = nalgebra::Matrix6::from_fn(|i, j| c[i][j]);
+            estimate.at_point = Some((point, point_sigma(&c, &estimate.x, point)));
+        }
         self.reports += 1;
         self.last_report = Some((
             self.poses,

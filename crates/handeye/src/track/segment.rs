@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::{Pending, RobotWorldPair, TrackEstimate, TrackOptions};
 use crate::check::precision::{resolution, rotation_resolution};
 use crate::check::readings::LEAST_TURN_DEG;
+use crate::check::uncertainty::point_sigma;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, rotation_angle_between};
 use crate::solve::accumulate::{PoseAccumulator, RobotWorldAccumulator, Scatter};
@@ -155,23 +156,36 @@ impl Segment {
         // At the noise unit: on exact data the scatter is rounding, or 0, which would make the
         // information matrix infinite and leave the estimate without an uncertainty.
         let [noise_rotation, noise_translation] = self.noise_unit(&scatter, &e.x);
-        let linear = self
-            .all
-            .covariance(
-                &e.x,
-                noise_rotation / 3f64.sqrt(),
-                noise_translation / 3f64.sqrt(),
-            )
-            .map(|c| {
-                let rotation = (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees();
-                (rotation, (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt())
-            });
+        let linear_covariance = self.all.covariance(
+            &e.x,
+            noise_rotation / 3f64.sqrt(),
+            noise_translation / 3f64.sqrt(),
+        );
+        let linear = linear_covariance.map(|c| {
+            let rotation = (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees();
+            (rotation, (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt())
+        });
         let local = split.zip(linear).map(|(a, b)| (a.0.max(b.0), a.1.max(b.1)));
         let drift = self.drift(&e.x, local);
         let (ur, ut) = match (local, drift) {
             (Some(a), Some(b)) => (Some(a.0.max(b.0)), Some(a.1.max(b.1))),
             _ => (None, None),
         };
+        // The first-order covariance scaled up until its sizes reach the reported ones (the
+        // split-half or the drift term may be the larger): its shape, the reported size.
+        let covariance = match (linear_covariance, linear, ur.zip(ut)) {
+            (Some(c), Some((lr, lt)), Some((ur, ut))) => {
+                let scale = (ur / lr.max(f64::MIN_POSITIVE))
+                    .max(ut / lt.max(f64::MIN_POSITIVE))
+                    .max(1.0);
+                Some(c * scale * scale)
+            }
+            _ => None,
+        };
+        let at_point = covariance.zip(self.all.mean_target()).map(|(c, p)| {
+            let point = [p.x, p.y, p.z];
+            (point, point_sigma(&c, &e.x, point))
+        });
         Some(Snapshot {
             estimate: TrackEstimate {
                 x: e.x,
@@ -183,6 +197,8 @@ impl Segment {
                 noise_translation: scatter.translation,
                 uncertainty_rotation_deg: ur,
                 uncertainty_translation: ut,
+                covariance: covariance.map(|c| std::array::from_fn(|i| std::array::from_fn(|j| c[(i, j)]))),
+                at_point,
                 robot_world: self.robot_world.estimate().map(|r| RobotWorldPair {
                     x: r.x,
                     target: r.target,
