@@ -373,7 +373,11 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         .collect();
     let joints: Option<Vec<Vec<f64>>> = (options.joints.len() == read_len)
         .then(|| kept.iter().map(|&i| options.joints[i].clone()).collect());
-    let systematic = systematic_error(&used, setup, &calibration.x, joints.as_deref(), &solve_x);
+    // Outliers kept pull X, and a wrong X leaves residuals that follow the pose: their own
+    // warning comes first, and the test runs once they are left out.
+    let systematic = (options.reject_outliers || found.poses.is_empty())
+        .then(|| systematic_error(&used, setup, &calibration.x, joints.as_deref(), &solve_x))
+        .flatten();
     let outliers = outlier_report(&found, options);
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));
