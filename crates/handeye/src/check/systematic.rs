@@ -249,19 +249,21 @@ fn explained_z(
     if total <= 0.0 {
         return (0.0, 0.0);
     }
+    let dim = features.ncols();
+    // One pass over the poses per order: b = Fᵀ (v_perm − v̄), a (features × 3) matrix, and the
+    // explained share Σ_c b_cᵀ (FᵀF)⁻¹ b_c.
     let share = |perm: &[usize]| {
-        (0..3)
-            .map(|c| {
-                let b = DVector::from_fn(features.ncols(), |k, _| {
-                    perm.iter()
-                        .enumerate()
-                        .map(|(i, &j)| features[(i, k)] * (v[j][c] - mean[c]))
-                        .sum::<f64>()
-                });
-                b.dot(&(&inverse * &b))
-            })
-            .sum::<f64>()
-            / total
+        let mut b = DMatrix::<f64>::zeros(dim, 3);
+        for (i, &j) in perm.iter().enumerate() {
+            let d = v[j] - mean;
+            for k in 0..dim {
+                let f = features[(i, k)];
+                b[(k, 0)] += f * d.x;
+                b[(k, 1)] += f * d.y;
+                b[(k, 2)] += f * d.z;
+            }
+        }
+        (b.transpose() * &inverse * &b).trace() / total
     };
     let identity: Vec<usize> = (0..n).collect();
     let r2 = share(&identity);
@@ -409,4 +411,60 @@ pub fn systematic_error(
     let mut found = test(&residuals.residuals, &configurations)?;
     found.halves = halves_disagree(poses, &found.order, solve);
     Some(found)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::RngExt;
+
+    /// Joint angles of `n` poses on a 2-joint grid, and residuals: independent noise plus
+    /// `bias` times a smooth function of the first joint.
+    fn case(n: usize, bias: f64, seed: u64) -> (Vec<PoseResidual>, Configurations) {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let joints: Vec<Vec<f64>> = (0..n)
+            .map(|_| vec![rng.random_range(-1.5..1.5), rng.random_range(-1.5..1.5)])
+            .collect();
+        let mut noise = || Vector3::new(rng.random::<f64>(), rng.random(), rng.random()) - Vector3::repeat(0.5);
+        let residuals = joints
+            .iter()
+            .map(|q| {
+                let smooth = Vector3::new(q[0].sin(), q[0].cos(), 0.0) * bias;
+                PoseResidual {
+                    rotation: noise() * 1e-3,
+                    angle: 0.0,
+                    translation: noise() * 1e-3 + smooth * 1e-3,
+                }
+            })
+            .collect();
+        (residuals, Configurations::of_joints(&joints).unwrap())
+    }
+
+    #[test]
+    fn the_neighbour_order_is_a_permutation() {
+        let (_, c) = case(1000, 0.0, 1);
+        let mut order = neighbour_order(&c);
+        order.sort_unstable();
+        assert_eq!(order, (0..1000).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn independent_residuals_are_not_flagged_and_smooth_ones_are() {
+        let quiet = (0..20)
+            .filter(|&s| test(&case(40, 0.0, s).0, &case(40, 0.0, s).1).unwrap().flagged)
+            .count();
+        assert!(quiet <= 1, "{quiet} of 20 noise-only cases flagged");
+        for seed in 0..5 {
+            let (r, c) = case(40, 2.0, seed);
+            let found = test(&r, &c).unwrap();
+            assert!(found.flagged, "{found:?}");
+            assert_eq!(found.joint.map(|j| j.joint), Some(1), "{found:?}");
+        }
+    }
+
+    #[test]
+    fn too_few_poses_are_not_tested() {
+        let (r, c) = case(MIN_POSES - 1, 2.0, 0);
+        assert!(test(&r, &c).is_none());
+    }
 }
