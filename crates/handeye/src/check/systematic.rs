@@ -25,7 +25,7 @@
 //! measured by the halves of the workspace (the first k-d split): each half solves X on its own
 //! and their disagreement is the error's size.
 
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, Vector3};
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_xoshiro::Xoshiro256PlusPlus;
