@@ -246,6 +246,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             pose_names: recording.names,
             written: recording.written,
             point: args.point,
+            joints: joints(&args.input)?,
         },
     )?;
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
