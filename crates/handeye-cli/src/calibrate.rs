@@ -14,7 +14,7 @@ use handeye::{Error, Method, Pairing};
 use handeye::{Named, RobotWorldMethod};
 
 use crate::faces::{self, Face, Published, length_unit};
-use crate::input::{InputArgs, read_all};
+use crate::input::{InputArgs, joints, read_all};
 use crate::output::{Questionable, print_json, print_text};
 use crate::values;
 
@@ -113,6 +113,7 @@ pub fn run(args: Args) -> Result<()> {
         &args.name,
     )?;
     let recording = read_all(&args.input, options.fix.reading())?;
+    let joints = joints(&args.input)?;
     let (poses, written) = (recording.poses, recording.written);
     let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
     enough(&args.input, poses.len(), 2, "to make a motion")?;
@@ -123,6 +124,7 @@ pub fn run(args: Args) -> Result<()> {
         &Options {
             pose_names: recording.names,
             written,
+            joints,
             ..options
         },
     ) {
@@ -244,6 +246,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             pose_names: recording.names,
             written: recording.written,
             point: args.point,
+            joints: joints(&args.input)?,
         },
     )?;
     if report.outliers.rejected && !report.outliers.poses.is_empty() {

@@ -18,7 +18,10 @@ use crate::check::holdout::{HeldOutCheck, leave_one_out};
 use crate::check::outliers::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::check::quality::{MotionQuality, QualityReport, ResidualSummary, quality_report};
 use crate::check::readings::{ReadingCheck, check_readings};
-use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, median_target};
+use crate::check::systematic::{Systematic, systematic_error};
+use crate::check::uncertainty::{
+    Uncertainty, bootstrap, bootstrap_by_region, check_replicates, median_target,
+};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::OutlierPose;
 use crate::model::findings::{Reading, Written};
@@ -141,6 +144,10 @@ pub struct Options {
     /// The point (camera frame, input unit) whose error through X `uncertainty.at_point` gives;
     /// `None`: the median target position seen by the camera ([`median_target`]).
     pub point: Option<[f64; 3]>,
+    /// The joint angles of each pose (radians, the robot's joint order), by input index, where the
+    /// input gives them: the configuration the systematic-error test orders the poses by, and
+    /// the joint it names. Empty: the hand poses order them.
+    pub joints: Vec<Vec<f64>>,
 }
 
 impl Default for Options {
@@ -156,6 +163,7 @@ impl Default for Options {
             pose_names: Vec::new(),
             written: Written::NAMED,
             point: None,
+            joints: Vec::new(),
         }
     }
 }
@@ -259,6 +267,10 @@ pub struct Report {
     /// The held-out check: each camera observation predicted from the other poses
     /// (`crate::holdout`); `None` with fewer than four poses.
     pub held_out: Option<HeldOutSummary>,
+    /// The test for an error that follows the robot's configuration ([`crate::check::systematic`]);
+    /// absent with fewer than 12 poses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub systematic: Option<Systematic>,
 }
 
 /// The held-out check in a [`Report`].
@@ -331,11 +343,16 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
             )
         },
     );
-    let mut uncertainty = uncertainty;
-    uncertainty.at_point = Some(uncertainty.place(
-        &calibration.x,
-        options.point.unwrap_or_else(|| median_target(&used)),
-    ));
+    let kept: Vec<usize> = (0..read_len)
+        .filter(|i| !(options.reject_outliers && found.poses.iter().any(|g| g.pose == *i)))
+        .collect();
+    let joints: Option<Vec<Vec<f64>>> = (options.joints.len() == read_len)
+        .then(|| kept.iter().map(|&i| options.joints[i].clone()).collect());
+    // Outliers kept pull X, and a wrong X leaves residuals that follow the pose: their own
+    // warning comes first, and the test runs once they are left out.
+    let systematic = (options.reject_outliers || found.poses.is_empty())
+        .then(|| systematic_error(&used, setup, &calibration.x, joints.as_deref(), &solve_x))
+        .flatten();
     let outliers = outlier_report(&found, options);
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));
@@ -343,6 +360,26 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         .and_then(|()| motions_determine(&used, setup, options, scene, calibration.conditioning))
         .map_err(|e| method_at_fault(e, &used, setup, options, scene))
         .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?;
+    let mut uncertainty = match systematic.as_ref().filter(|s| s.flagged) {
+        Some(found) => {
+            let regions = bootstrap_by_region(
+                &used,
+                setup,
+                &calibration.x,
+                &solve_x,
+                (options.replicates, scene),
+                &found.order,
+            );
+            let wide = covering(wider(uncertainty, regions), found, scene);
+            warnings.push(systematic_warning(found, &wide));
+            wide
+        }
+        None => uncertainty,
+    };
+    uncertainty.at_point = Some(uncertainty.place(
+        &calibration.x,
+        options.point.unwrap_or_else(|| median_target(&used)),
+    ));
     let translation_residual_rel = residuals.median_translation() / scene.max(f64::MIN_POSITIVE);
     warnings.extend(calibration.warnings.iter().cloned());
     warnings.extend(quality.warnings.iter().cloned());
@@ -353,9 +390,9 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         });
     }
     warnings.extend(kept_outliers);
-    let used_names: Vec<String> = (0..read_len)
-        .filter(|i| !(options.reject_outliers && found.poses.iter().any(|g| g.pose == *i)))
-        .map(|i| {
+    let used_names: Vec<String> = kept
+        .iter()
+        .map(|&i| {
             options
                 .pose_names
                 .get(i)
@@ -392,7 +429,47 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         units: Units::default(),
         transform: calibration.x,
         held_out,
+        systematic,
     })
+}
+
+/// The warning of an error that follows the configuration, with its effect on X.
+pub(crate) fn systematic_warning(found: &Systematic, regions: &Uncertainty) -> Warning {
+    Warning::SystematicError {
+        p_value: found.p_value,
+        halves_rotation_deg: found.halves.map(|h| h.rotation_deg),
+        halves_translation: found.halves.map(|h| h.translation),
+        rotation_sigma_deg: regions.rotation_deg,
+        translation_sigma: regions.translation,
+        joint: found.joint.map(|j| j.joint),
+    }
+}
+
+/// An uncertainty that covers what the halves of the workspace disagree by: each half's X is off
+/// by the systematic error as it weighs on that half, so half their distance is the least
+/// one-sigma an honest answer reports (`check::systematic::Halves`).
+pub(crate) fn covering(u: Uncertainty, found: &Systematic, scene: f64) -> Uncertainty {
+    match found.halves {
+        Some(h) => u.at_least(HALVES_SHARE * h.rotation_deg, HALVES_SHARE * h.translation, scene),
+        None => u,
+    }
+}
+
+/// The share of the halves' disagreement that [`covering`] takes as the least one-sigma.
+const HALVES_SHARE: f64 = 1.0;
+
+/// The region bootstrap's uncertainty where it is the wider (the sum of the two parts' ratios),
+/// else the ordinary one: a systematic error never narrows what the poses' own noise gives.
+pub(crate) fn wider(ordinary: Uncertainty, regions: Uncertainty) -> Uncertainty {
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 1.0 };
+    if ratio(regions.rotation_deg, ordinary.rotation_deg)
+        + ratio(regions.translation, ordinary.translation)
+        >= 2.0
+    {
+        regions
+    } else {
+        ordinary
+    }
 }
 
 /// The held-out check of the poses used ([`leave_one_out`]) with their names, and a warning naming

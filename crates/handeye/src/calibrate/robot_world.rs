@@ -26,9 +26,11 @@ use nalgebra::{Matrix3, Matrix6};
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::batch::{
-    Fix, Options, Outliers, ReadingReport, Units, explained, outlier_report, outlier_warning,
-    read_poses, warn_weak, without, working_distance,
+    Fix, Options, Outliers, ReadingReport, Units, covering, explained, outlier_report,
+    outlier_warning, read_poses, systematic_warning, warn_weak, wider, without, working_distance,
 };
+use crate::check::systematic::{Systematic, systematic_error};
+use crate::check::uncertainty::bootstrap_by_region;
 use crate::check::outliers::translation_scale;
 use crate::check::quality::OUTLIER_DEG;
 use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, median_target, summarise};
@@ -66,6 +68,8 @@ pub struct RobotWorldOptions {
     /// The point (camera frame, input unit) of X's `uncertainty.at_point`. Default `None`: the
     /// median target position seen by the camera.
     pub point: Option<[f64; 3]>,
+    /// The joint angles of each pose by input index (radians), as in the hand–eye options.
+    pub joints: Vec<Vec<f64>>,
 }
 
 impl Default for RobotWorldOptions {
@@ -79,6 +83,7 @@ impl Default for RobotWorldOptions {
             pose_names: Vec::new(),
             written: Written::NAMED,
             point: None,
+            joints: Vec::new(),
         }
     }
 }
@@ -195,6 +200,9 @@ pub struct RobotWorldReport {
     /// The target pose as a transform (not serialised).
     #[serde(skip)]
     pub target_transform: Transform,
+    /// The test for an error that follows the robot's configuration, as in the hand–eye report.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub systematic: Option<Systematic>,
 }
 
 /// Calibrates X and the target's pose from `poses` (see the module docs for the steps).
@@ -259,9 +267,38 @@ pub fn calibrate_robot_world(
         options.point.unwrap_or_else(|| median_target(&used)),
     ));
     let y_unc = summarise(left_block(&cov, 6, &solved.target), 0, 0, scene);
+    // As in the hand–eye calibration: the test waits for kept outliers, and a flagged result's
+    // uncertainty is resampled by workspace region and covers the halves' disagreement.
+    let joints: Option<Vec<Vec<f64>>> = (options.joints.len() == poses.len()).then(|| {
+        (0..poses.len())
+            .filter(|i| !(options.reject_outliers && found.poses.iter().any(|g| g.pose == *i)))
+            .map(|i| options.joints[i].clone())
+            .collect()
+    });
+    let systematic = (options.reject_outliers || found.poses.is_empty())
+        .then(|| systematic_error(&used, setup, &solved.x, joints.as_deref(), &solve_x))
+        .flatten();
+    let mut systematic_found = None;
+    if let Some(found) = systematic.as_ref().filter(|s| s.flagged) {
+        let regions = bootstrap_by_region(
+            &used,
+            setup,
+            &solved.x,
+            &solve_x,
+            (options.replicates, scene),
+            &found.order,
+        );
+        let at_point = x_unc.at_point.clone();
+        x_unc = covering(wider(x_unc, regions), found, scene);
+        x_unc.at_point = at_point.map(|p| x_unc.place(&solved.x, p.point));
+        systematic_found = Some(systematic_warning(found, &x_unc));
+    }
+    // Refused when undetermined, the widened uncertainty included: a systematic error the poses
+    // cannot separate from X leaves X undetermined too.
     for u in [&x_unc, &y_unc] {
         refuse_if_undetermined(u, setup, solved.conditioning).map_err(explain)?;
     }
+    warnings.extend(systematic_found);
     warnings.extend(solved.warnings.iter().cloned());
     warn_weak(&x_unc, setup, &mut warnings);
     warnings.extend(kept_outliers);
@@ -298,6 +335,7 @@ pub fn calibrate_robot_world(
         warnings,
         units: Units::default(),
         transform: solved.x,
+        systematic,
         target_transform: solved.target,
     })
 }

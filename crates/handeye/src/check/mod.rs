@@ -7,4 +7,5 @@ pub mod precision;
 pub mod quality;
 pub mod readings;
 pub mod stream;
+pub mod systematic;
 pub mod uncertainty;

@@ -159,6 +159,33 @@ pub fn point_sigma(c: &Matrix6<f64>, x: &Transform, point: [f64; 3]) -> f64 {
     (jac * c * jac.transpose()).trace().max(0.0).sqrt()
 }
 
+impl Uncertainty {
+    /// This uncertainty widened so that its RMS sizes are at least `rotation_deg` and
+    /// `translation` (each block of the covariance, and each replicate's part, scaled by the
+    /// same factor; never narrowed); `scene` as in [`bootstrap`] for the verdicts.
+    pub fn at_least(&self, rotation_deg: f64, translation: f64, scene: f64) -> Self {
+        let factor = |floor: f64, now: f64| {
+            if now > 0.0 && floor > now {
+                floor / now
+            } else {
+                1.0
+            }
+        };
+        let a = factor(rotation_deg, self.rotation_deg);
+        let b = factor(translation, self.translation);
+        let scale = Vector6::new(a, a, a, b, b, b);
+        let cov = Matrix6::from_fn(|i, j| self.covariance[i][j] * scale[i] * scale[j]);
+        let mut wider = summarise(cov, self.replicates, self.refused, scene);
+        wider.samples = self
+            .samples
+            .iter()
+            .map(|e| std::array::from_fn(|k| e[k] * scale[k]))
+            .collect();
+        wider.at_point = self.at_point.clone();
+        wider
+    }
+}
+
 /// The default point of [`Uncertainty::place`]: the median target position seen by the camera
 /// (per coordinate, over `camera_from_target`'s translations), the data's working distance.
 pub fn median_target(poses: &[PosePair]) -> [f64; 3] {
@@ -186,26 +213,76 @@ pub fn bootstrap(
     scene: f64,
 ) -> Uncertainty {
     let residuals = PoseResiduals::at(poses, setup, x);
+    let block = block_length(&residuals.residuals);
+    let groups: Vec<usize> = (0..poses.len()).map(|i| i / block).collect();
+    resample(poses, setup, x, solve, (replicates, scene), (&residuals, &groups))
+}
+
+/// The bootstrap of [`bootstrap`] with the signs shared by regions of the workspace instead of
+/// runs of consecutive poses: `order` is a neighbour order of the poses' configurations
+/// ([`crate::check::systematic::neighbour_order`]); the residuals along it are cut into blocks
+/// as long as their correlation along it ([`block_length`]), each block a region of the workspace
+/// whose poses share one sign.
+///
+/// An error that follows the configuration is alike within a region and adds up there, as it
+/// does in X; independent signs per pose would average it away and report a sigma many times
+/// smaller than the error. For independent errors the regions change nothing on average.
+pub fn bootstrap_by_region(
+    poses: &[PosePair],
+    setup: Setup,
+    x: &Transform,
+    solve: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
+    (replicates, scene): (usize, f64),
+    order: &[usize],
+) -> Uncertainty {
+    let residuals = PoseResiduals::at(poses, setup, x);
+    let along: Vec<PoseResidual> = order.iter().map(|&i| residuals.residuals[i]).collect();
+    let block = block_length(&along).max(region_floor(poses.len()));
+    let mut groups = vec![0; poses.len()];
+    for (rank, &i) in order.iter().enumerate() {
+        groups[i] = rank / block;
+    }
+    resample(poses, setup, x, solve, (replicates, scene), (&residuals, &groups))
+}
+
+/// The shortest region of [`bootstrap_by_region`]: an error that follows the configuration spans
+/// the workspace, so at least √n poses share a sign (8 regions or fewer at 64 poses).
+fn region_floor(poses: usize) -> usize {
+    (poses as f64).sqrt().ceil() as usize
+}
+
+/// The wild bootstrap: each replicate puts back every pose's residual with the sign of its
+/// group (`groups[i]`, one random sign per group), and re-solves.
+fn resample(
+    poses: &[PosePair],
+    setup: Setup,
+    x: &Transform,
+    solve: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
+    (replicates, scene): (usize, f64),
+    (residuals, groups): (&PoseResiduals, &[usize]),
+) -> Uncertainty {
     let n = poses.len() as f64;
     let inflate = if n > 3.0 { (n / (n - 2.0)).sqrt() } else { 2.0 };
-    let block = block_length(&residuals.residuals);
+    let count = groups.iter().max().map_or(0, |g| g + 1);
     let errors: Vec<Option<Vector6<f64>>> = (0..replicates)
         .into_par_iter()
         .map(|b| {
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(SEED ^ b as u64);
-            let mut s = inflate;
+            let signs: Vec<f64> = (0..count)
+                .map(|_| {
+                    if rng.next_u64() & 1 == 0 {
+                        inflate
+                    } else {
+                        -inflate
+                    }
+                })
+                .collect();
             let resampled: Vec<PosePair> = poses
                 .iter()
                 .zip(&residuals.residuals)
-                .enumerate()
-                .map(|(i, (p, d))| {
-                    if i % block == 0 {
-                        s = if rng.next_u64() & 1 == 0 {
-                            inflate
-                        } else {
-                            -inflate
-                        };
-                    }
+                .zip(groups)
+                .map(|((p, d), &g)| {
+                    let s = signs[g];
                     PosePair {
                         base_from_gripper: p.base_from_gripper,
                         camera_from_target: residuals.camera_from_target_with(

@@ -192,6 +192,84 @@ fn parse_record(
     })
 }
 
+/// The `joints` of every record of a JSON Lines pose file (radians, the robot's joint order), in
+/// record order: `None` when no record gives them. A record without them, a value that is not a
+/// finite number, or a count that differs from the first record's is refused with the file, the
+/// line and the field (`joints[k]`).
+pub fn read_joints(text: &str, source: &str) -> Result<Option<Vec<Vec<f64>>>> {
+    let mut joints: Vec<(usize, Option<Vec<f64>>)> = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let trimmed = raw.trim();
+        if trimmed.is_empty() || trimmed.starts_with('#') {
+            continue;
+        }
+        if !trimmed.contains("\"joints\"") {
+            joints.push((line, None));
+            continue;
+        }
+        let value: Value = serde_json::from_str(trimmed)
+            .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
+        joints.push((line, Some(joint_angles(&value["joints"], source, line)?)));
+    }
+    if joints.iter().all(|(_, q)| q.is_none()) {
+        return Ok(None);
+    }
+    let mut count = None;
+    joints
+        .into_iter()
+        .map(|(line, q)| {
+            let q = q.ok_or_else(|| {
+                parse_error(
+                    source,
+                    line,
+                    "joints",
+                    "missing: other records give joint angles, so every record must",
+                )
+            })?;
+            match count {
+                None => count = Some(q.len()),
+                Some(c) if c != q.len() => {
+                    return Err(parse_error(
+                        source,
+                        line,
+                        "joints",
+                        format!("{} joint angles, the first record gives {c}", q.len()),
+                    ));
+                }
+                _ => {}
+            }
+            Ok(q)
+        })
+        .collect::<Result<Vec<_>>>()
+        .map(Some)
+}
+
+/// The joint angles of one record: a non-empty list of finite numbers (radians).
+fn joint_angles(v: &Value, source: &str, line: usize) -> Result<Vec<f64>> {
+    let list = v.as_array().filter(|a| !a.is_empty()).ok_or_else(|| {
+        parse_error(
+            source,
+            line,
+            "joints",
+            format!("expected a list of joint angles in radians, found {v}"),
+        )
+    })?;
+    list.iter()
+        .enumerate()
+        .map(|(k, q)| {
+            q.as_f64().filter(|q| q.is_finite()).ok_or_else(|| {
+                parse_error(
+                    source,
+                    line,
+                    format!("joints[{k}]"),
+                    format!("expected a finite angle in radians, found {q}"),
+                )
+            })
+        })
+        .collect()
+}
+
 /// Reads the one transform of a pair of alternative names, inverting when the file gives the
 /// other direction, with the direction the file wrote.
 fn frame(
@@ -247,6 +325,36 @@ mod tests {
 
     fn read(text: &str) -> Vec<Result<StampedPosePair>> {
         JsonlPairs::new(text.as_bytes(), "t.jsonl").collect()
+    }
+
+    #[test]
+    fn joints_are_read_and_bad_ones_named() {
+        let rec =
+            |j: &str| format!("{{\"base_from_gripper\": {I}, \"camera_from_target\": {I}{j}}}");
+        let text = format!(
+            "{}\n\n{}\n",
+            rec(", \"joints\": [0.1, -2]"),
+            rec(", \"joints\": [0.3, 0.4]")
+        );
+        assert_eq!(
+            read_joints(&text, "f").unwrap(),
+            Some(vec![vec![0.1, -2.0], vec![0.3, 0.4]])
+        );
+        assert_eq!(read_joints(&format!("{}\n", rec("")), "f").unwrap(), None);
+        for (second, field) in [
+            (rec(", \"joints\": [0.3, \"x\"]"), "joints[1]"),
+            (rec(", \"joints\": [0.3]"), "joints"),
+            (rec(""), "joints"),
+            (rec(", \"joints\": 3"), "joints"),
+        ] {
+            let text = format!("{}\n{second}\n", rec(", \"joints\": [0.1, 0.2]"));
+            match read_joints(&text, "f.jsonl") {
+                Err(crate::model::error::Error::Parse { line, field: f, .. }) => {
+                    assert_eq!((line, f.as_str()), (2, field), "{second}");
+                }
+                other => panic!("{second}: {other:?}"),
+            }
+        }
     }
 
     #[test]

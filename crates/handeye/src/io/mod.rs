@@ -39,7 +39,7 @@ use lines::{Line, Lines};
 // `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
 // two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
 // public with `internals` for this crate's tests.
-pub use jsonl::parse_pose_line;
+pub use jsonl::{parse_pose_line, read_joints};
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
 pub use recording::{Note, Recording, RecordingOptions, Source};

@@ -102,6 +102,23 @@ pub enum Warning {
         /// The setup.
         setup: Setup,
     },
+    /// The residuals follow the robot's configuration: an error of the robot's kinematic model,
+    /// the TCP or flange offset, or the camera's intrinsics, which more poses do not average out.
+    SystematicError {
+        /// The neighbour test's p-value (`check::systematic`).
+        p_value: f64,
+        /// How far X moves between the two halves of the workspace, degrees (when both halves
+        /// determine X).
+        halves_rotation_deg: Option<f64>,
+        /// The same, input units.
+        halves_translation: Option<f64>,
+        /// The one-sigma of X once the residuals are resampled by workspace region: degrees.
+        rotation_sigma_deg: f64,
+        /// The same, input units.
+        translation_sigma: f64,
+        /// The joint (1-based) whose angle the residual follows most, where joint angles are given.
+        joint: Option<usize>,
+    },
 }
 
 /// The one option of the call that would fix what a [`Warning`] describes.
@@ -188,6 +205,7 @@ impl Warning {
             Self::ReadAs { .. } => "read_as",
             Self::KeptAsGiven { .. } => "kept_as_given",
             Self::SwappedSizes { .. } => "swapped_sizes",
+            Self::SystematicError { .. } => "systematic_error",
         }
     }
 
@@ -294,8 +312,53 @@ impl fmt::Display for Warning {
                     setup.name(),
                 )
             }
+            Self::SystematicError {
+                p_value,
+                halves_rotation_deg,
+                halves_translation,
+                rotation_sigma_deg,
+                translation_sigma,
+                joint,
+            } => systematic_words(
+                f,
+                *p_value,
+                (*halves_rotation_deg, *halves_translation),
+                (*rotation_sigma_deg, *translation_sigma),
+                *joint,
+            ),
         }
     }
+}
+
+/// The words of [`Warning::SystematicError`].
+fn systematic_words(
+    f: &mut fmt::Formatter<'_>,
+    p_value: f64,
+    halves: (Option<f64>, Option<f64>),
+    sigma: (f64, f64),
+    joint: Option<usize>,
+) -> fmt::Result {
+    write!(
+        f,
+        "the residuals follow the robot's configuration (poses close together share their error; p = {p_value:.1e}): an error that depends on where the robot is, most often the robot's own kinematic model (uncalibrated link lengths or joint zero offsets), a wrong TCP or flange offset, or the camera's intrinsics; more poses of the same kind will not average it out"
+    )?;
+    if let (Some(r), Some(t)) = halves {
+        write!(
+            f,
+            "; the two halves of the workspace give X {r:.2}° and {t:.4} (input unit) apart"
+        )?;
+    }
+    write!(
+        f,
+        "; resampled by workspace region, X is uncertain by {:.2}° and {:.4} (one-sigma, reported as the uncertainty)",
+        sigma.0, sigma.1
+    )?;
+    if let Some(k) = joint {
+        write!(f, "; the residual follows joint {k}'s angle most")?;
+    }
+    f.write_str(
+        ": calibrate the robot's kinematics (or use its calibrated model), check the TCP/flange offset and the camera's intrinsics, and spread the poses over the workspace you will use X in",
+    )
 }
 
 /// " and N more" when a list shows fewer than it has.
@@ -411,6 +474,14 @@ mod tests {
                 x_translation: 1.0,
                 y_translation: 0.1,
                 setup: Setup::EyeToHand,
+            },
+            Warning::SystematicError {
+                p_value: 1e-5,
+                halves_rotation_deg: Some(0.3),
+                halves_translation: Some(0.004),
+                rotation_sigma_deg: 0.2,
+                translation_sigma: 0.003,
+                joint: Some(2),
             },
         ];
         for w in &every {

@@ -1,0 +1,40 @@
+//! The systematic-error test (`check::systematic`) at 1,000, 10,000 and 100,000 poses of the
+//! simulator: the neighbour order (a k-d split, O(n log n)) and both statistics against their
+//! permutation nulls (O(n) each for a fixed number of permutations), without the halves' solves.
+//!
+//! `cargo bench -p handeye --bench systematic`
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use handeye::check::outliers::PoseResiduals;
+use handeye::check::systematic::{Configurations, test};
+use handeye::sim::{SimConfig, simulate};
+use handeye::{Method, Pairing, Setup, motion_pairs, solve};
+use std::hint::black_box;
+
+fn systematic(c: &mut Criterion) {
+    let mut group = c.benchmark_group("systematic");
+    group.sample_size(10);
+    for poses in [1_000usize, 10_000, 100_000] {
+        let sim = simulate(
+            &SimConfig {
+                poses,
+                ..SimConfig::large_motions()
+            },
+            42,
+            0,
+        );
+        let pairs = motion_pairs(&sim.poses, Pairing::Consecutive, Setup::EyeInHand);
+        let x = solve(Method::Andreff, &pairs)
+            .expect("the simulator's motions determine X")
+            .x;
+        let residuals = PoseResiduals::at(&sim.poses, Setup::EyeInHand, &x).residuals;
+        let configurations = Configurations::of_hand_poses(&sim.poses);
+        group.bench_with_input(BenchmarkId::new("test", poses), &poses, |b, _| {
+            b.iter(|| test(black_box(&residuals), black_box(&configurations)))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, systematic);
+criterion_main!(benches);

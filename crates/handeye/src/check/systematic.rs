@@ -1,0 +1,470 @@
+//! An error that follows the robot's configuration: an uncalibrated robot (DH parameters, joint
+//! zero offsets), a wrong TCP or flange offset, camera intrinsics.
+//!
+//! Random errors of the poses are independent of where the robot is: after the fit, the per-pose
+//! disagreement D_i = Y⁻¹ Y_i ([`PoseResiduals`]) of two poses close in configuration is no more
+//! alike than that of two poses far apart. A systematic error is a smooth function of the
+//! configuration, D_i ≈ g(q_i): neighbours share it. The test:
+//!
+//! 1. the poses are put in a *neighbour order* of their configuration: a k-d split of the joint
+//!    angles (when given) or of the hand pose (position over its spread, rotation vector about the
+//!    mean rotation, radians), the widest coordinate split at its median, recursively, the leaves
+//!    read in order (O(n log n)); consecutive poses of that order are neighbours, and contiguous
+//!    runs of it are regions of the workspace (the k-d cells);
+//! 2. along that order, the von Neumann ratio (Durbin–Watson) of the residuals, rotation and
+//!    translation each: S = Σ‖D_{o(k+1)} − D_{o(k)}‖² / (2 Σ‖D_i − D̄‖²), ≈ 1 for independent
+//!    residuals, ≪ 1 when neighbours share theirs;
+//! 3. its null distribution by permutation: the same ratio over [`PERMUTATIONS`] random orders
+//!    (exchangeable residuals are what "random" means here), its mean and spread give a z-score
+//!    (the ratio is a sum of n − 1 terms, normal to a good approximation from 20 poses); the
+//!    smaller of the two blocks' one-sided p-values, doubled (Bonferroni), is the p-value.
+//!    O(n · PERMUTATIONS).
+//!
+//! The residuals are winsorised at [`WINSOR`] times their median size first, so a few gross
+//! outliers (their own check) neither make nor hide the pattern. What the error does to X is
+//! measured by the halves of the workspace (the first k-d split): each half solves X on its own
+//! and their disagreement is the error's size.
+
+use nalgebra::{DMatrix, Vector3};
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_xoshiro::Xoshiro256PlusPlus;
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+use crate::check::outliers::{PoseResiduals, median};
+use crate::model::motion::{PosePair, Setup};
+use crate::model::pose::{Transform, log_so3};
+use crate::solve::residual::PoseResidual;
+
+/// Random orders drawn for the null distribution of the neighbour ratio.
+pub const PERMUTATIONS: usize = 200;
+
+/// A p-value below this flags a systematic error.
+pub const P_FLAG: f64 = 0.01;
+
+/// The test needs at least this many poses.
+pub const MIN_POSES: usize = 12;
+
+/// Residuals larger than this times the median size are clipped to it.
+const WINSOR: f64 = 4.0;
+
+/// The permutations' seed: results are reproducible run to run.
+const SEED: u64 = 0x5157_E3A7_1C00;
+
+/// What the test found (the report's `systematic`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Systematic {
+    /// Whether the residuals follow the configuration (p-value below the threshold).
+    pub flagged: bool,
+    /// The von Neumann ratio of the rotation residuals along the neighbour order (≈ 1 random).
+    pub rotation_ratio: f64,
+    /// The same for the translation residuals.
+    pub translation_ratio: f64,
+    /// The share of the rotation residuals' variance a linear function of the configuration
+    /// explains (≈ features / poses for random residuals).
+    pub rotation_explained: f64,
+    /// The same for the translation residuals.
+    pub translation_explained: f64,
+    /// The smaller of the two z-scores against the permutation null.
+    pub z: f64,
+    /// Its one-sided p-value, times four for the two blocks and the two statistics (Bonferroni).
+    pub p_value: f64,
+    /// The threshold the p-value was judged by.
+    pub threshold: f64,
+    /// Poses tested.
+    pub poses: usize,
+    /// Random orders of the null.
+    pub permutations: usize,
+    /// What the neighbours were found in: `joints` or `hand_pose`.
+    pub configuration: String,
+    /// The two halves of the workspace solved apart, where both determine X.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub halves: Option<Halves>,
+    /// The joint whose angle the residual follows most, where joint angles are given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<JointFollow>,
+    /// The neighbour order (indices into the poses tested); not serialised.
+    #[serde(skip)]
+    pub order: Vec<usize>,
+}
+
+/// X from the two halves of the workspace, each solved alone.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Halves {
+    /// Angle between the halves' rotations of X, degrees.
+    pub rotation_deg: f64,
+    /// Distance between the halves' translations of X, input units.
+    pub translation: f64,
+}
+
+/// The joint whose angle orders the residual best.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct JointFollow {
+    /// The joint, 1-based in the robot's joint order.
+    pub joint: usize,
+    /// The von Neumann ratio of the residuals (rotation and translation standardised, summed)
+    /// along that joint's angle alone (≈ 1 when the residual does not follow it).
+    pub ratio: f64,
+}
+
+/// The configuration of each pose, flat: `dim` numbers per pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Configurations {
+    /// The numbers, pose after pose.
+    pub values: Vec<f64>,
+    /// Numbers per pose.
+    pub dim: usize,
+    /// `joints` or `hand_pose`.
+    pub kind: &'static str,
+}
+
+impl Configurations {
+    /// The joint angles of each pose (radians), when every pose has the same number of them.
+    pub fn of_joints(joints: &[Vec<f64>]) -> Option<Self> {
+        let dim = joints.first()?.len();
+        if dim == 0 || joints.iter().any(|q| q.len() != dim) {
+            return None;
+        }
+        Some(Self {
+            values: joints.iter().flatten().copied().collect(),
+            dim,
+            kind: "joints",
+        })
+    }
+
+    /// The hand pose of each pose: position over its RMS spread, and the rotation vector of the
+    /// rotation relative to the first pose's, radians.
+    pub fn of_hand_poses(poses: &[PosePair]) -> Self {
+        let n = poses.len().max(1) as f64;
+        let centre: Vector3<f64> = poses
+            .iter()
+            .map(|p| p.base_from_gripper.translation.vector)
+            .sum::<Vector3<f64>>()
+            / n;
+        let spread = (poses
+            .iter()
+            .map(|p| (p.base_from_gripper.translation.vector - centre).norm_squared())
+            .sum::<f64>()
+            / n)
+            .sqrt()
+            .max(f64::MIN_POSITIVE);
+        let reference = poses
+            .first()
+            .map(|p| *p.base_from_gripper.rotation.matrix())
+            .unwrap_or_else(nalgebra::Matrix3::identity);
+        let mut values = Vec::with_capacity(6 * poses.len());
+        for p in poses {
+            let t = (p.base_from_gripper.translation.vector - centre) / spread;
+            let r = log_so3(&(reference.transpose() * p.base_from_gripper.rotation.matrix()));
+            values.extend_from_slice(&[t.x, t.y, t.z, r.x, r.y, r.z]);
+        }
+        Self {
+            values,
+            dim: 6,
+            kind: "hand_pose",
+        }
+    }
+
+    fn at(&self, i: usize, k: usize) -> f64 {
+        self.values[i * self.dim + k]
+    }
+}
+
+/// The neighbour order of the configurations: a k-d split (widest coordinate at its median,
+/// recursively), the leaves read in order. O(n log n).
+pub fn neighbour_order(c: &Configurations) -> Vec<usize> {
+    let n = c.values.len() / c.dim.max(1);
+    let mut order: Vec<usize> = (0..n).collect();
+    split(c, &mut order);
+    order
+}
+
+fn split(c: &Configurations, idx: &mut [usize]) {
+    if idx.len() <= 2 {
+        return;
+    }
+    let widest = (0..c.dim)
+        .map(|k| {
+            let (lo, hi) = idx.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
+                (lo.min(c.at(i, k)), hi.max(c.at(i, k)))
+            });
+            (k, hi - lo)
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(0, |(k, _)| k);
+    let mid = idx.len() / 2;
+    idx.select_nth_unstable_by(mid, |&a, &b| c.at(a, widest).total_cmp(&c.at(b, widest)));
+    let (lower, upper) = idx.split_at_mut(mid);
+    split(c, lower);
+    split(c, upper);
+}
+
+/// The von Neumann ratio of `v` along `order`: Σ‖v_{o(k+1)} − v_{o(k)}‖² / (2 Σ‖v_i − v̄‖²).
+pub fn neighbour_ratio(v: &[Vector3<f64>], order: &[usize]) -> f64 {
+    let n = v.len().max(1) as f64;
+    let mean: Vector3<f64> = v.iter().sum::<Vector3<f64>>() / n;
+    let total: f64 = v.iter().map(|x| (x - mean).norm_squared()).sum();
+    if total <= 0.0 {
+        return 1.0;
+    }
+    let steps: f64 = order
+        .windows(2)
+        .map(|w| (v[w[1]] - v[w[0]]).norm_squared())
+        .sum();
+    steps / (2.0 * total)
+}
+
+/// The z-score of the ratio along `order` against the ratios along random orders.
+fn z_score(v: &[Vector3<f64>], order: &[usize], rng: &mut Xoshiro256PlusPlus) -> (f64, f64) {
+    let ratio = neighbour_ratio(v, order);
+    let mut shuffled = order.to_vec();
+    let null: Vec<f64> = (0..PERMUTATIONS)
+        .map(|_| {
+            shuffled.shuffle(rng);
+            neighbour_ratio(v, &shuffled)
+        })
+        .collect();
+    let m = null.iter().sum::<f64>() / null.len() as f64;
+    let sd = (null.iter().map(|r| (r - m).powi(2)).sum::<f64>() / (null.len() - 1) as f64).sqrt();
+    let z = if sd > 0.0 { (ratio - m) / sd } else { 0.0 };
+    (ratio, z)
+}
+
+/// The share of the residuals' variance a linear function of the configuration explains,
+/// R² = ‖H v‖² / ‖v − v̄‖² summed over the three components (H the hat matrix of the features
+/// with an intercept), and its z-score against the same share for permuted residuals.
+fn explained_z(
+    v: &[Vector3<f64>],
+    features: &DMatrix<f64>,
+    rng: &mut Xoshiro256PlusPlus,
+) -> (f64, f64) {
+    let n = v.len();
+    let gram = features.transpose() * features;
+    let Some(inverse) = gram.try_inverse() else {
+        return (0.0, 0.0);
+    };
+    let mean: Vector3<f64> = v.iter().sum::<Vector3<f64>>() / n as f64;
+    let total: f64 = v.iter().map(|x| (x - mean).norm_squared()).sum();
+    if total <= 0.0 {
+        return (0.0, 0.0);
+    }
+    let dim = features.ncols();
+    // One pass over the poses per order: b = Fᵀ (v_perm − v̄), a (features × 3) matrix, and the
+    // explained share Σ_c b_cᵀ (FᵀF)⁻¹ b_c.
+    let share = |perm: &[usize]| {
+        let mut b = DMatrix::<f64>::zeros(dim, 3);
+        for (i, &j) in perm.iter().enumerate() {
+            let d = v[j] - mean;
+            for k in 0..dim {
+                let f = features[(i, k)];
+                b[(k, 0)] += f * d.x;
+                b[(k, 1)] += f * d.y;
+                b[(k, 2)] += f * d.z;
+            }
+        }
+        (b.transpose() * &inverse * &b).trace() / total
+    };
+    let identity: Vec<usize> = (0..n).collect();
+    let r2 = share(&identity);
+    let mut perm = identity.clone();
+    let null: Vec<f64> = (0..PERMUTATIONS)
+        .map(|_| {
+            perm.shuffle(rng);
+            share(&perm)
+        })
+        .collect();
+    let m = null.iter().sum::<f64>() / null.len() as f64;
+    let sd = (null.iter().map(|r| (r - m).powi(2)).sum::<f64>() / (null.len() - 1) as f64).sqrt();
+    // Large R² is the finding: the sign is turned so that, as for the neighbour ratio, a
+    // systematic error gives a negative z.
+    (r2, if sd > 0.0 { (m - r2) / sd } else { 0.0 })
+}
+
+/// The features of the linear model: an intercept and the configuration, each coordinate
+/// centred and scaled to unit spread.
+fn features(c: &Configurations, n: usize) -> DMatrix<f64> {
+    let mut f = DMatrix::from_element(n, c.dim + 1, 1.0);
+    for k in 0..c.dim {
+        let mean = (0..n).map(|i| c.at(i, k)).sum::<f64>() / n as f64;
+        let sd = ((0..n).map(|i| (c.at(i, k) - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+        for i in 0..n {
+            f[(i, k + 1)] = if sd > 0.0 { (c.at(i, k) - mean) / sd } else { 0.0 };
+        }
+    }
+    f
+}
+
+/// Each residual vector clipped to [`WINSOR`] times the median size.
+fn winsorised(v: impl Iterator<Item = Vector3<f64>>) -> Vec<Vector3<f64>> {
+    let v: Vec<Vector3<f64>> = v.collect();
+    let limit = WINSOR * median(v.iter().map(|x| x.norm()).collect());
+    v.into_iter()
+        .map(|x| {
+            let s = x.norm();
+            if s > limit && s > 0.0 {
+                x * (limit / s)
+            } else {
+                x
+            }
+        })
+        .collect()
+}
+
+/// The rotation and translation residuals of the poses, winsorised.
+fn parts(residuals: &[PoseResidual]) -> [Vec<Vector3<f64>>; 2] {
+    [
+        winsorised(residuals.iter().map(|r| r.rotation)),
+        winsorised(residuals.iter().map(|r| r.translation)),
+    ]
+}
+
+/// Tests whether `residuals` (one per pose) follow `configurations` (same poses, same order).
+/// `None` with fewer than [`MIN_POSES`] poses.
+pub fn test(residuals: &[PoseResidual], configurations: &Configurations) -> Option<Systematic> {
+    let n = residuals.len();
+    if n < MIN_POSES || configurations.values.len() != n * configurations.dim {
+        return None;
+    }
+    let order = neighbour_order(configurations);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(SEED);
+    let [rot, trans] = parts(residuals);
+    let (rotation_ratio, z_rot) = z_score(&rot, &order, &mut rng);
+    let (translation_ratio, z_trans) = z_score(&trans, &order, &mut rng);
+    let f = features(configurations, n);
+    let (rotation_explained, x_rot) = explained_z(&rot, &f, &mut rng);
+    let (translation_explained, x_trans) = explained_z(&trans, &f, &mut rng);
+    let z = z_rot.min(z_trans).min(x_rot).min(x_trans);
+    let p_value = (4.0 * Normal::standard().cdf(z)).min(1.0);
+    Some(Systematic {
+        flagged: p_value < P_FLAG,
+        rotation_ratio,
+        translation_ratio,
+        rotation_explained,
+        translation_explained,
+        z,
+        p_value,
+        threshold: P_FLAG,
+        poses: n,
+        permutations: PERMUTATIONS,
+        configuration: configurations.kind.into(),
+        halves: None,
+        joint: (configurations.kind == "joints").then(|| joint_followed(&rot, &trans, configurations)).flatten(),
+        order,
+    })
+}
+
+/// The joint along whose angle alone the residuals are most alike between neighbours.
+fn joint_followed(
+    rot: &[Vector3<f64>],
+    trans: &[Vector3<f64>],
+    c: &Configurations,
+) -> Option<JointFollow> {
+    let n = rot.len();
+    (0..c.dim)
+        .map(|k| {
+            let mut order: Vec<usize> = (0..n).collect();
+            order.sort_by(|&a, &b| c.at(a, k).total_cmp(&c.at(b, k)));
+            let ratio = 0.5 * (neighbour_ratio(rot, &order) + neighbour_ratio(trans, &order));
+            JointFollow { joint: k + 1, ratio }
+        })
+        .min_by(|a, b| a.ratio.total_cmp(&b.ratio))
+}
+
+/// The poses of each half of the workspace (the first k-d split of the neighbour order).
+pub fn halves(poses: &[PosePair], order: &[usize]) -> [Vec<PosePair>; 2] {
+    let mid = order.len() / 2;
+    [
+        order[..mid].iter().map(|&i| poses[i]).collect(),
+        order[mid..].iter().map(|&i| poses[i]).collect(),
+    ]
+}
+
+/// How far apart the halves' X are, when `solve` determines X from each.
+pub fn halves_disagree(
+    poses: &[PosePair],
+    order: &[usize],
+    solve: &dyn Fn(&[PosePair]) -> crate::model::error::Result<Transform>,
+) -> Option<Halves> {
+    let [a, b] = halves(poses, order);
+    let (xa, xb) = (solve(&a).ok()?, solve(&b).ok()?);
+    let r = log_so3(&(xa.rotation.matrix() * xb.rotation.matrix().transpose()));
+    Some(Halves {
+        rotation_deg: r.norm().to_degrees(),
+        translation: (xa.translation.vector - xb.translation.vector).norm(),
+    })
+}
+
+/// The test on the poses under `x`, with the halves' disagreement measured by `solve`.
+pub fn systematic_error(
+    poses: &[PosePair],
+    setup: Setup,
+    x: &Transform,
+    joints: Option<&[Vec<f64>]>,
+    solve: &dyn Fn(&[PosePair]) -> crate::model::error::Result<Transform>,
+) -> Option<Systematic> {
+    let residuals = PoseResiduals::at(poses, setup, x);
+    let configurations = joints
+        .filter(|j| j.len() == poses.len())
+        .and_then(Configurations::of_joints)
+        .unwrap_or_else(|| Configurations::of_hand_poses(poses));
+    let mut found = test(&residuals.residuals, &configurations)?;
+    found.halves = halves_disagree(poses, &found.order, solve);
+    Some(found)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::RngExt;
+
+    /// Joint angles of `n` poses on a 2-joint grid, and residuals: independent noise plus
+    /// `bias` times a smooth function of the first joint.
+    fn case(n: usize, bias: f64, seed: u64) -> (Vec<PoseResidual>, Configurations) {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let joints: Vec<Vec<f64>> = (0..n)
+            .map(|_| vec![rng.random_range(-1.5..1.5), rng.random_range(-1.5..1.5)])
+            .collect();
+        let mut noise = || Vector3::new(rng.random::<f64>(), rng.random(), rng.random()) - Vector3::repeat(0.5);
+        let residuals = joints
+            .iter()
+            .map(|q| {
+                let smooth = Vector3::new(q[0].sin(), q[0].cos(), 0.0) * bias;
+                PoseResidual {
+                    rotation: noise() * 1e-3,
+                    angle: 0.0,
+                    translation: noise() * 1e-3 + smooth * 1e-3,
+                }
+            })
+            .collect();
+        (residuals, Configurations::of_joints(&joints).unwrap())
+    }
+
+    #[test]
+    fn the_neighbour_order_is_a_permutation() {
+        let (_, c) = case(1000, 0.0, 1);
+        let mut order = neighbour_order(&c);
+        order.sort_unstable();
+        assert_eq!(order, (0..1000).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn independent_residuals_are_not_flagged_and_smooth_ones_are() {
+        let quiet = (0..20)
+            .filter(|&s| test(&case(40, 0.0, s).0, &case(40, 0.0, s).1).unwrap().flagged)
+            .count();
+        assert!(quiet <= 1, "{quiet} of 20 noise-only cases flagged");
+        for seed in 0..5 {
+            let (r, c) = case(40, 2.0, seed);
+            let found = test(&r, &c).unwrap();
+            assert!(found.flagged, "{found:?}");
+            assert_eq!(found.joint.map(|j| j.joint), Some(1), "{found:?}");
+        }
+    }
+
+    #[test]
+    fn too_few_poses_are_not_tested() {
+        let (r, c) = case(MIN_POSES - 1, 2.0, 0);
+        assert!(test(&r, &c).is_none());
+    }
+}
