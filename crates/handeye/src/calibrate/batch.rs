@@ -26,6 +26,8 @@ use crate::model::findings::{Part, Verdict};
 use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
 use crate::model::pose::Transform;
 use crate::model::pose::TransformJson;
+use crate::model::prior::{Prior, PriorsUsed, check_priors};
+use crate::calibrate::low_dof::{self, LowDofReport};
 use crate::model::warning::{SHOWN, Warning};
 use crate::solve::accumulate::PoseAccumulator;
 use crate::solve::motions::{AllPairs, MotionSource};
@@ -141,6 +143,10 @@ pub struct Options {
     /// The point (camera frame, input unit) whose error through X `uncertainty.at_point` gives;
     /// `None`: the median target position seen by the camera ([`median_target`]).
     pub point: Option<[f64; 3]>,
+    /// Priors on components of X's translation (SPEC sec. 9, `--prior`): a low-DOF recording's
+    /// free component comes from its prior; a prior on a component the motions determine is
+    /// checked against the data (the data's value is kept). Default none.
+    pub priors: Vec<Prior>,
 }
 
 impl Default for Options {
@@ -156,6 +162,7 @@ impl Default for Options {
             pose_names: Vec::new(),
             written: Written::NAMED,
             point: None,
+            priors: Vec::new(),
         }
     }
 }
@@ -284,6 +291,14 @@ pub struct Report {
     /// The held-out check: each camera observation predicted from the other poses
     /// (`crate::holdout`); `None` with fewer than four poses.
     pub held_out: Option<HeldOutSummary>,
+    /// The components of X's translation that came from a prior, not from the data (`"prior":
+    /// {"tz": {"value", "sigma"}}`); absent when none did.
+    #[serde(default, skip_serializing_if = "PriorsUsed::is_empty")]
+    pub prior: PriorsUsed,
+    /// A low-DOF recording (every motion rotates about one axis): the axis and the component
+    /// taken from the prior; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low_dof: Option<LowDofReport>,
 }
 
 /// The held-out check in a [`Report`].
@@ -316,6 +331,7 @@ pub struct HeldOutName {
 /// [`Error::Degenerate`] when the motions do not determine X, [`Error::TooFewMotions`].
 pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
     check_replicates(options.replicates)?;
+    check_priors(&options.priors)?;
     let mut warnings = Vec::new();
     let (applied, check, read, found) = read_poses(
         poses,
@@ -330,8 +346,16 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     } else {
         read
     };
-    let calibration = solve_poses(&used, setup, options)?;
-    let solve_x = |p: &[PosePair]| solve_replicate(p, setup, options);
+    let plan = low_dof::plan(&used, setup, options.pairing, &options.priors)
+        .map_err(|e| explained(e, &warnings, None))?;
+    let calibration = match &plan {
+        Some(plan) => low_dof::solve(plan, &used, setup, options.pairing, options.method)?,
+        None => solve_poses(&used, setup, options)?,
+    };
+    let solve_x = |p: &[PosePair]| match &plan {
+        Some(plan) => low_dof::solve_replicate(plan, p, setup, options.pairing),
+        None => solve_replicate(p, setup, options),
+    };
     // Translation verdicts are relative to the larger of the hand's spread and the camera's
     // working distance: motions that barely translate (a wrist turning) still fix X's offset.
     let scene = translation_scale(&used, setup).max(working_distance(&used));
@@ -364,14 +388,37 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     let outliers = outlier_report(&found, options);
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));
-    refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
-        .and_then(|()| motions_determine(&used, setup, options, scene, calibration.conditioning))
-        .map_err(|e| method_at_fault(e, &used, setup, options, scene))
-        .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?;
+    // The directions the motions leave weak are judged without the prior's sigma.
+    let data_uncertainty = uncertainty.clone();
+    let (uncertainty, prior) = match &plan {
+        // The motions' part is judged on its own; the prior's sigma is the user's to give.
+        Some(plan) => {
+            refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
+                .map_err(|_| low_dof::undetermined(plan, setup))
+                .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?;
+            low_dof::with_prior(plan, &uncertainty, scene)
+        }
+        None => {
+            refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
+                .and_then(|()| {
+                    motions_determine(&used, setup, options, scene, calibration.conditioning)
+                })
+                .map_err(|e| method_at_fault(e, &used, setup, options, scene))
+                .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?;
+            (uncertainty, PriorsUsed::new())
+        }
+    };
+    low_dof::check_determined(
+        &options.priors,
+        &prior,
+        &calibration.x,
+        &uncertainty,
+        &mut warnings,
+    );
     let translation_residual_rel = residuals.median_translation() / scene.max(f64::MIN_POSITIVE);
     warnings.extend(calibration.warnings.iter().cloned());
     warnings.extend(quality.warnings.iter().cloned());
-    warn_weak(&uncertainty, setup, &mut warnings);
+    warn_weak(&data_uncertainty, setup, &mut warnings);
     if translation_residual_rel > WARN_TRANSLATION_RESIDUAL {
         warnings.push(Warning::TranslationResiduals {
             relative: translation_residual_rel,
@@ -417,6 +464,8 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         units: Units::default(),
         transform: calibration.x,
         held_out,
+        prior,
+        low_dof: plan.map(|p| p.report(calibration.conditioning)),
     })
 }
 
