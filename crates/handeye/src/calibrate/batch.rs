@@ -417,7 +417,13 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     );
     let translation_residual_rel = residuals.median_translation() / scene.max(f64::MIN_POSITIVE);
     warnings.extend(calibration.warnings.iter().cloned());
-    warnings.extend(quality.warnings.iter().cloned());
+    warnings.extend(
+        quality
+            .warnings
+            .iter()
+            .filter(|w| plan.is_none() || !low_dof::handled(w))
+            .cloned(),
+    );
     warn_weak(&data_uncertainty, setup, &mut warnings);
     if translation_residual_rel > WARN_TRANSLATION_RESIDUAL {
         warnings.push(Warning::TranslationResiduals {

@@ -59,7 +59,7 @@ impl Plan {
     /// The report's `low_dof`.
     pub(crate) fn report(&self, conditioning: f64) -> LowDofReport {
         LowDofReport {
-            axis: self.axis.hand.into(),
+            axis: upward(&self.axis.hand).into(),
             spread_deg: self.axis.spread.to_degrees(),
             free: self.prior.component,
             conditioning,
@@ -81,6 +81,11 @@ pub(crate) fn plan(
     if !axis.is_low_dof() {
         return Ok(None);
     }
+    if let Some(ratio) = on_motions(poses, setup, pairing, |m| pitch_ratio(m, &axis))
+        && !(1.0 / UNIT_RATIO..=UNIT_RATIO).contains(&ratio)
+    {
+        return Err(refusal(&axis, setup, LowDofMissing::Units { ratio }));
+    }
     let Some(free) = axis.free_component() else {
         return Err(refusal(&axis, setup, LowDofMissing::NotStatable));
     };
@@ -93,20 +98,56 @@ pub(crate) fn plan(
     }
 }
 
+/// A hand pitch over camera pitch ratio beyond this (or below its inverse) is a unit mix-up: the
+/// two are one length seen by both sides, equal but for noise; a mm/m mix-up makes it 1000.
+pub const UNIT_RATIO: f64 = 10.0;
+
+/// The hand's pitches are judged only when their RMS is at least this fraction of the RMS hand
+/// translation (a robot that never moves along the axis has pitches of noise only).
+const LEAST_PITCH: f64 = 0.05;
+
+/// RMS of the hand's pitches k_A · t_A over RMS of the camera's k_B · t_B, over the motions that
+/// rotate (the pitch of a screw motion is the same seen from either side: t_A's component along
+/// the axis is R_X's image of t_B's); `None` when the hand barely moves along the axis.
+fn pitch_ratio(motions: &(impl MotionSource + ?Sized), axis: &CommonAxis) -> Option<f64> {
+    let (mut hand, mut eye, mut moved) = (0.0, 0.0, 0.0);
+    motions.for_each_motion(|m| {
+        let ta = m.a.translation.vector;
+        hand += axis.hand.dot(&ta).powi(2);
+        eye += axis.eye.dot(&m.b.translation.vector).powi(2);
+        moved += ta.norm_squared();
+    });
+    (hand > LEAST_PITCH.powi(2) * moved && eye > 0.0).then(|| (hand / eye).sqrt())
+}
+
 /// The refusal of a low-DOF recording for what it lacks.
 pub(crate) fn refusal(axis: &CommonAxis, setup: Setup, missing: LowDofMissing) -> Error {
-    // Pointing up (or along the positive coordinate) reads better.
-    let i = axis.hand.iamax();
-    let k = axis.hand * axis.hand[i].signum();
     Error::Degenerate {
         reason: Degeneracy::LowDof {
-            axis: k.into(),
+            axis: upward(&axis.hand).into(),
             spread_deg: axis.spread.to_degrees(),
             setup,
             missing,
         },
         conditioning: 0.0,
     }
+}
+
+/// The axis pointing along its largest coordinate's positive direction (up, for a SCARA), with
+/// rounding's −0 made 0: reads better, means the same.
+fn upward(k: &Vector3<f64>) -> Vector3<f64> {
+    let k = k * k[k.iamax()].signum();
+    k.map(|v| if v == 0.0 { 0.0 } else { v })
+}
+
+/// The warnings of the quality check that describe the very case a low-DOF solve handles (every
+/// axis in one direction, a weak rotation system): they would advise rotations a low-DOF robot
+/// cannot make.
+pub(crate) fn handled(w: &Warning) -> bool {
+    matches!(
+        w,
+        Warning::OneAxis { .. } | Warning::WeakConditioning { .. }
+    )
 }
 
 /// Runs `f` on the pairing's motions (every pair on the fly, or the consecutive ones stored).

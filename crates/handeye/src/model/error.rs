@@ -136,8 +136,17 @@ pub enum Degeneracy {
     },
 }
 
+/// " (conditioning c)" after a refusal's reason, but for a low-DOF one (Andreff's rotation
+/// system says nothing there).
+fn conditioning_words(reason: &Degeneracy, conditioning: f64) -> String {
+    match reason {
+        Degeneracy::LowDof { .. } => String::new(),
+        _ => format!(" (conditioning {conditioning:.3e})"),
+    }
+}
+
 /// What a low-DOF recording ([`Degeneracy::LowDof`]) lacks.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub enum LowDofMissing {
     /// A prior on X's translation along the axis (the component named), which no prior covers.
@@ -148,6 +157,12 @@ pub enum LowDofMissing {
     /// The motions do not fix X's rotation about the axis or its translation across it (too few,
     /// too small, no translation across the axis).
     Motions,
+    /// The hand's and the camera's translations along the axis (each motion's pitch, the same
+    /// length seen by both) differ by this factor (hand over camera): their length units differ.
+    Units {
+        /// RMS hand pitch over RMS camera pitch.
+        ratio: f64,
+    },
 }
 
 /// The words of a [`Degeneracy::LowDof`] refusal.
@@ -156,9 +171,14 @@ fn low_dof_words(axis: &[f64; 3], spread_deg: f64, setup: Setup, missing: LowDof
     let frame = crate::model::findings::reference_frame(setup);
     // No "-0.000".
     let [x, y, z] = axis.map(|v| if v.abs() < 5e-4 { 0.0 } else { v });
-    let which = match missing {
-        LowDofMissing::Prior(c) => format!("the {frame}'s {}", ["x", "y", "z"][c.index()]),
-        _ => "one axis".into(),
+    let i = (0..3)
+        .max_by(|&a, &b| axis[a].abs().total_cmp(&axis[b].abs()))
+        .unwrap_or(2);
+    let along_coordinate = axis[i].abs() >= crate::model::prior::PRIOR_AXIS_DEG.to_radians().cos();
+    let which = if along_coordinate {
+        format!("the {frame}'s {}", ["x", "y", "z"][i])
+    } else {
+        "one axis".into()
     };
     let what = format!(
         "every motion rotates about the same axis ({which}, ({x:.3}, {y:.3}, {z:.3}) in the {frame} frame, within {spread_deg:.2}°): a SCARA or 4-axis robot, or a gantry with one wrist joint"
@@ -179,7 +199,7 @@ fn low_dof_words(axis: &[f64; 3], spread_deg: f64, setup: Setup, missing: LowDof
             };
             let n = c.name();
             format!(
-                "{what}. Such motions determine X's rotation and its translation across the axis, but never its translation along it: measure {measure} (X's {n}: the camera's position along {along}, the input's length unit) and give it as a prior, `--prior {n}=VALUE` or `--prior {n}=VALUE+-SIGMA` (`priors=[\"{n}=VALUE\"]` in Python)"
+                "{what}. Such motions determine X's rotation and its translation across the axis, but never its translation along it: measure {measure} (X's {n}: the camera's position along {along}, the input's length unit) and give it as a prior, `--prior {n}=VALUE` or `--prior {n}=VALUE+-SIGMA`"
             )
         }
         LowDofMissing::NotStatable => format!(
@@ -187,8 +207,14 @@ fn low_dof_words(axis: &[f64; 3], spread_deg: f64, setup: Setup, missing: LowDof
             crate::model::prior::PRIOR_AXIS_DEG
         ),
         LowDofMissing::Motions => format!(
-            "{what}. X's rotation about the axis and its translation across it come from the motions' translations across the axis and their turns about it, and these motions do not fix them: add poses that move the gripper further across the axis and turn it through larger angles about it"
+            "{what}. X's rotation about the axis and its translation across it come from the motions' translations across the axis and their turns about it, and these motions do not fix them: add poses that move the gripper further across the axis and turn it through larger angles about it (or check how the input reads: both sides in one length unit, each pose in the direction its name says)"
         ),
+        LowDofMissing::Units { ratio } => {
+            let fix = if ratio > 1.0 { "robot-mm" } else { "camera-mm" };
+            format!(
+                "{what}. The robot's and the camera's translations along the axis, the same length seen by both, differ by a factor of {ratio:.3e} (robot over camera): their poses are in different length units; if one is in millimetres and the other in metres, pass `--fix {fix}`"
+            )
+        }
     }
 }
 
@@ -266,7 +292,7 @@ pub enum Error {
         need: usize,
     },
     /// The motions cannot determine X.
-    #[error("degenerate motions: {reason} (conditioning {conditioning:.3e})")]
+    #[error("degenerate motions: {reason}{}", conditioning_words(reason, *conditioning))]
     Degenerate {
         /// Which degeneracy.
         reason: Degeneracy,
