@@ -29,6 +29,10 @@ pub fn run(args: Args) -> Result<()> {
 /// The advice in a few lines.
 fn in_words(advice: &Advice) -> String {
     let mut out = String::new();
+    if let Some(words) = &advice.low_dof {
+        out.push_str(&format!("X from {} poses: {words}\n", advice.poses));
+        return out;
+    }
     match advice.current {
         Some(c) => out.push_str(&format!(
             "X from {} poses{}: one-sigma {:.3}° and {:.4} (input unit)\n",

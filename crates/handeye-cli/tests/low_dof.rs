@@ -225,3 +225,18 @@ fn a_unit_mismatch_is_refused_naming_the_fix() {
     let r: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(r["prior"]["tz"]["value"].as_f64(), Some(t[2]));
 }
+
+/// `advise` on a SCARA recording names the prior and suggests no rotation the robot cannot make.
+#[test]
+fn advise_names_the_prior_and_no_rotation() {
+    for (name, setup) in RECORDINGS {
+        let (code, out, err) = run(&["advise", &file(name), "--setup", setup]);
+        assert_eq!(code, 0, "{err}");
+        assert!(out.contains("--prior tz="), "{out}");
+        assert!(!out.contains("next motion 1"), "{out}");
+        let json = &out[out.find('{').unwrap()..];
+        let a: Value = serde_json::from_str(json).unwrap();
+        assert_eq!(a["suggestions"].as_array().map(Vec::len), Some(0));
+        assert!(a["low_dof"].as_str().unwrap().contains("SCARA"));
+    }
+}

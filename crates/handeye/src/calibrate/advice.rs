@@ -19,7 +19,7 @@ use crate::check::quality::OUTLIER_DEG;
 use crate::check::readings::check_readings;
 use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
-use crate::model::motion::{MotionFeatures, PosePair, Setup};
+use crate::model::motion::{MotionFeatures, Pairing, PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, transform_from_parts};
 use crate::solve::accumulate::PoseAccumulator;
 
@@ -79,8 +79,13 @@ pub struct Advice {
     pub current: Option<Predicted>,
     /// The least determined rotation and translation directions, weakest first.
     pub weakest: Vec<Weakness>,
-    /// The next motions, in the order to record them.
+    /// The next motions, in the order to record them (none for a low-DOF robot: they would turn
+    /// about axes it cannot turn about).
     pub suggestions: Vec<Suggestion>,
+    /// For a low-DOF robot (every motion rotates about one axis): what its motions determine and
+    /// the prior to give (`calibrate --prior`), in words; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low_dof: Option<String>,
 }
 
 /// The advice for `poses` (module documentation): `count` suggestions, from the poses that agree
@@ -108,6 +113,16 @@ pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) 
         return Err(misread);
     }
     let poses = &kept[..];
+    if let Some(words) = low_dof_words(poses, setup) {
+        return Ok(Advice {
+            poses: poses.len(),
+            outliers: outliers.len(),
+            current: None,
+            weakest: Vec::new(),
+            suggestions: Vec::new(),
+            low_dof: Some(words),
+        });
+    }
     let mut acc = PoseAccumulator::new(setup);
     poses.iter().for_each(|p| acc.add(p));
     let last = poses[poses.len() - 1].base_from_gripper;
@@ -141,6 +156,7 @@ pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) 
         current,
         weakest,
         suggestions,
+        low_dof: None,
     })
 }
 
@@ -253,7 +269,22 @@ fn undetermined(poses: &[PosePair], setup: Setup, count: usize) -> Advice {
         current: None,
         weakest: Vec::new(),
         suggestions,
+        low_dof: None,
     }
+}
+
+/// The words for a low-DOF recording (every motion rotates about one axis,
+/// [`crate::solve::low_dof`]): the refusal `calibrate` gives without a prior, and that advice on
+/// the next rotation is for robots that can turn about other axes. `None` for other recordings.
+fn low_dof_words(poses: &[PosePair], setup: Setup) -> Option<String> {
+    let refusal = crate::calibrate::low_dof::plan(poses, setup, Pairing::All, &[]).err()?;
+    let reason = match refusal {
+        Error::Degenerate { reason, .. } => reason,
+        _ => return None,
+    };
+    Some(format!(
+        "{reason}. No next motion is suggested: the motions that would determine the rest turn about other axes, which such a robot cannot make; with the prior, `calibrate` solves X"
+    ))
 }
 
 /// 13 axes of the gripper frame, one of each ± pair: the 3 coordinate axes, the 6 face diagonals
