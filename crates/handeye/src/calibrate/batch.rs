@@ -346,8 +346,12 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     } else {
         read
     };
-    let plan = low_dof::plan(&used, setup, options.pairing, &options.priors)
-        .map_err(|e| explained(e, &warnings, None))?;
+    let plan = match low_dof::plan(&used, setup, options.pairing, &options.priors) {
+        Err(e) if low_dof::wants_prior(&e).is_some() => {
+            return Err(first_what_motions_lack(poses, setup, options, e));
+        }
+        other => other.map_err(|e| explained(e, &warnings, None))?,
+    };
     let calibration = match &plan {
         Some(plan) => low_dof::solve(plan, &used, setup, options.pairing, options.method)?,
         None => solve_poses(&used, setup, options)?,
@@ -473,6 +477,31 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         prior,
         low_dof: plan.map(|p| p.report(calibration.conditioning)),
     })
+}
+
+/// A low-DOF recording refused for want of a prior (`refusal`) is refused for what its motions
+/// lack instead when, given the prior, they would not determine the rest either (a single joint
+/// turning, no translation across the axis): the user is told first what a prior cannot fix. The
+/// check calibrates with a stand-in prior of 0 (the component does not enter the motions' fit).
+fn first_what_motions_lack(
+    poses: &[PosePair],
+    setup: Setup,
+    options: &Options,
+    refusal: Error,
+) -> Error {
+    let Some(component) = low_dof::wants_prior(&refusal) else {
+        return refusal;
+    };
+    let mut with_prior = options.clone();
+    with_prior.priors.push(Prior {
+        component,
+        value: 0.0,
+        sigma: 0.0,
+    });
+    match calibrate(poses, setup, &with_prior) {
+        Err(e) if low_dof::lacks_motions(&e) => e,
+        _ => refusal,
+    }
 }
 
 /// The held-out check of the poses used ([`leave_one_out`]) with their names, and a warning naming

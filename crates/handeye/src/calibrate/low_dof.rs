@@ -308,6 +308,40 @@ fn lacking(e: Error, plan: &Plan, setup: Setup) -> Error {
     }
 }
 
+/// The component a low-DOF refusal asks a prior for, if it is that refusal.
+pub(crate) fn wants_prior(e: &Error) -> Option<Component> {
+    match e {
+        Error::Degenerate {
+            reason:
+                Degeneracy::LowDof {
+                    missing: LowDofMissing::Prior(c),
+                    ..
+                },
+            ..
+        } => Some(*c),
+        _ => None,
+    }
+}
+
+/// Whether `e` refuses a low-DOF recording for what its motions lack (alone, or with what in the
+/// input explains it).
+pub(crate) fn lacks_motions(e: &Error) -> bool {
+    match e {
+        Error::Untrusted {
+            refusal: Some(r), ..
+        } => lacks_motions(r),
+        Error::Degenerate {
+            reason:
+                Degeneracy::LowDof {
+                    missing: LowDofMissing::Motions,
+                    ..
+                },
+            ..
+        } => true,
+        _ => false,
+    }
+}
+
 /// The refusal of a low-DOF X whose data part is undetermined under the data's own noise.
 pub(crate) fn undetermined(plan: &Plan, setup: Setup) -> Error {
     refusal(&plan.axis, setup, LowDofMissing::Motions)
