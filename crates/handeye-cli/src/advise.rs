@@ -30,8 +30,7 @@ pub fn run(args: Args) -> Result<()> {
 fn in_words(advice: &Advice) -> String {
     let mut out = String::new();
     if let Some(words) = &advice.low_dof {
-        out.push_str(&format!("X from {} poses: {words}\n", advice.poses));
-        return out;
+        out.push_str(&format!("{words}\n"));
     }
     match advice.current {
         Some(c) => out.push_str(&format!(

@@ -226,17 +226,17 @@ fn a_unit_mismatch_is_refused_naming_the_fix() {
     assert_eq!(r["prior"]["tz"]["value"].as_f64(), Some(t[2]));
 }
 
-/// `advise` on a SCARA recording names the prior and suggests no rotation the robot cannot make.
+/// `advise` on a SCARA recording names the prior, and says a low-DOF robot cannot make the turns
+/// it suggests (a 6-DOF robot that turned one joint can).
 #[test]
-fn advise_names_the_prior_and_no_rotation() {
+fn advise_names_the_prior_and_what_a_low_dof_robot_cannot_make() {
     for (name, setup) in RECORDINGS {
         let (code, out, err) = run(&["advise", &file(name), "--setup", setup]);
         assert_eq!(code, 0, "{err}");
         assert!(out.contains("--prior tz="), "{out}");
-        assert!(!out.contains("next motion 1"), "{out}");
+        assert!(out.contains("a low-DOF robot cannot make them"), "{out}");
         let json = &out[out.find('{').unwrap()..];
         let a: Value = serde_json::from_str(json).unwrap();
-        assert_eq!(a["suggestions"].as_array().map(Vec::len), Some(0));
         assert!(a["low_dof"].as_str().unwrap().contains("SCARA"));
     }
 }

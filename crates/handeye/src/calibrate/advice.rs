@@ -79,11 +79,12 @@ pub struct Advice {
     pub current: Option<Predicted>,
     /// The least determined rotation and translation directions, weakest first.
     pub weakest: Vec<Weakness>,
-    /// The next motions, in the order to record them (none for a low-DOF robot: they would turn
-    /// about axes it cannot turn about).
+    /// The next motions, in the order to record them.
     pub suggestions: Vec<Suggestion>,
-    /// For a low-DOF robot (every motion rotates about one axis): what its motions determine and
-    /// the prior to give (`calibrate --prior`), in words; absent otherwise.
+    /// When every motion so far rotates about one axis (a low-DOF robot, or a 6-DOF one that
+    /// turned one joint): what such motions determine, the prior a low-DOF robot gives instead
+    /// (`calibrate --prior`), and that it cannot make the suggested turns, in words; absent
+    /// otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub low_dof: Option<String>,
 }
@@ -113,22 +114,14 @@ pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) 
         return Err(misread);
     }
     let poses = &kept[..];
-    if let Some(words) = low_dof_words(poses, setup) {
-        return Ok(Advice {
-            poses: poses.len(),
-            outliers: outliers.len(),
-            current: None,
-            weakest: Vec::new(),
-            suggestions: Vec::new(),
-            low_dof: Some(words),
-        });
-    }
+    let low_dof = low_dof_words(poses, setup);
     let mut acc = PoseAccumulator::new(setup);
     poses.iter().for_each(|p| acc.add(p));
     let last = poses[poses.len() - 1].base_from_gripper;
     let Some((x, y, noise)) = solved(&acc) else {
         return Ok(Advice {
             outliers: outliers.len(),
+            low_dof,
             ..undetermined(poses, setup, count)
         });
     };
@@ -156,7 +149,7 @@ pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) 
         current,
         weakest,
         suggestions,
-        low_dof: None,
+        low_dof,
     })
 }
 
@@ -283,7 +276,7 @@ fn low_dof_words(poses: &[PosePair], setup: Setup) -> Option<String> {
         _ => return None,
     };
     Some(format!(
-        "{reason}. No next motion is suggested: the motions that would determine the rest turn about other axes, which such a robot cannot make; with the prior, `calibrate` solves X"
+        "{reason}. The next motions suggested turn about other axes: a robot that can make them determines all of X with them; a low-DOF robot cannot make them, and gives the prior instead (with it, `calibrate` solves X)"
     ))
 }
 
