@@ -492,7 +492,12 @@ fn first_what_motions_lack(
     let Some(component) = low_dof::wants_prior(&refusal) else {
         return refusal;
     };
-    let mut with_prior = options.clone();
+    // Judged by the linear low-DOF solve (`andreff`), whatever the method: it is the motions'
+    // question, as in `motions_determine`.
+    let mut with_prior = Options {
+        method: Method::Andreff,
+        ..options.clone()
+    };
     with_prior.priors.push(Prior {
         component,
         value: 0.0,
