@@ -29,6 +29,9 @@ pub fn run(args: Args) -> Result<()> {
 /// The advice in a few lines.
 fn in_words(advice: &Advice) -> String {
     let mut out = String::new();
+    if let Some(words) = &advice.low_dof {
+        out.push_str(&format!("{words}\n"));
+    }
     match advice.current {
         Some(c) => out.push_str(&format!(
             "X from {} poses{}: one-sigma {:.3}° and {:.4} (input unit)\n",

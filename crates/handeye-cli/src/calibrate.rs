@@ -84,6 +84,14 @@ pub struct Args {
     /// the input's unit [default: the median target position seen by the camera].
     #[arg(long, value_name = "X,Y,Z", value_parser = values::point)]
     point: Option<[f64; 3]>,
+    /// A prior on a component of X's translation, for a low-DOF robot (a SCARA, a 4- or 5-axis
+    /// arm, a gantry with one wrist joint) whose motions all rotate about one axis and so never
+    /// determine X's translation along it: NAME=VALUE (exact) or NAME=VALUE+-SIGMA, NAME one of
+    /// tx, ty, tz (in X's parent frame: the gripper's eye-in-hand, the robot base's eye-to-hand;
+    /// the input's length unit), e.g. `--prior tz=0.12+-0.002`. Repeatable. A prior on a
+    /// component the motions determine is checked, not used.
+    #[arg(long, value_name = "NAME=VALUE[+-SIGMA]", value_parser = values::prior)]
+    prior: Vec<handeye::Prior>,
     /// Also write a page for a person: the held-out gap of every pose, the rotation axes and the
     /// rotation angles of the motions (one self-contained HTML file).
     #[arg(long, value_name = "FILE.html")]
@@ -202,6 +210,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
         ("--pairs", args.pairs.is_some()),
         ("--tsai-opencv-filter", args.tsai_opencv_filter),
         ("--report", args.report.is_some()),
+        ("--prior", !args.prior.is_empty()),
     ] {
         if given {
             return Err(Error::InvalidParameter {
@@ -332,6 +341,7 @@ fn options(args: &Args) -> Result<Options> {
         fix: args.fix.unwrap_or_default(),
         replicates,
         point: args.point,
+        priors: args.prior.clone(),
         ..Options::default()
     })
 }

@@ -562,6 +562,27 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
     if let Some(p) = &r.uncertainty.at_point {
         let _ = writeln!(s, "{}", at_point(p, unit));
     }
+    if let Some(low) = &r.low_dof {
+        let [x, y, z] = low.axis.map(|v| if v.abs() < 5e-4 { 0.0 } else { v });
+        let _ = writeln!(
+            s,
+            "Low-DOF robot: every motion rotates about one axis ({x:.3}, {y:.3}, {z:.3}) (within {:.2}°); X's {} is the prior's, the rest is the motions'",
+            low.spread_deg,
+            low.free.name()
+        );
+    }
+    for (name, p) in &r.prior {
+        let _ = writeln!(
+            s,
+            "Prior: {name} = {} {u}{}",
+            p.value,
+            if p.sigma > 0.0 {
+                format!(" +- {} {u}", p.sigma)
+            } else {
+                " (exact)".into()
+            }
+        );
+    }
     let _ = writeln!(
         s,
         "Residuals of AX = XB: rotation {:.4}° RMS ({:.4}° max), translation {} {u} RMS ({} {u} max)",

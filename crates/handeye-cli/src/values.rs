@@ -151,6 +151,14 @@ pub fn point(s: &str) -> Result<[f64; 3], String> {
     Ok([number(parts[0])?, number(parts[1])?, number(parts[2])?])
 }
 
+/// `--prior NAME=VALUE[+-SIGMA]` (the library's parser and words).
+pub fn prior(s: &str) -> Result<handeye::Prior, String> {
+    s.parse::<handeye::Prior>().map_err(|e| match e {
+        handeye::Error::InvalidParameter { message, .. } => message,
+        other => other.to_string(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

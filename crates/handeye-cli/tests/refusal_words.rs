@@ -59,8 +59,11 @@ fn motions_about_one_joint_are_still_blamed_by_every_method() {
     .flat_map(|s| methods.map(|m| (*s, m)))
     {
         let words = refusal(set, method);
+        // Every axis parallel is a low-DOF recording (issue 30): the motions are blamed in words
+        // that fit it ("add poses that move the gripper further across the axis").
         assert!(
-            words.contains("add motions") && !words.contains("does not determine X from these"),
+            (words.contains("add motions") || words.contains("add poses"))
+                && !words.contains("does not determine X from these"),
             "{set} {method}: {words}"
         );
     }

@@ -114,15 +114,17 @@ pub use online::experiment;
 
 // # The public surface, layer by layer.
 // Model: poses, motions, the setup, errors, warnings and what they carry.
-pub use model::error::{Degeneracy, Error, Result, TransformProblem};
+pub use model::error::{Degeneracy, Error, LowDofMissing, Result, TransformProblem};
 pub use model::findings::{Direction, OutlierPose, Part, Reading, Verdict, Written, WrittenAs};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
 pub use model::names::Named;
 pub use model::pose::{
     Transform, TransformJson, quaternion_xyzw, rotation_angle_between, transform_from_matrix4,
 };
+pub use model::prior::{Component, Prior, PriorValue, PriorsUsed};
 pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.
+pub use solve::low_dof::{CommonAxis, LowDofSolution, common_axis, solve_low_dof};
 pub use solve::motions::{AllPairs, MotionSource};
 pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 // Check.
@@ -133,6 +135,7 @@ pub use check::uncertainty::{AtPoint, REPLICATES, REPLICATES_RANGE, Uncertainty,
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, ClosedLoop, WeaknessKind, advise, closed_loop};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
+pub use calibrate::low_dof::LowDofReport;
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 pub use calibrate::verify::{Consistency, SavedUnit, SavedX, Sizes, Verification, verify};
 // Online: the paper's calibrator and the accumulating estimator.

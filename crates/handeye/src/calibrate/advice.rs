@@ -19,7 +19,7 @@ use crate::check::quality::OUTLIER_DEG;
 use crate::check::readings::check_readings;
 use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
-use crate::model::motion::{MotionFeatures, PosePair, Setup};
+use crate::model::motion::{MotionFeatures, Pairing, PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, transform_from_parts};
 use crate::solve::accumulate::PoseAccumulator;
 
@@ -81,6 +81,12 @@ pub struct Advice {
     pub weakest: Vec<Weakness>,
     /// The next motions, in the order to record them.
     pub suggestions: Vec<Suggestion>,
+    /// When every motion so far rotates about one axis (a low-DOF robot, or a 6-DOF one that
+    /// turned one joint): what such motions determine, the prior a low-DOF robot gives instead
+    /// (`calibrate --prior`), and that it cannot make the suggested turns, in words; absent
+    /// otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low_dof: Option<String>,
 }
 
 /// The advice for `poses` (module documentation): `count` suggestions, from the poses that agree
@@ -108,12 +114,14 @@ pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) 
         return Err(misread);
     }
     let poses = &kept[..];
+    let low_dof = low_dof_words(poses, setup);
     let mut acc = PoseAccumulator::new(setup);
     poses.iter().for_each(|p| acc.add(p));
     let last = poses[poses.len() - 1].base_from_gripper;
     let Some((x, y, noise)) = solved(&acc) else {
         return Ok(Advice {
             outliers: outliers.len(),
+            low_dof,
             ..undetermined(poses, setup, count)
         });
     };
@@ -141,6 +149,7 @@ pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) 
         current,
         weakest,
         suggestions,
+        low_dof,
     })
 }
 
@@ -253,7 +262,22 @@ fn undetermined(poses: &[PosePair], setup: Setup, count: usize) -> Advice {
         current: None,
         weakest: Vec::new(),
         suggestions,
+        low_dof: None,
     }
+}
+
+/// The words for a low-DOF recording (every motion rotates about one axis,
+/// [`crate::solve::low_dof`]): the refusal `calibrate` gives without a prior, and that advice on
+/// the next rotation is for robots that can turn about other axes. `None` for other recordings.
+fn low_dof_words(poses: &[PosePair], setup: Setup) -> Option<String> {
+    let refusal = crate::calibrate::low_dof::plan(poses, setup, Pairing::All, &[]).err()?;
+    let reason = match refusal {
+        Error::Degenerate { reason, .. } => reason,
+        _ => return None,
+    };
+    Some(format!(
+        "{reason}. The next motions suggested turn about other axes: a robot that can make them determines all of X with them; a low-DOF robot cannot make them, and gives the prior instead (with it, `calibrate` solves X)"
+    ))
 }
 
 /// 13 axes of the gripper frame, one of each ± pair: the 3 coordinate axes, the 6 face diagonals

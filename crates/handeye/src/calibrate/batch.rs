@@ -29,6 +29,8 @@ use crate::model::findings::{Part, Verdict};
 use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
 use crate::model::pose::Transform;
 use crate::model::pose::TransformJson;
+use crate::model::prior::{Prior, PriorsUsed, check_priors};
+use crate::calibrate::low_dof::{self, LowDofReport};
 use crate::model::warning::{SHOWN, Warning};
 use crate::solve::accumulate::PoseAccumulator;
 use crate::solve::motions::{AllPairs, MotionSource};
@@ -148,6 +150,10 @@ pub struct Options {
     /// input gives them: the configuration the systematic-error test orders the poses by, and
     /// the joint it names. Empty: the hand poses order them.
     pub joints: Vec<Vec<f64>>,
+    /// Priors on components of X's translation (SPEC sec. 9, `--prior`): a low-DOF recording's
+    /// free component comes from its prior; a prior on a component the motions determine is
+    /// checked against the data (the data's value is kept). Default none.
+    pub priors: Vec<Prior>,
 }
 
 impl Default for Options {
@@ -164,6 +170,7 @@ impl Default for Options {
             written: Written::NAMED,
             point: None,
             joints: Vec::new(),
+            priors: Vec::new(),
         }
     }
 }
@@ -271,6 +278,14 @@ pub struct Report {
     /// absent with fewer than 12 poses.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub systematic: Option<Systematic>,
+    /// The components of X's translation that came from a prior, not from the data (`"prior":
+    /// {"tz": {"value", "sigma"}}`); absent when none did.
+    #[serde(default, skip_serializing_if = "PriorsUsed::is_empty")]
+    pub prior: PriorsUsed,
+    /// A low-DOF recording (every motion rotates about one axis): the axis and the component
+    /// taken from the prior; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low_dof: Option<LowDofReport>,
 }
 
 /// The held-out check in a [`Report`].
@@ -303,6 +318,7 @@ pub struct HeldOutName {
 /// [`Error::Degenerate`] when the motions do not determine X, [`Error::TooFewMotions`].
 pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
     check_replicates(options.replicates)?;
+    check_priors(&options.priors)?;
     let mut warnings = Vec::new();
     let (applied, check, read, found) = read_poses(
         poses,
@@ -317,8 +333,20 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     } else {
         read
     };
-    let calibration = solve_poses(&used, setup, options)?;
-    let solve_x = |p: &[PosePair]| solve_replicate(p, setup, options);
+    let plan = match low_dof::plan(&used, setup, options.pairing, &options.priors) {
+        Err(e) if low_dof::wants_prior(&e).is_some() => {
+            return Err(first_what_motions_lack(poses, setup, options, e));
+        }
+        other => other.map_err(|e| explained(e, &warnings, None))?,
+    };
+    let calibration = match &plan {
+        Some(plan) => low_dof::solve(plan, &used, setup, options.pairing, options.method)?,
+        None => solve_poses(&used, setup, options)?,
+    };
+    let solve_x = |p: &[PosePair]| match &plan {
+        Some(plan) => low_dof::solve_replicate(plan, p, setup, options.pairing),
+        None => solve_replicate(p, setup, options),
+    };
     // Translation verdicts are relative to the larger of the hand's spread and the camera's
     // working distance: motions that barely translate (a wrist turning) still fix X's offset.
     let scene = translation_scale(&used, setup).max(working_distance(&used));
@@ -356,10 +384,17 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     let outliers = outlier_report(&found, options);
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));
-    refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
-        .and_then(|()| motions_determine(&used, setup, options, scene, calibration.conditioning))
-        .map_err(|e| method_at_fault(e, &used, setup, options, scene))
-        .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?;
+    // The motions' part is judged on its own: a low-DOF recording by what it determines (the
+    // prior's sigma is the user's to give), any other by every check of the motions.
+    match &plan {
+        Some(plan) => refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
+            .map_err(|_| low_dof::undetermined(plan, setup))
+            .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?,
+        None => refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
+            .and_then(|()| motions_determine(&used, setup, options, scene, calibration.conditioning))
+            .map_err(|e| method_at_fault(e, &used, setup, options, scene))
+            .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?,
+    }
     let mut uncertainty = match systematic.as_ref().filter(|s| s.flagged) {
         Some(found) => {
             let regions = bootstrap_by_region(
@@ -380,10 +415,29 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         &calibration.x,
         options.point.unwrap_or_else(|| median_target(&used)),
     ));
+    // The directions the motions leave weak are judged without the prior's sigma.
+    let data_uncertainty = uncertainty.clone();
+    let (uncertainty, prior) = match &plan {
+        Some(plan) => low_dof::with_prior(plan, &uncertainty, scene),
+        None => (uncertainty, PriorsUsed::new()),
+    };
+    low_dof::check_determined(
+        &options.priors,
+        &prior,
+        &calibration.x,
+        &uncertainty,
+        &mut warnings,
+    );
     let translation_residual_rel = residuals.median_translation() / scene.max(f64::MIN_POSITIVE);
     warnings.extend(calibration.warnings.iter().cloned());
-    warnings.extend(quality.warnings.iter().cloned());
-    warn_weak(&uncertainty, setup, &mut warnings);
+    warnings.extend(
+        quality
+            .warnings
+            .iter()
+            .filter(|w| plan.is_none() || !low_dof::handled(w))
+            .cloned(),
+    );
+    warn_weak(&data_uncertainty, setup, &mut warnings);
     if translation_residual_rel > WARN_TRANSLATION_RESIDUAL {
         warnings.push(Warning::TranslationResiduals {
             relative: translation_residual_rel,
@@ -430,6 +484,8 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         transform: calibration.x,
         held_out,
         systematic,
+        prior,
+        low_dof: plan.map(|p| p.report(calibration.conditioning)),
     })
 }
 
@@ -469,6 +525,36 @@ pub(crate) fn wider(ordinary: Uncertainty, regions: Uncertainty) -> Uncertainty 
         regions
     } else {
         ordinary
+    }
+}
+
+/// A low-DOF recording refused for want of a prior (`refusal`) is refused for what its motions
+/// lack instead when, given the prior, they would not determine the rest either (a single joint
+/// turning, no translation across the axis): the user is told first what a prior cannot fix. The
+/// check calibrates with a stand-in prior of 0 (the component does not enter the motions' fit).
+fn first_what_motions_lack(
+    poses: &[PosePair],
+    setup: Setup,
+    options: &Options,
+    refusal: Error,
+) -> Error {
+    let Some(component) = low_dof::wants_prior(&refusal) else {
+        return refusal;
+    };
+    // Judged by the linear low-DOF solve (`andreff`), whatever the method: it is the motions'
+    // question, as in `motions_determine`.
+    let mut with_prior = Options {
+        method: Method::Andreff,
+        ..options.clone()
+    };
+    with_prior.priors.push(Prior {
+        component,
+        value: 0.0,
+        sigma: 0.0,
+    });
+    match calibrate(poses, setup, &with_prior) {
+        Err(e) if low_dof::lacks_motions(&e) => e,
+        _ => refusal,
     }
 }
 

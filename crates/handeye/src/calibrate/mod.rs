@@ -4,5 +4,6 @@
 
 pub mod advice;
 pub mod batch;
+pub mod low_dof;
 pub mod robot_world;
 pub mod verify;

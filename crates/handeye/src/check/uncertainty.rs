@@ -186,6 +186,27 @@ impl Uncertainty {
     }
 }
 
+impl Uncertainty {
+    /// The uncertainty with a prior's: X's translation also moves by `g` δ, δ ~ N(0, σ²)
+    /// independent of the data (a prior on one component of X's translation, taken along the
+    /// free direction k: g = k / k_i). Adds σ² g gᵀ to the translation covariance, re-judges the
+    /// directions against `scene`, and widens `at_point` by the same σ|g| (a translation moves
+    /// every point alike). The bootstrap's samples are kept (the data's part).
+    pub fn with_prior(&self, g: &Vector3<f64>, sigma: f64, scene: f64) -> Uncertainty {
+        let mut cov = Matrix6::from_fn(|i, j| self.covariance[i][j]);
+        let add = g * g.transpose() * (sigma * sigma);
+        let block = cov.fixed_view::<3, 3>(3, 3) + add;
+        cov.fixed_view_mut::<3, 3>(3, 3).copy_from(&block);
+        let mut u = summarise(cov, self.replicates, self.refused, scene);
+        u.samples = self.samples.clone();
+        u.at_point = self.at_point.as_ref().map(|a| AtPoint {
+            sigma: (a.sigma.powi(2) + add.trace()).sqrt(),
+            ..a.clone()
+        });
+        u
+    }
+}
+
 /// The default point of [`Uncertainty::place`]: the median target position seen by the camera
 /// (per coordinate, over `camera_from_target`'s translations), the data's working distance.
 pub fn median_target(poses: &[PosePair]) -> [f64; 3] {

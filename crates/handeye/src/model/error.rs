@@ -113,6 +113,19 @@ pub enum Degeneracy {
         /// `andreff`'s one-sigma of X's translation, input units.
         translation: f64,
     },
+    /// Every motion rotates about the same axis (a SCARA, a 4-axis arm, a gantry with one wrist
+    /// joint): the motions determine X's rotation and its translation across that axis, never its
+    /// translation along it, and something else is missing (`missing`).
+    LowDof {
+        /// The common axis, in X's parent frame.
+        axis: [f64; 3],
+        /// The largest angle between a motion's axis and it, degrees.
+        spread_deg: f64,
+        /// The setup, which names X's parent frame.
+        setup: crate::model::motion::Setup,
+        /// What is missing.
+        missing: LowDofMissing,
+    },
     /// Re-solving under the data's own noise was refused too often: X is at the edge of what the
     /// motions determine.
     Unstable {
@@ -121,6 +134,88 @@ pub enum Degeneracy {
         /// Re-solves tried.
         tried: usize,
     },
+}
+
+/// " (conditioning c)" after a refusal's reason, but for a low-DOF one (Andreff's rotation
+/// system says nothing there).
+fn conditioning_words(reason: &Degeneracy, conditioning: f64) -> String {
+    match reason {
+        Degeneracy::LowDof { .. } => String::new(),
+        _ => format!(" (conditioning {conditioning:.3e})"),
+    }
+}
+
+/// What a low-DOF recording ([`Degeneracy::LowDof`]) lacks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum LowDofMissing {
+    /// A prior on X's translation along the axis (the component named), which no prior covers.
+    Prior(crate::model::prior::Component),
+    /// The axis is not along a coordinate axis of X's parent frame: no prior on tx, ty or tz can
+    /// state X's translation along it.
+    NotStatable,
+    /// The motions do not fix X's rotation about the axis or its translation across it (too few,
+    /// too small, no translation across the axis).
+    Motions,
+    /// The hand's and the camera's translations along the axis (each motion's pitch, the same
+    /// length seen by both) differ by this factor (hand over camera): their length units differ.
+    Units {
+        /// RMS hand pitch over RMS camera pitch.
+        ratio: f64,
+    },
+}
+
+/// The words of a [`Degeneracy::LowDof`] refusal.
+fn low_dof_words(axis: &[f64; 3], spread_deg: f64, setup: Setup, missing: LowDofMissing) -> String {
+    use crate::model::prior::Component;
+    let frame = crate::model::findings::reference_frame(setup);
+    // No "-0.000".
+    let [x, y, z] = axis.map(|v| if v.abs() < 5e-4 { 0.0 } else { v });
+    let i = (0..3)
+        .max_by(|&a, &b| axis[a].abs().total_cmp(&axis[b].abs()))
+        .unwrap_or(2);
+    let along_coordinate = axis[i].abs() >= crate::model::prior::PRIOR_AXIS_DEG.to_radians().cos();
+    let which = if along_coordinate {
+        format!("the {frame}'s {}", ["x", "y", "z"][i])
+    } else {
+        "one axis".into()
+    };
+    let what = format!(
+        "every motion rotates about the same axis ({which}, ({x:.3}, {y:.3}, {z:.3}) in the {frame} frame, within {spread_deg:.2}°): a SCARA or 4-axis robot, or a gantry with one wrist joint"
+    );
+    match missing {
+        LowDofMissing::Prior(c) => {
+            let (measure, along) = match (setup, c) {
+                (Setup::EyeInHand, Component::Tz) => (
+                    "the camera's height above the flange",
+                    "the gripper's z axis",
+                ),
+                (Setup::EyeToHand, Component::Tz) => (
+                    "the camera's height above the robot base",
+                    "the base's z axis",
+                ),
+                (Setup::EyeInHand, _) => ("the camera's offset from the flange", "that axis"),
+                (Setup::EyeToHand, _) => ("the camera's offset from the robot base", "that axis"),
+            };
+            let n = c.name();
+            format!(
+                "{what}. Such motions determine X's rotation and its translation across the axis, but never its translation along it: measure {measure} (X's {n}: the camera's position along {along}, the input's length unit) and give it as a prior, `--prior {n}=VALUE` or `--prior {n}=VALUE+-SIGMA`"
+            )
+        }
+        LowDofMissing::NotStatable => format!(
+            "{what}. Such motions never determine X's translation along that axis, and it is not along an axis of the {frame} frame (more than {:.0}° from each), so no prior on tx, ty or tz can state it: add motions that rotate about another axis, if the robot can make them",
+            crate::model::prior::PRIOR_AXIS_DEG
+        ),
+        LowDofMissing::Motions => format!(
+            "{what}. X's rotation about the axis and its translation across it come from the motions' translations across the axis and their turns about it, and these motions do not fix them: add poses that move the gripper further across the axis and turn it through larger angles about it (or check how the input reads: both sides in one length unit, each pose in the direction its name says)"
+        ),
+        LowDofMissing::Units { ratio } => {
+            let fix = if ratio > 1.0 { "robot-mm" } else { "camera-mm" };
+            format!(
+                "{what}. The robot's and the camera's translations along the axis, the same length seen by both, differ by a factor of {ratio:.3e} (robot over camera): their poses are in different length units; if one is in millimetres and the other in metres, pass `--fix {fix}`"
+            )
+        }
+    }
 }
 
 impl fmt::Display for Degeneracy {
@@ -164,6 +259,12 @@ impl fmt::Display for Degeneracy {
                  `andreff` determines X from them (one-sigma {rotation_deg:.2}° and {translation:.3e} in the input's \
                  length unit); use `--method andreff` (`method=\"andreff\"` in Python), or another method"
             ),
+            Self::LowDof {
+                axis,
+                spread_deg,
+                setup,
+                missing,
+            } => f.write_str(&low_dof_words(axis, *spread_deg, *setup, *missing)),
             Self::Unstable { refused, tried } => write!(
                 f,
                 "{refused} of {tried} re-solves under the data's own noise were refused: X is at the edge of what these motions determine; add motions with larger rotations about different axes"
@@ -191,7 +292,7 @@ pub enum Error {
         need: usize,
     },
     /// The motions cannot determine X.
-    #[error("degenerate motions: {reason} (conditioning {conditioning:.3e})")]
+    #[error("degenerate motions: {reason}{}", conditioning_words(reason, *conditioning))]
     Degenerate {
         /// Which degeneracy.
         reason: Degeneracy,

@@ -6,4 +6,5 @@ pub mod findings;
 pub mod motion;
 pub mod names;
 pub mod pose;
+pub mod prior;
 pub mod warning;

@@ -119,6 +119,18 @@ pub enum Warning {
         /// The joint (1-based) whose angle the residual follows most, where joint angles are given.
         joint: Option<usize>,
     },
+    /// A prior names a component of X's translation that the motions determine: the data's value
+    /// is kept, and it disagrees with the prior by more than 3 sigma.
+    PriorDisagrees {
+        /// The component's name (`tx`, `ty`, `tz`).
+        component: String,
+        /// The prior's value, input unit.
+        prior: f64,
+        /// The data's value, input unit.
+        data: f64,
+        /// The difference over the combined one-sigma (the data's and the prior's).
+        sigmas: f64,
+    },
 }
 
 /// The one option of the call that would fix what a [`Warning`] describes.
@@ -206,6 +218,7 @@ impl Warning {
             Self::KeptAsGiven { .. } => "kept_as_given",
             Self::SwappedSizes { .. } => "swapped_sizes",
             Self::SystematicError { .. } => "systematic_error",
+            Self::PriorDisagrees { .. } => "prior_disagrees",
         }
     }
 
@@ -291,6 +304,15 @@ impl fmt::Display for Warning {
             Self::KeptAsGiven { finding, .. } => {
                 write!(f, "kept as given (fix as-given), but {finding}")
             }
+            Self::PriorDisagrees {
+                component,
+                prior,
+                data,
+                sigmas,
+            } => write!(
+                f,
+                "the prior {component}={prior} disagrees with the value the motions determine ({data:.6}) by {sigmas:.1} sigma: the data's value is kept; check the measurement behind the prior, and its unit (the input's)"
+            ),
             Self::SwappedSizes {
                 x_translation,
                 y_translation,

@@ -13,6 +13,7 @@ mod daniilidis;
 mod horaud;
 mod least_squares;
 mod lm;
+pub mod low_dof;
 pub mod motions;
 mod park;
 mod quaternion;
@@ -33,7 +34,7 @@ pub use daniilidis::daniilidis;
 pub use horaud::horaud;
 pub use lm::{RefineOptions, Termination};
 pub use park::park;
-pub use refine::{refine, refine_from};
+pub use refine::{refine, refine_from, refine_unchecked};
 #[cfg(feature = "internals")]
 pub use refine::{Refinement, covariance_at};
 pub use residual::PoseResidual;

@@ -79,6 +79,24 @@ pub fn refine_from(
     Ok(run(motions, start, check, options))
 }
 
+/// Refines X over all motions from a given start without [`check_motions`]'s refusals: for motions
+/// that all rotate about one axis ([`crate::solve::low_dof`]), whose rotation system is singular
+/// but whose A X − X B residuals still fix every direction of X but the translation along the
+/// axis (the caller puts that back from its prior). `conditioning` is reported as given.
+pub fn refine_unchecked(
+    motions: &(impl MotionSource + ?Sized),
+    start: &Transform,
+    conditioning: f64,
+    options: &RefineOptions,
+) -> Refinement {
+    let check = MotionCheck {
+        conditioning,
+        andreff_rotation: rotation_matrix(start),
+        warnings: Vec::new(),
+    };
+    run(motions, start, check, options)
+}
+
 /// The motions' residuals as the refinement sees them, lengths in units of `unit`: over all
 /// pairs of a pose sequence the quadratic form of the per-pose sums
 /// ([`crate::solve::residual::Quadratic`], O(1) per evaluation), else motion by motion.

@@ -1,0 +1,242 @@
+//! `--prior` and low-DOF recordings on the command line (issue 30), on the simulated recordings
+//! of `testdata/low_dof` (made by `cargo run --release -p handeye --example low_dof_recordings`):
+//! a SCARA without a prior is refused (exit 3) naming the prior to give; with the true height X is
+//! within 3 sigma of the truth and `"prior"` says which component came from it; a free direction
+//! off the frame's axes is refused naming it; bad priors are exit 2.
+
+mod common;
+
+use common::{run, testdata};
+use serde_json::Value;
+
+fn truth(name: &str) -> (Vec<f64>, Vec<f64>) {
+    let text = std::fs::read_to_string(testdata(&format!("low_dof/{name}.truth.json"))).unwrap();
+    let t: Value = serde_json::from_str(&text).unwrap();
+    let x = t
+        .as_object()
+        .unwrap()
+        .iter()
+        .find(|(k, _)| k.ends_with("_from_camera"))
+        .unwrap()
+        .1;
+    let v = |f: &str| -> Vec<f64> {
+        x[f].as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    (v("translation"), v("quaternion_xyzw"))
+}
+
+fn file(name: &str) -> String {
+    testdata(&format!("low_dof/{name}.jsonl"))
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+const RECORDINGS: [(&str, &str); 2] = [
+    ("scara_eye-in-hand_s0", "eye-in-hand"),
+    ("scara_eye-to-hand_s1", "eye-to-hand"),
+];
+
+#[test]
+fn scara_without_a_prior_is_refused_naming_it() {
+    for (name, setup) in RECORDINGS {
+        let (code, out, err) = run(&[
+            "calibrate",
+            &file(name),
+            "--setup",
+            setup,
+            "--output",
+            "json",
+        ]);
+        assert_eq!(code, 3, "{name}: {out}{err}");
+        assert!(err.contains("--prior tz="), "{err}");
+        assert!(err.contains("SCARA"), "{err}");
+        assert!(!err.contains("rotate about the gripper x"), "{err}");
+        let height = if setup == "eye-in-hand" {
+            "height above the flange"
+        } else {
+            "height above the robot base"
+        };
+        assert!(err.contains(height), "{err}");
+    }
+}
+
+#[test]
+fn scara_with_the_true_height_is_within_three_sigma() {
+    for (name, setup) in RECORDINGS {
+        let (t, q) = truth(name);
+        let prior = format!("tz={}", t[2]);
+        let (code, out, err) = run(&[
+            "calibrate",
+            &file(name),
+            "--setup",
+            setup,
+            "--prior",
+            &prior,
+            "--output",
+            "json",
+        ]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let r: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(r["verdict"], "good", "{name}: {err}");
+        assert_eq!(r["prior"]["tz"]["value"].as_f64(), Some(t[2]));
+        assert_eq!(r["prior"]["tz"]["sigma"].as_f64(), Some(0.0));
+        assert_eq!(r["translation"][2].as_f64(), Some(t[2]));
+        assert_eq!(r["low_dof"]["free"], "tz");
+        let got: Vec<f64> = (0..3)
+            .map(|i| r["translation"][i].as_f64().unwrap())
+            .collect();
+        let dt = (0..3).map(|i| (got[i] - t[i]).powi(2)).sum::<f64>().sqrt();
+        let gq: Vec<f64> = (0..4)
+            .map(|i| r["quaternion_xyzw"][i].as_f64().unwrap())
+            .collect();
+        let dot = (0..4).map(|i| gq[i] * q[i]).sum::<f64>().abs().min(1.0);
+        let dr = (2.0 * dot.acos()).to_degrees();
+        let (sr, st) = (
+            r["uncertainty"]["rotation_deg"].as_f64().unwrap(),
+            r["uncertainty"]["translation"].as_f64().unwrap(),
+        );
+        println!("{name}: {dr:.4}° ({sr:.4}° sigma), {dt:.6} ({st:.6} sigma)");
+        assert!(dr <= 3.0 * sr && dt <= 3.0 * st, "{name}");
+    }
+}
+
+#[test]
+fn a_prior_sigma_is_the_reported_sigma_of_tz() {
+    let (name, setup) = RECORDINGS[1];
+    let (t, _) = truth(name);
+    let prior = format!("tz={}+-0.002", t[2]);
+    let (code, out, err) = run(&[
+        "calibrate",
+        &file(name),
+        "--setup",
+        setup,
+        "--prior",
+        &prior,
+        "--output",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let r: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r["prior"]["tz"]["sigma"].as_f64(), Some(0.002));
+    let tz_sigma = r["uncertainty"]["covariance"][5][5]
+        .as_f64()
+        .unwrap()
+        .sqrt();
+    assert!((tz_sigma - 0.002).abs() < 1e-9, "{tz_sigma}");
+    assert!(r["uncertainty"]["at_point"]["sigma"].as_f64().unwrap() >= 0.002);
+    // The text face says which component came from the prior.
+    let (code, out, _) = run(&[
+        "calibrate",
+        &file(name),
+        "--setup",
+        setup,
+        "--prior",
+        &prior,
+        "--output",
+        "text",
+    ]);
+    assert_eq!(code, 0);
+    assert!(
+        out.contains("Prior: tz = ") && out.contains("+- 0.002"),
+        "{out}"
+    );
+}
+
+#[test]
+fn a_free_direction_off_the_axes_is_refused_naming_it() {
+    let name = "tilted_wrist_eye-in-hand_s2";
+    for extra in [vec![], vec!["--prior", "tz=0.1"]] {
+        let mut args = vec!["calibrate".to_string(), file(name)];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (code, _, err) = run(&args);
+        assert_eq!(code, 3, "{err}");
+        assert!(
+            err.contains("no prior on tx, ty or tz can state it"),
+            "{err}"
+        );
+        assert!(err.contains("(0.000, -0.500, 0.866)"), "{err}");
+    }
+}
+
+#[test]
+fn bad_priors_are_usage_errors() {
+    let f = file(RECORDINGS[0].0);
+    for bad in [
+        "rz=0.1",
+        "tz",
+        "tz=abc",
+        "tz=0.1+-",
+        "tz=0.1+--0.5",
+        "tz=inf",
+    ] {
+        let (code, _, err) = run(&["calibrate", &f, "--prior", bad]);
+        assert_eq!(code, 2, "{bad}: {err}");
+        assert!(err.contains("--prior"), "{bad}: {err}");
+    }
+    let (code, _, err) = run(&["calibrate", &f, "--prior", "tz=0.1", "--prior", "tz=0.2"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("twice"), "{err}");
+}
+
+/// A unit mix-up (the camera in millimetres, the robot in metres) is named, not solved.
+#[test]
+fn a_unit_mismatch_is_refused_naming_the_fix() {
+    let (name, setup) = RECORDINGS[0];
+    let (t, _) = truth(name);
+    let text = std::fs::read_to_string(file(name)).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mm = dir.path().join("camera_mm.jsonl");
+    let lines: Vec<String> = text
+        .lines()
+        .map(|l| {
+            let mut v: Value = serde_json::from_str(l).unwrap();
+            for k in 0..3 {
+                let x = v["camera_from_target"]["translation"][k].as_f64().unwrap();
+                v["camera_from_target"]["translation"][k] = (x * 1000.0).into();
+            }
+            v.to_string()
+        })
+        .collect();
+    std::fs::write(&mm, lines.join("\n")).unwrap();
+    let prior = format!("tz={}", t[2]);
+    let mm = mm.to_str().unwrap();
+    let (code, _, err) = run(&["calibrate", mm, "--setup", setup, "--prior", &prior]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("--fix camera-mm"), "{err}");
+    let (code, out, err) = run(&[
+        "calibrate",
+        mm,
+        "--setup",
+        setup,
+        "--prior",
+        &prior,
+        "--fix",
+        "camera-mm",
+        "--output",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let r: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r["prior"]["tz"]["value"].as_f64(), Some(t[2]));
+}
+
+/// `advise` on a SCARA recording names the prior, and says a low-DOF robot cannot make the turns
+/// it suggests (a 6-DOF robot that turned one joint can).
+#[test]
+fn advise_names_the_prior_and_what_a_low_dof_robot_cannot_make() {
+    for (name, setup) in RECORDINGS {
+        let (code, out, err) = run(&["advise", &file(name), "--setup", setup]);
+        assert_eq!(code, 0, "{err}");
+        assert!(out.contains("--prior tz="), "{out}");
+        assert!(out.contains("a low-DOF robot cannot make them"), "{out}");
+        let json = &out[out.find('{').unwrap()..];
+        let a: Value = serde_json::from_str(json).unwrap();
+        assert!(a["low_dof"].as_str().unwrap().contains("SCARA"));
+    }
+}

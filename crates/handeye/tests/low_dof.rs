@@ -1,0 +1,321 @@
+//! Low-DOF robots (issue 30): SCARA, 5-axis and gantry recordings from `sim::simulate_low_dof`.
+//! Without a prior the free direction is refused, naming the prior; with one, X is within its
+//! reported uncertainty and the prior's component is the prior's.
+//!
+//! `cargo test --release -p handeye --test low_dof -- --nocapture` prints the measurements.
+
+use handeye::sim::{LowDofConfig, simulate_low_dof};
+use handeye::{
+    Component, Degeneracy, Error, LowDofMissing, Method, Options, Pairing, Prior, Setup, Transform,
+    Warning, calibrate, rotation_angle_between,
+};
+use nalgebra::Vector3;
+
+const SETUPS: [Setup; 2] = [Setup::EyeInHand, Setup::EyeToHand];
+const SEEDS: u64 = 40;
+
+fn prior(component: Component, value: f64, sigma: f64) -> Prior {
+    Prior {
+        component,
+        value,
+        sigma,
+    }
+}
+
+fn options(priors: Vec<Prior>) -> Options {
+    Options {
+        pairing: Pairing::All,
+        priors,
+        ..Options::default()
+    }
+}
+
+fn scara(setup: Setup) -> LowDofConfig {
+    LowDofConfig {
+        setup,
+        ..LowDofConfig::default()
+    }
+}
+
+/// Rotation error (degrees) and translation error (input units) of `x` against `truth`.
+fn errors(x: &Transform, truth: &Transform) -> (f64, f64) {
+    let r = rotation_angle_between(&x.rotation, &truth.rotation).to_degrees();
+    (r, (x.translation.vector - truth.translation.vector).norm())
+}
+
+fn low_dof_reason(e: &Error) -> Option<(LowDofMissing, [f64; 3])> {
+    let e = match e {
+        Error::Untrusted {
+            refusal: Some(r), ..
+        } => r.as_ref(),
+        other => other,
+    };
+    match e {
+        Error::Degenerate {
+            reason: Degeneracy::LowDof { missing, axis, .. },
+            ..
+        } => Some((*missing, *axis)),
+        _ => None,
+    }
+}
+
+#[test]
+fn noise_free_scara_is_exact_with_the_true_height() {
+    for setup in SETUPS {
+        for seed in 0..5 {
+            let s = simulate_low_dof(&scara(setup).noise_free(), seed, 0);
+            let tz = s.x.translation.vector.z;
+            for (method, pairing) in [
+                (Method::Andreff, Pairing::All),
+                (Method::Refine, Pairing::All),
+                (Method::Andreff, Pairing::Consecutive),
+                (Method::Refine, Pairing::Consecutive),
+            ] {
+                let o = Options {
+                    method,
+                    pairing,
+                    ..options(vec![prior(Component::Tz, tz, 0.0)])
+                };
+                let r = calibrate(&s.poses, setup, &o).unwrap();
+                let (er, et) = errors(&r.transform, &s.x);
+                assert!(
+                    er.to_radians() < 1e-9 && et < 1e-9,
+                    "{setup} seed {seed} {method:?} {pairing:?}: {er:e}° {et:e}"
+                );
+                assert!(r.low_dof.is_some());
+            }
+        }
+    }
+}
+
+#[test]
+fn scara_without_a_prior_is_refused_naming_it() {
+    for setup in SETUPS {
+        for seed in 0..SEEDS {
+            let s = simulate_low_dof(&scara(setup), seed, 0);
+            let e = calibrate(&s.poses, setup, &options(vec![])).unwrap_err();
+            let (missing, axis) =
+                low_dof_reason(&e).unwrap_or_else(|| panic!("{setup} {seed}: {e}"));
+            assert_eq!(missing, LowDofMissing::Prior(Component::Tz));
+            assert!(axis[2] > 0.999, "{axis:?}");
+            let words = e.to_string();
+            assert!(words.contains("--prior tz="), "{words}");
+            assert!(words.contains("SCARA"), "{words}");
+            assert!(!words.contains("rotate about the gripper x"), "{words}");
+            // A prior on a component the motions determine does not cover the free one.
+            let e = calibrate(
+                &s.poses,
+                setup,
+                &options(vec![prior(Component::Tx, 0.0, 0.0)]),
+            )
+            .unwrap_err();
+            assert_eq!(
+                low_dof_reason(&e).map(|r| r.0),
+                Some(LowDofMissing::Prior(Component::Tz))
+            );
+        }
+    }
+}
+
+#[test]
+fn scara_with_the_true_height_is_within_three_sigma() {
+    for setup in SETUPS {
+        let mut within = 0;
+        let mut ratios = Vec::new();
+        for seed in 0..SEEDS {
+            let s = simulate_low_dof(&scara(setup), seed, 0);
+            let tz = s.x.translation.vector.z;
+            let method = if seed % 2 == 0 {
+                Method::Andreff
+            } else {
+                Method::Refine
+            };
+            let o = Options {
+                method,
+                ..options(vec![prior(Component::Tz, tz, 0.0)])
+            };
+            let r =
+                calibrate(&s.poses, setup, &o).unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
+            assert_eq!(r.transform.translation.vector.z, tz, "tz is the prior's");
+            assert_eq!(r.prior["tz"].value, tz);
+            assert_eq!(r.prior["tz"].sigma, 0.0);
+            let (er, et) = errors(&r.transform, &s.x);
+            let (sr, st) = (r.uncertainty.rotation_deg, r.uncertainty.translation);
+            ratios.push((er / sr).max(et / st));
+            if er <= 3.0 * sr && et <= 3.0 * st {
+                within += 1;
+            }
+        }
+        ratios.sort_by(f64::total_cmp);
+        println!(
+            "{setup}: {within}/{SEEDS} within 3 sigma; error/sigma median {:.2}, max {:.2}",
+            ratios[ratios.len() / 2],
+            ratios[ratios.len() - 1]
+        );
+        assert!(
+            within as f64 >= 0.95 * SEEDS as f64,
+            "{setup}: {within}/{SEEDS}"
+        );
+    }
+}
+
+#[test]
+fn a_prior_with_a_sigma_is_the_reported_sigma_of_its_component() {
+    for setup in SETUPS {
+        for seed in 0..5 {
+            let s = simulate_low_dof(&scara(setup), seed, 0);
+            let tz = s.x.translation.vector.z;
+            let exact = calibrate(
+                &s.poses,
+                setup,
+                &options(vec![prior(Component::Tz, tz, 0.0)]),
+            )
+            .unwrap();
+            let sigma = 0.002;
+            let r = calibrate(
+                &s.poses,
+                setup,
+                &options(vec![prior(Component::Tz, tz + 0.001, sigma)]),
+            )
+            .unwrap();
+            let data = exact.uncertainty.covariance[5][5].sqrt();
+            let reported = r.uncertainty.covariance[5][5].sqrt();
+            println!(
+                "{setup} {seed}: tz sigma {reported:.6} (prior {sigma}, data alone {data:.2e})"
+            );
+            assert!(reported >= sigma && reported <= (sigma * sigma + data * data).sqrt() + 1e-12);
+            assert_eq!(r.prior["tz"].sigma, sigma);
+            assert_eq!(r.transform.translation.vector.z, tz + 0.001);
+            let at = |r: &handeye::Report| r.uncertainty.at_point.as_ref().unwrap().sigma;
+            assert!(at(&r) >= sigma && at(&r) > at(&exact));
+        }
+    }
+}
+
+#[test]
+fn a_prior_on_a_determined_component_keeps_the_data_and_warns() {
+    let setup = Setup::EyeInHand;
+    let s = simulate_low_dof(&scara(setup), 1, 0);
+    let t = s.x.translation.vector;
+    let r = calibrate(
+        &s.poses,
+        setup,
+        &options(vec![
+            prior(Component::Tz, t.z, 0.0),
+            prior(Component::Tx, t.x + 0.05, 0.001),
+        ]),
+    )
+    .unwrap();
+    assert!(!r.prior.contains_key("tx"));
+    assert!((r.transform.translation.vector.x - t.x).abs() < 0.01);
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| matches!(w, Warning::PriorDisagrees { component, .. } if component == "tx")),
+        "{:?}",
+        r.warnings
+    );
+    // An agreeing one is no warning.
+    let r = calibrate(
+        &s.poses,
+        setup,
+        &options(vec![
+            prior(Component::Tz, t.z, 0.0),
+            prior(Component::Tx, t.x, 0.001),
+        ]),
+    )
+    .unwrap();
+    assert!(
+        !r.warnings
+            .iter()
+            .any(|w| matches!(w, Warning::PriorDisagrees { .. }))
+    );
+}
+
+/// A 5-axis arm: x, y, z, a turn about z and a wrist about the flange's x. Two rotation axes:
+/// the motions determine all of X, no prior needed.
+#[test]
+fn five_axis_arm_is_determined_without_a_prior() {
+    for setup in SETUPS {
+        let mut within = 0;
+        for seed in 0..SEEDS {
+            let config = LowDofConfig {
+                wrist: Some([1.0, 0.0, 0.0]),
+                ..scara(setup)
+            };
+            let s = simulate_low_dof(&config, seed, 0);
+            let r = calibrate(&s.poses, setup, &options(vec![]))
+                .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
+            assert!(r.low_dof.is_none() && r.prior.is_empty());
+            let (er, et) = errors(&r.transform, &s.x);
+            if er <= 3.0 * r.uncertainty.rotation_deg && et <= 3.0 * r.uncertainty.translation {
+                within += 1;
+            }
+        }
+        println!("5-axis {setup}: {within}/{SEEDS} within 3 sigma");
+        assert!(within as f64 >= 0.95 * SEEDS as f64);
+    }
+}
+
+/// A gantry whose one wrist joint turns about the flange's x: the free component is tx.
+#[test]
+fn gantry_with_a_wrist_about_x_needs_tx() {
+    for setup in SETUPS {
+        for seed in 0..5 {
+            let config = LowDofConfig {
+                axis: [1.0, 0.0, 0.0],
+                ..scara(setup)
+            };
+            let s = simulate_low_dof(&config, seed, 0);
+            let e = calibrate(&s.poses, setup, &options(vec![])).unwrap_err();
+            assert_eq!(
+                low_dof_reason(&e).map(|r| r.0),
+                Some(LowDofMissing::Prior(Component::Tx)),
+                "{e}"
+            );
+            assert!(e.to_string().contains("--prior tx="));
+            let tx = s.x.translation.vector.x;
+            let r = calibrate(
+                &s.poses,
+                setup,
+                &options(vec![prior(Component::Tx, tx, 0.0)]),
+            )
+            .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
+            assert_eq!(r.transform.translation.vector.x, tx);
+            let (er, et) = errors(&r.transform, &s.x);
+            assert!(er < 5.0 * r.uncertainty.rotation_deg && et < 5.0 * r.uncertainty.translation);
+        }
+    }
+}
+
+/// A wrist whose axis is 30° off the flange's z: the free direction is along no coordinate
+/// axis, so no prior can state it; refused, naming the direction.
+#[test]
+fn a_free_direction_off_the_axes_is_refused_naming_it() {
+    let tilted = [0.0, -(30f64.to_radians().sin()), 30f64.to_radians().cos()];
+    for setup in SETUPS {
+        for seed in 0..5 {
+            let config = LowDofConfig {
+                axis: tilted,
+                ..scara(setup)
+            };
+            let s = simulate_low_dof(&config, seed, 0);
+            for priors in [
+                vec![],
+                vec![prior(Component::Tz, s.x.translation.vector.z, 0.0)],
+            ] {
+                let e = calibrate(&s.poses, setup, &options(priors)).unwrap_err();
+                let (missing, axis) = low_dof_reason(&e).unwrap_or_else(|| panic!("{e}"));
+                assert_eq!(missing, LowDofMissing::NotStatable);
+                let off = Vector3::from(axis).dot(&Vector3::from(tilted)).abs();
+                assert!(off > 0.9999, "{axis:?}");
+                let words = e.to_string();
+                assert!(words.contains("no prior on tx, ty or tz"), "{words}");
+                assert!(
+                    words.contains("(0.000, -0.500, 0.866)") && words.contains("one axis"),
+                    "{words}"
+                );
+            }
+        }
+    }
+}
