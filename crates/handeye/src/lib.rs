@@ -114,6 +114,7 @@ pub use online::experiment;
 
 // # The public surface, layer by layer.
 // Model: poses, motions, the setup, errors, warnings and what they carry.
+pub use model::camera::{Detections, Frame, Intrinsics};
 pub use model::error::{Degeneracy, Error, Result, TransformProblem};
 pub use model::findings::{Direction, OutlierPose, Part, Reading, Verdict, Written, WrittenAs};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
@@ -133,6 +134,7 @@ pub use check::uncertainty::{AtPoint, REPLICATES, REPLICATES_RANGE, Uncertainty,
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, ClosedLoop, WeaknessKind, advise, closed_loop};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
+pub use calibrate::pixels::{FrameRms, REFUSE_SIGMA_PX, ReprojectionSummary, calibrate_on_pixels};
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 pub use calibrate::verify::{Consistency, SavedUnit, SavedX, Sizes, Verification, verify};
 // Online: the paper's calibrator and the accumulating estimator.

@@ -243,3 +243,112 @@ fn the_sigma_is_honest_over_many_recordings() {
         "median error/sigma {median}: {ratios:?}"
     );
 }
+
+// The job (`calibrate --method reprojection`): bad input is refused or answered right.
+
+fn job(sim: &PixelSim, frames: &[Frame]) -> handeye::Result<handeye::Report> {
+    handeye::calibrate_on_pixels(
+        frames,
+        &sim.intrinsics,
+        sim.setup,
+        &handeye::Options::default(),
+    )
+}
+
+#[test]
+fn the_job_reports_the_fit_and_an_honest_at_point() {
+    for setup in SETUPS {
+        let sim = simulate_pixels(&PixelSimConfig::tag().with_setup(setup), 21);
+        let r = job(&sim, &sim.frames).unwrap();
+        assert_eq!(r.method, handeye::Method::Reprojection);
+        let p = r.reprojection.as_ref().unwrap();
+        assert_eq!(p.per_frame.len(), 30);
+        assert!(p.rms_px > 0.3 && p.rms_px < 2.0, "{}", p.rms_px);
+        assert!(r.uncertainty.at_point.as_ref().unwrap().sigma > 0.0);
+        let e = errors_against_truth(&r.transform, &sim.x);
+        assert!(e.rot_deg < 0.5 && e.trans < 0.005, "{e:?}");
+        let json = serde_json::to_value(&r).unwrap();
+        assert_eq!(json["method"], "reprojection");
+        assert!(json["reprojection"]["rms_px"].is_f64());
+        assert!(json["verdict"].is_string());
+    }
+}
+
+/// Robot poses written inverted: the pixels (not the flip-ambiguous PnP poses) say so.
+#[test]
+fn inverted_robot_poses_are_refused_on_the_pixels() {
+    for setup in SETUPS {
+        for config in [PixelSimConfig::tag(), PixelSimConfig::board()] {
+            let sim = simulate_pixels(&config.with_setup(setup), 5);
+            let inverted: Vec<Frame> = sim
+                .frames
+                .iter()
+                .map(|f| Frame {
+                    base_from_gripper: f.base_from_gripper.inverse(),
+                    ..f.clone()
+                })
+                .collect();
+            match job(&sim, &inverted) {
+                Err(handeye::Error::Misread { readings, .. }) => {
+                    assert_eq!(readings, vec![handeye::Reading::RobotInverted]);
+                }
+                other => panic!("{setup:?}: {:?}", other.map(|r| r.transform)),
+            }
+            // As given, the same frames are not called inverted.
+            assert!(job(&sim, &sim.frames).is_ok(), "{setup:?}");
+        }
+    }
+}
+
+/// Target points in millimetres with the robot in metres: refused, naming the unit.
+#[test]
+fn a_target_in_another_unit_is_refused_with_the_unit_named() {
+    let sim = simulate_pixels(&PixelSimConfig::board(), 8);
+    let mm: Vec<Frame> = sim
+        .frames
+        .iter()
+        .map(|f| {
+            let mut f = f.clone();
+            for p in &mut f.detections.target {
+                for v in p.iter_mut() {
+                    *v *= 1000.0;
+                }
+            }
+            f
+        })
+        .collect();
+    match job(&sim, &mm) {
+        Err(e @ handeye::Error::PixelsUnfit { .. }) => {
+            assert!(e.to_string().contains("1000 times smaller"), "{e}");
+        }
+        other => panic!("{:?}", other.map(|r| r.transform)),
+    }
+}
+
+/// Every frame from one view (the robot never moves): refused, not answered.
+#[test]
+fn one_view_is_refused() {
+    let sim = simulate_pixels(&PixelSimConfig::board(), 9);
+    let same: Vec<Frame> = (0..30).map(|_| sim.frames[0].clone()).collect();
+    let e = job(&sim, &same).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            handeye::Error::Degenerate { .. } | handeye::Error::TooFewMotions { .. }
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn bad_detections_are_refused_with_the_frame() {
+    let sim = simulate_pixels(&PixelSimConfig::tag(), 10);
+    let mut frames = sim.frames.clone();
+    frames[3].detections.pixels.pop();
+    let e = job(&sim, &frames).unwrap_err();
+    assert!(e.to_string().contains("frame 3"), "{e}");
+    let mut frames = sim.frames.clone();
+    frames[4].detections.pixels[1][0] = f64::NAN;
+    let e = job(&sim, &frames).unwrap_err();
+    assert!(e.to_string().contains("frame 4"), "{e}");
+}

@@ -284,6 +284,9 @@ pub struct Report {
     /// The held-out check: each camera observation predicted from the other poses
     /// (`crate::holdout`); `None` with fewer than four poses.
     pub held_out: Option<HeldOutSummary>,
+    /// The fit on the pixels (`--method reprojection`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reprojection: Option<crate::calibrate::pixels::ReprojectionSummary>,
 }
 
 /// The held-out check in a [`Report`].
@@ -417,6 +420,7 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         units: Units::default(),
         transform: calibration.x,
         held_out,
+        reprojection: None,
     })
 }
 
@@ -711,7 +715,7 @@ fn method_at_fault(
 }
 
 /// Refuses a result whose uncertainty leaves a direction of X undetermined.
-fn refuse_if_undetermined(u: &Uncertainty, setup: Setup, conditioning: f64) -> Result<()> {
+pub(crate) fn refuse_if_undetermined(u: &Uncertainty, setup: Setup, conditioning: f64) -> Result<()> {
     if u.verdict() != Verdict::Undetermined {
         return Ok(());
     }

@@ -6,3 +6,4 @@ pub mod advice;
 pub mod batch;
 pub mod robot_world;
 pub mod verify;
+pub mod pixels;

@@ -891,35 +891,6 @@ impl LeastSquares<12> for Bundle<'_> {
     }
 }
 
-/// The pixel residuals of the detections of `frames` at X and Y: per frame, per point, (u, v)
-/// predicted minus detected; `None` for a point behind the camera.
-pub fn pixel_residuals(
-    frames: &[Frame],
-    camera: &Intrinsics,
-    setup: Setup,
-    x: &Transform,
-    y: &Transform,
-) -> Vec<Vec<Option<[f64; 2]>>> {
-    frames
-        .iter()
-        .map(|f| {
-            let c = x.inverse() * motion_of(setup, &f.base_from_gripper) * y;
-            f.detections
-                .target
-                .iter()
-                .zip(&f.detections.pixels)
-                .map(|(p, u)| {
-                    let q = c * nalgebra::Point3::from(*p);
-                    (q.z > 0.0).then(|| {
-                        let r = camera.pixel(&q.coords) - Vector2::from(*u);
-                        [r.x, r.y]
-                    })
-                })
-                .collect()
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
