@@ -45,7 +45,9 @@ pub struct PixelOptions {
     /// Scale of the Cauchy loss of the first pass, pixels: a detection this far off weighs half.
     /// Default 4.
     pub cauchy_px: f64,
-    /// Levenberg–Marquardt settings of both passes.
+    /// Levenberg–Marquardt settings of both passes. Default: [`RefineOptions::default`] but a
+    /// relative cost tolerance of 1e-12 (a pixel cost's last digits move X by far less than its
+    /// noise).
     pub lm: RefineOptions,
 }
 
@@ -53,7 +55,10 @@ impl Default for PixelOptions {
     fn default() -> Self {
         Self {
             cauchy_px: CAUCHY_PX,
-            lm: RefineOptions::default(),
+            lm: RefineOptions {
+                cost_tolerance: 1e-12,
+                ..RefineOptions::default()
+            },
         }
     }
 }
@@ -562,8 +567,11 @@ fn refine_pose(
         pixels,
         camera,
     };
+    // A start only: the bundle refines it; a relative cost change of 1e-10 is far below noise.
     let options = RefineOptions {
-        max_iterations: 50,
+        max_iterations: 20,
+        cost_tolerance: 1e-10,
+        step_tolerance: 1e-12,
         ..RefineOptions::default()
     };
     let end = levenberg_marquardt(
