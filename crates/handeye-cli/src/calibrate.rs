@@ -152,6 +152,11 @@ pub fn run(args: Args) -> Result<()> {
             if face == Face::Text && refusal {
                 print_text(&faces::refused(&e))?;
             }
+            if matches!(e, Error::Misread { .. }) && carries_detections(&args.input) {
+                return Err(anyhow::Error::from(e).context(
+                    "these records carry `detections`: the PnP poses of a planar target flip (the planar ambiguity), which the pose-based check can take for inverted poses; calibrate on the pixels, where the reading is checked on the detections: --method reprojection --intrinsics FILE",
+                ));
+            }
             return Err(e.into());
         }
     };
@@ -206,6 +211,23 @@ pub fn run(args: Args) -> Result<()> {
         return Err(Questionable.into());
     }
     Ok(())
+}
+
+/// Whether the input file's first record carries `detections` (a JSON Lines file).
+fn carries_detections(input: &InputArgs) -> bool {
+    use std::io::BufRead;
+    let Some(path) = &input.input else {
+        return false;
+    };
+    let Ok(file) = std::fs::File::open(path) else {
+        return false;
+    };
+    std::io::BufReader::new(file)
+        .lines()
+        .take(50)
+        .map_while(std::result::Result::ok)
+        .find(|l| l.trim_start().starts_with('{'))
+        .is_some_and(|l| l.contains("\"detections\""))
 }
 
 /// `calibrate --method reprojection`: X on the pixels of the detections of a JSON Lines file.

@@ -183,3 +183,23 @@ fn inverted_robot_poses_are_refused() {
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("inverted"), "{err}");
 }
+
+/// A pose-based method on records with detections that it reads as misread: the refusal (exit 3)
+/// points to the check on the pixels.
+#[test]
+fn a_pose_based_misread_with_detections_points_to_the_pixels() {
+    let text = std::fs::read_to_string(path("tag_eih.jsonl")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("inv.jsonl");
+    std::fs::write(
+        &file,
+        text.replace("\"base_from_gripper\"", "\"gripper_from_base\""),
+    )
+    .unwrap();
+    let (code, _, err) = run(&["calibrate", file.to_str().unwrap(), "--output", "json"]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("--method reprojection --intrinsics FILE"),
+        "{err}"
+    );
+}
