@@ -10,12 +10,11 @@
 use std::fmt::Write as _;
 
 use handeye::sim::pixels::{PixelSimConfig, simulate_pixels};
-use handeye::solve::reprojection::planar_poses;
-use handeye::{Intrinsics, Setup, Transform};
+use handeye::{Intrinsics, Setup, Transform, planar_poses};
 use nalgebra::{Vector2, Vector3};
 
 fn pose(t: &Transform) -> String {
-    let q = handeye::model::pose::quaternion_xyzw(t);
+    let q = handeye::quaternion_xyzw(t);
     let v = t.translation.vector;
     format!(
         "{{\"translation\": [{:.9}, {:.9}, {:.9}], \"quaternion_xyzw\": [{:.12}, {:.12}, {:.12}, {:.12}]}}",

@@ -125,6 +125,7 @@ pub use model::pose::{
 pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.
 pub use solve::motions::{AllPairs, MotionSource};
+pub use solve::reprojection::{PixelOptions, PixelSolution, planar_poses, reprojection};
 pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 // Check.
 pub use check::holdout::leave_one_out;
