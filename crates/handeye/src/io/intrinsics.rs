@@ -31,9 +31,9 @@ pub fn read_intrinsics(path: &Path) -> Result<Intrinsics> {
 /// # Example
 /// ```
 /// let text = "%YAML:1.0\n---\nimage_width: 1280\nimage_height: 720\n\
-///     camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n\
+///     camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   \
 ///     data: [ 900., 0., 640., 0., 901., 360., 0., 0., 1. ]\n\
-///     distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n\
+///     distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   \
 ///     data: [ -0.2, 0.1, 0., 0., 0. ]\n";
 /// let k = handeye::io::parse_intrinsics(text, "camera.yml")?;
 /// assert_eq!((k.fx, k.fy, k.cx, k.cy, k.width), (900.0, 901.0, 640.0, 360.0, 1280));
