@@ -96,12 +96,16 @@ pub struct Args {
     /// rotation angles of the motions (one self-contained HTML file).
     #[arg(long, value_name = "FILE.html")]
     report: Option<std::path::PathBuf>,
+    /// The camera's intrinsics, for `--method reprojection`: OpenCV FileStorage YAML
+    /// (`camera_matrix`, `distortion_coefficients`) or a ROS `camera_info` YAML (`k`, `d`).
+    #[arg(long, value_name = "FILE")]
+    intrinsics: Option<std::path::PathBuf>,
 }
 
 /// The names of `--method`: the hand–eye methods and the robot-world ones, each once.
 fn any_method() -> PossibleValuesParser {
     let robot_world = RobotWorldMethod::ALL.iter().map(|m| m.name());
-    let mut names: Vec<&'static str> = Method::ALL.iter().map(|m| m.name()).collect();
+    let mut names: Vec<&'static str> = Method::WITH_PIXELS.iter().map(|m| m.name()).collect();
     names.extend(robot_world.filter(|m| m.parse::<Method>().is_err()));
     PossibleValuesParser::new(names)
 }
@@ -112,6 +116,16 @@ pub fn run(args: Args) -> Result<()> {
         return run_robot_world(&args);
     }
     let options = options(&args)?;
+    if options.method == Method::Reprojection {
+        return run_pixels(&args, options);
+    }
+    if args.intrinsics.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "intrinsics",
+            message: "--intrinsics is read by --method reprojection (calibration on the pixels of the detections)".into(),
+        }
+        .into());
+    }
     let setup = args.input.setup();
     // The frame names and the name are checked before the input is read.
     let frames = faces::frames(
@@ -147,6 +161,11 @@ pub fn run(args: Args) -> Result<()> {
             );
             if face == Face::Text && refusal {
                 print_text(&faces::refused(&e))?;
+            }
+            if matches!(e, Error::Misread { .. }) && carries_detections(&args.input) {
+                return Err(anyhow::Error::from(e).context(
+                    "these records carry `detections`: the PnP poses of a planar target flip (the planar ambiguity), which the pose-based check can take for inverted poses; calibrate on the pixels, where the reading is checked on the detections: --method reprojection --intrinsics FILE",
+                ));
             }
             return Err(e.into());
         }
@@ -204,8 +223,134 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
+/// Whether the input file's first record carries `detections` (a JSON Lines file).
+fn carries_detections(input: &InputArgs) -> bool {
+    use std::io::BufRead;
+    let Some(path) = &input.input else {
+        return false;
+    };
+    let Ok(file) = std::fs::File::open(path) else {
+        return false;
+    };
+    std::io::BufReader::new(file)
+        .lines()
+        .take(50)
+        .map_while(std::result::Result::ok)
+        .find(|l| l.trim_start().starts_with('{'))
+        .is_some_and(|l| l.contains("\"detections\""))
+}
+
+/// `calibrate --method reprojection`: X on the pixels of the detections of a JSON Lines file.
+fn run_pixels(args: &Args, options: Options) -> Result<()> {
+    let refuse = |message: String| -> anyhow::Error {
+        Error::InvalidParameter {
+            name: "method",
+            message,
+        }
+        .into()
+    };
+    for (flag, given) in [
+        ("--robot/--camera streams", args.input.robot.is_some()),
+        ("a ROS 2 recording", args.input.is_bag()),
+        ("--report", args.report.is_some()),
+        ("--reject-outliers", args.reject_outliers),
+    ] {
+        if given {
+            return Err(refuse(format!(
+                "{flag} is not offered with --method reprojection (yet): give a JSON Lines file with `detections`"
+            )));
+        }
+    }
+    let Some(intrinsics) = &args.intrinsics else {
+        return Err(refuse(
+            "reprojection needs the camera's intrinsics: --intrinsics FILE (OpenCV YAML or ROS camera_info)".into(),
+        ));
+    };
+    let Some(path) = &args.input.input else {
+        return Err(refuse(
+            "reprojection needs a JSON Lines file with `detections`".into(),
+        ));
+    };
+    let camera = handeye::io::read_intrinsics(intrinsics)?;
+    let series = handeye::io::read_frames(path)?;
+    let setup = args.input.setup();
+    let frames = faces::frames(
+        &args.input,
+        args.parent_frame.as_deref(),
+        args.child_frame.as_deref(),
+        &args.name,
+    )?;
+    let names = series
+        .lines
+        .iter()
+        .map(|l| format!("{}:{l}", path.display()))
+        .collect();
+    let face = Face::chosen(args.output);
+    let report = match handeye::calibrate_on_pixels(
+        &series.frames,
+        &camera,
+        setup,
+        &Options {
+            pose_names: names,
+            ..options
+        },
+    ) {
+        Ok(report) => report,
+        Err(e) => {
+            if face == Face::Text
+                && matches!(
+                    e,
+                    Error::Degenerate { .. }
+                        | Error::TooFewMotions { .. }
+                        | Error::Misread { .. }
+                        | Error::PixelsUnfit { .. }
+                )
+            {
+                print_text(&faces::refused(&e))?;
+            }
+            return Err(e.into());
+        }
+    };
+    let poses: Vec<handeye::PosePair> = series
+        .frames
+        .iter()
+        .map(|f| handeye::PosePair {
+            base_from_gripper: f.base_from_gripper,
+            camera_from_target: f.camera_from_target.unwrap_or_default(),
+        })
+        .collect();
+    let unit = length_unit(&poses);
+    if face != Face::Text {
+        for w in &report.warnings {
+            eprintln!("warning: {}", faces::warning(w));
+        }
+    }
+    let source = format!("calibrate, method {}", report.method);
+    let ros = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
+    let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
+    let published = Published::of(&report, &source, ros_unit);
+    match face {
+        Face::Text => print_text(&faces::text(&report, &frames, unit))?,
+        Face::Yaml => print_text(&faces::yaml(published, &frames, Some(&report)))?,
+        Face::Ros2 => print_text(&faces::ros2(published, &frames))?,
+        Face::Urdf => print_text(&faces::urdf(published, &frames))?,
+        Face::Json => print_json(&report)?,
+    }
+    if args.strict && report.verdict == Assessment::Questionable {
+        return Err(Questionable.into());
+    }
+    Ok(())
+}
+
 /// `calibrate --robot-world`: X and the target's pose together.
 fn run_robot_world(args: &Args) -> Result<()> {
+    if args.method.as_deref() == Some(Method::Reprojection.name()) {
+        return Err(Error::InvalidParameter {
+            name: "method",
+            message: "reprojection with --robot-world is not offered yet: drop --robot-world (`--method reprojection` solves X and the target's pose together already)".into(),
+        }
+        .into());
+    }
     for (flag, given) in [
         ("--pairs", args.pairs.is_some()),
         ("--tsai-opencv-filter", args.tsai_opencv_filter),

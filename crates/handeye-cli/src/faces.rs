@@ -583,6 +583,24 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
             }
         );
     }
+    if let Some(p) = &r.reprojection {
+        let worst = p
+            .per_frame
+            .iter()
+            .max_by(|a, b| a.rms_px.total_cmp(&b.rms_px));
+        let _ = writeln!(
+            s,
+            "Reprojection: {:.3} px RMS over {} detections ({} left out as mis-detections){}",
+            p.rms_px,
+            p.detections,
+            p.outlier_detections.len(),
+            worst.map_or(String::new(), |w| format!(
+                "; worst frame {} at {:.3} px",
+                w.name, w.rms_px
+            ))
+        );
+        let _ = writeln!(s, "  readings checked {}", p.reading_check);
+    }
     let _ = writeln!(
         s,
         "Residuals of AX = XB: rotation {:.4}° RMS ({:.4}° max), translation {} {u} RMS ({} {u} max)",

@@ -62,7 +62,8 @@ pub fn exit_code(e: &anyhow::Error) -> u8 {
             | Error::TooFewMotions { .. }
             | Error::Misread { .. }
             | Error::Untrusted { .. }
-            | Error::NoEstimate { .. },
+            | Error::NoEstimate { .. }
+            | Error::PixelsUnfit { .. },
         ) => DEGENERATE,
         Some(_) => BAD_INPUT,
         None => 1,

@@ -114,6 +114,7 @@ pub use online::experiment;
 
 // # The public surface, layer by layer.
 // Model: poses, motions, the setup, errors, warnings and what they carry.
+pub use model::camera::{Detections, Frame, Intrinsics};
 pub use model::error::{Degeneracy, Error, LowDofMissing, Result, TransformProblem};
 pub use model::findings::{Direction, OutlierPose, Part, Reading, Verdict, Written, WrittenAs};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
@@ -126,6 +127,7 @@ pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.
 pub use solve::low_dof::{CommonAxis, LowDofSolution, common_axis, solve_low_dof};
 pub use solve::motions::{AllPairs, MotionSource};
+pub use solve::reprojection::{PixelOptions, PixelSolution, planar_poses, reprojection};
 pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 // Check.
 pub use check::holdout::leave_one_out;
@@ -136,6 +138,7 @@ pub use check::uncertainty::{AtPoint, REPLICATES, REPLICATES_RANGE, Uncertainty,
 pub use calibrate::advice::{Advice, ClosedLoop, WeaknessKind, advise, closed_loop};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
+pub use calibrate::pixels::{FrameRms, REFUSE_SIGMA_PX, ReprojectionSummary, calibrate_on_pixels};
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 pub use calibrate::verify::{Consistency, SavedUnit, SavedX, Sizes, Verification, verify};
 // Online: the paper's calibrator and the accumulating estimator.

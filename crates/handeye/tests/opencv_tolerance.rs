@@ -101,6 +101,7 @@ fn tolerance(method: Method) -> (f64, f64) {
         Method::Tsai | Method::Park | Method::Horaud => (2e-2, 7e-2),
         Method::Andreff => (2e-2, 5e-2),
         Method::AndreffJoint | Method::Daniilidis | Method::Refine => (1e-2, 5e-2),
+        Method::Reprojection => unreachable!("not a solver of motions: not in Method::ALL"),
     }
 }
 

@@ -286,6 +286,9 @@ pub struct Report {
     /// taken from the prior; absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub low_dof: Option<LowDofReport>,
+    /// The fit on the pixels (`--method reprojection`); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reprojection: Option<crate::calibrate::pixels::ReprojectionSummary>,
 }
 
 /// The held-out check in a [`Report`].
@@ -486,6 +489,7 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         systematic,
         prior,
         low_dof: plan.map(|p| p.report(calibration.conditioning)),
+        reprojection: None,
     })
 }
 
@@ -850,7 +854,7 @@ fn method_at_fault(
 }
 
 /// Refuses a result whose uncertainty leaves a direction of X undetermined.
-fn refuse_if_undetermined(u: &Uncertainty, setup: Setup, conditioning: f64) -> Result<()> {
+pub(crate) fn refuse_if_undetermined(u: &Uncertainty, setup: Setup, conditioning: f64) -> Result<()> {
     if u.verdict() != Verdict::Undetermined {
         return Ok(());
     }

@@ -7,3 +7,4 @@ pub mod batch;
 pub mod low_dof;
 pub mod robot_world;
 pub mod verify;
+pub mod pixels;

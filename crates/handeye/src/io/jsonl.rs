@@ -13,6 +13,7 @@ use crate::io::{
     CAMERA_FRAMES, Projections, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error,
     read_transform_json, written_as,
 };
+use crate::model::camera::{Detections, Frame, MIN_DETECTIONS};
 use crate::model::error::Result;
 use crate::model::findings::{Written, WrittenAs};
 use crate::model::motion::PosePair;
@@ -270,6 +271,132 @@ fn joint_angles(v: &Value, source: &str, line: usize) -> Result<Vec<f64>> {
         .collect()
 }
 
+/// Parses one JSON Lines record of a recording on the pixels (SPEC sec. 9): a robot pose as in
+/// [`parse_pose_line`], `detections: {"target": [[x, y, z], …], "pixels": [[u, v], …]}` (the same
+/// count, at least [`MIN_DETECTIONS`], every number finite), and optionally the camera pose.
+/// Errors name the line and the field (`detections.pixels[3][1]`). The arrays are those of the
+/// line itself (at most [`crate::io::MAX_LINE`] bytes): nothing is allocated by a number the line
+/// gives.
+pub(crate) fn parse_frame_record(text: &str, source: &str, line: usize) -> Result<Frame> {
+    let value: Value = serde_json::from_str(text)
+        .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
+    let Value::Object(object) = value else {
+        return Err(parse_error(
+            source,
+            line,
+            "-",
+            "expected a JSON object per line",
+        ));
+    };
+    if let Some(repeated) = repeated_key(text) {
+        return Err(parse_error(
+            source,
+            line,
+            repeated.path.clone(),
+            repeated.message(),
+        ));
+    }
+    let (robot, _) = frame(&object, &ROBOT_FRAMES, source, line)?;
+    let camera = if CAMERA_FRAMES.iter().any(|(n, _)| object.contains_key(*n)) {
+        Some(frame(&object, &CAMERA_FRAMES, source, line)?.0.transform)
+    } else {
+        None
+    };
+    let detections = match object.get("detections") {
+        Some(d) => detections(d).map_err(|(field, message)| {
+            parse_error(source, line, format!("detections{field}"), message)
+        })?,
+        None => {
+            return Err(parse_error(
+                source,
+                line,
+                "detections",
+                "missing: calibration on the pixels needs each record's `detections` ({\"target\": [[x, y, z], …], \"pixels\": [[u, v], …]})",
+            ));
+        }
+    };
+    Ok(Frame {
+        base_from_gripper: robot.transform,
+        camera_from_target: camera,
+        detections,
+    })
+}
+
+/// The detections of a record, or the place (below `detections`) and the problem.
+fn detections(v: &Value) -> std::result::Result<Detections, (String, String)> {
+    let Value::Object(o) = v else {
+        return Err((
+            String::new(),
+            "expected {\"target\": [[x, y, z], …], \"pixels\": [[u, v], …]}".into(),
+        ));
+    };
+    let target = points::<3>(o.get("target"), ".target")?;
+    let pixels = points::<2>(o.get("pixels"), ".pixels")?;
+    if target.len() != pixels.len() {
+        return Err((
+            ".pixels".into(),
+            format!(
+                "{} pixels for {} target points: give one pixel per point, in the same order",
+                pixels.len(),
+                target.len()
+            ),
+        ));
+    }
+    if target.len() < MIN_DETECTIONS {
+        return Err((
+            ".target".into(),
+            format!(
+                "{} points, at least {MIN_DETECTIONS} needed (a planar target's pose)",
+                target.len()
+            ),
+        ));
+    }
+    Ok(Detections { target, pixels })
+}
+
+/// A list of N-vectors of finite numbers, or the place and the problem.
+fn points<const N: usize>(
+    v: Option<&Value>,
+    name: &str,
+) -> std::result::Result<Vec<[f64; N]>, (String, String)> {
+    let Some(Value::Array(items)) = v else {
+        return Err((
+            name.into(),
+            format!(
+                "missing or not a list: expected [[{}], …]",
+                ["x", "y", "z"][..N].join(", ")
+            ),
+        ));
+    };
+    items
+        .iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let at = |j: Option<usize>| match j {
+                Some(j) => format!("{name}[{i}][{j}]"),
+                None => format!("{name}[{i}]"),
+            };
+            let Value::Array(xs) = item else {
+                return Err((
+                    at(None),
+                    format!("expected a list of {N} numbers, got {item}"),
+                ));
+            };
+            if xs.len() != N {
+                return Err((at(None), format!("{} numbers, expected {N}", xs.len())));
+            }
+            let mut out = [0.0; N];
+            for (j, (o, x)) in out.iter_mut().zip(xs).enumerate() {
+                *o = x
+                    .as_f64()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| (at(Some(j)), format!("expected a finite number, got {x}")))?;
+            }
+            Ok(out)
+        })
+        .collect()
+}
+
 /// Reads the one transform of a pair of alternative names, inverting when the file gives the
 /// other direction, with the direction the file wrote.
 fn frame(
@@ -285,11 +412,16 @@ fn frame(
     let &&(name, inverted) = match present.as_slice() {
         [one] => one,
         [] => {
+            let pixels = if object.contains_key("detections") {
+                " (a record with `detections` alone is calibrated on the pixels: `--method reprojection --intrinsics FILE`)"
+            } else {
+                ""
+            };
             return Err(parse_error(
                 source,
                 line,
                 format!("{}|{}", names[0].0, names[1].0),
-                format!("missing: give `{}` or `{}`", names[0].0, names[1].0),
+                format!("missing: give `{}` or `{}`{pixels}", names[0].0, names[1].0),
             ));
         }
         _ => {

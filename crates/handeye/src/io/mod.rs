@@ -6,6 +6,8 @@
 //! (`base_from_gripper`, `camera_from_target`) whichever direction the file gives.
 
 mod csv_pairs;
+mod frames;
+mod intrinsics;
 mod json_text;
 mod jsonl;
 mod jsonl_fast;
@@ -39,6 +41,8 @@ use lines::{Line, Lines};
 // `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
 // two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
 // public with `internals` for this crate's tests.
+pub use frames::{FrameSeries, frames_of, read_frames};
+pub use intrinsics::{parse_intrinsics, read_intrinsics};
 pub use jsonl::{parse_pose_line, read_joints};
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;

@@ -391,6 +391,19 @@ pub enum Error {
         /// Why the search failed.
         source: Box<Error>,
     },
+    /// The detections do not fit any X: the pixels left after the best fit are far above
+    /// detection noise (a wrong unit, wrong intrinsics, robot poses that are not the images').
+    #[error(
+        "X cannot be trusted: the detections do not fit (reprojection sigma {sigma_px:.1} px after the best fit, RMS {rms_px:.1} px): {hint}"
+    )]
+    PixelsUnfit {
+        /// Robust sigma of one pixel coordinate, pixels.
+        sigma_px: f64,
+        /// RMS over the detections kept, pixels.
+        rms_px: f64,
+        /// What to check, in words.
+        hint: String,
+    },
     /// A parameter out of its valid range.
     #[error("parameter `{name}`: {message}")]
     InvalidParameter {

@@ -1,6 +1,7 @@
 //! The model: poses, motions, the setup, and what errors and warnings carry. The bottom layer:
 //! it imports nothing else of the crate.
 
+pub mod camera;
 pub mod error;
 pub mod findings;
 pub mod motion;

@@ -58,12 +58,14 @@ pub trait Named: Copy + Sized + 'static {
 /// });
 /// ```
 /// The first literal is what the value is in messages, the second the parameter's name in
-/// [`Error::InvalidParameter`]. A spelling given twice does not compile without a warning
+/// [`Error::InvalidParameter`]. Variants after `; not listed:` have a name and parse, but are left
+/// out of `ALL` (what contract suites iterate). A spelling given twice does not compile without a warning
 /// (an unreachable pattern).
 #[macro_export]
 macro_rules! named_enum {
     ($ty:ident, $what:literal, $param:literal {
         $($variant:ident => $name:literal $(| $alias:literal)*),+ $(,)?
+        $(; not listed: $($xvariant:ident => $xname:literal),+ $(,)?)?
     }) => {
         impl $ty {
             #[doc = concat!("Every ", $what, ", in the order they are listed to users.")]
@@ -72,7 +74,8 @@ macro_rules! named_enum {
             /// The name used on the command line, in the Python bindings and in output.
             pub fn name(self) -> &'static str {
                 match self {
-                    $($ty::$variant => $name),+
+                    $($ty::$variant => $name,)+
+                    $($($ty::$xvariant => $xname,)+)?
                 }
             }
         }
@@ -89,6 +92,7 @@ macro_rules! named_enum {
             fn from_name(s: &str) -> Option<Self> {
                 match s {
                     $($name $(| $alias)* => Some($ty::$variant),)+
+                    $($($xname => Some($ty::$xvariant),)+)?
                     _ => None,
                 }
             }

@@ -18,6 +18,7 @@ pub mod motions;
 mod park;
 mod quaternion;
 mod refine;
+pub mod reprojection;
 pub mod residual;
 pub(crate) mod robot_world;
 mod rotation_system;
@@ -95,6 +96,10 @@ pub enum Method {
     Daniilidis,
     /// Levenberg–Marquardt on all motions, started from `andreff`.
     Refine,
+    /// Levenberg–Marquardt on the pixels of the detections, X and the target's pose together
+    /// ([`reprojection::reprojection`]): not a solver of motions, so not in [`Method::ALL`], and
+    /// [`solve`] refuses it.
+    Reprojection,
 }
 
 crate::named_enum!(Method, "method", "method" {
@@ -104,8 +109,22 @@ crate::named_enum!(Method, "method", "method" {
     Park => "park",
     Horaud => "horaud",
     Daniilidis => "daniilidis",
-    Refine => "refine",
+    Refine => "refine";
+    not listed: Reprojection => "reprojection",
 });
+
+impl Method {
+    /// Every method, the motion solvers of [`Method::ALL`] and [`Method::Reprojection`].
+    pub const WITH_PIXELS: [Method; 8] = {
+        let mut all = [Method::Reprojection; 8];
+        let mut i = 0;
+        while i < Method::ALL.len() {
+            all[i] = Method::ALL[i];
+            i += 1;
+        }
+        all
+    };
+}
 
 /// The result of a batch solve.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -262,6 +281,10 @@ pub fn solve(method: Method, motions: &(impl MotionSource + ?Sized)) -> Result<C
         Method::Horaud => horaud(motions),
         Method::Daniilidis => daniilidis(motions),
         Method::Refine => refine(motions).map(|r| r.calibration),
+        Method::Reprojection => Err(crate::model::error::Error::InvalidParameter {
+            name: "method",
+            message: "`reprojection` solves on the pixels: give detections and intrinsics (`--intrinsics FILE`), not motions".into(),
+        }),
     }
 }
 

@@ -4,6 +4,8 @@
 //! Lengths are millimetres. Series `s` of a run with seed `S` draws from its own generator seeded
 //! from `(S, s)`, so a run is reproducible and independent of how many threads share it.
 
+pub mod pixels;
+
 use nalgebra::{Matrix3, Translation3, Vector3};
 use rand::{Rng, RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};

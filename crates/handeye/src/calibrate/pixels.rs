@@ -1,0 +1,335 @@
+//! `calibrate --method reprojection`: hand–eye calibration on the pixels of the detections
+//! ([`crate::solve::reprojection`]), with the same report as the pose-based job and its own
+//! checks:
+//! 1. the reading of the robot poses is checked on the pixels, not on PnP poses: a planar target's
+//!    PnP poses flip (the planar ambiguity), which the pose-based readings doctor takes for
+//!    inverted poses. The recording is solved as given and with the robot poses inverted; the
+//!    inverted reading refuses the as-given one only when it fits the pixels far better;
+//! 2. a fit whose pixels stay far above detection noise is refused ([`Error::PixelsUnfit`]),
+//!    naming a unit mismatch of target and robot when the target read in another unit fits;
+//! 3. the uncertainty is the solve's own (Gauss–Newton with the per-frame sandwich), judged by the
+//!    same bounds as the bootstrap's; `at_point` is placed through it.
+
+use serde::{Deserialize, Serialize};
+
+use crate::calibrate::batch::{
+    Assessment, Options, Outliers, ReadingReport, Report, Spread, Units, Fix, refuse_if_undetermined,
+    warn_weak, working_distance,
+};
+use crate::check::outliers::{PoseResiduals, translation_scale};
+use crate::check::quality::quality_report;
+use crate::check::uncertainty::{median_target, summarise};
+use crate::model::camera::{Frame, Intrinsics};
+use crate::model::error::{Degeneracy, Error, Result};
+use crate::model::findings::Reading;
+use crate::model::motion::{PosePair, Setup};
+use crate::model::pose::TransformJson;
+use crate::solve::motions::AllPairs;
+use crate::solve::reprojection::{PixelOptions, PixelSolution, reprojection};
+use crate::solve::Method;
+
+/// The robust sigma (pixels, per coordinate) above which the detections do not fit: detectors
+/// give 0.05–1 px; a wrong unit, wrong intrinsics or robot poses of other images give tens.
+pub const REFUSE_SIGMA_PX: f64 = 3.0;
+
+/// Another reading refuses the as-given one when the as-given sigma is this many times its own.
+const BETTER_READING: f64 = 3.0;
+
+/// The fit on the pixels in a [`Report`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReprojectionSummary {
+    /// RMS reprojection error over the detections kept, pixels.
+    pub rms_px: f64,
+    /// Each frame's RMS over all of its detections, in input order.
+    pub per_frame: Vec<FrameRms>,
+    /// Robust sigma of one pixel coordinate, pixels.
+    pub sigma_px: f64,
+    /// Detections used in all.
+    pub detections: usize,
+    /// Detections left out as mis-detections (beyond 5 robust sigmas), (frame name, point index).
+    pub outlier_detections: Vec<(String, usize)>,
+    /// Frames whose start pose was the other pose of the planar ambiguity than PnP's
+    /// smaller-residual one: chosen by the robot's motion.
+    pub flips_resolved: usize,
+    /// The target's pose Y solved with X, and its frame name.
+    pub target_frame: String,
+    /// Y (`translation`, `quaternion_xyzw`, `matrix`).
+    pub target: TransformJson,
+    /// How the reading of the robot poses was checked.
+    pub reading_check: String,
+}
+
+/// One frame's reprojection RMS.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameRms {
+    /// The frame's name (`file:line` from the command line).
+    pub name: String,
+    /// RMS over its detections, pixels.
+    pub rms_px: f64,
+}
+
+/// Calibrates X on the pixels (see the module docs). `options.method` is ignored (this is
+/// `reprojection`); `options.fix` may force `as-given` or `robot-inverted`; `options.point`
+/// places `at_point`; `options.pose_names` names the frames.
+///
+/// Errors: [`Error::Misread`] when the robot poses inverted fit the pixels far better,
+/// [`Error::PixelsUnfit`], [`Error::Degenerate`] (motions or covariance that do not determine X),
+/// [`Error::InvalidParameter`] for unusable detections or intrinsics.
+pub fn calibrate_on_pixels(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &Options,
+) -> Result<Report> {
+    camera.check().map_err(|(field, message)| Error::InvalidParameter {
+        name: "intrinsics",
+        message: format!("{field}: {message}"),
+    })?;
+    if frames.len() < 3 {
+        return Err(Error::TooFewMotions {
+            got: frames.len().saturating_sub(1),
+            need: 2,
+        });
+    }
+    let pixel_options = PixelOptions::default();
+    let inverted: Vec<Frame> = frames
+        .iter()
+        .map(|f| Frame {
+            base_from_gripper: f.base_from_gripper.inverse(),
+            ..f.clone()
+        })
+        .collect();
+    let (applied, solution, reading_check) = match options.fix {
+        Fix::Read(Reading::AsGiven) => (
+            Reading::AsGiven,
+            reprojection(frames, camera, setup, &pixel_options)?,
+            "not checked (--fix as-given)".to_string(),
+        ),
+        Fix::Read(Reading::RobotInverted) => (
+            Reading::RobotInverted,
+            reprojection(&inverted, camera, setup, &pixel_options)?,
+            "not checked (--fix robot-inverted)".to_string(),
+        ),
+        Fix::Read(other) => {
+            return Err(Error::InvalidParameter {
+                name: "fix",
+                message: format!(
+                    "`{}` is not offered on the pixels: as-given or robot-inverted",
+                    other.name()
+                ),
+            });
+        }
+        Fix::Refuse | Fix::Auto => {
+            checked_reading(frames, &inverted, camera, setup, options.fix, &pixel_options)?
+        }
+    };
+    let used = if applied == Reading::RobotInverted {
+        &inverted[..]
+    } else {
+        frames
+    };
+    if solution.sigma_px > REFUSE_SIGMA_PX {
+        return Err(unfit(&solution, used, camera, setup, &pixel_options));
+    }
+    report(used, setup, options, solution, applied, reading_check)
+}
+
+/// The reading on the pixels: as given, unless the robot poses inverted fit far better (then a
+/// refusal, or with [`Fix::Auto`] that reading).
+fn checked_reading(
+    frames: &[Frame],
+    inverted: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    fix: Fix,
+    pixel_options: &PixelOptions,
+) -> Result<(Reading, PixelSolution, String)> {
+    let as_given = reprojection(frames, camera, setup, pixel_options);
+    let flipped = reprojection(inverted, camera, setup, pixel_options).ok();
+    let as_given_sigma = as_given.as_ref().map_or(f64::INFINITY, |s| s.sigma_px);
+    let words = |other: Option<f64>| match other {
+        Some(o) => format!(
+            "on the pixels: as given {as_given_sigma:.3} px, robot poses inverted {o:.3} px (sigma per coordinate); PnP poses are not judged (a planar target's flip is not an inversion)"
+        ),
+        None => format!(
+            "on the pixels: as given {as_given_sigma:.3} px; the robot poses inverted do not solve"
+        ),
+    };
+    match flipped {
+        Some(f)
+            if f.sigma_px <= REFUSE_SIGMA_PX && as_given_sigma > BETTER_READING * f.sigma_px.max(0.05) =>
+        {
+            let text = words(Some(f.sigma_px));
+            if fix == Fix::Auto {
+                return Ok((Reading::RobotInverted, f, text));
+            }
+            Err(Error::Misread {
+                finding: format!(
+                    "the detections fit far better with the robot poses inverted (reprojection sigma {:.2} px instead of {as_given_sigma:.2} px)",
+                    f.sigma_px
+                ),
+                readings: vec![Reading::RobotInverted],
+                setup,
+                other_setup: false,
+                frames: false,
+            })
+        }
+        other => {
+            let text = words(other.map(|f| f.sigma_px));
+            as_given.map(|s| (Reading::AsGiven, s, text))
+        }
+    }
+}
+
+/// The refusal of a fit that leaves the pixels far above noise, naming a unit mismatch when the
+/// target read in another unit fits.
+fn unfit(
+    solution: &PixelSolution,
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &PixelOptions,
+) -> Error {
+    let rescaled = |s: f64| -> Vec<Frame> {
+        frames
+            .iter()
+            .map(|f| {
+                let mut f = f.clone();
+                for p in &mut f.detections.target {
+                    for v in p.iter_mut() {
+                        *v *= s;
+                    }
+                }
+                f.camera_from_target = None;
+                f
+            })
+            .collect()
+    };
+    let unit = [(1e-3, "1000 times smaller"), (1e3, "1000 times larger")]
+        .into_iter()
+        .find(|(s, _)| {
+            reprojection(&rescaled(*s), camera, setup, options)
+                .is_ok_and(|r| r.sigma_px <= REFUSE_SIGMA_PX)
+        });
+    let hint = match unit {
+        Some((_, words)) => format!(
+            "the target's points {words} fit: give the target's points and the robot's translations in one unit (a target in mm with a robot in m?)"
+        ),
+        None => "check that the target's points and the robot's translations share one unit, that the intrinsics are this camera's, that each record's robot pose is the one at its image, and the setup (--setup)".into(),
+    };
+    Error::PixelsUnfit {
+        sigma_px: solution.sigma_px,
+        rms_px: solution.rms_px,
+        hint,
+    }
+}
+
+/// The report of a solution on the pixels.
+fn report(
+    frames: &[Frame],
+    setup: Setup,
+    options: &Options,
+    solution: PixelSolution,
+    applied: Reading,
+    reading_check: String,
+) -> Result<Report> {
+    let x = solution.calibration.x;
+    let poses: Vec<PosePair> = frames
+        .iter()
+        .zip(&solution.start_poses)
+        .map(|(f, c)| PosePair {
+            base_from_gripper: f.base_from_gripper,
+            camera_from_target: *c,
+        })
+        .collect();
+    let scene = translation_scale(&poses, setup).max(working_distance(&poses));
+    let conditioning = solution.calibration.conditioning;
+    let Some(covariance) = solution.covariance else {
+        return Err(Error::Degenerate {
+            reason: Degeneracy::IllConditioned,
+            conditioning,
+        });
+    };
+    let mut uncertainty = summarise(covariance, 0, 0, scene);
+    uncertainty.at_point = Some(uncertainty.place(
+        &x,
+        options.point.unwrap_or_else(|| median_target(&poses)),
+    ));
+    refuse_if_undetermined(&uncertainty, setup, conditioning)?;
+    let mut warnings = solution.calibration.warnings.clone();
+    warn_weak(&uncertainty, setup, &mut warnings);
+    let quality = quality_report(&AllPairs::new(&poses, setup), &x, 0);
+    let residuals = PoseResiduals::at(&poses, setup, &x);
+    let name = |i: usize| {
+        options
+            .pose_names
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| format!("frame {i}"))
+    };
+    let summary = ReprojectionSummary {
+        rms_px: solution.rms_px,
+        per_frame: solution
+            .per_frame_rms_px
+            .iter()
+            .enumerate()
+            .map(|(i, r)| FrameRms {
+                name: name(i),
+                rms_px: *r,
+            })
+            .collect(),
+        sigma_px: solution.sigma_px,
+        detections: frames.iter().map(|f| f.detections.pixels.len()).sum(),
+        outlier_detections: solution
+            .outliers
+            .iter()
+            .map(|(f, k)| (name(*f), *k))
+            .collect(),
+        flips_resolved: solution.flips_resolved,
+        target_frame: match setup {
+            Setup::EyeInHand => "base_from_target",
+            Setup::EyeToHand => "gripper_from_target",
+        }
+        .into(),
+        target: TransformJson::from(&solution.target),
+        reading_check,
+    };
+    warnings.sort_by_key(|w| w.remedy().is_none());
+    Ok(Report {
+        verdict: Assessment::of(&warnings),
+        method: Method::Reprojection,
+        setup,
+        pairing: options.pairing,
+        frame: setup.x_frame().into(),
+        x: TransformJson::from(&x),
+        poses: frames.len(),
+        motions: solution.calibration.motions,
+        conditioning,
+        uncertainty,
+        reading: ReadingReport {
+            applied,
+            check: None,
+        },
+        outliers: Outliers {
+            poses: Vec::new(),
+            rejected: false,
+            angle_threshold_deg: 0.0,
+            pitch_threshold: 0.0,
+        },
+        residual: quality.residual,
+        translation_residual_rel: residuals.median_translation() / scene.max(f64::MIN_POSITIVE),
+        quality: Spread {
+            axis_spread_deg: quality.axis_spread_deg,
+            rotation_range_deg: quality.rotation_range_deg,
+            per_motion: None,
+        },
+        warnings,
+        units: Units::default(),
+        transform: x,
+        held_out: None,
+        reprojection: Some(summary),
+        systematic: None,
+        prior: Default::default(),
+        low_dof: None,
+    })
+}

@@ -1,0 +1,263 @@
+//! Camera intrinsics (`--intrinsics FILE`, SPEC sec. 9): OpenCV's FileStorage YAML
+//! (`camera_matrix`, `distortion_coefficients` k1 k2 p1 p2 k3, `image_width`, `image_height`; a
+//! `%YAML:1.0` first line and `!!opencv-matrix` mappings with `rows`, `cols`, `dt`, `data`), the
+//! same names as ROS's `camera_calibration_parsers` writes them, or a ROS `camera_info` message
+//! (`k`/`K`, `d`/`D`, `width`, `height`, `distortion_model`).
+//!
+//! Parsed with `yaml-rust2` (already the workspace's YAML parser: a maintained pure-Rust YAML 1.2
+//! parser, no unsafe code). OpenCV's `%YAML:1.0` is not a valid YAML directive (YAML writes
+//! `%YAML 1.0`): that one line is blanked before parsing, so line numbers stay the file's.
+
+use std::path::Path;
+
+use yaml_rust2::{Yaml, YamlLoader};
+
+use crate::io::parse_error;
+use crate::model::camera::Intrinsics;
+use crate::model::error::{Error, Result};
+
+/// Reads the intrinsics of a file (see the module docs).
+pub fn read_intrinsics(path: &Path) -> Result<Intrinsics> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        file: file.clone(),
+        source,
+    })?;
+    parse_intrinsics(&text, &file)
+}
+
+/// Parses intrinsics from the text of a file named `file` in messages.
+///
+/// # Example
+/// ```
+/// let text = "%YAML:1.0\n---\nimage_width: 1280\nimage_height: 720\n\
+///     camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   \
+///     data: [ 900., 0., 640., 0., 901., 360., 0., 0., 1. ]\n\
+///     distortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   \
+///     data: [ -0.2, 0.1, 0., 0., 0. ]\n";
+/// let k = handeye::io::parse_intrinsics(text, "camera.yml")?;
+/// assert_eq!((k.fx, k.fy, k.cx, k.cy, k.width), (900.0, 901.0, 640.0, 360.0, 1280));
+/// assert_eq!(k.distortion[0], -0.2);
+/// # Ok::<(), handeye::Error>(())
+/// ```
+pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
+    let cleaned = opencv_header_blanked(text);
+    let docs = YamlLoader::load_from_str(&cleaned).map_err(|e| {
+        parse_error(
+            file,
+            e.marker().line(),
+            "-",
+            format!("not YAML: {}", e.info()),
+        )
+    })?;
+    let Some(doc) = docs.iter().find(|d| matches!(d, Yaml::Hash(_))) else {
+        return Err(parse_error(
+            file,
+            0,
+            "-",
+            "expected a YAML mapping of intrinsics",
+        ));
+    };
+    let err = |field: &str, message: String| parse_error(file, 0, field, message);
+    let (k_name, k) = first_of(doc, &["camera_matrix", "k", "K"]).ok_or_else(|| {
+        err(
+            "camera_matrix",
+            "missing: give `camera_matrix` (OpenCV) or `k` (ROS camera_info)".into(),
+        )
+    })?;
+    let k = numbers(k).map_err(|m| err(k_name, m))?;
+    if k.len() != 9 {
+        return Err(err(
+            k_name,
+            format!("{} numbers, expected 9 (3×3)", k.len()),
+        ));
+    }
+    if k[1] != 0.0 || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0 {
+        return Err(err(
+            k_name,
+            format!(
+                "expected [fx 0 cx; 0 fy cy; 0 0 1], got {k:?} (a skewed or unnormalised matrix is not supported)"
+            ),
+        ));
+    }
+    let (d_name, d) = first_of(doc, &["distortion_coefficients", "d", "D"]).ok_or_else(|| {
+        err(
+            "distortion_coefficients",
+            "missing: give `distortion_coefficients` (OpenCV) or `d` (ROS camera_info); `data: [0, 0, 0, 0, 0]` for none".into(),
+        )
+    })?;
+    let d = numbers(d).map_err(|m| err(d_name, m))?;
+    if let Some(model) = doc["distortion_model"].as_str()
+        && !matches!(model, "plumb_bob" | "rational_polynomial" | "radtan" | "")
+    {
+        return Err(err(
+            "distortion_model",
+            format!("`{model}` is not supported: plumb_bob (k1 k2 p1 p2 k3) only"),
+        ));
+    }
+    let distortion = distortion(&d).map_err(|m| err(d_name, m))?;
+    let size = |names: &[&'static str]| -> Result<u32> {
+        match first_of(doc, names) {
+            None => Ok(0),
+            Some((name, v)) => v
+                .as_i64()
+                .and_then(|n| u32::try_from(n).ok())
+                .ok_or_else(|| err(name, format!("expected a size in pixels, got {v:?}"))),
+        }
+    };
+    let intrinsics = Intrinsics {
+        fx: k[0],
+        fy: k[4],
+        cx: k[2],
+        cy: k[5],
+        distortion,
+        width: size(&["image_width", "width"])?,
+        height: size(&["image_height", "height"])?,
+    };
+    intrinsics
+        .check()
+        .map_err(|(field, message)| err(&format!("{k_name}.{field}"), message))?;
+    Ok(intrinsics)
+}
+
+/// The text with OpenCV's `%YAML:1.0` first line blanked.
+fn opencv_header_blanked(text: &str) -> String {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    match text.split_once('\n') {
+        Some((first, rest)) if first.trim_end().starts_with("%YAML:") => format!("\n{rest}"),
+        _ => text.to_string(),
+    }
+}
+
+/// The first of `names` present in the mapping, with its value.
+fn first_of<'a>(doc: &'a Yaml, names: &[&'static str]) -> Option<(&'static str, &'a Yaml)> {
+    names
+        .iter()
+        .find(|n| !doc[**n].is_badvalue())
+        .map(|n| (*n, &doc[*n]))
+}
+
+/// The numbers of a matrix: an `!!opencv-matrix` (or ROS's) mapping with `data` (and `rows`,
+/// `cols` that must agree), or a flat or nested sequence.
+fn numbers(v: &Yaml) -> std::result::Result<Vec<f64>, String> {
+    match v {
+        Yaml::Hash(_) => {
+            let data = numbers_of(&v["data"]).map_err(|m| format!("`data`: {m}"))?;
+            if let (Some(rows), Some(cols)) = (v["rows"].as_i64(), v["cols"].as_i64())
+                && rows.checked_mul(cols) != Some(data.len() as i64)
+            {
+                return Err(format!(
+                    "rows {rows} × cols {cols} but {} numbers in `data`",
+                    data.len()
+                ));
+            }
+            Ok(data)
+        }
+        _ => numbers_of(v),
+    }
+}
+
+fn numbers_of(v: &Yaml) -> std::result::Result<Vec<f64>, String> {
+    let Yaml::Array(items) = v else {
+        return Err(format!("expected a list of numbers, got {v:?}"));
+    };
+    let mut out = Vec::new();
+    for (i, item) in items.iter().enumerate() {
+        match item {
+            Yaml::Array(_) => out.extend(numbers_of(item).map_err(|m| format!("[{i}]: {m}"))?),
+            _ => {
+                let x = item
+                    .as_f64()
+                    .or_else(|| item.as_i64().map(|n| n as f64))
+                    .ok_or_else(|| format!("[{i}]: expected a number, got {item:?}"))?;
+                if !x.is_finite() {
+                    return Err(format!("[{i}]: expected a finite number, got {x}"));
+                }
+                out.push(x);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// k1 k2 p1 p2 k3 from OpenCV's 4, 5, 8, 12 or 14 coefficients (those past the fifth must be 0:
+/// the rational and thin-prism terms are not modelled).
+fn distortion(d: &[f64]) -> std::result::Result<[f64; 5], String> {
+    match d.len() {
+        0 | 4 | 5 | 8 | 12 | 14 => {}
+        n => {
+            return Err(format!(
+                "{n} coefficients, expected 4, 5, 8, 12 or 14 (k1 k2 p1 p2 [k3 …])"
+            ));
+        }
+    }
+    if d.iter().skip(5).any(|x| *x != 0.0) {
+        return Err(
+            "coefficients past k3 are not zero: the rational and thin-prism terms are not supported"
+                .into(),
+        );
+    }
+    let mut out = [0.0; 5];
+    for (o, x) in out.iter_mut().zip(d) {
+        *o = *x;
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const OPENCV: &str = "%YAML:1.0\n---\ncalibration_time: \"x\"\nimage_width: 1280\nimage_height: 720\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 9.0500000000000000e+02, 0., 6.412e+02, 0.,\n       9.0350000000000000e+02, 3.587e+02, 0., 0., 1. ]\ndistortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ -2.1e-01, 9.0e-02, 7.0e-04, -4.0e-04, -1.5e-02 ]\n";
+
+    #[test]
+    fn reads_opencv_filestorage() {
+        let k = parse_intrinsics(OPENCV, "c.yml").unwrap();
+        assert_eq!((k.fx, k.fy, k.cx, k.cy), (905.0, 903.5, 641.2, 358.7));
+        assert_eq!(k.distortion, [-0.21, 0.09, 0.0007, -0.0004, -0.015]);
+        assert_eq!((k.width, k.height), (1280, 720));
+    }
+
+    #[test]
+    fn reads_ros_camera_info() {
+        let ros2 = "header:\n  frame_id: cam\nheight: 480\nwidth: 640\ndistortion_model: plumb_bob\nd: [0.1, -0.2, 0.0, 0.0, 0.0]\nk: [500.0, 0.0, 320.0, 0.0, 501.0, 240.0, 0.0, 0.0, 1.0]\n";
+        let k = parse_intrinsics(ros2, "info.yaml").unwrap();
+        assert_eq!(
+            (k.fx, k.fy, k.cx, k.cy, k.width),
+            (500.0, 501.0, 320.0, 240.0, 640)
+        );
+        let ros1 = "height: 480\nwidth: 640\nD: [0.1, -0.2, 0.0, 0.0]\nK: [500, 0, 320, 0, 501, 240, 0, 0, 1]\n";
+        assert_eq!(
+            parse_intrinsics(ros1, "info.yaml").unwrap().distortion[1],
+            -0.2
+        );
+    }
+
+    #[test]
+    fn bad_files_name_the_field() {
+        let field = |text: &str| match parse_intrinsics(text, "c.yml") {
+            Err(Error::Parse { field, .. }) => field,
+            other => panic!("{other:?}"),
+        };
+        let no_distortion = OPENCV.split("distortion_coefficients").next().unwrap();
+        assert_eq!(field(no_distortion), "distortion_coefficients");
+        assert_eq!(field("image_width: 3\n"), "camera_matrix");
+        assert_eq!(
+            field(&OPENCV.replace("rows: 3\n   cols: 3", "rows: 3\n   cols: 4")),
+            "camera_matrix"
+        );
+        assert_eq!(
+            field(&OPENCV.replace("9.0500000000000000e+02", "-1.")),
+            "camera_matrix.fx"
+        );
+        assert_eq!(
+            field(&OPENCV.replace("-2.1e-01", ".nan")),
+            "distortion_coefficients"
+        );
+        assert_eq!(field("k: [1, 2\n"), "-");
+        assert_eq!(
+            field(&format!("{OPENCV}distortion_model: equidistant\n")),
+            "distortion_model"
+        );
+    }
+}

@@ -1,0 +1,354 @@
+//! Hand–eye calibration on the pixels (`solve::reprojection`) on simulated recordings: a 9×6 board
+//! and a single 6 cm tag, both setups, distortion, pixel noise 0.5–1 px, robot noise 0.2 mm /
+//! 0.2 mrad, PnP flips, mis-detected corners (issue 35).
+
+use handeye::model::camera::{Frame, Intrinsics};
+use handeye::sim::pixels::{PixelSim, PixelSimConfig, simulate_pixels};
+use handeye::solve::reprojection::{PixelOptions, PixelSolution, planar_poses, reprojection};
+use handeye::{AllPairs, PosePair, Setup, Transform};
+use nalgebra::{Vector2, Vector3};
+
+/// Rotation (degrees) and translation (metres) of X̂ from the truth.
+struct Gap {
+    rot_deg: f64,
+    trans: f64,
+}
+
+impl std::fmt::Debug for Gap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.4}° {:.3} mm", self.rot_deg, self.trans * 1e3)
+    }
+}
+
+fn errors_against_truth(x: &Transform, truth: &Transform) -> Gap {
+    Gap {
+        rot_deg: handeye::model::pose::log_so3(
+            &(x.rotation.inverse() * truth.rotation).into_inner(),
+        )
+        .norm()
+        .to_degrees(),
+        trans: (x.translation.vector - truth.translation.vector).norm(),
+    }
+}
+
+const SETUPS: [Setup; 2] = [Setup::EyeInHand, Setup::EyeToHand];
+
+fn solve(sim: &PixelSim) -> PixelSolution {
+    reprojection(
+        &sim.frames,
+        &sim.intrinsics,
+        sim.setup,
+        &PixelOptions::default(),
+    )
+    .expect("the recording is solvable")
+}
+
+/// The camera pose of each frame with the smaller pixel residual of the two planar poses: what a
+/// per-frame PnP gives (flips included).
+fn pnp_poses(frames: &[Frame], camera: &Intrinsics) -> Vec<Transform> {
+    frames
+        .iter()
+        .map(|f| {
+            let points: Vec<Vector3<f64>> = f
+                .detections
+                .target
+                .iter()
+                .map(|p| Vector3::from(*p))
+                .collect();
+            let pixels: Vec<Vector2<f64>> = f
+                .detections
+                .pixels
+                .iter()
+                .map(|p| Vector2::from(*p))
+                .collect();
+            let poses = planar_poses(&points, &pixels, camera).unwrap();
+            poses
+                .into_iter()
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap()
+                .0
+        })
+        .collect()
+}
+
+/// The true camera pose of a frame: X⁻¹ M Y with the noise-free robot.
+fn true_pose(sim: &PixelSim, q: &Transform) -> Transform {
+    let m = match sim.setup {
+        Setup::EyeInHand => q.inverse(),
+        Setup::EyeToHand => *q,
+    };
+    sim.x.inverse() * m * sim.y
+}
+
+#[test]
+fn noise_free_recordings_are_solved_exactly() {
+    for setup in SETUPS {
+        for config in [PixelSimConfig::board(), PixelSimConfig::tag()] {
+            for seed in 0..3 {
+                let sim = simulate_pixels(&config.noise_free().with_setup(setup), seed);
+                let s = solve(&sim);
+                let e = errors_against_truth(&s.calibration.x, &sim.x);
+                assert!(
+                    e.rot_deg < 1e-7 && e.trans < 1e-9,
+                    "{setup:?} {:?} seed {seed}: {e:?}",
+                    config.target
+                );
+                assert!(s.rms_px < 1e-7, "{}", s.rms_px);
+                assert!(s.outliers.is_empty());
+            }
+        }
+    }
+}
+
+#[test]
+fn a_single_tag_gives_millimetres_in_both_setups() {
+    let mut flipped_frames = 0;
+    for setup in SETUPS {
+        for seed in 0..8 {
+            let sim = simulate_pixels(&PixelSimConfig::tag().with_setup(setup), seed);
+            // PnP's smaller-residual pose is flipped in some frames (the planar ambiguity).
+            let pnp = pnp_poses(&sim.frames, &sim.intrinsics);
+            let clean =
+                simulate_pixels(&PixelSimConfig::tag().noise_free().with_setup(setup), seed);
+            flipped_frames += pnp
+                .iter()
+                .zip(&clean.frames)
+                .filter(|(p, f)| {
+                    let t = true_pose(&clean, &f.base_from_gripper);
+                    errors_against_truth(p, &t).rot_deg > 10.0
+                })
+                .count();
+            let s = solve(&sim);
+            let e = errors_against_truth(&s.calibration.x, &sim.x);
+            assert!(
+                e.rot_deg < 0.5 && e.trans < 0.005,
+                "{setup:?} seed {seed}: {e:?} (flips resolved {})",
+                s.flips_resolved
+            );
+        }
+    }
+    assert!(flipped_frames > 0, "the recordings have PnP flips");
+}
+
+/// The pose-based refine over every pair of frames on the PnP poses of the same frames.
+fn pose_based(sim: &PixelSim) -> Transform {
+    let pnp = pnp_poses(&sim.frames, &sim.intrinsics);
+    let poses: Vec<PosePair> = sim
+        .frames
+        .iter()
+        .zip(pnp)
+        .map(|(f, c)| PosePair {
+            base_from_gripper: f.base_from_gripper,
+            camera_from_target: c,
+        })
+        .collect();
+    handeye::solve(handeye::Method::Refine, &AllPairs::new(&poses, sim.setup))
+        .unwrap()
+        .x
+}
+
+#[test]
+fn boards_are_no_worse_than_the_pose_based_refine() {
+    let (mut pixels, mut poses) = (Vec::new(), Vec::new());
+    for setup in SETUPS {
+        for seed in 0..6 {
+            let sim = simulate_pixels(&PixelSimConfig::board().with_setup(setup), seed);
+            let s = solve(&sim);
+            let e = errors_against_truth(&s.calibration.x, &sim.x);
+            let r = errors_against_truth(&pose_based(&sim), &sim.x);
+            pixels.push((e.rot_deg, e.trans));
+            poses.push((r.rot_deg, r.trans));
+            // Each recording: within the pose-based error or a tenth of a degree / a millimetre.
+            assert!(
+                e.rot_deg <= r.rot_deg.max(0.1) && e.trans <= r.trans.max(0.001),
+                "{setup:?} seed {seed}: pixels {e:?}, poses {r:?}"
+            );
+        }
+    }
+    let mean = |v: &[(f64, f64)], k: usize| {
+        v.iter()
+            .map(|e| if k == 0 { e.0 } else { e.1 })
+            .sum::<f64>()
+            / v.len() as f64
+    };
+    assert!(
+        mean(&pixels, 0) <= mean(&poses, 0),
+        "{pixels:?} vs {poses:?}"
+    );
+    assert!(
+        mean(&pixels, 1) <= mean(&poses, 1),
+        "{pixels:?} vs {poses:?}"
+    );
+}
+
+#[test]
+fn mis_detected_corners_are_left_out() {
+    for setup in SETUPS {
+        for (config, outliers) in [(PixelSimConfig::board(), 40), (PixelSimConfig::tag(), 6)] {
+            for seed in 0..3 {
+                let config = PixelSimConfig {
+                    outliers,
+                    ..config.with_setup(setup)
+                };
+                let sim = simulate_pixels(&config, seed);
+                let s = solve(&sim);
+                let e = errors_against_truth(&s.calibration.x, &sim.x);
+                assert!(
+                    e.rot_deg < 0.5 && e.trans < 0.005,
+                    "{setup:?} {:?} seed {seed}: {e:?}",
+                    config.target
+                );
+                let mut found = s.outliers.clone();
+                found.sort();
+                let mut truth = sim.outliers.clone();
+                truth.sort();
+                assert_eq!(found, truth, "{setup:?} {:?} seed {seed}", config.target);
+            }
+        }
+    }
+}
+
+#[test]
+fn the_sigma_is_honest_over_many_recordings() {
+    let mut within = 0;
+    let mut total = 0;
+    let mut ratios = Vec::new();
+    for setup in SETUPS {
+        for config in [PixelSimConfig::board(), PixelSimConfig::tag()] {
+            for seed in 100..115 {
+                let sim = simulate_pixels(&config.with_setup(setup), seed);
+                let s = solve(&sim);
+                let c = s.covariance.expect("a covariance");
+                let e = errors_against_truth(&s.calibration.x, &sim.x);
+                let rot_sigma = c.fixed_view::<3, 3>(0, 0).trace().sqrt().to_degrees();
+                let trans_sigma = c.fixed_view::<3, 3>(3, 3).trace().sqrt();
+                for r in [e.rot_deg / rot_sigma, e.trans / trans_sigma] {
+                    ratios.push(r);
+                    total += 1;
+                    if r <= 3.0 {
+                        within += 1;
+                    }
+                }
+            }
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    assert!(
+        within * 10 >= total * 9,
+        "{within} of {total} within 3 sigma: {ratios:?}"
+    );
+    assert!(
+        (0.3..2.0).contains(&median),
+        "median error/sigma {median}: {ratios:?}"
+    );
+}
+
+// The job (`calibrate --method reprojection`): bad input is refused or answered right.
+
+fn job(sim: &PixelSim, frames: &[Frame]) -> handeye::Result<handeye::Report> {
+    handeye::calibrate_on_pixels(
+        frames,
+        &sim.intrinsics,
+        sim.setup,
+        &handeye::Options::default(),
+    )
+}
+
+#[test]
+fn the_job_reports_the_fit_and_an_honest_at_point() {
+    for setup in SETUPS {
+        let sim = simulate_pixels(&PixelSimConfig::tag().with_setup(setup), 21);
+        let r = job(&sim, &sim.frames).unwrap();
+        assert_eq!(r.method, handeye::Method::Reprojection);
+        let p = r.reprojection.as_ref().unwrap();
+        assert_eq!(p.per_frame.len(), 30);
+        assert!(p.rms_px > 0.3 && p.rms_px < 2.0, "{}", p.rms_px);
+        assert!(r.uncertainty.at_point.as_ref().unwrap().sigma > 0.0);
+        let e = errors_against_truth(&r.transform, &sim.x);
+        assert!(e.rot_deg < 0.5 && e.trans < 0.005, "{e:?}");
+        let json = serde_json::to_value(&r).unwrap();
+        assert_eq!(json["method"], "reprojection");
+        assert!(json["reprojection"]["rms_px"].is_f64());
+        assert!(json["verdict"].is_string());
+    }
+}
+
+/// Robot poses written inverted: the pixels (not the flip-ambiguous PnP poses) say so.
+#[test]
+fn inverted_robot_poses_are_refused_on_the_pixels() {
+    for setup in SETUPS {
+        for config in [PixelSimConfig::tag(), PixelSimConfig::board()] {
+            let sim = simulate_pixels(&config.with_setup(setup), 5);
+            let inverted: Vec<Frame> = sim
+                .frames
+                .iter()
+                .map(|f| Frame {
+                    base_from_gripper: f.base_from_gripper.inverse(),
+                    ..f.clone()
+                })
+                .collect();
+            match job(&sim, &inverted) {
+                Err(handeye::Error::Misread { readings, .. }) => {
+                    assert_eq!(readings, vec![handeye::Reading::RobotInverted]);
+                }
+                other => panic!("{setup:?}: {:?}", other.map(|r| r.transform)),
+            }
+            // As given, the same frames are not called inverted.
+            assert!(job(&sim, &sim.frames).is_ok(), "{setup:?}");
+        }
+    }
+}
+
+/// Target points in millimetres with the robot in metres: refused, naming the unit.
+#[test]
+fn a_target_in_another_unit_is_refused_with_the_unit_named() {
+    let sim = simulate_pixels(&PixelSimConfig::board(), 8);
+    let mm: Vec<Frame> = sim
+        .frames
+        .iter()
+        .map(|f| {
+            let mut f = f.clone();
+            for p in &mut f.detections.target {
+                for v in p.iter_mut() {
+                    *v *= 1000.0;
+                }
+            }
+            f
+        })
+        .collect();
+    match job(&sim, &mm) {
+        Err(e @ handeye::Error::PixelsUnfit { .. }) => {
+            assert!(e.to_string().contains("1000 times smaller"), "{e}");
+        }
+        other => panic!("{:?}", other.map(|r| r.transform)),
+    }
+}
+
+/// Every frame from one view (the robot never moves): refused, not answered.
+#[test]
+fn one_view_is_refused() {
+    let sim = simulate_pixels(&PixelSimConfig::board(), 9);
+    let same: Vec<Frame> = (0..30).map(|_| sim.frames[0].clone()).collect();
+    let e = job(&sim, &same).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            handeye::Error::Degenerate { .. } | handeye::Error::TooFewMotions { .. }
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn bad_detections_are_refused_with_the_frame() {
+    let sim = simulate_pixels(&PixelSimConfig::tag(), 10);
+    let mut frames = sim.frames.clone();
+    frames[3].detections.pixels.pop();
+    let e = job(&sim, &frames).unwrap_err();
+    assert!(e.to_string().contains("frame 3"), "{e}");
+    let mut frames = sim.frames.clone();
+    frames[4].detections.pixels[1][0] = f64::NAN;
+    let e = job(&sim, &frames).unwrap_err();
+    assert!(e.to_string().contains("frame 4"), "{e}");
+}
