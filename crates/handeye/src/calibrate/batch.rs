@@ -383,7 +383,11 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     // warning comes first, and the test runs once they are left out.
     let systematic = (options.reject_outliers || found.poses.is_empty())
         .then(|| systematic_error(&used, setup, &calibration.x, joints.as_deref(), &solve_x))
-        .flatten();
+        .flatten()
+        .map(|mut s| {
+            s.weigh(scene);
+            s
+        });
     let outliers = outlier_report(&found, options);
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));

@@ -277,7 +277,11 @@ pub fn calibrate_robot_world(
     });
     let systematic = (options.reject_outliers || found.poses.is_empty())
         .then(|| systematic_error(&used, setup, &solved.x, joints.as_deref(), &solve_x))
-        .flatten();
+        .flatten()
+        .map(|mut s| {
+            s.weigh(scene);
+            s
+        });
     let mut systematic_found = None;
     if let Some(found) = systematic.as_ref().filter(|s| s.flagged) {
         let regions = bootstrap_by_region(
