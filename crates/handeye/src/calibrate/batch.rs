@@ -274,7 +274,7 @@ pub struct Report {
     /// The held-out check: each camera observation predicted from the other poses
     /// (`crate::holdout`); `None` with fewer than four poses.
     pub held_out: Option<HeldOutSummary>,
-    /// The test for an error that follows the robot's configuration ([`crate::check::systematic`]);
+    /// The test for an error that follows the robot's configuration (`check::systematic`);
     /// absent with fewer than 12 poses.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub systematic: Option<Systematic>,

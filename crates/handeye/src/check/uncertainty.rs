@@ -162,7 +162,7 @@ pub fn point_sigma(c: &Matrix6<f64>, x: &Transform, point: [f64; 3]) -> f64 {
 impl Uncertainty {
     /// This uncertainty widened so that its RMS sizes are at least `rotation_deg` and
     /// `translation` (each block of the covariance, and each replicate's part, scaled by the
-    /// same factor; never narrowed); `scene` as in [`bootstrap`] for the verdicts.
+    /// same factor; never narrowed); `scene` as in `bootstrap` for the verdicts.
     pub fn at_least(&self, rotation_deg: f64, translation: f64, scene: f64) -> Self {
         let factor = |floor: f64, now: f64| {
             if now > 0.0 && floor > now {

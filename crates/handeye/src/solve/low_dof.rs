@@ -50,18 +50,18 @@ pub struct CommonAxis {
     pub eye: Vector3<f64>,
     /// The largest angle between a rotating motion's axis and k_A, radians.
     pub spread: f64,
-    /// Motions that rotate at least [`LOW_DOF_MIN_ANGLE_DEG`].
+    /// Motions that rotate at least `LOW_DOF_MIN_ANGLE_DEG`.
     pub rotating: usize,
 }
 
 impl CommonAxis {
-    /// Whether every rotating motion rotates about this one axis (within [`LOW_DOF_SPREAD_DEG`]).
+    /// Whether every rotating motion rotates about this one axis (within `LOW_DOF_SPREAD_DEG`).
     pub fn is_low_dof(&self) -> bool {
         self.rotating >= 2 && self.spread.to_degrees() <= LOW_DOF_SPREAD_DEG
     }
 
     /// The coordinate component of X's translation along the free direction, when the free
-    /// direction is within [`PRIOR_AXIS_DEG`] of a coordinate axis of X's parent frame.
+    /// direction is within `PRIOR_AXIS_DEG` of a coordinate axis of X's parent frame.
     pub fn free_component(&self) -> Option<Component> {
         let i = self.hand.iamax();
         (self.hand[i].abs() >= PRIOR_AXIS_DEG.to_radians().cos())
@@ -72,7 +72,7 @@ impl CommonAxis {
 
 /// The dominant rotation axis of the motions' A (and the matching one of their B), with the
 /// spread of the A axes about it; `None` with fewer than two motions rotating at least
-/// [`LOW_DOF_MIN_ANGLE_DEG`].
+/// `LOW_DOF_MIN_ANGLE_DEG`.
 pub fn common_axis(motions: &(impl MotionSource + ?Sized)) -> Option<CommonAxis> {
     let min = LOW_DOF_MIN_ANGLE_DEG.to_radians();
     let mut scatter = nalgebra::Matrix3::zeros();

@@ -45,7 +45,7 @@ pub struct PixelOptions {
     /// Scale of the Cauchy loss of the first pass, pixels: a detection this far off weighs half.
     /// Default 4.
     pub cauchy_px: f64,
-    /// Levenberg–Marquardt settings of both passes. Default: [`RefineOptions::default`] but a
+    /// Levenberg–Marquardt settings of both passes. Default: `RefineOptions::default` but a
     /// relative cost tolerance of 1e-12 (a pixel cost's last digits move X by far less than its
     /// noise).
     pub lm: RefineOptions,
@@ -111,8 +111,8 @@ pub struct PixelSolution {
 /// X and Y from the pixels (see the module docs).
 ///
 /// Errors: [`Error::InvalidParameter`] for a frame whose detections cannot be used (fewer than
-/// [`MIN_DETECTIONS`] points, counts that differ, a non-planar target without `camera_from_target`),
-/// the errors of [`crate::solve::andreff`] on the start (degenerate motions).
+/// `MIN_DETECTIONS` points, counts that differ, a non-planar target without `camera_from_target`),
+/// the errors of Andreff's solve on the start (degenerate motions).
 ///
 /// # Example
 /// ```
