@@ -377,17 +377,13 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     let kept: Vec<usize> = (0..read_len)
         .filter(|i| !(options.reject_outliers && found.poses.iter().any(|g| g.pose == *i)))
         .collect();
-    let joints: Option<Vec<Vec<f64>>> = (options.joints.len() == read_len)
-        .then(|| kept.iter().map(|&i| options.joints[i].clone()).collect());
-    // Outliers kept pull X, and a wrong X leaves residuals that follow the pose: their own
-    // warning comes first, and the test runs once they are left out.
-    let systematic = (options.reject_outliers || found.poses.is_empty())
-        .then(|| systematic_error(&used, setup, &calibration.x, joints.as_deref(), &solve_x))
-        .flatten()
-        .map(|mut s| {
-            s.weigh(scene);
-            s
-        });
+    let systematic = systematic_test(
+        (&used, setup, &calibration.x),
+        (&options.joints, &kept, read_len),
+        !options.reject_outliers && !found.poses.is_empty(),
+        &solve_x,
+        scene,
+    );
     let outliers = outlier_report(&found, options);
     let kept_outliers = (!outliers.poses.is_empty() && !options.reject_outliers)
         .then(|| outlier_warning(&outliers));
@@ -402,22 +398,14 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
             .map_err(|e| method_at_fault(e, &used, setup, options, scene))
             .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?,
     }
-    let mut uncertainty = match systematic.as_ref().filter(|s| s.flagged) {
-        Some(found) => {
-            let regions = bootstrap_by_region(
-                &used,
-                setup,
-                &calibration.x,
-                &solve_x,
-                (options.replicates, scene),
-                &found.order,
-            );
-            let wide = covering(wider(uncertainty, regions), found, scene);
-            warnings.push(systematic_warning(found, &wide));
-            wide
-        }
-        None => uncertainty,
-    };
+    let (mut uncertainty, caution) = widened_for_systematic(
+        uncertainty,
+        systematic.as_ref(),
+        (&used, setup, &calibration.x),
+        &solve_x,
+        (options.replicates, scene),
+    );
+    warnings.extend(caution);
     uncertainty.at_point = Some(uncertainty.place(
         &calibration.x,
         options.point.unwrap_or_else(|| median_target(&used)),
@@ -495,6 +483,49 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         low_dof: plan.map(|p| p.report(calibration.conditioning)),
         reprojection: None,
     })
+}
+
+/// The systematic-error test (`check::systematic`) of the poses `used` (`solved`: the poses,
+/// their setup and X), with the joint angles of the poses kept (`joints` by input index, `kept`,
+/// of `read_len` poses read) where the input gives every pose's. It waits while outliers are
+/// kept: they pull X, and a wrong X leaves residuals that follow the pose, so their own warning
+/// comes first and the test runs once they are left out.
+pub(crate) fn systematic_test(
+    (used, setup, x): (&[PosePair], Setup, &Transform),
+    (joints, kept, read_len): (&[Vec<f64>], &[usize], usize),
+    outliers_kept: bool,
+    solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
+    scene: f64,
+) -> Option<Systematic> {
+    if outliers_kept {
+        return None;
+    }
+    let joints: Option<Vec<Vec<f64>>> =
+        (joints.len() == read_len).then(|| kept.iter().map(|&i| joints[i].clone()).collect());
+    let mut found = systematic_error(used, setup, x, joints.as_deref(), solve_x)?;
+    found.weigh(scene);
+    Some(found)
+}
+
+/// X's uncertainty where the test `found` flags an error that follows the configuration:
+/// resampled by workspace region, at least the halves' disagreement, `at_point` placed again
+/// at its point; with the caution that says so. Unflagged, the uncertainty as it was.
+pub(crate) fn widened_for_systematic(
+    uncertainty: Uncertainty,
+    found: Option<&Systematic>,
+    (used, setup, x): (&[PosePair], Setup, &Transform),
+    solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
+    (replicates, scene): (usize, f64),
+) -> (Uncertainty, Option<Warning>) {
+    let Some(found) = found.filter(|s| s.flagged) else {
+        return (uncertainty, None);
+    };
+    let regions = bootstrap_by_region(used, setup, x, solve_x, (replicates, scene), &found.order);
+    let at_point = uncertainty.at_point.clone();
+    let mut wide = covering(wider(uncertainty, regions), found, scene);
+    wide.at_point = at_point.map(|p| wide.place(x, p.point));
+    let caution = systematic_warning(found, &wide);
+    (wide, Some(caution))
 }
 
 /// The warning of an error that follows the configuration, with its effect on X.

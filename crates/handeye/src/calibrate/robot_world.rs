@@ -26,11 +26,11 @@ use nalgebra::{Matrix3, Matrix6};
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::batch::{
-    Fix, Options, Outliers, ReadingReport, Units, covering, explained, outlier_report,
-    outlier_warning, read_poses, systematic_warning, warn_weak, wider, without, working_distance,
+    Fix, Options, Outliers, ReadingReport, Units, explained, outlier_report,
+    outlier_warning, read_poses, systematic_test, warn_weak, widened_for_systematic, without,
+    working_distance,
 };
-use crate::check::systematic::{Systematic, systematic_error};
-use crate::check::uncertainty::bootstrap_by_region;
+use crate::check::systematic::Systematic;
 use crate::check::outliers::translation_scale;
 use crate::check::quality::OUTLIER_DEG;
 use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, median_target, summarise};
@@ -269,34 +269,23 @@ pub fn calibrate_robot_world(
     let y_unc = summarise(left_block(&cov, 6, &solved.target), 0, 0, scene);
     // As in the hand–eye calibration: the test waits for kept outliers, and a flagged result's
     // uncertainty is resampled by workspace region and covers the halves' disagreement.
-    let joints: Option<Vec<Vec<f64>>> = (options.joints.len() == poses.len()).then(|| {
-        (0..poses.len())
-            .filter(|i| !(options.reject_outliers && found.poses.iter().any(|g| g.pose == *i)))
-            .map(|i| options.joints[i].clone())
-            .collect()
-    });
-    let systematic = (options.reject_outliers || found.poses.is_empty())
-        .then(|| systematic_error(&used, setup, &solved.x, joints.as_deref(), &solve_x))
-        .flatten()
-        .map(|mut s| {
-            s.weigh(scene);
-            s
-        });
-    let mut systematic_found = None;
-    if let Some(found) = systematic.as_ref().filter(|s| s.flagged) {
-        let regions = bootstrap_by_region(
-            &used,
-            setup,
-            &solved.x,
-            &solve_x,
-            (options.replicates, scene),
-            &found.order,
-        );
-        let at_point = x_unc.at_point.clone();
-        x_unc = covering(wider(x_unc, regions), found, scene);
-        x_unc.at_point = at_point.map(|p| x_unc.place(&solved.x, p.point));
-        systematic_found = Some(systematic_warning(found, &x_unc));
-    }
+    let kept: Vec<usize> = (0..poses.len())
+        .filter(|i| !(options.reject_outliers && found.poses.iter().any(|g| g.pose == *i)))
+        .collect();
+    let systematic = systematic_test(
+        (&used, setup, &solved.x),
+        (&options.joints, &kept, poses.len()),
+        !options.reject_outliers && !found.poses.is_empty(),
+        &solve_x,
+        scene,
+    );
+    let (x_unc, systematic_found) = widened_for_systematic(
+        x_unc,
+        systematic.as_ref(),
+        (&used, setup, &solved.x),
+        &solve_x,
+        (options.replicates, scene),
+    );
     // Refused when undetermined, the widened uncertainty included: a systematic error the poses
     // cannot separate from X leaves X undetermined too.
     for u in [&x_unc, &y_unc] {

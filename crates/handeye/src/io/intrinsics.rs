@@ -4,15 +4,14 @@
 //! same names as ROS's `camera_calibration_parsers` writes them, or a ROS `camera_info` message
 //! (`k`/`K`, `d`/`D`, `width`, `height`, `distortion_model`).
 //!
-//! Parsed with `yaml-rust2` (already the workspace's YAML parser: a maintained pure-Rust YAML 1.2
-//! parser, no unsafe code). OpenCV's `%YAML:1.0` is not a valid YAML directive (YAML writes
+//! Parsed by the readers' YAML tree (`yaml-rust2`'s event parser, every value with its line), so
+//! errors name the line. OpenCV's `%YAML:1.0` is not a valid YAML directive (YAML writes
 //! `%YAML 1.0`): that one line is blanked before parsing, so line numbers stay the file's.
 
 use std::path::Path;
 
-use yaml_rust2::{Yaml, YamlLoader};
-
 use crate::io::parse_error;
+use crate::io::yaml_tree::YamlTree;
 use crate::model::camera::Intrinsics;
 use crate::model::error::{Error, Result};
 
@@ -41,31 +40,17 @@ pub fn read_intrinsics(path: &Path) -> Result<Intrinsics> {
 /// # Ok::<(), handeye::Error>(())
 /// ```
 pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
-    let cleaned = opencv_header_blanked(text);
-    let docs = YamlLoader::load_from_str(&cleaned).map_err(|e| {
-        parse_error(
-            file,
-            e.marker().line(),
-            "-",
-            format!("not YAML: {}", e.info()),
-        )
-    })?;
-    let Some(doc) = docs.iter().find(|d| matches!(d, Yaml::Hash(_))) else {
-        return Err(parse_error(
-            file,
-            0,
-            "-",
-            "expected a YAML mapping of intrinsics",
-        ));
+    let tree = YamlTree::parse(&opencv_header_blanked(text), file)?;
+    let err = |field: &str, message: String| {
+        parse_error(file, tree.line(field).unwrap_or(0), field, message)
     };
-    let err = |field: &str, message: String| parse_error(file, 0, field, message);
-    let (k_name, k) = first_of(doc, &["camera_matrix", "k", "K"]).ok_or_else(|| {
+    let k_name = first_of(&tree, &["camera_matrix", "k", "K"]).ok_or_else(|| {
         err(
             "camera_matrix",
             "missing: give `camera_matrix` (OpenCV) or `k` (ROS camera_info)".into(),
         )
     })?;
-    let k = numbers(k).map_err(|m| err(k_name, m))?;
+    let k = numbers(&tree, k_name, file)?;
     if k.len() != 9 {
         return Err(err(
             k_name,
@@ -80,14 +65,14 @@ pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
             ),
         ));
     }
-    let (d_name, d) = first_of(doc, &["distortion_coefficients", "d", "D"]).ok_or_else(|| {
+    let d_name = first_of(&tree, &["distortion_coefficients", "d", "D"]).ok_or_else(|| {
         err(
             "distortion_coefficients",
             "missing: give `distortion_coefficients` (OpenCV) or `d` (ROS camera_info); `data: [0, 0, 0, 0, 0]` for none".into(),
         )
     })?;
-    let d = numbers(d).map_err(|m| err(d_name, m))?;
-    if let Some(model) = doc["distortion_model"].as_str()
+    let d = numbers(&tree, d_name, file)?;
+    if let Some((model, _)) = tree.text("distortion_model")
         && !matches!(model, "plumb_bob" | "rational_polynomial" | "radtan" | "")
     {
         return Err(err(
@@ -97,12 +82,14 @@ pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
     }
     let distortion = distortion(&d).map_err(|m| err(d_name, m))?;
     let size = |names: &[&'static str]| -> Result<u32> {
-        match first_of(doc, names) {
+        match first_of(&tree, names) {
             None => Ok(0),
-            Some((name, v)) => v
-                .as_i64()
-                .and_then(|n| u32::try_from(n).ok())
-                .ok_or_else(|| err(name, format!("expected a size in pixels, got {v:?}"))),
+            Some(name) => {
+                let text = tree.text(name).map_or("", |(t, _)| t);
+                text.trim()
+                    .parse::<u32>()
+                    .map_err(|_| err(name, format!("expected a size in pixels, got `{text}`")))
+            }
         }
     };
     let intrinsics = Intrinsics {
@@ -129,53 +116,61 @@ fn opencv_header_blanked(text: &str) -> String {
     }
 }
 
-/// The first of `names` present in the mapping, with its value.
-fn first_of<'a>(doc: &'a Yaml, names: &[&'static str]) -> Option<(&'static str, &'a Yaml)> {
-    names
-        .iter()
-        .find(|n| !doc[**n].is_badvalue())
-        .map(|n| (*n, &doc[*n]))
+/// The first of `names` the file gives.
+fn first_of(tree: &YamlTree, names: &[&'static str]) -> Option<&'static str> {
+    names.iter().copied().find(|n| tree.line(n).is_some())
 }
 
-/// The numbers of a matrix: an `!!opencv-matrix` (or ROS's) mapping with `data` (and `rows`,
-/// `cols` that must agree), or a flat or nested sequence.
-fn numbers(v: &Yaml) -> std::result::Result<Vec<f64>, String> {
-    match v {
-        Yaml::Hash(_) => {
-            let data = numbers_of(&v["data"]).map_err(|m| format!("`data`: {m}"))?;
-            if let (Some(rows), Some(cols)) = (v["rows"].as_i64(), v["cols"].as_i64())
-                && rows.checked_mul(cols) != Some(data.len() as i64)
-            {
-                return Err(format!(
-                    "rows {rows} × cols {cols} but {} numbers in `data`",
-                    data.len()
-                ));
-            }
-            Ok(data)
-        }
-        _ => numbers_of(v),
-    }
-}
-
-fn numbers_of(v: &Yaml) -> std::result::Result<Vec<f64>, String> {
-    let Yaml::Array(items) = v else {
-        return Err(format!("expected a list of numbers, got {v:?}"));
+/// The numbers of the matrix `name`: an `!!opencv-matrix` (or ROS's) mapping with `data` (and
+/// `rows`, `cols` that must agree), or a list of numbers (or of rows of numbers). Errors are the
+/// matrix's, at the line of the offending entry.
+fn numbers(tree: &YamlTree, name: &str, file: &str) -> Result<Vec<f64>> {
+    let data = format!("{name}.data");
+    let list = if tree.line(&data).is_some() {
+        data
+    } else {
+        name.to_string()
     };
-    let mut out = Vec::new();
-    for (i, item) in items.iter().enumerate() {
-        match item {
-            Yaml::Array(_) => out.extend(numbers_of(item).map_err(|m| format!("[{i}]: {m}"))?),
-            _ => {
-                let x = item
-                    .as_f64()
-                    .or_else(|| item.as_i64().map(|n| n as f64))
-                    .ok_or_else(|| format!("[{i}]: expected a number, got {item:?}"))?;
-                if !x.is_finite() {
-                    return Err(format!("[{i}]: expected a finite number, got {x}"));
-                }
-                out.push(x);
-            }
+    let at = |path: &str, message: String| {
+        parse_error(
+            file,
+            tree.line(path).or(tree.line(name)).unwrap_or(0),
+            name,
+            message,
+        )
+    };
+    let count = tree
+        .sequence(&list, "a list of numbers")
+        .map_err(|_| at(&list, format!("`{list}`: expected a list of numbers")))?;
+    let mut out = Vec::with_capacity(count);
+    for i in 0..count {
+        let item = format!("{list}[{i}]");
+        let rows = tree.sequence(&item, "").ok();
+        let paths: Vec<String> = match rows {
+            Some(n) => (0..n).map(|j| format!("{item}[{j}]")).collect(),
+            None => vec![item],
+        };
+        for path in paths {
+            let x = tree
+                .number(&path, "a number")
+                .map_err(|_| at(&path, format!("`{path}`: expected a finite number")))?;
+            out.push(x);
         }
+    }
+    let size = |field: &str| {
+        tree.text(&format!("{name}.{field}"))
+            .and_then(|(t, _)| t.trim().parse::<usize>().ok())
+    };
+    if let (Some(rows), Some(cols)) = (size("rows"), size("cols"))
+        && rows.checked_mul(cols) != Some(out.len())
+    {
+        return Err(at(
+            name,
+            format!(
+                "rows {rows} × cols {cols} but {} numbers in `data`",
+                out.len()
+            ),
+        ));
     }
     Ok(out)
 }
@@ -255,6 +250,13 @@ mod tests {
             "distortion_coefficients"
         );
         assert_eq!(field("k: [1, 2\n"), "-");
+        // Every error has its line: the entry, the matrix, or the missing field's place.
+        let line = |text: &str| match parse_intrinsics(text, "c.yml") {
+            Err(Error::Parse { line, .. }) => line,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(line(&OPENCV.replace("-2.1e-01", ".nan")), 16);
+        assert_eq!(line(&OPENCV.replace("6.412e+02, 0.,\n", "6.412e+02, 0.,\n       9.0, ")), 6);
         assert_eq!(
             field(&format!("{OPENCV}distortion_model: equidistant\n")),
             "distortion_model"

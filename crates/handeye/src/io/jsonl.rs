@@ -139,13 +139,9 @@ pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedP
     }
 }
 
-/// [`parse_pose_line`], counting the rotation matrices projected onto SO(3) into `projections`.
-fn parse_record(
-    text: &str,
-    source: &str,
-    line: usize,
-    projections: &mut Projections,
-) -> Result<StampedPosePair> {
+/// One JSON Lines record as an object: malformed JSON, another value, or a key given twice is
+/// refused with the line (and the repeated key's path).
+fn json_object(text: &str, source: &str, line: usize) -> Result<Map<String, Value>> {
     let value: Value = serde_json::from_str(text)
         .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
     let Value::Object(object) = value else {
@@ -164,6 +160,17 @@ fn parse_record(
             repeated.message(),
         ));
     }
+    Ok(object)
+}
+
+/// [`parse_pose_line`], counting the rotation matrices projected onto SO(3) into `projections`.
+fn parse_record(
+    text: &str,
+    source: &str,
+    line: usize,
+    projections: &mut Projections,
+) -> Result<StampedPosePair> {
+    let object = json_object(text, source, line)?;
     let stamp = match object.get("stamp") {
         None | Some(Value::Null) => None,
         Some(v) => Some(
@@ -278,24 +285,7 @@ fn joint_angles(v: &Value, source: &str, line: usize) -> Result<Vec<f64>> {
 /// line itself (at most [`crate::io::MAX_LINE`] bytes): nothing is allocated by a number the line
 /// gives.
 pub(crate) fn parse_frame_record(text: &str, source: &str, line: usize) -> Result<Frame> {
-    let value: Value = serde_json::from_str(text)
-        .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
-    let Value::Object(object) = value else {
-        return Err(parse_error(
-            source,
-            line,
-            "-",
-            "expected a JSON object per line",
-        ));
-    };
-    if let Some(repeated) = repeated_key(text) {
-        return Err(parse_error(
-            source,
-            line,
-            repeated.path.clone(),
-            repeated.message(),
-        ));
-    }
+    let object = json_object(text, source, line)?;
     let (robot, _) = frame(&object, &ROBOT_FRAMES, source, line)?;
     let camera = if CAMERA_FRAMES.iter().any(|(n, _)| object.contains_key(*n)) {
         Some(frame(&object, &CAMERA_FRAMES, source, line)?.0.transform)

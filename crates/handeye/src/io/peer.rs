@@ -352,24 +352,7 @@ fn yaml_matrix16(tree: &YamlTree, path: &str, file: &str) -> Result<ReadTransfor
 /// The setup the file declares is returned with the series, to be checked against the one asked.
 pub fn read_easy_handeye_samples(text: &str, file: &str) -> Result<PoseSeries> {
     let tree = YamlTree::parse(text, file)?;
-    let setup = match tree.text("parameters.calibration_type") {
-        None => None,
-        Some((kind, line)) => Some(DeclaredSetup {
-            setup: match kind {
-                "eye_in_hand" => Setup::EyeInHand,
-                "eye_on_base" | "eye_to_hand" => Setup::EyeToHand,
-                other => {
-                    return Err(parse_error(
-                        file,
-                        line,
-                        "parameters.calibration_type",
-                        format!("`{other}`: expected eye_in_hand or eye_on_base"),
-                    ));
-                }
-            },
-            line,
-        }),
-    };
+    let setup = declared_setup(&tree, file)?;
     let robot_inverted = setup.is_some_and(|s| s.setup == Setup::EyeToHand);
     let n = tree.sequence(
         "samples",
@@ -409,8 +392,29 @@ pub fn read_easy_handeye_samples(text: &str, file: &str) -> Result<PoseSeries> {
     })
 }
 
+/// The setup easy_handeye2's `parameters.calibration_type` declares (in its sample files and its
+/// calibration files), with its line; `None` where the file does not say.
+pub(crate) fn declared_setup(tree: &YamlTree, file: &str) -> Result<Option<DeclaredSetup>> {
+    let Some((kind, line)) = tree.text("parameters.calibration_type") else {
+        return Ok(None);
+    };
+    let setup = match kind {
+        "eye_in_hand" => Setup::EyeInHand,
+        "eye_on_base" | "eye_to_hand" => Setup::EyeToHand,
+        other => {
+            return Err(parse_error(
+                file,
+                line,
+                "parameters.calibration_type",
+                format!("`{other}`: expected eye_in_hand or eye_on_base"),
+            ));
+        }
+    };
+    Ok(Some(DeclaredSetup { setup, line }))
+}
+
 /// A `geometry_msgs/Transform` in YAML: `translation {x, y, z}` and `rotation {x, y, z, w}`.
-fn yaml_transform(tree: &YamlTree, path: &str, file: &str) -> Result<Transform> {
+pub(crate) fn yaml_transform(tree: &YamlTree, path: &str, file: &str) -> Result<Transform> {
     let t = ["x", "y", "z"].map(|c| format!("{path}.translation.{c}"));
     let q = ["x", "y", "z", "w"].map(|c| format!("{path}.rotation.{c}"));
     let mut translation = [0.0; 3];

@@ -8,10 +8,11 @@ use serde_json::Value;
 
 use crate::calibrate::verify::{SavedUnit, SavedX};
 use crate::io::json_text::{line_of, steps};
+use crate::io::peer::{declared_setup, yaml_transform};
+use crate::io::yaml_tree::YamlTree;
 use crate::io::{parse_error, read_text, transform_from_json};
 use crate::model::error::Result;
 use crate::model::motion::Setup;
-use crate::model::pose::transform_from_xyz_quat_xyzw;
 
 /// Reads a saved X from a file (JSON when its first character is `{`, YAML otherwise); errors name
 /// the file, the line and the field.
@@ -131,116 +132,24 @@ fn covariance(v: &Value) -> std::result::Result<[[f64; 6]; 6], (String, String)>
 /// easy_handeye2's calibration YAML: `transform.translation.{x,y,z}` (metres) and
 /// `transform.rotation.{x,y,z,w}`, in block or flow style; `parameters.calibration_type`; and
 /// handeye's comment `# uncertainty (one sigma): rotation_deg R, translation T m`, whose sizes
-/// become an isotropic covariance (a third of each variance per axis).
+/// become an isotropic covariance (a third of each variance per axis). Read by the sample files'
+/// YAML reader ([`YamlTree`], with their `geometry_msgs/Transform` and setup), so every error
+/// names the line and the field.
 fn parse_yaml(text: &str, file: &str) -> Result<SavedX> {
-    let mut path: Vec<(usize, String)> = Vec::new();
-    let mut numbers: Vec<(String, f64, usize)> = Vec::new();
-    let mut kind: Option<(String, usize)> = None;
     let mut sigma: Option<(f64, f64)> = None;
     let mut unit = SavedUnit::Metre;
-    for (k, raw) in text.lines().enumerate() {
-        let number = k + 1;
-        let trimmed = raw.trim();
-        if let Some(comment) = trimmed.strip_prefix('#') {
-            let comment = comment.trim();
-            if comment.starts_with("frame:") && comment.contains("translation in the input's unit")
-            {
-                unit = SavedUnit::Unknown;
-            }
-            if let Some(rest) = comment.strip_prefix("uncertainty (one sigma):") {
-                sigma = one_sigma(rest);
-            }
-            continue;
+    for comment in text.lines().filter_map(|l| l.trim().strip_prefix('#')) {
+        let comment = comment.trim();
+        if comment.starts_with("frame:") && comment.contains("translation in the input's unit") {
+            unit = SavedUnit::Unknown;
         }
-        if trimmed.is_empty() || trimmed == "---" {
-            continue;
-        }
-        let indent = raw.len() - raw.trim_start().len();
-        let Some((key, value)) = trimmed.split_once(':') else {
-            return Err(parse_error(
-                file,
-                number,
-                "-",
-                "expected `key: value` (easy_handeye2's calibration YAML)",
-            ));
-        };
-        let key = key.trim().trim_matches(['"', '\'']).to_string();
-        let value = value.trim();
-        while path.last().is_some_and(|(i, _)| *i >= indent) {
-            path.pop();
-        }
-        let mut full: Vec<&str> = path.iter().map(|(_, k)| k.as_str()).collect();
-        full.push(&key);
-        let name = full.join(".");
-        if value.is_empty() {
-            path.push((indent, key));
-        } else if let Some(flow) = value.strip_prefix('{').and_then(|v| v.strip_suffix('}')) {
-            for entry in flow.split(',') {
-                let (k, v) = entry.split_once(':').ok_or_else(|| {
-                    parse_error(file, number, name.clone(), "expected `{k: v, ...}`")
-                })?;
-                numbers.push((
-                    format!("{name}.{}", k.trim()),
-                    yaml_number(v, file, number, &name)?,
-                    number,
-                ));
-            }
-        } else if name == "parameters.calibration_type" {
-            kind = Some((value.trim_matches(['"', '\'']).to_string(), number));
-        } else if name.starts_with("transform.") {
-            numbers.push((
-                name.clone(),
-                yaml_number(value, file, number, &name)?,
-                number,
-            ));
+        if let Some(rest) = comment.strip_prefix("uncertainty (one sigma):") {
+            sigma = one_sigma(rest);
         }
     }
-    let get = |field: &str| -> Result<f64> {
-        numbers
-            .iter()
-            .find(|(n, _, _)| n == field)
-            .map(|(_, v, _)| *v)
-            .ok_or_else(|| {
-                parse_error(
-                    file,
-                    0,
-                    field,
-                    "missing (expected easy_handeye2's calibration YAML: transform.translation {x, y, z} and transform.rotation {x, y, z, w})",
-                )
-            })
-    };
-    let t = [
-        get("transform.translation.x")?,
-        get("transform.translation.y")?,
-        get("transform.translation.z")?,
-    ];
-    let q = [
-        get("transform.rotation.x")?,
-        get("transform.rotation.y")?,
-        get("transform.rotation.z")?,
-        get("transform.rotation.w")?,
-    ];
-    let rotation_line = numbers
-        .iter()
-        .find(|(n, _, _)| n == "transform.rotation.w")
-        .map_or(0, |(_, _, l)| *l);
-    let x = transform_from_xyz_quat_xyzw(t, q)
-        .map_err(|p| parse_error(file, rotation_line, "transform.rotation", p.to_string()))?;
-    let setup = match kind {
-        None => None,
-        Some((k, line)) => Some(match k.as_str() {
-            "eye_in_hand" => Setup::EyeInHand,
-            "eye_on_base" | "eye_to_hand" => Setup::EyeToHand,
-            other => {
-                return Err(parse_error(
-                    file,
-                    line,
-                    "parameters.calibration_type",
-                    format!("`{other}`: expected eye_in_hand or eye_on_base"),
-                ));
-            }
-        }),
-    };
+    let tree = YamlTree::parse(text, file)?;
+    let x = yaml_transform(&tree, "transform", file)?;
+    let setup = declared_setup(&tree, file)?.map(|d| d.setup);
     let covariance = sigma.map(|(rotation_deg, translation)| {
         let mut c = [[0.0; 6]; 6];
         for (i, row) in c.iter_mut().enumerate() {
@@ -280,17 +189,36 @@ fn one_sigma(text: &str) -> Option<(f64, f64)> {
     }
 }
 
-fn yaml_number(v: &str, file: &str, line: usize, field: &str) -> Result<f64> {
-    let v = v.trim().trim_matches(['"', '\'']);
-    v.parse::<f64>()
-        .ok()
-        .filter(|x| x.is_finite())
-        .ok_or_else(|| {
-            parse_error(
-                file,
-                line,
-                field,
-                format!("`{v}`: expected a finite number"),
-            )
-        })
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::error::Error;
+
+    #[test]
+    fn easy_handeye_yaml_in_block_or_flow_style_and_its_errors_placed() {
+        let block = "parameters:\n  calibration_type: eye_on_base\ntransform:\n  translation:\n    x: 0.1\n    y: 0\n    z: 0.05\n  rotation:\n    x: 0\n    y: 0\n    z: 0\n    w: 1\n# uncertainty (one sigma): rotation_deg 0.5, translation 0.002 m\n";
+        let flow = "transform:\n  translation: {x: 0.1, y: 0, z: 0.05}\n  rotation: {x: 0, y: 0, z: 0, w: 1}\n";
+        let a = parse_saved_x(block, "a.yaml").unwrap();
+        let b = parse_saved_x(flow, "b.yaml").unwrap();
+        assert_eq!(a.x, b.x);
+        assert_eq!(a.setup, Some(Setup::EyeToHand));
+        assert!((a.covariance.unwrap()[3][3] - 0.002f64.powi(2) / 3.0).abs() < 1e-15);
+        assert!(b.covariance.is_none() && b.setup.is_none());
+        let place = |text: &str| match parse_saved_x(text, "c.yaml") {
+            Err(Error::Parse { line, field, .. }) => (line, field),
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(
+            place(&block.replace("    w: 1\n", "")),
+            (8, "transform.rotation.w".to_string())
+        );
+        assert_eq!(
+            place(&block.replace("y: 0\n    z: 0.05", "y: zero\n    z: 0.05")),
+            (6, "transform.translation.y".to_string())
+        );
+        assert_eq!(
+            place(&block.replace("eye_on_base", "eye_on_wrist")),
+            (2, "parameters.calibration_type".to_string())
+        );
+    }
 }

@@ -21,6 +21,8 @@ pub(crate) struct YamlTree {
     scalars: BTreeMap<String, (String, usize)>,
     /// Number of items and the line where it starts, by the path of each sequence.
     sequences: BTreeMap<String, (usize, usize)>,
+    /// The line where each value starts (its key's, in a mapping), by the value's path.
+    keys: BTreeMap<String, usize>,
     file: String,
 }
 
@@ -48,6 +50,7 @@ impl YamlTree {
         Ok(Self {
             scalars: flattener.scalars,
             sequences: flattener.sequences,
+            keys: flattener.keys,
             file: file.to_string(),
         })
     }
@@ -55,6 +58,11 @@ impl YamlTree {
     /// The text of the scalar at `path`, and its line.
     pub fn text(&self, path: &str) -> Option<(&str, usize)> {
         self.scalars.get(path).map(|(v, line)| (v.as_str(), *line))
+    }
+
+    /// The line where the value at `path` starts (its key's line in a mapping), if there is one.
+    pub fn line(&self, path: &str) -> Option<usize> {
+        self.keys.get(path).copied()
     }
 
     /// The length of the sequence at `path`, or an error naming what was expected there.
@@ -89,17 +97,15 @@ impl YamlTree {
             })
     }
 
-    /// The error for a missing field, placed at the line of its closest present parent.
+    /// The error for a missing field, placed at the line of its closest present parent (the line
+    /// of the key that names it, or where its sequence starts).
     pub fn missing(&self, path: &str, expected: &str) -> crate::model::error::Error {
         let line = parents(path)
             .find_map(|parent| {
-                self.line_of_sequence(parent).or_else(|| {
-                    self.scalars
-                        .range(parent.to_string()..)
-                        .next()
-                        .filter(|(k, _)| k.starts_with(parent))
-                        .map(|(_, (_, line))| *line)
-                })
+                self.keys
+                    .get(parent)
+                    .copied()
+                    .or_else(|| self.line_of_sequence(parent))
             })
             .unwrap_or(0);
         parse_error(&self.file, line, path, format!("missing ({expected})"))
@@ -137,6 +143,7 @@ struct Flattener {
     stack: Vec<Frame>,
     scalars: BTreeMap<String, (String, usize)>,
     sequences: BTreeMap<String, (usize, usize)>,
+    keys: BTreeMap<String, usize>,
     /// The first problem found: line, field, message.
     problem: Option<(usize, String, String)>,
     /// The text's last line.
@@ -151,14 +158,20 @@ impl Flattener {
             None => Some(String::new()),
             Some(Frame::Sequence { path, count, .. }) => {
                 *count += 1;
-                Some(format!("{path}[{}]", *count - 1))
+                let child = format!("{path}[{}]", *count - 1);
+                self.keys.insert(child.clone(), line);
+                Some(child)
             }
             Some(Frame::Mapping { path, key, seen }) => match key.take() {
-                Some((k, _)) => Some(if path.is_empty() {
-                    k
-                } else {
-                    format!("{path}.{k}")
-                }),
+                Some((k, key_line)) => {
+                    let child = if path.is_empty() {
+                        k
+                    } else {
+                        format!("{path}.{k}")
+                    };
+                    self.keys.insert(child.clone(), key_line);
+                    Some(child)
+                }
                 None => {
                     let field = path.clone();
                     match is_scalar {
@@ -291,8 +304,9 @@ mod tests {
         let (line, field, message) = place(t.number("s[0].r.x", "").unwrap_err());
         assert_eq!((line, field.as_str()), (3, "s[0].r.x"));
         assert!(message.contains("`one`"), "{message}");
+        // A missing field is placed at the key of the mapping that lacks it (`r:`).
         let (line, field, message) = place(t.number("s[0].r.y", "a number").unwrap_err());
-        assert_eq!((line, field.as_str()), (3, "s[0].r.y"));
+        assert_eq!((line, field.as_str()), (2, "s[0].r.y"));
         assert!(message.contains("missing (a number)"), "{message}");
     }
 }
