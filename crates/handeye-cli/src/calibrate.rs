@@ -14,7 +14,7 @@ use handeye::{Error, Method, Pairing};
 use handeye::{Named, RobotWorldMethod};
 
 use crate::faces::{self, Face, Published, length_unit};
-use crate::input::{InputArgs, joints, read_all};
+use crate::input::{InputArgs, read_all};
 use crate::output::{Questionable, print_json, print_text};
 use crate::values;
 
@@ -128,14 +128,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     let setup = args.input.setup();
     // The frame names and the name are checked before the input is read.
-    let frames = faces::frames(
-        &args.input,
-        args.parent_frame.as_deref(),
-        args.child_frame.as_deref(),
-        &args.name,
-    )?;
+    let frames = output_frames(&args)?;
     let recording = read_all(&args.input, options.fix.reading())?;
-    let joints = joints(&args.input)?;
     let (poses, written) = (recording.poses, recording.written);
     let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
     enough(&args.input, poses.len(), 2, "to make a motion")?;
@@ -146,7 +140,7 @@ pub fn run(args: Args) -> Result<()> {
         &Options {
             pose_names: recording.names,
             written,
-            joints,
+            joints: recording.joints,
             ..options
         },
     ) {
@@ -274,12 +268,7 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
     let camera = handeye::io::read_intrinsics(intrinsics)?;
     let series = handeye::io::read_frames(path)?;
     let setup = args.input.setup();
-    let frames = faces::frames(
-        &args.input,
-        args.parent_frame.as_deref(),
-        args.child_frame.as_deref(),
-        &args.name,
-    )?;
+    let frames = output_frames(args)?;
     let names = series
         .lines
         .iter()
@@ -400,7 +389,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             pose_names: recording.names,
             written: recording.written,
             point: args.point,
-            joints: joints(&args.input)?,
+            joints: recording.joints,
         },
     )?;
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
@@ -518,4 +507,15 @@ struct WithTimeOffset<'a, T> {
     /// Its one-sigma, seconds, when it was estimated.
     #[serde(skip_serializing_if = "Option::is_none")]
     time_offset_sigma_s: Option<f64>,
+}
+
+/// The frame names X is published under (`--parent-frame`, `--child-frame`) and the name, checked
+/// before the input is read.
+fn output_frames(args: &Args) -> Result<faces::Frames> {
+    Ok(faces::frames(
+        &args.input,
+        args.parent_frame.as_deref(),
+        args.child_frame.as_deref(),
+        &args.name,
+    )?)
 }

@@ -204,22 +204,6 @@ pub fn read_all(args: &InputArgs, reading: Reading) -> Result<Recording> {
     Ok(recording)
 }
 
-/// The joint angles of a JSON Lines pose file's records (`joints`), where every record gives
-/// them; empty for any other input (streams, recordings, stdin, other formats).
-pub fn joints(args: &InputArgs) -> Result<Vec<Vec<f64>>> {
-    let Some(path) = args.input.as_ref().filter(|p| p.as_os_str() != "-") else {
-        return Ok(Vec::new());
-    };
-    if args.robot.is_some() || args.is_bag() || !matches!(args.format, Format::Auto | Format::Jsonl)
-    {
-        return Ok(Vec::new());
-    }
-    let Ok(text) = std::fs::read_to_string(path) else {
-        return Ok(Vec::new());
-    };
-    Ok(handeye::io::read_joints(&text, &path.display().to_string())?.unwrap_or_default())
-}
-
 /// Tells on stderr the lines skipped before the first record, if any was not blank nor a comment.
 fn preamble<R: BufRead>(reader: &PoseReader<R>, source: &str) {
     if let Some(p) = reader.preamble() {

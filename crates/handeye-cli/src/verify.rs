@@ -72,6 +72,7 @@ pub fn run(args: Args) -> Result<()> {
         replicates: args.bootstrap,
         pose_names: recording.names,
         written: recording.written,
+        joints: recording.joints,
         ..Options::default()
     };
     let v = handeye::verify(&saved, &recording.poses, args.input.setup(), &options)?;

@@ -360,7 +360,7 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
 /// The whole batch calibration ([`handeye::calibrate`]): its report as JSON, the same
 /// object `handeye calibrate` prints (the Python layer parses it).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES, point=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES, point=None, joints=None))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,
@@ -374,8 +374,10 @@ fn calibrate_report<'py>(
     fix: Option<&str>,
     bootstrap: usize,
     point: Option<[f64; 3]>,
+    joints: Option<Vec<Vec<f64>>>,
 ) -> PyResult<String> {
     let options = handeye::Options {
+        joints: checked_joints(joints)?,
         reject_outliers,
         fix: match fix {
             None => handeye::Fix::Refuse,
@@ -396,7 +398,7 @@ fn calibrate_report<'py>(
 /// The robot-world calibration ([`handeye::calibrate_robot_world`]): its report as
 /// JSON, the same object `handeye calibrate --robot-world` prints.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::REPLICATES, reject_outliers=false, point=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::REPLICATES, reject_outliers=false, point=None, joints=None))]
 #[allow(clippy::too_many_arguments)]
 fn robot_world_report<'py>(
     py: Python<'py>,
@@ -408,8 +410,10 @@ fn robot_world_report<'py>(
     bootstrap: usize,
     reject_outliers: bool,
     point: Option<[f64; 3]>,
+    joints: Option<Vec<Vec<f64>>>,
 ) -> PyResult<String> {
     let options = handeye::RobotWorldOptions {
+        joints: checked_joints(joints)?,
         method: method.parse().map_err(value_error)?,
         fix: match fix {
             None => handeye::Fix::Refuse,
@@ -439,10 +443,24 @@ fn checked_point(point: Option<[f64; 3]>) -> PyResult<Option<[f64; 3]>> {
     }
 }
 
+/// Joint angles given to a calibration: every pose's, finite, one count (as JSON Lines gives them).
+fn checked_joints(joints: Option<Vec<Vec<f64>>>) -> PyResult<Vec<Vec<f64>>> {
+    let joints = joints.unwrap_or_default();
+    let count = joints.first().map_or(0, Vec::len);
+    for (i, q) in joints.iter().enumerate() {
+        if q.is_empty() || q.len() != count || q.iter().any(|v| !v.is_finite()) {
+            return Err(value_error(format!(
+                "joints[{i}]: expected {count} finite joint angles in radians (as every pose's), found {q:?}"
+            )));
+        }
+    }
+    Ok(joints)
+}
+
 /// Whether a saved X still fits a new recording (`handeye verify`): the library's
 /// `Verification` as JSON text, the same object the command line prints.
 #[pyfunction]
-#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::REPLICATES))]
+#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::REPLICATES, joints=None))]
 #[allow(clippy::too_many_arguments)]
 fn verify_report<'py>(
     py: Python<'py>,
@@ -454,9 +472,11 @@ fn verify_report<'py>(
     pairs: &str,
     reject_outliers: bool,
     bootstrap: usize,
+    joints: Option<Vec<Vec<f64>>>,
 ) -> PyResult<String> {
     let saved = handeye::io::read_saved_x(std::path::Path::new(saved)).map_err(value_error)?;
     let options = handeye::Options {
+        joints: checked_joints(joints)?,
         reject_outliers,
         replicates: bootstrap,
         ..calibration_options(method, pairs, false)?
@@ -639,6 +659,7 @@ fn read_recording<'py>(
     d.set_item("target_source", &r.target_source)?;
     let notes: Vec<String> = r.notes.iter().map(ToString::to_string).collect();
     d.set_item("notes", notes)?;
+    d.set_item("joints", (!r.joints.is_empty()).then_some(&r.joints))?;
     Ok(d)
 }
 

@@ -692,3 +692,21 @@ def test_the_error_at_a_chosen_point_as_the_command_line_gives_it():
         handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], point=[0.0, 0.0])
     with pytest.raises(ValueError, match="point"):
         handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], point=[0.0, float("nan"), 1.0])
+
+
+def test_joint_angles_reach_the_systematic_test_in_python_as_on_the_command_line():
+    # Issue 29 across faces: a JSON Lines file's joints order the poses for the systematic-error
+    # test. Python's read_recording returns them and calibrate takes them, so both faces give
+    # the same verdict (without them, 21 of the 72 suite files were judged differently).
+    suite = TESTDATA / "kinhec" / "systematic"
+    for name in ("dh1_panda_eih_s0", "dh2_ur5e_eth_s1", "ctl_pnp_ur10_eih_s0", "dh05_ur5_eih_s0"):
+        path = suite / f"{name}.jsonl"
+        setup = "eye-to-hand" if "_eth_" in name else "eye-in-hand"
+        r = handeye.read_recording(path, setup=setup)
+        assert r["joints"] is not None and len(r["joints"]) == len(r["base_from_gripper"])
+        py = handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], setup=setup, joints=r["joints"])
+        cli = _cli_json("calibrate", path, "--setup", setup)
+        assert py["verdict"] == cli["verdict"], name
+        assert py["systematic"]["flagged"] == cli["systematic"]["flagged"], name
+    with pytest.raises(ValueError, match="joints"):
+        handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], setup=setup, joints=r["joints"][:-1])

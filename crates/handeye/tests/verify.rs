@@ -469,6 +469,10 @@ fn a_few_poses_of_the_same_rig_are_never_called_inconsistent() {
                 Ok(v) => {
                     turned += 1;
                     turned_found += usize::from(v.verdict == Consistency::Inconsistent);
+                    if v.verdict != Consistency::Inconsistent {
+                        show(&format!("{} 10° turn, 6 poses", e["file"]), &v);
+                        println!("  {}", v.message);
+                    }
                     // Never a silent pass: a turn not found is one the poses cannot tell.
                     assert_ne!(
                         v.verdict,
@@ -487,7 +491,9 @@ fn a_few_poses_of_the_same_rig_are_never_called_inconsistent() {
     );
     assert!(windows >= 100, "{windows}");
     assert!(inconsistent * 100 <= windows, "{inconsistent} of {windows}");
-    // Measured: 15 of 18 before the low-DOF merge, 14 of 18 after; the rest undetermined
-    // (asserted above: never consistent).
+    // Measured: 15 of 18, then 14 once the systematic-error test flagged pnp_stations_eih_s1 and
+    // widened its saved X's covariance (the turn is then 3.26 sizes, the bound 3.29); the others
+    // missed are undetermined with their reason (a degenerate window, sizes within the bound),
+    // never consistent (asserted above).
     assert!(turned_found * 4 >= turned * 3, "{turned_found} of {turned}");
 }

@@ -110,6 +110,7 @@ def calibrate(
     robot_world=False,
     tsai_opencv_filter=False,
     point=None,
+    joints=None,
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
@@ -127,16 +128,16 @@ def calibrate(
     ``handeye calibrate``; "consecutive" for the paper's pairing). ``tsai_opencv_filter`` (with
     ``method="tsai"``) drops the motions OpenCV's Tsai drops, as ``--tsai-opencv-filter`` does.
     ``point`` (X, Y, Z in the camera frame, the input's unit) is where ``uncertainty.at_point``
-    gives the error, as ``--point`` does (default: the median target position seen).
+    gives the error, as ``--point`` does (default: the median target position seen). ``joints``
+    (every pose's joint angles, radians: what ``read_recording`` returns under ``joints``) orders
+    the poses for the systematic-error test and names the joint the residual follows, as the
+    command line does with a JSON Lines file's ``joints``.
 
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
     (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
     with ``target`` (``frame`` "base_from_target" or "gripper_from_target", ``matrix`` as a (4,4)
     array, ``translation``, ``quaternion_xyzw``, ``uncertainty``) and ``residual`` per pose."""
-    g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
-    c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
-    if g.ndim != 3 or c.ndim != 3:
-        raise ValueError("expected (N, 4, 4) arrays of transforms")
+    g, c = _transforms(base_from_gripper, camera_from_target)
     if robot_world:
         if pairs is not None:
             raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
@@ -150,6 +151,7 @@ def calibrate(
                 bootstrap=bootstrap,
                 reject_outliers=reject_outliers,
                 point=_point(point),
+                joints=joints,
             )
         )
         result["matrix"] = np.array(result["matrix"], dtype=np.float64)
@@ -168,6 +170,7 @@ def calibrate(
             fix=fix,
             bootstrap=bootstrap,
             point=_point(point),
+            joints=joints,
         )
     )
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)
@@ -184,7 +187,7 @@ def _point(point):
     return [float(v) for v in p]
 
 
-def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand", method=None, pairs=None, reject_outliers=False, bootstrap=40):
+def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand", method=None, pairs=None, reject_outliers=False, bootstrap=40, joints=None):
     """Whether a saved X still fits a new recording, as ``handeye verify --x SAVED`` decides it.
     ``saved`` is the path of what ``handeye calibrate --output json`` or ``--output yaml`` wrote
     (easy_handeye2's calibration file too; metres converted to the recording's millimetres when
@@ -196,10 +199,7 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
     ``distance_sigmas`` against ``limit_sigmas``, ``saved`` (the saved X, ``matrix`` a (4,4)
     array), ``quality`` of the recording's own calibration, ``message`` (what the verdict means and
     what to do) and ``notes``. A recording that cannot be read or solved at all raises ValueError."""
-    g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
-    c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
-    if g.ndim != 3 or c.ndim != 3:
-        raise ValueError("expected (N, 4, 4) arrays of transforms")
+    g, c = _transforms(base_from_gripper, camera_from_target)
     result = json.loads(
         _verify_report(
             str(saved),
@@ -210,6 +210,7 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
             pairs=pairs or "all",
             reject_outliers=reject_outliers,
             bootstrap=bootstrap,
+            joints=joints,
         )
     )
     result["saved"]["matrix"] = np.array(result["saved"]["matrix"], dtype=np.float64)
@@ -218,15 +219,21 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
     return result
 
 
+def _transforms(base_from_gripper, camera_from_target):
+    """The two pose lists as contiguous (N, 4, 4) float arrays."""
+    g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
+    c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
+    if g.ndim != 3 or c.ndim != 3:
+        raise ValueError("expected (N, 4, 4) arrays of transforms")
+    return g, c
+
+
 def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3):
     """What to record next, as ``handeye advise`` prints it: X's one-sigma now (``current``), its
     least determined directions (``weakest``) and the next gripper motions (``suggestions``: an
     axis of the gripper frame, an angle, and the uncertainty predicted once recorded). Takes
     (N, 4, 4) arrays."""
-    g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
-    c = np.ascontiguousarray(camera_from_target, dtype=np.float64)
-    if g.ndim != 3 or c.ndim != 3:
-        raise ValueError("expected (N, 4, 4) arrays of transforms")
+    g, c = _transforms(base_from_gripper, camera_from_target)
     return json.loads(_advise_report(g, c, setup=setup, count=count))
 
 
@@ -260,7 +267,8 @@ def read_recording(
     message number), ``stamps`` (seconds, or None), ``time_offset`` (the offset used, or None for a pose
     file), ``time_offset_sigma`` (its one-sigma in seconds when it was estimated, else None),
     ``offset_curve`` (with "auto": a (K, 2) array of offset and correlation, else None),
-    ``target_source`` (a recording's target topic or tf edge, else None) and ``notes`` (what
+    ``target_source`` (a recording's target topic or tf edge, else None), ``joints`` (each pose's
+    joint angles where a JSON Lines file gives them, for ``calibrate(joints=...)``, else None) and ``notes`` (what
     ``handeye`` prints on stderr while reading). Bad input raises ValueError naming the file,
     line and field."""
     return _read_recording(

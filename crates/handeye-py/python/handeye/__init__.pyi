@@ -29,6 +29,7 @@ def calibrate(
     robot_world: bool = False,
     tsai_opencv_filter: bool = False,
     point: Optional[npt.ArrayLike] = None,
+    joints: Optional[Sequence[Sequence[float]]] = None,
 ) -> dict[str, Any]: ...
 
 def advise(
@@ -48,6 +49,7 @@ def verify(
     pairs: Optional[str] = None,
     reject_outliers: bool = False,
     bootstrap: int = 40,
+    joints: Optional[Sequence[Sequence[float]]] = None,
 ) -> dict[str, Any]: ...
 
 def read_recording(

@@ -321,6 +321,7 @@ pub struct HeldOutName {
 /// [`Error::Degenerate`] when the motions do not determine X, [`Error::TooFewMotions`].
 pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
     check_replicates(options.replicates)?;
+    check_joints(&options.joints, poses.len())?;
     check_priors(&options.priors)?;
     let mut warnings = Vec::new();
     let (applied, check, read, found) = read_poses(
@@ -482,6 +483,20 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         prior,
         low_dof: plan.map(|p| p.report(calibration.conditioning)),
         reprojection: None,
+    })
+}
+
+/// Joint angles given are every pose's: one list a pose (or none at all).
+pub(crate) fn check_joints(joints: &[Vec<f64>], poses: usize) -> Result<()> {
+    if joints.is_empty() || joints.len() == poses {
+        return Ok(());
+    }
+    Err(Error::InvalidParameter {
+        name: "joints",
+        message: format!(
+            "{} lists of joint angles for {poses} poses: give every pose's, in order",
+            joints.len()
+        ),
     })
 }
 

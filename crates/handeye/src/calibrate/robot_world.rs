@@ -27,7 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::calibrate::batch::{
     Fix, Options, Outliers, ReadingReport, Units, explained, outlier_report,
-    outlier_warning, read_poses, systematic_test, warn_weak, widened_for_systematic, without,
+    check_joints, outlier_warning, read_poses, systematic_test, warn_weak, widened_for_systematic, without,
     working_distance,
 };
 use crate::check::systematic::Systematic;
@@ -227,6 +227,7 @@ pub fn calibrate_robot_world(
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
     check_replicates(options.replicates)?;
+    check_joints(&options.joints, poses.len())?;
     let mut warnings = Vec::new();
     let (applied, check, read, found) = read_poses(
         poses,

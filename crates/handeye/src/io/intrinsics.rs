@@ -256,7 +256,10 @@ mod tests {
             other => panic!("{other:?}"),
         };
         assert_eq!(line(&OPENCV.replace("-2.1e-01", ".nan")), 16);
-        assert_eq!(line(&OPENCV.replace("6.412e+02, 0.,\n", "6.412e+02, 0.,\n       9.0, ")), 6);
+        assert_eq!(
+            line(&OPENCV.replace("6.412e+02, 0.,\n", "6.412e+02, 0.,\n       9.0, ")),
+            6
+        );
         assert_eq!(
             field(&format!("{OPENCV}distortion_model: equidistant\n")),
             "distortion_model"

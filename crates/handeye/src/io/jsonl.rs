@@ -588,16 +588,14 @@ mod tests {
                 if !line.trim_start().starts_with('{') {
                     continue;
                 }
-                // Joint angles and detections are read by their own passes, on the general path.
-                if !(line.contains("\"joints\"") || line.contains("\"detections\"")) {
+                // Detections are read by their own pass, on the general path.
+                if !line.contains("\"detections\"") {
                     lines += 1;
                 }
                 let (mut p_fast, mut p_general) = (Projections::default(), Projections::default());
                 let general = parse_record(line.trim(), "t", k + 1, &mut p_general);
                 if let Some(record) = fast_record(line, k + 1, &mut p_fast) {
-                    fast += usize::from(
-                        !(line.contains("\"joints\"") || line.contains("\"detections\"")),
-                    );
+                    fast += usize::from(!line.contains("\"detections\""));
                     assert_eq!(
                         Ok(record),
                         general.map_err(|e| e.to_string()),

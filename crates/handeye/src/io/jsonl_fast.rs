@@ -40,6 +40,9 @@ enum Key {
     Robot(bool),
     /// A camera pose, inverted when `true` (`target_from_camera`).
     Camera(bool),
+    /// The robot's joint angles, read by their own pass (`io::read_joints`): passed over here
+    /// when they are a list of numbers.
+    Joints,
 }
 
 /// Reads `line` (a record's text, line end removed) when it has the common shape; `None`
@@ -54,6 +57,7 @@ pub(crate) fn scan(line: &str) -> Option<Scanned> {
     let mut stamp: Option<Option<f64>> = None;
     let mut robot = None;
     let mut camera = None;
+    let mut joints = false;
     loop {
         c.space();
         let key = c.key()?;
@@ -65,6 +69,10 @@ pub(crate) fn scan(line: &str) -> Option<Scanned> {
             Key::Robot(inverted) if robot.is_none() => robot = Some((c.transform()?, inverted)),
             Key::Camera(inverted) if camera.is_none() => {
                 camera = Some((c.transform()?, inverted));
+            }
+            Key::Joints if !joints => {
+                c.number_list()?;
+                joints = true;
             }
             // A key given twice (or both names of one pose): the general path says which.
             _ => return None,
@@ -132,7 +140,23 @@ impl<'a> Cursor<'a> {
             b"gripper_from_base" => Some(Key::Robot(true)),
             b"camera_from_target" => Some(Key::Camera(false)),
             b"target_from_camera" => Some(Key::Camera(true)),
+            b"joints" => Some(Key::Joints),
             _ => None,
+        }
+    }
+
+    /// A non-empty list of finite numbers, passed over.
+    fn number_list(&mut self) -> Option<()> {
+        self.eat(b'[')?;
+        loop {
+            self.space();
+            self.number()?;
+            self.space();
+            match self.next()? {
+                b',' => continue,
+                b']' => return Some(()),
+                _ => return None,
+            }
         }
     }
 

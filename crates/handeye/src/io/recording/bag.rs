@@ -101,5 +101,6 @@ pub(super) fn read_bag(
         target_source: Some(pairs.target_source),
         notes: Vec::new(),
         written: Written::FRAMES,
+        joints: Vec::new(),
     })
 }

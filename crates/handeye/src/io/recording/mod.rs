@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use crate::io::sync::{TimeOffset, pair_stream_files};
 use crate::io::{
     Format, PoseInput, PoseReader, PoseSeries, Projections, StampedPosePair, at_least_two_pairs,
-    open_poses, read_records,
+    open_poses, read_joints, read_records, read_text,
 };
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Reading, Written, WrittenAs};
@@ -138,6 +138,9 @@ pub struct Recording {
     pub notes: Vec<Note>,
     /// The directions in which the input wrote its poses (`Options::written` of a calibration).
     pub written: Written,
+    /// Each pair's joint angles (radians, the robot's joint order), where a JSON Lines file gives
+    /// every record's (`"joints"`, SPEC sec. 9; `Options::joints` of a calibration); else empty.
+    pub joints: Vec<Vec<f64>>,
 }
 
 impl Recording {
@@ -259,7 +262,21 @@ fn read_file(
                 notes.projections(&source, series.projections);
                 return Ok(file_recording(series, &source));
             }
-            PoseInput::Stream(reader) => read_stream(reader, &source, notes)?,
+            PoseInput::Stream(reader) => {
+                let jsonl = reader.format() == Format::Jsonl;
+                let series = read_stream(reader, &source, notes)?;
+                at_least_two_pairs(series.pairs.len(), source.clone())?;
+                // Joint angles are not part of a pose pair: read by their own pass over the text.
+                let joints = if jsonl {
+                    read_joints(&read_text(path)?, &source)?.unwrap_or_default()
+                } else {
+                    Vec::new()
+                };
+                return Ok(Recording {
+                    joints,
+                    ..file_recording(series, &source)
+                });
+            }
         }
     };
     at_least_two_pairs(series.pairs.len(), source.clone())?;
