@@ -44,6 +44,11 @@ pub struct Args {
     /// JSON otherwise].
     #[arg(long, value_parser = values::named::<Face>())]
     output: Option<Face>,
+    /// A prior on a component of X's translation, for a low-DOF robot (as `calibrate --prior`):
+    /// NAME=VALUE or NAME=VALUE+-SIGMA, NAME one of tx, ty, tz. Without one, the component such a
+    /// recording leaves free is taken from the saved X and the rest is checked. Repeatable.
+    #[arg(long, value_name = "NAME=VALUE[+-SIGMA]", value_parser = values::prior)]
+    prior: Vec<handeye::Prior>,
     /// Exit 5 when the saved X is consistent but the recording's own calibration is questionable.
     #[arg(long)]
     strict: bool,
@@ -73,6 +78,7 @@ pub fn run(args: Args) -> Result<()> {
         pose_names: recording.names,
         written: recording.written,
         joints: recording.joints,
+        priors: args.prior,
         ..Options::default()
     };
     let v = handeye::verify(&saved, &recording.poses, args.input.setup(), &options)?;

@@ -240,3 +240,59 @@ fn advise_names_the_prior_and_what_a_low_dof_robot_cannot_make() {
         assert!(a["low_dof"].as_str().unwrap().contains("SCARA"));
     }
 }
+
+#[test]
+fn verify_checks_a_saved_scara_x_and_takes_the_free_height_from_it() {
+    let dir = std::env::temp_dir().join(format!("handeye-low-dof-verify-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, setup) in RECORDINGS {
+        let tz = truth(name).0[2];
+        let (code, out, err) = run(&[
+            "calibrate",
+            &file(name),
+            "--setup",
+            setup,
+            "--prior",
+            &format!("tz={tz}+-0.001"),
+            "--output",
+            "json",
+        ]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let saved = dir.join(format!("{name}.json"));
+        std::fs::write(&saved, out).unwrap();
+        let saved = saved.to_str().unwrap();
+        // No prior: the height comes from the saved X, the rest is checked, and a note says so.
+        let (code, out, err) = run(&["verify", "--x", saved, &file(name), "--setup", setup]);
+        assert_eq!(code, 0, "{name}: {out}{err}");
+        let v: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["verdict"], "consistent");
+        let notes = v["notes"].to_string();
+        assert!(notes.contains("cannot check X's tz"), "{notes}");
+        // The user's own prior is used as given: 20 mm off, the saved X does not fit.
+        let (code, out, err) = run(&[
+            "verify",
+            "--x",
+            saved,
+            &file(name),
+            "--setup",
+            setup,
+            "--prior",
+            &format!("tz={}", tz + 0.02),
+        ]);
+        assert_eq!(code, 4, "{name}: {out}{err}");
+        // A prior in millimetres on a recording in metres: a usage error naming the unit.
+        let (code, _, err) = run(&[
+            "verify",
+            "--x",
+            saved,
+            &file(name),
+            "--setup",
+            setup,
+            "--prior",
+            &format!("tz={}", tz * 1e3),
+        ]);
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(err.contains("another length unit"), "{err}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

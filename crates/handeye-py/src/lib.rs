@@ -360,7 +360,7 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
 /// The whole batch calibration ([`handeye::calibrate`]): its report as JSON, the same
 /// object `handeye calibrate` prints (the Python layer parses it).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES, point=None, joints=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES, point=None, joints=None, prior=None))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,
@@ -375,9 +375,11 @@ fn calibrate_report<'py>(
     bootstrap: usize,
     point: Option<[f64; 3]>,
     joints: Option<Vec<Vec<f64>>>,
+    prior: Option<Vec<String>>,
 ) -> PyResult<String> {
     let options = handeye::Options {
         joints: checked_joints(joints)?,
+        priors: priors(prior)?,
         reject_outliers,
         fix: match fix {
             None => handeye::Fix::Refuse,
@@ -457,10 +459,20 @@ fn checked_joints(joints: Option<Vec<Vec<f64>>>) -> PyResult<Vec<Vec<f64>>> {
     Ok(joints)
 }
 
+/// Priors given to a calibration, in the command line's syntax (`"tz=0.12+-0.002"`), parsed with
+/// the library's words (the calibration checks that each component comes once).
+fn priors(prior: Option<Vec<String>>) -> PyResult<Vec<handeye::Prior>> {
+    prior
+        .unwrap_or_default()
+        .iter()
+        .map(|p| p.parse::<handeye::Prior>().map_err(value_error))
+        .collect()
+}
+
 /// Whether a saved X still fits a new recording (`handeye verify`): the library's
 /// `Verification` as JSON text, the same object the command line prints.
 #[pyfunction]
-#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::REPLICATES, joints=None))]
+#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::REPLICATES, joints=None, prior=None))]
 #[allow(clippy::too_many_arguments)]
 fn verify_report<'py>(
     py: Python<'py>,
@@ -473,10 +485,12 @@ fn verify_report<'py>(
     reject_outliers: bool,
     bootstrap: usize,
     joints: Option<Vec<Vec<f64>>>,
+    prior: Option<Vec<String>>,
 ) -> PyResult<String> {
     let saved = handeye::io::read_saved_x(std::path::Path::new(saved)).map_err(value_error)?;
     let options = handeye::Options {
         joints: checked_joints(joints)?,
+        priors: priors(prior)?,
         reject_outliers,
         replicates: bootstrap,
         ..calibration_options(method, pairs, false)?

@@ -3,7 +3,7 @@
 //! (`--fix robot-inverted`, "the file gives …") is worded again for them here.
 
 use handeye::Reading;
-use handeye::{Error, Setup, Warning};
+use handeye::{Degeneracy, Error, LowDofMissing, Setup, Warning};
 
 /// The drop-in's message for a library error: a misread input in OpenCV's terms, any other error
 /// as the library words it. `setup` is what the caller said, if anything: without it, readings
@@ -20,7 +20,50 @@ pub fn error(e: &Error, setup: Option<Setup>) -> String {
             }
             text
         }
+        Error::Degenerate { reason, .. } => degenerate(e, reason),
+        // What makes X untrusted, each part in the drop-in's terms (the outliers' remedy is to
+        // leave them out of the arrays, or `handeye.calibrate(..., reject_outliers=True)`).
+        Error::Untrusted { refusal, why } => {
+            let parts: Vec<String> = refusal
+                .iter()
+                .map(|r| error(r, setup))
+                .chain(why.iter().map(|w| warning(w, setup)))
+                .collect();
+            format!("X cannot be trusted: {}", parts.join("; "))
+        }
         _ => e.to_string(),
+    }
+}
+
+/// A refusal of the motions, its remedy in the drop-in's terms: OpenCV's arguments carry no prior
+/// and no `fix`; `method=` it takes.
+fn degenerate(e: &Error, reason: &Degeneracy) -> String {
+    let text = e.to_string();
+    let before = |marker: &str| text.find(marker).map_or(text.as_str(), |i| &text[..i]);
+    match reason {
+        Degeneracy::LowDof {
+            missing: LowDofMissing::Prior(c),
+            ..
+        } => format!(
+            "{}; OpenCV's arguments carry no prior: call `handeye.calibrate(base_from_gripper, \
+             camera_from_target, prior=\"{n}=VALUE+-SIGMA\")` with the poses as 4×4 matrices",
+            before(", `--prior"),
+            n = c.name()
+        ),
+        Degeneracy::LowDof {
+            missing: LowDofMissing::Units { .. },
+            ..
+        } => format!(
+            "{}; give t_gripper2base and t_target2cam in one length unit",
+            before("; if one is in millimetres")
+        ),
+        Degeneracy::MethodUndetermined { .. } => {
+            format!(
+                "{}; pass method=\"andreff\", or another method",
+                before("; use `--method")
+            )
+        }
+        _ => text,
     }
 }
 

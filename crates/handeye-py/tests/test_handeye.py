@@ -710,3 +710,48 @@ def test_joint_angles_reach_the_systematic_test_in_python_as_on_the_command_line
         assert py["systematic"]["flagged"] == cli["systematic"]["flagged"], name
     with pytest.raises(ValueError, match="joints"):
         handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], setup=setup, joints=r["joints"][:-1])
+
+
+def test_a_low_dof_robot_takes_its_prior_in_python_as_on_the_command_line(tmp_path):
+    # Issue 30 in Python: a SCARA recording (every motion about the gripper's z) is refused without
+    # the camera's height, naming Python's keyword; with it, X is the command line's. The drop-in
+    # has no prior and no flags: its refusal names handeye.calibrate, never a command-line flag.
+    import subprocess
+
+    path = TESTDATA / "low_dof" / "scara_eye-in-hand_s0.jsonl"
+    tz = json.loads(path.with_suffix(".truth.json").read_text())["gripper_from_camera"]["translation"][2]
+    r = handeye.read_recording(path)
+    g, c = r["base_from_gripper"], r["camera_from_target"]
+    with pytest.raises(ValueError, match='prior="tz=VALUE\\+-SIGMA"'):
+        handeye.calibrate(g, c)
+    given = f"tz={tz!r}+-0.001"
+    result = handeye.calibrate(g, c, prior=given)
+    cli = _cli_json("calibrate", path, "--prior", given)
+    assert np.abs(result["matrix"] - np.array(cli["matrix"])).max() < 1e-9
+    assert result["prior"] == cli["prior"] == {"tz": {"value": tz, "sigma": 0.001}}
+    assert result["low_dof"]["free"] == "tz"
+    # The same prior as a dict and as a list; bad ones raise with the library's words.
+    for same in ({"tz": (tz, 0.001)}, [given]):
+        assert np.abs(handeye.calibrate(g, c, prior=same)["matrix"] - result["matrix"]).max() < 1e-12
+    for bad, says in (("rz=0.1", "tx, ty, tz"), ({"tz": (1, 2, 3)}, "value, sigma"), (5, "prior"),
+                      (f"tz={tz * 1000}", "another length unit")):
+        with pytest.raises(ValueError, match=says):
+            handeye.calibrate(g, c, prior=bad)
+    with pytest.raises(ValueError, match="robot_world"):
+        handeye.calibrate(g, c, robot_world=True, prior=given)
+    # The drop-in refuses, naming what to call instead and no flag.
+    with pytest.raises(ValueError) as e:
+        handeye.calibrate_hand_eye([m[:3, :3] for m in g], [m[:3, 3] for m in g],
+                                   [m[:3, :3] for m in c], [m[:3, 3] for m in c], method="park")
+    words = str(e.value)
+    assert "handeye.calibrate(" in words and 'prior="tz=VALUE+-SIGMA"' in words, words
+    assert "--" not in words, words
+    # verify: the saved X's height is taken, the rest checked, as `handeye verify` does.
+    saved = tmp_path / "x.json"
+    saved.write_text(subprocess.run([str(CLI), "calibrate", str(path), "--prior", given, "--output", "json"],
+                                    check=True, capture_output=True, text=True).stdout)
+    v = handeye.verify(saved, g, c)
+    assert v["verdict"] == "consistent", v["message"]
+    assert any("cannot check X's tz" in n for n in v["notes"]), v["notes"]
+    off = handeye.verify(saved, g, c, prior=f"tz={tz + 0.02!r}")
+    assert off["verdict"] == "inconsistent", off["message"]

@@ -319,3 +319,63 @@ fn a_free_direction_off_the_axes_is_refused_naming_it() {
         }
     }
 }
+
+#[test]
+fn a_prior_in_another_unit_is_refused_naming_the_unit() {
+    for setup in SETUPS {
+        let s = simulate_low_dof(&scara(setup), 3, 0);
+        let tz = s.x.translation.vector[2];
+        // Millimetres on a recording in metres: refused for its size, not blamed on the motions.
+        let e = calibrate(
+            &s.poses,
+            setup,
+            &options(vec![prior(Component::Tz, tz * 1e3, 1.0)]),
+        )
+        .unwrap_err();
+        assert!(
+            matches!(e, Error::InvalidParameter { name: "prior", .. }),
+            "{setup}: {e}"
+        );
+        assert!(e.to_string().contains("another length unit"), "{e}");
+        // The true value in the poses' unit is answered.
+        calibrate(
+            &s.poses,
+            setup,
+            &options(vec![prior(Component::Tz, tz, 0.001)]),
+        )
+        .unwrap();
+    }
+}
+
+#[test]
+fn a_weak_direction_of_a_low_dof_x_advises_what_the_robot_can_record() {
+    // Four poses of a SCARA: X is weakly determined, and the advice must not ask for turns about
+    // another axis, which such a robot cannot make.
+    let mut weak = 0;
+    for seed in 0..SEEDS {
+        let s = simulate_low_dof(&scara(Setup::EyeInHand), seed, 0);
+        let few = &s.poses[..4];
+        let tz = s.x.translation.vector[2];
+        let Ok(r) = calibrate(
+            few,
+            Setup::EyeInHand,
+            &options(vec![prior(Component::Tz, tz, 0.001)]),
+        ) else {
+            continue;
+        };
+        for w in &r.warnings {
+            if let Warning::WeakDirection { one_axis, .. } = w {
+                weak += 1;
+                assert!(one_axis.is_some(), "{w:?}");
+                let words = w.to_string();
+                assert!(!words.contains("x or y"), "{words}");
+                assert!(words.contains("further across the axis"), "{words}");
+            }
+        }
+    }
+    println!("weak directions on 4-pose SCARA recordings: {weak}");
+    assert!(
+        weak > 0,
+        "no 4-pose recording gave a weak direction: the test tests nothing"
+    );
+}

@@ -497,3 +497,147 @@ fn a_few_poses_of_the_same_rig_are_never_called_inconsistent() {
     // never consistent (asserted above).
     assert!(turned_found * 4 >= turned * 3, "{turned_found} of {turned}");
 }
+
+/// A low-DOF recording (`testdata/low_dof`: simulated SCARAs, every motion about one axis) and its
+/// setup.
+fn low_dof(name: &str) -> (Vec<PosePair>, Setup, Value) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/low_dof");
+    let poses = read_pose_file(&dir.join(format!("{name}.jsonl")), Format::Auto)
+        .unwrap()
+        .pairs;
+    let truth: Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join(format!("{name}.truth.json"))).unwrap(),
+    )
+    .unwrap();
+    let setup = if truth["setup"] == "eye-to-hand" {
+        Setup::EyeToHand
+    } else {
+        Setup::EyeInHand
+    };
+    (poses, setup, truth)
+}
+
+#[test]
+fn a_low_dof_recording_checks_what_it_determines_and_takes_tz_from_the_saved_x() {
+    for name in ["scara_eye-in-hand_s0", "scara_eye-to-hand_s1"] {
+        let (all, setup, truth) = low_dof(name);
+        let x_key = if setup == Setup::EyeInHand {
+            "gripper_from_camera"
+        } else {
+            "base_from_camera"
+        };
+        let tz = truth[x_key]["translation"][2].as_f64().unwrap();
+        let h = all.len() / 2;
+        let (first, second) = (&all[..h], &all[h..]);
+        let with_prior = Options {
+            priors: vec![format!("tz={tz}+-0.001").parse().unwrap()],
+            ..options()
+        };
+        let r = calibrate(first, setup, &with_prior).unwrap();
+        let saved = SavedX {
+            x: r.transform,
+            setup: Some(setup),
+            covariance: Some(r.uncertainty.covariance),
+            unit: SavedUnit::Unknown,
+        };
+        // Without a prior the recording alone would be refused; verify takes tz from the saved X.
+        let v = verify(&saved, second, setup, &options()).unwrap();
+        show(name, &v);
+        assert_eq!(v.verdict, Consistency::Consistent, "{}", v.message);
+        assert!(
+            v.notes.iter().any(|n| n.contains("cannot check X's tz")),
+            "{:?}",
+            v.notes
+        );
+        // The camera bumped on its mount by 1° and 3 mm across the axis: found.
+        let delta = transform(
+            Vector3::new(1f64.to_radians(), 0.0, 0.0),
+            Vector3::new(0.003, 0.0, 0.0),
+        );
+        let v = verify(&saved, &bumped(second, &delta), setup, &options()).unwrap();
+        show("  bumped 1° and 3 mm", &v);
+        assert_eq!(v.verdict, Consistency::Inconsistent, "{}", v.message);
+        // A saved X in millimetres against this recording in metres: converted, and consistent.
+        let mut mm = saved.clone();
+        mm.x.translation.vector *= 1e3;
+        let c = mm.covariance.as_mut().unwrap();
+        for (i, row) in c.iter_mut().enumerate() {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v *= if i >= 3 { 1e3 } else { 1.0 } * if j >= 3 { 1e3 } else { 1.0 };
+            }
+        }
+        let v = verify(&mm, second, setup, &options()).unwrap();
+        show("  saved in millimetres", &v);
+        assert_eq!(v.verdict, Consistency::Consistent, "{}", v.message);
+        assert_eq!(v.unit_scale, 1e-3);
+        // A user's own prior is used as given: a wrong one is found.
+        let wrong = Options {
+            priors: vec![format!("tz={}", tz + 0.02).parse().unwrap()],
+            ..options()
+        };
+        let v = verify(&saved, second, setup, &wrong).unwrap();
+        show("  a prior 20 mm off", &v);
+        assert_eq!(v.verdict, Consistency::Inconsistent, "{}", v.message);
+        // The robot poses inverted: never consistent.
+        let inverted: Vec<PosePair> = second
+            .iter()
+            .map(|p| PosePair {
+                base_from_gripper: p.base_from_gripper.inverse(),
+                camera_from_target: p.camera_from_target,
+            })
+            .collect();
+        match verify(&saved, &inverted, setup, &options()) {
+            Ok(v) => {
+                show("  robot poses inverted", &v);
+                println!("    {}", v.message);
+                assert_ne!(v.verdict, Consistency::Consistent, "{}", v.message);
+                assert!(
+                    v.message.contains("if the robot can turn about other axes"),
+                    "{}",
+                    v.message
+                );
+            }
+            Err(e) => println!("  robot poses inverted: {e}"),
+        }
+        // Two frames paired with the wrong camera pose (turned 20°): never silently consistent;
+        // left out, the saved X fits again.
+        let mut outliers = second.to_vec();
+        for k in [2, 7] {
+            let turn = transform(Vector3::new(0.0, 20f64.to_radians(), 0.0), Vector3::zeros());
+            outliers[k].camera_from_target = turn * outliers[k].camera_from_target;
+        }
+        let v = verify(&saved, &outliers, setup, &options()).unwrap();
+        show("  two outlier frames", &v);
+        let named = v
+            .recording
+            .as_ref()
+            .is_some_and(|r| r.outliers.poses.len() >= 2);
+        assert!(
+            v.verdict != Consistency::Consistent || named,
+            "{}",
+            v.message
+        );
+        let rejecting = Options {
+            reject_outliers: true,
+            ..options()
+        };
+        let v = verify(&saved, &outliers, setup, &rejecting).unwrap();
+        show("  ... left out", &v);
+        assert_eq!(v.verdict, Consistency::Consistent, "{}", v.message);
+    }
+    // An axis off the coordinate axes: no prior can state the free direction, so it cannot tell.
+    let (all, setup, _) = low_dof("tilted_wrist_eye-in-hand_s2");
+    let v = verify(
+        &SavedX {
+            x: transform(Vector3::zeros(), Vector3::new(0.03, -0.04, -0.1)),
+            setup: Some(setup),
+            covariance: None,
+            unit: SavedUnit::Unknown,
+        },
+        &all,
+        setup,
+        &options(),
+    )
+    .unwrap();
+    assert_eq!(v.verdict, Consistency::Undetermined, "{}", v.message);
+}

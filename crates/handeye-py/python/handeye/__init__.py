@@ -111,6 +111,7 @@ def calibrate(
     tsai_opencv_filter=False,
     point=None,
     joints=None,
+    prior=None,
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
@@ -131,7 +132,11 @@ def calibrate(
     gives the error, as ``--point`` does (default: the median target position seen). ``joints``
     (every pose's joint angles, radians: what ``read_recording`` returns under ``joints``) orders
     the poses for the systematic-error test and names the joint the residual follows, as the
-    command line does with a JSON Lines file's ``joints``.
+    command line does with a JSON Lines file's ``joints``. ``prior`` states components of X's
+    translation a low-DOF robot (a SCARA, a 4-axis arm: every motion turns about one axis) cannot
+    determine, as ``--prior`` does: ``"tz=0.12+-0.002"`` (or ``"tz=0.12"``, exact), a list of
+    such, or a dict ``{"tz": 0.12}`` / ``{"tz": (0.12, 0.002)}``; ``tx``, ``ty``, ``tz`` in X's
+    parent frame and the input's length unit. The report then has ``prior`` and ``low_dof``.
 
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
     (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
@@ -141,6 +146,8 @@ def calibrate(
     if robot_world:
         if pairs is not None:
             raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
+        if prior is not None:
+            raise ValueError("prior does not apply to robot_world=True (a low-DOF robot is calibrated hand-eye)")
         result = json.loads(
             _robot_world_report(
                 g,
@@ -171,10 +178,34 @@ def calibrate(
             bootstrap=bootstrap,
             point=_point(point),
             joints=joints,
+            prior=_priors(prior),
         )
     )
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)
     return result
+
+
+def _priors(prior):
+    """Priors in the command line's syntax ("tz=0.12+-0.002"), from a string, a list of strings or
+    a dict of name -> value or (value, sigma); None for none."""
+    if prior is None:
+        return None
+    if isinstance(prior, str):
+        return [prior]
+    if isinstance(prior, dict):
+        out = []
+        for name, v in prior.items():
+            if np.ndim(v) == 0:
+                value, sigma = v, 0.0
+            elif np.shape(v) == (2,):
+                value, sigma = v
+            else:
+                raise ValueError(f"prior {name!r}: expected a value or (value, sigma), got {v!r}")
+            out.append(f"{name}={float(value)!r}+-{float(sigma)!r}")
+        return out
+    if isinstance(prior, (list, tuple)) and all(isinstance(p, str) for p in prior):
+        return list(prior)
+    raise ValueError(f"prior: expected \"tz=VALUE+-SIGMA\", a list of such, or a dict, got {prior!r}")
 
 
 def _point(point):
@@ -187,7 +218,7 @@ def _point(point):
     return [float(v) for v in p]
 
 
-def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand", method=None, pairs=None, reject_outliers=False, bootstrap=40, joints=None):
+def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand", method=None, pairs=None, reject_outliers=False, bootstrap=40, joints=None, prior=None):
     """Whether a saved X still fits a new recording, as ``handeye verify --x SAVED`` decides it.
     ``saved`` is the path of what ``handeye calibrate --output json`` or ``--output yaml`` wrote
     (easy_handeye2's calibration file too; metres converted to the recording's millimetres when
@@ -198,7 +229,9 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
     minus the recording's, and one sigma of that difference from the uncertainty of both),
     ``distance_sigmas`` against ``limit_sigmas``, ``saved`` (the saved X, ``matrix`` a (4,4)
     array), ``quality`` of the recording's own calibration, ``message`` (what the verdict means and
-    what to do) and ``notes``. A recording that cannot be read or solved at all raises ValueError."""
+    what to do) and ``notes``. A recording that cannot be read or solved at all raises ValueError.
+    ``prior`` is ``calibrate``'s; without one, the component of X a low-DOF recording leaves free
+    is taken from the saved X and the rest is checked (a note says so)."""
     g, c = _transforms(base_from_gripper, camera_from_target)
     result = json.loads(
         _verify_report(
@@ -211,6 +244,7 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
             reject_outliers=reject_outliers,
             bootstrap=bootstrap,
             joints=joints,
+            prior=_priors(prior),
         )
     )
     result["saved"]["matrix"] = np.array(result["saved"]["matrix"], dtype=np.float64)

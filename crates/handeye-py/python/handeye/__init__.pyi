@@ -2,7 +2,7 @@
 (target2cam); X = gripper_from_camera (cam2gripper) for eye-in-hand, base_from_camera for
 eye-to-hand."""
 import os
-from typing import Optional, Any, Sequence, Union
+from typing import Optional, Any, Mapping, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -30,6 +30,7 @@ def calibrate(
     tsai_opencv_filter: bool = False,
     point: Optional[npt.ArrayLike] = None,
     joints: Optional[Sequence[Sequence[float]]] = None,
+    prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
 ) -> dict[str, Any]: ...
 
 def advise(
@@ -50,6 +51,7 @@ def verify(
     reject_outliers: bool = False,
     bootstrap: int = 40,
     joints: Optional[Sequence[Sequence[float]]] = None,
+    prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
 ) -> dict[str, Any]: ...
 
 def read_recording(

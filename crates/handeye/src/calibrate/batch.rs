@@ -433,7 +433,12 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
             .filter(|w| plan.is_none() || !low_dof::handled(w))
             .cloned(),
     );
-    warn_weak(&data_uncertainty, setup, &mut warnings);
+    warn_weak(
+        &data_uncertainty,
+        setup,
+        plan.as_ref().map(low_dof::Plan::axis),
+        &mut warnings,
+    );
     if translation_residual_rel > WARN_TRANSLATION_RESIDUAL {
         warnings.push(Warning::TranslationResiduals {
             relative: translation_residual_rel,
@@ -933,8 +938,14 @@ fn undetermined(part: Part, d: &crate::model::findings::Direction, setup: Setup)
     }
 }
 
-/// Warnings for weakly determined directions.
-pub(crate) fn warn_weak(u: &Uncertainty, setup: Setup, warnings: &mut Vec<Warning>) {
+/// Warnings for weakly determined directions; `one_axis`: the axis every motion turns about, on a
+/// low-DOF recording (its advice is then what such a robot can record).
+pub(crate) fn warn_weak(
+    u: &Uncertainty,
+    setup: Setup,
+    one_axis: Option<[f64; 3]>,
+    warnings: &mut Vec<Warning>,
+) {
     for (part, d) in [
         (Part::Rotation, &u.weakest_rotation),
         (Part::Translation, &u.weakest_translation),
@@ -945,6 +956,7 @@ pub(crate) fn warn_weak(u: &Uncertainty, setup: Setup, warnings: &mut Vec<Warnin
                 axis: d.axis,
                 sigma: d.sigma,
                 setup,
+                one_axis,
             });
         }
     }

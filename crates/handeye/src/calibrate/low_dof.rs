@@ -56,10 +56,15 @@ impl Plan {
         k / k[self.prior.component.index()]
     }
 
+    /// The common axis in X's parent frame, its largest component positive (as reports give it).
+    pub(crate) fn axis(&self) -> [f64; 3] {
+        upward(&self.axis.hand).into()
+    }
+
     /// The report's `low_dof`.
     pub(crate) fn report(&self, conditioning: f64) -> LowDofReport {
         LowDofReport {
-            axis: upward(&self.axis.hand).into(),
+            axis: self.axis(),
             spread_deg: self.axis.spread.to_degrees(),
             free: self.prior.component,
             conditioning,
@@ -90,12 +95,40 @@ pub(crate) fn plan(
         return Err(refusal(&axis, setup, LowDofMissing::NotStatable));
     };
     match priors.iter().find(|p| p.component == free) {
-        Some(prior) => Ok(Some(Plan {
-            axis,
-            prior: *prior,
-        })),
+        Some(prior) => {
+            check_size(prior, poses)?;
+            Ok(Some(Plan {
+                axis,
+                prior: *prior,
+            }))
+        }
         None => Err(refusal(&axis, setup, LowDofMissing::Prior(free))),
     }
+}
+
+/// A prior larger than this many times the poses' size (the larger of the median robot and camera
+/// translation) is in another length unit: a millimetre prior on a recording in metres is 1000
+/// times too large, and its value then leaks through the axes' spread into X's other components
+/// (on `testdata/low_dof`, a refusal that blamed the motions).
+pub const PRIOR_SIZE_RATIO: f64 = 20.0;
+
+/// Refuses a prior of [`PRIOR_SIZE_RATIO`] times the poses' size or more, naming the unit.
+fn check_size(prior: &Prior, poses: &[PosePair]) -> Result<()> {
+    let median = |f: fn(&PosePair) -> f64| {
+        crate::check::outliers::median(poses.iter().map(f).collect())
+    };
+    let size = median(|p| p.base_from_gripper.translation.vector.norm())
+        .max(median(|p| p.camera_from_target.translation.vector.norm()));
+    if prior.value.abs() > PRIOR_SIZE_RATIO * size {
+        return Err(Error::InvalidParameter {
+            name: "prior",
+            message: format!(
+                "{prior} is {:.0} times the size of the poses' translations (median {size:.4}): it is in another length unit than the poses; give it in theirs",
+                prior.value.abs() / size.max(f64::MIN_POSITIVE)
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// A hand pitch over camera pitch ratio beyond this (or below its inverse) is a unit mix-up: the

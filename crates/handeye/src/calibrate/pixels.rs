@@ -257,7 +257,7 @@ fn report(
     ));
     refuse_if_undetermined(&uncertainty, setup, conditioning)?;
     let mut warnings = solution.calibration.warnings.clone();
-    warn_weak(&uncertainty, setup, &mut warnings);
+    warn_weak(&uncertainty, setup, None, &mut warnings);
     let quality = quality_report(&AllPairs::new(&poses, setup), &x, 0);
     let residuals = PoseResiduals::at(&poses, setup, &x);
     let name = |i: usize| {

@@ -294,7 +294,7 @@ pub fn calibrate_robot_world(
     }
     warnings.extend(systematic_found);
     warnings.extend(solved.warnings.iter().cloned());
-    warn_weak(&x_unc, setup, &mut warnings);
+    warn_weak(&x_unc, setup, None, &mut warnings);
     warnings.extend(kept_outliers);
     let per_pose = pose_residuals(&used, setup, &solved.x, &solved.target);
     let n = per_pose.len().max(1) as f64;

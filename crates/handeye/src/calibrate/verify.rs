@@ -15,10 +15,11 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use crate::calibrate::batch::{Assessment, Options, Report, calibrate, working_distance};
-use crate::model::error::{Error, Result};
+use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::Verdict;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson, log_so3};
+use crate::model::prior::{Component, Prior};
 
 /// The probability of the χ² test's acceptance region for a saved X of the same rig: one
 /// same-rig recording in a thousand is refused.
@@ -135,6 +136,13 @@ pub fn verify(
         ));
     }
     let report = match calibrate(poses, setup, options) {
+        Err(e) => match crate::calibrate::low_dof::wants_prior(&e) {
+            Some(free) => with_saved_prior(saved, poses, setup, options, free, &mut notes),
+            None => Err(e),
+        },
+        ok => ok,
+    };
+    let report = match report {
         Ok(r) => r,
         Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
             return Ok(cannot_tell(saved, poses, &e, notes));
@@ -261,6 +269,57 @@ pub const SIZE_LIMIT: f64 = 3.29;
 pub const SHAPE_POSES: usize = 12;
 
 /// The verdict of a recording whose own calibration was refused by `refusal`.
+/// A low-DOF recording (every motion turns about one axis) never determines X's translation along
+/// that axis (the component `free`): it is taken from the saved X, in the recording's unit and
+/// exactly (the difference there is then none, and the saved X's own sigma counts in the
+/// comparison), and the rest of X is checked.
+fn with_saved_prior(
+    saved: &SavedX,
+    poses: &[PosePair],
+    setup: Setup,
+    options: &Options,
+    free: Component,
+    notes: &mut Vec<String>,
+) -> Result<Report> {
+    let solve = |scale: f64| {
+        let mut with_prior = options.clone();
+        with_prior.priors.push(Prior {
+            component: free,
+            value: saved.x.translation.vector[free.index()] * scale,
+            sigma: 0.0,
+        });
+        calibrate(poses, setup, &with_prior)
+    };
+    // The saved X's unit: told by the file, else guessed by its size, then judged on the
+    // components the recording determines (the free one is the saved X's, whatever its unit).
+    let guess = match (saved.unit, recording_unit(poses)) {
+        (SavedUnit::Metre, Some(SavedUnit::Millimetre)) => 1000.0,
+        (SavedUnit::Millimetre, Some(SavedUnit::Metre)) => 1e-3,
+        (SavedUnit::Unknown, Some(SavedUnit::Metre)) if saved.x.translation.vector.norm() > 20.0 => {
+            1e-3
+        }
+        (SavedUnit::Unknown, Some(SavedUnit::Millimetre))
+            if saved.x.translation.vector.norm() < 2.0 =>
+        {
+            1000.0
+        }
+        _ => 1.0,
+    };
+    let first = solve(guess)?;
+    let i = free.index();
+    let mut across = saved.clone();
+    across.x.translation.vector[i] = 0.0;
+    let mut new_across = first.transform;
+    new_across.translation.vector[i] = 0.0;
+    let scale = unit_scale(&across, poses, &new_across, &mut Vec::new());
+    let report = if scale == guess { first } else { solve(scale)? };
+    notes.push(format!(
+        "every motion of the recording turns about one axis (a low-DOF robot), so it cannot check X's {}: that component was taken from the saved X, and the rest of X is checked",
+        free.name()
+    ));
+    Ok(report)
+}
+
 fn cannot_tell(
     saved: &SavedX,
     poses: &[PosePair],
@@ -285,10 +344,32 @@ fn cannot_tell(
         unit_scale: 1.0,
         quality: Assessment::Questionable,
         message: format!(
-            "this recording cannot tell whether the saved X fits: it does not determine X ({refusal}); record motions that rotate the hand about several different axes (20° or more each) and move it across the working volume"
+            "this recording cannot tell whether the saved X fits: it does not determine X ({refusal}){}",
+            if about_one_axis(refusal) {
+                // The refusal says what a low-DOF robot can record; a 6-DOF robot that turned one
+                // joint can do more.
+                "; if the robot can turn about other axes, record motions that rotate the hand about several different axes (20° or more each)"
+            } else {
+                "; record motions that rotate the hand about several different axes (20° or more each) and move it across the working volume"
+            }
         ),
         notes,
         recording: None,
+    }
+}
+
+/// Whether a refusal is of motions that all turn about one axis (its words then say what such a
+/// robot can record).
+fn about_one_axis(refusal: &Error) -> bool {
+    match refusal {
+        Error::Degenerate {
+            reason: Degeneracy::LowDof { .. },
+            ..
+        } => true,
+        Error::Untrusted {
+            refusal: Some(r), ..
+        } => about_one_axis(r),
+        _ => false,
     }
 }
 

@@ -199,7 +199,7 @@ fn low_dof_words(axis: &[f64; 3], spread_deg: f64, setup: Setup, missing: LowDof
             };
             let n = c.name();
             format!(
-                "{what}. Such motions determine X's rotation and its translation across the axis, but never its translation along it: measure {measure} (X's {n}: the camera's position along {along}, the input's length unit) and give it as a prior, `--prior {n}=VALUE` or `--prior {n}=VALUE+-SIGMA`"
+                "{what}. Such motions determine X's rotation and its translation across the axis, but never its translation along it: measure {measure} (X's {n}: the camera's position along {along}, the input's length unit) and give it as a prior, `--prior {n}=VALUE+-SIGMA` (`prior=\"{n}=VALUE+-SIGMA\"` in Python; without `+-SIGMA` the value is taken as exact)"
             )
         }
         LowDofMissing::NotStatable => format!(
@@ -212,7 +212,7 @@ fn low_dof_words(axis: &[f64; 3], spread_deg: f64, setup: Setup, missing: LowDof
         LowDofMissing::Units { ratio } => {
             let fix = if ratio > 1.0 { "robot-mm" } else { "camera-mm" };
             format!(
-                "{what}. The robot's and the camera's translations along the axis, the same length seen by both, differ by a factor of {ratio:.3e} (robot over camera): their poses are in different length units; if one is in millimetres and the other in metres, pass `--fix {fix}`"
+                "{what}. The robot's and the camera's translations along the axis, the same length seen by both, differ by a factor of {ratio:.3e} (robot over camera): their poses are in different length units; if one is in millimetres and the other in metres, pass `--fix {fix}` (`fix=\"{fix}\"` in Python)"
             )
         }
     }

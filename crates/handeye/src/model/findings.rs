@@ -66,6 +66,25 @@ pub fn advice(part: Part, d: &Direction, setup: Setup) -> String {
     }
 }
 
+/// [`advice`] for a low-DOF robot, whose motions all turn about `common` (X's reference frame):
+/// it cannot turn about another axis, so what helps is what it can record.
+pub fn one_axis_advice(part: Part, d: &Direction, setup: Setup, common: &[f64; 3]) -> String {
+    let frame = reference_frame(setup);
+    let (name, _) = axis_names(&d.axis);
+    let [x, y, z] = d.axis;
+    let [kx, ky, kz] = common.map(|v| if v.abs() < 5e-4 { 0.0 } else { v });
+    let (what, sigma) = match part {
+        Part::Rotation => ("rotation of X about", format!("{:.2}°", d.sigma)),
+        Part::Translation => (
+            "translation of X along",
+            format!("{:.3} in the input's length unit", d.sigma),
+        ),
+    };
+    format!(
+        "the {what} the {frame} {name} axis ({x:.2}, {y:.2}, {z:.2}) is weakly determined (one-sigma {sigma} under the data's own noise): every motion turns about one axis ({kx:.3}, {ky:.3}, {kz:.3}), as a low-DOF robot's do, so X comes from the motions' translations across that axis and their turns about it: add poses that move the gripper further across the axis and turn it through larger angles about it, or more poses"
+    )
+}
+
 /// The frame X is expressed in, in words: where the undetermined axis lies.
 pub(crate) fn reference_frame(setup: Setup) -> &'static str {
     match setup {

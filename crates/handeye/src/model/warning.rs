@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize, Serializer};
 
 use crate::model::findings::OutlierPose;
 use crate::model::findings::Reading;
-use crate::model::findings::{Direction, Part, Verdict, advice};
+use crate::model::findings::{Direction, Part, Verdict, advice, one_axis_advice};
 use crate::model::motion::Setup;
 
 /// Poses a warning lists by name before it says "and N more".
@@ -78,6 +78,11 @@ pub enum Warning {
         sigma: f64,
         /// The setup (it names the reference frame).
         setup: Setup,
+        /// The axis every motion turns about, in X's reference frame, when they all do (a low-DOF
+        /// robot, solved with a prior): the advice is then what such a robot can record, never
+        /// turns about other axes.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        one_axis: Option<[f64; 3]>,
     },
     /// The input was read another way, which fits far better (on request).
     ReadAs {
@@ -290,13 +295,17 @@ impl fmt::Display for Warning {
                 axis,
                 sigma,
                 setup,
+                one_axis,
             } => {
                 let d = Direction {
                     axis: *axis,
                     sigma: *sigma,
                     verdict: Verdict::Weak,
                 };
-                f.write_str(&advice(*part, &d, *setup))
+                match one_axis {
+                    None => f.write_str(&advice(*part, &d, *setup)),
+                    Some(k) => f.write_str(&one_axis_advice(*part, &d, *setup, k)),
+                }
             }
             Self::ReadAs { reading, finding } => {
                 write!(f, "read as {} (fix auto): {finding}", reading.name())
@@ -483,6 +492,14 @@ mod tests {
                 axis: [0.0, 0.0, 1.0],
                 sigma: 1.0,
                 setup: Setup::EyeToHand,
+                one_axis: None,
+            },
+            Warning::WeakDirection {
+                part: Part::Translation,
+                axis: [0.0, 1.0, 0.0],
+                sigma: 0.03,
+                setup: Setup::EyeInHand,
+                one_axis: Some([0.0, 0.0, 1.0]),
             },
             Warning::ReadAs {
                 reading: Reading::RobotInverted,
@@ -511,6 +528,38 @@ mod tests {
             assert!(!text.contains("--"), "{}: {text}", w.code());
             let json = serde_json::to_value(w).unwrap();
             assert_eq!(json["code"], w.code(), "serde's tag is code()");
+        }
+    }
+
+    #[test]
+    fn a_low_dof_weak_direction_advises_what_such_a_robot_can_record() {
+        for part in [Part::Rotation, Part::Translation] {
+            let weak = |one_axis| Warning::WeakDirection {
+                part,
+                axis: [0.02, -0.01, 1.0],
+                sigma: 1.35,
+                setup: Setup::EyeInHand,
+                one_axis,
+            };
+            let general = weak(None).to_string();
+            assert!(
+                general.contains("about the gripper x or y axis"),
+                "{general}"
+            );
+            let scara = weak(Some([0.0, 0.0, 1.0]));
+            let text = scara.to_string();
+            assert!(!text.contains("x or y"), "{text}");
+            assert!(text.contains("(0.000, 0.000, 1.000)"), "{text}");
+            assert!(text.contains("further across the axis"), "{text}");
+            let json = serde_json::to_value(&scara).unwrap();
+            assert_eq!(json["one_axis"], serde_json::json!([0.0, 0.0, 1.0]));
+            assert!(
+                serde_json::to_value(weak(None))
+                    .unwrap()
+                    .get("one_axis")
+                    .is_none()
+            );
+            assert_eq!(serde_json::from_value::<Warning>(json).unwrap(), scara);
         }
     }
 }
