@@ -603,7 +603,13 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
     }
     let _ = writeln!(
         s,
-        "Residuals of AX = XB: rotation {:.4}° RMS ({:.4}° max), translation {} {u} RMS ({} {u} max)",
+        "Residuals of AX = XB{}: rotation {:.4}° RMS ({:.4}° max), translation {} {u} RMS ({} {u} max)",
+        if r.reprojection.is_some() {
+            // X was fitted to the pixels: these are the PnP poses' noise, not X's error.
+            " of the PnP poses (their noise: X was fitted to the pixels)"
+        } else {
+            ""
+        },
         r.residual.rotation_deg_rms,
         r.residual.rotation_deg_max,
         short(r.residual.translation_rms),

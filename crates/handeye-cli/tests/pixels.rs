@@ -82,6 +82,15 @@ fn the_text_face_prints_the_reprojection_rms() {
         out.contains("Reprojection: ") && out.contains("px RMS"),
         "{out}"
     );
+    // The pose residuals are the PnP poses' (poor on a single tag), and say so: X was fitted to
+    // the pixels. Without detections they are X's own.
+    assert!(
+        out.contains("Residuals of AX = XB of the PnP poses (their noise"),
+        "{out}"
+    );
+    let (code, out, _) = run(&["calibrate", &path("tag_eih.jsonl"), "--output", "text"]);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("Residuals of AX = XB: "), "{out}");
 }
 
 #[test]
