@@ -183,6 +183,16 @@ pub fn run(args: Args) -> Result<()> {
             report.poses
         );
     }
+    if args.tsai_opencv_filter
+        && let Some(note) = handeye::TsaiOptions::opencv_filter_note(
+            report.motions,
+            report.pairing.motion_count(report.poses),
+        )
+    {
+        eprintln!(
+            "note: {note}; `--method tsai` without `--tsai-opencv-filter` keeps every motion"
+        );
+    }
     // The text face lists the warnings itself.
     if face != Face::Text {
         for w in &report.warnings {

@@ -664,3 +664,25 @@ fn online_with_the_papers_estimator_warns_about_misread_and_degenerate_input() {
         "{one_axis:?}"
     );
 }
+
+#[test]
+fn opencvs_tsai_filter_says_what_it_dropped() {
+    // Issue 33 item 19: OpenCV's filter drops motions without a word; a note says how many and why.
+    let file = testdata("opencv/opencv_eye-in-hand_noisy_10_12.jsonl");
+    let args = ["--pairs", "all", "--method", "tsai", "--output", "json"];
+    let (code, out, err) = run(handeye()
+        .arg("calibrate")
+        .arg(&file)
+        .args(args)
+        .arg("--tsai-opencv-filter"));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("note: OpenCV's Tsai motion filter kept 44 of 45 motions"),
+        "{err}"
+    );
+    let report: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(report["motions"], 44);
+    let (code, _, err) = run(handeye().arg("calibrate").arg(&file).args(args));
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("motion filter"), "{err}");
+}

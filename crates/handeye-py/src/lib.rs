@@ -180,6 +180,16 @@ fn solve_opencv_poses<'py>(
         report.transform.rotation.matrix(),
         report.transform.translation.vector,
     );
+    // OpenCV's filter drops motions without a word; the drop-in says how many, and why.
+    let filtered = tsai_opencv_filter
+        .then(|| {
+            handeye::TsaiOptions::opencv_filter_note(
+                report.motions,
+                report.pairing.motion_count(report.poses),
+            )
+        })
+        .flatten()
+        .map(|note| format!("{note}; method=\"tsai\" (the name) keeps every motion"));
     Ok((
         numpy::ndarray::Array2::from_shape_fn((3, 3), |(i, j)| r[(i, j)]).into_pyarray(py),
         numpy::ndarray::Array2::from_shape_fn((3, 1), |(i, _)| t[i]).into_pyarray(py),
@@ -187,6 +197,7 @@ fn solve_opencv_poses<'py>(
             .warnings
             .iter()
             .map(|w| opencv_words::warning(w, said))
+            .chain(filtered)
             .collect(),
     ))
 }

@@ -755,3 +755,44 @@ def test_a_low_dof_robot_takes_its_prior_in_python_as_on_the_command_line(tmp_pa
     assert any("cannot check X's tz" in n for n in v["notes"]), v["notes"]
     off = handeye.verify(saved, g, c, prior=f"tz={tz + 0.02!r}")
     assert off["verdict"] == "inconsistent", off["message"]
+
+
+def test_the_drop_in_says_what_opencvs_tsai_filter_dropped():
+    # Issue 33 item 19: OpenCV's Tsai constant applies its motion filter silently; the drop-in
+    # gives OpenCV's X and says how many motions the filter dropped and why. The name "tsai" keeps
+    # every motion, and says nothing.
+    def p_norm(rot):
+        return 2 * np.sin(np.arccos(np.clip((np.trace(rot) - 1) / 2, -1, 1)) / 2)
+
+    def h(R, tv):
+        m = np.eye(4)
+        m[:3, :3] = R if np.shape(R) == (3, 3) else cv2.Rodrigues(np.asarray(R, dtype=np.float64))[0]
+        m[:3, 3] = np.ravel(tv)
+        return m
+
+    dropping = 0
+    for seed in range(8):
+        Rg, tg, Rc, tc, _ = random_problem(np.random.default_rng(seed), n=10)
+        args = (Rg, tg, Rc, tc)
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            r, t = handeye.calibrate_hand_eye(*args, method=cv2.CALIB_HAND_EYE_TSAI)
+        r_cv, t_cv = cv2.calibrateHandEye(*args, method=cv2.CALIB_HAND_EYE_TSAI)
+        assert np.abs(r - r_cv).max() < 1e-6 and np.abs(t - t_cv).max() < 1e-6
+        # What OpenCV's filter keeps, counted from the poses as OpenCV counts it.
+        g, c = [h(*p) for p in zip(Rg, tg)], [h(*p) for p in zip(Rc, tc)]
+        kept = sum(1 for i in range(10) for j in range(i + 1, 10)
+                   if 0.3 <= p_norm((np.linalg.inv(g[j]) @ g[i])[:3, :3]) <= 1.7
+                   and 0.3 <= p_norm((c[j] @ np.linalg.inv(c[i]))[:3, :3]) <= 1.7)
+        notes = [str(w.message) for w in said if "Tsai motion filter" in str(w.message)]
+        if kept < 45:
+            dropping += 1
+            assert len(notes) == 1 and f"kept {kept} of 45 motions" in notes[0], (seed, kept, notes)
+            assert 'method="tsai"' in notes[0] and "--" not in notes[0], notes[0]
+        else:
+            assert notes == [], (seed, notes)
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            handeye.calibrate_hand_eye(*args, method="tsai")
+        assert not [w for w in said if "Tsai motion filter" in str(w.message)]
+    assert dropping > 0, "no seed had a motion dropped: the test tests nothing"

@@ -24,6 +24,24 @@ pub struct TsaiOptions {
     pub opencv_filter: bool,
 }
 
+impl TsaiOptions {
+    /// What OpenCV's motion filter did, in words, when it dropped motions (`None` when it kept all
+    /// `of`): the drop-in applies it silently for OpenCV's Tsai constant, as OpenCV does, and its
+    /// callers should know why X comes from fewer motions than they gave.
+    pub fn opencv_filter_note(kept: usize, of: usize) -> Option<String> {
+        let turn = |p: f64| (2.0 * (p / 2.0).asin()).to_degrees();
+        (kept < of).then(|| {
+            format!(
+                "OpenCV's Tsai motion filter kept {kept} of {of} motions: as cv2.calibrateHandEye does, it drops a motion whose gripper or camera turn has 2·sin(θ/2) outside [{}, {}] (turns under {:.1}° or over {:.1}°), and X comes from the motions kept",
+                FILTER_RANGE.0,
+                FILTER_RANGE.1,
+                turn(FILTER_RANGE.0),
+                turn(FILTER_RANGE.1)
+            )
+        })
+    }
+}
+
 /// Range of 2·sin(θ/2) kept by the OpenCV motion filter.
 const FILTER_RANGE: (f64, f64) = (0.3, 1.7);
 
