@@ -332,3 +332,61 @@ fn calibrate_says_the_error_at_the_working_distance_and_takes_a_point() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--point"), "{err}");
 }
+
+/// `camera_from_target` of one record (a 4×4 row list) turned by `deg` about the camera's x.
+fn turned_camera(line: &str, deg: f64) -> String {
+    let mut r: Value = serde_json::from_str(line).unwrap();
+    let m: Vec<Vec<f64>> = serde_json::from_value(r["camera_from_target"].clone()).unwrap();
+    let (c, s) = (deg.to_radians().cos(), deg.to_radians().sin());
+    let turn = [
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, c, -s, 0.0],
+        [0.0, s, c, 0.0],
+        [0.0, 0.0, 0.0, 1.0],
+    ];
+    let product: Vec<Vec<f64>> = (0..4)
+        .map(|i| {
+            (0..4)
+                .map(|j| (0..4).map(|k| turn[i][k] * m[k][j]).sum())
+                .collect()
+        })
+        .collect();
+    r["camera_from_target"] = serde_json::to_value(product).unwrap();
+    r.to_string()
+}
+
+#[test]
+fn strict_exits_5_when_the_saved_x_fits_a_questionable_recording() {
+    // The same rig, one frame of the new recording paired with a camera pose turned 8°: the saved
+    // X still fits (exit 0), but the recording's own calibration is questionable (its outlier is
+    // named), which `--strict` makes exit 5. The clean recording passes `--strict`.
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = halves(dir.path(), "nominal_stations_eih_s0.jsonl");
+    let saved = save(dir.path(), &a, "eye-in-hand", "json");
+    let b_arg = b.to_str().unwrap();
+    let (code, v, err) = verify(&saved, &[b_arg], &["--strict"]);
+    assert_eq!(
+        (code, v["quality"].as_str()),
+        (0, Some("good")),
+        "{v} {err}"
+    );
+    let text = std::fs::read_to_string(&b).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    lines[3] = turned_camera(&lines[3], 8.0);
+    let bad = dir.path().join("one_bad_frame.jsonl");
+    std::fs::write(&bad, lines.join("\n")).unwrap();
+    let bad_arg = bad.to_str().unwrap();
+    let (code, v, err) = verify(&saved, &[bad_arg], &[]);
+    assert_eq!(code, 0, "{v} {err}");
+    assert_eq!(v["verdict"], "consistent");
+    assert_eq!(v["quality"], "questionable");
+    let codes: Vec<&str> = v["recording"]["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|w| w["code"].as_str())
+        .collect();
+    assert!(codes.contains(&"outliers"), "{codes:?}");
+    let (code, _, err) = verify(&saved, &[bad_arg], &["--strict"]);
+    assert_eq!(code, 5, "{err}");
+}
