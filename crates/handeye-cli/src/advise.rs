@@ -2,8 +2,9 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::{Advice, WeaknessKind, advise};
+use handeye::{Advice, Unit, WeaknessKind, advise};
 
+use crate::faces::{self, short};
 use crate::input::{InputArgs, read_all};
 use crate::output::print_json;
 
@@ -22,19 +23,24 @@ pub fn run(args: Args) -> Result<()> {
     let recording = read_all(&args.input, handeye::Reading::AsGiven)?;
     let poses = recording.poses;
     let advice = advise(&poses, args.input.setup(), recording.written, args.count)?;
-    eprint!("{}", in_words(&advice));
+    eprint!("{}", in_words(&advice, faces::length_unit(&poses)));
     print_json(&advice)
 }
 
-/// The advice in a few lines.
-fn in_words(advice: &Advice) -> String {
+/// The advice in a few lines, lengths in the input's unit.
+fn in_words(advice: &Advice, unit: Option<Unit>) -> String {
+    let u = match unit {
+        Some(Unit::Metre) => "m",
+        Some(Unit::Millimetre) => "mm",
+        _ => "(input unit)",
+    };
     let mut out = String::new();
     if let Some(words) = &advice.low_dof {
         out.push_str(&format!("{words}\n"));
     }
     match advice.current {
         Some(c) => out.push_str(&format!(
-            "X from {} poses{}: one-sigma {:.3}° and {:.4} (input unit)\n",
+            "X from {} poses{}: one-sigma {:.3}° and {} {u}\n",
             advice.poses,
             if advice.outliers > 0 {
                 format!(" ({} outlier(s) left out)", advice.outliers)
@@ -42,7 +48,7 @@ fn in_words(advice: &Advice) -> String {
                 String::new()
             },
             c.rotation_deg,
-            c.translation
+            short(c.translation)
         )),
         None => out.push_str(&format!(
             "X is not determined by these {} poses: every rotation so far is about one axis\n",
@@ -57,22 +63,23 @@ fn in_words(advice: &Advice) -> String {
                 w.sigma
             ),
             WeaknessKind::Translation => format!(
-                "  weakest translation: along ({x:.2}, {y:.2}, {z:.2}), sigma {:.4}\n",
-                w.sigma
+                "  weakest translation: along ({x:.2}, {y:.2}, {z:.2}), sigma {} {u}\n",
+                short(w.sigma)
             ),
         });
     }
     for (k, s) in advice.suggestions.iter().enumerate() {
         let [x, y, z] = s.axis_gripper;
         out.push_str(&format!(
-            "next motion {}: turn the gripper {:.0}° about its axis ({x:.2}, {y:.2}, {z:.2})",
+            "next motion {}: turn the gripper {:.0}° about its axis ({x:.2}, {y:.2}, {z:.2}) through the flange (the gripper frame's origin stays put; keep the target in view)",
             k + 1,
             s.angle_deg
         ));
         match s.predicted {
             Some(p) => out.push_str(&format!(
-                " -> sigma {:.3}° and {:.4}\n",
-                p.rotation_deg, p.translation
+                " -> sigma {:.3}° and {} {u}\n",
+                p.rotation_deg,
+                short(p.translation)
             )),
             None => out.push('\n'),
         }

@@ -686,3 +686,26 @@ fn opencvs_tsai_filter_says_what_it_dropped() {
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("motion filter"), "{err}");
 }
+
+#[test]
+fn advise_gives_lengths_in_the_input_unit_and_the_pivot_of_each_turn() {
+    // Issue 33 item 16 (in part): the sizes carry the recording's unit, and each turn says where
+    // it pivots (the flange: the poses the advice predicts turn the gripper frame about its origin).
+    let file = testdata("kinhec/pairs/nominal_stations_eih_s0.jsonl");
+    let (code, _, err) = run(handeye().arg("advise").arg(&file));
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("(input unit)"), "{err}");
+    let sigma = err
+        .lines()
+        .find(|l| l.starts_with("X from 40 poses"))
+        .unwrap();
+    assert!(sigma.ends_with(" m"), "{sigma}");
+    let next = err.lines().filter(|l| l.starts_with("next motion")).count();
+    assert_eq!(next, 3, "{err}");
+    assert!(
+        err.lines()
+            .filter(|l| l.starts_with("next motion"))
+            .all(|l| l.contains("through the flange") && l.ends_with(" m")),
+        "{err}"
+    );
+}
