@@ -29,11 +29,7 @@ pub fn run(args: Args) -> Result<()> {
 
 /// The advice in a few lines, lengths in the input's unit.
 fn in_words(advice: &Advice, unit: Option<Unit>) -> String {
-    let u = match unit {
-        Some(Unit::Metre) => "m",
-        Some(Unit::Millimetre) => "mm",
-        _ => "(input unit)",
-    };
+    let u = faces::unit_name(unit);
     let mut out = String::new();
     if let Some(words) = &advice.low_dof {
         out.push_str(&format!("{words}\n"));

@@ -134,6 +134,7 @@ pub fn run(args: Args) -> Result<()> {
     let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
     enough(&args.input, poses.len(), 2, "to make a motion")?;
     let face = Face::chosen(args.output);
+    let tsai = options.tsai;
     let report = match calibrate(
         &poses,
         setup,
@@ -183,12 +184,7 @@ pub fn run(args: Args) -> Result<()> {
             report.poses
         );
     }
-    if args.tsai_opencv_filter
-        && let Some(note) = handeye::TsaiOptions::opencv_filter_note(
-            report.motions,
-            report.pairing.motion_count(report.poses),
-        )
-    {
+    if let Some(note) = report.tsai_filter_note(tsai) {
         eprintln!(
             "note: {note}; `--method tsai` without `--tsai-opencv-filter` keeps every motion"
         );

@@ -230,7 +230,8 @@ pub fn length_unit(poses: &[handeye::PosePair]) -> Option<Unit> {
     poses.iter().find_map(Unit::infer)
 }
 
-fn unit_name(unit: Option<Unit>) -> &'static str {
+/// The unit's symbol for a length printed for a person.
+pub fn unit_name(unit: Option<Unit>) -> &'static str {
     match unit {
         Some(Unit::Metre) => "m",
         Some(Unit::Millimetre) => "mm",

@@ -36,6 +36,20 @@ fn file(name: &str) -> String {
         .to_string()
 }
 
+/// `calibrate INPUT --setup SETUP --prior PRIOR --output FACE`: (exit code, stdout, stderr).
+fn with_prior(input: &str, setup: &str, prior: &str, face: &str) -> (i32, String, String) {
+    run(&[
+        "calibrate",
+        input,
+        "--setup",
+        setup,
+        "--prior",
+        prior,
+        "--output",
+        face,
+    ])
+}
+
 const RECORDINGS: [(&str, &str); 2] = [
     ("scara_eye-in-hand_s0", "eye-in-hand"),
     ("scara_eye-to-hand_s1", "eye-to-hand"),
@@ -70,16 +84,7 @@ fn scara_with_the_true_height_is_within_three_sigma() {
     for (name, setup) in RECORDINGS {
         let (t, q) = truth(name);
         let prior = format!("tz={}", t[2]);
-        let (code, out, err) = run(&[
-            "calibrate",
-            &file(name),
-            "--setup",
-            setup,
-            "--prior",
-            &prior,
-            "--output",
-            "json",
-        ]);
+        let (code, out, err) = with_prior(&file(name), setup, &prior, "json");
         assert_eq!(code, 0, "{name}: {err}");
         let r: Value = serde_json::from_str(&out).unwrap();
         assert_eq!(r["verdict"], "good", "{name}: {err}");
@@ -110,16 +115,7 @@ fn a_prior_sigma_is_the_reported_sigma_of_tz() {
     let (name, setup) = RECORDINGS[1];
     let (t, _) = truth(name);
     let prior = format!("tz={}+-0.002", t[2]);
-    let (code, out, err) = run(&[
-        "calibrate",
-        &file(name),
-        "--setup",
-        setup,
-        "--prior",
-        &prior,
-        "--output",
-        "json",
-    ]);
+    let (code, out, err) = with_prior(&file(name), setup, &prior, "json");
     assert_eq!(code, 0, "{err}");
     let r: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(r["prior"]["tz"]["sigma"].as_f64(), Some(0.002));
@@ -130,16 +126,7 @@ fn a_prior_sigma_is_the_reported_sigma_of_tz() {
     assert!((tz_sigma - 0.002).abs() < 1e-9, "{tz_sigma}");
     assert!(r["uncertainty"]["at_point"]["sigma"].as_f64().unwrap() >= 0.002);
     // The text face says which component came from the prior.
-    let (code, out, _) = run(&[
-        "calibrate",
-        &file(name),
-        "--setup",
-        setup,
-        "--prior",
-        &prior,
-        "--output",
-        "text",
-    ]);
+    let (code, out, _) = with_prior(&file(name), setup, &prior, "text");
     assert_eq!(code, 0);
     assert!(
         out.contains("Prior: tz = ") && out.contains("+- 0.002"),
@@ -247,16 +234,7 @@ fn verify_checks_a_saved_scara_x_and_takes_the_free_height_from_it() {
     std::fs::create_dir_all(&dir).unwrap();
     for (name, setup) in RECORDINGS {
         let tz = truth(name).0[2];
-        let (code, out, err) = run(&[
-            "calibrate",
-            &file(name),
-            "--setup",
-            setup,
-            "--prior",
-            &format!("tz={tz}+-0.001"),
-            "--output",
-            "json",
-        ]);
+        let (code, out, err) = with_prior(&file(name), setup, &format!("tz={tz}+-0.001"), "json");
         assert_eq!(code, 0, "{name}: {err}");
         let saved = dir.join(format!("{name}.json"));
         std::fs::write(&saved, out).unwrap();

@@ -181,14 +181,8 @@ fn solve_opencv_poses<'py>(
         report.transform.translation.vector,
     );
     // OpenCV's filter drops motions without a word; the drop-in says how many, and why.
-    let filtered = tsai_opencv_filter
-        .then(|| {
-            handeye::TsaiOptions::opencv_filter_note(
-                report.motions,
-                report.pairing.motion_count(report.poses),
-            )
-        })
-        .flatten()
+    let filtered = report
+        .tsai_filter_note(options.tsai)
         .map(|note| format!("{note}; method=\"tsai\" (the name) keeps every motion"));
     Ok((
         numpy::ndarray::Array2::from_shape_fn((3, 3), |(i, j)| r[(i, j)]).into_pyarray(py),
@@ -392,10 +386,7 @@ fn calibrate_report<'py>(
         joints: checked_joints(joints)?,
         priors: priors(prior)?,
         reject_outliers,
-        fix: match fix {
-            None => handeye::Fix::Refuse,
-            Some(name) => name.parse().map_err(value_error)?,
-        },
+        fix: parse_fix(fix)?,
         replicates: bootstrap,
         point: checked_point(point)?,
         ..calibration_options(method, pairs, tsai_opencv_filter)?
@@ -428,10 +419,7 @@ fn robot_world_report<'py>(
     let options = handeye::RobotWorldOptions {
         joints: checked_joints(joints)?,
         method: method.parse().map_err(value_error)?,
-        fix: match fix {
-            None => handeye::Fix::Refuse,
-            Some(name) => name.parse().map_err(value_error)?,
-        },
+        fix: parse_fix(fix)?,
         replicates: bootstrap,
         reject_outliers,
         point: checked_point(point)?,
@@ -701,6 +689,13 @@ fn calibration_options(
             opencv_filter: tsai_opencv_filter,
         },
         ..Default::default()
+    })
+}
+
+/// `fix` by name; none: a misread input is refused (the library's default, as on the command line).
+fn parse_fix(fix: Option<&str>) -> PyResult<handeye::Fix> {
+    fix.map_or(Ok(handeye::Fix::Refuse), |name| {
+        name.parse().map_err(value_error)
     })
 }
 

@@ -335,17 +335,23 @@ fn the_error_at_the_working_distance_is_as_large_as_it_says() {
             ratios.push(error / at.sigma);
         }
     }
+    let (median, within) = summary(&mut ratios, "results");
+    assert!(ratios.len() >= 30, "{ratios:?}");
+    assert!((0.5..=1.5).contains(&median), "median {median}: {ratios:?}");
+    assert!(within >= 0.9, "{within}: {ratios:?}");
+}
+
+/// The median error/sigma and the share within 3 sigma, printed with `label`.
+fn summary(ratios: &mut [f64], label: &str) -> (f64, f64) {
     ratios.sort_by(f64::total_cmp);
     let median = ratios[ratios.len() / 2];
     let within = ratios.iter().filter(|r| **r <= 3.0).count() as f64 / ratios.len() as f64;
     println!(
-        "{} results: error/sigma median {median:.2}, {:.0}% within 3 sigma",
+        "{} {label}: error/sigma median {median:.2}, {:.0}% within 3 sigma",
         ratios.len(),
         within * 100.0
     );
-    assert!(ratios.len() >= 30, "{ratios:?}");
-    assert!((0.5..=1.5).contains(&median), "median {median}: {ratios:?}");
-    assert!(within >= 0.9, "{within}: {ratios:?}");
+    (median, within)
 }
 
 #[test]
@@ -382,14 +388,7 @@ fn the_online_estimate_says_its_error_at_the_working_distance_too() {
             ratios.push(error / sigma);
         }
     }
-    ratios.sort_by(f64::total_cmp);
-    let median = ratios[ratios.len() / 2];
-    let within = ratios.iter().filter(|r| **r <= 3.0).count() as f64 / ratios.len() as f64;
-    println!(
-        "{} online estimates: error/sigma median {median:.2}, {:.0}% within 3 sigma",
-        ratios.len(),
-        within * 100.0
-    );
+    let (median, within) = summary(&mut ratios, "online estimates");
     assert!(ratios.len() >= 30, "{ratios:?}");
     assert!(within >= 0.9, "{within}: {ratios:?}");
     // Not inflated beyond use: the error is a fair fraction of the sigma.

@@ -32,6 +32,7 @@ use crate::model::pose::TransformJson;
 use crate::model::prior::{Prior, PriorsUsed, check_priors};
 use crate::calibrate::low_dof::{self, LowDofReport};
 use crate::model::warning::{SHOWN, Warning};
+pub(crate) use crate::check::outliers::working_distance;
 use crate::solve::accumulate::PoseAccumulator;
 use crate::solve::motions::{AllPairs, MotionSource};
 use crate::solve::{
@@ -313,6 +314,17 @@ pub struct HeldOutName {
     pub rotation_deg: f64,
     /// See `rotation_deg`.
     pub translation: f64,
+}
+
+impl Report {
+    /// What OpenCV's Tsai motion filter dropped, in words, when `tsai` applied it and it dropped
+    /// motions ([`TsaiOptions::opencv_filter_note`]); each face adds how it keeps every motion.
+    pub fn tsai_filter_note(&self, tsai: TsaiOptions) -> Option<String> {
+        if !tsai.opencv_filter || self.method != Method::Tsai {
+            return None;
+        }
+        TsaiOptions::opencv_filter_note(self.motions, self.pairing.motion_count(self.poses))
+    }
 }
 
 /// Calibrates X from `poses` (see the module docs for the steps).
@@ -795,16 +807,6 @@ pub(crate) fn choose_reading(
             frames: check.frames,
         }),
     }
-}
-
-/// Median distance from the camera to the target, input units.
-pub(crate) fn working_distance(poses: &[PosePair]) -> f64 {
-    crate::check::outliers::median(
-        poses
-            .iter()
-            .map(|p| p.camera_from_target.translation.vector.norm())
-            .collect(),
-    )
 }
 
 /// The poses without the outliers.

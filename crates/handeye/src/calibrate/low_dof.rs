@@ -114,11 +114,14 @@ pub const PRIOR_SIZE_RATIO: f64 = 20.0;
 
 /// Refuses a prior of [`PRIOR_SIZE_RATIO`] times the poses' size or more, naming the unit.
 fn check_size(prior: &Prior, poses: &[PosePair]) -> Result<()> {
-    let median = |f: fn(&PosePair) -> f64| {
-        crate::check::outliers::median(poses.iter().map(f).collect())
-    };
-    let size = median(|p| p.base_from_gripper.translation.vector.norm())
-        .max(median(|p| p.camera_from_target.translation.vector.norm()));
+    use crate::check::outliers::{median, working_distance};
+    let robot = median(
+        poses
+            .iter()
+            .map(|p| p.base_from_gripper.translation.vector.norm())
+            .collect(),
+    );
+    let size = robot.max(working_distance(poses));
     if prior.value.abs() > PRIOR_SIZE_RATIO * size {
         return Err(Error::InvalidParameter {
             name: "prior",
@@ -358,23 +361,25 @@ pub(crate) fn wants_prior(e: &Error) -> Option<Component> {
     }
 }
 
-/// Whether `e` refuses a low-DOF recording for what its motions lack (alone, or with what in the
-/// input explains it).
-pub(crate) fn lacks_motions(e: &Error) -> bool {
+/// What a low-DOF refusal says is missing, through the refusal an untrusted X carries too; `None`
+/// for every other error.
+pub(crate) fn missing(e: &Error) -> Option<LowDofMissing> {
     match e {
         Error::Untrusted {
             refusal: Some(r), ..
-        } => lacks_motions(r),
+        } => missing(r),
         Error::Degenerate {
-            reason:
-                Degeneracy::LowDof {
-                    missing: LowDofMissing::Motions,
-                    ..
-                },
+            reason: Degeneracy::LowDof { missing, .. },
             ..
-        } => true,
-        _ => false,
+        } => Some(*missing),
+        _ => None,
     }
+}
+
+/// Whether `e` refuses a low-DOF recording for what its motions lack (alone, or with what in the
+/// input explains it).
+pub(crate) fn lacks_motions(e: &Error) -> bool {
+    missing(e) == Some(LowDofMissing::Motions)
 }
 
 /// The refusal of a low-DOF X whose data part is undetermined under the data's own noise.

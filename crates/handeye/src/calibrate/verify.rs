@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use crate::calibrate::batch::{Assessment, Options, Report, calibrate, working_distance};
-use crate::model::error::{Degeneracy, Error, Result};
+use crate::model::error::{Error, Result};
 use crate::model::findings::Verdict;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson, log_so3};
@@ -292,17 +292,11 @@ fn with_saved_prior(
     };
     // The saved X's unit: told by the file, else guessed by its size, then judged on the
     // components the recording determines (the free one is the saved X's, whatever its unit).
-    let guess = match (saved.unit, recording_unit(poses)) {
-        (SavedUnit::Metre, Some(SavedUnit::Millimetre)) => 1000.0,
-        (SavedUnit::Millimetre, Some(SavedUnit::Metre)) => 1e-3,
-        (SavedUnit::Unknown, Some(SavedUnit::Metre)) if saved.x.translation.vector.norm() > 20.0 => {
-            1e-3
-        }
-        (SavedUnit::Unknown, Some(SavedUnit::Millimetre))
-            if saved.x.translation.vector.norm() < 2.0 =>
-        {
-            1000.0
-        }
+    let size = saved.x.translation.vector.norm();
+    let guess = match (told_scale(saved, poses), recording_unit(poses)) {
+        (Some((scale, _)), _) => scale,
+        (None, Some(SavedUnit::Metre)) if size > NOT_METRES => 1e-3,
+        (None, Some(SavedUnit::Millimetre)) if size < NOT_MILLIMETRES => 1000.0,
         _ => 1.0,
     };
     let first = solve(guess)?;
@@ -345,7 +339,7 @@ fn cannot_tell(
         quality: Assessment::Questionable,
         message: format!(
             "this recording cannot tell whether the saved X fits: it does not determine X ({refusal}){}",
-            if about_one_axis(refusal) {
+            if crate::calibrate::low_dof::missing(refusal).is_some() {
                 // The refusal says what a low-DOF robot can record; a 6-DOF robot that turned one
                 // joint can do more.
                 "; if the robot can turn about other axes, record motions that rotate the hand about several different axes (20° or more each)"
@@ -355,21 +349,6 @@ fn cannot_tell(
         ),
         notes,
         recording: None,
-    }
-}
-
-/// Whether a refusal is of motions that all turn about one axis (its words then say what such a
-/// robot can record).
-fn about_one_axis(refusal: &Error) -> bool {
-    match refusal {
-        Error::Degenerate {
-            reason: Degeneracy::LowDof { .. },
-            ..
-        } => true,
-        Error::Untrusted {
-            refusal: Some(r), ..
-        } => about_one_axis(r),
-        _ => false,
     }
 }
 
@@ -422,11 +401,9 @@ pub fn limit_sigmas() -> f64 {
 /// The factor bringing the saved translation into the recording's unit, with a note when it is
 /// not 1.
 fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, notes: &mut Vec<String>) -> f64 {
-    let recording = recording_unit(poses);
-    let (scale, words) = match (saved.unit, recording) {
-        (SavedUnit::Metre, Some(SavedUnit::Millimetre)) => (1000.0, "metres, the recording in millimetres"),
-        (SavedUnit::Millimetre, Some(SavedUnit::Metre)) => (1e-3, "millimetres, the recording in metres"),
-        (SavedUnit::Unknown, _) => {
+    let (scale, words) = match (told_scale(saved, poses), saved.unit) {
+        (Some(told), _) => told,
+        (None, SavedUnit::Unknown) => {
             // A file that does not say: the unit whose X is nearer the recording's, when a factor
             // of 1000 brings it ten times nearer.
             let gap = |k: f64| (saved.x.translation.vector * k - new.translation.vector).norm();
@@ -447,6 +424,28 @@ fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, notes: &mut V
     }
     scale
 }
+
+/// The factor to the recording's unit when the saved file tells its own unit and it differs from
+/// the recording's, with the words of the note.
+fn told_scale(saved: &SavedX, poses: &[PosePair]) -> Option<(f64, &'static str)> {
+    match (saved.unit, recording_unit(poses)) {
+        (SavedUnit::Metre, Some(SavedUnit::Millimetre)) => {
+            Some((1000.0, "metres, the recording in millimetres"))
+        }
+        (SavedUnit::Millimetre, Some(SavedUnit::Metre)) => {
+            Some((1e-3, "millimetres, the recording in metres"))
+        }
+        _ => None,
+    }
+}
+
+/// A saved X of unknown unit whose translation is longer than this is not in metres (a camera 20 m
+/// from its flange or base is no rig): millimetres, on a recording in metres.
+const NOT_METRES: f64 = 20.0;
+
+/// A saved X of unknown unit whose translation is shorter than this is not in millimetres (a camera
+/// within 2 mm of the flange's origin): metres, on a recording in millimetres.
+const NOT_MILLIMETRES: f64 = 2.0;
 
 /// Metres or millimetres from the size of the poses' translations (the median of each pose's
 /// larger translation), `None` when it fits neither.

@@ -267,6 +267,16 @@ pub(crate) fn median_in(v: &mut [f64]) -> f64 {
     *v.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
+/// Median distance from the camera to the target, input units.
+pub(crate) fn working_distance(poses: &[PosePair]) -> f64 {
+    median(
+        poses
+            .iter()
+            .map(|p| p.camera_from_target.translation.vector.norm())
+            .collect(),
+    )
+}
+
 /// The length scale of the scene, in the robot's unit: the median distance of the hand positions
 /// from their coordinate-wise median (robust, so that one mistyped pose does not set it).
 pub(crate) fn translation_scale(poses: &[PosePair], setup: Setup) -> f64 {
