@@ -10,7 +10,7 @@ use handeye::{REPLICATES, REPLICATES_RANGE};
 use handeye::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 
 use handeye::TsaiOptions;
-use handeye::{Error, Method, Pairing};
+use handeye::{Error, Method, Pairing, PosePair, Setup};
 use handeye::{Named, RobotWorldMethod};
 
 use crate::faces::{self, Face, Published, length_unit};
@@ -139,36 +139,27 @@ pub fn run(args: Args) -> Result<()> {
         &poses,
         setup,
         &Options {
-            pose_names: recording.names,
+            pose_names: recording.names.clone(),
             written,
             joints: recording.joints,
             ..options
         },
     ) {
         Ok(report) => report,
-        Err(e) => {
-            let refusal = matches!(
-                e,
-                Error::Degenerate { .. }
-                    | Error::TooFewMotions { .. }
-                    | Error::Misread { .. }
-                    | Error::Untrusted { .. }
-            );
-            if face == Face::Text && refusal {
-                print_text(&faces::refused(&e))?;
-            }
-            if matches!(e, Error::Misread { .. }) && carries_detections(&args.input) {
-                return Err(anyhow::Error::from(e).context(
-                    "these records carry `detections`: the PnP poses of a planar target flip (the planar ambiguity), which the pose-based check can take for inverted poses; calibrate on the pixels, where the reading is checked on the detections: --method reprojection --intrinsics FILE",
-                ));
-            }
-            return Err(e.into());
-        }
+        Err(e) => return Err(refused(&args, e, face, &poses, setup)),
     };
     // The unit of the poses as solved: a `--fix robot-mm` (or `auto`) reading has made them metres.
     let unit = length_unit(&report.reading.applied.apply(&poses, written));
     if let Some(path) = &args.report {
-        crate::report::write_calibrate(path, &poses, setup, &report)?;
+        let page = crate::report::RunPage {
+            poses: &poses,
+            names: &recording.names,
+            written,
+            setup,
+            unit,
+            summary: faces::text(&report, &frames, unit),
+        };
+        crate::report::write_calibrate(path, &page, &report)?;
         eprintln!("wrote {}", path.display());
     }
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
@@ -349,7 +340,6 @@ fn run_robot_world(args: &Args) -> Result<()> {
     for (flag, given) in [
         ("--pairs", args.pairs.is_some()),
         ("--tsai-opencv-filter", args.tsai_opencv_filter),
-        ("--report", args.report.is_some()),
         ("--prior", !args.prior.is_empty()),
     ] {
         if given {
@@ -374,8 +364,10 @@ fn run_robot_world(args: &Args) -> Result<()> {
     };
     let (fix, replicates) = (args.fix.unwrap_or_default(), args.bootstrap);
     let setup = args.input.setup();
+    let frames = output_frames(args)?;
     let recording = read_all(&args.input, fix.reading())?;
     let poses = recording.poses;
+    let written = recording.written;
     let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
     enough(
         &args.input,
@@ -383,7 +375,8 @@ fn run_robot_world(args: &Args) -> Result<()> {
         3,
         "to determine X and the target's pose",
     )?;
-    let report = calibrate_robot_world(
+    let face = Face::chosen(args.output);
+    let report = match calibrate_robot_world(
         &poses,
         setup,
         &RobotWorldOptions {
@@ -392,12 +385,28 @@ fn run_robot_world(args: &Args) -> Result<()> {
             replicates,
             reject_outliers: args.reject_outliers,
             outlier_deg: args.outlier_deg,
-            pose_names: recording.names,
-            written: recording.written,
+            pose_names: recording.names.clone(),
+            written,
             point: args.point,
             joints: recording.joints,
         },
-    )?;
+    ) {
+        Ok(report) => report,
+        Err(e) => return Err(refused(args, e, face, &poses, setup)),
+    };
+    let unit = length_unit(&report.reading.applied.apply(&poses, written));
+    if let Some(path) = &args.report {
+        let page = crate::report::RunPage {
+            poses: &poses,
+            names: &recording.names,
+            written,
+            setup,
+            unit,
+            summary: faces::robot_world_text(&report, &frames, unit),
+        };
+        crate::report::write_robot_world(path, &page, &report)?;
+        eprintln!("wrote {}", path.display());
+    }
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
         eprintln!(
             "rejected {} outlier pose(s) of {}",
@@ -405,28 +414,90 @@ fn run_robot_world(args: &Args) -> Result<()> {
             report.outliers.poses.len() + report.poses
         );
     }
-    for w in &report.warnings {
-        eprintln!("warning: {}", faces::warning(w));
-    }
-    match Face::chosen(args.output) {
-        // The YAML lists X, the target, their one-sigma and the residuals: readable as text too.
-        Face::Yaml | Face::Text => return print_text(&robot_world_yaml(&report)),
-        Face::Ros2 | Face::Urdf => {
-            return Err(Error::InvalidParameter {
-                name: "output",
-                message:
-                    "ros2 and urdf are not offered with --robot-world yet; use json, yaml or text"
-                        .into(),
-            }
-            .into());
+    if face != Face::Text {
+        for w in &report.warnings {
+            eprintln!("warning: {}", faces::warning(w));
         }
-        Face::Json => {}
     }
-    print_json(&WithTimeOffset {
-        report: &report,
-        time_offset_s: time_offset,
-        time_offset_sigma_s: time_offset_sigma,
-    })
+    let source = format!("calibrate, robot-world method {}", report.method);
+    let ros = matches!(face, Face::Ros2 | Face::Urdf);
+    let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
+    // X, then the target's pose: `base_from_target` (eye-in-hand) or `gripper_from_target`.
+    let x = Published {
+        x: &report.transform,
+        frame: &report.frame,
+        setup,
+        source: &source,
+        unit: ros_unit,
+    };
+    let target = Published {
+        x: &report.target_transform,
+        frame: &report.target.frame,
+        ..x
+    };
+    let (parent, child) = faces::target_frames(setup, &frames);
+    let target_frames = faces::Frames {
+        parent,
+        child,
+        ..frames.clone()
+    };
+    match face {
+        Face::Text => print_text(&faces::robot_world_text(&report, &frames, unit))?,
+        // The YAML lists X, the target, their one-sigma and the residuals.
+        Face::Yaml => print_text(&robot_world_yaml(&report))?,
+        Face::Ros2 => print_text(&format!(
+            "{}\n{}",
+            faces::ros2(x, &frames),
+            faces::ros2(target, &target_frames)
+        ))?,
+        Face::Urdf => print_text(&format!(
+            "{}{}",
+            faces::urdf(x, &frames),
+            faces::urdf(target, &target_frames)
+        ))?,
+        Face::Json => print_json(&WithTimeOffset {
+            report: &report,
+            time_offset_s: time_offset,
+            time_offset_sigma_s: time_offset_sigma,
+        })?,
+    }
+    if args.strict && report.verdict == Assessment::Questionable {
+        return Err(Questionable.into());
+    }
+    Ok(())
+}
+
+/// A refusal: said in the text face, drawn in `--report` (the motions' axes show what they
+/// lack), and returned as the error that sets the exit code.
+fn refused(args: &Args, e: Error, face: Face, poses: &[PosePair], setup: Setup) -> anyhow::Error {
+    let refusal = matches!(
+        e,
+        Error::Degenerate { .. }
+            | Error::TooFewMotions { .. }
+            | Error::Misread { .. }
+            | Error::Untrusted { .. }
+    );
+    if refusal {
+        if face == Face::Text
+            && let Err(printed) = print_text(&faces::refused(&e))
+        {
+            return printed;
+        }
+        if let Some(path) = &args.report {
+            match crate::report::write_refused(path, poses, setup, &faces::refused(&e)) {
+                Ok(()) => eprintln!("wrote {}", path.display()),
+                Err(written) => eprintln!("{written:#}"),
+            }
+        }
+    }
+    let misread = matches!(e, Error::Misread { .. });
+    let e = anyhow::Error::from(e);
+    if misread && carries_detections(&args.input) {
+        return e.context(
+            "these records carry `detections`: the PnP poses of a planar target flip (the planar ambiguity), which the pose-based check can take for inverted poses; calibrate on the pixels, where the reading is checked on the detections: --method reprojection --intrinsics FILE",
+        );
+    }
+    e
 }
 
 /// The robot-world result as ROS-style YAML: X and the target pose.

@@ -4,9 +4,9 @@
 
 use std::fmt::Write as _;
 
-use handeye::Report;
 use handeye::Unit;
 use handeye::{Error, Setup};
+use handeye::{Report, RobotWorldReport};
 use quick_xml::events::{BytesText, Event};
 use yaml_rust2::{Yaml, YamlEmitter};
 
@@ -510,9 +510,6 @@ pub fn at_point(p: &handeye::AtPoint, unit: Option<Unit>) -> String {
 pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
     let u = unit_name(unit);
     let mut s = String::new();
-    let [tx, ty, tz] = r.x.translation;
-    let [qx, qy, qz, qw] = r.x.quaternion_xyzw;
-    let [roll, pitch, yaw] = rpy(&r.transform).map(f64::to_degrees);
     let _ = writeln!(
         s,
         "X = {} ({} -> {}), {} on {} motions of {} poses ({})",
@@ -524,36 +521,13 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
         r.poses,
         r.setup.name()
     );
-    let mm = if unit == Some(Unit::Metre) {
-        format!("  = [{:.2}, {:.2}, {:.2}] mm", tx * 1e3, ty * 1e3, tz * 1e3)
-    } else {
-        String::new()
-    };
-    let _ = writeln!(s, "  translation  [{tx:.6}, {ty:.6}, {tz:.6}] {u}{mm}");
-    let _ = writeln!(
-        s,
-        "  rotation     roll {roll:.4}°, pitch {pitch:.4}°, yaw {yaw:.4}° (fixed axes x, y, z, as URDF)"
+    transform_lines(&mut s, &r.transform, unit);
+    verdict_lines(
+        &mut s,
+        r.verdict,
+        &r.warnings,
+        (r.outliers.poses.len(), r.outliers.rejected),
     );
-    let _ = writeln!(
-        s,
-        "  quaternion   x {qx:.8}, y {qy:.8}, z {qz:.8}, w {qw:.8}"
-    );
-    let _ = writeln!(s, "\nVerdict: {}", r.verdict.name());
-    for w in &r.warnings {
-        let _ = writeln!(s, "  - {}", warning(w));
-    }
-    if !r.outliers.poses.is_empty() {
-        let _ = writeln!(
-            s,
-            "  - {} pose(s) disagree with the others{}",
-            r.outliers.poses.len(),
-            if r.outliers.rejected {
-                " and were left out"
-            } else {
-                ""
-            }
-        );
-    }
     let _ = writeln!(
         s,
         "\nUncertainty (one sigma): rotation {:.4}°, translation {} {u}",
@@ -643,6 +617,118 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
         );
     }
     s
+}
+
+/// A transform's lines in the text face: its translation (and in millimetres when it is in
+/// metres), its roll, pitch, yaw and its quaternion.
+fn transform_lines(s: &mut String, x: &handeye::Transform, unit: Option<Unit>) {
+    let u = unit_name(unit);
+    let json = handeye::TransformJson::from(x);
+    let [tx, ty, tz] = json.translation;
+    let [qx, qy, qz, qw] = json.quaternion_xyzw;
+    let [roll, pitch, yaw] = rpy(x).map(f64::to_degrees);
+    let mm = if unit == Some(Unit::Metre) {
+        format!("  = [{:.2}, {:.2}, {:.2}] mm", tx * 1e3, ty * 1e3, tz * 1e3)
+    } else {
+        String::new()
+    };
+    let _ = writeln!(s, "  translation  [{tx:.6}, {ty:.6}, {tz:.6}] {u}{mm}");
+    let _ = writeln!(
+        s,
+        "  rotation     roll {roll:.4}°, pitch {pitch:.4}°, yaw {yaw:.4}° (fixed axes x, y, z, as URDF)"
+    );
+    let _ = writeln!(
+        s,
+        "  quaternion   x {qx:.8}, y {qy:.8}, z {qz:.8}, w {qw:.8}"
+    );
+}
+
+/// The verdict, its cautions and the poses that disagree.
+fn verdict_lines(
+    s: &mut String,
+    verdict: handeye::Assessment,
+    warnings: &[handeye::Warning],
+    (disagree, rejected): (usize, bool),
+) {
+    let _ = writeln!(s, "\nVerdict: {}", verdict.name());
+    for w in warnings {
+        let _ = writeln!(s, "  - {}", warning(w));
+    }
+    if disagree > 0 {
+        let _ = writeln!(
+            s,
+            "  - {disagree} pose(s) disagree with the others{}",
+            if rejected { " and were left out" } else { "" }
+        );
+    }
+}
+
+/// The robot-world summary for a person: X and the target's pose, the verdict, the uncertainty
+/// of both, the residuals, and what to do next.
+pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) -> String {
+    let u = unit_name(unit);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "X = {} ({} -> {}), robot-world method {} on {} poses ({})",
+        r.frame,
+        f.parent,
+        f.child,
+        r.method,
+        r.poses,
+        r.setup.name()
+    );
+    transform_lines(&mut s, &r.transform, unit);
+    let (parent, child) = target_frames(r.setup, f);
+    let _ = writeln!(s, "Target = {} ({parent} -> {child})", r.target.frame);
+    transform_lines(&mut s, &r.target_transform, unit);
+    verdict_lines(
+        &mut s,
+        r.verdict,
+        &r.warnings,
+        (r.outliers.poses.len(), r.outliers.rejected),
+    );
+    let _ = writeln!(
+        s,
+        "\nUncertainty (one sigma): X rotation {:.4}°, translation {} {u}; target rotation {:.4}°, translation {} {u}",
+        r.uncertainty.rotation_deg,
+        short(r.uncertainty.translation),
+        r.target.uncertainty.rotation_deg,
+        short(r.target.uncertainty.translation)
+    );
+    if let Some(p) = &r.uncertainty.at_point {
+        let _ = writeln!(s, "{}", at_point(p, unit));
+    }
+    let _ = writeln!(
+        s,
+        "Residuals of A X = Y B over the poses: rotation {:.4}° RMS ({:.4}° max), translation {} {u} RMS ({} {u} max)",
+        r.residual.rotation_deg_rms,
+        r.residual.rotation_deg_max,
+        short(r.residual.translation_rms),
+        short(r.residual.translation_max)
+    );
+    let _ = writeln!(s, "\nNext:");
+    if r.warnings.is_empty() {
+        let _ = writeln!(
+            s,
+            "  publish X and the target: --output ros2 (tf), --output urdf (two <joint>s); --output json for everything"
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "  act on the cautions above (each says what to do), then calibrate again; --output json for everything"
+        );
+    }
+    s
+}
+
+/// The tf frames of the robot-world target pose: `base_from_target` (eye-in-hand) or
+/// `gripper_from_target` (eye-to-hand).
+pub fn target_frames(setup: Setup, f: &Frames) -> (String, String) {
+    match setup {
+        Setup::EyeInHand => (f.base.clone(), f.target.clone()),
+        Setup::EyeToHand => (f.gripper.clone(), f.target.clone()),
+    }
 }
 
 /// A refusal as the text face gives it: the verdict, the reason and what to do.

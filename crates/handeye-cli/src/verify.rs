@@ -52,6 +52,10 @@ pub struct Args {
     /// Exit 5 when the saved X is consistent but the recording's own calibration is questionable.
     #[arg(long)]
     strict: bool,
+    /// Write an HTML page: the verdict, the two X's, and where each places the target, pose by
+    /// pose.
+    #[arg(long, value_name = "FILE.html")]
+    report: Option<PathBuf>,
 }
 
 /// Runs the command.
@@ -75,13 +79,31 @@ pub fn run(args: Args) -> Result<()> {
         reject_outliers: args.reject_outliers,
         fix,
         replicates: args.bootstrap,
-        pose_names: recording.names,
+        pose_names: recording.names.clone(),
         written: recording.written,
         joints: recording.joints,
         priors: args.prior,
         ..Options::default()
     };
-    let v = handeye::verify(&saved, &recording.poses, args.input.setup(), &options)?;
+    let setup = args.input.setup();
+    let v = handeye::verify(&saved, &recording.poses, setup, &options)?;
+    if let Some(path) = &args.report {
+        let reading = v
+            .recording
+            .as_ref()
+            .map_or(handeye::Reading::AsGiven, |r| r.reading.applied);
+        let unit = faces::length_unit(&reading.apply(&recording.poses, recording.written));
+        let page = crate::report::RunPage {
+            poses: &recording.poses,
+            names: &recording.names,
+            written: recording.written,
+            setup,
+            unit,
+            summary: text(&v),
+        };
+        crate::report::write_verify(path, &page, &v)?;
+        eprintln!("wrote {}", path.display());
+    }
     match face {
         Face::Text => print_text(&text(&v))?,
         _ => {

@@ -1,5 +1,5 @@
-//! `calibrate --report FILE.html` and `online --report FILE.html`: one self-contained page whose
-//! every figure renders in a real browser (headless Chromium, which `.ci/run` installs; without `CI` set, a missing browser
+//! `calibrate --report FILE.html` (hand–eye, robot-world, and refused), `verify --report` and
+//! `online --report FILE.html`: one self-contained page whose every figure renders in a real browser (headless Chromium, which `.ci/run` installs; without `CI` set, a missing browser
 //! skips only the rendering).
 
 use std::path::{Path, PathBuf};
@@ -11,40 +11,192 @@ fn testdata(rel: &str) -> PathBuf {
         .join(rel)
 }
 
+/// Runs the command line with `args` and `--report PATH`, expecting exit `code`; the page's text.
+fn page_of(args: &[&str], path: &Path, code: i32) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_handeye"))
+        .args(args)
+        .arg("--report")
+        .arg(path)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::read_to_string(path).unwrap()
+}
+
 /// The page for a kinhec file with planted outliers.
 fn page(dir: &Path) -> PathBuf {
     let path = dir.join("report.html");
-    let out = Command::new(env!("CARGO_BIN_EXE_handeye"))
-        .args(["calibrate", "--output", "json", "--report"])
-        .arg(&path)
-        .arg(testdata(
-            "kinhec/pairs/outliers_gross_stations_eih_s0.jsonl",
-        ))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let file = testdata("kinhec/pairs/outliers_gross_stations_eih_s0.jsonl");
+    page_of(
+        &["calibrate", "--output", "json", file.to_str().unwrap()],
+        &path,
+        0,
     );
     path
 }
 
-#[test]
-fn the_report_is_one_self_contained_page_with_three_figures() {
-    let dir = tempfile::tempdir().unwrap();
-    let html = std::fs::read_to_string(page(dir.path())).unwrap();
-    assert_eq!(html.matches("<svg").count(), 3);
-    assert_eq!(html.matches("<figcaption>").count(), 3);
-    // Nothing is fetched: no link, script or image source; URLs only as SVG's namespace.
+/// Nothing is fetched: no link, script or image source; URLs only as SVG's namespace.
+fn self_contained(html: &str) {
     for needle in ["href=", "src=", "<link", "<script", "<img"] {
         assert!(!html.contains(needle), "{needle}");
     }
     let urls = html.matches("http").count();
     assert_eq!(urls, html.matches("http://www.w3.org/2000/svg").count());
-    // The numbers a person needs, with their units, and the outliers' warning.
-    assert!(html.contains("X = gripper_from_camera") && html.contains("one-sigma"));
-    assert!(html.contains("(°)") && html.contains("disagree with the others"));
+}
+
+/// The JSON block to copy under `heading`, parsed.
+fn copied(html: &str, heading: &str) -> serde_json::Value {
+    let start = html.find(heading).expect(heading);
+    let block = &html[start..];
+    let open = block.find("<pre class=\"copy\">").unwrap() + "<pre class=\"copy\">".len();
+    let close = block[open..].find("</pre>").unwrap();
+    let text = block[open..open + close].replace("&quot;", "\"");
+    serde_json::from_str(&text).unwrap()
+}
+
+#[test]
+fn the_report_is_one_self_contained_page_with_four_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let html = std::fs::read_to_string(page(dir.path())).unwrap();
+    // Held-out rotation and translation, the axes and the angles of the motions used.
+    assert_eq!(html.matches("<svg").count(), 4);
+    assert_eq!(html.matches("<figcaption>").count(), 4);
+    self_contained(&html);
+    // The verdict, the text face's summary (X, the residual RMS, the warnings), the held-out
+    // translation in the input's unit, and the poses worst predicted named as the input names them.
+    assert!(html.contains("Verdict: questionable"));
+    assert!(html.contains("X = gripper_from_camera") && html.contains("Residuals of AX = XB"));
+    assert!(html.contains("disagree with the others"));
+    assert!(html.contains("held-out gap per pose: translation (m)"));
+    assert!(html.contains("outliers_gross_stations_eih_s0.jsonl:4</td>"));
+    assert!(html.contains("the 780 motions between every pair of the 40 poses"));
+    // X to copy: the report's own X, with its unit and roll/pitch/yaw.
+    let file = testdata("kinhec/pairs/outliers_gross_stations_eih_s0.jsonl");
+    let out = Command::new(env!("CARGO_BIN_EXE_handeye"))
+        .args(["calibrate", "--output", "json"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let x = copied(&html, "X, to copy");
+    assert_eq!(x["matrix"], report["matrix"]);
+    assert_eq!(x["quaternion_xyzw"], report["quaternion_xyzw"]);
+    assert_eq!(x["unit"], "m");
+    assert_eq!(x["rpy_deg"].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn with_rejected_outliers_the_motions_drawn_are_those_used() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = testdata("kinhec/pairs/outliers_gross_stations_eih_s0.jsonl");
+    let html = page_of(
+        &[
+            "calibrate",
+            "--output",
+            "json",
+            "--reject-outliers",
+            "--pairs",
+            "consecutive",
+            file.to_str().unwrap(),
+        ],
+        &dir.path().join("r.html"),
+        0,
+    );
+    // 40 poses, 4 outliers left out: 35 consecutive motions of the 36 used.
+    assert!(
+        html.contains("the 35 motions between consecutive poses"),
+        "{html}"
+    );
+}
+
+#[test]
+fn a_refused_run_gets_a_page_with_its_reason_and_its_motions() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = testdata("kinhec/pairs/degenerate_single_joint_continuous_eih_s0.jsonl");
+    let path = dir.path().join("refused.html");
+    let html = page_of(
+        &["calibrate", "--output", "json", file.to_str().unwrap()],
+        &path,
+        3,
+    );
+    self_contained(&html);
+    assert!(
+        html.contains("Verdict: refused")
+            && html.contains("every motion rotates about the same axis")
+    );
+    // The axes (all in one place) and the angles.
+    assert_eq!(html.matches("<svg").count(), 2);
+}
+
+#[test]
+fn the_robot_world_page_has_both_transforms_and_each_poses_residual() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = testdata("kinhec/pairs/outliers_gross_stations_eih_s0.jsonl");
+    let html = page_of(
+        &[
+            "calibrate",
+            "--robot-world",
+            "--output",
+            "json",
+            file.to_str().unwrap(),
+        ],
+        &dir.path().join("rw.html"),
+        0,
+    );
+    self_contained(&html);
+    assert!(html.contains("Verdict: questionable") && html.contains("Target = base_from_target"));
+    assert!(html.contains("residual of A X = Y B per pose: translation (m)"));
+    assert!(html.contains("outliers_gross_stations_eih_s0.jsonl:15</td>"));
+    let both = copied(&html, "X and the target's pose, to copy");
+    assert_eq!(both[0]["frame"], "gripper_from_camera");
+    assert_eq!(both[1]["frame"], "base_from_target");
+    assert_eq!(html.matches("<svg").count(), 4);
+}
+
+/// A saved X: the calibration of `file`, as `calibrate --output json` wrote it.
+fn saved_x(file: &Path, dir: &Path) -> PathBuf {
+    let out = Command::new(env!("CARGO_BIN_EXE_handeye"))
+        .args(["calibrate", "--output", "json"])
+        .arg(file)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let path = dir.join("saved.json");
+    std::fs::write(&path, &out.stdout).unwrap();
+    path
+}
+
+#[test]
+fn the_verify_page_shows_where_each_x_places_the_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let rig = testdata("kinhec/pairs/nominal_stations_eih_s1.jsonl");
+    let other = testdata("kinhec/pairs/nominal_stations_eih_s0.jsonl");
+    let saved = saved_x(&rig, dir.path());
+    for (file, code, verdict) in [(&rig, 0, "consistent"), (&other, 4, "inconsistent")] {
+        let html = page_of(
+            &[
+                "verify",
+                "--output",
+                "json",
+                "--x",
+                saved.to_str().unwrap(),
+                file.to_str().unwrap(),
+            ],
+            &dir.path().join(format!("{verdict}.html")),
+            code,
+        );
+        self_contained(&html);
+        assert!(html.contains(&format!("Verdict: {verdict}")), "{verdict}");
+        assert!(html.contains("through the saved X") && html.contains("through the recording"));
+        let both = copied(&html, "The saved X and the recording");
+        assert_eq!(both.as_array().unwrap().len(), 2);
+        assert_eq!(html.matches("<svg").count(), 3);
+    }
 }
 
 /// Chromium's binary, if installed.
@@ -99,7 +251,39 @@ fn every_figure_renders_in_headless_chromium() {
     };
     let dir = tempfile::tempdir().unwrap();
     // The online page of two streams also draws the clock-offset correlation.
-    for (path, figures) in [(page(dir.path()), 3), (online_page(dir.path()), 4)] {
+    let rig = testdata("kinhec/pairs/nominal_stations_eih_s1.jsonl");
+    let saved = saved_x(&rig, dir.path());
+    let verify = dir.path().join("verify.html");
+    page_of(
+        &[
+            "verify",
+            "--output",
+            "json",
+            "--x",
+            saved.to_str().unwrap(),
+            rig.to_str().unwrap(),
+        ],
+        &verify,
+        0,
+    );
+    let robot_world = dir.path().join("robot_world.html");
+    page_of(
+        &[
+            "calibrate",
+            "--robot-world",
+            "--output",
+            "json",
+            rig.to_str().unwrap(),
+        ],
+        &robot_world,
+        0,
+    );
+    for (path, figures) in [
+        (page(dir.path()), 4),
+        (online_page(dir.path()), 4),
+        (verify, 3),
+        (robot_world, 4),
+    ] {
         rendered(browser, &path, figures, dir.path());
     }
 }

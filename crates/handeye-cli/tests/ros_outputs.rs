@@ -627,3 +627,97 @@ fn hard_inputs_through_the_ros_outputs_keep_their_verdicts() {
         }
     }
 }
+
+/// The `ros2 run` lines of a ros2 face, each split as a POSIX shell splits it.
+fn argvs(ros2: &str) -> Vec<Vec<String>> {
+    ros2.lines()
+        .filter(|l| l.starts_with("ros2 run"))
+        .map(|l| shlex::split(l).unwrap_or_else(|| panic!("not shell words: {l}")))
+        .collect()
+}
+
+/// The value after `flag` in a split `ros2 run` line.
+fn after(argv: &[String], flag: &str) -> String {
+    argv[argv.iter().position(|a| a == flag).unwrap() + 1].clone()
+}
+
+#[test]
+fn robot_world_publishes_x_and_the_target_in_metres_in_every_ros_face() {
+    // A recording in millimetres (OpenCV's test data is in metres; the paper's series in mm).
+    let (mm, metres) = (path(MM), path(NOISY));
+    for (file, scale) in [(&metres, 1.0), (&mm, 1e-3)] {
+        let args = ["calibrate", "--robot-world", file.as_str()];
+        let (code, out, err) = run(&[&args[..], &["--output", "json"]].concat());
+        assert_eq!(code, 0, "{err}");
+        let json: Value = serde_json::from_str(&out).unwrap();
+        assert!(["good", "questionable"].contains(&json["verdict"].as_str().unwrap()));
+        let x = &json["translation"];
+        let target = &json["target"]["translation"];
+        // ros2: two publisher lines, X then the target, frames as the setup names them.
+        let (code, ros2, err) = run(&[&args[..], &["--output", "ros2"]].concat());
+        assert_eq!(code, 0, "{err}");
+        let lines = argvs(&ros2);
+        assert_eq!(lines.len(), 2, "{ros2}");
+        for (argv, (parent, child), t) in [
+            (&lines[0], ("gripper", "camera"), x),
+            (&lines[1], ("base", "target"), target),
+        ] {
+            assert_eq!(after(argv, "--frame-id"), parent);
+            assert_eq!(after(argv, "--child-frame-id"), child);
+            for (k, flag) in ["--x", "--y", "--z"].iter().enumerate() {
+                let published: f64 = after(argv, flag).parse().unwrap();
+                let given = t[k].as_f64().unwrap() * scale;
+                assert!(
+                    (published - given).abs() < 1e-12,
+                    "{flag}: {published} vs {given}"
+                );
+            }
+        }
+        // urdf: two fixed joints, read back by an XML reader.
+        let (code, urdf, err) = run(&[&args[..], &["--output", "urdf"]].concat());
+        assert_eq!(code, 0, "{err}");
+        let elements = xml_elements(&urdf);
+        let joints: Vec<&str> = elements
+            .iter()
+            .filter(|(e, _)| e == "joint")
+            .map(|(_, a)| a.iter().find(|(k, _)| k == "name").unwrap().1.as_str())
+            .collect();
+        assert_eq!(joints, ["gripper_to_camera", "base_to_target"], "{urdf}");
+        let origins: Vec<&str> = elements
+            .iter()
+            .filter(|(e, _)| e == "origin")
+            .map(|(_, a)| a.iter().find(|(k, _)| k == "xyz").unwrap().1.as_str())
+            .collect();
+        let z: f64 = origins[1].split(' ').nth(2).unwrap().parse().unwrap();
+        assert!((z - target[2].as_f64().unwrap() * scale).abs() < 1e-12);
+        // text: both transforms, the verdict and the uncertainty of both.
+        let (code, text, err) = run(&[&args[..], &["--output", "text"]].concat());
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            text.contains("X = gripper_from_camera") && text.contains("Target = base_from_target")
+        );
+        assert!(text.contains(&format!("Verdict: {}", json["verdict"].as_str().unwrap())));
+        assert!(text.contains("target rotation"), "{text}");
+    }
+}
+
+#[test]
+fn robot_world_strict_exits_5_on_a_questionable_verdict() {
+    let outliers = path("kinhec/pairs/outliers_gross_stations_eih_s0.jsonl");
+    let clean = path("kinhec/pairs/nominal_stations_eih_s1.jsonl");
+    for (file, verdict, code) in [(&outliers, "questionable", 5), (&clean, "good", 0)] {
+        let (plain, out, err) = run(&["calibrate", "--robot-world", file, "--output", "json"]);
+        assert_eq!(plain, 0, "{err}");
+        let json: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(json["verdict"], verdict);
+        let (strict, _, err) = run(&[
+            "calibrate",
+            "--robot-world",
+            file,
+            "--output",
+            "json",
+            "--strict",
+        ]);
+        assert_eq!(strict, code, "{err}");
+    }
+}

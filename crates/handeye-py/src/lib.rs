@@ -196,6 +196,79 @@ fn solve_opencv_poses<'py>(
     ))
 }
 
+/// The drop-in for `cv2.calibrateRobotWorldHandEye`: OpenCV's A X = Z B with A = world2cam
+/// (`camera_from_target`), B = base2gripper (`base_from_gripper⁻¹`), X = base2world (the target
+/// pose's inverse) and Z = gripper2cam (handeye's X's inverse), decided as `handeye calibrate
+/// --robot-world --method M` decides it: the same refusals (a `ValueError`), the same cautions
+/// (each for a `UserWarning`), the same transforms. Returns base2world's rotation and
+/// translation, gripper2cam's, and the cautions.
+#[pyfunction]
+#[pyo3(signature = (r_world2cam, t_world2cam, r_base2gripper, t_base2gripper, method="shah"))]
+fn solve_opencv_robot_world<'py>(
+    py: Python<'py>,
+    r_world2cam: PyReadonlyArrayDyn<'py, f64>,
+    t_world2cam: PyReadonlyArray2<'py, f64>,
+    r_base2gripper: PyReadonlyArrayDyn<'py, f64>,
+    t_base2gripper: PyReadonlyArray2<'py, f64>,
+    method: &str,
+) -> PyResult<RobotWorldParts<'py>> {
+    let camera = transforms(&r_world2cam, &t_world2cam, "world2cam")?;
+    let robot = transforms(&r_base2gripper, &t_base2gripper, "base2gripper")?;
+    if robot.len() != camera.len() {
+        return Err(value_error(format!(
+            "{} world2cam poses and {} base2gripper poses: one of each per pose",
+            camera.len(),
+            robot.len()
+        )));
+    }
+    let poses: Vec<PosePair> = robot
+        .iter()
+        .zip(camera)
+        .map(|(gripper_from_base, camera_from_target)| PosePair {
+            base_from_gripper: gripper_from_base.inverse(),
+            camera_from_target,
+        })
+        .collect();
+    let options = handeye::RobotWorldOptions {
+        method: method.parse().map_err(value_error)?,
+        ..Default::default()
+    };
+    let said = Some(Setup::EyeInHand);
+    let report = py
+        .allow_threads(|| handeye::calibrate_robot_world(&poses, Setup::EyeInHand, &options))
+        .map_err(|e| value_error(opencv_words::error(&e, said)))?;
+    let parts = |t: &Transform| {
+        let (r, v) = (t.rotation.matrix(), t.translation.vector);
+        (
+            numpy::ndarray::Array2::from_shape_fn((3, 3), |(i, j)| r[(i, j)]).into_pyarray(py),
+            numpy::ndarray::Array2::from_shape_fn((3, 1), |(i, _)| v[i]).into_pyarray(py),
+        )
+    };
+    let (r_base2world, t_base2world) = parts(&report.target_transform.inverse());
+    let (r_gripper2cam, t_gripper2cam) = parts(&report.transform.inverse());
+    let said = report
+        .warnings
+        .iter()
+        .map(|w| opencv_words::warning(w, said))
+        .collect();
+    Ok((
+        r_base2world,
+        t_base2world,
+        r_gripper2cam,
+        t_gripper2cam,
+        said,
+    ))
+}
+
+/// base2world's rotation and translation, gripper2cam's, and the cautions.
+type RobotWorldParts<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<String>,
+);
+
 /// [`solve_opencv`] on OpenCV's usual arguments, four lists (or tuples) of float64 arrays: (3, 3)
 /// rotation matrices or rotation vectors of 3 entries, translations of 3 entries, each array in
 /// any layout (a view `T[:3, :3]` too). Each array is read where it lies, so that ten poses cost
@@ -880,6 +953,7 @@ fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_x, m)?)?;
     m.add_function(wrap_pyfunction!(solve_opencv, m)?)?;
     m.add_function(wrap_pyfunction!(solve_opencv_sequences, m)?)?;
+    m.add_function(wrap_pyfunction!(solve_opencv_robot_world, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
     m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
     m.add_function(wrap_pyfunction!(advise_report, m)?)?;

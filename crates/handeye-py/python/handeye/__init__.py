@@ -8,7 +8,8 @@ eye-to-hand. Quaternions are not used here: 4x4 matrices, 3x3 rotations or 3-vec
 Two faces:
 
 * ``calibrate_hand_eye(...)``: a drop-in for ``cv2.calibrateHandEye`` (same arguments, same
-  outputs), which raises ``ValueError`` on degenerate data instead of returning an identity.
+  outputs), which raises ``ValueError`` on degenerate data instead of returning an identity;
+  ``calibrate_robot_world_hand_eye(...)`` the same for ``cv2.calibrateRobotWorldHandEye``.
 * ``calibrate(...)`` and ``OnlineCalibrator``: arrays of 4x4 transforms in, dicts out.
 """
 from __future__ import annotations
@@ -25,13 +26,17 @@ from ._handeye import calibrate_report as _calibrate_report
 from ._handeye import read_recording as _read_recording
 from ._handeye import robot_world_report as _robot_world_report
 from ._handeye import solve_opencv as _solve_opencv
+from ._handeye import solve_opencv_robot_world as _solve_opencv_robot_world
 from ._handeye import solve_opencv_sequences as _solve_opencv_sequences
 from ._handeye import verify_report as _verify_report
 
-__all__ = ["calibrate_hand_eye", "calibrate", "advise", "verify", "read_recording", "OnlineCalibrator", "METHODS"]
+__all__ = ["calibrate_hand_eye", "calibrate_robot_world_hand_eye", "calibrate", "advise", "verify", "read_recording", "OnlineCalibrator", "METHODS"]
 
 #: OpenCV's constants (cv2.CALIB_HAND_EYE_*) and handeye's names.
 METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
+
+#: OpenCV's robot-world constants (cv2.CALIB_ROBOT_WORLD_HAND_EYE_*) and handeye's names.
+ROBOT_WORLD_METHODS = {0: "shah", 1: "li"}
 
 
 def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2cam, method=0, setup=None):
@@ -76,6 +81,34 @@ def calibrate_hand_eye(R_gripper2base, t_gripper2base, R_target2cam, t_target2ca
     for text in said:
         warnings.warn(text, UserWarning, stacklevel=2)
     return rotation, translation
+
+
+def calibrate_robot_world_hand_eye(R_world2cam, t_world2cam, R_base2gripper, t_base2gripper, method=0):
+    """Drop-in for ``cv2.calibrateRobotWorldHandEye``; returns ``(R_base2world, t_base2world,
+    R_gripper2cam, t_gripper2cam)`` as (3,3) and (3,1) arrays. OpenCV's problem is A X = Z B with
+    A = world2cam (what PnP returns for a target that defines the world), B = base2gripper, X =
+    base2world, Z = gripper2cam: a camera on the gripper. ``method`` is an OpenCV constant
+    (``cv2.CALIB_ROBOT_WORLD_HAND_EYE_SHAH`` = 0, the default, or ``..._LI`` = 1) or a handeye
+    name ("shah", "li", or "refine": both transforms refined together on every pose, the most
+    accurate).
+
+    The decision is the command line's (``handeye calibrate --robot-world --method M``), made once
+    in the library: it answers with OpenCV's X and Z for Shah; for Li, OpenCV weighs rotations
+    against translations in the input's unit (its answer changes with the unit), handeye in the
+    poses' RMS translation, which is OpenCV's answer for the data expressed in that unit. It
+    raises ValueError on bad input, on fewer than 3 poses, on poses that fit far better read
+    another way (inverted arrays, millimetres on one side) and on motions that leave X or the
+    target's pose undetermined, where OpenCV answers; every caution of the command line's report
+    is issued as a ``UserWarning``: use ``calibrate(..., robot_world=True)`` for the whole report."""
+    name = ROBOT_WORLD_METHODS.get(method, method) if isinstance(method, int) else method
+    if not isinstance(name, str):
+        raise ValueError(f"unknown method {method!r}")
+    rc, tc = _arrays(R_world2cam, t_world2cam, "world2cam")
+    rb, tb = _arrays(R_base2gripper, t_base2gripper, "base2gripper")
+    r_w, t_w, r_z, t_z, said = _solve_opencv_robot_world(rc, tc, rb, tb, method=name)
+    for text in said:
+        warnings.warn(text, UserWarning, stacklevel=2)
+    return r_w, t_w, r_z, t_z
 
 
 def _arrays(rotations, translations, name: str):

@@ -8,6 +8,7 @@ import numpy as np
 import numpy.typing as npt
 
 METHODS: dict[int, str]
+ROBOT_WORLD_METHODS: dict[int, str]
 
 def calibrate_hand_eye(
     R_gripper2base: Sequence[npt.ArrayLike],
@@ -17,6 +18,13 @@ def calibrate_hand_eye(
     method: Union[int, str] = 0,
     setup: Optional[str] = None,
 ) -> tuple[np.ndarray, np.ndarray]: ...
+def calibrate_robot_world_hand_eye(
+    R_world2cam: Sequence[npt.ArrayLike],
+    t_world2cam: Sequence[npt.ArrayLike],
+    R_base2gripper: Sequence[npt.ArrayLike],
+    t_base2gripper: Sequence[npt.ArrayLike],
+    method: Union[int, str] = 0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
 def calibrate(
     base_from_gripper: npt.ArrayLike,
     camera_from_target: npt.ArrayLike,

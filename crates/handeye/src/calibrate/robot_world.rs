@@ -35,7 +35,7 @@ use crate::check::outliers::translation_scale;
 use crate::check::quality::OUTLIER_DEG;
 use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, median_target, summarise};
 use crate::model::error::{Degeneracy, Error, Result};
-use crate::model::findings::{Part, Verdict, Written};
+use crate::model::findings::{Assessment, Part, Verdict, Written};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::TransformJson;
 use crate::model::pose::{Transform, rotation_matrix};
@@ -164,6 +164,9 @@ mod printed {
 /// The result of [`calibrate_robot_world`]: X, the target's pose, how far to trust both.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RobotWorldReport {
+    /// The verdict: `good`, or `questionable` while a caution of `warnings` stands (as the
+    /// hand–eye report's).
+    pub verdict: Assessment,
     /// The solver.
     pub method: RobotWorldMethod,
     /// The setup.
@@ -310,6 +313,7 @@ pub fn calibrate_robot_world(
         per_pose,
     };
     Ok(RobotWorldReport {
+        verdict: Assessment::of(&warnings),
         method: options.method,
         setup,
         formulation: "robot-world".into(),
