@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::{Advice, Unit, WeaknessKind, advise};
+use handeye::{Advice, Pivot, Unit, WeaknessKind, advise};
 
 use crate::faces::{self, short};
 use crate::input::{InputArgs, read_all};
@@ -16,13 +16,24 @@ pub struct Args {
     /// How many next motions to suggest (1 to 20).
     #[arg(long, default_value_t = 3, value_parser = crate::values::count(1, 20))]
     count: usize,
+    /// A prior on a component of X's translation, for a low-DOF robot (as `calibrate --prior`):
+    /// NAME=VALUE or NAME=VALUE+-SIGMA, NAME one of tx, ty, tz. The advice is then for that
+    /// robot: turns about its one axis. Repeatable.
+    #[arg(long, value_name = "NAME=VALUE[+-SIGMA]", value_parser = crate::values::prior)]
+    prior: Vec<handeye::Prior>,
 }
 
 /// Runs the command: the advice as JSON on stdout, in words on stderr.
 pub fn run(args: Args) -> Result<()> {
     let recording = read_all(&args.input, handeye::Reading::AsGiven)?;
     let poses = recording.poses;
-    let advice = advise(&poses, args.input.setup(), recording.written, args.count)?;
+    let advice = advise(
+        &poses,
+        args.input.setup(),
+        recording.written,
+        args.count,
+        &args.prior,
+    )?;
     eprint!("{}", in_words(&advice, faces::length_unit(&poses)));
     print_json(&advice)
 }
@@ -66,8 +77,20 @@ fn in_words(advice: &Advice, unit: Option<Unit>) -> String {
     }
     for (k, s) in advice.suggestions.iter().enumerate() {
         let [x, y, z] = s.axis_gripper;
+        let pivot = match s.pivot {
+            Pivot::Flange => {
+                "through the flange (the gripper frame's origin stays put; keep the target in view)"
+                    .to_string()
+            }
+            Pivot::Target => {
+                let [px, py, pz] = s.pivot_gripper.map(short);
+                format!(
+                    "through the target, at ({px}, {py}, {pz}) {u} in the gripper frame (it stays where the camera sees it)"
+                )
+            }
+        };
         out.push_str(&format!(
-            "next motion {}: turn the gripper {:.0}° about its axis ({x:.2}, {y:.2}, {z:.2}) through the flange (the gripper frame's origin stays put; keep the target in view)",
+            "next motion {}: turn the gripper {:.0}° about its axis ({x:.2}, {y:.2}, {z:.2}) {pivot}",
             k + 1,
             s.angle_deg
         ));

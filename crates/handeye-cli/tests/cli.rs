@@ -702,10 +702,33 @@ fn advise_gives_lengths_in_the_input_unit_and_the_pivot_of_each_turn() {
     assert!(sigma.ends_with(" m"), "{sigma}");
     let next = err.lines().filter(|l| l.starts_with("next motion")).count();
     assert_eq!(next, 3, "{err}");
+    // Each turn says its pivot: the flange, or the target (where it is in the gripper frame, in
+    // the unit), so that the camera keeps it in view.
     assert!(
         err.lines()
             .filter(|l| l.starts_with("next motion"))
-            .all(|l| l.contains("through the flange") && l.ends_with(" m")),
+            .all(|l| (l.contains("through the flange")
+                || l.contains(") m in the gripper frame (it stays where the camera sees it)"))
+                && l.ends_with(" m")),
         "{err}"
     );
+    let (code, out, err) = run(handeye().args(["advise", "--count", "3"]).arg(&file));
+    assert_eq!(code, 0, "{err}");
+    let advice: serde_json::Value = serde_json::from_str(&out[out.find('{').unwrap()..]).unwrap();
+    for s in advice["suggestions"].as_array().unwrap() {
+        let pivot = s["pivot_gripper"].as_array().unwrap();
+        match s["pivot"].as_str().unwrap() {
+            "flange" => assert!(pivot.iter().all(|v| v.as_f64() == Some(0.0))),
+            "target" => {
+                // About the target: 0.2 to 1.5 m from the flange on this rig.
+                let d = pivot
+                    .iter()
+                    .map(|v| v.as_f64().unwrap().powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                assert!((0.2..1.5).contains(&d), "{d}");
+            }
+            other => panic!("pivot {other}"),
+        }
+    }
 }

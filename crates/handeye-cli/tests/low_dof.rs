@@ -228,6 +228,45 @@ fn advise_names_the_prior_and_what_a_low_dof_robot_cannot_make() {
     }
 }
 
+/// `advise --prior` on a SCARA recording: X's uncertainty with the prior's, and turns about the
+/// robot's one axis.
+#[test]
+fn advise_with_a_prior_advises_turns_the_robot_makes() {
+    for (name, setup) in RECORDINGS {
+        let tz = truth(name).0[2];
+        let prior = format!("tz={tz}+-0.001");
+        let (code, out, err) = run(&["advise", &file(name), "--setup", setup, "--prior", &prior]);
+        assert_eq!(code, 0, "{err}");
+        assert!(out.contains("X's tz is the prior's"), "{out}");
+        let json = &out[out.find('{').unwrap()..];
+        let a: Value = serde_json::from_str(json).unwrap();
+        // The height's sigma is the prior's: the translation's one-sigma is at least 1 mm and
+        // not far above it.
+        let t = a["current"]["translation"].as_f64().unwrap();
+        assert!((0.001..0.005).contains(&t), "{name}: {t}");
+        for s in a["suggestions"].as_array().unwrap() {
+            let k: Vec<f64> = s["axis_gripper"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            assert!(k[2].abs() > 0.999, "{name}: {k:?}");
+        }
+        // A prior in millimetres on this recording in metres: exit 2, naming the unit.
+        let (code, _, err) = run(&[
+            "advise",
+            &file(name),
+            "--setup",
+            setup,
+            "--prior",
+            &format!("tz={}", tz * 1000.0),
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains("another length unit"), "{err}");
+    }
+}
+
 #[test]
 fn verify_checks_a_saved_scara_x_and_takes_the_free_height_from_it() {
     let dir = std::env::temp_dir().join(format!("handeye-low-dof-verify-{}", std::process::id()));

@@ -796,3 +796,21 @@ def test_the_drop_in_says_what_opencvs_tsai_filter_dropped():
             handeye.calibrate_hand_eye(*args, method="tsai")
         assert not [w for w in said if "Tsai motion filter" in str(w.message)]
     assert dropping > 0, "no seed had a motion dropped: the test tests nothing"
+
+
+def test_advise_takes_a_prior_and_advises_a_scara_turns_it_makes():
+    """advise(..., prior=...) as `handeye advise --prior`: on a SCARA recording X's uncertainty
+    includes the prior's, and the turns suggested are about the robot's one axis."""
+    path = pathlib.Path(__file__).resolve().parents[3] / "testdata" / "low_dof" / "scara_eye-in-hand_s0.jsonl"
+    truth = json.loads(path.with_suffix("").with_suffix(".truth.json").read_text())
+    tz = truth["gripper_from_camera"]["translation"][2]
+    read = handeye.read_recording(str(path))
+    g, c = read["base_from_gripper"], read["camera_from_target"]
+    without = handeye.advise(g, c)
+    assert "--prior tz=" in without["low_dof"]
+    advice = handeye.advise(g, c, prior={"tz": (tz, 0.001)})
+    assert "X's tz is the prior's" in advice["low_dof"]
+    assert 0.001 <= advice["current"]["translation"] < 0.005
+    assert all(abs(s["axis_gripper"][2]) > 0.999 for s in advice["suggestions"])
+    with pytest.raises(ValueError, match="another length unit"):
+        handeye.advise(g, c, prior=f"tz={tz * 1000}")

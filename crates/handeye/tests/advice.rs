@@ -45,7 +45,7 @@ fn when_every_rotation_shares_one_axis_the_first_suggestion_turns_far_from_it() 
         let poses = handeye::io::read_pose_file(&path, handeye::io::Format::Auto)
             .unwrap()
             .pairs;
-        let advice = advise(&poses, setup, Written::NAMED, 3).unwrap();
+        let advice = advise(&poses, setup, Written::NAMED, 3, &[]).unwrap();
         let axis = dominant_axis(&poses, setup);
         let first = Vector3::from(advice.suggestions[0].axis_gripper);
         let angle = axis.dot(&first).abs().min(1.0).acos().to_degrees();
@@ -83,7 +83,7 @@ fn following_the_advice_shrinks_the_error_as_predicted() {
         let sim = simulate(&SimConfig::default(), 41, s);
         let truth = sim.gripper_from_camera;
         let mut poses = sim.poses[..12].to_vec();
-        let advice = advise(&poses, Setup::EyeInHand, Written::NAMED, 3).unwrap();
+        let advice = advise(&poses, Setup::EyeInHand, Written::NAMED, 3, &[]).unwrap();
         let now = advice.current.expect("determined after 12 poses");
         let predicted = advice.suggestions.last().unwrap().predicted.unwrap();
         let x0 = solve(
@@ -95,13 +95,14 @@ fn following_the_advice_shrinks_the_error_as_predicted() {
         // The poses the robot reaches by following the advice, seen by the true camera.
         let y = sim.base_from_target;
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(s);
+        // Each turn about its pivot (a point of the gripper frame that stays put).
         let record = |poses: &mut Vec<PosePair>,
-                      turns: &[(Vector3<f64>, f64)],
+                      turns: &[(Vector3<f64>, f64, Vector3<f64>)],
                       rng: &mut Xoshiro256PlusPlus| {
             let mut from = poses[poses.len() - 1].base_from_gripper;
-            for (axis, angle_deg) in turns {
+            for (axis, angle_deg, pivot) in turns {
                 let r = exp_so3(&(axis * angle_deg.to_radians()));
-                let q = from * transform_from_parts(&r, &Vector3::zeros());
+                let q = from * transform_from_parts(&r, &(pivot - r * pivot));
                 let exact = PosePair {
                     base_from_gripper: q,
                     camera_from_target: truth.inverse() * q.inverse() * y,
@@ -111,16 +112,22 @@ fn following_the_advice_shrinks_the_error_as_predicted() {
             }
         };
         // The same number of motions of the same angles about random axes, for comparison.
-        let turns: Vec<(Vector3<f64>, f64)> = advice
+        let turns: Vec<(Vector3<f64>, f64, Vector3<f64>)> = advice
             .suggestions
             .iter()
-            .map(|s| (Vector3::from(s.axis_gripper), s.angle_deg))
+            .map(|s| {
+                (
+                    Vector3::from(s.axis_gripper),
+                    s.angle_deg,
+                    Vector3::from(s.pivot_gripper),
+                )
+            })
             .collect();
-        let random_turns: Vec<(Vector3<f64>, f64)> = turns
+        let random_turns: Vec<(Vector3<f64>, f64, Vector3<f64>)> = turns
             .iter()
-            .map(|(_, a)| {
+            .map(|(_, a, pivot)| {
                 let v = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0));
-                (v.normalize(), *a)
+                (v.normalize(), *a, *pivot)
             })
             .collect();
         let mut other = poses.clone();
@@ -255,7 +262,7 @@ fn no_advice_from_misread_input_and_outliers_left_out() {
         "mistakes/quat_wxyz_camera__nominal_stations_eih_s0.jsonl",
         "mistakes/robot_mm__nominal_stations_eih_s0.jsonl",
     ] {
-        let e = advise(&read(f), Setup::EyeInHand, Written::NAMED, 3).unwrap_err();
+        let e = advise(&read(f), Setup::EyeInHand, Written::NAMED, 3, &[]).unwrap_err();
         assert!(matches!(e, handeye::Error::Misread { .. }), "{f}: {e}");
         assert!(e.to_string().contains("--fix"), "{f}: {e}");
     }
@@ -264,10 +271,63 @@ fn no_advice_from_misread_input_and_outliers_left_out() {
         Setup::EyeInHand,
         Written::NAMED,
         2,
+        &[],
     )
     .unwrap();
     assert!(
         advice.outliers >= 3 && advice.current.is_some(),
         "{advice:?}"
     );
+}
+
+#[test]
+fn a_turn_about_the_target_pivots_where_the_target_is() {
+    // On kinhec recordings of both setups, the first suggested turn about the target pivots on
+    // the target's true place in the gripper frame (eye-in-hand: X · camera_from_target of the
+    // last pose; eye-to-hand: gripper_from_target), within 2% of its distance.
+    let kinhec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec/pairs");
+    let mut checked = 0;
+    for (name, setup) in [
+        ("nominal_stations_eih_s0", Setup::EyeInHand),
+        ("nominal_stations_eih_s1", Setup::EyeInHand),
+        ("nominal_continuous_eth_s2", Setup::EyeToHand),
+        ("noise_free_continuous_eth_s0", Setup::EyeToHand),
+    ] {
+        let poses = handeye::io::read_pose_file(
+            &kinhec.join(format!("{name}.jsonl")),
+            handeye::io::Format::Auto,
+        )
+        .unwrap()
+        .pairs;
+        let truth: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(kinhec.join(format!("{name}.truth.json"))).unwrap(),
+        )
+        .unwrap();
+        let matrix = |v: &serde_json::Value| {
+            let m = nalgebra::Matrix4::from_fn(|i, j| v["matrix"][i][j].as_f64().unwrap());
+            handeye::transform_from_matrix4(&m).unwrap()
+        };
+        let last = poses[poses.len() - 1];
+        let place = match setup {
+            Setup::EyeInHand => {
+                (matrix(&truth["gripper_from_camera"]) * last.camera_from_target)
+                    .translation
+                    .vector
+            }
+            Setup::EyeToHand => matrix(&truth["gripper_from_target"]).translation.vector,
+        };
+        let advice = advise(&poses, setup, Written::NAMED, 1, &[]).unwrap();
+        let first = advice.suggestions[0];
+        if first.pivot != handeye::Pivot::Target {
+            continue;
+        }
+        let gap = (Vector3::from(first.pivot_gripper) - place).norm();
+        assert!(
+            gap < 0.02 * place.norm(),
+            "{name}: {gap} of {}",
+            place.norm()
+        );
+        checked += 1;
+    }
+    assert!(checked >= 2, "{checked} turns about the target checked");
 }

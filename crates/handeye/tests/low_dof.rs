@@ -379,3 +379,97 @@ fn a_weak_direction_of_a_low_dof_x_advises_what_the_robot_can_record() {
         "no 4-pose recording gave a weak direction: the test tests nothing"
     );
 }
+
+/// The gripper-frame axis of the motion from the first pose to the first one turned by more
+/// than 5° from it.
+fn gripper_axis(poses: &[handeye::PosePair]) -> Vector3<f64> {
+    poses
+        .iter()
+        .find_map(|p| {
+            let m = poses[0].base_from_gripper.inverse() * p.base_from_gripper;
+            let f = handeye::MotionFeatures::of(&m);
+            (f.angle > 5f64.to_radians()).then_some(f.axis?)
+        })
+        .unwrap()
+}
+
+#[test]
+fn advice_with_the_prior_turns_about_the_robots_axis_with_the_calibrations_sigma() {
+    use handeye::{Written, advise};
+    let mut ratios = Vec::new();
+    for setup in SETUPS {
+        for seed in 0..8 {
+            let s = simulate_low_dof(&scara(setup), seed, 0);
+            let tz = s.x.translation.vector.z;
+            let given = prior(Component::Tz, tz, 0.002);
+            let advice = advise(&s.poses, setup, Written::NAMED, 3, &[given])
+                .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
+            let words = advice.low_dof.as_deref().unwrap();
+            assert!(words.contains("X's tz is the prior's"), "{words}");
+            let current = advice.current.unwrap();
+            let r = calibrate(&s.poses, setup, &options(vec![given])).unwrap();
+            ratios.push(current.translation / r.uncertainty.translation);
+            // Every turn suggested is about the robot's one axis, as the gripper sees it.
+            let axis = gripper_axis(&s.poses);
+            assert_eq!(advice.suggestions.len(), 3);
+            let mut before = current;
+            for t in &advice.suggestions {
+                let k = Vector3::from(t.axis_gripper);
+                assert!(
+                    k.dot(&axis).abs() > 0.999,
+                    "{setup} {seed}: {k:?} vs {axis:?}"
+                );
+                let p = t.predicted.unwrap();
+                assert!(p.translation <= before.translation * (1.0 + 1e-9));
+                before = p;
+            }
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    println!(
+        "advise's translation sigma / calibrate's bootstrap, with the prior: {:.2} to {:.2} (median {:.2})",
+        ratios[0],
+        ratios[ratios.len() - 1],
+        ratios[ratios.len() / 2]
+    );
+    assert!(
+        ratios[0] > 1.0 / 3.0 && ratios[ratios.len() - 1] < 3.0,
+        "{ratios:?}"
+    );
+}
+
+#[test]
+fn advice_on_a_low_dof_recording_refuses_a_prior_in_another_unit_and_leaves_outliers_out() {
+    use handeye::{Written, advise};
+    let s = simulate_low_dof(&scara(Setup::EyeInHand), 3, 0);
+    let tz = s.x.translation.vector.z;
+    // Millimetres on a recording in metres.
+    let e = advise(
+        &s.poses,
+        Setup::EyeInHand,
+        Written::NAMED,
+        3,
+        &[prior(Component::Tz, tz * 1000.0, 0.0)],
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, Error::InvalidParameter { name: "prior", .. }),
+        "{e}"
+    );
+    // A camera pose replaced by another one's: left out, and the advice is still the SCARA's.
+    let mut poses = s.poses.clone();
+    poses[7].camera_from_target = poses[19].camera_from_target;
+    let advice = advise(
+        &poses,
+        Setup::EyeInHand,
+        Written::NAMED,
+        2,
+        &[prior(Component::Tz, tz, 0.0)],
+    )
+    .unwrap();
+    assert!(advice.outliers >= 1, "{advice:?}");
+    assert!(advice.low_dof.unwrap().contains("the prior's"));
+    // Without the prior, the words name it.
+    let advice = advise(&s.poses, Setup::EyeInHand, Written::NAMED, 2, &[]).unwrap();
+    assert!(advice.low_dof.unwrap().contains("--prior tz="));
+}

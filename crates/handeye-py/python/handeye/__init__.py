@@ -295,13 +295,15 @@ def _transforms(base_from_gripper, camera_from_target):
     return g, c
 
 
-def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3):
+def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, prior=None):
     """What to record next, as ``handeye advise`` prints it: X's one-sigma now (``current``), its
     least determined directions (``weakest``) and the next gripper motions (``suggestions``: an
     axis of the gripper frame, an angle, and the uncertainty predicted once recorded). Takes
-    (N, 4, 4) arrays."""
+    (N, 4, 4) arrays. ``prior`` as for ``calibrate`` (``"tz=0.12+-0.002"``, a list, or a dict): it
+    enters the uncertainty with its sigma, and on a low-DOF recording (every motion about one axis)
+    the advice is then for that robot (``low_dof`` says so): turns about its one axis."""
     g, c = _transforms(base_from_gripper, camera_from_target)
-    return json.loads(_advise_report(g, c, setup=setup, count=count))
+    return json.loads(_advise_report(g, c, setup=setup, count=count, prior=_priors(prior)))
 
 
 def read_recording(

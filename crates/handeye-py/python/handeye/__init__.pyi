@@ -46,6 +46,7 @@ def advise(
     camera_from_target: npt.ArrayLike,
     setup: str = "eye-in-hand",
     count: int = 3,
+    prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
 ) -> dict[str, Any]: ...
 
 def verify(

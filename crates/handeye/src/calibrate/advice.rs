@@ -21,6 +21,8 @@ use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
 use crate::model::motion::{MotionFeatures, Pairing, PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, transform_from_parts};
+use crate::model::prior::{Prior, check_priors};
+use crate::solve::Method;
 use crate::solve::accumulate::PoseAccumulator;
 
 /// Angles a suggestion may turn by, degrees.
@@ -63,9 +65,28 @@ pub struct Suggestion {
     pub axis_gripper: [f64; 3],
     /// Angle of that rotation, degrees.
     pub angle_deg: f64,
+    /// The point the turn is about: `flange` (the gripper frame's origin stays put) or `target`
+    /// (the point where the target is, which then stays where the camera sees it).
+    #[serde(default)]
+    pub pivot: Pivot,
+    /// That point in the gripper frame at the pose the turn starts from (zero for the flange).
+    #[serde(default)]
+    pub pivot_gripper: [f64; 3],
     /// X's uncertainty once this motion and the ones before it are recorded (`None` while X is not
     /// determined).
     pub predicted: Option<Predicted>,
+}
+
+/// The point a suggested turn is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Pivot {
+    /// The gripper frame's origin stays put.
+    #[default]
+    Flange,
+    /// The target's position stays put: eye-in-hand, the camera keeps it in view; eye-to-hand,
+    /// the target on the gripper stays where the fixed camera sees it.
+    Target,
 }
 
 /// The advice for a recording.
@@ -96,8 +117,17 @@ pub struct Advice {
 /// when the poses fit far better read another way (an inverted pose, `w, x, y, z` quaternions,
 /// millimetres on one side): no advice from data read wrongly. `written` is the directions in
 /// which the input wrote its poses (`io::PoseSeries::written`; [`Written::NAMED`] for poses as
-/// handeye names them).
-pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) -> Result<Advice> {
+/// handeye names them). `priors` (`--prior`) are measurements of components of X's translation:
+/// they enter the covariance with their sigma, and on a low-DOF recording (every motion about one
+/// axis) they make X determined: the advice is then for that robot, turns about its one axis.
+pub fn advise(
+    poses: &[PosePair],
+    setup: Setup,
+    written: Written,
+    count: usize,
+    priors: &[Prior],
+) -> Result<Advice> {
+    check_priors(priors)?;
     if poses.len() < 2 {
         return Err(Error::TooFewMotions {
             got: poses.len().saturating_sub(1),
@@ -114,34 +144,79 @@ pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) 
         return Err(misread);
     }
     let poses = &kept[..];
-    let low_dof = low_dof_words(poses, setup);
     let mut acc = PoseAccumulator::new(setup);
     poses.iter().for_each(|p| acc.add(p));
     let last = poses[poses.len() - 1].base_from_gripper;
-    let Some((x, y, noise)) = solved(&acc) else {
+    let plan = match crate::calibrate::low_dof::plan(poses, setup, Pairing::All, priors) {
+        Ok(plan) => plan,
+        // A low-DOF recording without its prior: the words say which to give (below).
+        Err(e) if crate::calibrate::low_dof::missing(&e).is_some() => None,
+        Err(e) => return Err(e),
+    };
+    let (x, low_dof, candidates): (_, _, Vec<Turn>) = match &plan {
+        Some(plan) => {
+            let x = crate::calibrate::low_dof::solve(plan, poses, setup, Pairing::All, Method::Andreff)?.x;
+            let axis = match setup {
+                Setup::EyeInHand => plan.axis.hand,
+                Setup::EyeToHand => last.rotation.inverse() * plan.axis.hand,
+            };
+            let words = format!(
+                "every motion rotates about one axis (a low-DOF robot): X's {} is the prior's ({}), the motions determine the rest; the next motions turn about the robot's axis ({:.2}, {:.2}, {:.2}) in the gripper frame, the only one it turns about",
+                plan.prior.component.name(),
+                plan.prior,
+                axis.x,
+                axis.y,
+                axis.z
+            );
+            let turns = ANGLES_DEG
+                .iter()
+                .flat_map(|&a| [a, -a])
+                .flat_map(|angle_deg| Turn::about(axis, angle_deg, &[Pivot::Flange, Pivot::Target]))
+                .collect();
+            (Some(x), Some(words), turns)
+        }
+        None => {
+            let words = low_dof_words(poses, setup);
+            // A low-DOF recording without its prior leaves X's translation along the axis free,
+            // and with it where the target is in the gripper frame: turns about the flange only.
+            let pivots: &[Pivot] = if words.is_some() {
+                &[Pivot::Flange]
+            } else {
+                &[Pivot::Flange, Pivot::Target]
+            };
+            let turns = candidate_axes()
+                .into_iter()
+                .flat_map(|axis| ANGLES_DEG.map(|a| (axis, a)))
+                .flat_map(|(axis, angle_deg)| Turn::about(axis, angle_deg, pivots))
+                .collect();
+            (acc.estimate().map(|e| e.x), words, turns)
+        }
+    };
+    let Some((x, (y, noise))) = x.and_then(|x| Some((x, noise_of(&acc, &x)?))) else {
         return Ok(Advice {
             outliers: outliers.len(),
             low_dof,
             ..undetermined(poses, setup, count)
         });
     };
-    let current = predicted(&acc, &x, noise);
-    let weakest = current
-        .map(|_| weakest(&acc, &x, noise))
-        .unwrap_or_default();
+    let model = Model { x, y, noise, priors };
+    let current = model.predicted(&acc);
+    let weakest = current.map(|_| model.weakest(&acc)).unwrap_or_default();
     let mut suggestions = Vec::with_capacity(count);
     let mut from = last;
     for _ in 0..count {
-        let Some((axis, angle, next, after)) = best_next(&acc, setup, &x, &y, &from, noise) else {
+        let Some((turn, next, after)) = model.best_next(&acc, setup, &from, &candidates) else {
             break;
         };
         acc.add(&next);
-        from = next.base_from_gripper;
         suggestions.push(Suggestion {
-            axis_gripper: axis.into(),
-            angle_deg: angle,
+            axis_gripper: turn.axis.into(),
+            angle_deg: turn.angle_deg,
+            pivot: turn.pivot,
+            pivot_gripper: model.pivot_point(setup, &from, turn.pivot).into(),
             predicted: Some(after),
         });
+        from = next.base_from_gripper;
     }
     Ok(Advice {
         poses: poses.len(),
@@ -153,77 +228,129 @@ pub fn advise(poses: &[PosePair], setup: Setup, written: Written, count: usize) 
     })
 }
 
-/// X, Y and the noise (per-axis rotation in radians, per-axis translation) of the poses, when X
-/// is determined. A noise of zero (exact data) is floored, so that predictions stay finite.
-fn solved(acc: &PoseAccumulator) -> Option<(Transform, Transform, (f64, f64))> {
-    let x = acc.estimate()?.x;
-    let scatter = acc.residual_scatter(&x)?;
-    let scale = acc.scene_scale().max(acc.viewing_distance()).max(1e-12);
-    let r = (scatter.rotation / 3f64.sqrt()).max(1e-6);
-    let t = (scatter.translation / 3f64.sqrt()).max(1e-6 * scale);
-    Some((x, scatter.y, (r, t)))
-}
-
-/// The one-sigma sizes from the covariance.
-fn predicted(acc: &PoseAccumulator, x: &Transform, noise: (f64, f64)) -> Option<Predicted> {
-    let c = acc.covariance(x, noise.0, noise.1)?;
-    Some(Predicted {
-        rotation_deg: (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees(),
-        translation: (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt(),
-    })
-}
-
-/// The weakest rotation and translation directions (the largest eigenvalue of each block).
-fn weakest(acc: &PoseAccumulator, x: &Transform, noise: (f64, f64)) -> Vec<Weakness> {
-    let Some(c) = acc.covariance(x, noise.0, noise.1) else {
-        return Vec::new();
-    };
-    let block = |k: usize| -> Matrix3<f64> { c.fixed_view::<3, 3>(k, k).into_owned() };
-    let mut out = Vec::new();
-    for (kind, k) in [(WeaknessKind::Rotation, 0), (WeaknessKind::Translation, 3)] {
-        let e = block(k).symmetric_eigen();
-        let i = e.eigenvalues.imax();
-        let sigma = e.eigenvalues[i].max(0.0).sqrt();
-        let v: Vector3<f64> = e.eigenvectors.column(i).into_owned();
-        out.push(Weakness {
-            kind,
-            axis_gripper: v.into(),
-            sigma: match kind {
-                WeaknessKind::Rotation => sigma.to_degrees(),
-                WeaknessKind::Translation => sigma,
-            },
-        });
-    }
-    out
-}
-
-/// The candidate next motion that leaves the smallest uncertainty (rotation and translation each
-/// relative to now), with the pose it makes and the prediction.
-fn best_next(
-    acc: &PoseAccumulator,
-    setup: Setup,
-    x: &Transform,
-    y: &Transform,
-    from: &Transform,
+/// What the predictions rest on: X, the fixed frame Y, the noise of the poses and the priors.
+struct Model<'a> {
+    x: Transform,
+    y: Transform,
     noise: (f64, f64),
-) -> Option<(Vector3<f64>, f64, PosePair, Predicted)> {
-    let now = predicted(acc, x, noise)?;
-    let mut best: Option<(f64, Vector3<f64>, f64, PosePair, Predicted)> = None;
-    for axis in candidate_axes() {
-        for angle in ANGLES_DEG {
-            let next = consistent_pose(setup, x, y, &turned(from, &axis, angle));
+    priors: &'a [Prior],
+}
+
+impl Model<'_> {
+    /// The covariance of X from the poses in `acc` and the priors.
+    fn covariance(&self, acc: &PoseAccumulator) -> Option<nalgebra::SMatrix<f64, 6, 6>> {
+        acc.covariance_given(&self.x, self.noise.0, self.noise.1, self.priors)
+    }
+
+    /// The one-sigma sizes from the covariance.
+    fn predicted(&self, acc: &PoseAccumulator) -> Option<Predicted> {
+        let c = self.covariance(acc)?;
+        Some(Predicted {
+            rotation_deg: (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees(),
+            translation: (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt(),
+        })
+    }
+
+    /// The weakest rotation and translation directions (the largest eigenvalue of each block).
+    fn weakest(&self, acc: &PoseAccumulator) -> Vec<Weakness> {
+        let Some(c) = self.covariance(acc) else {
+            return Vec::new();
+        };
+        let block = |k: usize| -> Matrix3<f64> { c.fixed_view::<3, 3>(k, k).into_owned() };
+        let mut out = Vec::new();
+        for (kind, k) in [(WeaknessKind::Rotation, 0), (WeaknessKind::Translation, 3)] {
+            let e = block(k).symmetric_eigen();
+            let i = e.eigenvalues.imax();
+            let sigma = e.eigenvalues[i].max(0.0).sqrt();
+            let v: Vector3<f64> = e.eigenvectors.column(i).into_owned();
+            out.push(Weakness {
+                kind,
+                axis_gripper: v.into(),
+                sigma: match kind {
+                    WeaknessKind::Rotation => sigma.to_degrees(),
+                    WeaknessKind::Translation => sigma,
+                },
+            });
+        }
+        out
+    }
+
+    /// The point `pivot` names, in the gripper frame at `from`: the origin for the flange; the
+    /// target's position (eye-in-hand: `from⁻¹ · Y`, Y = `base_from_target`; eye-to-hand: Y's own,
+    /// Y = `gripper_from_target`).
+    fn pivot_point(&self, setup: Setup, from: &Transform, pivot: Pivot) -> Vector3<f64> {
+        match (pivot, setup) {
+            (Pivot::Flange, _) => Vector3::zeros(),
+            (Pivot::Target, Setup::EyeInHand) => (from.inverse() * self.y).translation.vector,
+            (Pivot::Target, Setup::EyeToHand) => self.y.translation.vector,
+        }
+    }
+
+    /// The candidate turn that leaves the smallest uncertainty (rotation and translation each
+    /// relative to now), with the pose it makes and the prediction.
+    fn best_next(
+        &self,
+        acc: &PoseAccumulator,
+        setup: Setup,
+        from: &Transform,
+        candidates: &[Turn],
+    ) -> Option<(Turn, PosePair, Predicted)> {
+        let now = self.predicted(acc)?;
+        let mut best: Option<(f64, Turn, PosePair, Predicted)> = None;
+        for &turn in candidates {
+            let pivot = self.pivot_point(setup, from, turn.pivot);
+            // The target's place in the gripper frame comes through X: offered only when X's
+            // translation is known to a tenth of that distance (not while a direction is free).
+            if turn.pivot == Pivot::Target && now.translation > 0.1 * pivot.norm() {
+                continue;
+            }
+            let moved = turned(from, &turn.axis, turn.angle_deg, &pivot);
+            let next = consistent_pose(setup, &self.x, &self.y, &moved);
             let mut trial = acc.clone();
             trial.add(&next);
-            let Some(p) = predicted(&trial, x, noise) else {
+            let Some(p) = self.predicted(&trial) else {
                 continue;
             };
             let score = p.rotation_deg / now.rotation_deg + p.translation / now.translation;
             if best.as_ref().is_none_or(|b| score < b.0) {
-                best = Some((score, axis, angle, next, p));
+                best = Some((score, turn, next, p));
             }
         }
+        best.map(|(_, turn, next, p)| (turn, next, p))
     }
-    best.map(|(_, axis, angle, next, p)| (axis, angle, next, p))
+}
+
+/// A candidate turn of the gripper: an axis of the gripper frame, an angle, and the point it is
+/// about.
+#[derive(Debug, Clone, Copy)]
+struct Turn {
+    axis: Vector3<f64>,
+    angle_deg: f64,
+    pivot: Pivot,
+}
+
+impl Turn {
+    /// The turns by `angle_deg` about `axis`, one about each of `pivots`.
+    fn about(axis: Vector3<f64>, angle_deg: f64, pivots: &[Pivot]) -> Vec<Self> {
+        pivots
+            .iter()
+            .map(|&pivot| Self {
+                axis,
+                angle_deg,
+                pivot,
+            })
+            .collect()
+    }
+}
+
+/// Y and the noise (per-axis rotation in radians, per-axis translation) of the poses under X. A
+/// noise of zero (exact data) is floored, so that predictions stay finite.
+fn noise_of(acc: &PoseAccumulator, x: &Transform) -> Option<(Transform, (f64, f64))> {
+    let scatter = acc.residual_scatter(x)?;
+    let scale = acc.scene_scale().max(acc.viewing_distance()).max(1e-12);
+    let r = (scatter.rotation / 3f64.sqrt()).max(1e-6);
+    let t = (scatter.translation / 3f64.sqrt()).max(1e-6 * scale);
+    Some((scatter.y, (r, t)))
 }
 
 /// The advice when X is not determined: turn about the axis farthest from the rotation axes seen
@@ -253,6 +380,8 @@ fn undetermined(poses: &[PosePair], setup: Setup, count: usize) -> Advice {
         .map(|&i| Suggestion {
             axis_gripper: e.eigenvectors.column(i).into_owned().into(),
             angle_deg: 30.0,
+            pivot: Pivot::Flange,
+            pivot_gripper: [0.0; 3],
             predicted: None,
         })
         .collect();
@@ -299,10 +428,17 @@ fn candidate_axes() -> Vec<Vector3<f64>> {
     out
 }
 
-/// The robot pose turned by `angle_deg` about `axis` of its own (gripper) frame.
-fn turned(base_from_gripper: &Transform, axis: &Vector3<f64>, angle_deg: f64) -> Transform {
+/// The robot pose turned by `angle_deg` about `axis` of its own (gripper) frame, through the
+/// point `pivot` of that frame.
+fn turned(
+    base_from_gripper: &Transform,
+    axis: &Vector3<f64>,
+    angle_deg: f64,
+    pivot: &Vector3<f64>,
+) -> Transform {
     let r = exp_so3(&(axis * angle_deg.to_radians()));
-    base_from_gripper * transform_from_parts(&r, &Vector3::zeros())
+    // About the point p of the gripper frame: p stays put, q ↦ p + R (q − p).
+    base_from_gripper * transform_from_parts(&r, &(pivot - r * pivot))
 }
 
 /// The pose pair at `base_from_gripper` that agrees exactly with X and Y: C = X⁻¹ H⁻¹ Y.
@@ -350,8 +486,15 @@ pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
     let sigma = |poses: &[PosePair]| -> Option<f64> {
         let mut acc = PoseAccumulator::new(Setup::EyeInHand);
         poses.iter().for_each(|p| acc.add(p));
-        let (x, _, noise) = solved(&acc)?;
-        predicted(&acc, &x, noise).map(|p| p.rotation_deg)
+        let x = acc.estimate()?.x;
+        let (y, noise) = noise_of(&acc, &x)?;
+        let model = Model {
+            x,
+            y,
+            noise,
+            priors: &[],
+        };
+        model.predicted(&acc).map(|p| p.rotation_deg)
     };
     let noisy = |p: &PosePair, rng: &mut rand_xoshiro::Xoshiro256PlusPlus| {
         let mut jitter = |t: &Transform| {
@@ -398,7 +541,7 @@ pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
             let mut reached = usize::MAX;
             while poses.len() < MOST {
                 let (axis, angle) = if advised {
-                    match advise(&poses, Setup::EyeInHand, Written::NAMED, 1)
+                    match advise(&poses, Setup::EyeInHand, Written::NAMED, 1, &[])
                         .ok()
                         .and_then(|a| a.suggestions.first().copied())
                     {
@@ -412,7 +555,7 @@ pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
                         ANGLES_DEG[rng.random_range(0..ANGLES_DEG.len())],
                     )
                 };
-                let q = turned(&from, &axis, angle);
+                let q = turned(&from, &axis, angle, &Vector3::zeros());
                 let exact = consistent_pose(Setup::EyeInHand, &x, &y, &q);
                 poses.push(noisy(&exact, &mut rng));
                 from = q;

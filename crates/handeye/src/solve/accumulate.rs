@@ -229,6 +229,19 @@ impl PoseAccumulator {
         noise_rotation: f64,
         noise_translation: f64,
     ) -> Option<SMatrix<f64, 6, 6>> {
+        self.information(x, noise_rotation, noise_translation)?
+            .try_inverse()
+            .filter(|c| (0..6).all(|k| c[(k, k)].is_finite() && c[(k, k)] > 0.0))
+    }
+
+    /// The information matrix whose inverse is [`Self::covariance`] (symmetric; singular when the
+    /// poses leave a direction of X free). `None` with fewer than three poses or no noise.
+    fn information(
+        &self,
+        x: &Transform,
+        noise_rotation: f64,
+        noise_translation: f64,
+    ) -> Option<SMatrix<f64, 6, 6>> {
         if self.n < 3 || !(noise_rotation > 0.0 && noise_translation > 0.0) {
             return None;
         }
@@ -269,7 +282,32 @@ impl PoseAccumulator {
         let weight =
             SMatrix::<f64, 6, 6>::from_diagonal(&nalgebra::Vector6::new(wr, wr, wr, wt, wt, wt));
         let info = info - sum_a.transpose() * weight * sum_a / n;
-        let info = (info + info.transpose()) * 0.5;
+        Some((info + info.transpose()) * 0.5)
+    }
+
+    /// [`Self::covariance`] with priors on components of X's translation (each a measurement of
+    /// that component with its sigma: information 1/σ² on it; an exact prior's sigma is taken as
+    /// 1e-9 of the scene's size): the covariance of a low-DOF recording, whose motions leave a
+    /// component free, is then finite. `None` when it is singular.
+    pub fn covariance_given(
+        &self,
+        x: &Transform,
+        noise_rotation: f64,
+        noise_translation: f64,
+        priors: &[crate::model::prior::Prior],
+    ) -> Option<SMatrix<f64, 6, 6>> {
+        if priors.is_empty() {
+            return self.covariance(x, noise_rotation, noise_translation);
+        }
+        // The information without priors may be singular (the free direction): it is inverted
+        // with the priors' information added.
+        let floor = 1e-9 * self.scene_scale().max(1e-12);
+        let mut prior_info = SMatrix::<f64, 6, 6>::zeros();
+        for p in priors {
+            let k = 3 + p.component.index();
+            prior_info[(k, k)] += 1.0 / p.sigma.max(floor).powi(2);
+        }
+        let info = self.information(x, noise_rotation, noise_translation)? + prior_info;
         info.try_inverse()
             .filter(|c| (0..6).all(|k| c[(k, k)].is_finite() && c[(k, k)] > 0.0))
     }
