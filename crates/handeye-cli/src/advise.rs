@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::{Advice, Pivot, Unit, WeaknessKind, advise};
+use handeye::{Advice, AdviseOptions, Pivot, Unit, WeaknessKind, advise};
 
 use crate::faces::{self, short};
 use crate::input::{InputArgs, read_all};
@@ -21,19 +21,23 @@ pub struct Args {
     /// robot: turns about its one axis. Repeatable.
     #[arg(long, value_name = "NAME=VALUE[+-SIGMA]", value_parser = crate::values::prior)]
     prior: Vec<handeye::Prior>,
+    /// The one-sigma X you need, rotation in degrees and translation in the input's unit (e.g.
+    /// `0.1,0.001` for 0.1° and 1 mm in metres): the advice says when you are done, or after
+    /// which suggested motion the prediction is within it.
+    #[arg(long, value_name = "DEGREES,LENGTH", value_parser = crate::values::goal)]
+    goal: Option<handeye::Predicted>,
 }
 
 /// Runs the command: the advice as JSON on stdout, in words on stderr.
 pub fn run(args: Args) -> Result<()> {
     let recording = read_all(&args.input, handeye::Reading::AsGiven)?;
     let poses = recording.poses;
-    let advice = advise(
-        &poses,
-        args.input.setup(),
-        recording.written,
-        args.count,
-        &args.prior,
-    )?;
+    let options = AdviseOptions {
+        count: args.count,
+        priors: args.prior,
+        goal: args.goal,
+    };
+    let advice = advise(&poses, args.input.setup(), recording.written, &options)?;
     eprint!("{}", in_words(&advice, faces::length_unit(&poses)));
     print_json(&advice)
 }
@@ -102,6 +106,24 @@ fn in_words(advice: &Advice, unit: Option<Unit>) -> String {
             )),
             None => out.push('\n'),
         }
+    }
+    if let Some(g) = &advice.goal {
+        let goal = format!(
+            "{:.3}° and {} {u}",
+            g.goal.rotation_deg,
+            short(g.goal.translation)
+        );
+        out.push_str(&match (g.done, g.after) {
+            (true, _) => format!(
+                "you are done: X is within your goal ({goal}, one sigma); more poses are not needed for it\n"
+            ),
+            (false, Some(k)) => format!(
+                "your goal ({goal}, one sigma) is predicted after next motion {k}\n"
+            ),
+            (false, None) => format!(
+                "your goal ({goal}, one sigma) is not reached by the motions suggested: record them, then ask again\n"
+            ),
+        });
     }
     out
 }

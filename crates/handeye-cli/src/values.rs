@@ -151,6 +151,20 @@ pub fn point(s: &str) -> Result<[f64; 3], String> {
     Ok([number(parts[0])?, number(parts[1])?, number(parts[2])?])
 }
 
+/// `--goal DEGREES,LENGTH`: two positive sizes, a one-sigma rotation and translation.
+pub fn goal(s: &str) -> Result<handeye::Predicted, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 2 {
+        return Err(format!(
+            "expected DEGREES,LENGTH (a one-sigma rotation and translation), got `{s}`"
+        ));
+    }
+    Ok(handeye::Predicted {
+        rotation_deg: positive(parts[0])?,
+        translation: positive(parts[1])?,
+    })
+}
+
 /// `--prior NAME=VALUE[+-SIGMA]` (the library's parser and words).
 pub fn prior(s: &str) -> Result<handeye::Prior, String> {
     s.parse::<handeye::Prior>().map_err(|e| match e {

@@ -732,3 +732,35 @@ fn advise_gives_lengths_in_the_input_unit_and_the_pivot_of_each_turn() {
         }
     }
 }
+
+#[test]
+fn advise_says_you_are_done_when_x_is_within_the_goal() {
+    // Issue 33 item 16: "you are done" against the user's goal; a goal within reach names the
+    // motion after which it is predicted; a goal that is not two positive sizes exits 2.
+    let file = testdata("kinhec/pairs/nominal_stations_eih_s0.jsonl");
+    let (code, out, err) = run(handeye().args(["advise", "--goal", "0.2,0.005"]).arg(&file));
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("you are done"), "{err}");
+    let a: serde_json::Value = serde_json::from_str(&out[out.find('{').unwrap()..]).unwrap();
+    assert_eq!(a["goal"]["done"], true);
+    assert!(a["suggestions"].as_array().unwrap().is_empty());
+    let (code, out, err) = run(handeye()
+        .args(["advise", "--goal", "0.0001,0.000001"])
+        .arg(&file));
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("is not reached by the motions suggested"),
+        "{err}"
+    );
+    let a: serde_json::Value = serde_json::from_str(&out[out.find('{').unwrap()..]).unwrap();
+    assert_eq!(a["goal"]["done"], false);
+    assert_eq!(a["suggestions"].as_array().unwrap().len(), 3);
+    for bad in ["0,1", "1", "1,2,3", "x,1", "-1,1"] {
+        let (code, _, err) = run(handeye()
+            .arg("advise")
+            .arg(format!("--goal={bad}"))
+            .arg(&file));
+        assert_eq!(code, 2, "{bad}: {err}");
+        assert!(err.contains("--goal"), "{bad}: {err}");
+    }
+}

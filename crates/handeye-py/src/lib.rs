@@ -577,7 +577,7 @@ fn verify_report<'py>(
 
 /// What to record next (`handeye advise`): the library's `Advice` as JSON text.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, prior=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, prior=None, goal=None))]
 fn advise_report<'py>(
     py: Python<'py>,
     base_from_gripper: PyReadonlyArray3<'py, f64>,
@@ -585,15 +585,23 @@ fn advise_report<'py>(
     setup: &str,
     count: usize,
     prior: Option<Vec<String>>,
+    goal: Option<(f64, f64)>,
 ) -> PyResult<String> {
-    let priors = priors(prior)?;
+    let options = handeye::AdviseOptions {
+        count,
+        priors: priors(prior)?,
+        goal: goal.map(|(rotation_deg, translation)| handeye::Predicted {
+            rotation_deg,
+            translation,
+        }),
+    };
     if !(1..=20).contains(&count) {
         return Err(value_error(format!("count must be 1 to 20, found {count}")));
     }
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let advice = py
-        .allow_threads(|| handeye::advise(&poses, setup, handeye::Written::NAMED, count, &priors))
+        .allow_threads(|| handeye::advise(&poses, setup, handeye::Written::NAMED, &options))
         .map_err(value_error)?;
     serde_json::to_string(&advice).map_err(value_error)
 }

@@ -814,3 +814,17 @@ def test_advise_takes_a_prior_and_advises_a_scara_turns_it_makes():
     assert all(abs(s["axis_gripper"][2]) > 0.999 for s in advice["suggestions"])
     with pytest.raises(ValueError, match="another length unit"):
         handeye.advise(g, c, prior=f"tz={tz * 1000}")
+
+
+def test_advise_says_when_the_goal_is_reached():
+    """advise(..., goal=(degrees, length)) as `handeye advise --goal`: done within it, no more
+    suggestions; a goal that is not two positive sizes raises."""
+    q, c, _, _ = load_series("series_2007_000_200")
+    now = handeye.advise(q[:40], c[:40])["current"]
+    done = handeye.advise(q[:40], c[:40], goal=(now["rotation_deg"] * 1.01, now["translation"] * 1.01))
+    assert done["goal"]["done"] and done["suggestions"] == []
+    far = handeye.advise(q[:40], c[:40], goal=(now["rotation_deg"] * 1e-3, now["translation"] * 1e-3))
+    assert not far["goal"]["done"] and far["goal"]["after"] is None and len(far["suggestions"]) == 3
+    for bad in [(0.0, 1.0), (1.0,), (float("nan"), 1.0)]:
+        with pytest.raises(ValueError, match="goal"):
+            handeye.advise(q[:40], c[:40], goal=bad)

@@ -135,7 +135,10 @@ pub use check::quality::{OUTLIER_DEG, errors_against_truth};
 pub use check::stream::{StreamReading, StreamReadings};
 pub use check::uncertainty::{AtPoint, REPLICATES, REPLICATES_RANGE, Uncertainty, median_target};
 // The jobs: batch, robot-world, advice.
-pub use calibrate::advice::{Advice, ClosedLoop, Pivot, WeaknessKind, advise, closed_loop};
+pub use calibrate::advice::{
+    Advice, AdviseOptions, ClosedLoop, GoalReport, Pivot, Predicted, WeaknessKind, advise,
+    closed_loop,
+};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
 pub use calibrate::pixels::{FrameRms, REFUSE_SIGMA_PX, ReprojectionSummary, calibrate_on_pixels};

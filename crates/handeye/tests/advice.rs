@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use handeye::calibrate::advice::advise;
+use handeye::calibrate::advice::{AdviseOptions, advise};
 use handeye::check::quality::errors_against_truth;
 use handeye::model::pose::{exp_so3, proj_so3, transform_from_parts};
 use handeye::sim::{SimConfig, simulate};
@@ -45,7 +45,16 @@ fn when_every_rotation_shares_one_axis_the_first_suggestion_turns_far_from_it() 
         let poses = handeye::io::read_pose_file(&path, handeye::io::Format::Auto)
             .unwrap()
             .pairs;
-        let advice = advise(&poses, setup, Written::NAMED, 3, &[]).unwrap();
+        let advice = advise(
+            &poses,
+            setup,
+            Written::NAMED,
+            &AdviseOptions {
+                count: 3,
+                ..AdviseOptions::default()
+            },
+        )
+        .unwrap();
         let axis = dominant_axis(&poses, setup);
         let first = Vector3::from(advice.suggestions[0].axis_gripper);
         let angle = axis.dot(&first).abs().min(1.0).acos().to_degrees();
@@ -83,7 +92,16 @@ fn following_the_advice_shrinks_the_error_as_predicted() {
         let sim = simulate(&SimConfig::default(), 41, s);
         let truth = sim.gripper_from_camera;
         let mut poses = sim.poses[..12].to_vec();
-        let advice = advise(&poses, Setup::EyeInHand, Written::NAMED, 3, &[]).unwrap();
+        let advice = advise(
+            &poses,
+            Setup::EyeInHand,
+            Written::NAMED,
+            &AdviseOptions {
+                count: 3,
+                ..AdviseOptions::default()
+            },
+        )
+        .unwrap();
         let now = advice.current.expect("determined after 12 poses");
         let predicted = advice.suggestions.last().unwrap().predicted.unwrap();
         let x0 = solve(
@@ -262,7 +280,16 @@ fn no_advice_from_misread_input_and_outliers_left_out() {
         "mistakes/quat_wxyz_camera__nominal_stations_eih_s0.jsonl",
         "mistakes/robot_mm__nominal_stations_eih_s0.jsonl",
     ] {
-        let e = advise(&read(f), Setup::EyeInHand, Written::NAMED, 3, &[]).unwrap_err();
+        let e = advise(
+            &read(f),
+            Setup::EyeInHand,
+            Written::NAMED,
+            &AdviseOptions {
+                count: 3,
+                ..AdviseOptions::default()
+            },
+        )
+        .unwrap_err();
         assert!(matches!(e, handeye::Error::Misread { .. }), "{f}: {e}");
         assert!(e.to_string().contains("--fix"), "{f}: {e}");
     }
@@ -270,8 +297,10 @@ fn no_advice_from_misread_input_and_outliers_left_out() {
         &read("pairs/outliers_gross_stations_eih_s0.jsonl"),
         Setup::EyeInHand,
         Written::NAMED,
-        2,
-        &[],
+        &AdviseOptions {
+            count: 2,
+            ..AdviseOptions::default()
+        },
     )
     .unwrap();
     assert!(
@@ -316,7 +345,16 @@ fn a_turn_about_the_target_pivots_where_the_target_is() {
             }
             Setup::EyeToHand => matrix(&truth["gripper_from_target"]).translation.vector,
         };
-        let advice = advise(&poses, setup, Written::NAMED, 1, &[]).unwrap();
+        let advice = advise(
+            &poses,
+            setup,
+            Written::NAMED,
+            &AdviseOptions {
+                count: 1,
+                ..AdviseOptions::default()
+            },
+        )
+        .unwrap();
         let first = advice.suggestions[0];
         if first.pivot != handeye::Pivot::Target {
             continue;
@@ -330,4 +368,105 @@ fn a_turn_about_the_target_pivots_where_the_target_is() {
         checked += 1;
     }
     assert!(checked >= 2, "{checked} turns about the target checked");
+}
+
+#[test]
+fn a_goal_says_when_you_are_done_and_after_which_motion_you_will_be() {
+    // On kinhec recordings: a goal just above X's uncertainty now is done (and the calibration's
+    // own bootstrap sigma agrees within a factor of 1.5), a goal between now and the third
+    // suggestion's prediction is reached after the first suggestion that predicts it, and a goal
+    // beyond every prediction is not reached.
+    use handeye::{Options, Predicted, calibrate};
+    let kinhec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec/pairs");
+    for (name, setup) in [
+        ("nominal_stations_eih_s0", Setup::EyeInHand),
+        ("nominal_stations_eih_s1", Setup::EyeInHand),
+        ("nominal_continuous_eth_s2", Setup::EyeToHand),
+    ] {
+        let poses = handeye::io::read_pose_file(
+            &kinhec.join(format!("{name}.jsonl")),
+            handeye::io::Format::Auto,
+        )
+        .unwrap()
+        .pairs;
+        let ask = |goal: Predicted| {
+            advise(
+                &poses,
+                setup,
+                Written::NAMED,
+                &AdviseOptions {
+                    goal: Some(goal),
+                    ..AdviseOptions::default()
+                },
+            )
+            .unwrap()
+        };
+        let plain = advise(&poses, setup, Written::NAMED, &AdviseOptions::default()).unwrap();
+        let now = plain.current.unwrap();
+        let scaled = |f: f64| Predicted {
+            rotation_deg: now.rotation_deg * f,
+            translation: now.translation * f,
+        };
+        let done = ask(scaled(1.01));
+        let g = done.goal.unwrap();
+        assert!(
+            g.done && g.after.is_none() && done.suggestions.is_empty(),
+            "{name}"
+        );
+        let bootstrap = calibrate(&poses, setup, &Options::default())
+            .unwrap()
+            .uncertainty;
+        for (ours, theirs) in [
+            (now.rotation_deg, bootstrap.rotation_deg),
+            (now.translation, bootstrap.translation),
+        ] {
+            assert!(
+                (ours / theirs) < 1.5 && (theirs / ours) < 1.5,
+                "{name}: {ours} vs {theirs}"
+            );
+        }
+        let last = plain.suggestions.last().unwrap().predicted.unwrap();
+        let between = Predicted {
+            rotation_deg: 0.5 * (now.rotation_deg + last.rotation_deg),
+            translation: 0.5 * (now.translation + last.translation),
+        };
+        let advice = ask(between);
+        let g = advice.goal.unwrap();
+        let k = g.after.unwrap_or_else(|| panic!("{name}: {advice:?}"));
+        assert!(!g.done && (1..=3).contains(&k));
+        assert!(
+            advice.suggestions[k - 1]
+                .predicted
+                .unwrap()
+                .within(&between)
+        );
+        assert!(
+            advice.suggestions[..k - 1]
+                .iter()
+                .all(|s| !s.predicted.unwrap().within(&between))
+        );
+        let far = ask(scaled(1e-3)).goal.unwrap();
+        assert!(!far.done && far.after.is_none(), "{name}");
+    }
+    // A goal that is not two positive sizes is refused.
+    let sim = simulate(&SimConfig::default(), 41, 0);
+    for bad in [(0.0, 1.0), (1.0, -1.0), (f64::NAN, 1.0)] {
+        let e = advise(
+            &sim.poses[..12],
+            Setup::EyeInHand,
+            Written::NAMED,
+            &AdviseOptions {
+                goal: Some(Predicted {
+                    rotation_deg: bad.0,
+                    translation: bad.1,
+                }),
+                ..AdviseOptions::default()
+            },
+        )
+        .unwrap_err();
+        assert!(
+            matches!(e, handeye::Error::InvalidParameter { name: "goal", .. }),
+            "{e}"
+        );
+    }
 }

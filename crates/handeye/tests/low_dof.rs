@@ -395,15 +395,23 @@ fn gripper_axis(poses: &[handeye::PosePair]) -> Vector3<f64> {
 
 #[test]
 fn advice_with_the_prior_turns_about_the_robots_axis_with_the_calibrations_sigma() {
-    use handeye::{Written, advise};
+    use handeye::{AdviseOptions, Written, advise};
     let mut ratios = Vec::new();
     for setup in SETUPS {
         for seed in 0..8 {
             let s = simulate_low_dof(&scara(setup), seed, 0);
             let tz = s.x.translation.vector.z;
             let given = prior(Component::Tz, tz, 0.002);
-            let advice = advise(&s.poses, setup, Written::NAMED, 3, &[given])
-                .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
+            let advice = advise(
+                &s.poses,
+                setup,
+                Written::NAMED,
+                &AdviseOptions {
+                    priors: vec![given],
+                    ..AdviseOptions::default()
+                },
+            )
+            .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
             let words = advice.low_dof.as_deref().unwrap();
             assert!(words.contains("X's tz is the prior's"), "{words}");
             let current = advice.current.unwrap();
@@ -440,7 +448,7 @@ fn advice_with_the_prior_turns_about_the_robots_axis_with_the_calibrations_sigma
 
 #[test]
 fn advice_on_a_low_dof_recording_refuses_a_prior_in_another_unit_and_leaves_outliers_out() {
-    use handeye::{Written, advise};
+    use handeye::{AdviseOptions, Written, advise};
     let s = simulate_low_dof(&scara(Setup::EyeInHand), 3, 0);
     let tz = s.x.translation.vector.z;
     // Millimetres on a recording in metres.
@@ -448,8 +456,10 @@ fn advice_on_a_low_dof_recording_refuses_a_prior_in_another_unit_and_leaves_outl
         &s.poses,
         Setup::EyeInHand,
         Written::NAMED,
-        3,
-        &[prior(Component::Tz, tz * 1000.0, 0.0)],
+        &AdviseOptions {
+            priors: vec![prior(Component::Tz, tz * 1000.0, 0.0)],
+            ..AdviseOptions::default()
+        },
     )
     .unwrap_err();
     assert!(
@@ -463,13 +473,25 @@ fn advice_on_a_low_dof_recording_refuses_a_prior_in_another_unit_and_leaves_outl
         &poses,
         Setup::EyeInHand,
         Written::NAMED,
-        2,
-        &[prior(Component::Tz, tz, 0.0)],
+        &AdviseOptions {
+            count: 2,
+            priors: vec![prior(Component::Tz, tz, 0.0)],
+            ..AdviseOptions::default()
+        },
     )
     .unwrap();
     assert!(advice.outliers >= 1, "{advice:?}");
     assert!(advice.low_dof.unwrap().contains("the prior's"));
     // Without the prior, the words name it.
-    let advice = advise(&s.poses, Setup::EyeInHand, Written::NAMED, 2, &[]).unwrap();
+    let advice = advise(
+        &s.poses,
+        Setup::EyeInHand,
+        Written::NAMED,
+        &AdviseOptions {
+            count: 2,
+            ..AdviseOptions::default()
+        },
+    )
+    .unwrap();
     assert!(advice.low_dof.unwrap().contains("--prior tz="));
 }

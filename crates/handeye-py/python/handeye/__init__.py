@@ -295,15 +295,22 @@ def _transforms(base_from_gripper, camera_from_target):
     return g, c
 
 
-def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, prior=None):
+def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, prior=None, goal=None):
     """What to record next, as ``handeye advise`` prints it: X's one-sigma now (``current``), its
     least determined directions (``weakest``) and the next gripper motions (``suggestions``: an
     axis of the gripper frame, an angle, and the uncertainty predicted once recorded). Takes
     (N, 4, 4) arrays. ``prior`` as for ``calibrate`` (``"tz=0.12+-0.002"``, a list, or a dict): it
     enters the uncertainty with its sigma, and on a low-DOF recording (every motion about one axis)
-    the advice is then for that robot (``low_dof`` says so): turns about its one axis."""
+    the advice is then for that robot (``low_dof`` says so): turns about its one axis. ``goal``
+    (degrees, length in the input's unit: the one-sigma X you need) adds ``goal``: ``done`` when X
+    is within it now (and no suggestion), else ``after``: the suggested motion after which the
+    prediction is."""
     g, c = _transforms(base_from_gripper, camera_from_target)
-    return json.loads(_advise_report(g, c, setup=setup, count=count, prior=_priors(prior)))
+    if goal is not None:
+        goal = tuple(float(v) for v in goal)
+        if len(goal) != 2:
+            raise ValueError("goal: expected (degrees, length), a one-sigma rotation and translation")
+    return json.loads(_advise_report(g, c, setup=setup, count=count, prior=_priors(prior), goal=goal))
 
 
 def read_recording(

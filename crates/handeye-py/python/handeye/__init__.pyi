@@ -47,6 +47,7 @@ def advise(
     setup: str = "eye-in-hand",
     count: int = 3,
     prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
+    goal: Optional[tuple[float, float]] = None,
 ) -> dict[str, Any]: ...
 
 def verify(

@@ -108,10 +108,56 @@ pub struct Advice {
     /// otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub low_dof: Option<String>,
+    /// With a goal (`--goal`): whether X is within it now (`done`, and then no suggestion), or
+    /// after which suggested motion it is predicted to be.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal: Option<GoalReport>,
 }
 
-/// The advice for `poses` (module documentation): `count` suggestions, from the poses that agree
-/// with the others (outliers by the batch's own test are left out and counted in `outliers`).
+/// What [`advise`] is asked for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AdviseOptions {
+    /// How many next motions to suggest. Default 3.
+    pub count: usize,
+    /// Priors on components of X's translation (`--prior`).
+    pub priors: Vec<Prior>,
+    /// The uncertainty the user needs (`--goal`): reached, the advice says so and suggests
+    /// nothing more; else it says after which suggested motion the prediction reaches it.
+    pub goal: Option<Predicted>,
+}
+
+impl Default for AdviseOptions {
+    fn default() -> Self {
+        Self {
+            count: 3,
+            priors: Vec::new(),
+            goal: None,
+        }
+    }
+}
+
+/// How the advice stands against the user's goal.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GoalReport {
+    /// The goal: one-sigma rotation in degrees and translation in the input unit.
+    pub goal: Predicted,
+    /// X's uncertainty now is within the goal in both: record no more for it.
+    pub done: bool,
+    /// The number of suggested motions after which the prediction is within the goal (`None`
+    /// when done, or when the suggestions do not reach it).
+    pub after: Option<usize>,
+}
+
+impl Predicted {
+    /// Within `goal` in both sizes.
+    pub fn within(&self, goal: &Predicted) -> bool {
+        self.rotation_deg <= goal.rotation_deg && self.translation <= goal.translation
+    }
+}
+
+/// The advice for `poses` (module documentation): `options.count` suggestions, from the poses
+/// that agree with the others (outliers by the batch's own test are left out and counted in
+/// `outliers`).
 ///
 /// Errors with [`Error::TooFewMotions`] for fewer than two poses, and with [`Error::Misread`]
 /// when the poses fit far better read another way (an inverted pose, `w, x, y, z` quaternions,
@@ -124,10 +170,11 @@ pub fn advise(
     poses: &[PosePair],
     setup: Setup,
     written: Written,
-    count: usize,
-    priors: &[Prior],
+    options: &AdviseOptions,
 ) -> Result<Advice> {
+    let (count, priors) = (options.count, &options.priors[..]);
     check_priors(priors)?;
+    check_goal(options.goal)?;
     if poses.len() < 2 {
         return Err(Error::TooFewMotions {
             got: poses.len().saturating_sub(1),
@@ -196,15 +243,24 @@ pub fn advise(
         return Ok(Advice {
             outliers: outliers.len(),
             low_dof,
+            goal: options.goal.map(|goal| GoalReport {
+                goal,
+                done: false,
+                after: None,
+            }),
             ..undetermined(poses, setup, count)
         });
     };
     let model = Model { x, y, noise, priors };
     let current = model.predicted(&acc);
     let weakest = current.map(|_| model.weakest(&acc)).unwrap_or_default();
+    let done = options
+        .goal
+        .zip(current)
+        .is_some_and(|(goal, now)| now.within(&goal));
     let mut suggestions = Vec::with_capacity(count);
     let mut from = last;
-    for _ in 0..count {
+    for _ in 0..if done { 0 } else { count } {
         let Some((turn, next, after)) = model.best_next(&acc, setup, &from, &candidates) else {
             break;
         };
@@ -218,6 +274,18 @@ pub fn advise(
         });
         from = next.base_from_gripper;
     }
+    let goal = options.goal.map(|goal| GoalReport {
+        goal,
+        done,
+        after: (!done)
+            .then(|| {
+                suggestions
+                    .iter()
+                    .position(|s| s.predicted.is_some_and(|p| p.within(&goal)))
+                    .map(|k| k + 1)
+            })
+            .flatten(),
+    });
     Ok(Advice {
         poses: poses.len(),
         outliers: outliers.len(),
@@ -225,7 +293,29 @@ pub fn advise(
         weakest,
         suggestions,
         low_dof,
+        goal,
     })
+}
+
+/// Refuses a goal that is not two positive finite sizes.
+fn check_goal(goal: Option<Predicted>) -> Result<()> {
+    match goal {
+        Some(g)
+            if !(g.rotation_deg.is_finite()
+                && g.rotation_deg > 0.0
+                && g.translation.is_finite()
+                && g.translation > 0.0) =>
+        {
+            Err(Error::InvalidParameter {
+                name: "goal",
+                message: format!(
+                    "expected a one-sigma rotation in degrees and a translation in the input's unit, both positive, found {} and {}",
+                    g.rotation_deg, g.translation
+                ),
+            })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// What the predictions rest on: X, the fixed frame Y, the noise of the poses and the priors.
@@ -392,6 +482,7 @@ fn undetermined(poses: &[PosePair], setup: Setup, count: usize) -> Advice {
         weakest: Vec::new(),
         suggestions,
         low_dof: None,
+        goal: None,
     }
 }
 
@@ -541,7 +632,7 @@ pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
             let mut reached = usize::MAX;
             while poses.len() < MOST {
                 let (axis, angle) = if advised {
-                    match advise(&poses, Setup::EyeInHand, Written::NAMED, 1, &[])
+                    match advise(&poses, Setup::EyeInHand, Written::NAMED, &AdviseOptions { count: 1, ..AdviseOptions::default() })
                         .ok()
                         .and_then(|a| a.suggestions.first().copied())
                     {
