@@ -544,7 +544,7 @@ fn priors(prior: Option<Vec<String>>) -> PyResult<Vec<handeye::Prior>> {
 /// Whether a saved X still fits a new recording (`handeye verify`): the library's
 /// `Verification` as JSON text, the same object the command line prints.
 #[pyfunction]
-#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::REPLICATES, joints=None, prior=None))]
+#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::REPLICATES, joints=None, prior=None, fix=None))]
 #[allow(clippy::too_many_arguments)]
 fn verify_report<'py>(
     py: Python<'py>,
@@ -558,11 +558,13 @@ fn verify_report<'py>(
     bootstrap: usize,
     joints: Option<Vec<Vec<f64>>>,
     prior: Option<Vec<String>>,
+    fix: Option<&str>,
 ) -> PyResult<String> {
     let saved = handeye::io::read_saved_x(std::path::Path::new(saved)).map_err(value_error)?;
     let options = handeye::Options {
         joints: checked_joints(joints)?,
         priors: priors(prior)?,
+        fix: parse_fix(fix)?,
         reject_outliers,
         replicates: bootstrap,
         ..calibration_options(method, pairs, false)?

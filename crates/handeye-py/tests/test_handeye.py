@@ -663,6 +663,16 @@ def test_verify_decides_as_the_command_line_does(tmp_path):
     bumped = handeye.verify(saved, other["base_from_gripper"], moved)
     assert bumped["verdict"] == "inconsistent", bumped["message"]
     assert bumped["difference"]["rotation_deg"] > 0.5
+    # A new recording with its camera poses inverted: refused as misread (as the command line
+    # refuses it), and with fix="camera-inverted" read back to the consistent verdict.
+    inverted = np.linalg.inv(other["camera_from_target"])
+    with pytest.raises(ValueError, match="camera-inverted"):
+        handeye.verify(saved, other["base_from_gripper"], inverted)
+    fixed = handeye.verify(saved, other["base_from_gripper"], inverted, fix="camera-inverted")
+    assert fixed["verdict"] == "consistent", fixed["message"]
+    assert np.allclose(fixed["difference"]["rotation_deg"], same["difference"]["rotation_deg"], atol=1e-9)
+    with pytest.raises(ValueError, match="fix"):
+        handeye.verify(saved, other["base_from_gripper"], inverted, fix="upside-down")
 
 
 def test_the_report_says_its_verdict_as_every_face_does():

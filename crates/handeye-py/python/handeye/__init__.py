@@ -251,7 +251,7 @@ def _point(point):
     return [float(v) for v in p]
 
 
-def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand", method=None, pairs=None, reject_outliers=False, bootstrap=40, joints=None, prior=None):
+def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand", method=None, pairs=None, reject_outliers=False, bootstrap=40, joints=None, prior=None, fix=None):
     """Whether a saved X still fits a new recording, as ``handeye verify --x SAVED`` decides it.
     ``saved`` is the path of what ``handeye calibrate --output json`` or ``--output yaml`` wrote
     (easy_handeye2's calibration file too; metres converted to the recording's millimetres when
@@ -264,7 +264,8 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
     array), ``quality`` of the recording's own calibration, ``message`` (what the verdict means and
     what to do) and ``notes``. A recording that cannot be read or solved at all raises ValueError.
     ``prior`` is ``calibrate``'s; without one, the component of X a low-DOF recording leaves free
-    is taken from the saved X and the rest is checked (a note says so)."""
+    is taken from the saved X and the rest is checked (a note says so). ``fix`` reads the new
+    recording another way, as ``calibrate``'s (``verify --fix``)."""
     g, c = _transforms(base_from_gripper, camera_from_target)
     result = json.loads(
         _verify_report(
@@ -278,6 +279,7 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
             bootstrap=bootstrap,
             joints=joints,
             prior=_priors(prior),
+            fix=fix,
         )
     )
     result["saved"]["matrix"] = np.array(result["saved"]["matrix"], dtype=np.float64)

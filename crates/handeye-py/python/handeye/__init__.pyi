@@ -62,6 +62,7 @@ def verify(
     bootstrap: int = 40,
     joints: Optional[Sequence[Sequence[float]]] = None,
     prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
+    fix: Optional[str] = None,
 ) -> dict[str, Any]: ...
 
 def read_recording(
