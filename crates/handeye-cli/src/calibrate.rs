@@ -243,7 +243,6 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
     for (flag, given) in [
         ("--robot/--camera streams", args.input.robot.is_some()),
         ("a ROS 2 recording", args.input.is_bag()),
-        ("--report", args.report.is_some()),
         ("--reject-outliers", args.reject_outliers),
     ] {
         if given {
@@ -266,7 +265,7 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
     let series = handeye::io::read_frames(path)?;
     let setup = args.input.setup();
     let frames = output_frames(args)?;
-    let names = series
+    let names: Vec<String> = series
         .lines
         .iter()
         .map(|l| format!("{}:{l}", path.display()))
@@ -277,7 +276,7 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         &camera,
         setup,
         &Options {
-            pose_names: names,
+            pose_names: names.clone(),
             ..options
         },
     ) {
@@ -306,6 +305,18 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         })
         .collect();
     let unit = length_unit(&poses);
+    if let Some(path) = &args.report {
+        let page = crate::report::RunPage {
+            poses: &poses,
+            names: &names,
+            written: handeye::Written::NAMED,
+            setup,
+            unit,
+            summary: faces::text(&report, &frames, unit),
+        };
+        crate::report::write_pixels(path, &page, &report)?;
+        eprintln!("wrote {}", path.display());
+    }
     if face != Face::Text {
         for w in &report.warnings {
             eprintln!("warning: {}", faces::warning(w));

@@ -158,6 +158,37 @@ fn the_robot_world_page_has_both_transforms_and_each_poses_residual() {
     assert_eq!(html.matches("<svg").count(), 4);
 }
 
+#[test]
+fn the_pixels_page_has_each_frames_reprojection_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = testdata("pixels/tag_eih.jsonl");
+    let intrinsics = testdata("pixels/tag_eih.intrinsics.yml");
+    let html = page_of(
+        &[
+            "calibrate",
+            "--method",
+            "reprojection",
+            "--intrinsics",
+            intrinsics.to_str().unwrap(),
+            "--output",
+            "json",
+            file.to_str().unwrap(),
+        ],
+        &dir.path().join("pixels.html"),
+        0,
+    );
+    self_contained(&html);
+    assert!(html.contains("reprojection RMS per frame (px)"));
+    assert!(
+        html.contains("tag_eih.jsonl:23</td>"),
+        "frames named file:line"
+    );
+    let both = copied(&html, "X and the target's pose, to copy");
+    assert_eq!(both[1]["frame"], "base_from_target");
+    // The per-frame figure, and the robot motions' axes and angles.
+    assert_eq!(html.matches("<svg").count(), 3);
+}
+
 /// A saved X: the calibration of `file`, as `calibrate --output json` wrote it.
 fn saved_x(file: &Path, dir: &Path) -> PathBuf {
     let out = Command::new(env!("CARGO_BIN_EXE_handeye"))

@@ -126,6 +126,60 @@ pub fn write_robot_world(path: &Path, run: &RunPage<'_>, r: &RobotWorldReport) -
     page.write(path)
 }
 
+/// Writes the page of a calibration on the pixels (`--method reprojection`): X and the target's
+/// pose, each frame's reprojection RMS, the robot's motions.
+pub fn write_pixels(path: &Path, run: &RunPage<'_>, r: &Report) -> Result<()> {
+    register_font();
+    let mut page = Page::new(
+        "handeye calibrate --method reprojection",
+        Some(r.verdict.name()),
+    );
+    page.text("Summary", &run.summary);
+    let mut copy = vec![transform_json(&r.frame, &r.transform, run.unit)];
+    if let Some(p) = &r.reprojection {
+        let target =
+            transform_from_matrix4(&nalgebra::Matrix4::from_fn(|i, j| p.target.matrix[i][j]))
+                .map_err(|e| anyhow!("the target's pose: {e:?}"))?;
+        copy.push(transform_json(&p.target_frame, &target, run.unit));
+        let points: Vec<(usize, f64)> = p.per_frame.iter().map(|f| f.rms_px).enumerate().collect();
+        page.figure(
+            per_pose_figure(
+                "reprojection RMS per frame (px)",
+                "pixels",
+                points.len(),
+                &[Series {
+                    label: "frame",
+                    color: OWN,
+                    points: points.clone(),
+                    ring: false,
+                }],
+                &[],
+            )?,
+            &format!(
+                "Each frame's RMS reprojection error over its detections under the solved X and target pose, pixels (all frames: {:.3} px RMS over {} detections, {} left out as mis-detections). A frame far above the rest was detected badly or paired with the wrong robot pose.",
+                p.rms_px,
+                p.detections,
+                p.outlier_detections.len()
+            ),
+        );
+        let mut worst: Vec<&handeye::FrameRms> = p.per_frame.iter().collect();
+        worst.sort_by(|a, b| b.rms_px.total_cmp(&a.rms_px));
+        let rows = worst
+            .iter()
+            .take(WORST)
+            .map(|f| vec![f.name.clone(), format!("{:.3}", f.rms_px)])
+            .collect();
+        page.table(
+            &format!("The {} frames worst fitted", worst.len().min(WORST)),
+            &["frame", "reprojection RMS (px)"],
+            rows,
+        );
+    }
+    page.copyable("X and the target's pose, to copy", &json!(copy));
+    motions(&mut page, run.poses, Pairing::All, run.setup, f64::NAN)?;
+    page.write(path)
+}
+
 /// Writes the page of a refused calibration: why, and the motions that were not enough.
 pub fn write_refused(path: &Path, poses: &[PosePair], setup: Setup, why: &str) -> Result<()> {
     register_font();
