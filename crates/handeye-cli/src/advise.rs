@@ -23,7 +23,10 @@ pub fn run(args: Args) -> Result<()> {
     let recording = read_all(&args.input, handeye::Reading::AsGiven)?;
     let poses = recording.poses;
     let advice = advise(&poses, args.input.setup(), recording.written, args.count)?;
-    eprint!("{}", in_words(&advice, faces::length_unit(&poses)));
+    eprint!(
+        "{}",
+        crate::output::escaped_text(&in_words(&advice, faces::length_unit(&poses)))
+    );
     print_json(&advice)
 }
 

@@ -127,8 +127,12 @@ pub fn run(args: Args) -> Result<()> {
         .into());
     }
     let setup = args.input.setup();
-    // The frame names and the name are checked before the input is read.
+    // The frame names and the name are checked before the input is read, and so is the report's
+    // path.
     let frames = output_frames(&args)?;
+    if let Some(path) = &args.report {
+        crate::report::check_writable(path)?;
+    }
     let recording = read_all(&args.input, options.fix.reading())?;
     let (poses, written) = (recording.poses, recording.written);
     let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
@@ -167,32 +171,28 @@ pub fn run(args: Args) -> Result<()> {
     };
     // The unit of the poses as solved: a `--fix robot-mm` (or `auto`) reading has made them metres.
     let unit = length_unit(&report.reading.applied.apply(&poses, written));
-    if let Some(path) = &args.report {
-        crate::report::write_calibrate(path, &poses, setup, &report)?;
-        eprintln!("wrote {}", path.display());
-    }
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
-        eprintln!(
+        crate::tell!(
             "rejected {} outlier pose(s) of {}",
             report.outliers.poses.len(),
             report.outliers.poses.len() + report.poses
         );
     }
     if args.pairs.is_none() && (args.input.robot.is_some() || args.input.is_bag()) {
-        eprintln!(
+        crate::tell!(
             "pairs: every pair of the {} stream samples (consecutive frames barely move; `--pairs consecutive` for the paper's pairing)",
             report.poses
         );
     }
     if let Some(note) = report.tsai_filter_note(tsai) {
-        eprintln!(
+        crate::tell!(
             "note: {note}; `--method tsai` without `--tsai-opencv-filter` keeps every motion"
         );
     }
     // The text face lists the warnings itself.
     if face != Face::Text {
         for w in &report.warnings {
-            eprintln!("warning: {}", faces::warning(w));
+            crate::tell!("warning: {}", faces::warning(w));
         }
     }
     let source = format!("calibrate, method {}", report.method);
@@ -201,7 +201,7 @@ pub fn run(args: Args) -> Result<()> {
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
     let published = Published::of(&report, &source, ros_unit);
     if args.input.is_bag() && face != Face::Ros2 {
-        eprintln!(
+        crate::tell!(
             "publish X in tf with: {}",
             faces::static_transform_publisher(published, &frames)
         );
@@ -216,6 +216,11 @@ pub fn run(args: Args) -> Result<()> {
             time_offset_s: time_offset,
             time_offset_sigma_s: time_offset_sigma,
         })?,
+    }
+    // After the result: a report that cannot be written loses nothing computed.
+    if let Some(path) = &args.report {
+        crate::report::write_calibrate(path, &poses, setup, &report)?;
+        crate::tell!("wrote {}", path.display());
     }
     if args.strict && report.verdict == Assessment::Questionable {
         return Err(Questionable.into());
@@ -317,7 +322,7 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
     let unit = length_unit(&poses);
     if face != Face::Text {
         for w in &report.warnings {
-            eprintln!("warning: {}", faces::warning(w));
+            crate::tell!("warning: {}", faces::warning(w));
         }
     }
     let source = format!("calibrate, method {}", report.method);
@@ -399,14 +404,14 @@ fn run_robot_world(args: &Args) -> Result<()> {
         },
     )?;
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
-        eprintln!(
+        crate::tell!(
             "rejected {} outlier pose(s) of {}",
             report.outliers.poses.len(),
             report.outliers.poses.len() + report.poses
         );
     }
     for w in &report.warnings {
-        eprintln!("warning: {}", faces::warning(w));
+        crate::tell!("warning: {}", faces::warning(w));
     }
     match Face::chosen(args.output) {
         // The YAML lists X, the target, their one-sigma and the residuals: readable as text too.

@@ -17,6 +17,22 @@ const SIZE: (u32, u32) = (900, 360);
 /// Poses the motions of the axis and angle figures are taken between (spread over the input).
 const SAMPLE: usize = 60;
 
+/// Checks before the work that the report can be written at `path` (creating it, or opening an
+/// existing one to append, then leaving it as it was): a path that cannot be written would
+/// otherwise fail after the calibration.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+        .map_err(|e| anyhow!("cannot write the report {}: {e}", path.display()))?;
+    if !existed {
+        let _ = std::fs::remove_file(path);
+    }
+    Ok(())
+}
+
 /// Writes the report page of a batch calibration.
 pub fn write_calibrate(
     path: &Path,

@@ -86,11 +86,11 @@ pub fn run(args: Args) -> Result<()> {
         Face::Text => print_text(&text(&v))?,
         _ => {
             for note in &v.notes {
-                eprintln!("note: {note}");
+                crate::tell!("note: {note}");
             }
             if let Some(r) = &v.recording {
                 for w in &r.warnings {
-                    eprintln!("warning: {}", faces::warning(w));
+                    crate::tell!("warning: {}", faces::warning(w));
                 }
             }
             print_json(&v)?
