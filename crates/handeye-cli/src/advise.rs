@@ -38,7 +38,10 @@ pub fn run(args: Args) -> Result<()> {
         goal: args.goal,
     };
     let advice = advise(&poses, args.input.setup(), recording.written, &options)?;
-    eprint!("{}", in_words(&advice, faces::length_unit(&poses)));
+    eprint!(
+        "{}",
+        crate::output::escaped_text(&in_words(&advice, faces::length_unit(&poses)))
+    );
     print_json(&advice)
 }
 

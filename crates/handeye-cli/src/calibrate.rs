@@ -127,8 +127,12 @@ pub fn run(args: Args) -> Result<()> {
         .into());
     }
     let setup = args.input.setup();
-    // The frame names and the name are checked before the input is read.
+    // The frame names and the name are checked before the input is read, and so is the report's
+    // path.
     let frames = output_frames(&args)?;
+    if let Some(path) = &args.report {
+        crate::report::check_writable(path)?;
+    }
     let recording = read_all(&args.input, options.fix.reading())?;
     let (poses, written) = (recording.poses, recording.written);
     let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
@@ -150,40 +154,28 @@ pub fn run(args: Args) -> Result<()> {
     };
     // The unit of the poses as solved: a `--fix robot-mm` (or `auto`) reading has made them metres.
     let unit = length_unit(&report.reading.applied.apply(&poses, written));
-    if let Some(path) = &args.report {
-        let page = crate::report::RunPage {
-            poses: &poses,
-            names: &recording.names,
-            written,
-            setup,
-            unit,
-            summary: faces::text(&report, &frames, unit),
-        };
-        crate::report::write_calibrate(path, &page, &report)?;
-        eprintln!("wrote {}", path.display());
-    }
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
-        eprintln!(
+        crate::tell!(
             "rejected {} outlier pose(s) of {}",
             report.outliers.poses.len(),
             report.outliers.poses.len() + report.poses
         );
     }
     if args.pairs.is_none() && (args.input.robot.is_some() || args.input.is_bag()) {
-        eprintln!(
+        crate::tell!(
             "pairs: every pair of the {} stream samples (consecutive frames barely move; `--pairs consecutive` for the paper's pairing)",
             report.poses
         );
     }
     if let Some(note) = report.tsai_filter_note(tsai) {
-        eprintln!(
+        crate::tell!(
             "note: {note}; `--method tsai` without `--tsai-opencv-filter` keeps every motion"
         );
     }
     // The text face lists the warnings itself.
     if face != Face::Text {
         for w in &report.warnings {
-            eprintln!("warning: {}", faces::warning(w));
+            crate::tell!("warning: {}", faces::warning(w));
         }
     }
     let source = format!("calibrate, method {}", report.method);
@@ -192,7 +184,7 @@ pub fn run(args: Args) -> Result<()> {
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
     let published = Published::of(&report, &source, ros_unit);
     if args.input.is_bag() && face != Face::Ros2 {
-        eprintln!(
+        crate::tell!(
             "publish X in tf with: {}",
             faces::static_transform_publisher(published, &frames)
         );
@@ -207,6 +199,19 @@ pub fn run(args: Args) -> Result<()> {
             time_offset_s: time_offset,
             time_offset_sigma_s: time_offset_sigma,
         })?,
+    }
+    // After the result: a report that cannot be written loses nothing computed.
+    if let Some(path) = &args.report {
+        let page = crate::report::RunPage {
+            poses: &poses,
+            names: &recording.names,
+            written,
+            setup,
+            unit,
+            summary: faces::text(&report, &frames, unit),
+        };
+        crate::report::write_calibrate(path, &page, &report)?;
+        crate::tell!("wrote {}", path.display());
     }
     if args.strict && report.verdict == Assessment::Questionable {
         return Err(Questionable.into());
@@ -261,6 +266,9 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
             "reprojection needs a JSON Lines file with `detections`".into(),
         ));
     };
+    if let Some(path) = &args.report {
+        crate::report::check_writable(path)?;
+    }
     let camera = handeye::io::read_intrinsics(intrinsics)?;
     let series = handeye::io::read_frames(path)?;
     let setup = args.input.setup();
@@ -305,21 +313,9 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         })
         .collect();
     let unit = length_unit(&poses);
-    if let Some(path) = &args.report {
-        let page = crate::report::RunPage {
-            poses: &poses,
-            names: &names,
-            written: handeye::Written::NAMED,
-            setup,
-            unit,
-            summary: faces::text(&report, &frames, unit),
-        };
-        crate::report::write_pixels(path, &page, &report)?;
-        eprintln!("wrote {}", path.display());
-    }
     if face != Face::Text {
         for w in &report.warnings {
-            eprintln!("warning: {}", faces::warning(w));
+            crate::tell!("warning: {}", faces::warning(w));
         }
     }
     let source = format!("calibrate, method {}", report.method);
@@ -332,6 +328,19 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         Face::Ros2 => print_text(&faces::ros2(published, &frames))?,
         Face::Urdf => print_text(&faces::urdf(published, &frames))?,
         Face::Json => print_json(&report)?,
+    }
+    // After the result: a report that cannot be written loses nothing computed.
+    if let Some(path) = &args.report {
+        let page = crate::report::RunPage {
+            poses: &poses,
+            names: &names,
+            written: handeye::Written::NAMED,
+            setup,
+            unit,
+            summary: faces::text(&report, &frames, unit),
+        };
+        crate::report::write_pixels(path, &page, &report)?;
+        crate::tell!("wrote {}", path.display());
     }
     if args.strict && report.verdict == Assessment::Questionable {
         return Err(Questionable.into());
@@ -376,6 +385,9 @@ fn run_robot_world(args: &Args) -> Result<()> {
     let (fix, replicates) = (args.fix.unwrap_or_default(), args.bootstrap);
     let setup = args.input.setup();
     let frames = output_frames(args)?;
+    if let Some(path) = &args.report {
+        crate::report::check_writable(path)?;
+    }
     let recording = read_all(&args.input, fix.reading())?;
     let poses = recording.poses;
     let written = recording.written;
@@ -406,20 +418,8 @@ fn run_robot_world(args: &Args) -> Result<()> {
         Err(e) => return Err(refused(args, e, face, &poses, setup)),
     };
     let unit = length_unit(&report.reading.applied.apply(&poses, written));
-    if let Some(path) = &args.report {
-        let page = crate::report::RunPage {
-            poses: &poses,
-            names: &recording.names,
-            written,
-            setup,
-            unit,
-            summary: faces::robot_world_text(&report, &frames, unit),
-        };
-        crate::report::write_robot_world(path, &page, &report)?;
-        eprintln!("wrote {}", path.display());
-    }
     if report.outliers.rejected && !report.outliers.poses.is_empty() {
-        eprintln!(
+        crate::tell!(
             "rejected {} outlier pose(s) of {}",
             report.outliers.poses.len(),
             report.outliers.poses.len() + report.poses
@@ -427,7 +427,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
     }
     if face != Face::Text {
         for w in &report.warnings {
-            eprintln!("warning: {}", faces::warning(w));
+            crate::tell!("warning: {}", faces::warning(w));
         }
     }
     let source = format!("calibrate, robot-world method {}", report.method);
@@ -472,6 +472,19 @@ fn run_robot_world(args: &Args) -> Result<()> {
             time_offset_sigma_s: time_offset_sigma,
         })?,
     }
+    // After the result: a report that cannot be written loses nothing computed.
+    if let Some(path) = &args.report {
+        let page = crate::report::RunPage {
+            poses: &poses,
+            names: &recording.names,
+            written,
+            setup,
+            unit,
+            summary: faces::robot_world_text(&report, &frames, unit),
+        };
+        crate::report::write_robot_world(path, &page, &report)?;
+        crate::tell!("wrote {}", path.display());
+    }
     if args.strict && report.verdict == Assessment::Questionable {
         return Err(Questionable.into());
     }
@@ -496,8 +509,8 @@ fn refused(args: &Args, e: Error, face: Face, poses: &[PosePair], setup: Setup) 
         }
         if let Some(path) = &args.report {
             match crate::report::write_refused(path, poses, setup, &faces::refused(&e)) {
-                Ok(()) => eprintln!("wrote {}", path.display()),
-                Err(written) => eprintln!("{written:#}"),
+                Ok(()) => crate::tell!("wrote {}", path.display()),
+                Err(written) => crate::tell!("{written:#}"),
             }
         }
     }

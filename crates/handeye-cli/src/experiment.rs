@@ -144,7 +144,7 @@ fn publish(
         &(serde_json::to_string_pretty(report)? + "\n"),
     )?;
     for path in figures {
-        eprintln!("wrote {}", path.display());
+        crate::tell!("wrote {}", path.display());
     }
     Ok(())
 }

@@ -130,12 +130,12 @@ impl<'a> Published<'a> {
 pub fn ros_unit(unit: Option<Unit>) -> Option<Unit> {
     match unit {
         Some(Unit::Millimetre) => {
-            eprintln!("translation converted from millimetres to metres for ROS");
+            crate::tell!("translation converted from millimetres to metres for ROS");
             Some(Unit::Millimetre)
         }
         Some(Unit::Metre) => Some(Unit::Metre),
         _ => {
-            eprintln!(
+            crate::tell!(
                 "warning: the input's length unit cannot be told from its poses; the translation is in the input's unit, and ROS expects metres (divide it by 1000 if the input is in millimetres)"
             );
             None

@@ -39,9 +39,9 @@ pub struct InputArgs {
     /// streams cannot tell). Default: estimated when the streams allow it, else 0 (said on stderr).
     #[arg(long, value_parser = crate::values::time_offset)]
     pub time_offset: Option<TimeOffset>,
-    /// Drop camera samples in gaps of the robot stream longer than this, seconds.
-    #[arg(long, default_value_t = 0.1, value_parser = crate::values::positive)]
-    pub max_gap: f64,
+    /// Drop camera samples in gaps of the robot stream longer than this, seconds [default: 0.1].
+    #[arg(long, value_parser = crate::values::max_gap)]
+    pub max_gap: Option<f64>,
     /// ROS 2 recording: the robot's base frame in /tf (e.g. base_link).
     #[arg(
         long,
@@ -157,19 +157,43 @@ fn options(args: &InputArgs, reading: Reading) -> RecordingOptions {
         setup: args.setup(),
         time_offset: args.time_offset,
         reading,
-        max_gap: args.max_gap,
+        max_gap: args.max_gap.unwrap_or(DEFAULT_MAX_GAP),
     }
+}
+
+/// The default of `--max-gap`, seconds.
+const DEFAULT_MAX_GAP: f64 = 0.1;
+
+/// Refuses `--time-offset` and `--max-gap` on a pose file: they pair two streams or a recording,
+/// and a pose file's pairs are made (they would be ignored without a word).
+fn pose_file_flags(args: &InputArgs) -> Result<()> {
+    let given = [
+        ("--time-offset", args.time_offset.is_some()),
+        ("--max-gap", args.max_gap.is_some()),
+    ];
+    if let Some((flag, _)) = given.iter().find(|(_, given)| *given) {
+        return Err(handeye::Error::InvalidParameter {
+            name: "input",
+            message: format!(
+                "{flag} pairs two stamped streams (--robot, --camera) or a ROS 2 recording; INPUT is a pose file, whose pose pairs are made already"
+            ),
+        }
+        .into());
+    }
+    Ok(())
 }
 
 /// Reads `source`, telling its notes on stderr as they come; a failed `auto` offset search is
 /// named by the flag.
 fn read(source: &Source, options: &RecordingOptions) -> Result<Recording> {
-    Recording::read_telling(source, options, &mut |note| eprintln!("{note}")).map_err(|e| match e {
-        handeye::Error::TimeOffset { streams, source } => {
-            anyhow::Error::new(*source).context(format!("--time-offset auto on {streams}"))
-        }
-        e => e.into(),
-    })
+    Recording::read_telling(source, options, &mut |note| crate::tell!("{note}")).map_err(
+        |e| match e {
+            handeye::Error::TimeOffset { streams, source } => {
+                anyhow::Error::new(*source).context(format!("--time-offset auto on {streams}"))
+            }
+            e => e.into(),
+        },
+    )
 }
 
 /// The ROS 2 recording or the two streams of `args` read whole, or `None` for a pose file (or
@@ -179,6 +203,7 @@ fn read_recorded(args: &InputArgs, reading: Reading) -> Result<Option<Recording>
         return read(&source, &options(args, reading)).map(Some);
     }
     let (Some(robot), Some(camera)) = (&args.robot, &args.camera) else {
+        pose_file_flags(args)?;
         return Ok(None);
     };
     let source = Source::Streams {
@@ -207,14 +232,14 @@ pub fn read_all(args: &InputArgs, reading: Reading) -> Result<Recording> {
 /// Tells on stderr the lines skipped before the first record, if any was not blank nor a comment.
 fn preamble<R: BufRead>(reader: &PoseReader<R>, source: &str) {
     if let Some(p) = reader.preamble() {
-        eprintln!("{source}: {}", p.note());
+        crate::tell!("{source}: {}", p.note());
     }
 }
 
 /// Tells on stderr how many rotation matrices of `source` were projected onto SO(3), if any.
 fn note(source: &str, projections: &Projections) {
     if let Some(note) = projections.note() {
-        eprintln!("{source}: {note}");
+        crate::tell!("{source}: {note}");
     }
 }
 

@@ -33,7 +33,9 @@ pub fn run(args: Args) -> Result<()> {
     }
 }
 
-/// The summary for a person: the topics as a table, the tf tree drawn from each root.
+/// The summary for a person: the topics as a table, the tf tree drawn from each root, then any
+/// loop of parent links. Every name from the recording is shown with its control characters
+/// escaped.
 pub fn render(s: &BagSummary) -> String {
     let mut out = String::new();
     let storage = serde_json::to_value(s.storage)
@@ -43,13 +45,18 @@ pub fn render(s: &BagSummary) -> String {
     let _ = writeln!(
         out,
         "{}: {storage}, {} file(s), {} message(s)\n\ntopics",
-        s.path,
+        shown(&s.path),
         s.files.len(),
         s.messages
     );
-    let width = s.topics.iter().map(|t| t.topic.len()).max().unwrap_or(0);
-    let type_width = s.topics.iter().map(|t| t.msg_type.len()).max().unwrap_or(0);
-    for t in &s.topics {
+    let names: Vec<(String, String)> = s
+        .topics
+        .iter()
+        .map(|t| (shown(&t.topic), shown(&t.msg_type)))
+        .collect();
+    let width = names.iter().map(|t| t.0.chars().count()).max().unwrap_or(0);
+    let type_width = names.iter().map(|t| t.1.chars().count()).max().unwrap_or(0);
+    for (t, (topic, msg_type)) in s.topics.iter().zip(&names) {
         let note = if s.target_topics.contains(&t.topic) {
             "   a target pose topic (--target-topic)"
         } else {
@@ -57,8 +64,8 @@ pub fn render(s: &BagSummary) -> String {
         };
         let _ = writeln!(
             out,
-            "  {:width$}  {:type_width$}  {:>7}{note}",
-            t.topic, t.msg_type, t.count
+            "  {topic:width$}  {msg_type:type_width$}  {:>7}{note}",
+            t.count
         );
     }
     let _ = writeln!(out, "\ntf tree");
@@ -70,8 +77,11 @@ pub fn render(s: &BagSummary) -> String {
         children.entry(e.parent.as_str()).or_default().push(e);
     }
     for root in &s.roots {
-        let _ = writeln!(out, "  {root}");
-        draw(&mut out, &children, root, "  ", 0);
+        let _ = writeln!(out, "  {}", shown(root));
+        draw(&mut out, &children, root, &[], "  ", 0);
+    }
+    for frames in &s.loops {
+        draw_loop(&mut out, &children, frames);
     }
     let _ = writeln!(
         out,
@@ -80,18 +90,59 @@ pub fn render(s: &BagSummary) -> String {
     out
 }
 
+/// A name from the recording as it is printed: control characters escaped.
+fn shown(name: &str) -> String {
+    crate::output::escaped(name).into_owned()
+}
+
+/// Levels of the tree drawn; deeper frames are counted, not drawn.
+const MAX_DEPTH: usize = 64;
+
+/// A loop of parent links (its frames have no root), then what hangs from its frames.
+fn draw_loop(out: &mut String, children: &BTreeMap<&str, Vec<&TfEdge>>, frames: &[String]) {
+    let mut words: Vec<String> = frames.iter().map(|f| shown(f)).collect();
+    words.extend(frames.first().map(|f| shown(f)));
+    let _ = writeln!(
+        out,
+        "  a loop of {} frame(s), each the child of the next, so without a root (tf allows no loop, and no lookup passes through one):\n  {}",
+        frames.len(),
+        words.join(" → ")
+    );
+    for f in frames {
+        if children
+            .get(f.as_str())
+            .is_some_and(|list| list.iter().any(|e| !frames.contains(&e.child)))
+        {
+            let _ = writeln!(out, "  {}", shown(f));
+            draw(out, children, f, frames, "  ", 0);
+        }
+    }
+}
+
+/// Draws the children of `frame` (those in `skip` left out), to [`MAX_DEPTH`] levels; below it a
+/// line counts the frames not drawn.
 fn draw(
     out: &mut String,
     children: &BTreeMap<&str, Vec<&TfEdge>>,
     frame: &str,
+    skip: &[String],
     indent: &str,
     depth: usize,
 ) {
     let Some(list) = children.get(frame) else {
         return;
     };
-    // A loop cannot come from one parent per frame, but a bound costs nothing.
-    if depth > 64 {
+    let list: Vec<&&TfEdge> = list.iter().filter(|e| !skip.contains(&e.child)).collect();
+    if depth >= MAX_DEPTH {
+        let below: usize = list
+            .iter()
+            .map(|e| 1 + descendants(children, &e.child))
+            .sum();
+        let _ = writeln!(
+            out,
+            "{indent}└─ … {below} more frame(s) below `{}`, deeper than {MAX_DEPTH} levels (not drawn; --output json lists every edge)",
+            shown(frame)
+        );
         return;
     }
     for (k, e) in list.iter().enumerate() {
@@ -109,9 +160,22 @@ fn draw(
             out,
             "{indent}{}{}  ({what})",
             if last { "└─ " } else { "├─ " },
-            e.child
+            shown(&e.child)
         );
         let deeper = format!("{indent}{}", if last { "   " } else { "│  " });
-        draw(out, children, &e.child, &deeper, depth + 1);
+        draw(out, children, &e.child, skip, &deeper, depth + 1);
     }
+}
+
+/// The frames below `frame` (its children, theirs, …), counted without recursion.
+fn descendants(children: &BTreeMap<&str, Vec<&TfEdge>>, frame: &str) -> usize {
+    let mut stack = vec![frame];
+    let mut count = 0;
+    while let Some(f) = stack.pop() {
+        for e in children.get(f).into_iter().flatten() {
+            count += 1;
+            stack.push(&e.child);
+        }
+    }
+    count
 }

@@ -88,7 +88,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if output::is_closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", output::error_message(&e));
+            crate::tell!("error: {}", output::error_message(&e));
             ExitCode::from(output::exit_code(&e))
         }
     }

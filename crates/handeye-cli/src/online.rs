@@ -70,14 +70,14 @@ pub struct Args {
     /// Candidates tried before the thresholds are relaxed.
     #[arg(long, default_value_t = AdaptiveParams::default().interval, value_parser = values::count(1, u64::MAX))]
     interval: usize,
-    /// Relaxation factor of sin α₀ and β₀, in (0, 1].
-    #[arg(long, default_value_t = AdaptiveParams::default().relax_down, value_parser = values::fraction)]
+    /// Relaxation factor of sin α₀ and β₀, in [0.1, 1].
+    #[arg(long, default_value_t = AdaptiveParams::default().relax_down, value_parser = values::relax_down)]
     relax_down: f64,
-    /// Relaxation factor of d₀, at least 1.
-    #[arg(long, default_value_t = AdaptiveParams::default().relax_up, value_parser = values::at_least_one)]
+    /// Relaxation factor of d₀, in [1, 10].
+    #[arg(long, default_value_t = AdaptiveParams::default().relax_up, value_parser = values::relax_up)]
     relax_up: f64,
-    /// Exploration factor after calibrations 1–3.
-    #[arg(long, default_value_t = AdaptiveParams::default().explore, value_parser = values::positive)]
+    /// Exploration factor after calibrations 1–3, in [0.1, 10].
+    #[arg(long, default_value_t = AdaptiveParams::default().explore, value_parser = values::explore)]
     explore: f64,
     /// Required rotation accuracy rmsRMax, unit-free: the RMS of the nine entries of R̂ − R
     /// (‖R̂ − R‖_F / 3, the events' `rms_r`; 0.001 is a rotation error of about 0.12°).
@@ -163,7 +163,7 @@ pub fn run(args: Args) -> Result<()> {
             rms_t_max: args.rms_t_max,
             alpha_min: match args.alpha_min {
                 Some(sine) => {
-                    eprintln!(
+                    crate::tell!(
                         "warning: --alpha-min (a sine) is deprecated: use --alpha-min-deg {:.4}",
                         sine.asin().to_degrees()
                     );
@@ -213,6 +213,9 @@ pub fn run(args: Args) -> Result<()> {
         args.child_frame.as_deref(),
         &args.name,
     )?;
+    if let Some(path) = &args.report {
+        crate::report::check_writable(path)?;
+    }
     let mut calibrator = OnlineCalibrator::new(config)?;
     // Event lines are buffered, and written out before the input is waited for.
     let out = LineOut::stdout();
@@ -310,11 +313,15 @@ pub fn run(args: Args) -> Result<()> {
                     _ => {}
                 }
             }
-            if calibrator.poses() % QUIET_POSES == 0
+            // Said at 200, 400, 800, … poses without a calibration: a stuck stream is told
+            // so at growing intervals, not every 200 poses.
+            let since = calibrator.poses_since_calibration();
+            if since % QUIET_POSES == 0
+                && (since / QUIET_POSES).is_power_of_two()
                 && let Some(why) = calibrator.quiet(QUIET_POSES)
             {
                 out.flush_quietly();
-                eprintln!("{why}");
+                crate::tell!("{why}");
             }
         }
     }
@@ -335,12 +342,25 @@ pub fn run(args: Args) -> Result<()> {
     // Every line is out before the summary, the report and the other faces.
     out.flush()?;
     let summary = summary(&calibrator, last.as_ref(), messages.bad_lines);
-    eprintln!("{summary}");
+    crate::tell!("{summary}");
     if let (Some(path), Some(mut trace)) = (&args.report, trace) {
         trace.poses = calibrator.poses();
         trace.offset = offset.and_then(|o| o.curve.map(|c| (o.seconds, c)));
         crate::report::write_online(path, &trace, &summary)?;
-        eprintln!("wrote {}", path.display());
+        crate::tell!("wrote {}", path.display());
+    }
+    if calibrator.poses() == 0 {
+        // As `calibrate` refuses an input without a pose pair.
+        return Err(handeye::Error::Parse {
+            file: source,
+            line: 0,
+            field: "-".into(),
+            message: match messages.bad_lines {
+                0 => "no pose pair in the input".into(),
+                n => format!("no pose pair in the input: all {n} record line(s) were bad"),
+            },
+        }
+        .into());
     }
     if publish {
         let Some(report) = &last else {
@@ -456,7 +476,7 @@ fn event_text(e: &Event, unit: Unit) -> String {
 }
 
 /// Poses without a calibration after which the summary says why (and the paper's estimator says
-/// it during the run too, at every multiple).
+/// it during the run too, at this many poses and at each doubling of it).
 const QUIET_POSES: usize = 200;
 
 /// Warns that the poses fit far better read another way (an inverted pose, `w, x, y, z`
@@ -465,9 +485,9 @@ const QUIET_POSES: usize = 200;
 fn warn_misread(found: StreamReading) {
     match found {
         StreamReading::ReadWrongly(_) => {
-            eprintln!("warning: {found} (`handeye calibrate` checks this too)")
+            crate::tell!("warning: {found} (`handeye calibrate` checks this too)")
         }
-        _ => eprintln!("warning: {found}"),
+        _ => crate::tell!("warning: {found}"),
     }
 }
 
@@ -489,10 +509,10 @@ impl Thinned {
         *count += 1;
         if *count <= SHOWN_BAD_LINES || count.is_power_of_two() {
             out.flush_quietly();
-            eprintln!("{message}");
+            crate::tell!("{message}");
         }
         if *count == SHOWN_BAD_LINES {
-            eprintln!(
+            crate::tell!(
                 "further {what} are counted and shown only at the 2^k-th (the count is given at the end)"
             );
         }
@@ -536,13 +556,13 @@ fn tell_unit(calibrator: &OnlineCalibrator, record: &handeye::io::StampedPosePai
         Unit::Metre => "metres",
         Unit::Millimetre => "millimetres",
         Unit::AsGiven => {
-            eprintln!("length unit: as given (d_max = {})", calibrator.d_max());
+            crate::tell!("length unit: as given (d_max = {})", calibrator.d_max());
             return true;
         }
         Unit::Auto => {
             if calibrator.poses() == 1 {
                 let p = &record.pose;
-                eprintln!(
+                crate::tell!(
                     "warning: cannot tell the length unit from the first pose (line {}: translations of {:.4} and {:.4} fit neither metres nor millimetres); d_max stays {} until a pose tells: pass --unit m or --unit mm, or --d-max in your unit",
                     record.line,
                     p.base_from_gripper.translation.vector.norm(),
@@ -561,7 +581,7 @@ fn tell_unit(calibrator: &OnlineCalibrator, record: &handeye::io::StampedPosePai
     } else {
         "--unit".to_string()
     };
-    eprintln!(
+    crate::tell!(
         "length unit: {unit} ({how}); d_max = {}",
         calibrator.d_max()
     );
@@ -598,7 +618,7 @@ fn print_step(
     }
     if let Some(c) = &step.change {
         out.flush_quietly();
-        eprintln!(
+        crate::tell!(
             "change of X or of the target from {} on (confirmed at {}): X moved by {:.3}° and {:.4}; accumulation restarted there",
             place(c.at),
             place(c.confirmed),

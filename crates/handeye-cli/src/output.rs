@@ -84,11 +84,53 @@ pub fn error_message(e: &anyhow::Error) -> String {
     message
 }
 
-/// Prints text to stdout and flushes it. A closed pipe comes back as an error, on which `main`
-/// exits 0 quietly (see [`is_closed_pipe`]).
+/// `name` with every control character escaped (`\u{1b}`, `\n`, …): a frame or topic name from
+/// a recording may hold terminal escape sequences, which must not reach the terminal.
+pub fn escaped(name: &str) -> std::borrow::Cow<'_, str> {
+    escaped_but(name, &[])
+}
+
+/// Text for the terminal with its control characters escaped, its line ends and tabs kept.
+pub fn escaped_text(text: &str) -> std::borrow::Cow<'_, str> {
+    escaped_but(text, &['\n', '\t'])
+}
+
+/// `text` with every control character (C0, DEL, C1) but those of `keep` escaped.
+fn escaped_but<'a>(text: &'a str, keep: &[char]) -> std::borrow::Cow<'a, str> {
+    let bad = |c: char| c.is_control() && !keep.contains(&c);
+    if !text.chars().any(bad) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if bad(c) {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+/// Prints a message on stderr, its control characters escaped (see [`escaped_text`]).
+pub fn tell(text: &str) {
+    eprintln!("{}", escaped_text(text));
+}
+
+/// `eprintln!` through [`tell`]: no control character of a name reaches the terminal.
+#[macro_export]
+macro_rules! tell {
+    ($($arg:tt)*) => {
+        $crate::output::tell(&format!($($arg)*))
+    };
+}
+
+/// Prints text to stdout, its control characters escaped (see [`escaped_text`]), and flushes
+/// it. A closed pipe comes back as an error, on which `main` exits 0 quietly (see
+/// [`is_closed_pipe`]).
 pub fn print_text(text: &str) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
-    out.write_all(text.as_bytes())?;
+    out.write_all(escaped_text(text).as_bytes())?;
     out.flush()?;
     Ok(())
 }
@@ -138,12 +180,33 @@ pub fn quiet_on_closed_pipe() {
 /// about 6 ms, for all pairs of 50 poses). The library's result types are serialised directly,
 /// with no `serde_json::Value` in between (a tree of small allocations as large as the report).
 pub fn print_json(v: &(impl serde::Serialize + ?Sized)) -> anyhow::Result<()> {
-    let mut text = serde_json::to_vec_pretty(v)?;
+    let mut text = json_safe(serde_json::to_vec_pretty(v)?);
     text.push(b'\n');
     let mut out = std::io::stdout().lock();
     out.write_all(&text)?;
     out.flush()?;
     Ok(())
+}
+
+/// JSON text with the control characters JSON leaves raw (DEL and the C1 controls, U+007F to
+/// U+009F) written as `\u` escapes, which read back as the same string: with the C0 controls that
+/// `serde_json` escapes, no control character of a name reaches the terminal.
+fn json_safe(json: Vec<u8>) -> Vec<u8> {
+    let raw = |c: char| ('\u{7f}'..='\u{9f}').contains(&c);
+    match std::str::from_utf8(&json) {
+        Ok(text) if text.chars().any(raw) => {
+            let mut out = String::with_capacity(text.len() + 16);
+            for c in text.chars() {
+                if raw(c) {
+                    out.push_str(&format!("\\u{:04x}", c as u32));
+                } else {
+                    out.push(c);
+                }
+            }
+            out.into_bytes()
+        }
+        _ => json,
+    }
 }
 
 /// Bytes kept before [`LineOut`] writes them out even when no input is awaited.
@@ -179,15 +242,18 @@ impl LineOut {
     /// One JSON line: the value, compact, and a line end.
     pub fn json(&self, v: &impl serde::Serialize) -> anyhow::Result<()> {
         let mut buffer = self.0.borrow_mut();
-        serde_json::to_writer(&mut buffer.bytes, v)?;
+        let line = json_safe(serde_json::to_vec(v)?);
+        buffer.bytes.extend_from_slice(&line);
         buffer.bytes.push(b'\n');
         Ok(buffer.written()?)
     }
 
-    /// Text (whole lines, each ending in `\n`).
+    /// Text (whole lines, each ending in `\n`), its control characters escaped.
     pub fn text(&self, text: &str) -> anyhow::Result<()> {
         let mut buffer = self.0.borrow_mut();
-        buffer.bytes.extend_from_slice(text.as_bytes());
+        buffer
+            .bytes
+            .extend_from_slice(escaped_text(text).as_bytes());
         Ok(buffer.written()?)
     }
 

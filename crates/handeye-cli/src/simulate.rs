@@ -99,7 +99,7 @@ pub fn run(args: Args) -> Result<()> {
         )
         .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    eprintln!(
+    crate::tell!(
         "wrote {} poses (millimetres) to {}",
         s.poses.len(),
         if to_stdout {

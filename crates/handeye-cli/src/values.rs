@@ -8,7 +8,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, RangedU64ValueParser, T
 use clap::error::ErrorKind;
 use clap::{Arg, Command};
 use handeye::Named;
-use handeye::io::TimeOffset;
+use handeye::io::{MAX_TIME_OFFSET, TimeOffset};
 
 /// The most poses `simulate`, `demo` and `bench` make (each pose is about a hundred bytes, and
 /// `bench --pairs all` grows with the square).
@@ -58,14 +58,29 @@ pub fn fraction(s: &str) -> Result<f64, String> {
     }
 }
 
-/// A finite number of at least 1.
-pub fn at_least_one(s: &str) -> Result<f64, String> {
+/// A factor in `[low, high]` (the library's range of an online parameter).
+fn factor(s: &str, (low, high): (f64, f64)) -> Result<f64, String> {
     let v = number(s)?;
-    if v >= 1.0 {
+    if (low..=high).contains(&v) {
         Ok(v)
     } else {
-        Err(format!("must be at least 1, got {s}"))
+        Err(format!("must be in [{low}, {high}], got {}", shown(s)))
     }
+}
+
+/// `--relax-down`: [`handeye::AdaptiveParams::RELAX_DOWN`].
+pub fn relax_down(s: &str) -> Result<f64, String> {
+    factor(s, handeye::AdaptiveParams::RELAX_DOWN)
+}
+
+/// `--relax-up`: [`handeye::AdaptiveParams::RELAX_UP`].
+pub fn relax_up(s: &str) -> Result<f64, String> {
+    factor(s, handeye::AdaptiveParams::RELAX_UP)
+}
+
+/// `--explore`: [`handeye::AdaptiveParams::EXPLORE`].
+pub fn explore(s: &str) -> Result<f64, String> {
+    factor(s, handeye::AdaptiveParams::EXPLORE)
 }
 
 /// An angle in (0°, 180°].
@@ -98,12 +113,45 @@ pub fn budget_s(s: &str) -> Result<f64, String> {
     }
 }
 
-/// `auto` or a finite number of seconds.
+/// `auto` or a number of seconds of at most [`MAX_TIME_OFFSET`] in size (127 years).
 pub fn time_offset(s: &str) -> Result<TimeOffset, String> {
-    if s == "auto" {
-        Ok(TimeOffset::Auto)
+    if s.trim() == "auto" {
+        return Ok(TimeOffset::Auto);
+    }
+    let v = number(s)?;
+    if v.abs() <= MAX_TIME_OFFSET {
+        Ok(TimeOffset::Fixed(v))
     } else {
-        number(s).map(TimeOffset::Fixed)
+        Err(format!(
+            "must be `auto` or seconds of at most {MAX_TIME_OFFSET:e} in size (127 years), got {}",
+            shown(s)
+        ))
+    }
+}
+
+/// The longest `--max-gap`, seconds (11.6 days).
+pub const MAX_GAP: f64 = 1e6;
+
+/// A gap in (0, [`MAX_GAP`]] seconds.
+pub fn max_gap(s: &str) -> Result<f64, String> {
+    let v = number(s)?;
+    if v > 0.0 && v <= MAX_GAP {
+        Ok(v)
+    } else {
+        Err(format!(
+            "must be in (0, {MAX_GAP:e}] seconds, got {}",
+            shown(s)
+        ))
+    }
+}
+
+/// A value as a message shows it: at most 24 characters (`1e308` written out has 309 digits).
+fn shown(s: &str) -> String {
+    let s = s.trim();
+    if s.chars().count() <= 24 {
+        s.to_string()
+    } else {
+        format!("{}…", s.chars().take(24).collect::<String>())
     }
 }
 
@@ -189,7 +237,15 @@ mod tests {
         assert!(angle_deg("181").is_err() && angle_deg("180").is_ok());
         assert!(axis_angle_deg("91").is_err() && axis_angle_deg("15").is_ok());
         assert!(budget_s("1e308").is_err() && budget_s("0.3").is_ok());
-        assert!(at_least_one("0.99").is_err() && at_least_one("1").is_ok());
+        assert!(relax_up("0.99").is_err() && relax_up("1").is_ok() && relax_up("1e308").is_err());
+        assert!(explore("1e-320").is_err() && explore("1.1").is_ok());
+        assert!(relax_down("1e-320").is_err() && relax_down("0.9").is_ok());
+        assert!(max_gap("0").is_err() && max_gap("1e7").is_err() && max_gap("0.2").is_ok());
+        // A huge value is named short, not written out in its 309 digits.
+        let e = time_offset(&format!("1{}", "0".repeat(308))).unwrap_err();
+        assert!(e.len() < 200, "{e}");
+        assert_eq!(time_offset(" 5"), Ok(TimeOffset::Fixed(5.0)));
+        assert!(time_offset("4.1e9").is_err() && time_offset("-4e9").is_ok());
         assert_eq!(time_offset("auto"), Ok(TimeOffset::Auto));
         assert_eq!(time_offset("-0.25"), Ok(TimeOffset::Fixed(-0.25)));
     }

@@ -70,6 +70,9 @@ pub fn run(args: Args) -> Result<()> {
             .into());
         }
     };
+    if let Some(path) = &args.report {
+        crate::report::check_writable(path)?;
+    }
     let saved = handeye::io::read_saved_x(&args.saved)?;
     let fix = args.fix.unwrap_or_default();
     let recording = read_all(&args.input, fix.reading())?;
@@ -87,6 +90,21 @@ pub fn run(args: Args) -> Result<()> {
     };
     let setup = args.input.setup();
     let v = handeye::verify(&saved, &recording.poses, setup, &options)?;
+    match face {
+        Face::Text => print_text(&text(&v))?,
+        _ => {
+            for note in &v.notes {
+                crate::tell!("note: {note}");
+            }
+            if let Some(r) = &v.recording {
+                for w in &r.warnings {
+                    crate::tell!("warning: {}", faces::warning(w));
+                }
+            }
+            print_json(&v)?
+        }
+    }
+    // After the result: a report that cannot be written loses nothing computed.
     if let Some(path) = &args.report {
         let reading = v
             .recording
@@ -102,21 +120,7 @@ pub fn run(args: Args) -> Result<()> {
             summary: text(&v),
         };
         crate::report::write_verify(path, &page, &v)?;
-        eprintln!("wrote {}", path.display());
-    }
-    match face {
-        Face::Text => print_text(&text(&v))?,
-        _ => {
-            for note in &v.notes {
-                eprintln!("note: {note}");
-            }
-            if let Some(r) = &v.recording {
-                for w in &r.warnings {
-                    eprintln!("warning: {}", faces::warning(w));
-                }
-            }
-            print_json(&v)?
-        }
+        crate::tell!("wrote {}", path.display());
     }
     match v.verdict {
         Consistency::Consistent if args.strict && v.quality == Assessment::Questionable => {

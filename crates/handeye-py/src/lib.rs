@@ -404,7 +404,12 @@ fn transforms(
     what: &str,
 ) -> PyResult<Vec<Transform>> {
     let (r, t) = (rotations.as_array(), translations.as_array());
-    let n = r.shape()[0];
+    // A 0-d array has no first axis to count the poses on.
+    let Some(&n) = r.shape().first() else {
+        return Err(value_error(format!(
+            "{what}: expected (N, 3, 3) rotations or (N, 3) rotation vectors, got a 0-d array"
+        )));
+    };
     let matrices = r.shape()[1..] == [3, 3];
     if !(matrices || r.shape()[1..] == [3]) || t.shape() != [n, 3] {
         return Err(value_error(format!(
@@ -941,14 +946,35 @@ impl PyOnline {
         serde_json::to_string(&self.inner).map_err(value_error)
     }
 
-    /// A calibrator restored from `state()`.
+    /// A calibrator restored from `state()`; its settings are checked as the constructor checks
+    /// them.
     #[staticmethod]
     fn from_state(state: &str) -> PyResult<Self> {
+        let inner: OnlineCalibrator = serde_json::from_str(state).map_err(|e| {
+            value_error(format!("not a saved state: {}", shortened(&e.to_string())))
+        })?;
+        inner.config().validate().map_err(value_error)?;
         Ok(Self {
-            inner: serde_json::from_str(state).map_err(value_error)?,
+            inner,
             readings: None,
             found: None,
         })
+    }
+}
+
+/// Characters of a message kept by [`shortened`].
+const MESSAGE_CHARS: usize = 300;
+
+/// A message of at most [`MESSAGE_CHARS`] characters: JSON's errors quote the value they fail on,
+/// which may be the whole (100 MB) input.
+fn shortened(message: &str) -> String {
+    match message.char_indices().nth(MESSAGE_CHARS) {
+        None => message.to_string(),
+        Some((at, _)) => format!(
+            "{}… ({} characters in all)",
+            &message[..at],
+            message.chars().count()
+        ),
     }
 }
 

@@ -314,6 +314,31 @@ def test_bad_inputs_raise_and_never_crash():
             handeye.calibrate(q[:20], cam[:20], bootstrap=bootstrap, robot_world=True)
 
 
+def test_private_functions_and_the_online_bounds_raise_value_errors():
+    # Issue 34 item 15: a 0-d array made a private function panic; shrink=nan, shrink=0 and
+    # every=0 were taken where the command line refuses them; from_state of a 100 MB string
+    # echoed it whole in its error.
+    from handeye import _handeye
+    for zero_d in (np.array(1.0), np.float64(1.0)):
+        with pytest.raises(ValueError, match="0-d"):
+            _handeye.solve_opencv(np.asarray(zero_d), np.zeros((1, 3)), np.asarray(zero_d), np.zeros((1, 3)))
+    for bad in ({"shrink": float("nan")}, {"shrink": 0.0}, {"shrink": float("inf")}, {"every": 0},
+                {"relax_up": 1e308}, {"explore": 1e-320}, {"relax_down": 1e-320}):
+        name = next(iter(bad))
+        with pytest.raises(ValueError, match=name):
+            handeye.OnlineCalibrator(**bad)
+    huge = "x" * (100 << 20)
+    for state in (json.dumps(huge), huge):
+        with pytest.raises(ValueError) as e:
+            handeye.OnlineCalibrator.from_state(state)
+        assert len(str(e.value)) < 1000
+    # A saved state whose settings are out of range is refused as the constructor refuses them.
+    saved = json.loads(handeye.OnlineCalibrator().state())
+    saved["config"]["tracking"]["shrink"] = 0.0
+    with pytest.raises(ValueError, match="shrink"):
+        handeye.OnlineCalibrator.from_state(json.dumps(saved))
+
+
 def load_series(name):
     lines = (TESTDATA / "paper" / f"{name}.jsonl").read_text().splitlines()
     poses = [json.loads(l) for l in lines if l.strip()]

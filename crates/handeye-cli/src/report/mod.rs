@@ -63,6 +63,22 @@ impl RunPage<'_> {
     }
 }
 
+/// Checks before the work that the report can be written at `path` (creating it, or opening an
+/// existing one to append, then leaving it as it was): a path that cannot be written would
+/// otherwise fail after the calibration.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let existed = path.exists();
+    std::fs::OpenOptions::new()
+        .append(true)
+        .create(true)
+        .open(path)
+        .map_err(|e| anyhow!("cannot write the report {}: {e}", path.display()))?;
+    if !existed {
+        let _ = std::fs::remove_file(path);
+    }
+    Ok(())
+}
+
 /// Writes the page of a batch calibration.
 pub fn write_calibrate(path: &Path, run: &RunPage<'_>, r: &Report) -> Result<()> {
     register_font();

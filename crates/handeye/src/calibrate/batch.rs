@@ -27,7 +27,7 @@ use crate::model::findings::OutlierPose;
 use crate::model::findings::{Reading, Written};
 use crate::model::findings::{Part, Verdict};
 use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
-use crate::model::pose::Transform;
+use crate::model::pose::{MAX_TRANSLATION, Transform, check_translation};
 use crate::model::pose::TransformJson;
 use crate::model::prior::{Prior, PriorsUsed, check_priors};
 use crate::calibrate::low_dof::{self, LowDofReport};
@@ -327,6 +327,21 @@ impl Report {
     }
 }
 
+/// Refuses a solved transform (`what`: X, or the target's pose) whose translation is beyond the
+/// bound every input translation is held to ([`MAX_TRANSLATION`]): inputs at the edge of that
+/// bound (every translation 9.9e8) solve to an X beyond it (2e9), a length no unit makes.
+pub(crate) fn plausible(x: &Transform, what: &str) -> Result<()> {
+    for &v in x.translation.vector.iter() {
+        check_translation(v).map_err(|problem| Error::InvalidTransform {
+            what: format!(
+                "{what} as solved from these poses (the inputs' translations are within the bound of {MAX_TRANSLATION:e} each, but are not a recording's lengths)"
+            ),
+            problem,
+        })?;
+    }
+    Ok(())
+}
+
 /// Calibrates X from `poses` (see the module docs for the steps).
 ///
 /// Errors: [`Error::Misread`] when another reading fits far better (and [`Fix::Refuse`]),
@@ -359,6 +374,7 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
         Some(plan) => low_dof::solve(plan, &used, setup, options.pairing, options.method)?,
         None => solve_poses(&used, setup, options)?,
     };
+    plausible(&calibration.x, "X")?;
     let solve_x = |p: &[PosePair]| match &plan {
         Some(plan) => low_dof::solve_replicate(plan, p, setup, options.pairing),
         None => solve_replicate(p, setup, options),

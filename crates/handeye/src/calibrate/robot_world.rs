@@ -26,6 +26,7 @@ use nalgebra::{Matrix3, Matrix6};
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::batch::{
+    plausible,
     Fix, Options, Outliers, ReadingReport, Units, explained, outlier_report,
     check_joints, outlier_warning, read_poses, systematic_test, warn_weak, widened_for_systematic, without,
     working_distance,
@@ -256,6 +257,8 @@ pub fn calibrate_robot_world(
     };
     let explain = |e: Error| explained(e, &warnings, kept_outliers.as_ref());
     let solved = robot_world(options.method, &used, setup).map_err(explain)?;
+    plausible(&solved.x, "X")?;
+    plausible(&solved.target, "the target's pose")?;
     let undetermined = |conditioning| Error::Degenerate {
         reason: Degeneracy::IllConditioned,
         conditioning,

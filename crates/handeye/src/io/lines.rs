@@ -1,8 +1,9 @@
 //! A bounded line reader: the lines of a stream one at a time, each at most [`MAX_LINE`] bytes.
 //!
 //! A longer line (or an input without newlines, such as `/dev/zero`) is not buffered: the reader
-//! reports it as [`Line::TooLong`] with its number and skips to the next newline, so memory stays
-//! bounded whatever the input. A UTF-8 byte order mark at the start of the input is dropped.
+//! reports it as [`Line::TooLong`] with its number as soon as it passes the limit, and skips to
+//! the next newline before it reads the next line, so memory stays bounded whatever the input and
+//! the line is told about before the rest of it is read (which may never end). A UTF-8 byte order mark at the start of the input is dropped.
 
 use std::io::{BufRead, ErrorKind, Read};
 
@@ -28,6 +29,8 @@ pub(crate) struct Lines<R> {
     /// Number of the line in `buffer`, from 1 (0 before the first).
     number: usize,
     too_long: bool,
+    /// The rest of an over-long line is still to be skipped.
+    skipping: bool,
     /// The next call yields the line in `buffer` again.
     replay: bool,
     finished: bool,
@@ -40,6 +43,7 @@ impl<R: BufRead> Lines<R> {
             buffer: Vec::new(),
             number: 0,
             too_long: false,
+            skipping: false,
             replay: false,
             finished: false,
         }
@@ -106,6 +110,10 @@ impl<R: BufRead> Lines<R> {
     /// newline is found by the standard library's `read_until` (a word-at-a-time search), on at
     /// most the longest line kept: a longer one is skipped to its newline, not kept.
     fn read_line(&mut self) -> std::io::Result<bool> {
+        if self.skipping {
+            self.skip_line()?;
+            self.skipping = false;
+        }
         self.buffer.clear();
         self.too_long = false;
         // The BOM and a `\r` before the newline do not count towards the limit.
@@ -119,7 +127,8 @@ impl<R: BufRead> Lines<R> {
         if self.buffer.last() == Some(&b'\n') {
             self.buffer.pop();
         } else if self.buffer.len() > most {
-            self.skip_line()?;
+            // Told now; the rest is skipped before the next line.
+            self.skipping = true;
             self.too_long = true;
             self.buffer = Vec::new();
         }

@@ -48,7 +48,7 @@ pub use jsonl::{parse_pose_line, read_joints};
 pub use recording::BagFrames;
 pub use recording::{Note, Recording, RecordingOptions, Source};
 pub use saved::{parse_saved_x, read_saved_x};
-pub use sync::TimeOffset;
+pub use sync::{MAX_TIME_OFFSET, TimeOffset};
 pub use truth::{Truth, read_truth, truth_json};
 // Each format's own reader and the io helpers: crate-internal; public with `internals` for this
 // crate's tests.
@@ -391,11 +391,22 @@ impl<R: BufRead> PoseReader<R> {
                 lines.unread();
                 break found;
             }
+            if line == Line::TooLong {
+                // Before any record, a line without end (`/dev/zero`) would be skipped forever.
+                return Err(parse_error(
+                    source,
+                    number,
+                    "-",
+                    format!(
+                        "a line longer than {MAX_LINE} bytes before any pose record: not a pose file (JSON Lines or CSV)"
+                    ),
+                ));
+            }
             skipped += 1;
             if kind != Kind::Blank && preamble.is_none() {
                 let first = match line {
                     Line::Text(t) => String::from_utf8_lossy(t).chars().take(80).collect(),
-                    Line::TooLong => format!("(a line longer than {MAX_LINE} bytes)"),
+                    Line::TooLong => String::new(),
                 };
                 preamble = Some(Preamble {
                     lines: 0,
@@ -410,6 +421,24 @@ impl<R: BufRead> PoseReader<R> {
             no_record: decided.is_none(),
             ..p
         });
+        if let (None, Format::Csv, Some(p)) = (decided, format, &preamble) {
+            // Read as CSV (by its name or by `--format csv`) and no line is a header.
+            return Err(parse_error(
+                source,
+                p.first_line,
+                "-",
+                format!(
+                    "no CSV header: no line names the columns (`stamp,base_from_gripper_x,…`); line {}, the first not blank nor a comment, is `{}`{}",
+                    p.first_line,
+                    p.first,
+                    if p.first.contains('\0') {
+                        " (it holds a NUL byte)"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
         let inner = match decided.unwrap_or(if format == Format::Csv {
             Format::Csv
         } else {
@@ -466,9 +495,32 @@ pub(crate) fn too_long(source: &str, line: usize) -> Error {
     )
 }
 
-/// Reads a whole text file, naming it in the error; text that is not UTF-8 is a parse error on
-/// the line of its first invalid byte.
+/// The largest input read whole, bytes (OpenCV YAML, moveit and easy_handeye2 files, ViSP pose
+/// files, the stamped streams, truth and saved-X files): 256 MiB, about 800,000 poses of
+/// OpenCV YAML or 3 million samples of a stamped stream. Larger is refused before it is read
+/// (a regular file) or once it passes the bound (a pipe), never held whole.
+pub(crate) const MAX_WHOLE_FILE: u64 = 256 << 20;
+
+/// Reads a whole text file, naming it in the error: a regular file or a pipe (`<(…)`) of at most
+/// [`MAX_WHOLE_FILE`] bytes; a device (`/dev/zero`), a socket or a directory is refused before it
+/// is read. Text that is not UTF-8 is a parse error on the line of its first invalid byte; a
+/// leading byte order mark is dropped.
 pub(crate) fn read_text(path: &Path) -> Result<String> {
+    let file = path.display().to_string();
+    let io_error = |e| Error::Io {
+        file: file.clone(),
+        source: e,
+    };
+    let meta = std::fs::metadata(path).map_err(io_error)?;
+    whole_file_kind(&meta, &file)?;
+    File::open(path)
+        .map_err(io_error)
+        .and_then(|f| read_whole(f, &file))
+}
+
+/// A file read once already as a stream (its JSON Lines records), read again whole for another
+/// pass (its joint angles): its size is what the first pass read.
+pub(crate) fn reread_text(path: &Path) -> Result<String> {
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| Error::Io {
         file: file.clone(),
@@ -477,9 +529,69 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
     text_of(bytes, &file)
 }
 
-/// `bytes` as text, or a parse error on the line of the first invalid byte.
+/// Refuses what cannot be read whole: anything but a regular file or a pipe, or a regular file
+/// larger than [`MAX_WHOLE_FILE`].
+pub(crate) fn whole_file_kind(meta: &std::fs::Metadata, file: &str) -> Result<()> {
+    let kind = meta.file_type();
+    #[cfg(unix)]
+    let pipe = std::os::unix::fs::FileTypeExt::is_fifo(&kind);
+    #[cfg(not(unix))]
+    let pipe = false;
+    if !(kind.is_file() || pipe) {
+        let what = if kind.is_dir() {
+            "a directory"
+        } else {
+            "a device or a socket"
+        };
+        return Err(parse_error(
+            file,
+            0,
+            "-",
+            format!("{what}, not a file: this format is read whole, from a file or a pipe"),
+        ));
+    }
+    if kind.is_file() && meta.len() > MAX_WHOLE_FILE {
+        return Err(too_large(file));
+    }
+    Ok(())
+}
+
+/// The error of an input read whole that is larger than [`MAX_WHOLE_FILE`].
+fn too_large(file: &str) -> Error {
+    parse_error(
+        file,
+        0,
+        "-",
+        format!(
+            "larger than {} MiB: this format is read whole, and no pose file of it is that large",
+            MAX_WHOLE_FILE >> 20
+        ),
+    )
+}
+
+/// All of `input` as text (see [`text_of`]), at most [`MAX_WHOLE_FILE`] bytes.
+pub(crate) fn read_whole(input: impl Read, file: &str) -> Result<String> {
+    let mut bytes = Vec::new();
+    input
+        .take(MAX_WHOLE_FILE + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::Io {
+            file: file.to_string(),
+            source: e,
+        })?;
+    if bytes.len() as u64 > MAX_WHOLE_FILE {
+        return Err(too_large(file));
+    }
+    text_of(bytes, file)
+}
+
+/// `bytes` as text without a leading byte order mark, or a parse error on the line of the first
+/// invalid byte (UTF-16 text said to be so).
 fn text_of(bytes: Vec<u8>, file: &str) -> Result<String> {
-    String::from_utf8(bytes).map_err(|e| {
+    if let Some(e) = utf16(&bytes, file) {
+        return Err(e);
+    }
+    let mut text = String::from_utf8(bytes).map_err(|e| {
         let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
         let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
         let column = 1 + valid.iter().rev().take_while(|&&b| b != b'\n').count();
@@ -489,7 +601,33 @@ fn text_of(bytes: Vec<u8>, file: &str) -> Result<String> {
             "-",
             format!("not valid UTF-8 text (byte {column} of the line)"),
         )
-    })
+    })?;
+    if text.starts_with('\u{feff}') {
+        text.drain(..'\u{feff}'.len_utf8());
+    }
+    Ok(text)
+}
+
+/// The error of text encoded as UTF-16 (a byte order mark `FF FE` or `FE FF`, or ASCII with a NUL
+/// in every other byte), which is read as UTF-8 only: `None` for any other start.
+pub(crate) fn utf16(head: &[u8], file: &str) -> Option<Error> {
+    let little =
+        head.starts_with(&[0xff, 0xfe]) || matches!(head, [a, 0, b, 0, ..] if *a != 0 && *b != 0);
+    let big =
+        head.starts_with(&[0xfe, 0xff]) || matches!(head, [0, a, 0, b, ..] if *a != 0 && *b != 0);
+    let order = match (little, big) {
+        (true, _) => "little-endian",
+        (_, true) => "big-endian",
+        _ => return None,
+    };
+    Some(parse_error(
+        file,
+        1,
+        "-",
+        format!(
+            "the text is UTF-16 ({order}), and pose files are read as UTF-8: convert it (`iconv -f UTF-16 -t UTF-8`, or save it as UTF-8)"
+        ),
+    ))
 }
 
 /// Opens a file for reading, naming it in the error.
@@ -519,6 +657,17 @@ pub fn open_poses(path: &Path, format: Format) -> Result<PoseInput<BufReader<Fil
     if format == Format::Visp || (format == Format::Auto && path.is_dir()) {
         return peer::read_visp_dir(path).map(PoseInput::Whole);
     }
+    let whole = matches!(
+        format,
+        Format::OpencvYaml | Format::Moveit | Format::MoveitYaml | Format::EasyHandeye
+    );
+    if whole {
+        let meta = std::fs::metadata(path).map_err(|e| Error::Io {
+            file: source.clone(),
+            source: e,
+        })?;
+        whole_file_kind(&meta, &source)?;
+    }
     open_pose_stream(open(path)?, &source, format)
 }
 
@@ -535,14 +684,7 @@ pub fn open_pose_stream<R: BufRead>(
         Format::Auto => sniffed,
         f => f,
     };
-    let text = |mut input: Sniffed<R>| {
-        let mut bytes = Vec::new();
-        input.read_to_end(&mut bytes).map_err(|e| Error::Io {
-            file: source.to_string(),
-            source: e,
-        })?;
-        text_of(bytes, source)
-    };
+    let text = |input: Sniffed<R>| read_whole(input, source);
     Ok(match format {
         Format::OpencvYaml => PoseInput::Whole(peer::read_opencv_yaml(&text(input)?, source)?),
         Format::Moveit => PoseInput::Whole(peer::read_moveit_json(&text(input)?, source)?),
@@ -656,6 +798,9 @@ pub(crate) fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Fo
             }
         }
         start = head.len();
+    }
+    if let Some(e) = utf16(&head, source) {
+        return Err(e);
     }
     let text = String::from_utf8_lossy(&head);
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();

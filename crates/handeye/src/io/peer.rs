@@ -506,11 +506,31 @@ pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
             ));
         };
         pairs.push(PosePair {
-            base_from_gripper: read_visp_pose(&dir.join(file))?,
-            camera_from_target: read_visp_pose(&dir.join(camera_file))?,
+            base_from_gripper: read_visp_pose(&regular(dir, file)?)?,
+            camera_from_target: read_visp_pose(&regular(dir, camera_file)?)?,
         });
     }
     series(pairs, &name, Projections::default())
+}
+
+/// `dir/file` when it is a regular file (a link to one included): a pipe in a directory of pose
+/// files would wait for a writer forever, and a device (a link to `/dev/zero`) never ends.
+fn regular(dir: &Path, file: &str) -> Result<std::path::PathBuf> {
+    let path = dir.join(file);
+    let meta = std::fs::metadata(&path).map_err(|e| Error::Io {
+        file: path.display().to_string(),
+        source: e,
+    })?;
+    if meta.is_file() {
+        Ok(path)
+    } else {
+        Err(parse_error(
+            &dir.display().to_string(),
+            0,
+            file,
+            "not a regular file (a pipe, a device or a directory): a ViSP pose file is read from a directory of files",
+        ))
+    }
 }
 
 /// Largest norm of a ViSP θu rotation vector accepted, radians (a full turn; ViSP writes θ ≤ π).

@@ -143,6 +143,11 @@ pub(crate) fn pair_streams(
     out
 }
 
+/// The largest clock offset taken, seconds (about 127 years): more than any two clocks differ,
+/// a camera stamping from its boot and a robot in Unix time included (1.7e9 s), and small enough
+/// for nanosecond stamps (a ROS 2 recording's) to hold it.
+pub const MAX_TIME_OFFSET: f64 = 4e9;
+
 /// The clock offset to pair two streams with.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub enum TimeOffset {

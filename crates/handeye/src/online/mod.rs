@@ -67,6 +67,22 @@ pub struct OnlineConfig {
     pub unit: Unit,
 }
 
+impl OnlineConfig {
+    /// Checks every setting's range (the adaptive parameters', the accumulating estimator's), and
+    /// that `truth` is given when it is the error source: what [`OnlineCalibrator::new`] checks,
+    /// for a calibrator restored from its saved state too.
+    pub fn validate(&self) -> Result<()> {
+        if self.error_source == ErrorSource::Truth && self.truth.is_none() {
+            return Err(Error::InvalidParameter {
+                name: "error_source",
+                message: "`truth` needs the true X (give a truth file)".to_string(),
+            });
+        }
+        self.params.validate()?;
+        self.tracking.validate()
+    }
+}
+
 /// The length unit of the input, for the one threshold that has a unit (`d_max`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -318,12 +334,7 @@ pub struct OnlineCalibrator {
 impl OnlineCalibrator {
     /// A calibrator for `config`; errors on invalid parameters or `Truth` without a truth.
     pub fn new(config: OnlineConfig) -> Result<Self> {
-        if config.error_source == ErrorSource::Truth && config.truth.is_none() {
-            return Err(Error::InvalidParameter {
-                name: "error_source",
-                message: "`truth` needs the true X (give a truth file)".to_string(),
-            });
-        }
+        config.validate()?;
         Ok(Self {
             selector: Selector::new(config.selection, config.setup, config.params)?,
             config,
@@ -384,10 +395,15 @@ impl OnlineCalibrator {
         self.selector.thresholds()
     }
 
+    /// Poses pushed since the last calibration (all of them before the first).
+    pub fn poses_since_calibration(&self) -> usize {
+        self.poses - self.last_calibration
+    }
+
     /// Why the paper's selection has made no calibration for a while, in words: `None` when a
     /// calibration came within the last `poses` poses (or fewer were pushed).
     pub fn quiet(&self, poses: usize) -> Option<String> {
-        let since = self.poses - self.last_calibration;
+        let since = self.poses_since_calibration();
         if since < poses.max(1) {
             return None;
         }

@@ -101,6 +101,40 @@ impl Default for TrackOptions {
     }
 }
 
+impl TrackOptions {
+    /// Checks the ranges of the settings a face exposes and the others: `every` at least 1,
+    /// `shrink` and the gates finite and above 0, `outlier_deg` in (0, 180], a finite `point`.
+    pub fn validate(&self) -> crate::model::error::Result<()> {
+        let bad = |name: &'static str, message: String| {
+            Err(crate::model::error::Error::InvalidParameter { name, message })
+        };
+        if self.every < 1 {
+            return bad("every", "must be at least 1 (poses between reports)".into());
+        }
+        for (name, v) in [
+            ("shrink", self.shrink),
+            ("max_rotation_deg", self.max_rotation_deg),
+            ("max_translation", self.max_translation),
+            ("gate", self.gate),
+            ("elevated", self.elevated),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return bad(name, format!("must be a finite number above 0, got {v}"));
+            }
+        }
+        if !(self.outlier_deg > 0.0 && self.outlier_deg <= 180.0) {
+            return bad(
+                "outlier_deg",
+                format!("must be in (0, 180] degrees, got {}", self.outlier_deg),
+            );
+        }
+        if self.point.is_some_and(|p| p.iter().any(|v| !v.is_finite())) {
+            return bad("point", "must be three finite numbers".into());
+        }
+        Ok(())
+    }
+}
+
 /// Recent accepted poses the screw gate compares a new pose with.
 const PARTNER_RING: usize = 32;
 /// Of those, every this-many-th is a partner (up to eight motions per pose).

@@ -89,6 +89,8 @@ pub(super) fn read_bag(
         outside: pairs.dropped_outside,
         gap: pairs.dropped_gap,
         max_gap: options.max_gap,
+        repeated: pairs.dropped_repeated,
+        robot_repeated: pairs.robot_repeated,
     });
     Ok(Recording {
         poses: pairs.poses(),

@@ -5,10 +5,10 @@
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
-use crate::io::sync::{TimeOffset, pair_stream_files};
+use crate::io::sync::{MAX_TIME_OFFSET, TimeOffset, pair_stream_files};
 use crate::io::{
     Format, PoseInput, PoseReader, PoseSeries, Projections, StampedPosePair, at_least_two_pairs,
-    open_poses, read_joints, read_records, read_text,
+    open_poses, read_joints, read_records, reread_text,
 };
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Reading, Written, WrittenAs};
@@ -76,7 +76,7 @@ pub struct RecordingOptions {
     /// The clock offset (camera clock − robot clock) of two streams or a recording. None (the
     /// default): estimated as with [`TimeOffset::Auto`] when the streams allow it, else 0 s with
     /// a note saying why ([`Note::NoTimeOffset`]); an unnoticed offset of a few tens of
-    /// milliseconds moves X by millimetres. Ignored for a pose file.
+    /// milliseconds moves X by millimetres. Refused for a pose file, whose pairs are made.
     pub time_offset: Option<TimeOffset>,
     /// A camera sample in a gap of the robot's poses longer than this is dropped, seconds.
     /// Default 0.1.
@@ -161,6 +161,12 @@ impl Recording {
         tell: &mut dyn FnMut(&Note),
     ) -> Result<Self> {
         check_options(options)?;
+        if let (Source::File { .. }, Some(_)) = (source, options.time_offset) {
+            return Err(Error::InvalidParameter {
+                name: "time_offset",
+                message: "a clock offset pairs two stamped streams or a ROS 2 recording; a pose file gives its pose pairs already paired, and no offset would change them".into(),
+            });
+        }
         let mut notes = Notes {
             tell,
             notes: Vec::new(),
@@ -191,14 +197,17 @@ impl Recording {
     }
 }
 
-/// Refuses a non-finite time offset and a `max_gap` not above 0.
+/// Refuses a time offset that is not finite or beyond [`MAX_TIME_OFFSET`] in size, and a
+/// `max_gap` not above 0.
 fn check_options(options: &RecordingOptions) -> Result<()> {
     if let Some(TimeOffset::Fixed(t)) = options.time_offset
-        && !t.is_finite()
+        && !(t.is_finite() && t.abs() <= MAX_TIME_OFFSET)
     {
         return Err(Error::InvalidParameter {
             name: "time_offset",
-            message: format!("expected a finite number of seconds, found {t}"),
+            message: format!(
+                "expected a finite number of seconds of at most {MAX_TIME_OFFSET:e} in size (127 years), found {t:e}"
+            ),
         });
     }
     if !(options.max_gap > 0.0 && options.max_gap.is_finite()) {
@@ -268,7 +277,7 @@ fn read_file(
                 at_least_two_pairs(series.pairs.len(), source.clone())?;
                 // Joint angles are not part of a pose pair: read by their own pass over the text.
                 let joints = if jsonl {
-                    read_joints(&read_text(path)?, &source)?.unwrap_or_default()
+                    read_joints(&reread_text(path)?, &source)?.unwrap_or_default()
                 } else {
                     Vec::new()
                 };
@@ -372,12 +381,20 @@ fn read_streams(
             line: 0,
             field: "t".into(),
             message: format!(
-                "{} camera sample(s) within the robot stream {} ({} outside it, {} in its gaps longer than {} s): at least 2 pose pairs are needed",
+                "{} camera sample(s) within the robot stream {} ({} outside it, {} in its gaps longer than {} s){}: at least 2 pose pairs are needed",
                 s.pairs.len(),
                 robot.display(),
                 s.dropped_outside,
                 s.dropped_gap,
-                options.max_gap
+                options.max_gap,
+                if pairing.time_offset == 0.0 {
+                    String::new()
+                } else {
+                    format!(
+                        ", the camera stamps shifted by the clock offset of {:e} s",
+                        pairing.time_offset
+                    )
+                }
             ),
         });
     }

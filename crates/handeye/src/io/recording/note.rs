@@ -71,6 +71,10 @@ pub enum Note {
         gap: usize,
         /// The longest gap interpolated across, seconds.
         max_gap: f64,
+        /// Observations at a stamp an earlier one has (the first of each stamp kept).
+        repeated: usize,
+        /// Samples of the robot's transforms at a stamp an earlier one has (the first kept).
+        robot_repeated: usize,
     },
 }
 
@@ -136,6 +140,8 @@ impl Note {
             outside,
             gap,
             max_gap,
+            repeated,
+            robot_repeated,
         } = self
         else {
             return Ok(());
@@ -148,6 +154,18 @@ impl Note {
             write!(
                 f,
                 "; dropped {outside} outside the robot's transforms and {gap} in their gaps longer than {max_gap} s"
+            )?;
+        }
+        if *repeated > 0 {
+            write!(
+                f,
+                "; dropped {repeated} observation(s) stamped like an earlier one (one pose per stamp: the first read, as tf2 keeps)"
+            )?;
+        }
+        if *robot_repeated > 0 {
+            write!(
+                f,
+                "; dropped {robot_repeated} sample(s) of the robot's transforms stamped like an earlier one (the first read kept, as tf2 does)"
             )?;
         }
         Ok(())

@@ -22,7 +22,7 @@ mod pairs;
 mod storage;
 mod tf;
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
@@ -38,9 +38,11 @@ pub use pairs::{BagOptions, BagPairs, read_bag_pairs};
 pub(crate) use pairs::{BagOptions, read_bag_pairs};
 pub use storage::Storage;
 pub use tf::TfEdge;
+#[cfg(feature = "internals")]
+pub use tf::tree_steps;
 
 use msg::RawPose;
-use storage::{Message, TopicInfo, bag_error, scan};
+use storage::{Message, Topics, bag_error, scan};
 use tf::TfBuffer;
 
 /// The topic of dynamic transforms.
@@ -165,7 +167,7 @@ struct Observation {
 /// What a recording holds for a calibration.
 struct Loaded {
     tf: TfBuffer,
-    topics: BTreeMap<String, TopicInfo>,
+    topics: Topics,
     target: Vec<Observation>,
     messages: usize,
 }
@@ -182,7 +184,7 @@ fn transform_of(raw: &RawPose) -> std::result::Result<Transform, String> {
 fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
     let mut tf = TfBuffer::default();
     let mut target = Vec::new();
-    let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
+    let mut topics = Topics::default();
     let mut index: HashMap<String, usize> = HashMap::new();
     let mut messages = 0usize;
     let wanted =
@@ -260,15 +262,9 @@ fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
             });
             Ok(())
         };
-        for (name, info) in scan(file, bag.storage, &wanted, &mut on_message)? {
-            messages += info.count;
-            match topics.get_mut(&name) {
-                Some(known) => known.count += info.count,
-                None => {
-                    topics.insert(name, info);
-                }
-            }
-        }
+        let found = scan(file, bag.storage, &wanted, &mut on_message)?;
+        messages += found.iter().map(|(_, info)| info.count).sum::<usize>();
+        topics.merge(found);
     }
     tf.finish();
     Ok(Loaded {
@@ -280,7 +276,7 @@ fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
 }
 
 /// The topics of a recording as `name (type)`, for messages.
-fn topic_list(topics: &BTreeMap<String, TopicInfo>) -> String {
+fn topic_list(topics: &Topics) -> String {
     if topics.is_empty() {
         return "(none)".into();
     }
@@ -323,6 +319,10 @@ pub struct BagSummary {
     pub frames: Vec<String>,
     /// The frames without a parent: one per tree.
     pub roots: Vec<String>,
+    /// The loops of parent links (frames that have no root), each as its frames, the parent of
+    /// each the next; tf allows none, and no lookup through one can be made.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub loops: Vec<Vec<String>>,
     /// Every edge of the tf tree.
     pub tf: Vec<TfEdge>,
     /// The topics that can hold the target's pose (`PoseStamped`, `TransformStamped`).
@@ -337,7 +337,7 @@ pub fn inspect_bag(path: &Path) -> Result<BagSummary> {
         .topics
         .iter()
         .map(|(name, info)| TopicSummary {
-            topic: name.clone(),
+            topic: name.to_string(),
             msg_type: info.msg_type.clone(),
             encoding: info.encoding.clone(),
             count: info.count,
@@ -352,10 +352,16 @@ pub fn inspect_bag(path: &Path) -> Result<BagSummary> {
             .iter()
             .filter(|t| t.msg_type == POSE_STAMPED || t.msg_type == TRANSFORM_STAMPED)
             .map(|t| t.topic.clone())
-            .collect(),
+            .fold(Vec::new(), |mut names, t| {
+                if names.last() != Some(&t) {
+                    names.push(t);
+                }
+                names
+            }),
         topics,
         frames: loaded.tf.frames(),
         roots: loaded.tf.roots(),
+        loops: loaded.tf.loops(),
         tf: loaded.tf.summary(),
     })
 }

@@ -9,7 +9,7 @@ use super::storage::bag_error;
 use super::tf::{self, TfError, seconds};
 use super::{Bag, TF_STATIC_TOPIC, TF_TOPIC, at, load, topic_list};
 use crate::io::StampedPosePair;
-use crate::io::sync::{Lookup, StampedPose};
+use crate::io::sync::{Lookup, MAX_TIME_OFFSET, StampedPose};
 use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
 use crate::model::motion::PosePair;
@@ -41,6 +41,9 @@ pub struct BagOptions {
 /// Default `max_gap`, seconds.
 pub(crate) const DEFAULT_MAX_GAP: f64 = 0.1;
 
+/// The longest `max_gap`, seconds (11.6 days).
+const MAX_GAP: f64 = 1e6;
+
 /// The pose pairs of a recording.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BagPairs {
@@ -58,6 +61,11 @@ pub struct BagPairs {
     pub dropped_outside: usize,
     /// Observations in a gap, longer than `max_gap`, of a dynamic transform they need.
     pub dropped_gap: usize,
+    /// Observations at a stamp an earlier observation has: one is kept per stamp, the first read
+    /// (as tf2 does with the samples of a transform), whether the target is in `/tf` or a topic.
+    pub dropped_repeated: usize,
+    /// Samples of the robot's dynamic transforms dropped for the same reason.
+    pub robot_repeated: usize,
     /// `base_from_gripper` at every stamp of the robot's dynamic transforms (robot clock), for an
     /// estimate of the clock offset ([`crate::io::sync::estimate_time_offset`]). Stamps are seconds
     /// from the robot's first stamp, so that they keep their nanoseconds (seconds since the epoch
@@ -76,11 +84,13 @@ impl BagPairs {
 }
 
 /// Seconds as nanoseconds, for an offset or a gap given in seconds.
-fn nanoseconds(name: &'static str, value: f64) -> Result<i64> {
-    if !(value.is_finite() && value.abs() <= 1e6) {
+fn nanoseconds(name: &'static str, value: f64, most: f64) -> Result<i64> {
+    if !(value.is_finite() && value.abs() <= most) {
         return Err(Error::InvalidParameter {
             name,
-            message: format!("{value} s is not a usable time (finite, at most 1e6 s in size)"),
+            message: format!(
+                "{value:e} s is not a usable time (finite, at most {most:e} s in size)"
+            ),
         });
     }
     Ok((value * NS as f64).round() as i64)
@@ -138,19 +148,19 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         .map(|t| frame("target_frame", t))
         .transpose()?;
     let target_topic = options.target_topic.as_deref().map(str::trim);
-    let offset_ns = nanoseconds("time_offset", options.time_offset)?;
+    let offset_ns = nanoseconds("time_offset", options.time_offset, MAX_TIME_OFFSET)?;
     let max_gap = if options.max_gap > 0.0 {
         options.max_gap
     } else {
         DEFAULT_MAX_GAP
     };
-    let max_gap_ns = nanoseconds("max_gap", max_gap)?;
+    let max_gap_ns = nanoseconds("max_gap", max_gap, MAX_GAP)?;
     let loaded = load(&bag, target_topic)?;
     let whole = |message: String| bag_error(path, None, message);
     let tf_error = |what: &str, e: TfError| whole(format!("{what}: {e}"));
     let tf = &loaded.tf;
 
-    if !loaded.topics.contains_key(TF_TOPIC) && !loaded.topics.contains_key(TF_STATIC_TOPIC) {
+    if !loaded.topics.has(TF_TOPIC) && !loaded.topics.has(TF_STATIC_TOPIC) {
         return Err(whole(format!(
             "no /tf or /tf_static topic; the topics are: {}",
             topic_list(&loaded.topics)
@@ -167,28 +177,33 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
 
     // The target's observations: (number, stamp, camera_from_target or why not).
     let mut observations: Vec<(usize, i64, Lookup)> = Vec::new();
+    // Observations dropped for a stamp an earlier one has.
+    let mut dropped_repeated = 0;
     let target_source;
     match target_topic {
         Some(topic) => {
-            match loaded.topics.get(topic) {
-                None => {
-                    let names: Vec<String> = loaded.topics.keys().cloned().collect();
-                    let near = tf::nearest(topic, &names)
-                        .map_or(String::new(), |n| format!(" (did you mean `{n}`?)"));
-                    return Err(whole(format!(
-                        "no topic `{topic}` in the recording{near}; the topics are: {}",
-                        topic_list(&loaded.topics)
-                    )));
-                }
-                Some(info)
-                    if info.msg_type != POSE_STAMPED && info.msg_type != TRANSFORM_STAMPED =>
-                {
-                    return Err(whole(format!(
-                        "topic `{topic}` has type `{}`; a target topic must be `{POSE_STAMPED}` or `{TRANSFORM_STAMPED}`",
-                        info.msg_type
-                    )));
-                }
-                Some(_) => {}
+            let types: Vec<&str> = loaded
+                .topics
+                .of(topic)
+                .map(|info| info.msg_type.as_str())
+                .collect();
+            if types.is_empty() {
+                let names = loaded.topics.names();
+                let near = tf::nearest(topic, &names)
+                    .map_or(String::new(), |n| format!(" (did you mean `{n}`?)"));
+                return Err(whole(format!(
+                    "no topic `{topic}` in the recording{near}; the topics are: {}",
+                    topic_list(&loaded.topics)
+                )));
+            }
+            if !types
+                .iter()
+                .any(|t| *t == POSE_STAMPED || *t == TRANSFORM_STAMPED)
+            {
+                return Err(whole(format!(
+                    "topic `{topic}` has type `{}`; a target topic must be `{POSE_STAMPED}` or `{TRANSFORM_STAMPED}`",
+                    types.join("`, `")
+                )));
             }
             target_source = topic.to_string();
             let mut paths: HashMap<String, tf::TfPath> = HashMap::new();
@@ -248,12 +263,17 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
             for (k, t) in tf.stamps_of(&edge).into_iter().enumerate() {
                 observations.push((k + 1, t, tf.lookup(&target_path, t, max_gap_ns)));
             }
+            dropped_repeated = tf.repeated(&edge);
         }
     }
+    // One observation per stamp, the first read (stable sort), as tf2 keeps a transform's.
     observations.sort_by_key(|o| o.1);
+    let read = observations.len();
+    observations.dedup_by_key(|o| o.1);
+    dropped_repeated += read - observations.len();
 
-    let mut robot_stamps: Vec<i64> = tf
-        .dynamic_on(&robot_path)
+    let robot_edges = tf.dynamic_on(&robot_path);
+    let mut robot_stamps: Vec<i64> = robot_edges
         .iter()
         .flat_map(|edge| tf.stamps_of(edge))
         .collect();
@@ -285,9 +305,11 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         pairs: Vec::new(),
         names: Vec::new(),
         target_source: target_source.clone(),
-        observations: observations.len(),
+        observations: observations.len() + dropped_repeated,
         dropped_outside: 0,
         dropped_gap: 0,
+        dropped_repeated,
+        robot_repeated: robot_edges.iter().map(|e| tf.repeated(e)).sum(),
         robot_stream,
         camera_stream,
     };
@@ -314,11 +336,15 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
     }
     if out.pairs.len() < 2 {
         return Err(whole(format!(
-            "{} observation(s) of the target ({target_source}), {} within the robot's transforms ({} outside them, {} in their gaps longer than {max_gap} s): at least 2 pose pairs are needed",
+            "{} observation(s) of the target ({target_source}), {} within the robot's transforms ({} outside them, {} in their gaps longer than {max_gap} s{}): at least 2 pose pairs are needed",
             out.observations,
             out.pairs.len(),
             out.dropped_outside,
-            out.dropped_gap
+            out.dropped_gap,
+            match out.dropped_repeated {
+                0 => String::new(),
+                n => format!(", {n} stamped like an earlier one"),
+            }
         )));
     }
     Ok(out)

@@ -6,7 +6,8 @@
 //! `a_from_b` at time t walks from both frames up to their nearest common ancestor, interpolating
 //! every dynamic edge at t (slerp, linear translation; [`crate::io::sync::interpolate`]).
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::cell::Cell;
+use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use serde::Serialize;
 
@@ -15,11 +16,30 @@ use crate::model::pose::Transform;
 
 use super::msg::NS;
 
+thread_local! {
+    /// Steps of the tree's searches on this thread (see [`tree_steps`]).
+    static STEPS: Cell<u64> = const { Cell::new(0) };
+}
+
+/// Counts `n` steps of a search of the tree.
+fn step(n: usize) {
+    STEPS.with(|s| s.set(s.get() + n as u64));
+}
+
+/// Steps the tf tree's searches have taken on this thread so far: every parent link followed,
+/// every frame compared or listed. For tests that show the searches linear in the tree's size.
+#[cfg_attr(not(feature = "internals"), allow(dead_code))]
+pub fn tree_steps() -> u64 {
+    STEPS.with(Cell::get)
+}
+
 /// One edge of the tree: the parent and what is known of `parent_from_child`.
 #[derive(Debug, Clone)]
 struct Edge {
     parent: String,
     kind: EdgeKind,
+    /// Samples dropped by [`TfBuffer::finish`] for a stamp an earlier sample has.
+    repeated: usize,
 }
 
 #[derive(Debug, Clone)]
@@ -52,17 +72,41 @@ pub struct TfEdge {
 /// Why a lookup cannot be made at all (at any time).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) enum TfError {
-    /// A frame that no transform names; the known frames are listed.
+    /// A frame that no transform names; a few of the known frames are listed.
     MissingFrame { frame: String, known: Vec<String> },
     /// The two frames are in different trees.
     Disconnected {
         a: String,
-        a_tree: Vec<String>,
+        a_tree: Box<Tree>,
         b: String,
-        b_tree: Vec<String>,
+        b_tree: Box<Tree>,
     },
-    /// The parent links loop.
-    Cycle { frame: String },
+    /// The parent links loop: the frames of the loop, each the parent of the one before.
+    Cycle { frames: Vec<String> },
+}
+
+/// A tree of the buffer, for messages: its root, its size and its first frames by name.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Tree {
+    pub root: String,
+    pub size: usize,
+    pub first: Vec<String>,
+}
+
+/// Frames named in a message: a tree or the known frames are shown by this many of theirs.
+const SHOWN_FRAMES: usize = 8;
+
+impl std::fmt::Display for Tree {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the tree rooted at `{}` ({} frame{}: {})",
+            self.root,
+            self.size,
+            if self.size == 1 { "" } else { "s" },
+            list(&self.first, self.size)
+        )
+    }
 }
 
 impl std::fmt::Display for TfError {
@@ -73,7 +117,8 @@ impl std::fmt::Display for TfError {
                 if let Some(near) = nearest(frame, known) {
                     write!(f, " (did you mean `{near}`?)")?;
                 }
-                write!(f, "; the frames there are: {}", list(known))
+                let shown: Vec<String> = known.iter().take(SHOWN_FRAMES).cloned().collect();
+                write!(f, "; the frames there are: {}", list(&shown, known.len()))
             }
             Self::Disconnected {
                 a,
@@ -82,13 +127,32 @@ impl std::fmt::Display for TfError {
                 b_tree,
             } => write!(
                 f,
-                "frames `{a}` and `{b}` are not connected in the tf tree: `{a}` is in the tree of {}, `{b}` in the tree of {}",
-                list(a_tree),
-                list(b_tree)
+                "frames `{a}` and `{b}` are not connected in the tf tree: `{a}` is in {a_tree}, `{b}` in {b_tree}"
             ),
-            Self::Cycle { frame } => write!(f, "the tf tree has a loop through frame `{frame}`"),
+            Self::Cycle { frames } => write!(
+                f,
+                "the tf tree has a loop: {} (each frame the parent of the one before; tf allows none)",
+                loop_words(frames)
+            ),
         }
     }
+}
+
+/// A loop's frames as `` `a` → `b` → `c` → `a` ``, shortened in the middle when long.
+pub(crate) fn loop_words(frames: &[String]) -> String {
+    let named = |f: &String| format!("`{f}`");
+    let mut words: Vec<String> = if frames.len() <= SHOWN_FRAMES {
+        frames.iter().map(named).collect()
+    } else {
+        let mut w: Vec<String> = frames[..SHOWN_FRAMES / 2].iter().map(named).collect();
+        w.push(format!("… {} more …", frames.len() - SHOWN_FRAMES));
+        w.extend(frames[frames.len() - SHOWN_FRAMES / 2..].iter().map(named));
+        w
+    };
+    if let Some(first) = frames.first() {
+        words.push(named(first));
+    }
+    words.join(" → ")
 }
 
 /// The name of `known` closest to `name`, when it is within a couple of edits (a typo, a
@@ -121,16 +185,20 @@ fn edit_distance(a: &str, b: &str) -> usize {
     row[b.len()]
 }
 
-/// Frames as `a, b, c` (none: `(none)`).
-fn list(frames: &[String]) -> String {
+/// Frames as `a, b, c` (none: `(none)`), said to be the first of `all` when there are more.
+fn list(frames: &[String], all: usize) -> String {
     if frames.is_empty() {
-        "(none)".into()
+        return "(none)".into();
+    }
+    let names = frames
+        .iter()
+        .map(|f| format!("`{f}`"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    if all > frames.len() {
+        format!("{names}, … ({} more)", all - frames.len())
     } else {
-        frames
-            .iter()
-            .map(|f| format!("`{f}`"))
-            .collect::<Vec<_>>()
-            .join(", ")
+        names
     }
 }
 
@@ -147,6 +215,8 @@ pub(crate) struct TfPath {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct TfBuffer {
     edges: BTreeMap<String, Edge>,
+    /// Every frame an edge names, as parent or child.
+    names: BTreeSet<String>,
 }
 
 impl TfBuffer {
@@ -175,11 +245,17 @@ impl TfBuffer {
                 } else {
                     EdgeKind::Dynamic(vec![(stamp_ns, parent_from_child)])
                 };
+                for name in [parent, child] {
+                    if !self.names.contains(name) {
+                        self.names.insert(name.to_string());
+                    }
+                }
                 self.edges.insert(
                     child.to_string(),
                     Edge {
                         parent: parent.to_string(),
                         kind,
+                        repeated: 0,
                     },
                 );
                 Ok(())
@@ -207,31 +283,30 @@ impl TfBuffer {
         }
     }
 
-    /// Sorts every time series by stamp (stable: of equal stamps the later message wins).
+    /// Sorts every time series by stamp and keeps one sample per stamp: the first read, as tf2
+    /// does (it ignores a sample whose stamp it has); the others are counted
+    /// ([`TfBuffer::repeated`]).
     pub fn finish(&mut self) {
         for edge in self.edges.values_mut() {
             if let EdgeKind::Dynamic(samples) = &mut edge.kind {
+                // Stable: of equal stamps, the first read comes first.
                 samples.sort_by_key(|s| s.0);
-                let mut kept: Vec<(i64, Transform)> = Vec::with_capacity(samples.len());
-                for s in samples.drain(..) {
-                    match kept.last_mut() {
-                        Some(last) if last.0 == s.0 => *last = s,
-                        _ => kept.push(s),
-                    }
-                }
-                *samples = kept;
+                let before = samples.len();
+                samples.dedup_by_key(|s| s.0);
+                edge.repeated += before - samples.len();
             }
         }
     }
 
+    /// Samples of the dynamic edge whose child is `child` dropped by [`TfBuffer::finish`] for a
+    /// stamp an earlier sample has.
+    pub fn repeated(&self, child: &str) -> usize {
+        self.edges.get(child).map_or(0, |e| e.repeated)
+    }
+
     /// Every frame named by a transform, sorted.
     pub fn frames(&self) -> Vec<String> {
-        let mut set: BTreeSet<&str> = BTreeSet::new();
-        for (child, edge) in &self.edges {
-            set.insert(child);
-            set.insert(&edge.parent);
-        }
-        set.into_iter().map(str::to_string).collect()
+        self.names.iter().cloned().collect()
     }
 
     /// The parent of `child`, if it has one.
@@ -241,32 +316,82 @@ impl TfBuffer {
 
     /// Whether a transform names `frame`.
     pub fn has_frame(&self, frame: &str) -> bool {
-        self.edges.contains_key(frame) || self.edges.values().any(|e| e.parent == frame)
+        self.names.contains(frame)
     }
 
-    /// `frame` and its ancestors, up to its root.
+    /// `frame` and its ancestors, up to its root; a loop is an error naming it.
     fn ancestors(&self, frame: &str) -> Result<Vec<String>, TfError> {
         let mut chain = vec![frame.to_string()];
+        let mut seen: HashMap<&str, usize> = HashMap::from([(frame, 0)]);
         let mut current = frame;
         while let Some(edge) = self.edges.get(current) {
-            if chain.len() > self.edges.len() + 1 {
+            step(1);
+            if let Some(&at) = seen.get(edge.parent.as_str()) {
                 return Err(TfError::Cycle {
-                    frame: current.to_string(),
+                    frames: chain[at..].to_vec(),
                 });
             }
+            seen.insert(&edge.parent, chain.len());
             chain.push(edge.parent.clone());
             current = &edge.parent;
         }
         Ok(chain)
     }
 
-    /// The frames of the tree `frame` belongs to (same root), sorted.
-    fn tree_of(&self, frame: &str) -> Vec<String> {
-        let root = self.ancestors(frame).ok().and_then(|c| c.last().cloned());
-        self.frames()
-            .into_iter()
-            .filter(|f| self.ancestors(f).ok().and_then(|c| c.last().cloned()) == root)
-            .collect()
+    /// The root of every frame's tree (`None` for a frame in a loop or below one), each parent
+    /// link followed once; and the loops found, each as its frames, the parent of each the next.
+    fn trees(&self) -> (HashMap<&str, Option<&str>>, Vec<Vec<String>>) {
+        let mut root: HashMap<&str, Option<&str>> = HashMap::new();
+        let mut loops = Vec::new();
+        let frames = self
+            .edges
+            .iter()
+            .flat_map(|(child, edge)| [child.as_str(), edge.parent.as_str()]);
+        for start in frames {
+            // Up from `start` to a frame whose root is known, a root, or a frame of this walk.
+            let mut walk: Vec<&str> = Vec::new();
+            let mut on_walk: HashMap<&str, usize> = HashMap::new();
+            let mut current = start;
+            let found = loop {
+                step(1);
+                if let Some(known) = root.get(current) {
+                    break *known;
+                }
+                if let Some(&at) = on_walk.get(current) {
+                    loops.push(walk[at..].iter().map(|f| f.to_string()).collect());
+                    break None;
+                }
+                on_walk.insert(current, walk.len());
+                walk.push(current);
+                match self.edges.get(current) {
+                    Some(edge) => current = &edge.parent,
+                    None => break Some(current),
+                }
+            };
+            for f in walk {
+                root.insert(f, found);
+            }
+        }
+        (root, loops)
+    }
+
+    /// The tree whose root is `root`: its size and first frames by name.
+    fn tree(&self, root: &str, roots: &HashMap<&str, Option<&str>>) -> Tree {
+        let mut tree = Tree {
+            root: root.to_string(),
+            size: 0,
+            first: Vec::new(),
+        };
+        for f in &self.names {
+            step(1);
+            if roots.get(f.as_str()).copied().flatten() == Some(root) {
+                tree.size += 1;
+                if tree.first.len() < SHOWN_FRAMES {
+                    tree.first.push(f.clone());
+                }
+            }
+        }
+        tree
     }
 
     /// The path between `a` and `b` through their nearest common ancestor.
@@ -281,22 +406,41 @@ impl TfBuffer {
         }
         let up_a = self.ancestors(a)?;
         let up_b = self.ancestors(b)?;
-        let Some((i, j)) = up_a
-            .iter()
-            .enumerate()
-            .find_map(|(i, f)| up_b.iter().position(|g| g == f).map(|j| (i, j)))
-        else {
+        let mut on_b: HashMap<&str, usize> = HashMap::with_capacity(up_b.len());
+        for (j, f) in up_b.iter().enumerate() {
+            step(1);
+            on_b.entry(f).or_insert(j);
+        }
+        let common = up_a.iter().enumerate().find_map(|(i, f)| {
+            step(1);
+            on_b.get(f.as_str()).map(|&j| (i, j))
+        });
+        let Some((i, j)) = common else {
+            let (roots, _) = self.trees();
+            let root_of = |chain: &[String]| chain.last().cloned().unwrap_or_default();
             return Err(TfError::Disconnected {
                 a: a.to_string(),
-                a_tree: self.tree_of(a),
+                a_tree: Box::new(self.tree(&root_of(&up_a), &roots)),
                 b: b.to_string(),
-                b_tree: self.tree_of(b),
+                b_tree: Box::new(self.tree(&root_of(&up_b), &roots)),
             });
         };
         Ok(TfPath {
             up: up_a[..i].to_vec(),
             down: up_b[..j].to_vec(),
         })
+    }
+
+    /// The loops of the tree, each as its frames (the parent of each the next) from its first
+    /// by name; sorted.
+    pub fn loops(&self) -> Vec<Vec<String>> {
+        let mut loops = self.trees().1;
+        for l in &mut loops {
+            let first = (0..l.len()).min_by_key(|&k| &l[k]).unwrap_or(0);
+            l.rotate_left(first);
+        }
+        loops.sort();
+        loops
     }
 
     /// The children of the dynamic edges on a path, from `b`'s side (nearest `b` first), then

@@ -67,12 +67,12 @@ pub struct AdaptiveParams {
     pub n_init: usize,
     /// Candidates tried before the thresholds are relaxed. Default 5.
     pub interval: usize,
-    /// Factor on sin α₀ and β₀ when relaxing. Default 0.9.
+    /// Factor on sin α₀ and β₀ when relaxing, in [`AdaptiveParams::RELAX_DOWN`]. Default 0.9.
     pub relax_down: f64,
-    /// Factor on d₀ when relaxing. Default 1.1.
+    /// Factor on d₀ when relaxing, in [`AdaptiveParams::RELAX_UP`]. Default 1.1.
     pub relax_up: f64,
     /// After calibrations 1..3: sin α₀ ← min(1, sin α₀·explore), β₀ ← β₀·explore,
-    /// d₀ ← d₀/explore. Default 1.1.
+    /// d₀ ← d₀/explore; in [`AdaptiveParams::EXPLORE`]. Default 1.1.
     pub explore: f64,
     /// rmsRMax, the required rotation accuracy. Default 0.001.
     pub rms_r_max: f64,
@@ -109,6 +109,16 @@ impl Default for AdaptiveParams {
 }
 
 impl AdaptiveParams {
+    /// The range of `relax_down`: a tenth at most per relaxation, so that the thresholds step
+    /// down rather than vanish (`1e-320` made β₀ a subnormal number after one step).
+    pub const RELAX_DOWN: (f64, f64) = (0.1, 1.0);
+    /// The range of `relax_up`: ten times at most per relaxation (`1e308` made d₀ infinite, and
+    /// every event's `"d"` null).
+    pub const RELAX_UP: (f64, f64) = (1.0, 10.0);
+    /// The range of `explore`: each of the first three calibrations changes the thresholds ten
+    /// times at most (`1e-320` made d₀ infinite).
+    pub const EXPLORE: (f64, f64) = (0.1, 10.0);
+
     /// Checks every parameter's range.
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &'static str, message: &str| {
@@ -133,14 +143,17 @@ impl AdaptiveParams {
         if self.interval < 1 {
             return bad("interval", "must be at least 1");
         }
-        if !(positive(self.relax_down) && self.relax_down <= 1.0) {
-            return bad("relax_down", "must be in (0, 1]");
-        }
-        if !(self.relax_up.is_finite() && self.relax_up >= 1.0) {
-            return bad("relax_up", "must be at least 1");
-        }
-        if !positive(self.explore) {
-            return bad("explore", "must be positive");
+        for (name, v, (low, high)) in [
+            ("relax_down", self.relax_down, Self::RELAX_DOWN),
+            ("relax_up", self.relax_up, Self::RELAX_UP),
+            ("explore", self.explore, Self::EXPLORE),
+        ] {
+            if !(low..=high).contains(&v) {
+                return bad(
+                    name,
+                    &format!("must be in [{low}, {high}] (a factor per step), got {v:e}"),
+                );
+            }
         }
         for (name, v) in [
             ("rms_r_max", self.rms_r_max),
