@@ -254,6 +254,8 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         ("a ROS 2 recording", args.input.is_bag()),
         ("--report", args.report.is_some()),
         ("--reject-outliers", args.reject_outliers),
+        // The records' JSON fields name their own conventions (`kuka_abc_deg`, `rvec`, …).
+        ("--rotation", !args.input.rotation.is_empty()),
     ] {
         if given {
             return Err(refuse(format!(
