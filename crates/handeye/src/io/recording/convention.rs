@@ -57,7 +57,7 @@ fn choices(named: Option<RotationConvention>) -> Vec<Option<RotationConvention>>
 
 /// Refuses `recording` ([`Error::Misread`]) when its poses, read in the conventions `options`
 /// names, fit poorly and another reading of the same numbers fits far better (the rule of the
-/// readings check, [`ReadingFit::far_better_than`]). Standard input cannot be read again and is
+/// readings check, [`ReadingFit::far_better_than`]) and fits well. Standard input cannot be read again and is
 /// not checked; a reading that fails (a number out of the other convention's range) is passed.
 pub(super) fn check_named(
     source: &Source,
@@ -94,7 +94,10 @@ pub(super) fn check_named(
             let Some(fit) = judged_fit(&other.poses, options.setup) else {
                 continue;
             };
+            // Far better, and good: a reading that still fits poorly says the input has another
+            // fault too, and naming a convention would send the user the wrong way.
             if fit.far_better_than(&given)
+                && !fit.poor()
                 && best
                     .as_ref()
                     .is_none_or(|(_, b)| fit.score(&given) < b.score(&given))
