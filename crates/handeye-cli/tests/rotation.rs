@@ -59,6 +59,11 @@ fn robot_stream(dir: &Path, convention: &str) -> PathBuf {
 
 /// A kinhec pose file rewritten as CSV, both sides in `convention`, its columns lettered `letters`.
 fn csv(dir: &Path, convention: &str, letters: [&str; 3]) -> PathBuf {
+    csv_sides(dir, [convention, convention], letters)
+}
+
+/// [`csv`] with the robot's and the camera's conventions.
+fn csv_sides(dir: &Path, conventions: [&str; 2], letters: [&str; 3]) -> PathBuf {
     let series = handeye::io::read_pose_file(
         &testdata("kinhec/pairs/nominal_stations_eih_s0.jsonl"),
         handeye::io::Format::Auto,
@@ -78,15 +83,20 @@ fn csv(dir: &Path, convention: &str, letters: [&str; 3]) -> PathBuf {
         columns("camera_from_target")
     );
     for p in &series.pairs {
-        let side =
-            |t: &handeye::Transform| written(&t.translation.vector, &t.rotation, convention, ",");
+        let side = |t: &handeye::Transform, convention: &str| {
+            written(&t.translation.vector, &t.rotation, convention, ",")
+        };
         text.push_str(&format!(
             "{},{}\n",
-            side(&p.base_from_gripper),
-            side(&p.camera_from_target)
+            side(&p.base_from_gripper, conventions[0]),
+            side(&p.camera_from_target, conventions[1])
         ));
     }
-    let path = dir.join(format!("{convention}_{}.csv", letters.concat()));
+    let path = dir.join(format!(
+        "{}_{}.csv",
+        conventions.join("_"),
+        letters.concat()
+    ));
     std::fs::write(&path, text).unwrap();
     path
 }
@@ -246,6 +256,17 @@ fn the_wrong_convention_is_refused_naming_the_right_one() {
     assert!(
         err.contains("`--rotation kuka-abc`")
             && err.contains("the robot and camera columns then end in `_a`, `_b`, `_c`"),
+        "{err}"
+    );
+    // KUKA robot poses and a camera's roll, pitch, yaw under one name: the camera's side alone is
+    // named otherwise, the robot's kept.
+    let mixed = csv_sides(dir.path(), ["kuka-abc", "rpy-deg"], ["a", "b", "c"]);
+    let (code, _, err) = run(&["calibrate", s(&mixed), "--rotation", "kuka-abc"]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("the camera poses' numbers read as mitsubishi-abc")
+            && err.contains("`--rotation robot=kuka-abc --rotation camera=mitsubishi-abc`")
+            && err.contains("`rotation=[\"robot=kuka-abc\", \"camera=mitsubishi-abc\"]` in Python"),
         "{err}"
     );
     // A KUKA robot stream named FANUC's: the robot's side is named.

@@ -49,10 +49,10 @@ struct PoseColumns {
 /// (`base_from_gripper` or `gripper_from_base`) and exactly one camera pose (`camera_from_target`
 /// or `target_from_camera`), in any order; any other column is refused. A pose's rotation columns
 /// are those of its side's convention in [`Rotations`] (`_qx … _qw` when none is named); three
-/// angles cannot tell their convention, so columns of one are refused until it is named. Rows are yielded one at
-/// a time in our directions (Q = `base_from_gripper`, `camera_from_target`), or as an
-/// [`Error::Parse`](crate::model::error::Error::Parse) naming the file, the line and the column, after which
-/// the next row is read. Blank lines and lines starting with `#` are skipped.
+/// angles cannot tell their convention, so columns of one are refused until it is named. Rows are
+/// yielded one at a time in our directions (Q = `base_from_gripper`, `camera_from_target`), or as
+/// an [`Error::Parse`](crate::model::error::Error::Parse) naming the file, the line and the column,
+/// after which the next row is read. Blank lines and lines starting with `#` are skipped.
 pub struct CsvPairs<R: BufRead> {
     lines: Lines<R>,
     source: String,

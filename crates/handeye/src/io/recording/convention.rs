@@ -57,8 +57,9 @@ fn choices(named: Option<RotationConvention>) -> Vec<Option<RotationConvention>>
 
 /// Refuses `recording` ([`Error::Misread`]) when its poses, read in the conventions `options`
 /// names, fit poorly and another reading of the same numbers fits far better (the rule of the
-/// readings check, [`ReadingFit::far_better_than`]) and fits well. Standard input cannot be read again and is
-/// not checked; a reading that fails (a number out of the other convention's range) is passed.
+/// readings check, [`ReadingFit::far_better_than`]) and fits well. Standard input cannot be read
+/// again and is not checked; a reading that fails (a number out of the other convention's range)
+/// is passed.
 pub(super) fn check_named(
     source: &Source,
     options: &RecordingOptions,
@@ -172,23 +173,32 @@ fn finding(
         })
         .collect::<Vec<_>>()
         .join(", and ");
-    let specs: Vec<String> = changed
-        .iter()
-        .map(|(side, _, meant)| match *side {
-            "robot" | "camera" if named.robot.is_some() && named.camera.is_some() => {
-                format!("{side}={}", meant[0].name())
-            }
-            "robot" | "camera" if named.robot != named.camera => {
-                format!("{side}={}", meant[0].name())
-            }
-            _ => meant[0].name().to_string(),
-        })
-        .collect();
-    let flags = specs
-        .iter()
-        .map(|s| format!("`--rotation {s}`"))
-        .collect::<Vec<_>>()
-        .join(" ");
+    // The names to give: every side named, the changed ones as meant.
+    let meant_for = |side: &str, n: Option<RotationConvention>| {
+        changed
+            .iter()
+            .find(|(s, _, _)| s.contains(side))
+            .map(|(_, _, meant)| meant[0])
+            .or(n)
+    };
+    let specs: Vec<String> = match (
+        meant_for("robot", named.robot),
+        meant_for("camera", named.camera),
+    ) {
+        (Some(r), Some(c)) if r == c => vec![r.name().to_string()],
+        (r, c) => [("robot", r), ("camera", c)]
+            .into_iter()
+            .filter_map(|(side, c)| Some(format!("{side}={}", c?.name())))
+            .collect(),
+    };
+    let flags = format!(
+        "`{}`",
+        specs
+            .iter()
+            .map(|s| format!("--rotation {s}"))
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
     let python = match specs.as_slice() {
         [one] => format!("`rotation=\"{one}\"`"),
         _ => format!(
@@ -210,6 +220,8 @@ fn finding(
                         .is_some_and(|e| e.eq_ignore_ascii_case("csv")));
             changed
                 .iter()
+                // CSV columns the file already has need no word.
+                .filter(|(_, n, meant)| !csv || n.components() != meant[0].components())
                 .map(|(side, _, meant)| {
                     let r = meant[0];
                     if csv {
