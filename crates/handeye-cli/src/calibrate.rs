@@ -249,6 +249,8 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         ("--robot/--camera streams", args.input.robot.is_some()),
         ("a ROS 2 recording", args.input.is_bag()),
         ("--reject-outliers", args.reject_outliers),
+        // The records' JSON fields name their own conventions (`kuka_abc_deg`, `rvec`, …).
+        ("--rotation", !args.input.rotation.is_empty()),
     ] {
         if given {
             return Err(refuse(format!(

@@ -16,7 +16,7 @@ use handeye::io::{
     BagFrames, Format, PoseInput, PoseReader, Projections, Recording, RecordingOptions, Source,
     StampedPosePair, TimeOffset, open_pose_stream, open_poses,
 };
-use handeye::{Reading, Setup};
+use handeye::{Reading, Rotations, Setup};
 
 /// Input options shared by `calibrate` and `online`.
 #[derive(ClapArgs, Debug, Clone)]
@@ -79,12 +79,30 @@ pub struct InputArgs {
     /// Camera on the gripper (X = gripper_from_camera) or fixed (X = base_from_camera).
     #[arg(long, default_value_t = Setup::EyeInHand, value_parser = crate::values::named::<Setup>())]
     pub setup: Setup,
+    /// How the input writes rotations, where its numbers cannot say: the --robot/--camera
+    /// streams (`t x y z` and the convention's numbers) and CSV columns (`<frame>_x, _y, _z` and
+    /// the convention's, e.g. `_a, _b, _c` for kuka-abc); JSON fields name their own
+    /// (`kuka_abc_deg`, `rvec`, …) and need no flag. NAME for every pose, or robot=NAME /
+    /// camera=NAME for one side (repeatable). NAME (numbers; unit; R): quaternion-xyzw (qx qy qz
+    /// qw; the default), quaternion-wxyz (q1 q2 q3 q4, w first: ABB), rvec (rx ry rz; radians;
+    /// OpenCV, Universal Robots), kuka-abc (a b c; degrees; Rz(A)·Ry(B)·Rx(C)), mitsubishi-abc (a
+    /// b c; degrees; Rz(C)·Ry(B)·Rx(A)), fanuc-wpr (w p r; degrees; Rz(R)·Ry(P)·Rx(W)),
+    /// yaskawa-rxryrz (rx ry rz; degrees; Rz(Rz)·Ry(Ry)·Rx(Rx)), staubli-xyz (rx ry rz; degrees;
+    /// Rx(Rx)·Ry(Ry)·Rz(Rz)), kawasaki-oat (o a t; degrees; Rz(O)·Ry(A)·Rz(T)), rpy (roll pitch
+    /// yaw; radians; Rz(yaw)·Ry(pitch)·Rx(roll), ROS), rpy-deg (the same in degrees).
+    #[arg(long, value_name = "NAME|robot=NAME|camera=NAME", value_parser = crate::values::rotation)]
+    pub rotation: Vec<String>,
 }
 
 impl InputArgs {
     /// The setup.
     pub fn setup(&self) -> Setup {
         self.setup
+    }
+
+    /// The rotation conventions named by `--rotation`.
+    pub fn rotations(&self) -> handeye::Result<Rotations> {
+        Rotations::parse(&self.rotation)
     }
 
     /// Whether INPUT is a ROS 2 recording.
@@ -152,13 +170,14 @@ fn bag_source(args: &InputArgs) -> Result<Option<Source>> {
 }
 
 /// The options of [`Recording::read`] from the flags, for poses to be solved read as `reading`.
-fn options(args: &InputArgs, reading: Reading) -> RecordingOptions {
-    RecordingOptions {
+fn options(args: &InputArgs, reading: Reading) -> Result<RecordingOptions> {
+    Ok(RecordingOptions {
         setup: args.setup(),
         time_offset: args.time_offset,
         reading,
         max_gap: args.max_gap.unwrap_or(DEFAULT_MAX_GAP),
-    }
+        rotations: args.rotations()?,
+    })
 }
 
 /// The default of `--max-gap`, seconds.
@@ -200,7 +219,7 @@ fn read(source: &Source, options: &RecordingOptions) -> Result<Recording> {
 /// stdin).
 fn read_recorded(args: &InputArgs, reading: Reading) -> Result<Option<Recording>> {
     if let Some(source) = bag_source(args)? {
-        return read(&source, &options(args, reading)).map(Some);
+        return read(&source, &options(args, reading)?).map(Some);
     }
     let (Some(robot), Some(camera)) = (&args.robot, &args.camera) else {
         pose_file_flags(args)?;
@@ -210,7 +229,7 @@ fn read_recorded(args: &InputArgs, reading: Reading) -> Result<Option<Recording>
         robot: robot.clone(),
         camera: camera.clone(),
     };
-    read(&source, &options(args, reading)).map(Some)
+    read(&source, &options(args, reading)?).map(Some)
 }
 
 /// All pose pairs of the input (a batch solve), each pose's name for messages (`file:line`, or
@@ -223,7 +242,7 @@ pub fn read_all(args: &InputArgs, reading: Reading) -> Result<Recording> {
                 path: args.input.clone().unwrap_or_else(|| PathBuf::from("-")),
                 format: args.format,
             };
-            read(&source, &options(args, reading))?
+            read(&source, &options(args, reading)?)?
         }
     };
     Ok(recording)
@@ -258,6 +277,9 @@ impl<R: BufRead> Iterator for NotingReader<R> {
         if next.is_none() && !self.told {
             self.told = true;
             note(&self.source, &self.reader.projections());
+            for n in handeye::io::Note::small_degrees(&self.source, &self.reader.degree_angles()) {
+                eprintln!("{n}");
+            }
         }
         next
     }
@@ -352,7 +374,7 @@ pub fn records(
     let source = path.display().to_string();
     if path.as_os_str() == "-" {
         let stdin = WaitHook::new(std::io::stdin().lock(), before_wait);
-        let reader = PoseReader::new(stdin, "-", args.format)?;
+        let reader = PoseReader::with_rotations(stdin, "-", args.format, args.rotations()?)?;
         preamble(&reader, &source);
         let records = NotingReader {
             reader,
@@ -363,7 +385,11 @@ pub fn records(
     }
     let format = args.format;
     let records = if format == Format::Visp || path.is_dir() {
-        file_records(open_poses(&path, format)?, &source, args.setup())?
+        file_records(
+            open_poses(&path, format, args.rotations()?)?,
+            &source,
+            args.setup(),
+        )?
     } else {
         let file = File::open(&path).map_err(|e| handeye::Error::Io {
             file: source.clone(),
@@ -371,7 +397,7 @@ pub fn records(
         })?;
         let input = WaitHook::new(file, before_wait);
         file_records(
-            open_pose_stream(input, &source, format)?,
+            open_pose_stream(input, &source, format, args.rotations()?)?,
             &source,
             args.setup(),
         )?

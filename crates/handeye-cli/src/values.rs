@@ -38,6 +38,17 @@ fn number(s: &str) -> Result<f64, String> {
     }
 }
 
+/// One `--rotation` value: NAME, robot=NAME or camera=NAME (the library's parser; a side named
+/// twice is refused when the flags are read together).
+pub fn rotation(s: &str) -> Result<String, String> {
+    handeye::Rotations::parse(&[s])
+        .map(|_| s.to_string())
+        .map_err(|e| match e {
+            handeye::Error::InvalidParameter { message, .. } => message,
+            e => e.to_string(),
+        })
+}
+
 /// A finite number above 0.
 pub fn positive(s: &str) -> Result<f64, String> {
     let v = number(s)?;

@@ -368,3 +368,46 @@ fn a_clock_offset_is_given_or_found() {
     assert_eq!(v["time_offset_s"].as_f64(), Some(0.0));
     assert!(max_diff(&flat(&v["matrix"]), &expected) > 1e-4);
 }
+
+/// Issue 33 item 13: `--base-frame` and `--gripper-frame` swapped on a bag. The tf tree says so
+/// (the base below the gripper), so every command refuses at reading, naming the swap of the two
+/// flags and never an inversion of the poses: before, `online` published an X 0.72 m off with the
+/// verdict "good", and the batch commands named the swap only when the poses fit inverted.
+#[test]
+fn swapped_base_and_gripper_flags_are_named_by_every_command() {
+    let path = bag("eih_tf_mcap").display().to_string();
+    let frames = [
+        "--base-frame",
+        "tool0",
+        "--gripper-frame",
+        "base_link",
+        "--camera-frame",
+        "camera_color_optical_frame",
+        "--target-frame",
+        "board",
+    ];
+    let saved = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../testdata/golden/saved_nominal_stations_eih_s0.calib")
+        .display()
+        .to_string();
+    for command in [
+        vec!["calibrate"],
+        vec!["online"],
+        vec!["advise"],
+        vec!["verify", "--x", saved.as_str()],
+    ] {
+        let mut a = command.clone();
+        a.push(path.as_str());
+        a.extend(frames);
+        let (code, out, err) = run(&a);
+        assert_eq!(code, 2, "{command:?}: {out}{err}");
+        assert!(out.is_empty(), "{command:?}: {out}");
+        assert!(
+            err.contains(
+                "swap the two frame flags, `--base-frame base_link --gripper-frame tool0`"
+            ) && err.contains("(base_link → flange → tool0, parent to child)"),
+            "{command:?}: {err}"
+        );
+        assert!(!err.contains("--fix") && !err.contains("inverted"), "{err}");
+    }
+}

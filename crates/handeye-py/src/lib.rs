@@ -711,7 +711,7 @@ fn pose_arrays<'py>(py: Python<'py>, poses: &[PosePair]) -> [Bound<'py, numpy::P
 /// Reads any input (the library's `io::Recording`): a pose file, a ViSP directory, two stamped
 /// streams or a ROS 2 recording; a dict of the pose pairs and what reading found.
 #[pyfunction]
-#[pyo3(signature = (path=None, *, format="auto", robot=None, camera=None, base_frame=None, gripper_frame=None, camera_frame=None, target_frame=None, target_topic=None, setup="eye-in-hand", time_offset=None, max_gap=0.1))]
+#[pyo3(signature = (path=None, *, format="auto", robot=None, camera=None, base_frame=None, gripper_frame=None, camera_frame=None, target_frame=None, target_topic=None, setup="eye-in-hand", time_offset=None, max_gap=0.1, rotation=None))]
 #[allow(clippy::too_many_arguments)]
 fn read_recording<'py>(
     py: Python<'py>,
@@ -727,6 +727,7 @@ fn read_recording<'py>(
     setup: &str,
     time_offset: Option<&Bound<'py, PyAny>>,
     max_gap: f64,
+    rotation: Option<Vec<String>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let frames = [
         base_frame,
@@ -740,6 +741,7 @@ fn read_recording<'py>(
         setup: parse_setup(setup)?,
         time_offset: self::time_offset(time_offset)?,
         max_gap,
+        rotations: handeye::Rotations::parse(&rotation.unwrap_or_default()).map_err(value_error)?,
         ..RecordingOptions::default()
     };
     let r = py

@@ -602,6 +602,9 @@ def test_read_recording_refuses_bad_input_with_a_clear_message(tmp_path):
         handeye.read_recording(bag)
     with pytest.raises(ValueError, match="base_lnk"):
         handeye.read_recording(bag, base_frame="base_lnk", gripper_frame="tool0", camera_frame="camera_link", target_frame="board")
+    # Issue 33 item 13: the base below the gripper in the tf tree is the two names swapped.
+    with pytest.raises(ValueError, match='swap the two frame flags.*base_frame="base_link", gripper_frame="tool0"'):
+        handeye.read_recording(bag, base_frame="tool0", gripper_frame="base_link", camera_frame="camera_link", target_frame="board")
     with pytest.raises(ValueError, match="is for a ROS 2 recording"):
         handeye.read_recording(TESTDATA / "opencv" / "opencv_eye-in-hand_exact_10_11.jsonl", base_frame="base_link")
     with pytest.raises(ValueError, match="not both"):
@@ -616,6 +619,33 @@ def test_read_recording_refuses_bad_input_with_a_clear_message(tmp_path):
     one.write_text((TESTDATA / "opencv" / "opencv_eye-in-hand_exact_10_11.jsonl").read_text().splitlines()[0])
     with pytest.raises(ValueError, match="at least 2"):
         handeye.read_recording(one)
+
+
+def test_read_recording_reads_a_named_rotation_convention(tmp_path):
+    # Issue 33 item 11: KUKA A, B, C columns read with rotation="kuka-abc" give SciPy's matrices
+    # (testdata/rotation/fixtures.json); unnamed, they are refused naming the keyword.
+    fixtures = json.loads((TESTDATA / "rotation" / "fixtures.json").read_text())["conventions"]
+    cases = fixtures["kuka-abc"]
+    header = ",".join(
+        f"{frame}_{s}" for frame in ("base_from_gripper", "camera_from_target") for s in "xyzabc"
+    )
+    rows = []
+    for k, case in enumerate(cases):
+        pose = ",".join(repr(float(v)) for v in [0.1 * k, -0.2, 0.3, *case["values"]])
+        rows.append(f"{pose},{pose}")
+    path = tmp_path / "kuka.csv"
+    path.write_text(header + "\n" + "\n".join(rows) + "\n")
+    for rotation in ("kuka-abc", ["robot=kuka-abc", "camera=kuka-abc"], {"robot": "kuka-abc", "camera": "kuka-abc"}):
+        r = handeye.read_recording(path, rotation=rotation)
+        want = np.array([c["matrix"] for c in cases])
+        assert np.abs(r["base_from_gripper"][:, :3, :3] - want).max() < 1e-12
+        assert np.abs(r["camera_from_target"][:, :3, :3] - want).max() < 1e-12
+    with pytest.raises(ValueError, match='rotation="kuka-abc"'):
+        handeye.read_recording(path)
+    with pytest.raises(ValueError, match="unknown rotation convention `kuka`"):
+        handeye.read_recording(path, rotation="kuka")
+    with pytest.raises(ValueError, match="rotation: expected"):
+        handeye.read_recording(path, rotation=3)
 
 
 def _push_all(calibrator, path):

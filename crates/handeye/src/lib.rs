@@ -123,6 +123,7 @@ pub use model::pose::{
     Transform, TransformJson, quaternion_xyzw, rotation_angle_between, transform_from_matrix4,
 };
 pub use model::prior::{Component, Prior, PriorValue, PriorsUsed};
+pub use model::rotation::{RotationConvention, Rotations};
 pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.
 pub use solve::low_dof::{CommonAxis, LowDofSolution, common_axis, solve_low_dof};

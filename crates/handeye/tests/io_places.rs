@@ -421,7 +421,7 @@ fn read_and_check(
             Kind::EasyHandeye => read_pose_file(path, Format::EasyHandeye)?.pairs,
             Kind::Visp => read_pose_file(path, Format::Visp)?.pairs,
             Kind::Stream => {
-                let s = read_stamped_poses(path)?;
+                let s = read_stamped_poses(path, None)?;
                 assert!(s.poses.iter().all(|p| p.stamp.is_finite()));
                 s.poses
                     .iter()

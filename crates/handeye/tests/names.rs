@@ -78,6 +78,7 @@ fn every_name_parses_back_and_serde_agrees() {
     serde_is_name::<OnlineMethod>();
     // Not serialised.
     round_trip::<Format>();
+    round_trip::<handeye::RotationConvention>();
     // Fix::Read carries a reading: serde writes {"read": name}, so only refuse and auto
     // are bare names.
     round_trip::<Fix>();

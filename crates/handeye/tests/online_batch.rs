@@ -30,6 +30,7 @@ fn online_and_batch_give_one_answer_on_the_ethz_simulation() {
         Setup::EyeInHand,
         (TimeOffset::Fixed(0.0), handeye::Reading::AsGiven),
         0.1,
+        handeye::Rotations::default(),
     )
     .unwrap();
     let poses = &pairing.synced.pairs;
@@ -91,6 +92,7 @@ fn a_still_robot_is_not_judged_misread() {
         Setup::EyeInHand,
         (TimeOffset::Fixed(0.0), handeye::Reading::AsGiven),
         0.1,
+        handeye::Rotations::default(),
     )
     .unwrap();
     let still = &pairing.synced.pairs[..64];

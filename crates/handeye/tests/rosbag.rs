@@ -483,7 +483,7 @@ fn a_clock_offset_is_applied_to_the_robot_lookup() {
 fn swapped_frame_names_are_named_as_such_not_as_inverted_poses() {
     use handeye::io::{BagFrames, Recording, RecordingOptions, Source};
     use handeye::{Options, calibrate};
-    let run = |base: &str, gripper: &str, camera: &str, target: &str| {
+    let read = |base: &str, gripper: &str, camera: &str, target: &str| {
         let source = Source::Bag {
             path: bag("eih_tf_mcap"),
             frames: BagFrames {
@@ -494,7 +494,10 @@ fn swapped_frame_names_are_named_as_such_not_as_inverted_poses() {
                 target_topic: None,
             },
         };
-        let r = Recording::read(&source, &RecordingOptions::default()).unwrap();
+        Recording::read(&source, &RecordingOptions::default())
+    };
+    let run = |base: &str, gripper: &str, camera: &str, target: &str| {
+        let r = read(base, gripper, camera, target).unwrap();
         assert!(r.written.frames);
         calibrate(
             &r.poses,
@@ -508,30 +511,39 @@ fn swapped_frame_names_are_named_as_such_not_as_inverted_poses() {
     };
     let camera = "camera_color_optical_frame";
     assert!(run("base_link", "tool0", camera, "board").is_ok());
-    for (swapped, words) in [
-        (
-            run("tool0", "base_link", camera, "board"),
-            "swap the base and gripper frame names",
-        ),
-        (
-            run("base_link", "tool0", "board", camera),
-            "swap the camera and target frame names",
-        ),
+    // The base below the gripper in the tf tree: the two flags swapped, said by the tree itself
+    // (issue 33 item 13), before any pose is fitted, for every face that reads the recording.
+    let e = read("tool0", "base_link", camera, "board")
+        .unwrap_err()
+        .to_string();
+    for words in [
+        "the base frame `tool0` is below the gripper frame `base_link` in the tf tree (base_link → flange → tool0",
+        "swap the two frame flags, `--base-frame base_link --gripper-frame tool0`",
+        "`base_frame=\"base_link\", gripper_frame=\"tool0\"` in Python",
+        "inverting the poses is not the fix",
     ] {
-        let e = swapped.unwrap_err();
-        let Error::Misread { frames, .. } = &e else {
-            panic!("{e}")
-        };
-        assert!(frames);
-        let text = e.to_string();
-        assert!(text.contains(words), "{text}");
-        assert!(text.contains("inverting them is not the fix"), "{text}");
-        assert!(!text.contains("--fix"), "{text}");
-        // The camera may be fixed instead: the setup is the one typed remedy left.
-        assert!(
-            matches!(e.remedy(), None | Some(handeye::Remedy::Setup(_))),
-            "{:?}",
-            e.remedy()
-        );
+        assert!(e.contains(words), "{words}: {e}");
     }
+    assert!(!e.contains("--fix") && !e.contains("robot-inverted"), "{e}");
+    // The camera and target swapped: no tree tells (a detector may publish either way), the fit
+    // does.
+    let swapped = run("base_link", "tool0", "board", camera);
+    let e = swapped.unwrap_err();
+    let Error::Misread { frames, .. } = &e else {
+        panic!("{e}")
+    };
+    assert!(frames);
+    let text = e.to_string();
+    assert!(
+        text.contains("swap the camera and target frame names"),
+        "{text}"
+    );
+    assert!(text.contains("inverting them is not the fix"), "{text}");
+    assert!(!text.contains("--fix"), "{text}");
+    // The camera may be fixed instead: the setup is the one typed remedy left.
+    assert!(
+        matches!(e.remedy(), None | Some(handeye::Remedy::Setup(_))),
+        "{:?}",
+        e.remedy()
+    );
 }

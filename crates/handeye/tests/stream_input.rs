@@ -158,7 +158,9 @@ fn a_fifo_is_read_once_and_whole() {
             let mut f = std::fs::OpenOptions::new().write(true).open(&path).unwrap();
             f.write_all(text.as_bytes()).unwrap();
         });
-        let PoseInput::Stream(mut reader) = open_poses(&fifo, Format::Auto).unwrap() else {
+        let PoseInput::Stream(mut reader) =
+            open_poses(&fifo, Format::Auto, handeye::Rotations::default()).unwrap()
+        else {
             panic!("{name}: not streamed");
         };
         assert_eq!(reader.preamble().map(|p| p.lines), Some(2));

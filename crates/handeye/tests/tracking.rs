@@ -73,6 +73,7 @@ fn the_ethz_recordings_raise_no_alarm_and_end_at_the_batch_answer() {
             Setup::EyeInHand,
             (TimeOffset::Auto, handeye::Reading::AsGiven),
             0.1,
+            handeye::Rotations::default(),
         )
         .unwrap();
         let run = track(&pairing, Setup::EyeInHand);
@@ -152,6 +153,7 @@ fn the_kinhec_streams_raise_no_alarm_hold_out_the_outliers_and_beat_opencv() {
             setup,
             (TimeOffset::Auto, handeye::Reading::AsGiven),
             0.1,
+            handeye::Rotations::default(),
         )
         .unwrap();
         let truth = handeye::io::read_truth(&file("truth")).unwrap().x;

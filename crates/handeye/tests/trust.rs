@@ -380,8 +380,10 @@ fn the_clock_offset_is_found_to_a_few_milliseconds_within_its_sigma() {
     let mut ratios = Vec::new();
     for e in streams {
         let path = |key: &str| suite().join(e[key].as_str().unwrap());
-        let robot = read_stamped_poses(&path("robot_file")).unwrap().poses;
-        let camera = read_camera_stream(&path("camera_file")).unwrap().poses;
+        let robot = read_stamped_poses(&path("robot_file"), None).unwrap().poses;
+        let camera = read_camera_stream(&path("camera_file"), None)
+            .unwrap()
+            .poses;
         let truth = e["time_offset_s"].as_f64().unwrap();
         let rough = estimate_time_offset(&robot, &camera, &OffsetOptions::default())
             .unwrap()

@@ -241,6 +241,22 @@ def _priors(prior):
     raise ValueError(f"prior: expected \"tz=VALUE+-SIGMA\", a list of such, or a dict, got {prior!r}")
 
 
+def _rotations(rotation):
+    """Rotation conventions in the command line's syntax ("kuka-abc", "robot=rvec"), from a
+    string, a list of strings or a dict of side -> name; None for none."""
+    if rotation is None:
+        return None
+    if isinstance(rotation, str):
+        return [rotation]
+    if isinstance(rotation, dict):
+        return [f"{side}={name}" for side, name in rotation.items()]
+    if isinstance(rotation, (list, tuple)) and all(isinstance(r, str) for r in rotation):
+        return list(rotation)
+    raise ValueError(
+        f"rotation: expected a name (\"kuka-abc\"), \"robot=NAME\" or \"camera=NAME\", a list of such, or a dict, got {rotation!r}"
+    )
+
+
 def _point(point):
     """A point as three floats, or None."""
     if point is None:
@@ -329,6 +345,7 @@ def read_recording(
     setup="eye-in-hand",
     time_offset=None,
     max_gap=0.1,
+    rotation=None,
 ) -> dict:
     """Reads any input as ``handeye calibrate`` does (the library's ``io::Recording``): a pose
     file (``format`` "auto", "jsonl", "csv", "opencv-yaml", "moveit" or "visp"; a directory of
@@ -338,7 +355,14 @@ def read_recording(
     (or ``target_topic``). ``time_offset`` (streams and recordings): camera clock minus robot
     clock in seconds, or "auto" to estimate it (ValueError when the streams cannot tell); None
     (the default) estimates it when the streams allow, else pairs at 0 s with a note; ``max_gap``: the longest gap of the robot's poses
-    interpolated across, seconds.
+    interpolated across, seconds. ``rotation`` names how the input writes rotations where its
+    numbers cannot say (as ``--rotation`` does): the streams' columns after ``t x y z`` and CSV
+    columns (``<frame>_a, _b, _c`` for "kuka-abc", …); JSON fields name their own
+    (``kuka_abc_deg``, ``rvec``, …). A name for every pose ("kuka-abc"), "robot=NAME" or
+    "camera=NAME" for one side, a list of those, or a dict ``{"robot": NAME, "camera": NAME}``;
+    NAME one of "quaternion-xyzw" (the default), "quaternion-wxyz" (ABB's q1..q4), "rvec"
+    (radians), "kuka-abc", "mitsubishi-abc", "fanuc-wpr", "yaskawa-rxryrz", "staubli-xyz",
+    "kawasaki-oat" (degrees), "rpy" (radians) or "rpy-deg".
 
     Returns a dict: ``base_from_gripper`` and ``camera_from_target`` ((N, 4, 4) arrays, ready for
     ``calibrate``), ``names`` (each pose's name in messages), ``lines`` (its line, sample or
@@ -362,6 +386,7 @@ def read_recording(
         setup=setup,
         time_offset=time_offset,
         max_gap=max_gap,
+        rotation=_rotations(rotation),
     )
 
 

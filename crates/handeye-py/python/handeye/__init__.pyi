@@ -79,6 +79,7 @@ def read_recording(
     setup: str = "eye-in-hand",
     time_offset: Optional[Union[float, str]] = None,
     max_gap: float = 0.1,
+    rotation: Optional[Union[str, Sequence[str], Mapping[str, str]]] = None,
 ) -> dict[str, Any]: ...
 
 class OnlineCalibrator:

@@ -70,12 +70,12 @@ pub struct ReadingFit {
 impl ReadingFit {
     /// Whether the fit is poor enough to question the reading ([`POOR_ROTATION_DEG`],
     /// [`POOR_TRANSLATION`]).
-    fn poor(&self) -> bool {
+    pub(crate) fn poor(&self) -> bool {
         self.rotation_deg > POOR_ROTATION_DEG || self.translation_rel > POOR_TRANSLATION
     }
 
     /// Whether this fit is far better than `given` (see [`FAR_BETTER`]).
-    fn far_better_than(&self, given: &ReadingFit) -> bool {
+    pub(crate) fn far_better_than(&self, given: &ReadingFit) -> bool {
         let poor = given.poor();
         let much = self.rotation_deg < FAR_BETTER * given.rotation_deg
             || self.translation_rel < FAR_BETTER * given.translation_rel;
@@ -107,7 +107,7 @@ impl ReadingFit {
     }
 
     /// Improvement score against `given` (smaller is better).
-    fn score(&self, given: &ReadingFit) -> f64 {
+    pub(crate) fn score(&self, given: &ReadingFit) -> f64 {
         self.rotation_deg / given.rotation_deg.max(1e-300)
             + self.translation_rel / given.translation_rel.max(1e-300)
     }
@@ -261,15 +261,7 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         also: Vec::new(),
         frames: written.frames,
     };
-    let rotations = gripper_rotations(&sample, setup);
-    // Below DEGENERATE_SCATTER the rotations leave X free, and below LEAST_TURN_DEG the gripper
-    // stood still (the residuals are noise, whatever the reading): no reading can be judged.
-    if rotations.scatter < DEGENERATE_SCATTER
-        || rotations.widest_from_first < LEAST_TURN_DEG.to_radians().max(REFUSE_ANGLE)
-    {
-        return none(None);
-    }
-    let Some(given) = fit(&sample, setup, Reading::AsGiven) else {
+    let Some(given) = judged_fit(&sample, setup) else {
         return none(None);
     };
     if !given.poor() {
@@ -304,6 +296,21 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         also: candidates.collect(),
         frames: written.frames,
     }
+}
+
+/// The fit of `poses` as given (at most [`SAMPLE`] of them, spread), when a reading can be judged
+/// on them: `None` below [`DEGENERATE_SCATTER`] (the rotations leave X free) or below
+/// [`LEAST_TURN_DEG`] (the gripper stood still: the residuals are noise, whatever the reading),
+/// or when they cannot be solved.
+pub(crate) fn judged_fit(poses: &[PosePair], setup: Setup) -> Option<ReadingFit> {
+    let sample = spread(poses);
+    let rotations = gripper_rotations(&sample, setup);
+    if rotations.scatter < DEGENERATE_SCATTER
+        || rotations.widest_from_first < LEAST_TURN_DEG.to_radians().max(REFUSE_ANGLE)
+    {
+        return None;
+    }
+    fit(&sample, setup, Reading::AsGiven)
 }
 
 /// The millimetre reading that makes sense, if any: the side whose translations are the larger,

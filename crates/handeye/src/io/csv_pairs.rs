@@ -1,36 +1,58 @@
-//! Pose pairs as CSV: a header naming an optional `stamp` and 7 columns per pose,
-//! `<frame>_x, _y, _z, _qx, _qy, _qz, _qw` (translation and quaternion x y z w).
+//! Pose pairs as CSV: a header naming an optional `stamp` and the columns of each pose,
+//! `<frame>_x, _y, _z` and the rotation's: `_qx, _qy, _qz, _qw` (a quaternion x y z w), or, with
+//! its convention named ([`Rotations`]), that convention's components (`_a, _b, _c` for KUKA
+//! A, B, C, …: [`RotationConvention::components`]).
 
 use std::io::BufRead;
 
 use crate::io::lines::{Line, Lines};
 use crate::io::{
-    CAMERA_FRAMES, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error, too_long, written_as,
+    CAMERA_FRAMES, Conventions, DegreeAngles, ROBOT_FRAMES, StampedPosePair, check_stamp,
+    parse_error, too_long, written_as,
 };
 use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
 use crate::model::motion::PosePair;
-use crate::model::pose::{Transform, check_translation, transform_from_xyz_quat_xyzw};
+use crate::model::pose::{Transform, check_translation, transform_from_parts};
+use crate::model::rotation::{RotationConvention, Rotations};
+use nalgebra::Vector3;
 
-/// The column suffixes of one pose, in order.
-const SUFFIXES: [&str; 7] = ["x", "y", "z", "qx", "qy", "qz", "qw"];
+/// The column suffixes of a pose's translation, in order.
+const TRANSLATION: [&str; 3] = ["x", "y", "z"];
 
-/// Where a pose's columns are, and whether the file's direction is the inverse of ours.
+/// Whether `suffix` is a column suffix of some pose: a translation's or some rotation
+/// convention's component.
+fn known_suffix(suffix: &str) -> bool {
+    TRANSLATION.contains(&suffix)
+        || RotationConvention::ALL
+            .iter()
+            .any(|c| c.components().contains(&suffix))
+}
+
+/// Where a pose's columns are (translation, then the rotation's components), in which rotation
+/// convention, and whether the file's direction is the inverse of ours.
 #[derive(Debug, Clone)]
 struct PoseColumns {
     name: &'static str,
-    columns: [usize; 7],
+    translation: [usize; 3],
+    rotation: Vec<usize>,
+    convention: RotationConvention,
+    /// The convention the rotation's numbers are read as (`convention`, unless a check reads
+    /// them as another).
+    read_as: RotationConvention,
     inverted: bool,
 }
 
 /// Streaming reader of CSV pose pairs.
 ///
-/// The header names an optional `stamp` (seconds) and the 7 columns of exactly one robot pose
+/// The header names an optional `stamp` (seconds) and the columns of exactly one robot pose
 /// (`base_from_gripper` or `gripper_from_base`) and exactly one camera pose (`camera_from_target`
-/// or `target_from_camera`), in any order; any other column is refused. Rows are yielded one at
-/// a time in our directions (Q = `base_from_gripper`, `camera_from_target`), or as an
-/// [`Error::Parse`](crate::model::error::Error::Parse) naming the file, the line and the column, after which
-/// the next row is read. Blank lines and lines starting with `#` are skipped.
+/// or `target_from_camera`), in any order; any other column is refused. A pose's rotation columns
+/// are those of its side's convention in [`Rotations`] (`_qx … _qw` when none is named); three
+/// angles cannot tell their convention, so columns of one are refused until it is named. Rows are
+/// yielded one at a time in our directions (Q = `base_from_gripper`, `camera_from_target`), or as
+/// an [`Error::Parse`](crate::model::error::Error::Parse) naming the file, the line and the column,
+/// after which the next row is read. Blank lines and lines starting with `#` are skipped.
 pub struct CsvPairs<R: BufRead> {
     lines: Lines<R>,
     source: String,
@@ -39,6 +61,7 @@ pub struct CsvPairs<R: BufRead> {
     robot: PoseColumns,
     camera: PoseColumns,
     record: Vec<String>,
+    degrees: DegreeAngles,
 }
 
 /// The fields of one line read as a CSV record (quotes allowed within the line, trimmed), or why
@@ -59,12 +82,18 @@ impl<R: BufRead> CsvPairs<R> {
     /// Reads the header of `input` (named `source` in messages) and finds the pose columns.
     #[cfg(test)]
     pub fn new(input: R, source: &str) -> Result<Self> {
-        Self::from_lines(Lines::new(input), source)
+        Self::from_lines(Lines::new(input), source, Conventions::default())
     }
 
-    /// As [`CsvPairs::new`], going on from `lines`: the header is the next line that is neither
-    /// blank nor a `#` comment.
-    pub(crate) fn from_lines(mut lines: Lines<R>, source: &str) -> Result<Self> {
+    /// As [`CsvPairs::new`], going on from `lines` (the header is the next line that is neither
+    /// blank nor a `#` comment), each side's rotation in the convention `conventions` names (and
+    /// read as it says).
+    pub(crate) fn from_lines(
+        mut lines: Lines<R>,
+        source: &str,
+        conventions: Conventions,
+    ) -> Result<Self> {
+        let rotations = conventions.named;
         let (header_line, names) = loop {
             let (number, line) = match lines.next_line() {
                 None => {
@@ -116,10 +145,11 @@ impl<R: BufRead> CsvPairs<R> {
         let names: Vec<&str> = names.iter().map(String::as_str).collect();
         let known = |n: &str| {
             n == "stamp"
-                || ROBOT_FRAMES
-                    .iter()
-                    .chain(&CAMERA_FRAMES)
-                    .any(|(f, _)| SUFFIXES.iter().any(|s| n == format!("{f}_{s}")))
+                || ROBOT_FRAMES.iter().chain(&CAMERA_FRAMES).any(|(f, _)| {
+                    n.strip_prefix(f)
+                        .and_then(|n| n.strip_prefix('_'))
+                        .is_some_and(known_suffix)
+                })
         };
         if let Some(k) = names.iter().position(|n| !known(n)) {
             let field = match names[k] {
@@ -130,7 +160,7 @@ impl<R: BufRead> CsvPairs<R> {
                 source,
                 header_line,
                 field,
-                "unknown column: expected `stamp` and `<frame>_x … <frame>_qw` with frame base_from_gripper, gripper_from_base, camera_from_target or target_from_camera",
+                "unknown column: expected `stamp` and `<frame>_x, _y, _z` with the rotation's columns (`<frame>_qx … _qw`, or those of the convention named by `--rotation`) with frame base_from_gripper, gripper_from_base, camera_from_target or target_from_camera",
             ));
         }
         if let Some((k, twice)) = names
@@ -153,8 +183,11 @@ impl<R: BufRead> CsvPairs<R> {
             ));
         }
         let stamp = names.iter().position(|n| *n == "stamp");
-        let robot = pose_columns(&names, &ROBOT_FRAMES, source, header_line)?;
-        let camera = pose_columns(&names, &CAMERA_FRAMES, source, header_line)?;
+        let header = (source, header_line);
+        let mut robot = pose_columns(&names, (&ROBOT_FRAMES, true), rotations.robot, header)?;
+        let mut camera = pose_columns(&names, (&CAMERA_FRAMES, false), rotations.camera, header)?;
+        robot.read_as = conventions.read_as(true, robot.convention);
+        camera.read_as = conventions.read_as(false, camera.convention);
         Ok(Self {
             source: source.to_string(),
             header: names.iter().map(|n| n.to_string()).collect(),
@@ -163,10 +196,16 @@ impl<R: BufRead> CsvPairs<R> {
             camera,
             record: Vec::new(),
             lines,
+            degrees: DegreeAngles::default(),
         })
     }
 
-    fn parse(&self, line: usize) -> Result<StampedPosePair> {
+    /// The largest angles in degrees read so far (see [`DegreeAngles`]).
+    pub fn degree_angles(&self) -> DegreeAngles {
+        self.degrees
+    }
+
+    fn parse(&mut self, line: usize) -> Result<StampedPosePair> {
         let stamp = self
             .stamp
             .map(|k| {
@@ -174,8 +213,10 @@ impl<R: BufRead> CsvPairs<R> {
                 check_stamp(v).map_err(|m| parse_error(&self.source, line, "stamp", m))
             })
             .transpose()?;
-        let base_from_gripper = self.pose(&self.robot, line)?;
-        let camera_from_target = self.pose(&self.camera, line)?;
+        let (base_from_gripper, robot_degrees) = self.pose(&self.robot, line)?;
+        let (camera_from_target, camera_degrees) = self.pose(&self.camera, line)?;
+        self.degrees.add(true, robot_degrees);
+        self.degrees.add(false, camera_degrees);
         Ok(StampedPosePair {
             line,
             stamp,
@@ -206,59 +247,168 @@ impl<R: BufRead> CsvPairs<R> {
             })
     }
 
-    fn pose(&self, p: &PoseColumns, line: usize) -> Result<Transform> {
-        let mut v = [0.0; 7];
-        for (k, (c, s)) in p.columns.iter().zip(SUFFIXES).enumerate() {
+    /// The pose of `p`'s columns on this line, with its largest angle when they are degrees.
+    fn pose(&self, p: &PoseColumns, line: usize) -> Result<(Transform, Option<f64>)> {
+        let mut t = [0.0; 3];
+        for (k, (c, s)) in p.translation.iter().zip(TRANSLATION).enumerate() {
             let field = format!("{}_{s}", p.name);
-            v[k] = self.number(*c, &field, line)?;
-            if k < 3 {
-                check_translation(v[k])
-                    .map_err(|e| parse_error(&self.source, line, field, e.to_string()))?;
-            }
+            t[k] = self.number(*c, &field, line)?;
+            check_translation(t[k])
+                .map_err(|e| parse_error(&self.source, line, field, e.to_string()))?;
         }
-        let t = transform_from_xyz_quat_xyzw([v[0], v[1], v[2]], [v[3], v[4], v[5], v[6]])
-            .map_err(|e| {
-                parse_error(
-                    &self.source,
-                    line,
-                    format!("{}_qx..qw", p.name),
-                    e.to_string(),
-                )
-            })?;
-        Ok(if p.inverted { t.inverse() } else { t })
+        let components = p.convention.components();
+        let values = p
+            .rotation
+            .iter()
+            .zip(components)
+            .map(|(c, s)| self.number(*c, &format!("{}_{s}", p.name), line))
+            .collect::<Result<Vec<f64>>>()?;
+        let r = p.read_as.rotation(&values).map_err(|e| {
+            let field = match e.component {
+                Some(k) => format!("{}_{}", p.name, components[k]),
+                None => format!(
+                    "{}_{}..{}",
+                    p.name,
+                    components[0],
+                    components[components.len() - 1]
+                ),
+            };
+            parse_error(&self.source, line, field, e.message)
+        })?;
+        let t = transform_from_parts(&r, &Vector3::from(t));
+        let degrees = p
+            .read_as
+            .in_degrees()
+            .then(|| values.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+        Ok((if p.inverted { t.inverse() } else { t }, degrees))
     }
 }
 
-/// Finds the 7 columns of exactly one of two alternative frame names.
+/// The columns `<frame>_<suffix>` of `names` for each suffix, `None` where missing.
+fn columns_of(names: &[&str], frame: &str, suffixes: &[&str]) -> Vec<Option<usize>> {
+    suffixes
+        .iter()
+        .map(|s| names.iter().position(|n| *n == format!("{frame}_{s}")))
+        .collect()
+}
+
+/// The columns of one pose given under `frame`, its rotation's in the convention `named` (a
+/// quaternion `_qx … _qw` when none is); the problem (field and message) when they are not there.
+fn frame_columns(
+    names: &[&str],
+    (frame, inverted): (&'static str, bool),
+    named: Option<RotationConvention>,
+    robot: bool,
+) -> std::result::Result<PoseColumns, (String, String)> {
+    let convention = named.unwrap_or(RotationConvention::QuaternionXyzw);
+    let given: Vec<&str> = names
+        .iter()
+        .filter_map(|n| n.strip_prefix(frame)?.strip_prefix('_'))
+        .filter(|s| !TRANSLATION.contains(s))
+        .collect();
+    let column = |s: &str| format!("{frame}_{s}");
+    let list = |c: RotationConvention| {
+        let parts = c.components();
+        format!("`{}`, `_{}`", column(parts[0]), parts[1..].join("`, `_"))
+    };
+    let translation = columns_of(names, frame, &TRANSLATION);
+    if let Some(k) = translation.iter().position(Option::is_none) {
+        return Err((column(TRANSLATION[k]), "missing column".into()));
+    }
+    let rotation = columns_of(names, frame, convention.components());
+    let exact = rotation.iter().all(Option::is_some) && given.len() == rotation.len();
+    if !exact {
+        let candidates = RotationConvention::with_components(&given);
+        let side = if robot { "robot" } else { "camera" };
+        if !candidates.is_empty() && !candidates.contains(&convention) {
+            let first = column(candidates[0].components()[0]);
+            let message = match named {
+                None if candidates == [RotationConvention::QuaternionWxyz] => format!(
+                    "columns {} are a quaternion w first (ABB's q1 … q4) only when named so: {} (`robot=` or `camera=` for these poses only); a header of `_qx, _qy, _qz, _qw` needs no name",
+                    list(candidates[0]),
+                    Rotations::flag(RotationConvention::QuaternionWxyz, None),
+                ),
+                None => format!(
+                    "columns {} cannot tell their rotation convention ({}): name it, {} (`{side}=NAME` for these poses only)",
+                    list(candidates[0]),
+                    candidates
+                        .iter()
+                        .map(|c| format!("{}: {}", c.name(), c.describe()))
+                        .collect::<Vec<_>>()
+                        .join("; or "),
+                    candidates
+                        .iter()
+                        .map(|&c| Rotations::flag(c, None))
+                        .collect::<Vec<_>>()
+                        .join(" or "),
+                ),
+                Some(named) => format!(
+                    "columns {} are {} ({}), and the rotations of these poses are named {}, which reads {}: name the convention the file uses, or give its columns",
+                    list(candidates[0]),
+                    candidates
+                        .iter()
+                        .map(|c| c.describe())
+                        .collect::<Vec<_>>()
+                        .join(", or "),
+                    candidates
+                        .iter()
+                        .map(|c| c.name())
+                        .collect::<Vec<_>>()
+                        .join(" or "),
+                    named.name(),
+                    list(named),
+                ),
+            };
+            return Err((first, message));
+        }
+        let in_named = |message: &str| match named {
+            None => message.to_string(),
+            Some(named) => format!("{message}: {} reads {}", named.name(), list(named)),
+        };
+        if let Some(k) = rotation.iter().position(Option::is_none) {
+            return Err((
+                column(convention.components()[k]),
+                in_named("missing column"),
+            ));
+        }
+        let extra = given
+            .iter()
+            .find(|s| !convention.components().contains(s))
+            .map_or_else(|| column("?"), |s| column(s));
+        return Err((extra, in_named("not a column of this pose's rotation")));
+    }
+    Ok(PoseColumns {
+        name: frame,
+        translation: [
+            translation[0].unwrap_or(0),
+            translation[1].unwrap_or(0),
+            translation[2].unwrap_or(0),
+        ],
+        rotation: rotation.into_iter().flatten().collect(),
+        convention,
+        read_as: convention,
+        inverted,
+    })
+}
+
+/// Finds the columns of exactly one of two alternative frame names (the robot's when `robot`),
+/// the rotation's in the convention `named`.
 fn pose_columns(
     names: &[&str],
-    frames: &[(&'static str, bool); 2],
-    source: &str,
-    header_line: usize,
+    (frames, robot): (&[(&'static str, bool); 2], bool),
+    named: Option<RotationConvention>,
+    (source, header_line): (&str, usize),
 ) -> Result<PoseColumns> {
     let mut found = Vec::new();
-    for &(frame, inverted) in frames {
-        let columns: Vec<Option<usize>> = SUFFIXES
+    for &frame in frames {
+        let given = names
             .iter()
-            .map(|s| names.iter().position(|n| *n == format!("{frame}_{s}")))
-            .collect();
-        if columns.iter().any(Option::is_some) {
-            let mut out = [0; 7];
-            for (k, c) in columns.iter().enumerate() {
-                out[k] = c.ok_or_else(|| {
-                    parse_error(
-                        source,
-                        header_line,
-                        format!("{frame}_{}", SUFFIXES[k]),
-                        "missing column",
-                    )
-                })?;
-            }
-            found.push(PoseColumns {
-                name: frame,
-                columns: out,
-                inverted,
-            });
+            .any(|n| n.strip_prefix(frame.0).is_some_and(|n| n.starts_with('_')));
+        if given {
+            found.push(
+                frame_columns(names, frame, named, robot)
+                    .map_err(|(field, message)| parse_error(source, header_line, field, message))?,
+            );
         }
     }
     match found.len() {

@@ -9,15 +9,17 @@ use crate::io::json_text::repeated_key;
 use crate::io::jsonl_fast::scan;
 use crate::io::lines::Lines;
 use crate::io::transform::TransformNumbers;
+use crate::io::transform::read_transform_json_as;
 use crate::io::{
-    CAMERA_FRAMES, Projections, ROBOT_FRAMES, StampedPosePair, check_stamp, parse_error,
-    read_transform_json, written_as,
+    CAMERA_FRAMES, Conventions, DegreeAngles, Projections, ROBOT_FRAMES, StampedPosePair,
+    check_stamp, parse_error, written_as,
 };
 use crate::model::camera::{Detections, Frame, MIN_DETECTIONS};
 use crate::model::error::Result;
 use crate::model::findings::{Written, WrittenAs};
 use crate::model::motion::PosePair;
 use crate::model::pose::ReadTransform;
+use crate::model::rotation::{RotationConvention, Rotations};
 
 /// Streaming reader of JSON Lines pose pairs (blank lines and `#` comments are skipped).
 ///
@@ -28,27 +30,37 @@ pub struct JsonlPairs<R: BufRead> {
     lines: Lines<R>,
     source: String,
     projections: Projections,
+    conventions: Conventions,
+    degrees: DegreeAngles,
 }
 
 impl<R: BufRead> JsonlPairs<R> {
     /// A reader of `input`, named `source` in messages.
     #[cfg(test)]
     pub fn new(input: R, source: &str) -> Self {
-        Self::from_lines(Lines::new(input), source)
+        Self::from_lines(Lines::new(input), source, Conventions::default())
     }
 
-    /// A reader going on from `lines`.
-    pub(crate) fn from_lines(lines: Lines<R>, source: &str) -> Self {
+    /// A reader going on from `lines`, each side's rotations in the convention `conventions`
+    /// names (a rotation field of another convention is refused), or as its fields say.
+    pub(crate) fn from_lines(lines: Lines<R>, source: &str, conventions: Conventions) -> Self {
         Self {
             lines,
             source: source.to_string(),
             projections: Projections::default(),
+            conventions,
+            degrees: DegreeAngles::default(),
         }
     }
 
     /// The rotation matrices projected onto SO(3) so far (see [`Projections`]).
     pub fn projections(&self) -> Projections {
         self.projections
+    }
+
+    /// The largest angles in degrees read so far (see [`DegreeAngles`]).
+    pub fn degree_angles(&self) -> DegreeAngles {
+        self.degrees
     }
 }
 
@@ -71,7 +83,16 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
                     "the line is not valid UTF-8 text",
                 )));
             };
-            if let Some(record) = fast_record(text, number, &mut self.projections) {
+            // The fast path reads `quaternion_xyzw` and matrices only: with another convention
+            // named, every record goes the general way, which refuses a field of another one.
+            let xyzw = |c: Option<RotationConvention>| {
+                c.is_none_or(|c| c == RotationConvention::QuaternionXyzw)
+            };
+            if self.conventions.read_as == Rotations::default()
+                && xyzw(self.conventions.named.robot)
+                && xyzw(self.conventions.named.camera)
+                && let Some(record) = fast_record(text, number, &mut self.projections)
+            {
                 return Some(Ok(record));
             }
             let text = text.trim();
@@ -80,9 +101,9 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
             }
             return Some(parse_record(
                 text,
-                &self.source,
-                number,
-                &mut self.projections,
+                (&self.source, number),
+                self.conventions,
+                (&mut self.projections, &mut self.degrees),
             ));
         }
     }
@@ -135,7 +156,12 @@ pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedP
     let mut projections = Projections::default();
     match fast_record(text, line, &mut projections) {
         Some(record) => Ok(record),
-        None => parse_record(text, source, line, &mut projections),
+        None => parse_record(
+            text,
+            (source, line),
+            Conventions::default(),
+            (&mut projections, &mut DegreeAngles::default()),
+        ),
     }
 }
 
@@ -166,9 +192,9 @@ fn json_object(text: &str, source: &str, line: usize) -> Result<Map<String, Valu
 /// [`parse_pose_line`], counting the rotation matrices projected onto SO(3) into `projections`.
 fn parse_record(
     text: &str,
-    source: &str,
-    line: usize,
-    projections: &mut Projections,
+    (source, line): (&str, usize),
+    conventions: Conventions,
+    (projections, degrees): (&mut Projections, &mut DegreeAngles),
 ) -> Result<StampedPosePair> {
     let object = json_object(text, source, line)?;
     let stamp = match object.get("stamp") {
@@ -180,10 +206,18 @@ fn parse_record(
                 .map_err(|message| parse_error(source, line, "stamp", message))?,
         ),
     };
-    let (robot, robot_written) = frame(&object, &ROBOT_FRAMES, source, line)?;
-    let (camera, camera_written) = frame(&object, &CAMERA_FRAMES, source, line)?;
+    let (robot, robot_written) =
+        frame(&object, (&ROBOT_FRAMES, true), (source, line), conventions)?;
+    let (camera, camera_written) = frame(
+        &object,
+        (&CAMERA_FRAMES, false),
+        (source, line),
+        conventions,
+    )?;
     projections.add(&robot);
     projections.add(&camera);
+    degrees.add(true, robot.degrees);
+    degrees.add(false, camera.degrees);
     let (base_from_gripper, camera_from_target) = (robot.transform, camera.transform);
     Ok(StampedPosePair {
         line,
@@ -286,9 +320,14 @@ fn joint_angles(v: &Value, source: &str, line: usize) -> Result<Vec<f64>> {
 /// gives.
 pub(crate) fn parse_frame_record(text: &str, source: &str, line: usize) -> Result<Frame> {
     let object = json_object(text, source, line)?;
-    let (robot, _) = frame(&object, &ROBOT_FRAMES, source, line)?;
+    let none = Conventions::default();
+    let (robot, _) = frame(&object, (&ROBOT_FRAMES, true), (source, line), none)?;
     let camera = if CAMERA_FRAMES.iter().any(|(n, _)| object.contains_key(*n)) {
-        Some(frame(&object, &CAMERA_FRAMES, source, line)?.0.transform)
+        Some(
+            frame(&object, (&CAMERA_FRAMES, false), (source, line), none)?
+                .0
+                .transform,
+        )
     } else {
         None
     };
@@ -388,12 +427,13 @@ fn points<const N: usize>(
 }
 
 /// Reads the one transform of a pair of alternative names, inverting when the file gives the
-/// other direction, with the direction the file wrote.
+/// other direction, with the direction the file wrote; its rotation in the convention
+/// `conventions` names for this side (the robot's when `robot`), if one is.
 fn frame(
     object: &Map<String, Value>,
-    names: &[(&str, bool); 2],
-    source: &str,
-    line: usize,
+    (names, robot): (&[(&str, bool); 2], bool),
+    (source, line): (&str, usize),
+    conventions: Conventions,
 ) -> Result<(ReadTransform, WrittenAs)> {
     let present: Vec<_> = names
         .iter()
@@ -423,7 +463,7 @@ fn frame(
             ));
         }
     };
-    let read = read_transform_json(&object[name]).map_err(|p| {
+    let read = read_transform_json_as(&object[name], (robot, conventions)).map_err(|p| {
         let field = p.path_under(name);
         parse_error(source, line, field, p.message)
     })?;
@@ -593,7 +633,12 @@ mod tests {
                     lines += 1;
                 }
                 let (mut p_fast, mut p_general) = (Projections::default(), Projections::default());
-                let general = parse_record(line.trim(), "t", k + 1, &mut p_general);
+                let general = parse_record(
+                    line.trim(),
+                    ("t", k + 1),
+                    Conventions::default(),
+                    (&mut p_general, &mut DegreeAngles::default()),
+                );
                 if let Some(record) = fast_record(line, k + 1, &mut p_fast) {
                     fast += usize::from(!line.contains("\"detections\""));
                     assert_eq!(

@@ -34,6 +34,7 @@ use crate::model::error::{Error, Result};
 use crate::model::findings::{Written, WrittenAs};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::ReadTransform;
+use crate::model::rotation::Rotations;
 use lines::{Line, Lines};
 
 // What the faces use: one entry for every input (`Recording`: a pose file, two streams, a ROS 2
@@ -228,6 +229,81 @@ impl Projections {
     }
 }
 
+/// How a reader finds and reads each side's rotations: `named` finds them (the CSV columns, the
+/// JSON field allowed) and reads them, unless `read_as` names for that side another convention
+/// of as many numbers: the numbers found are then read as that one. The check of a named
+/// convention ([`Recording`]'s) tries the others on the same numbers so.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct Conventions {
+    /// The conventions named for the input.
+    pub named: Rotations,
+    /// The conventions to read the numbers as instead, per side.
+    pub read_as: Rotations,
+}
+
+impl Conventions {
+    /// The input's named conventions, read as named.
+    pub fn named(named: Rotations) -> Self {
+        Self {
+            named,
+            read_as: Rotations::default(),
+        }
+    }
+
+    /// The convention to read a side's numbers as, found in the convention `found` (the robot's
+    /// side when `robot`).
+    pub fn read_as(
+        self,
+        robot: bool,
+        found: crate::model::rotation::RotationConvention,
+    ) -> crate::model::rotation::RotationConvention {
+        let side = if robot {
+            self.read_as.robot
+        } else {
+            self.read_as.camera
+        };
+        side.filter(|c| c.components().len() == found.components().len())
+            .unwrap_or(found)
+    }
+}
+
+/// The largest angle (in size) each side of an input gave in a convention in degrees (a vendor's
+/// Euler angles, `rpy-deg`), where one did: every angle within a turn's 2π of a whole recording
+/// is radians given to a convention in degrees, most likely (robot and camera poses turn by tens
+/// of degrees; read as degrees, radians turn them by a few). Told as a note, not refused: a few
+/// degrees are valid angles.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct DegreeAngles {
+    /// The robot poses' largest angle in degrees, if they gave angles in degrees.
+    pub robot: Option<f64>,
+    /// The camera poses'.
+    pub camera: Option<f64>,
+}
+
+impl DegreeAngles {
+    /// Counts the largest angle `degrees` of a pose of one side (the robot's when `robot`).
+    pub(crate) fn add(&mut self, robot: bool, degrees: Option<f64>) {
+        let side = if robot {
+            &mut self.robot
+        } else {
+            &mut self.camera
+        };
+        if let Some(d) = degrees {
+            *side = Some(side.map_or(d, |s: f64| s.max(d)));
+        }
+    }
+
+    /// The sides whose every angle in degrees is within ±2π, with their largest: `robot` or
+    /// `camera`, and the angle.
+    pub fn within_a_radian_turn(&self) -> Vec<(&'static str, f64)> {
+        [("robot", self.robot), ("camera", self.camera)]
+            .into_iter()
+            .filter_map(|(side, d)| Some((side, d?)))
+            .filter(|(_, d)| *d <= std::f64::consts::TAU)
+            .collect()
+    }
+}
+
 /// A streaming reader of pose pairs: one record at a time, so that a pipe can be processed as it
 /// arrives. Yields `Err` for a bad record and goes on with the next one.
 ///
@@ -347,6 +423,28 @@ impl<R: BufRead> PoseReader<R> {
     /// # Ok::<(), handeye::Error>(())
     /// ```
     pub fn new(input: R, source: &str, format: Format) -> Result<Self> {
+        Self::with_rotations(input, source, format, Rotations::default())
+    }
+
+    /// As [`PoseReader::new`], each side's rotations read in the convention `rotations` names
+    /// (CSV columns of that convention; in JSON Lines a rotation field of another convention is
+    /// refused). Unnamed sides are read as their columns or fields say (`_qx … _qw` in CSV).
+    pub fn with_rotations(
+        input: R,
+        source: &str,
+        format: Format,
+        rotations: Rotations,
+    ) -> Result<Self> {
+        Self::with_conventions(input, source, format, Conventions::named(rotations))
+    }
+
+    /// As [`PoseReader::with_rotations`], the numbers read as [`Conventions`] says.
+    pub(crate) fn with_conventions(
+        input: R,
+        source: &str,
+        format: Format,
+        conventions: Conventions,
+    ) -> Result<Self> {
         let lower = source.to_ascii_lowercase();
         let format = match format {
             Format::Auto
@@ -444,8 +542,8 @@ impl<R: BufRead> PoseReader<R> {
         } else {
             Format::Jsonl
         }) {
-            Format::Csv => Inner::Csv(Box::new(CsvPairs::from_lines(lines, source)?)),
-            _ => Inner::Jsonl(JsonlPairs::from_lines(lines, source)),
+            Format::Csv => Inner::Csv(Box::new(CsvPairs::from_lines(lines, source, conventions)?)),
+            _ => Inner::Jsonl(JsonlPairs::from_lines(lines, source, conventions)),
         };
         Ok(Self { inner, preamble })
     }
@@ -468,8 +566,16 @@ impl<R: BufRead> PoseReader<R> {
     pub fn projections(&self) -> Projections {
         match &self.inner {
             Inner::Jsonl(r) => r.projections(),
-            // CSV gives quaternions only.
+            // CSV gives no matrices.
             Inner::Csv(_) => Projections::default(),
+        }
+    }
+
+    /// The largest angles in degrees read so far (see [`DegreeAngles`]).
+    pub fn degree_angles(&self) -> DegreeAngles {
+        match &self.inner {
+            Inner::Jsonl(r) => r.degree_angles(),
+            Inner::Csv(r) => r.degree_angles(),
         }
     }
 }
@@ -651,10 +757,30 @@ pub enum PoseInput<R: BufRead> {
 
 /// Opens the pose-pair file `path` once (a FIFO or `<(…)` cannot be read twice): with
 /// [`Format::Auto`] a directory is ViSP, else the format is told from the head of the content
-/// (its head tells the format), which is then read again from memory, not from the file.
-pub fn open_poses(path: &Path, format: Format) -> Result<PoseInput<BufReader<File>>> {
+/// (its head tells the format), which is then read again from memory, not from the file. The
+/// rotations of JSON Lines and CSV are read in the conventions `rotations` names; a format of its
+/// own (OpenCV YAML, moveit, ViSP, easy_handeye2) refuses a named convention.
+pub fn open_poses(
+    path: &Path,
+    format: Format,
+    rotations: Rotations,
+) -> Result<PoseInput<BufReader<File>>> {
+    open_poses_as(path, format, Conventions::named(rotations))
+}
+
+/// As [`open_poses`], the numbers read as [`Conventions`] says.
+pub(crate) fn open_poses_as(
+    path: &Path,
+    format: Format,
+    conventions: Conventions,
+) -> Result<PoseInput<BufReader<File>>> {
     let source = path.display().to_string();
     if format == Format::Visp || (format == Format::Auto && path.is_dir()) {
+        no_rotations(
+            conventions.named,
+            &source,
+            "a directory of ViSP pose files (θu rotation vectors)",
+        )?;
         return peer::read_visp_dir(path).map(PoseInput::Whole);
     }
     let whole = matches!(
@@ -668,7 +794,20 @@ pub fn open_poses(path: &Path, format: Format) -> Result<PoseInput<BufReader<Fil
         })?;
         whole_file_kind(&meta, &source)?;
     }
-    open_pose_stream(open(path)?, &source, format)
+    open_pose_stream_as(open(path)?, &source, format, conventions)
+}
+
+/// Refuses rotation conventions named for an input whose format fixes its own (`what`).
+pub(crate) fn no_rotations(rotations: Rotations, source: &str, what: &str) -> Result<()> {
+    if !rotations.is_named() {
+        return Ok(());
+    }
+    Err(Error::InvalidParameter {
+        name: "rotation",
+        message: format!(
+            "{source} is {what}, whose rotations are written one way only: drop `--rotation` (`rotation=` in Python), which is for stamped streams, CSV columns and JSON fields"
+        ),
+    })
 }
 
 /// [`open_poses`] on an input already open, named `source` in messages: for a reader of the
@@ -678,13 +817,34 @@ pub fn open_pose_stream<R: BufRead>(
     input: R,
     source: &str,
     format: Format,
+    rotations: Rotations,
 ) -> Result<PoseInput<R>> {
+    open_pose_stream_as(input, source, format, Conventions::named(rotations))
+}
+
+/// As [`open_pose_stream`], the numbers read as [`Conventions`] says.
+fn open_pose_stream_as<R: BufRead>(
+    input: R,
+    source: &str,
+    format: Format,
+    conventions: Conventions,
+) -> Result<PoseInput<R>> {
+    let rotations = conventions.named;
     let (sniffed, input) = sniff_format(input, source)?;
     let format = match format {
         Format::Auto => sniffed,
         f => f,
     };
     let text = |input: Sniffed<R>| read_whole(input, source);
+    let own = match format {
+        Format::OpencvYaml => Some("an OpenCV YAML file of matrices"),
+        Format::Moveit | Format::MoveitYaml => Some("a moveit_calibration sample file of matrices"),
+        Format::EasyHandeye => Some("an easy_handeye2 sample file (x, y, z, w quaternions)"),
+        _ => None,
+    };
+    if let Some(what) = own {
+        no_rotations(rotations, source, what)?;
+    }
     Ok(match format {
         Format::OpencvYaml => PoseInput::Whole(peer::read_opencv_yaml(&text(input)?, source)?),
         Format::Moveit => PoseInput::Whole(peer::read_moveit_json(&text(input)?, source)?),
@@ -692,7 +852,7 @@ pub fn open_pose_stream<R: BufRead>(
         Format::EasyHandeye => {
             PoseInput::Whole(peer::read_easy_handeye_samples(&text(input)?, source)?)
         }
-        f => PoseInput::Stream(PoseReader::new(input, source, f)?),
+        f => PoseInput::Stream(PoseReader::with_conventions(input, source, f, conventions)?),
     })
 }
 
@@ -737,7 +897,7 @@ pub(crate) fn at_least_two_pairs(pairs: usize, source: String) -> Result<()> {
 /// Reads a whole pose-pair file; errors on the first bad record, or with fewer than 2 poses.
 pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     let source = path.display().to_string();
-    let mut reader = match open_poses(path, format)? {
+    let mut reader = match open_poses(path, format, Rotations::default())? {
         PoseInput::Whole(series) => return Ok(series),
         PoseInput::Stream(reader) => reader,
     };

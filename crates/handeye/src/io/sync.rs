@@ -169,6 +169,8 @@ pub struct StreamPairing {
     pub correlated: Option<FoundOffset>,
     /// Samples of the robot and the camera file that were out of time order (put in order).
     pub reordered: [usize; 2],
+    /// The largest angles in degrees of each stream (see [`crate::io::DegreeAngles`]).
+    pub degrees: crate::io::DegreeAngles,
 }
 
 /// Reads a robot stream (`base_from_gripper`) and a camera stream (`target_from_camera`, the
@@ -177,17 +179,23 @@ pub struct StreamPairing {
 ///
 /// The offset is searched on the streams read as `reading` (the reading the poses will be solved
 /// under: a quaternion order mixed up changes the angular speeds); the pairs are as the files give
-/// them.
+/// them. Each stream's rotations are read in the convention `rotations` names for its side (a
+/// quaternion `x y z w` when none is).
 pub fn pair_stream_files(
     robot: &std::path::Path,
     camera: &std::path::Path,
     setup: crate::model::motion::Setup,
     (offset, reading): (TimeOffset, Reading),
     max_gap: f64,
+    rotations: crate::model::rotation::Rotations,
 ) -> Result<StreamPairing> {
-    let robot_stream = crate::io::read_stamped_poses(robot)?;
-    let camera_stream = crate::io::read_camera_stream(camera)?;
+    let robot_stream = crate::io::read_stamped_poses(robot, rotations.robot)?;
+    let camera_stream = crate::io::read_camera_stream(camera, rotations.camera)?;
     let reordered = [robot_stream.reordered, camera_stream.reordered];
+    let degrees = crate::io::DegreeAngles {
+        robot: robot_stream.largest_degrees,
+        camera: camera_stream.largest_degrees,
+    };
     let (robot, camera) = (robot_stream.poses, camera_stream.poses);
     let (time_offset, correlated) = match offset {
         TimeOffset::Fixed(t) => (t, None),
@@ -216,6 +224,7 @@ pub fn pair_stream_files(
         time_offset,
         correlated,
         reordered,
+        degrees,
     })
 }
 

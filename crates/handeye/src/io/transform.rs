@@ -3,11 +3,13 @@
 use nalgebra::{Matrix4, Vector3};
 use serde_json::{Map, Value};
 
+use crate::io::Conventions;
 use crate::model::error::TransformProblem;
 use crate::model::pose::{
-    ReadTransform, Transform, check_translation, exp_so3, read_matrix4, transform_from_parts,
+    ReadTransform, Transform, check_translation, read_matrix4, transform_from_parts,
     transform_from_xyz_quat_xyzw,
 };
+use crate::model::rotation::RotationConvention;
 
 /// Largest entry difference accepted between `matrix` and `translation`/`quaternion_xyzw` when both
 /// are given.
@@ -51,9 +53,11 @@ impl From<TransformProblem> for FieldProblem {
 }
 
 /// Reads a transform from JSON: a bare matrix (4×4, 3×4 with the row `0 0 0 1` implied, or 16
-/// numbers row by row), or an object with `matrix` and/or `translation` + `quaternion_xyzw` (or
-/// `translation` + `rvec`, a rotation vector in radians) (both forms must then agree within [`CONSISTENCY_TOL`], or
-/// within the matrix's deviation from orthonormality when it was printed more coarsely).
+/// numbers row by row), or an object with `matrix` and/or `translation` and one rotation field
+/// (`quaternion_xyzw`, `rvec` in radians, or another [`RotationConvention::json_field`]:
+/// `quaternion_wxyz`, `kuka_abc_deg`, …) (both forms must then agree within
+/// [`CONSISTENCY_TOL`], or within the matrix's deviation from orthonormality when it was printed
+/// more coarsely).
 pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
     read_transform_json(v).map(|r| r.transform)
 }
@@ -61,6 +65,16 @@ pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
 /// As [`transform_from_json`], also telling how far from orthonormal a matrix was as given (its
 /// rotation is then projected onto SO(3), see [`read_matrix4`]).
 pub(crate) fn read_transform_json(v: &Value) -> Result<ReadTransform, FieldProblem> {
+    read_transform_json_as(v, (true, Conventions::default()))
+}
+
+/// As [`read_transform_json`], for a side (the robot's when `robot`) whose rotation convention
+/// `conventions` may name (by the flag): a rotation field of another convention is then refused,
+/// naming the one expected (a matrix has no convention and is read as always).
+pub(crate) fn read_transform_json_as(
+    v: &Value,
+    (robot, conventions): (bool, Conventions),
+) -> Result<ReadTransform, FieldProblem> {
     match v {
         Value::Array(_) => Ok(read_matrix4(&matrix_from_json(v, "")?)?),
         Value::Object(o) => {
@@ -68,12 +82,13 @@ pub(crate) fn read_transform_json(v: &Value) -> Result<ReadTransform, FieldProbl
                 .get("matrix")
                 .map(|m| Ok::<_, FieldProblem>(read_matrix4(&matrix_from_json(m, "matrix")?)?))
                 .transpose()?;
-            let from_parts = transform_from_parts_json(o, from_matrix.is_some())?;
+            let from_parts =
+                transform_from_parts_json(o, from_matrix.is_some(), (robot, conventions))?;
             one_transform(from_matrix, from_parts)
         }
         _ => Err(FieldProblem::new(
             "",
-            "expected a matrix (4×4, 3×4 or 16 numbers) or an object with `matrix`, or `translation` + `quaternion_xyzw` or `rvec`",
+            "expected a matrix (4×4, 3×4 or 16 numbers) or an object with `matrix`, or `translation` and a rotation (`quaternion_xyzw`, `rvec`, …)",
         )),
     }
 }
@@ -82,10 +97,10 @@ pub(crate) fn read_transform_json(v: &Value) -> Result<ReadTransform, FieldProbl
 /// [`CONSISTENCY_TOL`], or within the matrix's deviation from orthonormality).
 fn one_transform(
     from_matrix: Option<ReadTransform>,
-    from_parts: Option<Transform>,
+    from_parts: Option<(Transform, Option<f64>)>,
 ) -> Result<ReadTransform, FieldProblem> {
     match (from_matrix, from_parts) {
-        (Some(a), Some(b)) => {
+        (Some(a), Some((b, _))) => {
             let difference = (a.transform.to_homogeneous() - b.to_homogeneous())
                 .abs()
                 .max();
@@ -95,13 +110,14 @@ fn one_transform(
             Ok(a)
         }
         (Some(a), None) => Ok(a),
-        (None, Some(b)) => Ok(ReadTransform {
+        (None, Some((b, degrees))) => Ok(ReadTransform {
             transform: b,
             deviation: 0.0,
+            degrees,
         }),
         (None, None) => Err(FieldProblem::new(
             "",
-            "a transform needs `matrix`, or `translation` and `quaternion_xyzw` (or `rvec`)",
+            "a transform needs `matrix`, or `translation` and a rotation field (`quaternion_xyzw`, `rvec`, `quaternion_wxyz`, `kuka_abc_deg`, …)",
         )),
     }
 }
@@ -128,7 +144,7 @@ impl TransformNumbers {
                 if t.iter().any(|&v| check_translation(v).is_err()) {
                     return None;
                 }
-                Some(transform_from_xyz_quat_xyzw(t, q).ok()?)
+                Some((transform_from_xyz_quat_xyzw(t, q).ok()?, None))
             }
             (Some(_), None) | (None, Some(_)) if self.matrix.is_none() => return None,
             _ => None,
@@ -137,84 +153,90 @@ impl TransformNumbers {
     }
 }
 
-/// The transform of `translation` + `quaternion_xyzw` or `translation` + `rvec` (a rotation
-/// vector in radians, as `solvePnP` returns it), if given; a translation without a rotation (or
-/// the reverse) is an error unless a `matrix` is given (`has_matrix`).
+/// The rotation fields a transform may give, one per convention.
+fn rotation_fields() -> impl Iterator<Item = (RotationConvention, &'static str)> {
+    RotationConvention::ALL.iter().map(|&c| (c, c.json_field()))
+}
+
+/// The transform of `translation` and one rotation field (`quaternion_xyzw`, `rvec`, or another
+/// [`RotationConvention::json_field`]), if given, with the largest of its angles when they are in
+/// degrees; a translation without a rotation (or the reverse) is an error unless a `matrix` is
+/// given (`has_matrix`). With a convention `named` for this side, a rotation field of another
+/// convention is refused.
 fn transform_from_parts_json(
     o: &Map<String, Value>,
     has_matrix: bool,
-) -> Result<Option<Transform>, FieldProblem> {
-    let rotation = match (o.get("quaternion_xyzw"), o.get("rvec")) {
-        (Some(_), Some(_)) => {
+    (robot, conventions): (bool, Conventions),
+) -> Result<Option<(Transform, Option<f64>)>, FieldProblem> {
+    let named = if robot {
+        conventions.named.robot
+    } else {
+        conventions.named.camera
+    };
+    let given: Vec<(RotationConvention, &str)> = rotation_fields()
+        .filter(|(_, f)| o.contains_key(*f))
+        .collect();
+    let rotation = match given.as_slice() {
+        [] => None,
+        [(convention, field)] => Some((*convention, *field)),
+        [(_, first), (_, second), ..] => {
             return Err(FieldProblem::new(
-                "rvec",
-                "give one rotation: `quaternion_xyzw` or `rvec`, not both",
+                *second,
+                format!("give one rotation: `{first}` or `{second}`, not both"),
             ));
         }
-        (Some(q), None) => Some(Rotation::Quaternion(numbers::<4>(q, "quaternion_xyzw")?)),
-        (None, Some(r)) => Some(Rotation::Vector(rotation_vector(r)?)),
-        (None, None) => None,
     };
+    if let (Some((given, field)), Some(named)) = (rotation, named)
+        && given != named
+    {
+        return Err(FieldProblem::new(
+            field,
+            format!(
+                "the rotations of these poses are named {} (`--rotation`; `rotation=` in Python), given as `{}`, and this one is `{field}`: {}; write it as `{}`, or drop the name (a field named for its convention needs none)",
+                named.name(),
+                named.json_field(),
+                given.describe(),
+                named.json_field(),
+            ),
+        ));
+    }
     match (o.get("translation"), rotation) {
-        (Some(t), Some(rotation)) => {
+        (Some(t), Some((convention, field))) => {
             let t = numbers::<3>(t, "translation")?;
             for (k, v) in t.iter().enumerate() {
                 check_translation(*v)
                     .map_err(|p| FieldProblem::new(format!("translation[{k}]"), p.to_string()))?;
             }
-            match rotation {
-                Rotation::Quaternion(q) => {
-                    Ok(Some(transform_from_xyz_quat_xyzw(t, q).map_err(|p| {
-                        FieldProblem::new("quaternion_xyzw", p.to_string())
-                    })?))
-                }
-                Rotation::Vector(w) => {
-                    Ok(Some(transform_from_parts(&exp_so3(&w), &Vector3::from(t))))
-                }
-            }
+            let values = numbers_n(&o[field], field, convention.components().len())?;
+            let convention = conventions.read_as(robot, convention);
+            let r = convention.rotation(&values).map_err(|p| {
+                let at = match p.component {
+                    Some(k) => format!("{field}[{k}]"),
+                    None => field.to_string(),
+                };
+                FieldProblem::new(at, p.message)
+            })?;
+            let degrees = convention
+                .in_degrees()
+                .then(|| values.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+            Ok(Some((transform_from_parts(&r, &Vector3::from(t)), degrees)))
         }
         (Some(_), None) if !has_matrix => Err(FieldProblem::new(
-            "quaternion_xyzw",
-            "missing (needed with `translation`; or give `rvec`)",
-        )),
-        (None, Some(rotation)) if !has_matrix => Err(FieldProblem::new(
-            "translation",
-            format!(
-                "missing (needed with `{}`)",
-                match rotation {
-                    Rotation::Quaternion(_) => "quaternion_xyzw",
-                    Rotation::Vector(_) => "rvec",
+            named.map_or("quaternion_xyzw", RotationConvention::json_field),
+            match named {
+                Some(named) => format!("missing (needed with `translation`: {})", named.describe()),
+                None => {
+                    "missing (needed with `translation`; or give `rvec`, or another rotation field)"
+                        .to_string()
                 }
-            ),
+            },
+        )),
+        (None, Some((_, field))) if !has_matrix => Err(FieldProblem::new(
+            "translation",
+            format!("missing (needed with `{field}`)"),
         )),
         _ => Ok(None),
     }
-}
-
-/// The rotation of a transform's parts.
-enum Rotation {
-    Quaternion([f64; 4]),
-    Vector(Vector3<f64>),
-}
-
-/// Largest rotation vector accepted, radians: one turn. `solvePnP` returns at most π; a longer
-/// one is almost always degrees.
-const MAX_RVEC_NORM: f64 = std::f64::consts::TAU;
-
-/// A rotation vector (axis × angle, radians).
-fn rotation_vector(v: &Value) -> Result<Vector3<f64>, FieldProblem> {
-    let w = Vector3::from(numbers::<3>(v, "rvec")?);
-    if w.norm() > MAX_RVEC_NORM {
-        return Err(FieldProblem::new(
-            "rvec",
-            format!(
-                "a rotation of {:.1} rad ({:.0}°) is more than a turn: `rvec` is in radians (degrees given?)",
-                w.norm(),
-                w.norm().to_degrees()
-            ),
-        ));
-    }
-    Ok(w)
 }
 
 /// The shapes a matrix may be written in, for messages.
@@ -266,6 +288,18 @@ fn numbers<const N: usize>(v: &Value, field: &str) -> Result<[f64; N], FieldProb
         out[k] = number(x, &format!("{field}[{k}]"))?;
     }
     Ok(out)
+}
+
+/// An array of exactly `n` numbers.
+fn numbers_n(v: &Value, field: &str, n: usize) -> Result<Vec<f64>, FieldProblem> {
+    let a = v
+        .as_array()
+        .filter(|a| a.len() == n)
+        .ok_or_else(|| FieldProblem::new(field, format!("expected {n} numbers")))?;
+    a.iter()
+        .enumerate()
+        .map(|(k, x)| number(x, &format!("{field}[{k}]")))
+        .collect()
 }
 
 /// A finite number.

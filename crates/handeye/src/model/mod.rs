@@ -8,4 +8,5 @@ pub mod motion;
 pub mod names;
 pub mod pose;
 pub mod prior;
+pub mod rotation;
 pub mod warning;

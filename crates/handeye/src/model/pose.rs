@@ -90,6 +90,9 @@ pub(crate) struct ReadTransform {
     pub transform: Transform,
     /// Largest entry of `|RᵀR − I|` of the rotation as given.
     pub deviation: f64,
+    /// When the rotation was given as angles in degrees (a vendor's Euler angles, `rpy_deg`):
+    /// the largest of them in size.
+    pub degrees: Option<f64>,
 }
 
 impl ReadTransform {
@@ -126,6 +129,7 @@ pub(crate) fn read_matrix4(m: &Matrix4<f64>) -> Result<ReadTransform, TransformP
     let mut read = ReadTransform {
         transform: transform_from_parts(&r, &t),
         deviation,
+        degrees: None,
     };
     if read.projected() {
         read.transform = transform_from_parts(&proj_so3(&r), &t);

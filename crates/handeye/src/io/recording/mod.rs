@@ -7,15 +7,17 @@ use std::path::{Path, PathBuf};
 
 use crate::io::sync::{MAX_TIME_OFFSET, TimeOffset, pair_stream_files};
 use crate::io::{
-    Format, PoseInput, PoseReader, PoseSeries, Projections, StampedPosePair, at_least_two_pairs,
-    open_poses, read_joints, read_records, reread_text,
+    Conventions, DegreeAngles, Format, PoseInput, PoseReader, PoseSeries, Projections,
+    StampedPosePair, at_least_two_pairs, open_poses_as, read_joints, read_records, reread_text,
 };
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Reading, Written, WrittenAs};
 use crate::model::motion::{PosePair, Setup};
+use crate::model::rotation::Rotations;
 
 #[cfg(feature = "rosbag")]
 mod bag;
+mod convention;
 mod note;
 
 pub use note::Note;
@@ -85,6 +87,11 @@ pub struct RecordingOptions {
     /// streams so read, since a quaternion order mixed up changes their angular speeds. The poses
     /// returned are as the input gives them. Default [`Reading::AsGiven`].
     pub reading: Reading,
+    /// How each side writes its rotations, where the numbers do not say (stamped streams, CSV
+    /// columns; in JSON a field of another convention is then refused). Default: none named
+    /// (`x y z w` quaternions, or the JSON fields' own). A ROS 2 recording and the formats of
+    /// other tools fix their own, and refuse a name.
+    pub rotations: Rotations,
 }
 
 impl Default for RecordingOptions {
@@ -94,6 +101,7 @@ impl Default for RecordingOptions {
             time_offset: None,
             max_gap: 0.1,
             reading: Reading::AsGiven,
+            rotations: Rotations::default(),
         }
     }
 }
@@ -155,29 +163,19 @@ impl Recording {
 
     /// [`Recording::read`], telling each note to `tell` as it is found: a face shows the notes
     /// found before an error too.
+    ///
+    /// With a rotation convention named (`options.rotations`) and poses that fit poorly, the same
+    /// numbers are read in each other convention of as many numbers and the same unit, and the
+    /// input is refused ([`Error::Misread`], naming the convention) when one of them fits far
+    /// better.
     pub fn read_telling(
         source: &Source,
         options: &RecordingOptions,
         tell: &mut dyn FnMut(&Note),
     ) -> Result<Self> {
-        check_options(options)?;
-        if let (Source::File { .. }, Some(_)) = (source, options.time_offset) {
-            return Err(Error::InvalidParameter {
-                name: "time_offset",
-                message: "a clock offset pairs two stamped streams or a ROS 2 recording; a pose file gives its pose pairs already paired, and no offset would change them".into(),
-            });
-        }
-        let mut notes = Notes {
-            tell,
-            notes: Vec::new(),
-        };
-        let mut recording = match source {
-            Source::File { path, format } => read_file(path, *format, options.setup, &mut notes)?,
-            Source::Streams { robot, camera } => read_streams(robot, camera, options, &mut notes)?,
-            #[cfg(feature = "rosbag")]
-            Source::Bag { path, frames } => bag::read_bag(path, frames, options, &mut notes)?,
-        };
-        recording.notes = notes.notes;
+        let named = Conventions::named(options.rotations);
+        let recording = read_source(source, options, named, tell)?;
+        convention::check_named(source, options, &recording)?;
         Ok(recording)
     }
 
@@ -194,6 +192,58 @@ impl Recording {
                 written: self.written,
             })
             .collect()
+    }
+}
+
+/// Reads `source`, its numbers read as `conventions` says, telling each note as it is found.
+fn read_source(
+    source: &Source,
+    options: &RecordingOptions,
+    conventions: Conventions,
+    tell: &mut dyn FnMut(&Note),
+) -> Result<Recording> {
+    check_options(options)?;
+    if let (Source::File { .. }, Some(_)) = (source, options.time_offset) {
+        return Err(Error::InvalidParameter {
+            name: "time_offset",
+            message: "a clock offset pairs two stamped streams or a ROS 2 recording; a pose file gives its pose pairs already paired, and no offset would change them".into(),
+        });
+    }
+    let mut notes = Notes {
+        tell,
+        notes: Vec::new(),
+    };
+    let mut recording = match source {
+        Source::File { path, format } => {
+            read_file(path, *format, (options, conventions), &mut notes)?
+        }
+        Source::Streams { robot, camera } => {
+            let options = RecordingOptions {
+                rotations: read_as(conventions),
+                ..*options
+            };
+            read_streams(robot, camera, &options, &mut notes)?
+        }
+        #[cfg(feature = "rosbag")]
+        Source::Bag { path, frames } => {
+            crate::io::no_rotations(
+                options.rotations,
+                &path.display().to_string(),
+                "a ROS 2 recording (tf and pose messages: x, y, z, w quaternions)",
+            )?;
+            bag::read_bag(path, frames, options, &mut notes)?
+        }
+    };
+    recording.notes = notes.notes;
+    Ok(recording)
+}
+
+/// The conventions positional numbers (stamped streams) are read in: those to read them as, where
+/// given, else those named.
+fn read_as(conventions: Conventions) -> Rotations {
+    Rotations {
+        robot: conventions.read_as.robot.or(conventions.named.robot),
+        camera: conventions.read_as.camera.or(conventions.named.camera),
     }
 }
 
@@ -241,6 +291,13 @@ impl Notes<'_> {
         }
     }
 
+    /// Angles in degrees that look like radians, if any.
+    fn degrees(&mut self, source: &str, degrees: &DegreeAngles) {
+        for note in Note::small_degrees(source, degrees) {
+            self.add(note);
+        }
+    }
+
     /// Rotation matrices projected, if any.
     fn projections(&mut self, source: &str, projections: Projections) {
         if projections.count > 0 {
@@ -256,15 +313,17 @@ impl Notes<'_> {
 fn read_file(
     path: &Path,
     format: Format,
-    setup: Setup,
+    (options, conventions): (&RecordingOptions, Conventions),
     notes: &mut Notes<'_>,
 ) -> Result<Recording> {
+    let setup = options.setup;
     let source = path.display().to_string();
     let series = if path.as_os_str() == "-" {
-        let reader = PoseReader::new(std::io::stdin().lock(), "-", format)?;
+        let reader =
+            PoseReader::with_conventions(std::io::stdin().lock(), "-", format, conventions)?;
         read_stream(reader, &source, notes)?
     } else {
-        match open_poses(path, format)? {
+        match open_poses_as(path, format, conventions)? {
             PoseInput::Whole(series) => {
                 series.check_setup(setup, &source)?;
                 // Read whole: as many pairs as the file has, the count checked by the solver.
@@ -301,6 +360,7 @@ fn read_stream<R: BufRead>(
     notes.preamble(&reader, source);
     let series = read_records(&mut reader)?;
     notes.projections(source, reader.projections());
+    notes.degrees(source, &reader.degree_angles());
     Ok(series)
 }
 
@@ -334,6 +394,7 @@ fn read_streams(
             options.setup,
             (offset, options.reading),
             options.max_gap,
+            options.rotations,
         )
     };
     let pairing = match options.time_offset {
@@ -363,6 +424,18 @@ fn read_streams(
             });
         }
     }
+    let (robot_degrees, camera_degrees) = (
+        DegreeAngles {
+            camera: None,
+            ..pairing.degrees
+        },
+        DegreeAngles {
+            robot: None,
+            ..pairing.degrees
+        },
+    );
+    notes.degrees(&robot.display().to_string(), &robot_degrees);
+    notes.degrees(&camera.display().to_string(), &camera_degrees);
     if let Some(found) = &pairing.correlated {
         notes.add(Note::time_offset(found));
     }

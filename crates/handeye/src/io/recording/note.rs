@@ -55,6 +55,16 @@ pub enum Note {
         /// The longest gap interpolated across, seconds.
         max_gap: f64,
     },
+    /// Every angle one side of `source` gave in degrees (a convention in degrees) is within ±2π:
+    /// radians given to a convention in degrees, most likely (see [`crate::io::DegreeAngles`]).
+    SmallDegrees {
+        /// The file.
+        source: String,
+        /// `robot` or `camera`.
+        side: &'static str,
+        /// The largest angle given, in size.
+        largest: f64,
+    },
     /// The pose pairs a ROS 2 recording gave.
     BagPairs {
         /// The recording.
@@ -114,12 +124,33 @@ impl fmt::Display for Note {
                 f,
                 "dropped {outside} camera sample(s) outside the robot stream and {gap} in gaps longer than {max_gap} s"
             ),
+            Self::SmallDegrees {
+                source,
+                side,
+                largest,
+            } => write!(
+                f,
+                "{source}: every {side} angle given in degrees is within ±{largest:.2}, so the {side} poses turn by a few degrees at most: if these are radians, convert them to degrees (× 180/π)"
+            ),
             Self::BagPairs { .. } => self.fmt_bag_pairs(f),
         }
     }
 }
 
 impl Note {
+    /// The notes of the angles in degrees of `source` that look like radians.
+    pub fn small_degrees(source: &str, degrees: &crate::io::DegreeAngles) -> Vec<Self> {
+        degrees
+            .within_a_radian_turn()
+            .into_iter()
+            .map(|(side, largest)| Self::SmallDegrees {
+                source: source.to_string(),
+                side,
+                largest,
+            })
+            .collect()
+    }
+
     /// The note of an offset found by the search.
     pub(crate) fn time_offset(found: &FoundOffset) -> Self {
         Self::TimeOffset {

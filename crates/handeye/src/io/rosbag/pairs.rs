@@ -169,6 +169,18 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
     let robot_path = tf
         .path(&base, &gripper)
         .map_err(|e| tf_error("the robot's pose", e))?;
+    // A robot's tf tree runs from its base down to its tool (robot_state_publisher publishes each
+    // link under its parent): a base frame below the gripper frame is the two flags swapped, told
+    // by the tree itself, whatever the poses fit (issue 33 item 13).
+    if robot_path.down.is_empty() && !robot_path.up.is_empty() {
+        let chain = std::iter::once(gripper.as_str())
+            .chain(robot_path.up.iter().rev().map(String::as_str))
+            .collect::<Vec<_>>()
+            .join(" → ");
+        return Err(whole(format!(
+            "the base frame `{base}` is below the gripper frame `{gripper}` in the tf tree ({chain}, parent to child): the two frame names are swapped; swap the two frame flags, `--base-frame {gripper} --gripper-frame {base}` (`base_frame=\"{gripper}\", gripper_frame=\"{base}\"` in Python); tf's directions are the recording's own, and inverting the poses is not the fix"
+        )));
+    }
     if tf.dynamic_on(&robot_path).is_empty() {
         return Err(whole(format!(
             "the pose of `{gripper}` in `{base}` never changes: every transform between them is in /tf_static (is the gripper frame right?)"
