@@ -433,7 +433,7 @@ pub fn ros2(p: Published<'_>, f: &Frames) -> String {
          # In a launch file (Python):\n\
          from launch_ros.actions import Node\n\
          \n\
-         handeye_tf = Node(\n    package=\"tf2_ros\",\n    executable=\"static_transform_publisher\",\n    \
+         {variable} = Node(\n    package=\"tf2_ros\",\n    executable=\"static_transform_publisher\",\n    \
          name={name},\n    arguments=[\n        \
          {xyz},\n        \
          {q},\n        \
@@ -442,6 +442,12 @@ pub fn ros2(p: Published<'_>, f: &Frames) -> String {
         parent = f.parent,
         child = f.child,
         source = p.source,
+        // X's node, or the target's (robot-world prints both: two names, both pasteable).
+        variable = if p.frame.ends_with("_from_target") {
+            "handeye_target_tf"
+        } else {
+            "handeye_tf"
+        },
         line = static_transform_publisher(p, f),
         name = python_string(&node_name(&format!("handeye_{}_to_{}", f.parent, f.child))),
         xyz = list(&arguments[0..6]),

@@ -658,6 +658,10 @@ fn robot_world_publishes_x_and_the_target_in_metres_in_every_ros_face() {
         assert_eq!(code, 0, "{err}");
         let lines = argvs(&ros2);
         assert_eq!(lines.len(), 2, "{ros2}");
+        // Two launch nodes under two names: both can be pasted into one launch file.
+        assert!(
+            ros2.contains("\nhandeye_tf = Node(") && ros2.contains("\nhandeye_target_tf = Node(")
+        );
         for (argv, (parent, child), t) in [
             (&lines[0], ("gripper", "camera"), x),
             (&lines[1], ("base", "target"), target),
