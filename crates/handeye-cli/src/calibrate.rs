@@ -189,8 +189,9 @@ pub fn run(args: Args) -> Result<()> {
             faces::static_transform_publisher(published, &frames)
         );
     }
+    let summary = faces::text(&report, &frames, unit);
     match face {
-        Face::Text => print_text(&faces::text(&report, &frames, unit))?,
+        Face::Text => print_text(&summary)?,
         Face::Yaml => print_text(&faces::yaml(published, &frames, Some(&report)))?,
         Face::Ros2 => print_text(&faces::ros2(published, &frames))?,
         Face::Urdf => print_text(&faces::urdf(published, &frames))?,
@@ -200,20 +201,31 @@ pub fn run(args: Args) -> Result<()> {
             time_offset_sigma_s: time_offset_sigma,
         })?,
     }
-    // After the result: a report that cannot be written loses nothing computed.
+    let page = crate::report::RunPage {
+        poses: &poses,
+        names: &recording.names,
+        written,
+        setup,
+        unit,
+        summary,
+    };
+    after_result(&args, report.verdict, |path| {
+        crate::report::write_calibrate(path, &page, &report)
+    })
+}
+
+/// After the result is printed: the report page (last, so that a path that cannot be written
+/// loses nothing computed), then `--strict`'s exit 5 on a questionable verdict.
+fn after_result(
+    args: &Args,
+    verdict: Assessment,
+    write: impl FnOnce(&std::path::Path) -> Result<()>,
+) -> Result<()> {
     if let Some(path) = &args.report {
-        let page = crate::report::RunPage {
-            poses: &poses,
-            names: &recording.names,
-            written,
-            setup,
-            unit,
-            summary: faces::text(&report, &frames, unit),
-        };
-        crate::report::write_calibrate(path, &page, &report)?;
+        write(path)?;
         crate::tell!("wrote {}", path.display());
     }
-    if args.strict && report.verdict == Assessment::Questionable {
+    if args.strict && verdict == Assessment::Questionable {
         return Err(Questionable.into());
     }
     Ok(())
@@ -324,30 +336,25 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
     let ros = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
     let published = Published::of(&report, &source, ros_unit);
+    let summary = faces::text(&report, &frames, unit);
     match face {
-        Face::Text => print_text(&faces::text(&report, &frames, unit))?,
+        Face::Text => print_text(&summary)?,
         Face::Yaml => print_text(&faces::yaml(published, &frames, Some(&report)))?,
         Face::Ros2 => print_text(&faces::ros2(published, &frames))?,
         Face::Urdf => print_text(&faces::urdf(published, &frames))?,
         Face::Json => print_json(&report)?,
     }
-    // After the result: a report that cannot be written loses nothing computed.
-    if let Some(path) = &args.report {
-        let page = crate::report::RunPage {
-            poses: &poses,
-            names: &names,
-            written: handeye::Written::NAMED,
-            setup,
-            unit,
-            summary: faces::text(&report, &frames, unit),
-        };
-        crate::report::write_pixels(path, &page, &report)?;
-        crate::tell!("wrote {}", path.display());
-    }
-    if args.strict && report.verdict == Assessment::Questionable {
-        return Err(Questionable.into());
-    }
-    Ok(())
+    let page = crate::report::RunPage {
+        poses: &poses,
+        names: &names,
+        written: handeye::Written::NAMED,
+        setup,
+        unit,
+        summary,
+    };
+    after_result(args, report.verdict, |path| {
+        crate::report::write_pixels(path, &page, &report)
+    })
 }
 
 /// `calibrate --robot-world`: X and the target's pose together.
@@ -454,8 +461,9 @@ fn run_robot_world(args: &Args) -> Result<()> {
         child,
         ..frames.clone()
     };
+    let summary = faces::robot_world_text(&report, &frames, unit);
     match face {
-        Face::Text => print_text(&faces::robot_world_text(&report, &frames, unit))?,
+        Face::Text => print_text(&summary)?,
         // The YAML lists X, the target, their one-sigma and the residuals.
         Face::Yaml => print_text(&robot_world_yaml(&report))?,
         Face::Ros2 => print_text(&format!(
@@ -474,23 +482,17 @@ fn run_robot_world(args: &Args) -> Result<()> {
             time_offset_sigma_s: time_offset_sigma,
         })?,
     }
-    // After the result: a report that cannot be written loses nothing computed.
-    if let Some(path) = &args.report {
-        let page = crate::report::RunPage {
-            poses: &poses,
-            names: &recording.names,
-            written,
-            setup,
-            unit,
-            summary: faces::robot_world_text(&report, &frames, unit),
-        };
-        crate::report::write_robot_world(path, &page, &report)?;
-        crate::tell!("wrote {}", path.display());
-    }
-    if args.strict && report.verdict == Assessment::Questionable {
-        return Err(Questionable.into());
-    }
-    Ok(())
+    let page = crate::report::RunPage {
+        poses: &poses,
+        names: &recording.names,
+        written,
+        setup,
+        unit,
+        summary,
+    };
+    after_result(args, report.verdict, |path| {
+        crate::report::write_robot_world(path, &page, &report)
+    })
 }
 
 /// A refusal: said in the text face, drawn in `--report` (the motions' axes show what they

@@ -175,7 +175,7 @@ fn solve_opencv_poses<'py>(
         .collect();
     let report = py
         .allow_threads(|| handeye::calibrate(&poses, setup, &options))
-        .map_err(|e| value_error(opencv_words::error(&e, said)))?;
+        .map_err(|e| value_error(opencv_words::error(&e, said, opencv_words::HAND_EYE)))?;
     let (r, t) = (
         report.transform.rotation.matrix(),
         report.transform.translation.vector,
@@ -190,7 +190,7 @@ fn solve_opencv_poses<'py>(
         report
             .warnings
             .iter()
-            .map(|w| opencv_words::warning(w, said))
+            .map(|w| opencv_words::warning(w, said, opencv_words::HAND_EYE))
             .chain(filtered)
             .collect(),
     ))
@@ -236,7 +236,7 @@ fn solve_opencv_robot_world<'py>(
     let said = Some(Setup::EyeInHand);
     let report = py
         .allow_threads(|| handeye::calibrate_robot_world(&poses, Setup::EyeInHand, &options))
-        .map_err(|e| value_error(opencv_words::error(&e, said)))?;
+        .map_err(|e| value_error(opencv_words::error(&e, said, opencv_words::ROBOT_WORLD)))?;
     let parts = |t: &Transform| {
         let (r, v) = (t.rotation.matrix(), t.translation.vector);
         (
@@ -249,7 +249,7 @@ fn solve_opencv_robot_world<'py>(
     let said = report
         .warnings
         .iter()
-        .map(|w| opencv_words::warning(w, said))
+        .map(|w| opencv_words::warning(w, said, opencv_words::ROBOT_WORLD))
         .collect();
     Ok((
         r_base2world,

@@ -342,8 +342,14 @@ def test_the_robot_world_drop_in_refuses_what_opencv_answers():
     b = np.linalg.inv(q)
     # Right: an answer near the truth; inverted robot poses: refused as a misread.
     handeye.calibrate_robot_world_hand_eye(list(cam[:, :3, :3]), list(cam[:, :3, 3]), list(b[:, :3, :3]), list(b[:, :3, 3]))
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError) as inverted:
         handeye.calibrate_robot_world_hand_eye(list(cam[:, :3, :3]), list(cam[:, :3, 3]), list(q[:, :3, :3]), list(q[:, :3, 3]))
+    # Worded in this function's own arguments, not calibrateHandEye's.
+    words = str(inverted.value)
+    assert "R_base2gripper" in words and "gripper2base" not in words.replace("base2gripper", ""), words
+    with pytest.raises(ValueError) as mixed:
+        handeye.calibrate_robot_world_hand_eye(list(cam[:, :3, :3]), list(cam[:, :3, 3] * 1000), list(b[:, :3, :3]), list(b[:, :3, 3]))
+    assert "t_world2cam in millimetres" in str(mixed.value), str(mixed.value)
 
 
 def _series():

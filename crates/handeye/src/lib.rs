@@ -132,6 +132,7 @@ pub use solve::reprojection::{PixelOptions, PixelSolution, planar_poses, reproje
 pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 // Check.
 pub use check::holdout::leave_one_out;
+pub use check::outliers::PoseResiduals;
 pub use check::quality::{OUTLIER_DEG, errors_against_truth};
 pub use check::stream::{StreamReading, StreamReadings};
 pub use check::uncertainty::{AtPoint, REPLICATES, REPLICATES_RANGE, Uncertainty, median_target};

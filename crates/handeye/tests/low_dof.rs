@@ -396,7 +396,7 @@ fn gripper_axis(poses: &[handeye::PosePair]) -> Vector3<f64> {
 #[test]
 fn advice_with_the_prior_turns_about_the_robots_axis_with_the_calibrations_sigma() {
     use handeye::{AdviseOptions, Written, advise};
-    let mut ratios = Vec::new();
+    let (mut ratios, mut rotation_ratios) = (Vec::new(), Vec::new());
     for setup in SETUPS {
         for seed in 0..8 {
             let s = simulate_low_dof(&scara(setup), seed, 0);
@@ -417,6 +417,7 @@ fn advice_with_the_prior_turns_about_the_robots_axis_with_the_calibrations_sigma
             let current = advice.current.unwrap();
             let r = calibrate(&s.poses, setup, &options(vec![given])).unwrap();
             ratios.push(current.translation / r.uncertainty.translation);
+            rotation_ratios.push(current.rotation_deg / r.uncertainty.rotation_deg);
             // Every turn suggested is about the robot's one axis, as the gripper sees it.
             let axis = gripper_axis(&s.poses);
             assert_eq!(advice.suggestions.len(), 3);
@@ -443,6 +444,14 @@ fn advice_with_the_prior_turns_about_the_robots_axis_with_the_calibrations_sigma
     assert!(
         ratios[0] > 1.0 / 3.0 && ratios[ratios.len() - 1] < 3.0,
         "{ratios:?}"
+    );
+    // The rotation: the advice's first-order sigma against the bootstrap's.
+    rotation_ratios.sort_by(f64::total_cmp);
+    println!(
+        "advise's rotation sigma / calibrate's bootstrap, with the prior: {:.2} to {:.2} (median {:.2})",
+        rotation_ratios[0],
+        rotation_ratios[rotation_ratios.len() - 1],
+        rotation_ratios[rotation_ratios.len() / 2]
     );
 }
 

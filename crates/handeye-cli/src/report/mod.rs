@@ -13,8 +13,8 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use handeye::{
-    Pairing, PosePair, Reading, Report, RobotWorldReport, Setup, Transform, Unit, Verification,
-    Written, leave_one_out, transform_from_matrix4,
+    Pairing, PosePair, PoseResiduals, Reading, Report, RobotWorldReport, Setup, Transform, Unit,
+    Verification, Written, leave_one_out, transform_from_matrix4,
 };
 use plotters::style::RGBColor;
 use serde_json::{Value, json};
@@ -243,13 +243,13 @@ pub fn write_verify(path: &Path, run: &RunPage<'_>, v: &Verification) -> Result<
     let u = unit_name(run.unit);
     page.figure(
         per_pose_figure(
-            &format!("where each pose places the target ({u} from their median)"),
+            &format!("where each pose places the target ({u} from their common place)"),
             u,
             poses.len(),
             &series,
             &[],
         )?,
-        "Each pose places the target (in the base for eye-in-hand, in the gripper for eye-to-hand) through X: its distance from the median of those places. An X that fits the recording places it in one spot up to the noise (blue dots: the recording's own X); a saved X that no longer fits scatters it wider (orange rings).",
+        "Each pose places the target (in the base for eye-in-hand, in the gripper for eye-to-hand) through X: its distance from their common place (a robust mean). An X that fits the recording places it in one spot up to the noise (blue dots: the recording's own X); a saved X that no longer fits scatters it wider (orange rings).",
     );
     motions(&mut page, &poses, Pairing::All, run.setup, f64::NAN)?;
     page.write(path)
@@ -389,28 +389,14 @@ fn without(poses: &[PosePair], indices: &[usize]) -> Vec<PosePair> {
         .collect()
 }
 
-/// Where each pose places the target through `x` (`base_from_target` for eye-in-hand:
-/// `base_from_gripper · X · camera_from_target`; `gripper_from_target` for eye-to-hand:
-/// `gripper_from_base · X · camera_from_target`): each place's distance from their median.
+/// Where each pose places the target through `x` (Y_i = hand_i · X · camera_from_target_i), as its
+/// distance from the common place ([`PoseResiduals`]: a robust mean of the Y_i).
 fn target_scatter(poses: &[PosePair], setup: Setup, x: &Transform) -> Vec<(usize, f64)> {
-    let places: Vec<nalgebra::Vector3<f64>> = poses
+    PoseResiduals::at(poses, setup, x)
+        .residuals
         .iter()
-        .map(|p| {
-            (setup.hand_pose(&p.base_from_gripper) * x * p.camera_from_target)
-                .translation
-                .vector
-        })
-        .collect();
-    let median = |k: usize| {
-        let mut v: Vec<f64> = places.iter().map(|p| p[k]).collect();
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(0.0)
-    };
-    let centre = nalgebra::Vector3::new(median(0), median(1), median(2));
-    places
-        .iter()
+        .map(|r| r.distance())
         .enumerate()
-        .map(|(i, p)| (i, (p - centre).norm()))
         .collect()
 }
 
