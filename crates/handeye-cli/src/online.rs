@@ -193,6 +193,12 @@ pub fn run(args: Args) -> Result<()> {
             Some(_) => Unit::AsGiven,
             None => args.unit,
         },
+        // A recording's poses are looked up between the frames named.
+        written: if args.input.is_bag() {
+            handeye::Written::FRAMES
+        } else {
+            handeye::Written::NAMED
+        },
     };
     for (name, value) in [("--every", args.every as f64), ("--shrink", args.shrink)] {
         if !(value.is_finite() && value > 0.0) {
@@ -229,7 +235,6 @@ pub fn run(args: Args) -> Result<()> {
         held_out: 0,
         out: out.clone(),
     };
-    let mut last: Option<Report> = None;
     // Kept only for --report: a few numbers per event.
     let mut trace = args
         .report
@@ -298,7 +303,6 @@ pub fn run(args: Args) -> Result<()> {
                 face,
                 &mut messages,
             )?;
-            last = step.report.or(last);
         }
         if let Some(t) = &mut trace {
             events.iter().for_each(|e| t.calibration(e));
@@ -337,10 +341,12 @@ pub fn run(args: Args) -> Result<()> {
                 ..Step::default()
             });
         }
-        last = Some(report);
     }
     // Every line is out before the summary, the report and the other faces.
     out.flush()?;
+    // The estimate to use: the last report since the last change, from readings not found
+    // misread since.
+    let last = calibrator.tracker().and_then(|t| t.last_report());
     let summary = summary(&calibrator, last.as_ref(), messages.bad_lines);
     crate::tell!("{summary}");
     if let (Some(path), Some(mut trace)) = (&args.report, trace) {
@@ -699,7 +705,12 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
 
 /// Why the accumulating estimator reported no estimate.
 fn no_estimate(calibrator: &OnlineCalibrator) -> String {
+    let changed = calibrator.tracker().is_some_and(|t| t.changes() > 0);
     match calibrator.pending() {
+        // An estimate from before a change is not the current X.
+        Some(why) if changed && why.of_motions() => {
+            format!("since the last change of X or of the target, {why}")
+        }
         Some(why) => why.to_string(),
         None if calibrator.poses() == 0 => "the input gave no pose".to_string(),
         None => "no estimate was determined".to_string(),

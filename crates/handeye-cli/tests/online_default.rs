@@ -192,3 +192,44 @@ fn an_outlier_laden_stream_publishes_the_inliers_answer() {
         .sqrt();
     assert!(dt < 3e-3, "{dt} m");
 }
+
+/// A recording with the camera and target frame names swapped: its first poses fit as given about
+/// as well as read right, its whole fits far better read right. Nothing is published, in any
+/// face, and the reason names the frame flags (never an inversion of tf data); the batch job
+/// refuses the same recording, and calibrates its first 16 poses only as questionable.
+#[test]
+fn swapped_frame_names_publish_nothing_online() {
+    let frames = [
+        "--base-frame",
+        "base_link",
+        "--gripper-frame",
+        "tool0",
+        "--camera-frame",
+        "board",
+        "--target-frame",
+        "camera_link",
+    ];
+    for output in ["ros2", "urdf", "yaml", "text", "json"] {
+        let mut args = vec!["online", "rosbag/eih_tf_mcap", "--output", output];
+        args.extend(frames);
+        let (code, out, err) = run(&args);
+        let publishes = ["ros2", "urdf", "yaml"].contains(&output);
+        assert_eq!(code, if publishes { 3 } else { 0 }, "{output}: {err}");
+        assert!(
+            !out.contains("static_transform_publisher"),
+            "{output}: {out}"
+        );
+        assert!(!out.contains("\"estimate\""), "{output}: {out}");
+        assert!(
+            err.contains("no estimate from 80 pose(s)")
+                && err.contains("swap the camera and target frame names"),
+            "{output}: {err}"
+        );
+        assert!(!err.contains("--fix"), "{output}: {err}");
+    }
+    let mut args = vec!["calibrate", "rosbag/eih_tf_mcap"];
+    args.extend(frames);
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("the input looks misread"), "{err}");
+}

@@ -873,6 +873,8 @@ impl PyOnline {
                 Some(_) => Unit::AsGiven,
                 None => unit.parse::<Unit>().map_err(value_error)?,
             },
+            // Arrays as handeye names them.
+            written: handeye::Written::NAMED,
         };
         let readings =
             (config.estimator != Estimator::Accumulate).then(|| StreamReadings::new(config.setup));
@@ -926,6 +928,17 @@ impl PyOnline {
         }
         let setup = self.inner.config().setup;
         self.inner.finish().map(|r| r.json(setup, None).to_string())
+    }
+
+    /// The estimate to use now (JSON text): the accumulating estimator's last report since the
+    /// last change of X, unless the readings were found misread since; None when there is none
+    /// (`pending()` says why). A report from before a change is not the current X.
+    fn last_report(&self) -> Option<String> {
+        let setup = self.inner.config().setup;
+        self.inner
+            .tracker()?
+            .last_report()
+            .map(|r| r.json(setup, None).to_string())
     }
 
     /// Why the accumulating estimator has nothing to report now, or None.

@@ -676,7 +676,7 @@ def test_online_defaults_to_the_accumulating_estimator_and_push_returns_a_list()
     # Issue 33 items 2 and 19: Python's default is the command line's (every estimate with its
     # uncertainty, the readings checked), and push returns one type.
     cal = handeye.OnlineCalibrator()
-    r = handeye.read_recording(TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.jsonl")
+    r = r_good = handeye.read_recording(TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.jsonl")
     truth = json.loads((TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s0.truth.json").read_text())
     x_true = np.array(truth["gripper_from_camera"]["matrix"])
     pushed = [cal.push(a, b) for a, b in zip(r["base_from_gripper"], r["camera_from_target"])]
@@ -692,6 +692,27 @@ def test_online_defaults_to_the_accumulating_estimator_and_push_returns_a_list()
     assert not any("estimate" in e for e in reports), reports
     assert inverted.finish() is None
     assert "camera" in (inverted.pending() or ""), inverted.pending()
+    assert inverted.last_report() is None
+    # The estimate to use is the last report, with its arrays; a camera moved on its mount
+    # withdraws the one from before it (a report from before a change is not the current X).
+    assert cal.last_report()["matrix"].shape == (4, 4)
+    assert np.allclose(cal.last_report()["matrix"], final["matrix"])
+    moved = np.eye(4)
+    moved[:3, :3] = cv2.Rodrigues(np.array([0.0, 0.14, 0.0]))[0]
+    moved[:3, 3] = [0.04, 0.0, 0.0]
+    bumped = np.linalg.inv(moved) @ r_good["camera_from_target"]
+    changes = []
+    for a, b in zip(r_good["base_from_gripper"], bumped):
+        events = cal.push(a, b)
+        if any("change" in e for e in events):
+            changes.append(cal.last_report())
+    cal.finish()
+    assert len(changes) == 1 and changes[0] is None, changes
+    after = cal.last_report()
+    assert after is not None
+    expected = x_true @ moved
+    angle = np.degrees(np.arccos(np.clip((np.trace(expected[:3, :3].T @ after["matrix"][:3, :3]) - 1) / 2, -1, 1)))
+    assert angle < 3 * after["uncertainty"]["rotation_deg"] + 1e-9, (angle, after["uncertainty"])
 
 
 def test_verify_decides_as_the_command_line_does(tmp_path):

@@ -144,12 +144,20 @@ fn memory_stays_constant_over_a_million_poses() {
             "{selection}: {} calibrations",
             c.calibrations()
         );
-        // The state holds only fixed-size records: the number of values it serialises does not
-        // grow with the stream.
-        assert_eq!(
-            sizes[0], sizes[1],
+        // The state holds only fixed-size records and the accumulating estimator's sample of the
+        // poses for the check of the readings, which holds 64 to 127 poses (thinned by half each
+        // time it fills; 24 numbers a pose): the number of values it serialises does not grow
+        // with the stream beyond that sample's swing.
+        let swing = if estimator == Estimator::Accumulate {
+            64 * 24
+        } else {
+            0
+        };
+        assert!(
+            sizes[1] <= sizes[0] + swing,
             "{selection}: state grew from {} to {} numbers",
-            sizes[0], sizes[1]
+            sizes[0],
+            sizes[1]
         );
     }
 }

@@ -464,6 +464,14 @@ class OnlineCalibrator:
         if found is not None:
             warnings.warn(found, UserWarning, stacklevel=3)
 
+    def last_report(self):
+        """The estimate to use now (a dict, as a report), or None: the accumulating estimator's
+        last report since the last change of X, unless the readings were found misread since
+        (``pending()`` says why there is none). A report from before a change is not the
+        current X: use this, not the last report ``push`` returned."""
+        text = self._inner.last_report()
+        return None if text is None else _with_arrays(json.loads(text))
+
     def pending(self):
         """Why the accumulating estimator has nothing to report now (a sentence), or None."""
         return self._inner.pending()

@@ -798,6 +798,7 @@ pub(crate) fn choose_reading(
     let check = check_readings(poses, setup, written);
     let (Some(finding), Some(better)) = (check.finding(setup), check.better) else {
         warnings.extend(check.size_warning(setup));
+        warnings.extend(check.alike_warning(setup));
         return Ok((Reading::AsGiven, Some(check)));
     };
     match fix {

@@ -84,6 +84,13 @@ impl ReadingFit {
         poor && much && not_worse
     }
 
+    /// Whether this fit is about as good as `given` in both residuals (within [`NOT_WORSE`]): the
+    /// poses cannot tell the two readings apart.
+    pub(crate) fn as_well_as(&self, given: &ReadingFit) -> bool {
+        self.rotation_deg <= NOT_WORSE * given.rotation_deg
+            && self.translation_rel <= NOT_WORSE * given.translation_rel
+    }
+
     /// Whether X and Y have the sizes the setup makes likely: a camera on the gripper is nearer to
     /// the gripper than the target is to the base (eye-in-hand), a fixed camera farther from the
     /// base than the target is from the gripper (eye-to-hand). A reading and its mirror image
@@ -124,6 +131,13 @@ pub struct ReadingCheck {
     pub better: Option<ReadingFit>,
     /// Other readings that fit about as well as `better` (its mirror image, typically).
     pub also: Vec<ReadingFit>,
+    /// When the as-given reading fits (not [`ReadingFit::poor`]) and no reading fits far better:
+    /// the other readings that fit about as well ([`ReadingFit::as_well_as`]), but for its mirror
+    /// image (both poses inverted, which always fits as well: [`Self::size_warning`]) and the
+    /// millimetre readings (judged by sizes). The motions are too small, or too alike, to tell
+    /// whether the input is read right, and the X of each reading is a different one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub alike: Vec<ReadingFit>,
     /// The poses were looked up between named frames ([`Written::frames`]): an inverted
     /// reading means frame names swapped.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
@@ -225,6 +239,18 @@ impl ReadingCheck {
             && !(self.frames && self.better.is_some_and(|b| b.reading.inverts()))
     }
 
+    /// A warning when another reading fits about as well as the as-given one ([`Self::alike`]).
+    pub fn alike_warning(&self, setup: Setup) -> Option<Warning> {
+        let (given, best) = (self.as_given?, self.alike.first()?);
+        Some(Warning::ReadingsAlike {
+            readings: self.alike.iter().map(|f| f.reading).collect(),
+            fit: [best.rotation_deg, best.translation_rel],
+            given: [given.rotation_deg, given.translation_rel],
+            frames: self.frames,
+            setup,
+        })
+    }
+
     /// A warning when the as-given reading fits but gives X and Y implausible sizes for the setup:
     /// both poses inverted fit exactly as well, with X and Y swapped.
     pub fn size_warning(&self, setup: Setup) -> Option<Warning> {
@@ -250,25 +276,24 @@ impl ReadingCheck {
 /// `written` is the directions in which the input wrote its poses (where a quaternion-order
 /// reading undoes the mix-up, [`Reading::apply`]); a reading that cannot apply to them is not tried.
 ///
-/// The as-given reading is solved first: when it fits well (not [`ReadingFit::poor`]) no other
-/// reading can be far better, by the rule itself, and the other eight are not tried. The result
-/// is the same as trying them all, for one solve instead of nine.
+/// Every reading is tried, even when the as-given one fits well (not [`ReadingFit::poor`]) and no
+/// other can be far better by the rule itself: one that fits about as well says the motions cannot
+/// tell the readings apart ([`ReadingCheck::alike`]), and an X that fits the poses is then not
+/// known to be the right one.
 pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> ReadingCheck {
     let sample = spread(poses);
     let none = |as_given| ReadingCheck {
         as_given,
         better: None,
         also: Vec::new(),
+        alike: Vec::new(),
         frames: written.frames,
     };
     let Some(given) = judged_fit(&sample, setup) else {
         return none(None);
     };
-    if !given.poor() {
-        return none(Some(given));
-    }
     let mm = mm_side(&sample, setup);
-    let mut candidates: Vec<ReadingFit> = Reading::ALL
+    let fits: Vec<ReadingFit> = Reading::ALL
         .iter()
         .filter(|&&r| r != Reading::AsGiven && r.applies_to(written))
         .filter_map(|&r| fit(&r.apply(&sample, written), setup, r))
@@ -278,8 +303,32 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         .filter(|f| {
             !matches!(f.reading, Reading::RobotMm | Reading::CameraMm) || Some(f.reading) == mm
         })
-        .filter(|f| f.far_better_than(&given))
         .collect();
+    let mut candidates: Vec<ReadingFit> = fits
+        .iter()
+        .filter(|f| f.far_better_than(&given))
+        .copied()
+        .collect();
+    if candidates.is_empty() {
+        // Only a fit that passes for good is in question (a poor one is judged by its residuals);
+        // a unit is judged by the sizes (a gripper turning about one point fits any camera unit).
+        let alike = fits
+            .into_iter()
+            .filter(|f| !given.poor() && f.as_well_as(&given))
+            .filter(|f| {
+                !matches!(
+                    f.reading,
+                    Reading::BothInverted | Reading::RobotMm | Reading::CameraMm
+                )
+            })
+            .collect();
+        let mut alike: Vec<ReadingFit> = alike;
+        alike.sort_by(|a, b| a.score(&given).total_cmp(&b.score(&given)));
+        return ReadingCheck {
+            alike,
+            ..none(Some(given))
+        };
+    }
     candidates.sort_by(|a, b| a.score(&given).total_cmp(&b.score(&given)));
     // Readings within 2× of the best score fit as well: the plausible one leads.
     let best = candidates.first().map_or(0.0, |f| f.score(&given));
@@ -294,6 +343,7 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         as_given: Some(given),
         better: candidates.next(),
         also: candidates.collect(),
+        alike: Vec::new(),
         frames: written.frames,
     }
 }

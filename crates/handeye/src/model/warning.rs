@@ -107,6 +107,22 @@ pub enum Warning {
         /// The setup.
         setup: Setup,
     },
+    /// Another reading of the input fits about as well as the as-given one (and gives another
+    /// X): the motions are too small or too alike to tell whether the input is read right.
+    ReadingsAlike {
+        /// The readings that fit as well, the best first.
+        readings: Vec<Reading>,
+        /// The best one's median rotation residual, degrees, and translation residual over the
+        /// motion range.
+        fit: [f64; 2],
+        /// The same, as given.
+        given: [f64; 2],
+        /// The poses were looked up between named frames (an inverted reading means frame names
+        /// swapped).
+        frames: bool,
+        /// The setup.
+        setup: Setup,
+    },
     /// The residuals follow the robot's configuration: an error of the robot's kinematic model,
     /// the TCP or flange offset, or the camera's intrinsics, which more poses do not average out.
     SystematicError {
@@ -223,6 +239,7 @@ impl Warning {
             Self::KeptAsGiven { .. } => "kept_as_given",
             Self::SwappedSizes { .. } => "swapped_sizes",
             Self::SystematicError { .. } => "systematic_error",
+            Self::ReadingsAlike { .. } => "readings_alike",
             Self::PriorDisagrees { .. } => "prior_disagrees",
         }
     }
@@ -341,6 +358,36 @@ impl fmt::Display for Warning {
                     f,
                     "X puts {x_is} at {x_translation:.3} and {y_is} at {y_translation:.3}, the reverse of what the {} setup usually has: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions",
                     setup.name(),
+                )
+            }
+            Self::ReadingsAlike {
+                readings,
+                fit,
+                given,
+                frames,
+                setup,
+            } => {
+                let meaning = |r: Reading| {
+                    if *frames {
+                        r.meaning_in_frames(*setup)
+                    } else {
+                        r.meaning(*setup)
+                    }
+                };
+                let read: Vec<String> = readings.iter().map(|r| meaning(*r)).collect();
+                let check = if *frames {
+                    "the frame names"
+                } else {
+                    "the directions of the poses"
+                };
+                write!(
+                    f,
+                    "the poses fit about as well read as {} (median residual {:.2}° and {:.1}% of the motion range, against {:.2}° and {:.1}% as given), and each reading gives another X: the motions are too small or too alike to tell whether the input is read right; record poses with wider turns (30° or more, about different axes) and check {check}",
+                    read.join(", or as "),
+                    fit[0],
+                    100.0 * fit[1],
+                    given[0],
+                    100.0 * given[1],
                 )
             }
             Self::SystematicError {
@@ -513,6 +560,13 @@ mod tests {
                 x_translation: 1.0,
                 y_translation: 0.1,
                 setup: Setup::EyeToHand,
+            },
+            Warning::ReadingsAlike {
+                readings: vec![Reading::CameraInverted, Reading::RobotInverted],
+                fit: [0.16, 0.006],
+                given: [0.18, 0.010],
+                frames: true,
+                setup: Setup::EyeInHand,
             },
             Warning::SystematicError {
                 p_value: 1e-5,

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 use crate::check::quality::{errors_against_truth, residual_rms};
 use crate::model::error::{Error, Result};
 use crate::model::motion::{MotionPair, PosePair, Setup};
+use crate::model::findings::Written;
 use crate::model::pose::Transform;
 use crate::model::pose::TransformJson;
 use crate::online::select::{AdaptiveParams, Selected, Selection, Selector, Thresholds};
@@ -65,6 +66,11 @@ pub struct OnlineConfig {
     /// The input's length unit, which sets `params.d_max` (0.1 m in that unit). Default `Auto`:
     /// inferred from the first pose.
     pub unit: Unit,
+    /// The directions in which the input writes its poses (`io::Recording::written`): a
+    /// recording's, looked up between named frames, has a misread worded as frame names swapped.
+    /// Default: both as handeye names them.
+    #[serde(default)]
+    pub written: Written,
 }
 
 impl OnlineConfig {
@@ -349,7 +355,7 @@ impl OnlineCalibrator {
             largest_step: 0.0,
             unit: config.unit,
             tracker: (config.estimator == Estimator::Accumulate)
-                .then(|| Tracker::new(config.setup, config.tracking)),
+                .then(|| Tracker::new(config.setup, config.tracking).with_written(config.written)),
             step: Step::default(),
         })
     }

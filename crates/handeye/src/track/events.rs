@@ -5,6 +5,7 @@ use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
+use crate::model::error::misread_advice;
 use crate::model::findings::{Assessment, Reading};
 use crate::model::motion::Setup;
 use crate::model::pose::Transform;
@@ -192,6 +193,22 @@ pub enum Pending {
         /// `ReadingCheck::other_setup`): the user is asked where the camera is.
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         other_setup: bool,
+        /// The poses were looked up between named frames (a recording): an inverted reading
+        /// means two frame names swapped.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        frames: bool,
+    },
+    /// Another reading of the input fits about as well as the as-given one
+    /// (`ReadingCheck::alike`): the motions so far are too small or too alike to tell whether
+    /// the input is read right. Nothing is reported before they can.
+    ReadingsAlike {
+        /// The reading that fits about as well.
+        reading: Reading,
+        /// The setup the poses are read in.
+        setup: Setup,
+        /// The poses were looked up between named frames.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        frames: bool,
     },
     /// The readings of the input (inverted poses, quaternion order, units) could not be checked
     /// yet: the poses so far are a gripper standing still or turning about one axis. Nothing is
@@ -219,6 +236,20 @@ fn where_camera(setup: Setup) -> String {
     format!("{camera} ({})", setup.name())
 }
 
+impl Pending {
+    /// Whether the reason is the motions of the current segment (too few, too small, about one
+    /// axis, not determining X), rather than how the input is read.
+    pub fn of_motions(&self) -> bool {
+        matches!(
+            self,
+            Self::FewPoses { .. }
+                | Self::NoRotation { .. }
+                | Self::ParallelAxes
+                | Self::Undetermined { .. }
+        )
+    }
+}
+
 impl fmt::Display for Pending {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -238,7 +269,41 @@ impl fmt::Display for Pending {
             Self::Misread {
                 reading,
                 setup,
+                other_setup,
+                frames: true,
+            } => f.write_str(&misread_advice(
+                &format!(
+                    "the poses fit far better read as {}",
+                    reading.meaning_in_frames(*setup)
+                ),
+                &[*reading],
+                setup,
+                other_setup,
+                &true,
+            )),
+            Self::ReadingsAlike {
+                reading,
+                setup,
+                frames,
+            } => write!(
+                f,
+                "the poses fit about as well read as {}, which gives another X: the motions so far are too small or too alike to tell whether the input is read right; turn the gripper more (30° or more), about other axes{}",
+                if *frames {
+                    reading.meaning_in_frames(*setup)
+                } else {
+                    reading.meaning(*setup)
+                },
+                if *frames {
+                    ", and check the frame names"
+                } else {
+                    ""
+                }
+            ),
+            Self::Misread {
+                reading,
+                setup,
                 other_setup: true,
+                ..
             } => write!(
                 f,
                 "the poses fit far better read as {}, and as well read the other way round: if the camera is {}, pass `--setup {}`; if it is {}, correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",

@@ -149,10 +149,29 @@ const REFRESH_ALWAYS: usize = 200;
 /// have come, the gate having learned its typical gaps by then (it lets the very first poses
 /// through untested): at 16, 64 and 256 poses, each time over all of them.
 const WARMUP: [usize; 3] = [16, 64, 256];
-/// Poses kept for checking the readings after the first ones could not be judged (a robot
-/// standing still, or turning about one axis): a sample thinned by half, its stride doubled, each
-/// time it fills, and checked then (constant memory, a check every doubling of the stream).
+/// Poses kept for checking the readings again as the stream goes on (the first ones may not tell
+/// a misread: a robot standing still, turning about one axis, or turning too little to tell an
+/// inverted pose): a sample of every pose pushed, thinned by half, its stride doubled, each time
+/// it fills, and checked then and at the end.
 const READINGS_SAMPLE: usize = 128;
+
+/// Every stride-th pose pushed, for [`Tracker::sample_readings`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct ReadingsSample {
+    poses: Vec<PosePair>,
+    stride: usize,
+    seen: usize,
+}
+
+impl Default for ReadingsSample {
+    fn default() -> Self {
+        Self {
+            poses: Vec::with_capacity(READINGS_SAMPLE),
+            stride: 1,
+            seen: 0,
+        }
+    }
+}
 /// A challenger unconfirmed after this many times `confirm_poses` poses is dropped.
 const CHALLENGER_LIFE: usize = 10;
 
@@ -194,10 +213,20 @@ pub struct Tracker {
     /// axis): nothing is reported before (a saved state from before this field was judged).
     #[serde(default = "judged_before")]
     readings_judged: bool,
-    /// After the first poses, until the readings are judged: a thinned sample of the accepted
-    /// poses and its stride.
+    /// A reading that fits about as well as the as-given one, while the readings are not judged
+    /// ([`crate::check::readings::ReadingCheck::alike`]).
     #[serde(default)]
-    readings_sample: Option<(Vec<PosePair>, usize)>,
+    alike: Option<Reading>,
+    /// A thinned sample of every pose pushed, judged again each time it fills and at the end.
+    #[serde(default)]
+    sample: ReadingsSample,
+    /// The directions in which the input writes its poses.
+    #[serde(default)]
+    written: Written,
+    /// The last report of the current segment (none after a change, or once the readings are
+    /// found misread).
+    #[serde(default)]
+    last: Option<Report>,
     /// The poses held out in a row by the screw gate, with their numbers.
     screw_run: Vec<(usize, PosePair)>,
     /// Pose number and uncertainties of the last report of this segment.
@@ -223,13 +252,30 @@ impl Tracker {
             misread: None,
             implausible: false,
             readings_judged: false,
-            readings_sample: None,
+            alike: None,
+            sample: ReadingsSample::default(),
+            written: Written::NAMED,
+            last: None,
             screw_run: Vec::with_capacity(STALE_RUN),
             last_report: None,
             reports: 0,
             held_out: 0,
             changes: 0,
         }
+    }
+
+    /// The same, for an input that writes its poses in the directions `written`
+    /// (`io::Recording::written`): a misread of a recording is worded as frame names swapped.
+    pub fn with_written(mut self, written: Written) -> Self {
+        self.written = written;
+        self
+    }
+
+    /// The estimate to use now: the last report since the last change of X, unless the readings
+    /// have since been found misread. `None` when there is none (see [`Tracker::pending`]): an
+    /// estimate from before a change is not the current X.
+    pub fn last_report(&self) -> Option<Report> {
+        self.last.filter(|_| self.misread.is_none())
     }
 
     /// Poses pushed so far.
@@ -264,16 +310,26 @@ impl Tracker {
                 reading,
                 setup: self.setup,
                 other_setup,
+                frames: self.written.frames,
             });
         }
+        let unjudged = match self.alike {
+            Some(reading) => Pending::ReadingsAlike {
+                reading,
+                setup: self.setup,
+                frames: self.written.frames,
+            },
+            None => Pending::ReadingsUnchecked,
+        };
         self.incumbent
             .pending(self.estimate().as_ref(), &self.options)
-            .or((!self.readings_judged).then_some(Pending::ReadingsUnchecked))
+            .or((!self.readings_judged).then_some(unjudged))
     }
 
     /// Takes the next pose (module documentation).
     pub fn push(&mut self, pose: &PosePair) -> Step {
         self.poses += 1;
+        self.sample_readings(pose);
         let mut step = Step {
             pose: self.poses,
             ..Step::default()
@@ -336,16 +392,11 @@ impl Tracker {
     /// reporting bounds but below the batch refusal's (10°, half the scene). `None` when there is
     /// no estimate or it is not determined at all ([`Tracker::pending`] says why).
     pub fn finish(&mut self) -> Option<Report> {
-        // A stream too short for the checks of the readings so far: they run on what came.
-        if !self.readings_judged {
-            let poses: Vec<PosePair> = match (&self.warmup, &self.readings_sample) {
-                (Some(w), _) => w.iter().map(|(_, p)| *p).collect(),
-                (None, Some((sample, _))) => sample.clone(),
-                (None, None) => Vec::new(),
-            };
-            if poses.len() >= WARMUP[0] {
-                self.judge_readings(&poses);
-            }
+        // The last word on the readings: the sample of the whole stream (a stream too short for
+        // the checks so far, or one whose first poses could not tell a misread).
+        if self.sample.poses.len() >= WARMUP[0] {
+            let poses = self.sample.poses.clone();
+            self.judge_sample(&poses);
         }
         // Nothing from readings never checked ([`Tracker::pending`] says so).
         if !self.readings_judged {
@@ -383,7 +434,6 @@ impl Tracker {
     fn add(&mut self, pose: &PosePair, number: usize) -> Vec<(usize, HeldOut)> {
         self.incumbent.add(pose);
         let Some(warmup) = &mut self.warmup else {
-            self.sample_readings(pose);
             return Vec::new();
         };
         warmup.push((number, *pose));
@@ -401,12 +451,6 @@ impl Tracker {
             .map(|i| poses[i])
             .collect();
         self.judge_readings(&kept);
-        if last && !self.readings_judged {
-            // Not judged by the first poses: a thinned sample of them, and of those to come.
-            let stride = kept.len().div_ceil(READINGS_SAMPLE / 2).max(1);
-            let sample = kept.iter().step_by(stride).copied().collect();
-            self.readings_sample = Some((sample, stride));
-        }
         let mut held = Vec::new();
         if !found.poses.is_empty() {
             let mut segment = Segment::new(self.setup, self.incumbent.since);
@@ -442,45 +486,60 @@ impl Tracker {
         held
     }
 
-    /// The batch's check of the readings on `poses`: what it finds stands when it could judge them
-    /// (an input read wrongly is reported as such, and nothing else is reported from it).
+    /// The batch's check of the readings on `poses`. A reading that fits far better stands (nothing
+    /// is reported from data read wrongly, and an earlier report is withdrawn); the as-given one
+    /// stands when no other fits about as well. A check that cannot judge, or finds another reading
+    /// fitting as well, leaves an earlier judgement as it was.
     fn judge_readings(&mut self, poses: &[PosePair]) {
-        let readings = check_readings(poses, self.setup, Written::NAMED);
-        if readings.as_given.is_some() {
-            let other_setup = readings.other_setup(self.setup);
-            self.misread = readings.better.map(|b| (b.reading, other_setup));
-            self.implausible = readings.size_warning(self.setup).is_some();
-            self.readings_judged = true;
-            self.readings_sample = None;
+        let readings = check_readings(poses, self.setup, self.written);
+        if readings.as_given.is_none() {
+            return;
         }
+        if let Some(better) = readings.better {
+            self.misread = Some((better.reading, readings.other_setup(self.setup)));
+            self.readings_judged = true;
+            self.last = None;
+            return;
+        }
+        if let Some(alike) = readings.alike.first() {
+            if !self.readings_judged {
+                self.alike = Some(alike.reading);
+            }
+            return;
+        }
+        self.misread = None;
+        self.alike = None;
+        self.implausible = readings.size_warning(self.setup).is_some();
+        self.readings_judged = true;
     }
 
-    /// Keeps every stride-th accepted pose for the check of the readings while they are not
-    /// judged; checks, thins by half and doubles the stride when the sample is full.
-    fn sample_readings(&mut self, pose: &PosePair) {
-        let Some((sample, stride)) = &mut self.readings_sample else {
-            return;
-        };
-        if !self.incumbent.all.poses().is_multiple_of(*stride) {
-            return;
-        }
-        sample.push(*pose);
-        if sample.len() < READINGS_SAMPLE {
-            return;
-        }
-        let poses = std::mem::take(sample);
-        let kept: Vec<PosePair> = {
-            let found = pose_outliers(&poses, self.setup, self.options.outlier_deg).indices();
-            (0..poses.len())
-                .filter(|i| !found.contains(i))
-                .map(|i| poses[i])
-                .collect()
-        };
+    /// [`Self::judge_readings`] on a sample of poses without those that disagree with the others.
+    fn judge_sample(&mut self, poses: &[PosePair]) {
+        let found = pose_outliers(poses, self.setup, self.options.outlier_deg).indices();
+        let kept: Vec<PosePair> = (0..poses.len())
+            .filter(|i| !found.contains(i))
+            .map(|i| poses[i])
+            .collect();
         self.judge_readings(&kept);
-        if let Some((sample, stride)) = &mut self.readings_sample {
-            *sample = poses.into_iter().step_by(2).collect();
-            *stride *= 2;
+    }
+
+    /// Keeps every stride-th pose pushed for the check of the readings; checks, thins by half
+    /// and doubles the stride when the sample is full (constant memory, a check every doubling of
+    /// the stream).
+    fn sample_readings(&mut self, pose: &PosePair) {
+        let sample = &mut self.sample;
+        sample.seen += 1;
+        if !(sample.seen - 1).is_multiple_of(sample.stride) {
+            return;
         }
+        sample.poses.push(*pose);
+        if sample.poses.len() < READINGS_SAMPLE {
+            return;
+        }
+        let poses = std::mem::take(&mut sample.poses);
+        self.judge_sample(&poses);
+        self.sample.poses = poses.into_iter().step_by(2).collect();
+        self.sample.stride *= 2;
     }
 
     /// The pose's own disagreement with the current (X, Y): rotation (radians) and translation.
@@ -599,6 +658,7 @@ impl Tracker {
         self.current = Some(snapshot);
         self.warmup = None;
         self.last_report = None;
+        self.last = None;
         self.changes += 1;
         Some(change)
     }
@@ -677,13 +737,15 @@ impl Tracker {
             estimate.uncertainty_rotation_deg.unwrap_or(f64::INFINITY),
             estimate.uncertainty_translation.unwrap_or(f64::INFINITY),
         ));
-        Report {
+        let report = Report {
             number: self.reports,
             pose: self.poses,
             reason,
             estimate,
             weak: None,
             implausible: self.implausible,
-        }
+        };
+        self.last = Some(report);
+        report
     }
 }
