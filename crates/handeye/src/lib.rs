@@ -122,7 +122,7 @@ pub use model::names::Named;
 pub use model::pose::{
     Transform, TransformJson, quaternion_xyzw, rotation_angle_between, transform_from_matrix4,
 };
-pub use model::prior::{Component, Prior, PriorValue, PriorsUsed};
+pub use model::prior::{Component, Prior, PriorUnit, PriorValue, PriorsUsed};
 pub use model::rotation::{RotationConvention, Rotations};
 pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.

@@ -6,8 +6,8 @@
 
 use handeye::sim::{LowDofConfig, simulate_low_dof};
 use handeye::{
-    Component, Degeneracy, Error, LowDofMissing, Method, Options, Pairing, Prior, Setup, Transform,
-    Warning, calibrate, rotation_angle_between,
+    Component, Degeneracy, Error, LowDofMissing, Method, Options, Pairing, PosePair, Prior, Setup,
+    Transform, Warning, calibrate, rotation_angle_between,
 };
 use nalgebra::Vector3;
 
@@ -19,6 +19,7 @@ fn prior(component: Component, value: f64, sigma: f64) -> Prior {
         component,
         value,
         sigma,
+        unit: None,
     }
 }
 
@@ -344,6 +345,45 @@ fn a_prior_in_another_unit_is_refused_naming_the_unit() {
             &options(vec![prior(Component::Tz, tz, 0.001)]),
         )
         .unwrap();
+        // Metres on a recording in millimetres: refused too, with the value in millimetres
+        // offered (nothing in the data tells: the motions leave tz free, and the answer was
+        // "good" with X's height 1000 times too small).
+        let mm: Vec<PosePair> = s
+            .poses
+            .iter()
+            .map(|p| {
+                let mut p = *p;
+                p.base_from_gripper.translation.vector *= 1e3;
+                p.camera_from_target.translation.vector *= 1e3;
+                p
+            })
+            .collect();
+        let e = calibrate(&mm, setup, &options(vec![prior(Component::Tz, tz, 0.001)])).unwrap_err();
+        let words = e.to_string();
+        assert!(
+            matches!(e, Error::InvalidParameter { name: "prior", .. }),
+            "{setup}: {e}"
+        );
+        assert!(words.contains("another length unit"), "{words}");
+        assert!(words.contains(&format!("tz={tz}m+-0.001m")), "{words}");
+        // In the poses' unit, or with its own: the same X, tz the prior's.
+        let r = calibrate(
+            &mm,
+            setup,
+            &options(vec![prior(Component::Tz, tz * 1e3, 1.0)]),
+        )
+        .unwrap();
+        assert_eq!(r.transform.translation.vector[2], tz * 1e3);
+        let metres: Prior = format!("tz={tz}+-0.001m").parse().unwrap();
+        let told = calibrate(&mm, setup, &options(vec![metres])).unwrap();
+        let d = told.transform.translation.vector - r.transform.translation.vector;
+        assert!(d.norm() < 1e-9 * 1e3, "{d}");
+        // Millimetres named on a recording in metres: converted.
+        let named: Prior = format!("tz={}mm", tz * 1e3).parse().unwrap();
+        let r = calibrate(&s.poses, setup, &options(vec![named])).unwrap();
+        assert!((r.transform.translation.vector[2] - tz).abs() < 1e-12);
+        // A camera at the flange's height: 0 is a value in any unit.
+        calibrate(&mm, setup, &options(vec![prior(Component::Tz, 0.0, 1.0)])).unwrap();
     }
 }
 

@@ -172,8 +172,9 @@ pub fn advise(
     written: Written,
     options: &AdviseOptions,
 ) -> Result<Advice> {
-    let (count, priors) = (options.count, &options.priors[..]);
-    check_priors(priors)?;
+    check_priors(&options.priors)?;
+    let priors = &crate::calibrate::low_dof::in_poses_unit(&options.priors, poses)?[..];
+    let count = options.count;
     check_goal(options.goal)?;
     if poses.len() < 2 {
         return Err(Error::TooFewMotions {

@@ -350,6 +350,10 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     check_replicates(options.replicates)?;
     check_joints(&options.joints, poses.len())?;
     check_priors(&options.priors)?;
+    let options = &Options {
+        priors: crate::calibrate::low_dof::in_poses_unit(&options.priors, poses)?,
+        ..options.clone()
+    };
     let mut warnings = Vec::new();
     let (applied, check, read, found) = read_poses(
         poses,
@@ -638,6 +642,7 @@ fn first_what_motions_lack(
         component,
         value: 0.0,
         sigma: 0.0,
+        unit: None,
     });
     match calibrate(poses, setup, &with_prior) {
         Err(e) if low_dof::lacks_motions(&e) => e,

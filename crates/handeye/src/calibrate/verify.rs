@@ -19,7 +19,7 @@ use crate::model::error::{Error, Result};
 use crate::model::findings::Verdict;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson, log_so3};
-use crate::model::prior::{Component, Prior};
+use crate::model::prior::{Component, Prior, PriorUnit};
 
 /// The probability of the χ² test's acceptance region for a saved X of the same rig: one
 /// same-rig recording in a thousand is refused.
@@ -287,6 +287,9 @@ fn with_saved_prior(
             component: free,
             value: saved.x.translation.vector[free.index()] * scale,
             sigma: 0.0,
+            // In the recording's unit, which is then taken as said (a camera at the flange's
+            // height is no unit mix-up).
+            unit: crate::calibrate::low_dof::length_unit(poses),
         });
         calibrate(poses, setup, &with_prior)
     };
@@ -450,25 +453,10 @@ const NOT_MILLIMETRES: f64 = 2.0;
 /// Metres or millimetres from the size of the poses' translations (the median of each pose's
 /// larger translation), `None` when it fits neither.
 fn recording_unit(poses: &[PosePair]) -> Option<SavedUnit> {
-    let size = crate::check::outliers::median(
-        poses
-            .iter()
-            .map(|p| {
-                p.base_from_gripper
-                    .translation
-                    .vector
-                    .norm()
-                    .max(p.camera_from_target.translation.vector.norm())
-            })
-            .collect(),
-    );
-    if (0.05..=10.0).contains(&size) {
-        Some(SavedUnit::Metre)
-    } else if (50.0..=10_000.0).contains(&size) {
-        Some(SavedUnit::Millimetre)
-    } else {
-        None
-    }
+    crate::calibrate::low_dof::length_unit(poses).map(|u| match u {
+        PriorUnit::Metre => SavedUnit::Metre,
+        PriorUnit::Millimetre => SavedUnit::Millimetre,
+    })
 }
 
 /// (log(R_a R_bᵀ), t_a − t_b): the convention of the bootstrap's replicate errors.

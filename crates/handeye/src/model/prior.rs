@@ -50,16 +50,49 @@ impl Component {
     }
 }
 
-/// One prior: X's translation component `component` is `value` (input unit), known to `sigma`
-/// (one sigma; 0 for exact).
+/// The length unit a prior names (`tz=0.12m`, `tz=120mm`), converted to the poses' own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum PriorUnit {
+    /// Metres (`m`).
+    #[serde(rename = "m")]
+    Metre,
+    /// Millimetres (`mm`).
+    #[serde(rename = "mm")]
+    Millimetre,
+}
+
+impl PriorUnit {
+    /// Its suffix: `m` or `mm`.
+    pub fn suffix(self) -> &'static str {
+        match self {
+            Self::Metre => "m",
+            Self::Millimetre => "mm",
+        }
+    }
+
+    /// Metres per this unit.
+    pub fn metres(self) -> f64 {
+        match self {
+            Self::Metre => 1.0,
+            Self::Millimetre => 1e-3,
+        }
+    }
+}
+
+/// One prior: X's translation component `component` is `value`, known to `sigma` (one sigma; 0
+/// for exact), in the input's length unit or in the `unit` it names.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Prior {
     /// The component.
     pub component: Component,
-    /// Its value, input unit.
+    /// Its value, input unit (or `unit`).
     pub value: f64,
-    /// Its one-sigma, input unit; 0: exact.
+    /// Its one-sigma, input unit (or `unit`); 0: exact.
     pub sigma: f64,
+    /// The unit the value was written in when it names one (`tz=0.12m`): converted to the
+    /// poses' unit, told by their sizes, before use. `None`: the poses' unit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<PriorUnit>,
 }
 
 /// A prior as a report gives it (`"prior": {"tz": {"value", "sigma"}}`).
@@ -121,11 +154,12 @@ fn invalid(message: String) -> Error {
 impl std::str::FromStr for Prior {
     type Err = Error;
 
-    /// `NAME=VALUE` (exact) or `NAME=VALUE+-SIGMA` (also `±`), NAME one of `tx`, `ty`, `tz`.
+    /// `NAME=VALUE` (exact) or `NAME=VALUE+-SIGMA` (also `±`), NAME one of `tx`, `ty`, `tz`; the
+    /// value and the sigma may end in a unit, `m` or `mm` (one for both).
     fn from_str(s: &str) -> Result<Self> {
         let syntax = || {
             invalid(format!(
-                "`{s}`: write NAME=VALUE or NAME=VALUE+-SIGMA, NAME one of tx, ty, tz (a component of X's translation in X's parent frame, the input's length unit), e.g. tz=0.12 or tz=0.12+-0.002"
+                "`{s}`: write NAME=VALUE or NAME=VALUE+-SIGMA, NAME one of tx, ty, tz (a component of X's translation in X's parent frame, in the input's length unit, or with its unit: m or mm), e.g. tz=0.12, tz=0.12+-0.002 or tz=120mm+-2mm"
             ))
         };
         let (name, rest) = s.split_once('=').ok_or_else(syntax)?;
@@ -134,11 +168,35 @@ impl std::str::FromStr for Prior {
             Some((v, sg)) => (v, Some(sg)),
             None => (rest, None),
         };
-        let number = |t: &str| t.trim().parse::<f64>().map_err(|_| syntax());
+        let number = |t: &str| -> Result<(f64, Option<PriorUnit>)> {
+            let t = t.trim();
+            let (digits, unit) = if let Some(d) = t.strip_suffix("mm") {
+                (d, Some(PriorUnit::Millimetre))
+            } else if let Some(d) = t.strip_suffix('m') {
+                (d, Some(PriorUnit::Metre))
+            } else {
+                (t, None)
+            };
+            let v = digits.trim().parse::<f64>().map_err(|_| syntax())?;
+            Ok((v, unit))
+        };
+        let (value, value_unit) = number(value)?;
+        let (sigma, sigma_unit) = sigma.map(number).transpose()?.unwrap_or((0.0, None));
+        let unit = match (value_unit, sigma_unit) {
+            (Some(a), Some(b)) if a != b => {
+                return Err(invalid(format!(
+                    "`{s}`: the value is in {} and the sigma in {}: give both in one unit",
+                    a.suffix(),
+                    b.suffix()
+                )));
+            }
+            (a, b) => a.or(b),
+        };
         let prior = Prior {
             component,
-            value: number(value)?,
-            sigma: sigma.map(number).transpose()?.unwrap_or(0.0),
+            value,
+            sigma,
+            unit,
         };
         prior.validate()?;
         Ok(prior)
@@ -147,16 +205,17 @@ impl std::str::FromStr for Prior {
 
 impl std::fmt::Display for Prior {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let unit = self.unit.map_or("", PriorUnit::suffix);
         if self.sigma > 0.0 {
             write!(
                 f,
-                "{}={}+-{}",
+                "{}={}{unit}+-{}{unit}",
                 self.component.name(),
                 self.value,
                 self.sigma
             )
         } else {
-            write!(f, "{}={}", self.component.name(), self.value)
+            write!(f, "{}={}{unit}", self.component.name(), self.value)
         }
     }
 }
@@ -173,9 +232,23 @@ mod tests {
             Prior {
                 component: Component::Tz,
                 value: 0.12,
-                sigma: 0.0
+                sigma: 0.0,
+                unit: None,
             }
         );
+        let p: Prior = "tz=120mm+-2".parse().unwrap();
+        assert_eq!(
+            (p.value, p.sigma, p.unit),
+            (120.0, 2.0, Some(PriorUnit::Millimetre))
+        );
+        assert_eq!(p.to_string(), "tz=120mm+-2mm");
+        let p: Prior = "tz=0.12+-0.002m".parse().unwrap();
+        assert_eq!(
+            (p.value, p.sigma, p.unit),
+            (0.12, 0.002, Some(PriorUnit::Metre))
+        );
+        assert!("tz=0.12m+-2mm".parse::<Prior>().is_err());
+        assert!("tz=0.12km".parse::<Prior>().is_err());
         let p: Prior = "tx=-5+-0.5".parse().unwrap();
         assert_eq!((p.component, p.value, p.sigma), (Component::Tx, -5.0, 0.5));
         let p: Prior = "ty=1e-1±2e-3".parse().unwrap();
