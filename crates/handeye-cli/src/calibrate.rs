@@ -16,7 +16,9 @@ use handeye::{Named, RobotWorldMethod};
 use crate::faces::{self, Face, Published, length_unit};
 use crate::input::{InputArgs, read_all};
 use crate::output::{Questionable, print_json, print_text};
+use crate::publish::Publication;
 use crate::values;
+use handeye::io::CameraMount;
 
 /// Options of `handeye calibrate`.
 #[derive(ClapArgs, Debug)]
@@ -72,8 +74,10 @@ pub struct Args {
     /// frame (eye-in-hand) or base frame (eye-to-hand); `gripper` or `base` for files].
     #[arg(long)]
     parent_frame: Option<String>,
-    /// The child frame of X (the camera's) [default: the recording's camera frame; `camera` for
-    /// files].
+    /// The child frame of X (the camera's) [default: the recording's camera frame, or, when the
+    /// recording's tf gives it a parent, the root of its subtree, X carried there; `camera` for
+    /// files]. A name given is kept (X carried to it when the recording's /tf_static holds it
+    /// above the camera frame), with a warning when the recording gives that frame a parent.
     #[arg(long)]
     child_frame: Option<String>,
     /// The calibration's name in the yaml output (easy_handeye2's `parameters.name`, the file
@@ -182,23 +186,24 @@ pub fn run(args: Args) -> Result<()> {
     // The ROS outputs are in metres whatever the input (the text and JSON keep its unit).
     let ros = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf) || args.input.is_bag();
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
-    let published = Published::of(&report, &source, ros_unit);
-    if args.input.is_bag() && face != Face::Ros2 {
-        crate::tell!(
-            "publish X in tf with: {}",
-            faces::static_transform_publisher(published, &frames)
-        );
+    let mount = recording.camera_mount.as_ref();
+    let publication = publication(&args, &report.transform, &frames, mount);
+    let published = publication.of(Published::of(&report, &source, ros_unit));
+    let to = &publication.frames;
+    if args.input.is_bag() {
+        publication.tell(published, face != Face::Ros2);
     }
     let summary = faces::text(&report, &frames, unit);
     match face {
         Face::Text => print_text(&summary)?,
-        Face::Yaml => print_text(&faces::yaml(published, &frames, Some(&report)))?,
-        Face::Ros2 => print_text(&faces::ros2(published, &frames))?,
-        Face::Urdf => print_text(&faces::urdf(published, &frames))?,
+        Face::Yaml => print_text(&faces::yaml(published, to, Some(&report)))?,
+        Face::Ros2 => print_text(&faces::ros2(published, to))?,
+        Face::Urdf => print_text(&faces::urdf(published, to))?,
         Face::Json => print_json(&WithTimeOffset {
             report: &report,
             time_offset_s: time_offset,
             time_offset_sigma_s: time_offset_sigma,
+            publish: publication.json(),
         })?,
     }
     let page = crate::report::RunPage {
@@ -442,19 +447,28 @@ fn run_robot_world(args: &Args) -> Result<()> {
     let source = format!("calibrate, robot-world method {}", report.method);
     let ros = matches!(face, Face::Ros2 | Face::Urdf);
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
+    let mount = recording.camera_mount.as_ref();
+    let publication = publication(args, &report.transform, &frames, mount);
     // X, then the target's pose: `base_from_target` (eye-in-hand) or `gripper_from_target`.
-    let x = Published {
+    let x = publication.of(Published {
         x: &report.transform,
         frame: &report.frame,
         setup,
         source: &source,
         unit: ros_unit,
-    };
+        note: None,
+        warning: None,
+    });
     let target = Published {
         x: &report.target_transform,
         frame: &report.target.frame,
+        note: None,
+        warning: None,
         ..x
     };
+    if args.input.is_bag() {
+        publication.tell(x, false);
+    }
     let (parent, child) = faces::target_frames(setup, &frames);
     let target_frames = faces::Frames {
         parent,
@@ -468,18 +482,19 @@ fn run_robot_world(args: &Args) -> Result<()> {
         Face::Yaml => print_text(&robot_world_yaml(&report))?,
         Face::Ros2 => print_text(&format!(
             "{}\n{}",
-            faces::ros2(x, &frames),
+            faces::ros2(x, &publication.frames),
             faces::ros2(target, &target_frames)
         ))?,
         Face::Urdf => print_text(&format!(
             "{}{}",
-            faces::urdf(x, &frames),
+            faces::urdf(x, &publication.frames),
             faces::urdf(target, &target_frames)
         ))?,
         Face::Json => print_json(&WithTimeOffset {
             report: &report,
             time_offset_s: time_offset,
             time_offset_sigma_s: time_offset_sigma,
+            publish: publication.json(),
         })?,
     }
     let page = crate::report::RunPage {
@@ -612,6 +627,21 @@ struct WithTimeOffset<'a, T> {
     /// Its one-sigma, seconds, when it was estimated.
     #[serde(skip_serializing_if = "Option::is_none")]
     time_offset_sigma_s: Option<f64>,
+    /// What to publish in tf instead of X, and why, when a recording's tf gives the camera frame
+    /// a parent ([`Publication::json`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    publish: Option<serde_json::Value>,
+}
+
+/// What the ROS faces publish for `x` between `frames`, given where a recording's tf places the
+/// camera frame (see [`crate::publish`]).
+fn publication(
+    args: &Args,
+    x: &handeye::Transform,
+    frames: &faces::Frames,
+    mount: Option<&CameraMount>,
+) -> Publication {
+    crate::publish::publication(x, frames, mount, args.child_frame.is_some())
 }
 
 /// The frame names X is published under (`--parent-frame`, `--child-frame`) and the name, checked

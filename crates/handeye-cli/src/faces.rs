@@ -78,6 +78,12 @@ pub struct Published<'a> {
     /// The input's length unit, when known: a translation in millimetres is published in metres
     /// ([`ros_unit`]).
     pub unit: Option<Unit>,
+    /// Why the transform is not X for the frames asked, for a comment
+    /// ([`crate::publish::Publication::note`]).
+    pub note: Option<&'a str>,
+    /// What publishing it breaks in the recording's tf, for a comment
+    /// ([`crate::publish::Publication::warning`]).
+    pub warning: Option<&'a str>,
 }
 
 impl<'a> Published<'a> {
@@ -89,7 +95,20 @@ impl<'a> Published<'a> {
             setup: r.setup,
             source,
             unit,
+            note: None,
+            warning: None,
         }
+    }
+
+    /// The comment lines the note and the warning make, each without its comment sign.
+    fn comments(&self) -> Vec<String> {
+        let warning = self.warning.map(|w| format!("warning: {w}"));
+        self.note
+            .map(str::to_string)
+            .into_iter()
+            .chain(warning)
+            .map(|line| line.replace(['\n', '\r'], " "))
+            .collect()
     }
 
     /// What a length of the input is in metres, or 1 when the unit is not known.
@@ -350,6 +369,9 @@ pub fn yaml(p: Published<'_>, f: &Frames, batch: Option<&Report>) -> String {
         f.child,
         p.unit_words()
     ));
+    for line in p.comments() {
+        comment(line);
+    }
     if let Some(r) = batch {
         let unit = if p.unit.is_some() { " m" } else { "" };
         comment(format!(
@@ -426,9 +448,10 @@ pub fn ros2(p: Published<'_>, f: &Frames) -> String {
         .map(|a| python_string(a))
         .collect::<Vec<_>>();
     let list = |a: &[String]| a.join(", ");
+    let comments: String = p.comments().iter().map(|c| format!("# {c}\n")).collect();
     format!(
         "# handeye {source}: {frame} ({parent} -> {child})\n\
-         {line}\n\
+         {comments}{line}\n\
          \n\
          # In a launch file (Python):\n\
          from launch_ros.actions import Node\n\
@@ -466,8 +489,16 @@ pub fn urdf(p: Published<'_>, f: &Frames) -> String {
     let xyz = format!("{x} {y} {z}");
     let rpy = format!("{roll} {pitch} {yaw}");
     let joint = format!("{}_to_{}", f.parent, f.child);
+    let comments: Vec<String> = p
+        .comments()
+        .iter()
+        .map(|c| format!(" {c} ").replace("--", "- -"))
+        .collect();
     let written: std::io::Result<()> = (|| {
         w.write_event(Event::Comment(BytesText::from_escaped(comment.as_str())))?;
+        for c in &comments {
+            w.write_event(Event::Comment(BytesText::from_escaped(c.as_str())))?;
+        }
         w.create_element("joint")
             .with_attributes([("name", joint.as_str()), ("type", "fixed")])
             .write_inner_content(|w| {

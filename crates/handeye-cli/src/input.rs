@@ -13,8 +13,8 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::is_bag;
 use handeye::io::{
-    BagFrames, Format, PoseInput, PoseReader, Projections, Recording, RecordingOptions, Source,
-    StampedPosePair, TimeOffset, open_pose_stream, open_poses,
+    BagFrames, CameraMount, Format, Note, PoseInput, PoseReader, Projections, Recording,
+    RecordingOptions, Source, StampedPosePair, TimeOffset, open_pose_stream, open_poses,
 };
 use handeye::{Reading, Rotations, Setup};
 
@@ -55,7 +55,11 @@ pub struct InputArgs {
         help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
     )]
     pub gripper_frame: Option<String>,
-    /// ROS 2 recording: the camera frame X is found for (e.g. camera_color_optical_frame).
+    /// ROS 2 recording: the camera frame X is found for: the root of the camera's subtree in tf
+    /// (e.g. camera_link, under which the camera driver publishes its optical frames). For a
+    /// frame with a parent there (camera_color_optical_frame), X is its own but is published for
+    /// the root (tf gives a frame one parent), with a warning; for a camera placed in the robot's
+    /// tree already (calibrated before), X is compared with tf's, not published.
     #[arg(
         long,
         help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
@@ -202,17 +206,20 @@ fn pose_file_flags(args: &InputArgs) -> Result<()> {
     Ok(())
 }
 
-/// Reads `source`, telling its notes on stderr as they come; a failed `auto` offset search is
+/// Reads `source`, telling its notes on stderr as they come (a camera frame that has a parent in
+/// a recording's tf as a warning: X published for it breaks tf); a failed `auto` offset search is
 /// named by the flag.
 fn read(source: &Source, options: &RecordingOptions) -> Result<Recording> {
-    Recording::read_telling(source, options, &mut |note| crate::tell!("{note}")).map_err(
-        |e| match e {
-            handeye::Error::TimeOffset { streams, source } => {
-                anyhow::Error::new(*source).context(format!("--time-offset auto on {streams}"))
-            }
-            e => e.into(),
-        },
-    )
+    let tell = &mut |note: &Note| match note {
+        Note::CameraMount { .. } => crate::tell!("warning: {note}"),
+        _ => crate::tell!("{note}"),
+    };
+    Recording::read_telling(source, options, tell).map_err(|e| match e {
+        handeye::Error::TimeOffset { streams, source } => {
+            anyhow::Error::new(*source).context(format!("--time-offset auto on {streams}"))
+        }
+        e => e.into(),
+    })
 }
 
 /// The ROS 2 recording or the two streams of `args` read whole, or `None` for a pose file (or
@@ -288,6 +295,16 @@ impl<R: BufRead> Iterator for NotingReader<R> {
 /// Pose pairs one at a time, each with its place, or the error of a bad record.
 pub type Records = Box<dyn Iterator<Item = handeye::Result<StampedPosePair>>>;
 
+/// What opening a record stream told besides its records.
+pub struct Opened {
+    /// Its name for messages.
+    pub source: String,
+    /// The clock offset two streams (or a recording) were paired with.
+    pub offset: Option<Offset>,
+    /// A recording's: where its tf places the camera frame, when it gives it a parent.
+    pub camera_mount: Option<CameraMount>,
+}
+
 /// The clock offset two streams (or a recording) were paired with.
 pub struct Offset {
     /// Camera clock minus robot clock, seconds.
@@ -340,10 +357,7 @@ impl<R: Read> BufRead for WaitHook<R> {
 /// A record stream for `online`: from stdin, a file, or paired streams, with the name of its
 /// source for messages. A file is opened once (a FIFO cannot be read twice). `before_wait` is
 /// called before each read of stdin or of the file, which may wait for input.
-pub fn records(
-    args: &InputArgs,
-    before_wait: Rc<dyn Fn()>,
-) -> Result<(Records, String, Option<Offset>)> {
+pub fn records(args: &InputArgs, before_wait: Rc<dyn Fn()>) -> Result<(Records, Opened)> {
     if let Some(recording) = read_recorded(args, Reading::AsGiven)? {
         let source = match (&recording.target_source, &args.camera) {
             (Some(target), _) => format!(
@@ -364,10 +378,15 @@ pub fn records(
                 .clone()
                 .filter(|_| recording.target_source.is_none()),
         });
+        let records = Box::new(recording.records().into_iter().map(Ok));
+        let camera_mount = recording.camera_mount;
         return Ok((
-            Box::new(recording.records().into_iter().map(Ok)),
-            source,
-            offset,
+            records,
+            Opened {
+                source,
+                offset,
+                camera_mount,
+            },
         ));
     }
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
@@ -381,7 +400,7 @@ pub fn records(
             source: source.clone(),
             told: false,
         };
-        return Ok((Box::new(records), source, None));
+        return Ok((Box::new(records), opened(source)));
     }
     let format = args.format;
     let records = if format == Format::Visp || path.is_dir() {
@@ -402,7 +421,16 @@ pub fn records(
             args.setup(),
         )?
     };
-    Ok((records, source, None))
+    Ok((records, opened(source)))
+}
+
+/// A pose file's: its name alone.
+fn opened(source: String) -> Opened {
+    Opened {
+        source,
+        offset: None,
+        camera_mount: None,
+    }
 }
 
 /// The records of a file opened by [`open_poses`] or [`open_pose_stream`].
@@ -457,12 +485,9 @@ const BATCH: usize = 256;
 /// Batches [`ReadAhead`]'s reader may have read ahead.
 const QUEUED_BATCHES: usize = 8;
 
-/// [`records`] read ahead on a second thread ([`ReadAhead`]): the same records, source name and
-/// clock offset, and the same error when the input cannot be opened.
-pub fn read_ahead(
-    args: &InputArgs,
-    before_wait: Rc<dyn Fn()>,
-) -> Result<(ReadAhead, String, Option<Offset>)> {
+/// [`records`] read ahead on a second thread ([`ReadAhead`]): the same records and what opening
+/// told, and the same error when the input cannot be opened.
+pub fn read_ahead(args: &InputArgs, before_wait: Rc<dyn Fn()>) -> Result<(ReadAhead, Opened)> {
     let args = args.clone();
     let (batches, received) = sync_channel(QUEUED_BATCHES);
     let (opened, head) = sync_channel(1);
@@ -483,8 +508,8 @@ pub fn read_ahead(
                 send();
             })
         }) {
-            Ok((records, source, offset)) => {
-                let _ = opened.send(Ok((source, offset)));
+            Ok((records, head)) => {
+                let _ = opened.send(Ok(head));
                 records
             }
             Err(e) => {
@@ -501,15 +526,14 @@ pub fn read_ahead(
         send();
     });
     match head.recv() {
-        Ok(Ok((source, offset))) => Ok((
+        Ok(Ok(head)) => Ok((
             ReadAhead {
                 batches: received,
                 batch: Vec::new().into_iter(),
                 before_wait,
                 reader: Some(reader),
             },
-            source,
-            offset,
+            head,
         )),
         Ok(Err(e)) => Err(e),
         // The reader stopped before it opened the input: only a panic does that.

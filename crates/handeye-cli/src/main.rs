@@ -15,6 +15,7 @@ mod input;
 mod inspect;
 mod online;
 mod output;
+mod publish;
 mod report;
 mod simulate;
 mod values;

@@ -115,8 +115,10 @@ pub struct Args {
     /// frame (eye-in-hand) or base frame (eye-to-hand); `gripper` or `base` for files].
     #[arg(long)]
     parent_frame: Option<String>,
-    /// The child frame of X (the camera's) [default: the recording's camera frame; `camera` for
-    /// files].
+    /// The child frame of X (the camera's) [default: the recording's camera frame, or, when the
+    /// recording's tf gives it a parent, the root of its subtree, X carried there; `camera` for
+    /// files]. A name given is kept (X carried to it when the recording's /tf_static holds it
+    /// above the camera frame), with a warning when the recording gives that frame a parent.
     #[arg(long)]
     child_frame: Option<String>,
     /// The calibration's name in the yaml output (easy_handeye2's `parameters.name`, the file
@@ -225,10 +227,11 @@ pub fn run(args: Args) -> Result<()> {
     let mut calibrator = OnlineCalibrator::new(config)?;
     // Event lines are buffered, and written out before the input is waited for.
     let out = LineOut::stdout();
-    let (records, source, offset) = read_ahead(&args.input, {
+    let (records, opened) = read_ahead(&args.input, {
         let out = out.clone();
         Rc::new(move || out.flush_quietly())
     })?;
+    let (source, offset) = (opened.source, opened.offset);
     let time_offset = offset.as_ref().map(|o| o.seconds);
     let mut messages = Thinned {
         bad_lines: 0,
@@ -396,17 +399,24 @@ pub fn run(args: Args) -> Result<()> {
             e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
             e.uncertainty_translation.unwrap_or(f64::NAN) * scale,
         );
-        let published = Published {
+        let child_given = args.child_frame.is_some();
+        let mount = opened.camera_mount.as_ref();
+        let publication = crate::publish::publication(&x, &frames, mount, child_given);
+        let published = publication.of(Published {
             x: &x,
             frame: setup.x_frame(),
             setup,
             source: &source,
             unit,
-        };
+            note: None,
+            warning: None,
+        });
+        publication.tell(published, false);
+        let to = &publication.frames;
         print_text(&match face {
-            Face::Yaml => faces::yaml(published, &frames, None),
-            Face::Ros2 => faces::ros2(published, &frames),
-            _ => faces::urdf(published, &frames),
+            Face::Yaml => faces::yaml(published, to, None),
+            Face::Ros2 => faces::ros2(published, to),
+            _ => faces::urdf(published, to),
         })?;
     }
     Ok(())

@@ -7,7 +7,9 @@
 use std::path::PathBuf;
 
 use handeye::TrackOptions;
-use handeye::io::{BagFrames, Format, Recording, RecordingOptions, Source, TimeOffset};
+use handeye::io::{
+    BagFrames, CameraMount, Format, Recording, RecordingOptions, Source, TimeOffset,
+};
 use handeye::transform_from_matrix4;
 use handeye::{AdaptiveParams, Selection, StreamReadings};
 use handeye::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
@@ -708,6 +710,26 @@ fn pose_arrays<'py>(py: Python<'py>, poses: &[PosePair]) -> [Bound<'py, numpy::P
     ]
 }
 
+/// Where a recording's tf places the camera frame, as a dict: `camera`, `root` (the frame X is
+/// published for), `root_from_camera` (a 4x4 array, or None when a transform between them moves),
+/// `placed_under` (the robot's frame the root hangs from, or None) and `tf_x` (X as tf has it,
+/// when it is placed there through static transforms, or None).
+fn camera_mount<'py>(py: Python<'py>, m: &CameraMount) -> PyResult<Bound<'py, PyDict>> {
+    let array = |t: Option<Transform>| {
+        t.map(|t| {
+            let h = t.to_homogeneous();
+            numpy::ndarray::Array2::from_shape_fn((4, 4), |(r, c)| h[(r, c)]).into_pyarray(py)
+        })
+    };
+    let d = PyDict::new(py);
+    d.set_item("camera", &m.camera)?;
+    d.set_item("root", m.root())?;
+    d.set_item("root_from_camera", array(m.frame_from_camera(m.root())))?;
+    d.set_item("placed_under", &m.placed_under)?;
+    d.set_item("tf_x", array(m.tf_x))?;
+    Ok(d)
+}
+
 /// Reads any input (the library's `io::Recording`): a pose file, a ViSP directory, two stamped
 /// streams or a ROS 2 recording; a dict of the pose pairs and what reading found.
 #[pyfunction]
@@ -762,6 +784,12 @@ fn read_recording<'py>(
     });
     d.set_item("offset_curve", curve)?;
     d.set_item("target_source", &r.target_source)?;
+    let mount = r
+        .camera_mount
+        .as_ref()
+        .map(|m| camera_mount(py, m))
+        .transpose()?;
+    d.set_item("camera_mount", mount)?;
     let notes: Vec<String> = r.notes.iter().map(ToString::to_string).collect();
     d.set_item("notes", notes)?;
     d.set_item("joints", (!r.joints.is_empty()).then_some(&r.joints))?;

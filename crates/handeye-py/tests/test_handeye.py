@@ -593,6 +593,28 @@ def test_read_recording_of_a_ros2_bag_with_auto_offset():
     assert fixed["time_offset"] == 0.037 and fixed["offset_curve"] is None
 
 
+def test_read_recording_of_an_optical_camera_frame_says_what_to_publish():
+    # Issue 33 item 12: the optical frame has a parent in tf (camera_link, from /tf_static), so X
+    # found for it is published for camera_link, X @ inv(root_from_camera).
+    bag = TESTDATA / "rosbag" / "eih_tf_mcap"
+    frames = dict(base_frame="base_link", gripper_frame="tool0", target_frame="board")
+    r = handeye.read_recording(bag, camera_frame="camera_color_optical_frame", **frames)
+    assert any(
+        "the camera frame `camera_color_optical_frame` has a parent in tf already" in n
+        and "publish it for `camera_link`, the root of the camera's subtree" in n
+        for n in r["notes"]
+    ), r["notes"]
+    m = r["camera_mount"]
+    assert (m["camera"], m["root"], m["placed_under"], m["tf_x"]) == (
+        "camera_color_optical_frame", "camera_link", None, None)
+    truth = json.loads((TESTDATA / "rosbag" / "eih_tf_mcap.truth.json").read_text())
+    link, optical = (np.array(truth[k]) for k in ("tool0_from_camera_link", "tool0_from_camera_color_optical_frame"))
+    assert np.allclose(optical @ np.linalg.inv(m["root_from_camera"]), link, atol=1e-12)
+    plain = handeye.read_recording(bag, camera_frame="camera_link", **frames)
+    assert plain["camera_mount"] is None
+    assert not any("has a parent in tf" in n for n in plain["notes"])
+
+
 def test_read_recording_refuses_bad_input_with_a_clear_message(tmp_path):
     missing = tmp_path / "missing.jsonl"
     with pytest.raises(ValueError, match="missing.jsonl"):

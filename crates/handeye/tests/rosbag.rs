@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use handeye::io::rosbag::{BagOptions, inspect_bag, read_bag_pairs};
+use handeye::io::{BagFrames, Note, Recording, RecordingOptions, Source};
 use handeye::model::pose::Transform;
 use handeye::{Error, Method, Pairing, Setup, motion_pairs, solve};
 use nalgebra::Matrix4;
@@ -106,6 +107,76 @@ fn noise_free_bags_give_x_to_rounding_in_both_storages_setups_and_target_sources
             assert_eq!(n, t["detections"].as_u64().unwrap() as usize, "{name}");
             assert!(d < 1e-9, "{name} ({camera}): X off by {d:e}");
         }
+    }
+}
+
+/// Issue 33 item 12: the camera frame asked for has a parent in tf (`camera_link` →
+/// `camera_color_optical_frame`, from /tf_static). The recording says so (a note, and
+/// `camera_mount`), and X carried to the root of the camera's subtree is the truth's X of
+/// `camera_link`; for `camera_link` itself there is nothing to say.
+#[test]
+fn a_camera_frame_with_a_parent_is_told_with_the_root_x_is_published_for() {
+    for (name, setup) in [
+        ("eih_tf_mcap", Setup::EyeInHand),
+        ("eth_tf_sqlite3", Setup::EyeToHand),
+    ] {
+        let read = |camera: &str| {
+            let source = Source::Bag {
+                path: bag(name),
+                frames: BagFrames {
+                    base: "base_link".into(),
+                    gripper: "tool0".into(),
+                    camera: camera.into(),
+                    target: Some("board".into()),
+                    target_topic: None,
+                },
+            };
+            let options = RecordingOptions {
+                setup,
+                ..RecordingOptions::default()
+            };
+            Recording::read(&source, &options).unwrap()
+        };
+        let r = read("camera_color_optical_frame");
+        let mount = r
+            .camera_mount
+            .clone()
+            .expect("the optical frame has a parent");
+        assert_eq!(mount.root(), "camera_link", "{name}");
+        assert_eq!((mount.placed_under.as_deref(), mount.tf_x), (None, None));
+        let x_parent = match setup {
+            Setup::EyeInHand => "tool0",
+            Setup::EyeToHand => "base_link",
+        };
+        assert_eq!(mount.x_parent, x_parent);
+        let motions = motion_pairs(&r.poses, Pairing::All, setup);
+        let x = solve(Method::Andreff, &motions).unwrap().x;
+        let root_from_camera = mount.frame_from_camera("camera_link").unwrap();
+        let published = x * root_from_camera.inverse();
+        let t = truth(name);
+        let d = diff(&published, &matrix(&t[x_name(setup, "camera_link")]));
+        assert!(d < 1e-9, "{name}: the root's X off by {d:e}");
+        let told = r
+            .notes
+            .iter()
+            .find(|n| matches!(n, Note::CameraMount { .. }))
+            .expect("a note")
+            .to_string();
+        assert!(
+            told.contains(
+                "the camera frame `camera_color_optical_frame` has a parent in tf already (`camera_link` → `camera_color_optical_frame`)"
+            ) && told.contains(&format!(
+                "publish it for `camera_link`, the root of the camera's subtree, as {x_parent}_from_camera_link = X · camera_color_optical_frame_from_camera_link"
+            )),
+            "{told}"
+        );
+        let r = read("camera_link");
+        assert_eq!(r.camera_mount, None);
+        assert!(
+            !r.notes
+                .iter()
+                .any(|n| matches!(n, Note::CameraMount { .. }))
+        );
     }
 }
 

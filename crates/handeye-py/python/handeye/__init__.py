@@ -369,7 +369,13 @@ def read_recording(
     message number), ``stamps`` (seconds, or None), ``time_offset`` (the offset used, or None for a pose
     file), ``time_offset_sigma`` (its one-sigma in seconds when it was estimated, else None),
     ``offset_curve`` (with "auto": a (K, 2) array of offset and correlation, else None),
-    ``target_source`` (a recording's target topic or tf edge, else None), ``joints`` (each pose's
+    ``target_source`` (a recording's target topic or tf edge, else None), ``camera_mount`` (when
+    a recording's tf gives the camera frame a parent, as it gives an optical frame under
+    ``camera_link``: a dict of ``camera``, ``root``, the root of the camera's subtree, which X is
+    published for as ``X @ inv(root_from_camera)``, ``root_from_camera`` (4x4, or None when a
+    transform between them moves), ``placed_under`` (the robot's frame the root hangs from when
+    the camera is placed in tf already, else None) and ``tf_x`` (X as tf has it then); else
+    None), ``joints`` (each pose's
     joint angles where a JSON Lines file gives them, for ``calibrate(joints=...)``, else None) and ``notes`` (what
     ``handeye`` prints on stderr while reading). Bad input raises ValueError naming the file,
     line and field."""

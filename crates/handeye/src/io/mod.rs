@@ -47,7 +47,7 @@ pub use intrinsics::{parse_intrinsics, read_intrinsics};
 pub use jsonl::{parse_pose_line, read_joints};
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
-pub use recording::{Note, Recording, RecordingOptions, Source};
+pub use recording::{CameraMount, MountFrame, Note, Recording, RecordingOptions, Source};
 pub use saved::{parse_saved_x, read_saved_x};
 pub use sync::{MAX_TIME_OFFSET, TimeOffset};
 pub use truth::{Truth, read_truth, truth_json};

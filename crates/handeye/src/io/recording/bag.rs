@@ -43,6 +43,7 @@ pub(super) fn read_bag(
         target_topic: frames.target_topic.clone(),
         time_offset: 0.0,
         max_gap: options.max_gap,
+        setup: options.setup,
     };
     let (time_offset, found) = match options.time_offset {
         Some(TimeOffset::Fixed(t)) => (t, None),
@@ -92,6 +93,12 @@ pub(super) fn read_bag(
         repeated: pairs.dropped_repeated,
         robot_repeated: pairs.robot_repeated,
     });
+    if let Some(mount) = &pairs.camera_mount {
+        notes.add(Note::CameraMount {
+            path: path.display().to_string(),
+            mount: mount.clone(),
+        });
+    }
     Ok(Recording {
         poses: pairs.poses(),
         lines: pairs.pairs.iter().map(|p| p.line).collect(),
@@ -101,6 +108,7 @@ pub(super) fn read_bag(
         time_offset_sigma: found.as_ref().map(|f| f.sigma),
         offset_curve: found.map(|f| f.correlated.curve),
         target_source: Some(pairs.target_source),
+        camera_mount: pairs.camera_mount,
         notes: Vec::new(),
         written: Written::FRAMES,
         joints: Vec::new(),

@@ -18,8 +18,10 @@ use crate::model::rotation::Rotations;
 #[cfg(feature = "rosbag")]
 mod bag;
 mod convention;
+mod mount;
 mod note;
 
+pub use mount::{CameraMount, MountFrame};
 pub use note::Note;
 
 /// Where a [`Recording`] is read from.
@@ -59,7 +61,9 @@ pub struct BagFrames {
     pub base: String,
     /// The gripper's frame (e.g. `tool0`).
     pub gripper: String,
-    /// The camera frame X is found for (e.g. `camera_color_optical_frame`).
+    /// The camera frame X is found for: the root of the camera's subtree in tf (e.g.
+    /// `camera_link`), or a frame below it (an optical frame), for which [`Recording::camera_mount`]
+    /// says where tf places it and so what to publish.
     pub camera: String,
     /// The target's frame in `/tf` (e.g. `board`); with a `TransformStamped` target topic its
     /// `child_frame_id` must be it.
@@ -142,6 +146,9 @@ pub struct Recording {
     /// For a ROS 2 recording: where the target's pose came from (`/board_pose`, or
     /// `/tf camera → board`).
     pub target_source: Option<String>,
+    /// For a ROS 2 recording whose tf gives the camera frame a parent: where it places it, and
+    /// so the frame X is to be published for (also told as [`Note::CameraMount`]).
+    pub camera_mount: Option<CameraMount>,
     /// What reading found worth telling, in order.
     pub notes: Vec<Note>,
     /// The directions in which the input wrote its poses (`Options::written` of a calibration).

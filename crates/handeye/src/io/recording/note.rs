@@ -2,6 +2,7 @@
 
 use std::fmt;
 
+use super::CameraMount;
 use crate::io::sync::FoundOffset;
 use crate::io::{Preamble, Projections};
 
@@ -86,6 +87,15 @@ pub enum Note {
         /// Samples of the robot's transforms at a stamp an earlier one has (the first kept).
         robot_repeated: usize,
     },
+    /// The camera frame of a ROS 2 recording has a parent in its tf: X found for it is published
+    /// for the root of the camera's subtree, or not at all when the camera is placed in the
+    /// robot's tree already.
+    CameraMount {
+        /// The recording.
+        path: String,
+        /// Where tf places the camera frame.
+        mount: CameraMount,
+    },
 }
 
 impl fmt::Display for Note {
@@ -133,6 +143,7 @@ impl fmt::Display for Note {
                 "{source}: every {side} angle given in degrees is within ±{largest:.2}, so the {side} poses turn by a few degrees at most: if these are radians, convert them to degrees (× 180/π)"
             ),
             Self::BagPairs { .. } => self.fmt_bag_pairs(f),
+            Self::CameraMount { path, mount } => mount.fmt_note(path, f),
         }
     }
 }

@@ -17,6 +17,7 @@
 //! gripper; the setup is applied afterwards). [`inspect_bag`] lists the topics and the tf tree.
 
 mod cdr;
+mod mount;
 mod msg;
 mod pairs;
 mod storage;

@@ -8,11 +8,11 @@ use super::msg::{NS, POSE_STAMPED, TRANSFORM_STAMPED, frame_name};
 use super::storage::bag_error;
 use super::tf::{self, TfError, seconds};
 use super::{Bag, TF_STATIC_TOPIC, TF_TOPIC, at, load, topic_list};
-use crate::io::StampedPosePair;
 use crate::io::sync::{Lookup, MAX_TIME_OFFSET, StampedPose};
+use crate::io::{CameraMount, StampedPosePair};
 use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
-use crate::model::motion::PosePair;
+use crate::model::motion::{PosePair, Setup};
 
 /// Which frames and topics make the pose pairs; `Default` gives the values on each field.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -21,8 +21,8 @@ pub struct BagOptions {
     pub base_frame: String,
     /// The gripper's frame (e.g. `tool0`). No default: required.
     pub gripper_frame: String,
-    /// The camera frame whose pose X is (e.g. `camera_color_optical_frame`). No default:
-    /// required.
+    /// The camera frame whose pose X is (e.g. `camera_link`, or an optical frame below it; see
+    /// [`BagPairs::camera_mount`]). No default: required.
     pub camera_frame: String,
     /// The target's frame (e.g. `board`): needed when the target is in `/tf`; with a
     /// `TransformStamped` topic its `child_frame_id` must be it. Default none.
@@ -36,6 +36,9 @@ pub struct BagOptions {
     /// A dynamic transform is not interpolated across a gap between samples longer than this,
     /// seconds (the observation is dropped). Default 0 counts as 0.1.
     pub max_gap: f64,
+    /// The setup, which makes X's parent frame the gripper's (eye-in-hand) or the base's
+    /// (eye-to-hand), for [`BagPairs::camera_mount`]. Default eye-in-hand.
+    pub setup: Setup,
 }
 
 /// Default `max_gap`, seconds.
@@ -74,6 +77,9 @@ pub struct BagPairs {
     /// `camera_from_target` at every observation (camera clock), in time order; stamps from the
     /// same origin as `robot_stream`'s.
     pub camera_stream: Vec<StampedPose>,
+    /// Where tf places the camera frame, when it gives it a parent (an optical frame under
+    /// `camera_link`): X is then published for the root of the camera's subtree.
+    pub camera_mount: Option<CameraMount>,
 }
 
 impl BagPairs {
@@ -94,6 +100,21 @@ fn nanoseconds(name: &'static str, value: f64, most: f64) -> Result<i64> {
         });
     }
     Ok((value * NS as f64).round() as i64)
+}
+
+/// Where `tf` places the camera frame, X's parent frame being the gripper's or the base's by
+/// `setup`.
+fn camera_mount(
+    tf: &tf::TfBuffer,
+    camera: &str,
+    [base, gripper]: [&str; 2],
+    setup: Setup,
+) -> Option<CameraMount> {
+    let x_parent = match setup {
+        Setup::EyeInHand => gripper,
+        Setup::EyeToHand => base,
+    };
+    super::mount::camera_mount(tf, camera, [base, gripper], x_parent)
 }
 
 /// The pose pairs of a recording: at each stamp of the target's pose, `base_from_gripper` from
@@ -324,6 +345,7 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         robot_repeated: robot_edges.iter().map(|e| tf.repeated(e)).sum(),
         robot_stream,
         camera_stream,
+        camera_mount: camera_mount(tf, &camera, [&base, &gripper], options.setup),
     };
     for (index, stamp_ns, camera_from_target) in observations {
         let robot = tf.lookup(&robot_path, stamp_ns.saturating_sub(offset_ns), max_gap_ns);

@@ -319,8 +319,16 @@ impl TfBuffer {
         self.names.contains(frame)
     }
 
+    /// `parent_from_child` of the edge of `child` when it is static (from `/tf_static`).
+    pub fn static_edge(&self, child: &str) -> Option<Transform> {
+        match self.edges.get(child).map(|e| &e.kind) {
+            Some(EdgeKind::Static(t)) => Some(*t),
+            _ => None,
+        }
+    }
+
     /// `frame` and its ancestors, up to its root; a loop is an error naming it.
-    fn ancestors(&self, frame: &str) -> Result<Vec<String>, TfError> {
+    pub fn ancestors(&self, frame: &str) -> Result<Vec<String>, TfError> {
         let mut chain = vec![frame.to_string()];
         let mut seen: HashMap<&str, usize> = HashMap::from([(frame, 0)]);
         let mut current = frame;
