@@ -4,9 +4,7 @@
 use anyhow::Result;
 use clap::Args as ClapArgs;
 use clap::builder::PossibleValuesParser;
-use handeye::OUTLIER_DEG;
 use handeye::{Assessment, Fix, Options, calibrate};
-use handeye::{REPLICATES, REPLICATES_RANGE};
 use handeye::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 
 use handeye::TsaiOptions;
@@ -44,7 +42,7 @@ pub struct Args {
     reject_outliers: bool,
     /// A pose whose motions' robot and camera rotation angles differ by more than this (median,
     /// degrees) is an outlier whatever the noise level.
-    #[arg(long, default_value_t = OUTLIER_DEG, value_parser = values::angle_deg)]
+    #[arg(long, default_value_t = Options::default().outlier_deg, value_parser = values::angle_deg)]
     outlier_deg: f64,
     /// Read the input another way: `auto` applies a reading that fits far better when one is
     /// found; `as-given` keeps the input as it is (a better reading is then a warning, not a
@@ -54,7 +52,7 @@ pub struct Args {
     #[arg(long, value_parser = values::named::<Fix>())]
     fix: Option<Fix>,
     /// Bootstrap replicates behind the reported uncertainty.
-    #[arg(long, default_value_t = REPLICATES, value_parser = values::count(*REPLICATES_RANGE.start() as u64, *REPLICATES_RANGE.end() as u64))]
+    #[arg(long, default_value_t = Options::default().replicates, value_parser = values::count(*Options::REPLICATES_RANGE.start() as u64, *Options::REPLICATES_RANGE.end() as u64))]
     bootstrap: usize,
     /// Drop the motions OpenCV's Tsai drops: robot or camera rotation with 2·sin(θ/2) outside
     /// [0.3, 1.7] (with --method tsai).

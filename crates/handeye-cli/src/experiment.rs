@@ -94,7 +94,7 @@ pub fn run(args: Args) -> Result<()> {
         publish(&args.out, "tracking", &table, &report, &figures)?;
     }
     if matches!(study, Some(Study::All | Study::Advice)) {
-        let report = handeye::closed_loop(args.series.unwrap_or(20), args.seed);
+        let report = handeye::experiment::closed_loop(args.series.unwrap_or(20), args.seed);
         publish(&args.out, "advice", &advice_table(&report), &report, &[])?;
     }
     Ok(())
@@ -115,7 +115,7 @@ fn series_bar(series: usize, name: &str) -> ProgressBar {
 }
 
 /// The closed loop of the advice as Markdown.
-fn advice_table(r: &handeye::ClosedLoop) -> String {
+fn advice_table(r: &handeye::experiment::ClosedLoop) -> String {
     let cell = |n: Option<usize>| n.map_or(format!("> {}", r.most), |n| n.to_string());
     format!(
         "### advice ({} series of the paper's protocol, from its first 3 poses)\n\nPoses needed to reach a rotation one-sigma of {:.4}° (what the paper's walk reaches after {} poses), median over the series:\n\n| the paper's walk | turns about random axes | the advice |\n|---|---|---|\n| {} | {} | {} |\n",

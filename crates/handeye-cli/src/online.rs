@@ -8,7 +8,7 @@ use std::rc::Rc;
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
-use handeye::{AdaptiveParams, MAX_N_INIT, Selection, StreamReading, StreamReadings};
+use handeye::{AdaptiveParams, Selection, StreamReading, StreamReadings};
 use handeye::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::{Step, TrackOptions, TrackReport as Report};
 
@@ -65,7 +65,7 @@ pub struct Args {
     #[arg(long, default_value_t = OnBadLine::Skip, value_parser = values::named::<OnBadLine>())]
     on_bad_line: OnBadLine,
     /// N of Eq. (1): motions averaged for the initial thresholds (2 to 1000000).
-    #[arg(long, default_value_t = AdaptiveParams::default().n_init, value_parser = values::count(2, MAX_N_INIT as u64))]
+    #[arg(long, default_value_t = AdaptiveParams::default().n_init, value_parser = values::count(2, AdaptiveParams::MAX_N_INIT as u64))]
     n_init: usize,
     /// Candidates tried before the thresholds are relaxed.
     #[arg(long, default_value_t = AdaptiveParams::default().interval, value_parser = values::count(1, u64::MAX))]

@@ -8,7 +8,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, RangedU64ValueParser, T
 use clap::error::ErrorKind;
 use clap::{Arg, Command};
 use handeye::Named;
-use handeye::io::{MAX_TIME_OFFSET, TimeOffset};
+use handeye::io::TimeOffset;
 
 /// The most poses `simulate`, `demo` and `bench` make (each pose is about a hundred bytes, and
 /// `bench --pairs all` grows with the square).
@@ -124,17 +124,18 @@ pub fn budget_s(s: &str) -> Result<f64, String> {
     }
 }
 
-/// `auto` or a number of seconds of at most [`MAX_TIME_OFFSET`] in size (127 years).
+/// `auto` or a number of seconds of at most [`TimeOffset::MAX_SECONDS`] in size (127 years).
 pub fn time_offset(s: &str) -> Result<TimeOffset, String> {
     if s.trim() == "auto" {
         return Ok(TimeOffset::Auto);
     }
     let v = number(s)?;
-    if v.abs() <= MAX_TIME_OFFSET {
+    if v.abs() <= TimeOffset::MAX_SECONDS {
         Ok(TimeOffset::Fixed(v))
     } else {
         Err(format!(
-            "must be `auto` or seconds of at most {MAX_TIME_OFFSET:e} in size (127 years), got {}",
+            "must be `auto` or seconds of at most {:e} in size (127 years), got {}",
+            TimeOffset::MAX_SECONDS,
             shown(s)
         ))
     }

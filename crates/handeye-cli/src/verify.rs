@@ -7,9 +7,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::{
-    Assessment, Consistency, Fix, Method, Options, Pairing, REPLICATES, REPLICATES_RANGE,
-};
+use handeye::{Assessment, Consistency, Fix, Method, Options, Pairing};
 
 use crate::faces::{self, Face};
 use crate::input::{InputArgs, read_all};
@@ -38,7 +36,7 @@ pub struct Args {
     #[arg(long, value_parser = values::named::<Fix>())]
     fix: Option<Fix>,
     /// Bootstrap replicates behind the recording's uncertainty.
-    #[arg(long, default_value_t = REPLICATES, value_parser = values::count(*REPLICATES_RANGE.start() as u64, *REPLICATES_RANGE.end() as u64))]
+    #[arg(long, default_value_t = Options::default().replicates, value_parser = values::count(*Options::REPLICATES_RANGE.start() as u64, *Options::REPLICATES_RANGE.end() as u64))]
     bootstrap: usize,
     /// Output: the JSON object, or a summary for a person (`text`) [default: text on a terminal,
     /// JSON otherwise].

@@ -445,7 +445,7 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
 /// The whole batch calibration ([`handeye::calibrate`]): its report as JSON, the same
 /// object `handeye calibrate` prints (the Python layer parses it).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::REPLICATES, point=None, joints=None, prior=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::Options::default().replicates, point=None, joints=None, prior=None))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,
@@ -482,7 +482,7 @@ fn calibrate_report<'py>(
 /// The robot-world calibration ([`handeye::calibrate_robot_world`]): its report as
 /// JSON, the same object `handeye calibrate --robot-world` prints.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::REPLICATES, reject_outliers=false, point=None, joints=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::Options::default().replicates, reject_outliers=false, point=None, joints=None))]
 #[allow(clippy::too_many_arguments)]
 fn robot_world_report<'py>(
     py: Python<'py>,
@@ -551,7 +551,7 @@ fn priors(prior: Option<Vec<String>>) -> PyResult<Vec<handeye::Prior>> {
 /// Whether a saved X still fits a new recording (`handeye verify`): the library's
 /// `Verification` as JSON text, the same object the command line prints.
 #[pyfunction]
-#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::REPLICATES, joints=None, prior=None, fix=None))]
+#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::Options::default().replicates, joints=None, prior=None, fix=None))]
 #[allow(clippy::too_many_arguments)]
 fn verify_report<'py>(
     py: Python<'py>,

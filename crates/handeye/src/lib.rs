@@ -110,7 +110,24 @@ pub mod model;
 mod model;
 pub mod sim;
 
-pub use online::experiment;
+pub mod experiment {
+    //! The experiments `handeye experiment` runs. The paper's (sec. 4.1), as SPEC sec. 6 fixes
+    //! them: Monte-Carlo over simulated series, in parallel, reproducible whatever the number of
+    //! threads.
+    //!
+    //! - [`Experiment::Accuracy`]: 20 series × 200 poses; mean error per series of conventional,
+    //!   fixed and adaptive (error source: truth), and every batch solver on all poses (Fig. 2).
+    //! - [`Experiment::Adaptability`]: 100 series × 500 poses; calibrations per series, adaptive
+    //!   vs fixed (Fig. 3).
+    //! - [`Experiment::Realtime`]: 50 series × 100 poses; time per calibration and errors,
+    //!   adaptive vs optimal (Table I).
+    //!
+    //! And the advice's closed loop ([`closed_loop`]): how many poses the paper's walk, random
+    //! turns and [`advise`](crate::advise)'s suggestions need to reach the same uncertainty.
+
+    pub use crate::calibrate::advice::{ClosedLoop, closed_loop};
+    pub use crate::online::experiment::*;
+}
 
 // # The public surface, layer by layer.
 // Model: poses, motions, the setup, errors, warnings and what they carry.
@@ -122,32 +139,30 @@ pub use model::names::Named;
 pub use model::pose::{
     Transform, TransformJson, quaternion_xyzw, rotation_angle_between, transform_from_matrix4,
 };
-pub use model::prior::{Component, Prior, PriorUnit, PriorValue, PriorsUsed};
+pub use model::prior::{Component, Prior, PriorUnit, PriorValue};
 pub use model::rotation::{RotationConvention, Rotations};
 pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.
-pub use solve::low_dof::{CommonAxis, LowDofSolution, common_axis, solve_low_dof};
 pub use solve::motions::{AllPairs, MotionSource};
-pub use solve::reprojection::{PixelOptions, PixelSolution, planar_poses, reprojection};
+pub use solve::reprojection::planar_poses;
 pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 // Check.
 pub use check::holdout::leave_one_out;
 pub use check::outliers::PoseResiduals;
-pub use check::quality::{OUTLIER_DEG, errors_against_truth};
+pub use check::quality::errors_against_truth;
 pub use check::stream::{StreamReading, StreamReadings};
-pub use check::uncertainty::{AtPoint, REPLICATES, REPLICATES_RANGE, Uncertainty, median_target};
+pub use check::uncertainty::{AtPoint, Uncertainty};
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{
-    Advice, AdviseOptions, ClosedLoop, GoalReport, Pivot, Predicted, WeaknessKind, advise,
-    closed_loop,
+    Advice, AdviseOptions, GoalReport, Pivot, Predicted, WeaknessKind, advise,
 };
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
-pub use calibrate::pixels::{FrameRms, REFUSE_SIGMA_PX, ReprojectionSummary, calibrate_on_pixels};
+pub use calibrate::pixels::{FrameRms, ReprojectionSummary, calibrate_on_pixels};
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 pub use calibrate::verify::{Consistency, SavedUnit, SavedX, Sizes, Verification, verify};
 // Online: the paper's calibrator and the accumulating estimator.
-pub use online::select::{AdaptiveParams, MAX_N_INIT, Selection};
+pub use online::select::{AdaptiveParams, Selection};
 pub use online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
 pub use track::{Report as TrackReport, Step, TrackOptions};
 

@@ -12,6 +12,8 @@
 //!    weakly determined one is a warning naming it;
 //! 5. the residuals and the spread of the motions ([`crate::check::quality::quality_report`]).
 
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::check::holdout::{HeldOutCheck, leave_one_out};
@@ -29,7 +31,7 @@ use crate::model::findings::{Part, Verdict};
 use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
 use crate::model::pose::{MAX_TRANSLATION, Transform, check_translation};
 use crate::model::pose::TransformJson;
-use crate::model::prior::{Prior, PriorsUsed, check_priors};
+use crate::model::prior::{Prior, PriorValue, PriorsUsed, check_priors};
 use crate::calibrate::low_dof::{self, LowDofReport};
 use crate::model::warning::{SHOWN, Warning};
 pub(crate) use crate::check::outliers::working_distance;
@@ -135,7 +137,7 @@ pub struct Options {
     pub outlier_deg: f64,
     /// What to do about a better reading of the input.
     pub fix: Fix,
-    /// Bootstrap replicates for the uncertainty.
+    /// Bootstrap replicates for the uncertainty (within [`Options::REPLICATES_RANGE`]).
     pub replicates: usize,
     /// How each pose is named in messages (e.g. `file:line`), by input index; `pose i` when
     /// shorter than the input.
@@ -145,7 +147,8 @@ pub struct Options {
     /// undoes the mix-up.
     pub written: Written,
     /// The point (camera frame, input unit) whose error through X `uncertainty.at_point` gives;
-    /// `None`: the median target position seen by the camera ([`median_target`]).
+    /// `None`: the median target position seen by the camera (per coordinate, over
+    /// `camera_from_target`'s translations).
     pub point: Option<[f64; 3]>,
     /// The joint angles of each pose (radians, the robot's joint order), by input index, where the
     /// input gives them: the configuration the systematic-error test orders the poses by, and
@@ -155,6 +158,14 @@ pub struct Options {
     /// free component comes from its prior; a prior on a component the motions determine is
     /// checked against the data (the data's value is kept). Default none.
     pub priors: Vec<Prior>,
+}
+
+impl Options {
+    /// The bootstrap replicates a calibration accepts (`replicates`, here and in
+    /// [`RobotWorldOptions`](crate::RobotWorldOptions)): fewer than 8 give no usable one-sigma, and
+    /// more than 100,000 only cost memory and time (each keeps an X).
+    pub const REPLICATES_RANGE: std::ops::RangeInclusive<usize> =
+        crate::check::uncertainty::REPLICATES_RANGE;
 }
 
 impl Default for Options {
@@ -281,8 +292,8 @@ pub struct Report {
     pub systematic: Option<Systematic>,
     /// The components of X's translation that came from a prior, not from the data (`"prior":
     /// {"tz": {"value", "sigma"}}`); absent when none did.
-    #[serde(default, skip_serializing_if = "PriorsUsed::is_empty")]
-    pub prior: PriorsUsed,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub prior: BTreeMap<String, PriorValue>,
     /// A low-DOF recording (every motion rotates about one axis): the axis and the component
     /// taken from the prior; absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -52,14 +52,15 @@ pub struct RobotWorldOptions {
     pub method: RobotWorldMethod,
     /// What to do about a better reading of the input. Default [`Fix::Refuse`].
     pub fix: Fix,
-    /// Bootstrap replicates for X's uncertainty. Default
-    /// [`REPLICATES`](crate::check::uncertainty::REPLICATES).
+    /// Bootstrap replicates for X's uncertainty, within
+    /// [`Options::REPLICATES_RANGE`](crate::Options::REPLICATES_RANGE). Default 40, as
+    /// [`Options`](crate::Options)'.
     pub replicates: usize,
     /// Leave out the outlier poses (found as in the hand–eye report, by the screw invariants of
     /// their motions). Default false: they are kept and named in a warning.
     pub reject_outliers: bool,
-    /// A pose whose median rotation-angle gap is above this (degrees) is an outlier. Default
-    /// [`OUTLIER_DEG`].
+    /// A pose whose median rotation-angle gap is above this (degrees) is an outlier. Default 3,
+    /// as [`Options`](crate::Options)'.
     pub outlier_deg: f64,
     /// How each pose is named in messages (e.g. `file:line`), by input index. Default empty
     /// (`pose i`).

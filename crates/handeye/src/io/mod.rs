@@ -42,32 +42,38 @@ use lines::{Line, Lines};
 // `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
 // two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
 // public with `internals` for this crate's tests.
-pub use frames::{FrameSeries, frames_of, read_frames};
-pub use intrinsics::{parse_intrinsics, read_intrinsics};
-pub use jsonl::{parse_pose_line, read_joints};
+pub use frames::{FrameSeries, read_frames};
+pub use intrinsics::read_intrinsics;
+pub use jsonl::parse_pose_line;
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
 pub use recording::{CameraMount, MountFrame, Note, Recording, RecordingOptions, Source};
-pub use saved::{parse_saved_x, read_saved_x};
-pub use sync::{MAX_TIME_OFFSET, TimeOffset};
+pub use saved::read_saved_x;
+pub use sync::TimeOffset;
 pub use truth::{Truth, read_truth, truth_json};
-// Each format's own reader and the io helpers: crate-internal; public with `internals` for this
-// crate's tests.
+// Each format's own reader, the io helpers, and the parsers of text behind the file readers
+// (`parse_intrinsics`, `parse_saved_x`, `frames_of`, the joints of a pose file): crate-internal;
+// public with `internals` for this crate's tests.
 use csv_pairs::CsvPairs;
 use jsonl::JsonlPairs;
 pub(crate) use transform::{FieldProblem, read_transform_json};
-#[cfg(not(feature = "internals"))]
-use {
-    lines::MAX_LINE,
-    stamped::{read_camera_stream, read_stamped_poses},
-    transform::transform_from_json,
-};
 #[cfg(feature = "internals")]
 pub use {
+    frames::frames_of,
+    intrinsics::parse_intrinsics,
+    jsonl::read_joints,
     lines::MAX_LINE,
+    saved::parse_saved_x,
     stamped::{read_camera_stream, read_stamped_poses},
     transform::transform_from_json,
     truth::{parse_truth, write_truth},
+};
+#[cfg(not(feature = "internals"))]
+use {
+    jsonl::read_joints,
+    lines::MAX_LINE,
+    stamped::{read_camera_stream, read_stamped_poses},
+    transform::transform_from_json,
 };
 
 /// The names a pose may have in a file, and whether the file's transform is the inverse of ours.

@@ -157,6 +157,13 @@ pub enum TimeOffset {
     Auto,
 }
 
+impl TimeOffset {
+    /// The largest clock offset taken, seconds (about 127 years): more than any two clocks
+    /// differ, a camera stamping from its boot and a robot in Unix time included (1.7e9 s), and
+    /// small enough for nanosecond stamps (a ROS 2 recording's) to hold it.
+    pub const MAX_SECONDS: f64 = MAX_TIME_OFFSET;
+}
+
 /// Two stream files read and paired ([`pair_stream_files`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct StreamPairing {

@@ -1,12 +1,5 @@
-//! The paper's simulated experiments (sec. 4.1), as SPEC sec. 6 fixes them: Monte-Carlo over
-//! simulated series, in parallel, reproducible whatever the number of threads.
-//!
-//! - [`Experiment::Accuracy`]: 20 series × 200 poses; mean error per series of conventional, fixed
-//!   and adaptive (error source: truth), and every batch solver on all poses (Fig. 2).
-//! - [`Experiment::Adaptability`]: 100 series × 500 poses; calibrations per series, adaptive vs
-//!   fixed (Fig. 3).
-//! - [`Experiment::Realtime`]: 50 series × 100 poses; time per calibration and errors, adaptive vs
-//!   optimal (Table I).
+//! The paper's simulated experiments (sec. 4.1), as SPEC sec. 6 fixes them: public as
+//! [`crate::experiment`], with the advice's closed loop.
 
 use std::time::Instant;
 
@@ -53,7 +46,7 @@ impl Experiment {
     }
 
     /// The online methods the experiment compares (batch solvers come as reference rows).
-    pub fn online_methods(self) -> &'static [OnlineMethod] {
+    pub(crate) fn online_methods(self) -> &'static [OnlineMethod] {
         match self {
             Self::Accuracy => &[
                 OnlineMethod::Conventional,
@@ -76,26 +69,37 @@ crate::named_enum!(Experiment, "experiment", "experiment" {
     Realtime => "realtime",
 });
 
-/// The paper's online methods.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum OnlineMethod {
-    /// Andreff on every two consecutive motions.
-    Conventional,
-    /// Shi et al.'s fixed thresholds.
-    Fixed,
-    /// The paper's adaptive selection.
-    Adaptive,
-    /// Adaptive selection, then refinement over the last five selected motions.
-    Optimal,
-}
+// The online methods an experiment compares are named in its report (`MethodSummary::method`);
+// the enum is crate-internal, public with `internals` for this crate's tests.
+#[cfg(feature = "internals")]
+pub use methods::OnlineMethod;
+#[cfg(not(feature = "internals"))]
+use methods::OnlineMethod;
 
-crate::named_enum!(OnlineMethod, "online method", "method" {
-    Conventional => "conventional",
-    Fixed => "fixed",
-    Adaptive => "adaptive",
-    Optimal => "optimal",
-});
+mod methods {
+    use serde::{Deserialize, Serialize};
+
+    /// The paper's online methods.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+    #[serde(rename_all = "kebab-case")]
+    pub enum OnlineMethod {
+        /// Andreff on every two consecutive motions.
+        Conventional,
+        /// Shi et al.'s fixed thresholds.
+        Fixed,
+        /// The paper's adaptive selection.
+        Adaptive,
+        /// Adaptive selection, then refinement over the last five selected motions.
+        Optimal,
+    }
+
+    crate::named_enum!(OnlineMethod, "online method", "method" {
+        Conventional => "conventional",
+        Fixed => "fixed",
+        Adaptive => "adaptive",
+        Optimal => "optimal",
+    });
+}
 
 /// Settings of a run; `for_experiment` gives the paper's.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

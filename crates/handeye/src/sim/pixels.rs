@@ -85,7 +85,7 @@ pub struct PixelSimConfig {
 }
 
 /// Realistic intrinsics: 1280×720, f ≈ 900 px, barrel distortion.
-pub fn realistic_intrinsics() -> Intrinsics {
+fn realistic_intrinsics() -> Intrinsics {
     Intrinsics {
         fx: 905.0,
         fy: 903.5,

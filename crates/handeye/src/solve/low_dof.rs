@@ -131,7 +131,8 @@ pub struct LowDofSolution {
 ///
 /// # Example
 /// ```
-/// use handeye::{Component, MotionPair, Transform, common_axis, solve_low_dof};
+/// use handeye::solve::low_dof::{common_axis, solve_low_dof};
+/// use handeye::{Component, MotionPair, Transform};
 /// use nalgebra::{Rotation3, Translation3, Vector3};
 /// let x = Transform::from_parts(
 ///     Translation3::new(0.03, -0.02, 0.12),

@@ -97,8 +97,8 @@ pub enum Method {
     /// Levenberg–Marquardt on all motions, started from `andreff`.
     Refine,
     /// Levenberg–Marquardt on the pixels of the detections, X and the target's pose together
-    /// ([`reprojection::reprojection`]): not a solver of motions, so not in [`Method::ALL`], and
-    /// [`solve`] refuses it.
+    /// ([`calibrate_on_pixels`](crate::calibrate_on_pixels)): not a solver of motions, so not in
+    /// [`Method::ALL`], and [`solve`] refuses it.
     Reprojection,
 }
 

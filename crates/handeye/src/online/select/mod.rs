@@ -118,6 +118,9 @@ impl AdaptiveParams {
     /// The range of `explore`: each of the first three calibrations changes the thresholds ten
     /// times at most (`1e-320` made d₀ infinite).
     pub const EXPLORE: (f64, f64) = (0.1, 10.0);
+    /// The largest `n_init` accepted: far beyond any use (the paper's is 5), small enough that
+    /// the poses buffered before the first thresholds stay a few hundred megabytes at worst.
+    pub const MAX_N_INIT: usize = MAX_N_INIT;
 
     /// Checks every parameter's range.
     pub fn validate(&self) -> Result<()> {
