@@ -132,10 +132,22 @@ pub(crate) fn in_poses_unit(priors: &[Prior], poses: &[PosePair]) -> Result<Vec<
             .map(|p| p.base_from_gripper.translation.vector.norm())
             .collect(),
     );
-    let size = robot.max(working_distance(poses));
+    let camera = working_distance(poses);
+    if robot.max(camera) > MIXED_UNITS_RATIO * robot.min(camera) {
+        // The robot and the camera in two units: the poses' unit is not one, and the calibration
+        // names the mix-up and its `--fix` (a prior judged against the larger would be refused as
+        // in the wrong unit first, sending the user to the wrong fix).
+        return Ok(priors.to_vec());
+    }
+    let size = robot.max(camera);
     let unit = length_unit(poses);
     priors.iter().map(|p| in_unit(p, size, unit)).collect()
 }
+
+/// The robot's and the camera's translations (medians) further apart than this are in two length
+/// units (metres against millimetres is about 1000); a fixed camera two metres away from a robot
+/// whose flange is half a metre from its base is 4.
+const MIXED_UNITS_RATIO: f64 = 50.0;
 
 /// The poses' length unit told by their size (the median over the poses of the larger of the
 /// robot's and the camera's translation): metres when it is 0.05–10, millimetres when 50–10,000.
