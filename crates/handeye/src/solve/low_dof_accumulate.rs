@@ -91,7 +91,7 @@ impl OneAxis {
         // Σ (1 − cos φ_k) and Σ (1 − cos φ_k) sin² α_k.
         let turned = 0.5 * (3.0 * count - m.trace());
         let off = count - k.dot(&(m * k));
-        if !(turned > 0.0) {
+        if turned.is_nan() || turned <= 0.0 {
             return None;
         }
         Some(Self {
@@ -198,9 +198,9 @@ impl LowDofAccumulator {
         for (sum, (a, b)) in self.rows.iter_mut().zip(PAIRS) {
             *sum += l[a] * l[b].transpose();
         }
-        for a in 0..3 {
+        for (a, row) in l.iter().enumerate() {
             for b in 0..3 {
-                self.cross[3 * a + b] += l[a] * p[b];
+                self.cross[3 * a + b] += row * p[b];
             }
         }
         self.pp += p * p.transpose();
