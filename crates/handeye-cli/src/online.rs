@@ -52,6 +52,15 @@ pub struct Args {
     /// target position seen, the working distance).
     #[arg(long, value_name = "X,Y,Z", value_parser = values::point)]
     point: Option<[f64; 3]>,
+    /// With --estimator accumulate: a prior on a component of X's translation, for a low-DOF
+    /// robot (a SCARA, a 4-axis arm) whose rotations are all about one axis and so never
+    /// determine X's translation along it: NAME=VALUE (exact) or NAME=VALUE+-SIGMA, NAME one of
+    /// tx, ty, tz (X's parent frame; the input's length unit, or with its unit: tz=0.12m,
+    /// tz=120mm+-2mm), e.g. `--prior tz=0.12+-0.002`. Repeatable. Used only while the rotations
+    /// are about one axis, for the component along it; its sigma is added to the translation
+    /// uncertainty.
+    #[arg(long, value_name = "NAME=VALUE[+-SIGMA]", value_parser = values::prior)]
+    prior: Vec<handeye::Prior>,
     /// Also refine over the last five selected motions (the paper's optimal method).
     #[arg(long)]
     optimal: bool,
@@ -224,7 +233,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.report {
         crate::report::check_writable(path)?;
     }
-    let mut calibrator = OnlineCalibrator::new(config)?;
+    let mut calibrator = OnlineCalibrator::new(config)?.with_priors(&args.prior)?;
     // Event lines are buffered, and written out before the input is waited for.
     let out = LineOut::stdout();
     let (records, opened) = read_ahead(&args.input, {
@@ -335,7 +344,12 @@ pub fn run(args: Args) -> Result<()> {
     if !accumulate && let Some(found) = readings.finish() {
         warn_misread(found);
     }
-    if let Some(report) = calibrator.finish() {
+    let finished = calibrator.finish();
+    if let Some(e) = calibrator.refusal() {
+        out.flush()?;
+        return Err(e.into());
+    }
+    if let Some(report) = finished {
         print_report(&report, setup, time_offset, face, &out, calibrator.unit())?;
         if let Some(t) = &mut trace {
             t.step(&Step {
@@ -456,8 +470,17 @@ fn estimate_words(r: &Report, unit: Unit) -> String {
         let words = faces::at_point(&at, known(unit));
         format!("; {}{}", words[..1].to_lowercase(), &words[1..])
     });
+    // Which component came from the prior (a low-DOF robot), as the batch's text says it.
+    let prior = e.prior.map_or(String::new(), |p| {
+        format!(
+            "; {} from the prior ({} +- {})",
+            p.component.name(),
+            length(p.value, unit),
+            length(p.sigma, unit)
+        )
+    });
     format!(
-        "{}, uncertainty {:.3}° / {}{at_point}; verdict {}",
+        "{}, uncertainty {:.3}° / {}{at_point}{prior}; verdict {}",
         describe(&e.x, unit),
         e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
         length(e.uncertainty_translation.unwrap_or(f64::NAN), unit),

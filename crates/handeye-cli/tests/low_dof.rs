@@ -313,3 +313,140 @@ fn verify_checks_a_saved_scara_x_and_takes_the_free_height_from_it() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `online INPUT --setup SETUP [--prior PRIOR] --output json`: (exit code, the JSON lines).
+fn online(input: &str, setup: &str, prior: Option<&str>) -> (i32, Vec<Value>, String) {
+    let mut args = vec!["online", input, "--setup", setup, "--output", "json"];
+    if let Some(p) = prior {
+        args.extend(["--prior", p]);
+    }
+    let (code, out, err) = run(&args);
+    let lines = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    (code, lines, err)
+}
+
+#[test]
+fn online_with_the_true_height_is_within_three_sigma() {
+    for (name, setup) in RECORDINGS {
+        let (t, q) = truth(name);
+        let prior = format!("tz={}", t[2]);
+        let (code, lines, err) = online(&file(name), setup, Some(&prior));
+        assert_eq!(code, 0, "{name}: {err}");
+        let r = lines
+            .iter()
+            .rfind(|l| l.get("estimate").is_some())
+            .unwrap_or_else(|| panic!("{name}: no estimate: {err}"));
+        assert_eq!(r["verdict"], "good", "{name}: {err}");
+        assert_eq!(r["poses"].as_u64(), Some(25));
+        assert_eq!(r["prior"]["tz"]["value"].as_f64(), Some(t[2]));
+        assert_eq!(r["prior"]["tz"]["sigma"].as_f64(), Some(0.0));
+        assert_eq!(r["low_dof"]["free"], "tz");
+        assert_eq!(r["translation"][2].as_f64(), Some(t[2]));
+        let dt = (0..3)
+            .map(|i| (r["translation"][i].as_f64().unwrap() - t[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let dot = (0..4)
+            .map(|i| r["quaternion_xyzw"][i].as_f64().unwrap() * q[i])
+            .sum::<f64>()
+            .abs()
+            .min(1.0);
+        let dr = (2.0 * dot.acos()).to_degrees();
+        let (sr, st) = (
+            r["uncertainty"]["rotation_deg"].as_f64().unwrap(),
+            r["uncertainty"]["translation"].as_f64().unwrap(),
+        );
+        println!("online {name}: {dr:.4}° ({sr:.4}° sigma), {dt:.6} ({st:.6} sigma)");
+        assert!(dr <= 3.0 * sr && dt <= 3.0 * st, "{name}");
+    }
+}
+
+#[test]
+fn online_prior_sigma_is_added_to_the_translation_uncertainty() {
+    let (name, setup) = RECORDINGS[0];
+    let (t, _) = truth(name);
+    let last = |prior: &str| {
+        let (code, lines, err) = online(&file(name), setup, Some(prior));
+        assert_eq!(code, 0, "{err}");
+        lines
+            .into_iter()
+            .rfind(|l| l.get("estimate").is_some())
+            .unwrap()
+    };
+    let exact = last(&format!("tz={}", t[2]));
+    let loose = last(&format!("tz={}+-0.002", t[2]));
+    assert_eq!(loose["prior"]["tz"]["sigma"].as_f64(), Some(0.002));
+    let u = |r: &Value| r["uncertainty"]["translation"].as_f64().unwrap();
+    // The data's part is the same; the prior's sigma is added in quadrature (SCARA: g = z).
+    let expected = (u(&exact).powi(2) + 0.002f64.powi(2)).sqrt();
+    assert!(
+        (u(&loose) - expected).abs() < 1e-9,
+        "{} {expected}",
+        u(&loose)
+    );
+    assert!(u(&loose) >= 0.002);
+    assert!(loose["uncertainty"]["at_point"]["sigma"].as_f64().unwrap() >= 0.002);
+    // The text face says which component came from the prior.
+    let (code, out, _) = run(&[
+        "online",
+        &file(name),
+        "--setup",
+        setup,
+        "--prior",
+        &format!("tz={}+-0.002", t[2]),
+        "--output",
+        "text",
+    ]);
+    assert_eq!(code, 0);
+    assert!(out.contains("tz from the prior"), "{out}");
+}
+
+#[test]
+fn online_without_a_prior_publishes_nothing_and_names_it() {
+    for (name, setup) in RECORDINGS {
+        let (code, lines, err) = online(&file(name), setup, None);
+        assert_eq!(code, 0, "{name}: {err}");
+        assert!(
+            lines.iter().all(|l| l.get("estimate").is_none()),
+            "{name}: {lines:?}"
+        );
+        assert!(err.contains("--prior tz="), "{name}: {err}");
+        // A prior on another component than the free one names the one to give.
+        let (_, lines, err) = online(&file(name), setup, Some("tx=0.03"));
+        assert!(lines.iter().all(|l| l.get("estimate").is_none()));
+        assert!(err.contains("--prior tz="), "{name}: {err}");
+    }
+}
+
+#[test]
+fn online_prior_in_another_unit_is_refused_or_converted() {
+    let (name, setup) = RECORDINGS[0];
+    let (t, _) = truth(name);
+    // Millimetres on a recording in metres: refused (exit 2), naming the unit.
+    let mm = format!("tz={}", t[2] * 1000.0);
+    let (code, lines, err) = online(&file(name), setup, Some(&mm));
+    assert_eq!(code, 2, "{err}");
+    assert!(lines.iter().all(|l| l.get("estimate").is_none()));
+    assert!(err.contains("another length unit"), "{err}");
+    // The same with its unit: converted.
+    let (code, lines, err) = online(&file(name), setup, Some(&format!("{mm}mm")));
+    assert_eq!(code, 0, "{err}");
+    let r = lines.iter().rfind(|l| l.get("estimate").is_some()).unwrap();
+    assert!((r["translation"][2].as_f64().unwrap() - t[2]).abs() < 1e-12);
+    // The paper's estimator has no low-DOF solve.
+    let (code, _, err) = run(&[
+        "online",
+        &file(name),
+        "--setup",
+        setup,
+        "--estimator",
+        "paper",
+        "--prior",
+        "tz=0.1",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("accumulating estimator"), "{err}");
+}

@@ -839,7 +839,7 @@ struct PyOnline {
 #[pymethods]
 impl PyOnline {
     #[new]
-    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None))]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None, prior=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         selection: &str,
@@ -863,6 +863,7 @@ impl PyOnline {
         every: Option<usize>,
         shrink: Option<f64>,
         point: Option<[f64; 3]>,
+        prior: Option<Vec<String>>,
     ) -> PyResult<Self> {
         let tracking = TrackOptions::default();
         // A parameter left out takes the library's default.
@@ -904,10 +905,13 @@ impl PyOnline {
             // Arrays as handeye names them.
             written: handeye::Written::NAMED,
         };
+        let given = priors(prior)?;
         let readings =
             (config.estimator != Estimator::Accumulate).then(|| StreamReadings::new(config.setup));
         Ok(Self {
-            inner: OnlineCalibrator::new(config).map_err(value_error)?,
+            inner: OnlineCalibrator::new(config)
+                .and_then(|c| c.with_priors(&given))
+                .map_err(value_error)?,
             readings,
             found: None,
         })
@@ -950,12 +954,17 @@ impl PyOnline {
 
     /// The accumulating estimator's final report (JSON text), or None; a readings check not run
     /// yet runs on a short stream (see `take_warning`).
-    fn finish(&mut self) -> Option<String> {
+    fn finish(&mut self) -> PyResult<Option<String>> {
         if let Some(found) = self.readings.as_mut().and_then(StreamReadings::finish) {
             self.found = Some(found.to_string());
         }
         let setup = self.inner.config().setup;
-        self.inner.finish().map(|r| r.json(setup, None).to_string())
+        let report = self.inner.finish();
+        // A prior in another length unit than the poses, told only now on a short stream.
+        if let Some(e) = self.inner.refusal() {
+            return Err(value_error(e));
+        }
+        Ok(report.map(|r| r.json(setup, None).to_string()))
     }
 
     /// The estimate to use now (JSON text): the accumulating estimator's last report since the

@@ -906,6 +906,37 @@ def test_the_drop_in_says_what_opencvs_tsai_filter_dropped():
     assert dropping > 0, "no seed had a motion dropped: the test tests nothing"
 
 
+def test_the_online_calibrator_takes_a_prior_for_a_low_dof_robot_as_the_command_line():
+    # Issue 30 online: a SCARA stream gives no estimate without the camera's height (the pending
+    # reason names the prior), and with it the final report is `handeye online --prior`'s.
+    path = TESTDATA / "low_dof" / "scara_eye-in-hand_s0.jsonl"
+    tz = json.loads(path.with_suffix(".truth.json").read_text())["gripper_from_camera"]["translation"][2]
+    r = handeye.read_recording(path)
+    g, c = r["base_from_gripper"], r["camera_from_target"]
+
+    def run(**params):
+        online = handeye.OnlineCalibrator(setup="eye-in-hand", **params)
+        for a, b in zip(g, c):
+            online.push(a, b)
+        return online, online.finish()
+
+    online, final = run()
+    assert final is None
+    assert "--prior tz=" in online.pending()
+    given = f"tz={tz!r}+-0.001"
+    _, final = run(prior=given)
+    cli = _cli_json("online", path, "--setup", "eye-in-hand", "--prior", given)[-1]
+    assert np.abs(final["matrix"] - np.array(cli["matrix"])).max() < 1e-12
+    assert final["prior"] == cli["prior"] == {"tz": {"value": tz, "sigma": 0.001}}
+    assert final["low_dof"]["free"] == "tz"
+    assert final["uncertainty"]["translation"] >= 0.001
+    # A prior 1000 times off is refused once the first poses tell the unit.
+    with pytest.raises(ValueError, match="another length unit"):
+        run(prior={"tz": tz * 1000})
+    with pytest.raises(ValueError, match="accumulating estimator"):
+        handeye.OnlineCalibrator(estimator="paper", prior=given)
+
+
 def test_advise_takes_a_prior_and_advises_a_scara_turns_it_makes():
     """advise(..., prior=...) as `handeye advise --prior`: on a SCARA recording X's uncertainty
     includes the prior's, and the turns suggested are about the robot's one axis."""

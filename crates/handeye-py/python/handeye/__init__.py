@@ -418,7 +418,11 @@ class OnlineCalibrator:
     left out, it is 0.1 m in the ``unit``: "auto" infers metres or millimetres from the first
     pose, "m", "mm"), ``unfreeze``; for ``estimator="accumulate"`` also ``every`` and ``shrink``
     (how often it reports) and ``point`` (where each report's ``uncertainty.at_point`` gives the
-    error, camera frame; default the mean target position seen). With the paper's estimator, the first 64 poses (a shorter stream's, at
+    error, camera frame; default the mean target position seen) and ``prior``, ``calibrate``'s, for
+    a low-DOF robot (a SCARA: every rotation about one axis): ``"tz=0.12+-0.002"``, a list of such
+    or a dict; while the rotations are about one axis, X is solved with the prior's component and
+    each report has ``prior`` and ``low_dof`` (a prior in another length unit than the poses raises
+    ``ValueError`` from ``push`` once the first 16 poses tell the unit, or from ``finish``). With the paper's estimator, the first 64 poses (a shorter stream's, at
     ``finish()``) are checked as ``handeye online`` checks them: a ``UserWarning`` when they fit far
     better read another way, have sizes the setup makes unlikely, or turn about one axis.
     With ``estimator="accumulate"``, ``push`` returns the estimator's own
@@ -442,6 +446,8 @@ class OnlineCalibrator:
         truth = params.pop("truth", None)
         if truth is not None:
             truth = np.ascontiguousarray(truth, dtype=np.float64)
+        if params.get("prior") is not None:
+            params["prior"] = _priors(params["prior"])
         self._inner = _OnlineCalibrator(truth=truth, **params)
 
     def push(self, base_from_gripper, camera_from_target):

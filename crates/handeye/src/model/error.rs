@@ -166,7 +166,12 @@ pub enum LowDofMissing {
 }
 
 /// The words of a [`Degeneracy::LowDof`] refusal.
-fn low_dof_words(axis: &[f64; 3], spread_deg: f64, setup: Setup, missing: LowDofMissing) -> String {
+pub(crate) fn low_dof_words(
+    axis: &[f64; 3],
+    spread_deg: f64,
+    setup: Setup,
+    missing: LowDofMissing,
+) -> String {
     use crate::model::prior::Component;
     let frame = crate::model::findings::reference_frame(setup);
     // No "-0.000".

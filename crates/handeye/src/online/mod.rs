@@ -453,6 +453,9 @@ impl OnlineCalibrator {
         self.previous = Some(hand);
         if let Some(tracker) = &mut self.tracker {
             self.step = tracker.push(pose);
+            if let Some(e) = tracker.refusal() {
+                return Err(e);
+            }
         }
         let selections = self.selector.offer(self.poses, pose);
         Ok(selections
@@ -514,6 +517,29 @@ impl OnlineCalibrator {
     /// is determined and was not just reported).
     pub fn finish(&mut self) -> Option<Report> {
         self.tracker.as_mut()?.finish()
+    }
+
+    /// The same calibrator with priors on X's translation for a low-DOF robot
+    /// ([`Tracker::with_priors`]); refused with the paper's estimator, which has no low-DOF solve.
+    /// Before the first pose.
+    pub fn with_priors(mut self, priors: &[crate::model::prior::Prior]) -> Result<Self> {
+        if priors.is_empty() {
+            return Ok(self);
+        }
+        let Some(tracker) = self.tracker.take() else {
+            return Err(Error::InvalidParameter {
+                name: "prior",
+                message: "a prior needs the accumulating estimator (`--estimator accumulate`, the default): the paper's estimator solves X from two motions at a time and has no low-DOF solve".into(),
+            });
+        };
+        self.tracker = Some(tracker.with_priors(priors)?);
+        Ok(self)
+    }
+
+    /// Why the priors were refused (a prior in another length unit than the poses, told on the
+    /// first poses or at the end of a short stream): `push` returns it as its error.
+    pub fn refusal(&self) -> Option<Error> {
+        self.tracker.as_ref()?.refusal()
     }
 
     /// The accumulating estimator's current estimate, determined or not; `None` before it has

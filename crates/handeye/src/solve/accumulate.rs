@@ -349,6 +349,11 @@ impl PoseAccumulator {
         self.n
     }
 
+    /// U = Σ R_k, the sum of the hand rotations.
+    pub(crate) fn rotation_sum(&self) -> Matrix3<f64> {
+        self.u
+    }
+
     /// Forgets every pose (after a detected change).
     #[cfg(any(test, feature = "internals"))]
     pub fn reset(&mut self) {

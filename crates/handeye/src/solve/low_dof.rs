@@ -39,7 +39,7 @@ pub const LOW_DOF_SPREAD_DEG: f64 = 2.0;
 
 
 /// The conditioning of the scaled translation system below which θ or t_X⊥ is not determined.
-const REFUSE_SYSTEM: f64 = 1e-10;
+pub(crate) const REFUSE_SYSTEM: f64 = 1e-10;
 
 /// The common rotation axis of a set of motions.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -58,6 +58,13 @@ impl CommonAxis {
     /// Whether every rotating motion rotates about this one axis (within `LOW_DOF_SPREAD_DEG`).
     pub fn is_low_dof(&self) -> bool {
         self.rotating >= 2 && self.spread.to_degrees() <= LOW_DOF_SPREAD_DEG
+    }
+
+    /// The axis in X's parent frame pointing along its largest coordinate's positive direction
+    /// (up, for a SCARA), as reports give it.
+    pub(crate) fn upward(&self) -> [f64; 3] {
+        let k = self.hand * self.hand[self.hand.iamax()].signum();
+        k.map(|v| if v == 0.0 { 0.0 } else { v }).into()
     }
 
     /// The coordinate component of X's translation along the free direction, when the free
@@ -224,7 +231,7 @@ pub fn with_component(t: &Vector3<f64>, k: &Vector3<f64>, along: (Component, f64
 
 /// The smallest rotation taking `from` to `to` (both unit); a half turn about a perpendicular
 /// axis when they are opposite.
-fn align(from: &Vector3<f64>, to: &Vector3<f64>) -> Rotation3<f64> {
+pub(crate) fn align(from: &Vector3<f64>, to: &Vector3<f64>) -> Rotation3<f64> {
     Rotation3::rotation_between(from, to).unwrap_or_else(|| {
         let (perpendicular, _) = across(from);
         Rotation3::from_axis_angle(&Unit::new_normalize(perpendicular), std::f64::consts::PI)
@@ -232,7 +239,7 @@ fn align(from: &Vector3<f64>, to: &Vector3<f64>) -> Rotation3<f64> {
 }
 
 /// Two unit vectors that complete `k` to a right-handed orthonormal basis.
-fn across(k: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+pub(crate) fn across(k: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     let helper = if k.x.abs() < 0.9 {
         Vector3::x()
     } else {
@@ -244,7 +251,7 @@ fn across(k: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
 
 /// Smallest over largest eigenvalue of D N D, D = diag(N_ii^−½) (the conditioning whatever the
 /// length unit).
-fn scaled_conditioning(normal: &Matrix4<f64>) -> f64 {
+pub(crate) fn scaled_conditioning(normal: &Matrix4<f64>) -> f64 {
     let d = normal.diagonal().map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 });
     let scaled = Matrix4::from_fn(|i, j| normal[(i, j)] * d[i] * d[j]);
     let eigen = scaled.symmetric_eigen().eigenvalues;

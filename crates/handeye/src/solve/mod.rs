@@ -14,6 +14,7 @@ mod horaud;
 mod least_squares;
 mod lm;
 pub mod low_dof;
+pub mod low_dof_accumulate;
 pub mod motions;
 mod park;
 mod quaternion;

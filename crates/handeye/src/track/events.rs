@@ -9,6 +9,7 @@ use crate::model::error::misread_advice;
 use crate::model::findings::{Assessment, Reading};
 use crate::model::motion::Setup;
 use crate::model::pose::Transform;
+use crate::model::prior::Component;
 
 /// The estimate of one segment of the stream (since the start or the last change).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -51,6 +52,25 @@ pub struct TrackEstimate {
     /// the target as the mean fixed frame under the hand–eye X. `None` while its system is
     /// degenerate.
     pub robot_world: Option<RobotWorldPair>,
+    /// Set when X is the low-DOF solve (every rotation about one axis, a prior on X's translation
+    /// along it, [`crate::solve::low_dof_accumulate`]): the component that came from the prior.
+    #[serde(default)]
+    pub prior: Option<TrackPrior>,
+}
+
+/// The component of a low-DOF X that came from the prior, not from the data.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrackPrior {
+    /// The component (`tz` for a SCARA).
+    pub component: Component,
+    /// Its value, the poses' length unit (a prior that named another unit converted).
+    pub value: f64,
+    /// Its one-sigma, the same unit (0: exact); added to the translation uncertainty.
+    pub sigma: f64,
+    /// The common rotation axis, X's parent frame (its largest component positive).
+    pub axis: [f64; 3],
+    /// RMS angle of the rotations' axes from it, degrees.
+    pub spread_deg: f64,
 }
 
 /// X and the target pose of a robot-world solution.
@@ -214,6 +234,18 @@ pub enum Pending {
     /// yet: the poses so far are a gripper standing still or turning about one axis. Nothing is
     /// reported before they are.
     ReadingsUnchecked,
+    /// Every rotation is about one axis (a low-DOF robot: a SCARA, a 4-axis arm): X's translation
+    /// along it is never determined and no prior gives it.
+    LowDof {
+        /// The axis, X's parent frame.
+        axis: [f64; 3],
+        /// RMS angle of the rotations' axes from it, degrees.
+        spread_deg: f64,
+        /// The setup the poses are read in.
+        setup: Setup,
+        /// The component a prior should give; `None` when the axis is along no coordinate axis.
+        prior: Option<Component>,
+    },
     /// An estimate exists but its uncertainty is above the bound.
     Undetermined {
         /// Rotation uncertainty, degrees (`None`: too few poses for the split-half estimate).
@@ -245,6 +277,7 @@ impl Pending {
             Self::FewPoses { .. }
                 | Self::NoRotation { .. }
                 | Self::ParallelAxes
+                | Self::LowDof { .. }
                 | Self::Undetermined { .. }
         )
     }
@@ -262,6 +295,20 @@ impl fmt::Display for Pending {
                 f,
                 "all rotation axes parallel so far: rotate the gripper about another axis"
             ),
+            Self::LowDof {
+                axis,
+                spread_deg,
+                setup,
+                prior,
+            } => f.write_str(&crate::model::error::low_dof_words(
+                axis,
+                *spread_deg,
+                *setup,
+                match prior {
+                    Some(c) => crate::model::error::LowDofMissing::Prior(*c),
+                    None => crate::model::error::LowDofMissing::NotStatable,
+                },
+            )),
             Self::ReadingsUnchecked => write!(
                 f,
                 "the readings of the input (pose directions, quaternion order, units) are not checked yet: the poses sampled so far turn the gripper less than 2° or about one axis only; turn it about other axes"
@@ -382,6 +429,17 @@ impl Report {
             insert_transform(&mut target, &rw.target);
             x.insert("target".into(), target.into());
             out.insert("robot_world".into(), x.into());
+        }
+        if let Some(p) = &e.prior {
+            // As the batch report: which component came from the prior, and the axis.
+            out.insert(
+                "prior".into(),
+                serde_json::json!({p.component.name(): {"value": p.value, "sigma": p.sigma}}),
+            );
+            out.insert(
+                "low_dof".into(),
+                serde_json::json!({"axis": p.axis, "spread_deg": p.spread_deg, "free": p.component}),
+            );
         }
         if let Some(w) = &self.weak {
             out.insert("weak".into(), w.to_string().into());

@@ -46,7 +46,9 @@ use crate::model::findings::Written;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{axis_angle, rotation_angle_between};
 
-pub use events::{Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate};
+pub use events::{
+    Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate, TrackPrior,
+};
 #[cfg(feature = "internals")]
 pub use events::target_frame;
 use crate::check::uncertainty::point_sigma;
@@ -234,7 +236,23 @@ pub struct Tracker {
     reports: usize,
     held_out: usize,
     changes: usize,
+    /// The priors on X's translation for a low-DOF robot ([`Tracker::with_priors`]).
+    #[serde(default)]
+    priors: Option<TrackPriors>,
 }
+
+/// A tracker's priors: as given, and in the poses' length unit once the first poses tell it (or
+/// why they were refused).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct TrackPriors {
+    given: Vec<crate::model::prior::Prior>,
+    resolved: Option<Vec<crate::model::prior::Prior>>,
+    refused: Option<String>,
+}
+
+/// Poses pushed after which the priors' unit is told from them (the median size of that many
+/// poses, as the batch tells it from all of them); fewer at the end of a shorter stream.
+const PRIOR_UNIT_POSES: usize = WARMUP[0];
 
 impl Tracker {
     /// A tracker for poses read in `setup`.
@@ -243,7 +261,7 @@ impl Tracker {
             options,
             setup,
             poses: 0,
-            incumbent: Segment::new(setup, 1),
+            incumbent: Segment::new(setup, 1, None),
             current: None,
             challenger: None,
             partners: VecDeque::with_capacity(PARTNER_RING),
@@ -261,7 +279,81 @@ impl Tracker {
             reports: 0,
             held_out: 0,
             changes: 0,
+            priors: None,
         }
+    }
+
+    /// The same with priors on X's translation (`--prior tz=…`), for a low-DOF robot (a SCARA,
+    /// a 4-axis arm): when every rotation of a segment is about one axis and a prior covers the
+    /// component along it, X is the low-DOF solve over every pair of the segment's poses
+    /// ([`crate::solve::low_dof_accumulate`], O(1) per pose), the prior's sigma added to its
+    /// translation uncertainty; otherwise the priors change nothing. A prior that names its unit
+    /// (`tz=0.12m`) is converted, and one without a unit refused when it is of another unit than
+    /// the poses, as the batch does, on the first 16 poses ([`Tracker::refusal`]). Before the first
+    /// pose; refuses two priors on one component and bad numbers.
+    pub fn with_priors(mut self, priors: &[crate::model::prior::Prior]) -> crate::model::error::Result<Self> {
+        crate::model::prior::check_priors(priors)?;
+        if priors.is_empty() {
+            return Ok(self);
+        }
+        self.priors = Some(TrackPriors {
+            given: priors.to_vec(),
+            resolved: None,
+            refused: None,
+        });
+        self.incumbent = Segment::new(self.setup, 1, self.segment_priors());
+        Ok(self)
+    }
+
+    /// Why the priors were refused (a prior in another length unit than the poses): the tracker
+    /// then gives no low-DOF estimate, and a face stops with this error.
+    pub fn refusal(&self) -> Option<crate::model::error::Error> {
+        let message = self.priors.as_ref()?.refused.clone()?;
+        Some(crate::model::error::Error::InvalidParameter {
+            name: "prior",
+            message,
+        })
+    }
+
+    /// What a new segment keeps of the priors (see [`Segment::new`]).
+    fn segment_priors(&self) -> Option<Option<Vec<crate::model::prior::Prior>>> {
+        self.priors.as_ref().map(|p| p.resolved.clone())
+    }
+
+    /// Tells the priors' unit from the poses sampled so far, once there are
+    /// [`PRIOR_UNIT_POSES`] of them (at the end, three), as the batch's `in_poses_unit`.
+    fn resolve_priors(&mut self, at_end: bool) {
+        let Some(p) = &mut self.priors else {
+            return;
+        };
+        let n = self.sample.poses.len();
+        if p.resolved.is_some() || p.refused.is_some() || n < if at_end { 3 } else { PRIOR_UNIT_POSES } {
+            return;
+        }
+        match crate::calibrate::low_dof::in_poses_unit(&p.given, &self.sample.poses) {
+            Ok(resolved) => {
+                p.resolved = Some(resolved.clone());
+                if let Some(low) = &mut self.incumbent.low {
+                    low.priors = Some(resolved.clone());
+                }
+                if let Some(low) = self.challenger.as_mut().and_then(|c| c.segment.low.as_mut()) {
+                    low.priors = Some(resolved);
+                }
+            }
+            Err(e) => {
+                p.refused = Some(match e {
+                    crate::model::error::Error::InvalidParameter { message, .. } => message,
+                    other => other.to_string(),
+                });
+            }
+        }
+    }
+
+    /// Whether the readings' check may be left unjudged: the incumbent is a low-DOF robot solved
+    /// with its prior, whose readings the check cannot judge (it solves the general problem, which
+    /// one-axis rotations leave undetermined), as the batch calibrates such a recording.
+    fn readings_moot(&self) -> bool {
+        self.incumbent.solves_low_dof()
     }
 
     /// The same, for an input that writes its poses in the directions `written`
@@ -323,13 +415,14 @@ impl Tracker {
         };
         self.incumbent
             .pending(self.estimate().as_ref(), &self.options)
-            .or((!self.readings_judged).then_some(unjudged))
+            .or((!self.readings_judged && !self.readings_moot()).then_some(unjudged))
     }
 
     /// Takes the next pose (module documentation).
     pub fn push(&mut self, pose: &PosePair) -> Step {
         self.poses += 1;
         self.sample_readings(pose);
+        self.resolve_priors(false);
         let mut step = Step {
             pose: self.poses,
             ..Step::default()
@@ -398,12 +491,13 @@ impl Tracker {
             let poses = self.sample.poses.clone();
             self.judge_sample(&poses);
         }
-        // Nothing from readings never checked ([`Tracker::pending`] says so).
-        if !self.readings_judged {
-            self.current = self.incumbent.refresh(&self.options);
+        self.resolve_priors(true);
+        // Nothing from readings never checked ([`Tracker::pending`] says so), but for a low-DOF
+        // robot solved with its prior.
+        self.current = self.incumbent.refresh(&self.options);
+        if !self.readings_judged && !self.readings_moot() {
             return None;
         }
-        self.current = self.incumbent.refresh(&self.options);
         if self.last_report.is_some_and(|(p, _, _)| p == self.poses) {
             return None;
         }
@@ -453,7 +547,7 @@ impl Tracker {
         self.judge_readings(&kept);
         let mut held = Vec::new();
         if !found.poses.is_empty() {
-            let mut segment = Segment::new(self.setup, self.incumbent.since);
+            let mut segment = Segment::new(self.setup, self.incumbent.since, self.segment_priors());
             let mut gaps = found.poses.iter().peekable();
             let mut k = 0;
             warmup.retain(|(n, p)| {
@@ -591,7 +685,7 @@ impl Tracker {
         let elevated = s > self.options.elevated;
         if elevated && self.challenger.is_none() {
             self.challenger = Some(Challenger {
-                segment: Segment::new(self.setup, number),
+                segment: Segment::new(self.setup, number, self.segment_priors()),
                 current: None,
                 poses: 0,
                 elevated: 0,

@@ -3,13 +3,25 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Pending, RobotWorldPair, TrackEstimate, TrackOptions};
+use super::{Pending, RobotWorldPair, TrackEstimate, TrackOptions, TrackPrior};
 use crate::check::precision::{resolution, rotation_resolution};
 use crate::check::readings::LEAST_TURN_DEG;
 use crate::check::uncertainty::point_sigma;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, rotation_angle_between};
+use crate::model::prior::Prior;
 use crate::solve::accumulate::{PoseAccumulator, RobotWorldAccumulator, Scatter};
+use crate::solve::low_dof_accumulate::{LowDofAccumulator, OneAxis};
+
+/// The low-DOF sums of a segment, kept when the tracker was given priors: the pose-form sums of
+/// all poses and of the two halves ([`LowDofAccumulator`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub(super) struct LowDofSums {
+    all: LowDofAccumulator,
+    halves: [LowDofAccumulator; 2],
+    /// The priors in the poses' length unit; `None` until the unit is told.
+    pub(super) priors: Option<Vec<Prior>>,
+}
 
 /// An estimate with what the tracker needs to judge by it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -42,10 +54,15 @@ pub(super) struct Segment {
     /// before it: every checkpoint counts as determined.)
     #[serde(default)]
     pub(super) checkpoint_local: Vec<Option<(f64, f64)>>,
+    /// The low-DOF sums, when the tracker has priors (`None` without: nothing more per pose).
+    #[serde(default)]
+    pub(super) low: Option<LowDofSums>,
 }
 
 impl Segment {
-    pub(super) fn new(setup: Setup, since: usize) -> Self {
+    /// `priors`: `None` without priors; else the priors in the poses' unit once it is told
+    /// (`Some(None)` before).
+    pub(super) fn new(setup: Setup, since: usize, priors: Option<Option<Vec<Prior>>>) -> Self {
         Self {
             all: PoseAccumulator::new(setup),
             halves: [PoseAccumulator::new(setup), PoseAccumulator::new(setup)],
@@ -55,6 +72,11 @@ impl Segment {
             largest: 0.0,
             checkpoints: Vec::new(),
             checkpoint_local: Vec::new(),
+            low: priors.map(|priors| LowDofSums {
+                all: LowDofAccumulator::new(setup),
+                halves: [LowDofAccumulator::new(setup), LowDofAccumulator::new(setup)],
+                priors,
+            }),
         }
     }
 
@@ -66,7 +88,57 @@ impl Segment {
             .max(rotation_angle_between(&first.rotation, &hand.rotation));
         self.all.add(pose);
         self.halves[self.all.poses() % 2].add(pose);
+        if let Some(low) = &mut self.low {
+            low.all.add(pose);
+            low.halves[self.all.poses() % 2].add(pose);
+        }
         self.robot_world.add(pose);
+    }
+
+    /// The common axis of the segment's hand rotations when they turn about one axis (a low-DOF
+    /// robot), with the prior on its free component when one is given (in the poses' unit); from
+    /// the all-pairs sums (Σ R_k and the first rotation), so without priors too.
+    pub(super) fn low_dof(&self) -> Option<(OneAxis, Option<Prior>)> {
+        let first = self.first?;
+        let axis = OneAxis::of_hand(
+            &self.all.rotation_sum(),
+            first.rotation.matrix(),
+            self.all.poses(),
+        )
+        .filter(OneAxis::is_low_dof)?;
+        let prior = self
+            .low
+            .as_ref()
+            .and_then(|l| l.priors.as_ref())
+            .zip(axis.common().free_component())
+            .and_then(|(priors, c)| priors.iter().find(|p| p.component == c).copied());
+        Some((axis, prior))
+    }
+
+    /// The low-DOF sums and the prior to solve with, when the segment is low-DOF and a prior
+    /// covers its free component: the tracker's low-DOF solve then replaces all-pairs Andreff.
+    fn low_dof_plan(&self) -> Option<(&LowDofSums, OneAxis, Prior)> {
+        let (axis, prior) = self.low_dof()?;
+        Some((self.low.as_ref()?, axis, prior?))
+    }
+
+    /// A low-DOF robot with no prior on its free component (once the priors' unit is told, when
+    /// some were given): the prior to give, in the batch refusal's words.
+    fn wants_prior(&self) -> Option<Pending> {
+        let (axis, None) = self.low_dof()? else {
+            return None;
+        };
+        self.low.as_ref().is_none_or(|l| l.priors.is_some()).then(|| Pending::LowDof {
+            axis: axis.common().upward(),
+            spread_deg: axis.spread.to_degrees(),
+            setup: self.all.setup(),
+            prior: axis.common().free_component(),
+        })
+    }
+
+    /// Whether the segment is solved by the low-DOF solve (a prior covers its free component).
+    pub(super) fn solves_low_dof(&self) -> bool {
+        self.low_dof_plan().is_some()
     }
 
     /// The segment's estimate now, kept as a checkpoint when its pose count has grown by half
@@ -140,27 +212,56 @@ impl Segment {
     }
 
     pub(super) fn estimate(&self) -> Option<Snapshot> {
-        let e = self.all.estimate()?;
+        // A low-DOF segment with its prior: the low-DOF solve, of all poses and of each half.
+        let plan = self.low_dof_plan();
+        let (e, halves) = match plan {
+            Some((low, _, prior)) => {
+                let along = (prior.component, prior.value);
+                let solved = low.all.solve(along).ok()?;
+                let half = |k: usize| low.halves[k].solve(along).ok().map(|s| s.x);
+                (
+                    crate::solve::accumulate::Estimate {
+                        x: solved.x,
+                        poses: self.all.poses(),
+                        conditioning: solved.conditioning,
+                    },
+                    (half(0), half(1)),
+                )
+            }
+            None => {
+                let e = self.all.estimate()?;
+                let half = |k: usize| self.halves[k].estimate().map(|e| e.x);
+                (e, (half(0), half(1)))
+            }
+        };
         let scatter = self.all.residual_scatter(&e.x)?;
         // The largest of three measures: the split-half difference, the first-order covariance
         // with each pose as one measurement at the scatter's noise level, and the drift since
         // half the poses.
-        let halves = (self.halves[0].estimate(), self.halves[1].estimate());
         let split = match halves {
             (Some(a), Some(b)) => Some((
-                0.5 * rotation_angle_between(&a.x.rotation, &b.x.rotation).to_degrees(),
-                0.5 * (a.x.translation.vector - b.x.translation.vector).norm(),
+                0.5 * rotation_angle_between(&a.rotation, &b.rotation).to_degrees(),
+                0.5 * (a.translation.vector - b.translation.vector).norm(),
             )),
             _ => None,
         };
         // At the noise unit: on exact data the scatter is rounding, or 0, which would make the
         // information matrix infinite and leave the estimate without an uncertainty.
         let [noise_rotation, noise_translation] = self.noise_unit(&scatter, &e.x);
-        let linear_covariance = self.all.covariance(
-            &e.x,
-            noise_rotation / 3f64.sqrt(),
-            noise_translation / 3f64.sqrt(),
-        );
+        let (noise_r, noise_t) = (noise_rotation / 3f64.sqrt(), noise_translation / 3f64.sqrt());
+        // A low-DOF X: the data's part, the prior taken as exact (its sigma is added below).
+        let linear_covariance = match plan {
+            Some((_, _, prior)) => self.all.covariance_given(
+                &e.x,
+                noise_r,
+                noise_t,
+                &[Prior {
+                    sigma: 0.0,
+                    ..prior
+                }],
+            ),
+            None => self.all.covariance(&e.x, noise_r, noise_t),
+        };
         let linear = linear_covariance.map(|c| {
             let rotation = (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees();
             (rotation, (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt())
@@ -173,7 +274,7 @@ impl Segment {
         };
         // The first-order covariance scaled up until its sizes reach the reported ones (the
         // split-half or the drift term may be the larger): its shape, the reported size.
-        let covariance = match (linear_covariance, linear, ur.zip(ut)) {
+        let mut covariance = match (linear_covariance, linear, ur.zip(ut)) {
             (Some(c), Some((lr, lt)), Some((ur, ut))) => {
                 let scale = (ur / lr.max(f64::MIN_POSITIVE))
                     .max(ut / lt.max(f64::MIN_POSITIVE))
@@ -182,6 +283,27 @@ impl Segment {
             }
             _ => None,
         };
+        // The prior's sigma is added, not measured (as the batch's `with_prior`): s² g gᵀ in the
+        // translation block, g = k / k_i the direction the prior moves X per unit of its value,
+        // and s|g| in quadrature to the translation uncertainty.
+        let mut ut = ut;
+        let prior = plan.map(|(_, axis, prior)| {
+            let k = axis.hand * axis.hand[axis.hand.iamax()].signum();
+            let g = k / k[prior.component.index()];
+            let add = g * g.transpose() * prior.sigma.powi(2);
+            if let Some(c) = &mut covariance {
+                let block = c.fixed_view::<3, 3>(3, 3) + add;
+                c.fixed_view_mut::<3, 3>(3, 3).copy_from(&block);
+            }
+            ut = ut.map(|t| (t * t + add.trace()).sqrt());
+            TrackPrior {
+                component: prior.component,
+                value: prior.value,
+                sigma: prior.sigma,
+                axis: k.map(|v| if v == 0.0 { 0.0 } else { v }).into(),
+                spread_deg: axis.spread.to_degrees(),
+            }
+        });
         let at_point = covariance.zip(self.all.mean_target()).map(|(c, p)| {
             let point = [p.x, p.y, p.z];
             (point, point_sigma(&c, &e.x, point))
@@ -203,6 +325,7 @@ impl Segment {
                     x: r.x,
                     target: r.target,
                 }),
+                prior,
             },
             scatter,
             local,
@@ -243,6 +366,8 @@ impl Segment {
                 Pending::NoRotation {
                     largest_deg: self.largest.to_degrees(),
                 }
+            } else if let Some(low_dof) = self.wants_prior() {
+                low_dof
             } else {
                 Pending::ParallelAxes
             });
@@ -252,6 +377,9 @@ impl Segment {
             (e.uncertainty_rotation_deg, e.uncertainty_translation),
             (Some(r), Some(t)) if r <= options.max_rotation_deg && t <= bound_translation
         );
+        if !ok && let Some(low_dof) = self.wants_prior() {
+            return Some(low_dof);
+        }
         (!ok).then_some(Pending::Undetermined {
             rotation_deg: e.uncertainty_rotation_deg,
             translation: e.uncertainty_translation,
