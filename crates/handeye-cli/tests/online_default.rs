@@ -146,7 +146,7 @@ fn no_x_is_published_from_a_misread_degenerate_or_unit_mixed_input() {
         (
             "kinhec/pairs/degenerate_single_joint_continuous_eih_s0.jsonl",
             "eye-in-hand",
-            "not determined",
+            "every motion rotates about the same axis",
         ),
     ] {
         for output in ["ros2", "yaml", "urdf"] {

@@ -128,7 +128,7 @@ const QUOTES: &[Quote] = &[
     },
     Quote {
         readme: "exits 3 with `no X to publish from N pose(s): <why>`",
-        parts: &["no X to publish from 40 pose(s): X not determined yet"],
+        parts: &["no X to publish from 40 pose(s): every motion rotates about the same axis"],
         args: &[
             "online",
             "kinhec/pairs/degenerate_single_joint_continuous_eih_s0.jsonl",
@@ -138,9 +138,10 @@ const QUOTES: &[Quote] = &[
         exit: 3,
     },
     Quote {
-        readme: "\"X not determined yet: uncertainty 54.07° and 0.4212 (reported below 2.00° and 0.0263)\"",
+        readme: "\"every motion rotates about the same axis (the gripper's z, (0.000, 0.000, 1.000) in the\n  gripper frame, within 0.13°): a SCARA or 4-axis robot, …\"",
         parts: &[
-            "X not determined yet: uncertainty 54.07° and 0.4212 (reported below 2.00° and 0.0263)",
+            "every motion rotates about the same axis (the gripper's z, (0.000, 0.000, 1.000) in the gripper frame, within 0.13°): a SCARA or 4-axis robot",
+            "`--prior tz=VALUE+-SIGMA`",
         ],
         args: &[
             "online",

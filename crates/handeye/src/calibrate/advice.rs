@@ -173,7 +173,7 @@ pub fn advise(
     options: &AdviseOptions,
 ) -> Result<Advice> {
     check_priors(&options.priors)?;
-    let priors = &crate::calibrate::low_dof::in_poses_unit(&options.priors, poses)?[..];
+    let priors = &crate::check::units::in_poses_unit(&options.priors, poses)?[..];
     let count = options.count;
     check_goal(options.goal)?;
     if poses.len() < 2 {

@@ -362,7 +362,7 @@ pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<
     check_joints(&options.joints, poses.len())?;
     check_priors(&options.priors)?;
     let options = &Options {
-        priors: crate::calibrate::low_dof::in_poses_unit(&options.priors, poses)?,
+        priors: crate::check::units::in_poses_unit(&options.priors, poses)?,
         ..options.clone()
     };
     let mut warnings = Vec::new();

@@ -289,7 +289,7 @@ fn with_saved_prior(
             sigma: 0.0,
             // In the recording's unit, which is then taken as said (a camera at the flange's
             // height is no unit mix-up).
-            unit: crate::calibrate::low_dof::length_unit(poses),
+            unit: crate::check::units::length_unit(poses),
         });
         calibrate(poses, setup, &with_prior)
     };
@@ -453,7 +453,7 @@ const NOT_MILLIMETRES: f64 = 2.0;
 /// Metres or millimetres from the size of the poses' translations (the median of each pose's
 /// larger translation), `None` when it fits neither.
 fn recording_unit(poses: &[PosePair]) -> Option<SavedUnit> {
-    crate::calibrate::low_dof::length_unit(poses).map(|u| match u {
+    crate::check::units::length_unit(poses).map(|u| match u {
         PriorUnit::Metre => SavedUnit::Metre,
         PriorUnit::Millimetre => SavedUnit::Millimetre,
     })

@@ -9,3 +9,4 @@ pub mod readings;
 pub mod stream;
 pub mod systematic;
 pub mod uncertainty;
+pub mod units;

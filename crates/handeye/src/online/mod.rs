@@ -519,8 +519,9 @@ impl OnlineCalibrator {
         self.tracker.as_mut()?.finish()
     }
 
-    /// The same calibrator with priors on X's translation for a low-DOF robot
-    /// ([`Tracker::with_priors`]); refused with the paper's estimator, which has no low-DOF solve.
+    /// The same calibrator with priors on X's translation for a low-DOF robot (the accumulating
+    /// estimator solves the rest from the data); refused with the paper's estimator, which has no
+    /// low-DOF solve.
     /// Before the first pose.
     pub fn with_priors(mut self, priors: &[crate::model::prior::Prior]) -> Result<Self> {
         if priors.is_empty() {

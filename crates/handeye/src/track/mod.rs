@@ -330,7 +330,7 @@ impl Tracker {
         if p.resolved.is_some() || p.refused.is_some() || n < if at_end { 3 } else { PRIOR_UNIT_POSES } {
             return;
         }
-        match crate::calibrate::low_dof::in_poses_unit(&p.given, &self.sample.poses) {
+        match crate::check::units::in_poses_unit(&p.given, &self.sample.poses) {
             Ok(resolved) => {
                 p.resolved = Some(resolved.clone());
                 if let Some(low) = &mut self.incumbent.low {
