@@ -223,3 +223,46 @@ fn a_sample_file_for_the_other_setup_is_refused_with_its_line() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn an_empty_calibration_type_is_undeclared_and_an_unknown_one_is_refused() {
+    // easy_handeye2 writes `calibration_type: ''` when its parameter was never set: the file then
+    // declares no setup, and the run's setup decides (it used to be refused, exit 2).
+    let original = read(
+        &suite().join("nominal_stations_eih_s0.jsonl"),
+        Setup::EyeInHand,
+    )
+    .unwrap();
+    let dir = scratch("empty-type");
+    let declared = easy_handeye_samples(&original.poses, Setup::EyeInHand);
+    for (file, kind) in [("quoted.samples", "''"), ("double.samples", "\"\"")] {
+        let path = dir.join(file);
+        let text = declared.replace(
+            "calibration_type: eye_in_hand",
+            &format!("calibration_type: {kind}"),
+        );
+        assert_ne!(text, declared);
+        std::fs::write(&path, text).unwrap();
+        let read_back = read(&path, Setup::EyeInHand).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let poses = difference(&read_back.poses, &original.poses);
+        assert!(poses < 1e-12, "{file}: poses differ by {poses}");
+        // Undeclared: the other setup is not refused for what the file says.
+        read(&path, Setup::EyeToHand).unwrap_or_else(|e| panic!("{file} eye-to-hand: {e}"));
+    }
+    let path = dir.join("unknown.samples");
+    std::fs::write(
+        &path,
+        declared.replace(
+            "calibration_type: eye_in_hand",
+            "calibration_type: eye_on_table",
+        ),
+    )
+    .unwrap();
+    match read(&path, Setup::EyeInHand) {
+        Err(Error::Parse { line, field, .. }) => {
+            assert_eq!((line, field.as_str()), (3, "parameters.calibration_type"))
+        }
+        other => panic!("{other:?}"),
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

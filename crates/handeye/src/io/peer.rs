@@ -393,12 +393,15 @@ pub fn read_easy_handeye_samples(text: &str, file: &str) -> Result<PoseSeries> {
 }
 
 /// The setup easy_handeye2's `parameters.calibration_type` declares (in its sample files and its
-/// calibration files), with its line; `None` where the file does not say.
+/// calibration files), with its line; `None` where the file does not say, and where it says `''`
+/// (the empty string is what easy_handeye2 writes when its `calibration_type` parameter was never
+/// set: the setup then comes from the run, `--setup`).
 pub(crate) fn declared_setup(tree: &YamlTree, file: &str) -> Result<Option<DeclaredSetup>> {
     let Some((kind, line)) = tree.text("parameters.calibration_type") else {
         return Ok(None);
     };
-    let setup = match kind {
+    let setup = match kind.trim() {
+        "" => return Ok(None),
         "eye_in_hand" => Setup::EyeInHand,
         "eye_on_base" | "eye_to_hand" => Setup::EyeToHand,
         other => {
