@@ -44,10 +44,12 @@ def _sets():
         robot, camera = (TESTDATA / "real" / "ethz-asl" / f"{name}_{s}.csv" for s in ("B_H", "W_E"))
         sets.append((f"real/ethz-asl/{name}", ["--robot", str(robot), "--camera", str(camera)],
                      {"robot": str(robot), "camera": str(camera)}, "eye-in-hand"))
-    for readme in sorted((TESTDATA / "peers").glob("*/README.md")) if (TESTDATA / "peers").exists() else []:
-        for path in sorted(readme.parent.glob("*.jsonl")):
-            setup = "eye-to-hand" if "eye-to-hand" in path.name or "_eth" in path.name else "eye-in-hand"
-            sets.append((f"peers/{readme.parent.name}/{path.stem}", [str(path)], {"path": str(path)}, setup))
+    # Other projects' data (testdata/peers, made by make_peers.py): the setup is the one their
+    # peer.json gives.
+    for peer in sorted((TESTDATA / "peers").glob("*/peer.json")):
+        setup = json.loads(peer.read_text())["setup"]
+        for path in sorted(peer.parent.glob("*.jsonl")):
+            sets.append((f"peers/{peer.parent.name}/{path.stem}", [str(path)], {"path": str(path)}, setup))
     return sets
 
 
