@@ -173,8 +173,8 @@ fn visp_chessboard_poses_are_the_ones_visp_calibrated() {
 fn visp_pixels_of_eight_frames_are_refused() {
     // The reprojection's covariance takes the larger of Gauss–Newton's and the sandwich over frames
     // with the factor F/(F − 12): it needs more than 12 frames, and ViSP's sets have 8. The run
-    // refuses (exit 3) rather than answer without an uncertainty (see the README's "Peers' data":
-    // the refusal's words name the rotation system's conditioning, which is not the reason).
+    // refuses (exit 3) by count, before the solve, rather than answer without an uncertainty (it
+    // used to solve, then say "the rotation system is too ill-conditioned", which was not why).
     for name in ["visp_eye_in_hand", "visp_eye_to_hand"] {
         let Some(dir) = set(name) else { continue };
         let p = peer(&dir);
@@ -190,6 +190,11 @@ fn visp_pixels_of_eight_frames_are_refused() {
             ],
         );
         assert_eq!(code, 3, "{name}: {err}");
+        assert!(
+            err.contains("7 motion(s) given, at least 12 needed"),
+            "{name}: {err}"
+        );
+        assert!(!err.contains("ill-conditioned"), "{name}: {err}");
     }
 }
 

@@ -325,6 +325,25 @@ fn a_target_in_another_unit_is_refused_with_the_unit_named() {
     }
 }
 
+/// Twelve frames or fewer leave X's covariance (the sandwich over frames, F/(F − 12)) without an
+/// estimate: refused by count, as too few motions, not after the solve as ill-conditioned
+/// motions (the words every recording of 3 to 12 frames used to get, ViSP's 8-frame tutorial
+/// data among them).
+#[test]
+fn twelve_frames_are_refused_by_count_and_thirteen_are_solved() {
+    let sim = simulate_pixels(&PixelSimConfig::board(), 12);
+    for n in [3, 8, 12] {
+        match job(&sim, &sim.frames[..n]) {
+            Err(handeye::Error::TooFewMotions { got, need }) => {
+                assert_eq!((got, need), (n - 1, 12))
+            }
+            other => panic!("{n} frames: {other:?}"),
+        }
+    }
+    let r = job(&sim, &sim.frames[..13]).unwrap();
+    assert!(r.uncertainty.rotation_deg.is_finite() && r.uncertainty.rotation_deg > 0.0);
+}
+
 /// Every frame from one view (the robot never moves): refused, not answered.
 #[test]
 fn one_view_is_refused() {

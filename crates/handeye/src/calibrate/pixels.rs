@@ -68,13 +68,17 @@ pub struct FrameRms {
     pub rms_px: f64,
 }
 
+/// The parameters of the fit on the pixels: X's and the target's rotation and translation.
+const PIXEL_PARAMETERS: usize = 12;
+
 /// Calibrates X on the pixels (see the module docs). `options.method` is ignored (this is
 /// `reprojection`); `options.fix` may force `as-given` or `robot-inverted`; `options.point`
 /// places `at_point`; `options.pose_names` names the frames.
 ///
 /// Errors: [`Error::Misread`] when the robot poses inverted fit the pixels far better,
 /// [`Error::PixelsUnfit`], [`Error::Degenerate`] (motions or covariance that do not determine X),
-/// [`Error::InvalidParameter`] for unusable detections or intrinsics.
+/// [`Error::TooFewMotions`] for fewer than 13 frames, [`Error::InvalidParameter`] for unusable
+/// detections or intrinsics.
 pub fn calibrate_on_pixels(
     frames: &[Frame],
     camera: &Intrinsics,
@@ -85,10 +89,13 @@ pub fn calibrate_on_pixels(
         name: "intrinsics",
         message: format!("{field}: {message}"),
     })?;
-    if frames.len() < 3 {
+    // X's covariance takes the sandwich over frames with the factor F/(F − 12) (12 parameters):
+    // fewer than 13 frames have no honest uncertainty, and are refused here, by count, rather
+    // than after the solve as if the motions were degenerate.
+    if frames.len() <= PIXEL_PARAMETERS {
         return Err(Error::TooFewMotions {
             got: frames.len().saturating_sub(1),
-            need: 2,
+            need: PIXEL_PARAMETERS,
         });
     }
     let pixel_options = PixelOptions::default();
