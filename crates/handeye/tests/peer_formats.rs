@@ -227,7 +227,8 @@ fn a_sample_file_for_the_other_setup_is_refused_with_its_line() {
 #[test]
 fn an_empty_calibration_type_is_undeclared_and_an_unknown_one_is_refused() {
     // easy_handeye2 writes `calibration_type: ''` when its parameter was never set: the file then
-    // declares no setup, and the run's setup decides (it used to be refused, exit 2).
+    // declares no setup, and the run's setup decides (it used to be refused, exit 2). Its sampler
+    // then looks the robot up effector-to-base, as for `eye_on_base`, whatever the setup is.
     let original = read(
         &suite().join("nominal_stations_eih_s0.jsonl"),
         Setup::EyeInHand,
@@ -235,13 +236,14 @@ fn an_empty_calibration_type_is_undeclared_and_an_unknown_one_is_refused() {
     .unwrap();
     let dir = scratch("empty-type");
     let declared = easy_handeye_samples(&original.poses, Setup::EyeInHand);
+    let as_sampled = easy_handeye_samples(&original.poses, Setup::EyeToHand);
     for (file, kind) in [("quoted.samples", "''"), ("double.samples", "\"\"")] {
         let path = dir.join(file);
-        let text = declared.replace(
-            "calibration_type: eye_in_hand",
+        let text = as_sampled.replace(
+            "calibration_type: eye_on_base",
             &format!("calibration_type: {kind}"),
         );
-        assert_ne!(text, declared);
+        assert_ne!(text, as_sampled);
         std::fs::write(&path, text).unwrap();
         let read_back = read(&path, Setup::EyeInHand).unwrap_or_else(|e| panic!("{file}: {e}"));
         let poses = difference(&read_back.poses, &original.poses);

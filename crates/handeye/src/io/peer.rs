@@ -347,13 +347,19 @@ fn yaml_matrix16(tree: &YamlTree, path: &str, file: &str) -> Result<ReadTransfor
 /// `robot` and a `tracking` transform (`translation {x, y, z}`, `rotation {x, y, z, w}`).
 ///
 /// easy_handeye2 looks the robot transform up from the base to the effector for `eye_in_hand`
-/// (`base_from_gripper`) and from the effector to the base for `eye_on_base` (`gripper_from_base`,
-/// read as written: inverted); `tracking` is the marker in the tracking system (`camera_from_target`).
-/// The setup the file declares is returned with the series, to be checked against the one asked.
+/// (`base_from_gripper`) and from the effector to the base otherwise, for `eye_on_base` and for an
+/// empty `calibration_type` (`gripper_from_base`, read as written: inverted); `tracking` is the
+/// marker in the tracking system (`camera_from_target`). The setup the file declares is returned
+/// with the series, to be checked against the one asked; an empty type declares none.
 pub fn read_easy_handeye_samples(text: &str, file: &str) -> Result<PoseSeries> {
     let tree = YamlTree::parse(text, file)?;
     let setup = declared_setup(&tree, file)?;
-    let robot_inverted = setup.is_some_and(|s| s.setup == Setup::EyeToHand);
+    // easy_handeye2's sampler looks the robot up base-to-effector only for `eye_in_hand`: any
+    // other type, its empty one included, is written effector-to-base as for `eye_on_base`.
+    let written_empty = tree
+        .text("parameters.calibration_type")
+        .is_some_and(|(kind, _)| kind.trim().is_empty());
+    let robot_inverted = written_empty || setup.is_some_and(|s| s.setup == Setup::EyeToHand);
     let n = tree.sequence(
         "samples",
         "easy_handeye2's samples: a list of robot and tracking transforms",
