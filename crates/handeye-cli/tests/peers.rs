@@ -301,8 +301,9 @@ fn industrial_calibrations_circle_grid_is_within_its_tests_bounds() {
     let Some(dir) = set(name) else { return };
     let p = peer(&dir);
     let b = &p["bounds"];
-    let report = reprojection(&dir, name, "eye-in-hand");
-    let (rms, pos, ori) = upstream_stats(&dir, &report, |_| true);
+    let pixels = reprojection(&dir, name, "eye-in-hand");
+    let report = &pixels;
+    let (rms, pos, ori) = upstream_stats(&dir, report, |_| true);
     eprintln!(
         "{name}: {rms:.3} px, {:.1} mm, {ori:.2}° (upstream's bounds {b})",
         pos * 1e3
@@ -328,6 +329,28 @@ fn industrial_calibrations_circle_grid_is_within_its_tests_bounds() {
         .map(|w| w["code"].as_str().unwrap())
         .collect();
     assert!(codes.contains(&"systematic_error"), "{name}: {codes:?}");
+    // Its uncertainty covers its distance to the pixel fit, and is no wider than the scene: a
+    // 7-pose half of the workspace that does not determine X on its own put it at 50° and 1.4 km.
+    let (dr, dt) = apart(&matrix(&report["matrix"]), &matrix(&pixels["matrix"]));
+    let (sr, st) = sigma(&report);
+    let (pr, pt) = sigma(&pixels);
+    eprintln!(
+        "{name}: pose path {dr:.2}° / {:.1} mm from the pixel fit; sigma {sr:.2}° / {:.1} mm (pixels {pr:.2}° / {:.1} mm)",
+        dt * 1e3,
+        st * 1e3,
+        pt * 1e3
+    );
+    assert!(sr < 10.0 && st < 0.2, "{name}: sigma {sr}° / {st} m");
+    assert!(dr < 3.0 * sr.hypot(pr) && dt < 3.0 * st.hypot(pt), "{name}");
+}
+
+/// A report's one-sigma rotation (degrees) and translation.
+fn sigma(r: &Value) -> (f64, f64) {
+    let u = &r["uncertainty"];
+    (
+        u["rotation_deg"].as_f64().unwrap(),
+        u["translation"].as_f64().unwrap(),
+    )
 }
 
 #[test]

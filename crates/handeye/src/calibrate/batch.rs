@@ -20,7 +20,7 @@ use crate::check::holdout::{HeldOutCheck, leave_one_out};
 use crate::check::outliers::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::check::quality::{MotionQuality, QualityReport, ResidualSummary, quality_report};
 use crate::check::readings::{ReadingCheck, check_readings};
-use crate::check::systematic::{Systematic, systematic_error};
+use crate::check::systematic::{Systematic, halves_determine, systematic_error};
 use crate::check::uncertainty::{
     Uncertainty, bootstrap, bootstrap_by_region, check_replicates, median_target,
 };
@@ -567,6 +567,13 @@ pub(crate) fn systematic_test(
         (joints.len() == read_len).then(|| kept.iter().map(|&i| joints[i].clone()).collect());
     let mut found = systematic_error(used, setup, x, joints.as_deref(), solve_x)?;
     found.weigh(scene);
+    // The halves count only where each determines X; checked where they would widen the answer.
+    if found.flagged
+        && found.halves.is_some()
+        && !halves_determine(used, setup, &found.order, solve_x, scene)
+    {
+        found.halves = None;
+    }
     Some(found)
 }
 
