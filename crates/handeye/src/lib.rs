@@ -158,7 +158,9 @@ pub use calibrate::advice::{
 };
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
-pub use calibrate::pixels::{FrameRms, ReprojectionSummary, calibrate_on_pixels};
+pub use calibrate::pixels::{
+    FrameRms, ReprojectionSummary, calibrate_on_pixels, calibrate_robot_world_on_pixels,
+};
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 pub use calibrate::verify::{Consistency, SavedUnit, SavedX, Sizes, Verification, verify};
 // Online: the paper's calibrator and the accumulating estimator.

@@ -12,6 +12,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::calibrate::robot_world::{
+    PoseResidualSummary, RobotWorldOptions, RobotWorldReport, TargetReport,
+};
 use crate::calibrate::batch::{
     Assessment, Options, Outliers, ReadingReport, Report, Spread, Units, Fix, refuse_if_undetermined,
     warn_weak, working_distance,
@@ -23,10 +26,10 @@ use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::Reading;
 use crate::model::motion::{PosePair, Setup};
-use crate::model::pose::TransformJson;
+use crate::model::pose::{Transform, TransformJson};
 use crate::solve::motions::AllPairs;
 use crate::solve::reprojection::{PixelOptions, PixelSolution, reprojection};
-use crate::solve::Method;
+use crate::solve::{Method, RobotWorldMethod, pose_residuals, target_frame};
 
 /// The robust sigma (pixels, per coordinate) above which the detections do not fit: detectors
 /// give 0.05–1 px; a wrong unit, wrong intrinsics or robot poses of other images give tens.
@@ -81,6 +84,119 @@ pub fn calibrate_on_pixels(
     setup: Setup,
     options: &Options,
 ) -> Result<Report> {
+    let (used, solution, applied, reading_check) = solved(frames, camera, setup, options.fix)?;
+    report(&used, setup, options, solution, applied, reading_check)
+}
+
+/// X and the target's pose on the pixels, with the same checks as [`calibrate_on_pixels`] (the
+/// reading of the robot poses on the pixels, a fit far above noise refused), in the result shape
+/// of the pose-based robot-world calibration
+/// ([`calibrate_robot_world`](crate::calibrate_robot_world)): one result for every face.
+///
+/// Both uncertainties are the pixel solve's own (X's and the target's blocks of one covariance,
+/// the larger of the Gauss–Newton and the per-frame sandwich one), judged by the same bounds;
+/// `residual` is Q_i X C_i = Y over the PnP poses the solve started from (their noise, not X's
+/// error: X and the target were fitted to the pixels), and `reprojection` the fit on the pixels.
+/// `options.method` is ignored (this is [`RobotWorldMethod::Reprojection`]), as are
+/// `replicates`, `written`, `outlier_deg` and `joints` (no bootstrap, no systematic-error test on
+/// the pixels); `fix` may force `as-given` or `robot-inverted`; `point` places `at_point`;
+/// `pose_names` names the frames.
+///
+/// Errors: those of [`calibrate_on_pixels`], and [`Error::InvalidParameter`] for
+/// `reject_outliers` (mis-detected corners are left out, and listed, by the solve itself).
+pub fn calibrate_robot_world_on_pixels(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &RobotWorldOptions,
+) -> Result<RobotWorldReport> {
+    if options.reject_outliers {
+        return Err(Error::InvalidParameter {
+            name: "reject_outliers",
+            message: "not offered on the pixels: mis-detected corners are left out (and listed) by the solve itself".into(),
+        });
+    }
+    let (used, solution, applied, reading_check) = solved(frames, camera, setup, options.fix)?;
+    let hand_eye = Options {
+        fix: options.fix,
+        point: options.point,
+        pose_names: options.pose_names.clone(),
+        ..Options::default()
+    };
+    let target = solution.target;
+    let target_covariance = solution.target_covariance;
+    let poses = pose_pairs(&used, &solution.start_poses);
+    let Report {
+        verdict,
+        x,
+        uncertainty,
+        conditioning,
+        reading,
+        outliers,
+        warnings,
+        units,
+        transform,
+        reprojection,
+        ..
+    } = report(&used, setup, &hand_eye, solution, applied, reading_check)?;
+    let scene = translation_scale(&poses, setup).max(working_distance(&poses));
+    let Some(target_covariance) = target_covariance else {
+        return Err(Error::Degenerate {
+            reason: Degeneracy::IllConditioned,
+            conditioning,
+        });
+    };
+    let target_uncertainty = summarise(target_covariance, 0, 0, scene);
+    refuse_if_undetermined(&target_uncertainty, setup, conditioning)?;
+    let residual = PoseResidualSummary::of(pose_residuals(&poses, setup, &transform, &target));
+    Ok(RobotWorldReport {
+        verdict,
+        method: RobotWorldMethod::Reprojection,
+        setup,
+        formulation: "robot-world".into(),
+        frame: setup.x_frame().into(),
+        x,
+        uncertainty,
+        target: TargetReport {
+            frame: target_frame(setup).into(),
+            pose: TransformJson::from(&target),
+            uncertainty: target_uncertainty,
+        },
+        poses: used.len(),
+        conditioning,
+        reading,
+        outliers,
+        residual,
+        warnings,
+        units,
+        transform,
+        target_transform: target,
+        systematic: None,
+        reprojection,
+    })
+}
+
+/// The robot poses with the camera poses the solve started from (the PnP pose of each frame
+/// chosen by the robot's motion).
+fn pose_pairs(frames: &[Frame], start_poses: &[Transform]) -> Vec<PosePair> {
+    frames
+        .iter()
+        .zip(start_poses)
+        .map(|(f, c)| PosePair {
+            base_from_gripper: f.base_from_gripper,
+            camera_from_target: *c,
+        })
+        .collect()
+}
+
+/// The solve on the pixels with its checks: the frames as read (the robot poses inverted when
+/// that reading was applied), the solution, the reading and how it was checked.
+fn solved(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    fix: Fix,
+) -> Result<(Vec<Frame>, PixelSolution, Reading, String)> {
     camera.check().map_err(|(field, message)| Error::InvalidParameter {
         name: "intrinsics",
         message: format!("{field}: {message}"),
@@ -99,7 +215,7 @@ pub fn calibrate_on_pixels(
             ..f.clone()
         })
         .collect();
-    let (applied, solution, reading_check) = match options.fix {
+    let (applied, solution, reading_check) = match fix {
         Fix::Read(Reading::AsGiven) => (
             Reading::AsGiven,
             reprojection(frames, camera, setup, &pixel_options)?,
@@ -120,18 +236,18 @@ pub fn calibrate_on_pixels(
             });
         }
         Fix::Refuse | Fix::Auto => {
-            checked_reading(frames, &inverted, camera, setup, options.fix, &pixel_options)?
+            checked_reading(frames, &inverted, camera, setup, fix, &pixel_options)?
         }
     };
     let used = if applied == Reading::RobotInverted {
-        &inverted[..]
+        inverted
     } else {
-        frames
+        frames.to_vec()
     };
     if solution.sigma_px > REFUSE_SIGMA_PX {
-        return Err(unfit(&solution, used, camera, setup, &pixel_options));
+        return Err(unfit(&solution, &used, camera, setup, &pixel_options));
     }
-    report(used, setup, options, solution, applied, reading_check)
+    Ok((used, solution, applied, reading_check))
 }
 
 /// The reading on the pixels: as given, unless the robot poses inverted fit far better (then a
@@ -234,14 +350,7 @@ fn report(
     reading_check: String,
 ) -> Result<Report> {
     let x = solution.calibration.x;
-    let poses: Vec<PosePair> = frames
-        .iter()
-        .zip(&solution.start_poses)
-        .map(|(f, c)| PosePair {
-            base_from_gripper: f.base_from_gripper,
-            camera_from_target: *c,
-        })
-        .collect();
+    let poses = pose_pairs(frames, &solution.start_poses);
     let scene = translation_scale(&poses, setup).max(working_distance(&poses));
     let conditioning = solution.calibration.conditioning;
     let Some(covariance) = solution.covariance else {

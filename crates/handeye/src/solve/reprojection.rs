@@ -89,6 +89,10 @@ pub struct PixelSolution {
     /// detections share its robot pose's error: the sandwich over frames) and never below the
     /// Gauss–Newton one; `None` when the normal matrix is singular.
     pub covariance: Option<Matrix6<f64>>,
+    /// Covariance of Y (left rotation increment `exp([δ]×) R_y`, then t_y), from the same
+    /// Jacobian and the same choice (the larger of the Gauss–Newton and the sandwich one, by Y's
+    /// own trace); `None` when the normal matrix is singular.
+    pub target_covariance: Option<Matrix6<f64>>,
     /// RMS reprojection error over the kept detections, pixels.
     pub rms_px: f64,
     /// RMS reprojection error of each frame (every detection of it), pixels.
@@ -169,7 +173,10 @@ pub fn reprojection(
         .filter(|(_, k)| !**k)
         .map(|(i, _)| *i)
         .collect();
-    let covariance = plain.covariance(&state).map(|c| in_unit(c, unit));
+    let (covariance, target_covariance) = match plain.covariance(&state) {
+        Some((x, y)) => (Some(in_unit(x, unit)), Some(in_unit(y, unit))),
+        None => (None, None),
+    };
     let x = transform_from_parts(&state.0, &(state.1 * unit));
     let target = transform_from_parts(&state.2, &(state.3 * unit));
     Ok(PixelSolution {
@@ -182,6 +189,7 @@ pub fn reprojection(
         },
         target,
         covariance,
+        target_covariance,
         rms_px,
         per_frame_rms_px,
         outliers,
@@ -823,11 +831,11 @@ impl Bundle<'_> {
         (per_frame, jtj, cost, count)
     }
 
-    /// Covariance of X's 6 parameters: the larger (by trace) of the Gauss–Newton one, s² (JᵀJ)⁻¹
-    /// with s² = Σr²/(m − 12), and the sandwich over frames, H⁻¹ (Σ_f g_f g_fᵀ) H⁻¹ · F/(F − 12)
-    /// with g_f = J_fᵀ r_f (a frame's detections share its robot pose's error, which the
-    /// Gauss–Newton covariance takes as independent pixel noise).
-    fn covariance(&self, s: &State) -> Option<Matrix6<f64>> {
+    /// Covariances of X's and of Y's 6 parameters: each the larger (by its trace) of the
+    /// Gauss–Newton one, s² (JᵀJ)⁻¹ with s² = Σr²/(m − 12), and the sandwich over frames,
+    /// H⁻¹ (Σ_f g_f g_fᵀ) H⁻¹ · F/(F − 12) with g_f = J_fᵀ r_f (a frame's detections share its
+    /// robot pose's error, which the Gauss–Newton covariance takes as independent pixel noise).
+    fn covariance(&self, s: &State) -> Option<(Matrix6<f64>, Matrix6<f64>)> {
         let (per_frame, jtj, cost, count) = self.gradients(s);
         let frames = per_frame.len();
         if count <= 12 || frames <= 12 {
@@ -841,13 +849,16 @@ impl Bundle<'_> {
             meat += g * g.transpose();
         }
         let sandwich = inv * meat * inv * (frames as f64 / (frames - 12) as f64);
-        let x_block = |c: &SMatrix<f64, 12, 12>| c.fixed_view::<6, 6>(0, 0).into_owned();
-        let (a, b) = (x_block(&classic), x_block(&sandwich));
         let scale = |c: &Matrix6<f64>| {
             c.fixed_view::<3, 3>(0, 0).trace() * 1e4 + c.fixed_view::<3, 3>(3, 3).trace()
         };
-        let c = if scale(&b) > scale(&a) { b } else { a };
-        c.iter().all(|v| v.is_finite()).then_some(c)
+        let block = |at: usize| {
+            let a: Matrix6<f64> = classic.fixed_view::<6, 6>(at, at).into_owned();
+            let b: Matrix6<f64> = sandwich.fixed_view::<6, 6>(at, at).into_owned();
+            let c = if scale(&b) > scale(&a) { b } else { a };
+            c.iter().all(|v| v.is_finite()).then_some(c)
+        };
+        Some((block(0)?, block(6)?))
     }
 }
 
