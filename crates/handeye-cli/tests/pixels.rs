@@ -436,3 +436,175 @@ fn robot_world_on_the_pixels_lists_and_leaves_out_mis_detections() {
     let (deg, t) = gap_of(&r["target"], &truth[target_frame]);
     assert!(deg < 1.0 && t < 0.005, "target: {deg}° {t} m");
 }
+
+/// A saved X for `verify`: the truth of a recording, turned about an axis of X's parent frame by
+/// `turn_deg` and shifted by `shift` (input unit).
+fn saved_x(
+    dir: &std::path::Path,
+    name: &str,
+    frame: &str,
+    setup: &str,
+    axis: usize,
+    turn_deg: f64,
+    shift: f64,
+) -> String {
+    let truth: Value = serde_json::from_str(
+        &std::fs::read_to_string(path(&format!("{name}.truth.json"))).unwrap(),
+    )
+    .unwrap();
+    let t = &truth[frame];
+    let q: Vec<f64> = (0..4)
+        .map(|i| t["quaternion_xyzw"][i].as_f64().unwrap())
+        .collect();
+    let half = turn_deg.to_radians() / 2.0;
+    let mut d = [0.0, 0.0, 0.0, half.cos()];
+    d[axis] = half.sin();
+    // d ⊗ q (x, y, z, w).
+    let turned = [
+        d[3] * q[0] + d[0] * q[3] + d[1] * q[2] - d[2] * q[1],
+        d[3] * q[1] - d[0] * q[2] + d[1] * q[3] + d[2] * q[0],
+        d[3] * q[2] + d[0] * q[1] - d[1] * q[0] + d[2] * q[3],
+        d[3] * q[3] - d[0] * q[0] - d[1] * q[1] - d[2] * q[2],
+    ];
+    let mut translation: Vec<f64> = (0..3)
+        .map(|i| t["translation"][i].as_f64().unwrap())
+        .collect();
+    translation[axis] += shift;
+    let file = dir.join(format!("{name}_{axis}_{turn_deg}_{shift}.json"));
+    let saved = serde_json::json!({
+        "frame": frame,
+        "setup": setup,
+        "translation": translation,
+        "quaternion_xyzw": turned,
+    });
+    std::fs::write(&file, saved.to_string()).unwrap();
+    file.display().to_string()
+}
+
+fn verify_on_pixels(saved: &str, name: &str, setup: &str, extra: &[&str]) -> (i32, String, String) {
+    let file = path(&format!("{name}.jsonl"));
+    let k = path(&format!("{name}.intrinsics.yml"));
+    let mut args = vec![
+        "verify",
+        "--x",
+        saved,
+        &file,
+        "--intrinsics",
+        &k,
+        "--setup",
+        setup,
+    ];
+    args.extend_from_slice(extra);
+    run(&args)
+}
+
+/// `verify --intrinsics` on the committed recordings: the true X is consistent (exit 0), a saved
+/// X turned by 1° or shifted by 5 mm along any axis inconsistent (exit 4), with the pixels' RMS
+/// of both X in the result.
+#[test]
+fn verify_on_the_pixels_accepts_the_truth_and_rejects_a_degree_or_five_millimetres() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, setup, x_frame, _) in RECORDINGS {
+        let truth = saved_x(dir.path(), name, x_frame, setup, 0, 0.0, 0.0);
+        let (code, out, err) = verify_on_pixels(&truth, name, setup, &["--output", "json"]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let v: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["verdict"], "consistent", "{name}: {v}");
+        assert_eq!(v["recording"]["method"], "reprojection");
+        let p = &v["pixels"];
+        let (saved_px, own_px) = (
+            p["saved_rms_px"].as_f64().unwrap(),
+            p["own_rms_px"].as_f64().unwrap(),
+        );
+        assert!(
+            saved_px >= own_px - 1e-9 && saved_px < 1.1 * own_px,
+            "{name}: {p}"
+        );
+        assert_eq!(p["per_frame"].as_array().unwrap().len(), 30);
+        for axis in 0..3 {
+            for (turn, shift) in [(1.0, 0.0), (0.0, 0.005)] {
+                let wrong = saved_x(dir.path(), name, x_frame, setup, axis, turn, shift);
+                let (code, out, err) = verify_on_pixels(&wrong, name, setup, &["--output", "json"]);
+                assert_eq!(code, 4, "{name} axis {axis} {turn}° {shift} m: {err}");
+                let v: Value = serde_json::from_str(&out).unwrap();
+                assert_eq!(v["verdict"], "inconsistent");
+                assert!(
+                    v["message"]
+                        .as_str()
+                        .unwrap()
+                        .starts_with("the saved X does not fit this recording"),
+                    "{v}"
+                );
+                let p = &v["pixels"];
+                assert!(
+                    p["saved_rms_px"].as_f64().unwrap() > 1.5 * p["own_rms_px"].as_f64().unwrap(),
+                    "{name} axis {axis} {turn}° {shift} m: {p}"
+                );
+            }
+        }
+    }
+    // The text face: the verdict words and both RMS.
+    let (name, setup, x_frame, _) = RECORDINGS[0];
+    let truth = saved_x(dir.path(), name, x_frame, setup, 0, 0.0, 0.0);
+    let (code, out, err) = verify_on_pixels(&truth, name, setup, &["--output", "text"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.starts_with("Verdict: consistent\n  the saved X fits this recording"),
+        "{out}"
+    );
+    assert!(
+        out.contains("On the pixels (the target's pose fitted to each X): saved X "),
+        "{out}"
+    );
+}
+
+/// `verify` on the pixels: the flags that do not apply are refused (exit 2), and robot poses that
+/// fit the pixels far better inverted are refused as `calibrate` refuses them (exit 3).
+#[test]
+fn verify_on_the_pixels_refuses_what_it_cannot_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let (name, setup, x_frame, _) = RECORDINGS[1];
+    let truth = saved_x(dir.path(), name, x_frame, setup, 0, 0.0, 0.0);
+    let file = path(&format!("{name}.jsonl"));
+    let (code, _, err) = run(&[
+        "verify",
+        "--x",
+        &truth,
+        &file,
+        "--method",
+        "reprojection",
+        "--setup",
+        setup,
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--intrinsics"), "{err}");
+    let k = path(&format!("{name}.intrinsics.yml"));
+    let (code, _, err) = run(&[
+        "verify",
+        "--x",
+        &truth,
+        &file,
+        "--intrinsics",
+        &k,
+        "--method",
+        "tsai",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    let (_tmp, inverted) = rewritten(name, |_, v| {
+        let pose = v["base_from_gripper"].take();
+        v.as_object_mut().unwrap().remove("base_from_gripper");
+        v["gripper_from_base"] = pose;
+    });
+    let (code, _, err) = run(&[
+        "verify",
+        "--x",
+        &truth,
+        &inverted,
+        "--intrinsics",
+        &k,
+        "--setup",
+        setup,
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("inverted"), "{err}");
+}

@@ -28,7 +28,11 @@ use crate::model::findings::Reading;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson};
 use crate::solve::motions::AllPairs;
-use crate::solve::reprojection::{PixelOptions, PixelSolution, reprojection};
+use crate::calibrate::verify::{
+    FramePixels, PixelComparison, SavedX, Verification, cannot_tell, compared, setup_notes,
+    unit_scale,
+};
+use crate::solve::reprojection::{PixelOptions, PixelSolution, reprojection, target_with_x};
 use crate::solve::{Method, RobotWorldMethod, pose_residuals, target_frame};
 
 /// The robust sigma (pixels, per coordinate) above which the detections do not fit: detectors
@@ -174,6 +178,78 @@ pub fn calibrate_robot_world_on_pixels(
         systematic: None,
         reprojection,
     })
+}
+
+/// Checks a saved X against a recording with detections (`verify --intrinsics`): the recording is
+/// calibrated on the pixels as [`calibrate_on_pixels`] does it, and its X compared with the saved
+/// one by the same test and words as [`verify`](crate::verify) (the covariance is the pixel
+/// solve's). `pixels` adds the reprojection error of the recording's detections with the saved X
+/// and with the recording's own, the target's pose fitted to each with X held fixed
+/// ([`target_with_x`]): how much worse the saved X explains the pixels, frame by frame.
+///
+/// Errors: those of [`calibrate_on_pixels`] but a refusal for degenerate or too few motions, which
+/// is the verdict `undetermined`.
+pub fn verify_on_pixels(
+    saved: &SavedX,
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &Options,
+) -> Result<Verification> {
+    let notes = setup_notes(saved, setup);
+    let (used, solution, applied, reading_check) = match solved(frames, camera, setup, options.fix) {
+        Ok(s) => s,
+        Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
+            let poses = pose_pairs(
+                frames,
+                &frames
+                    .iter()
+                    .map(|f| f.camera_from_target.unwrap_or_default())
+                    .collect::<Vec<_>>(),
+            );
+            return Ok(cannot_tell(saved, &poses, &e, notes));
+        }
+        Err(e) => return Err(e),
+    };
+    let poses = pose_pairs(&used, &solution.start_poses);
+    let own = solution.calibration.x;
+    let mut x = saved.x;
+    x.translation.vector *= unit_scale(saved, &poses, &own, &mut Vec::new());
+    let pixel_options = PixelOptions::default();
+    let with_saved = target_with_x(&used, camera, setup, &x, &solution, &pixel_options);
+    let with_own = target_with_x(&used, camera, setup, &own, &solution, &pixel_options);
+    let report = match report(&used, setup, options, solution, applied, reading_check) {
+        Ok(r) => r,
+        Err(e @ Error::Degenerate { .. }) => return Ok(cannot_tell(saved, &poses, &e, notes)),
+        Err(e) => return Err(e),
+    };
+    let names = report.reprojection.as_ref().map(|r| {
+        r.per_frame
+            .iter()
+            .map(|f| f.name.clone())
+            .collect::<Vec<_>>()
+    });
+    let per_frame = with_saved
+        .per_frame_rms_px
+        .iter()
+        .zip(&with_own.per_frame_rms_px)
+        .enumerate()
+        .map(|(i, (s, o))| FramePixels {
+            name: names
+                .as_ref()
+                .and_then(|n| n.get(i).cloned())
+                .unwrap_or_else(|| format!("frame {i}")),
+            saved_px: *s,
+            own_px: *o,
+        })
+        .collect();
+    let mut v = compared(saved, &poses, report, notes);
+    v.pixels = Some(PixelComparison {
+        saved_rms_px: with_saved.rms_px,
+        own_rms_px: with_own.rms_px,
+        per_frame,
+    });
+    Ok(v)
 }
 
 /// The robot poses with the camera poses the solve started from (the PnP pose of each frame

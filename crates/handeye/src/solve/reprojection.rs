@@ -201,6 +201,75 @@ pub fn reprojection(
     })
 }
 
+/// The target's pose fitted to the pixels with X held fixed ([`target_with_x`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TargetFit {
+    /// Y fitted with X fixed.
+    pub target: Transform,
+    /// RMS reprojection error over the detections the solve kept, pixels.
+    pub rms_px: f64,
+    /// Each frame's RMS over its detections the solve kept (0 for a frame with none), pixels.
+    pub per_frame_rms_px: Vec<f64>,
+}
+
+/// Fits only the target's pose Y to the pixels with X fixed at `x`, over the detections `solved`
+/// kept (its mis-detections left out), started from `solved`'s Y: how well a given X (a saved one)
+/// explains the pixels of a recording, against [`PixelSolution`]'s own X. Plain least squares
+/// with the Levenberg–Marquardt settings of `options`.
+pub fn target_with_x(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    x: &Transform,
+    solved: &PixelSolution,
+    options: &PixelOptions,
+) -> TargetFit {
+    let unit = length_unit(&solved.start_poses);
+    let data = Data::new(frames, camera, setup, unit);
+    let keep: Vec<bool> = data
+        .index
+        .iter()
+        .map(|i| !solved.outliers.contains(i))
+        .collect();
+    let problem = TargetOnly {
+        bundle: Bundle {
+            data: &data,
+            loss: Loss::Squared,
+            keep: Some(&keep),
+        },
+        x: (
+            *x.rotation.matrix(),
+            x.translation.vector / unit,
+        ),
+    };
+    let y0 = scaled(&solved.target, 1.0 / unit);
+    let end = levenberg_marquardt(
+        &problem,
+        (*y0.rotation.matrix(), y0.translation.vector),
+        &options.lm,
+    );
+    let state = (problem.x.0, problem.x.1, end.state.0, end.state.1);
+    let residuals = data.residual_norms(&state);
+    let (rms_px, _) = data.rms(&residuals, &keep);
+    let per_frame_rms_px = data
+        .starts
+        .windows(2)
+        .map(|w| {
+            let kept: Vec<f64> = (w[0]..w[1])
+                .filter(|k| keep[*k])
+                .map(|k| residuals[k])
+                .collect();
+            let n = kept.len().max(1) as f64;
+            (kept.iter().map(|r| r * r).sum::<f64>() / n).sqrt()
+        })
+        .collect();
+    TargetFit {
+        target: transform_from_parts(&end.state.0, &(end.state.1 * unit)),
+        rms_px,
+        per_frame_rms_px,
+    }
+}
+
 /// Refuses frames whose detections cannot be used, naming the frame.
 fn check_frames(frames: &[Frame]) -> Result<()> {
     for (i, f) in frames.iter().enumerate() {
@@ -859,6 +928,45 @@ impl Bundle<'_> {
             c.iter().all(|v| v.is_finite()).then_some(c)
         };
         Some((block(0)?, block(6)?))
+    }
+}
+
+/// The bundle with X held fixed: Y's 6 parameters only.
+struct TargetOnly<'a> {
+    bundle: Bundle<'a>,
+    /// X (R_x, t_x), in the solve's unit.
+    x: (Matrix3<f64>, Vector3<f64>),
+}
+
+impl TargetOnly<'_> {
+    fn with_x(&self, (r_y, t_y): &(Matrix3<f64>, Vector3<f64>)) -> State {
+        (self.x.0, self.x.1, *r_y, *t_y)
+    }
+}
+
+impl LeastSquares<6> for TargetOnly<'_> {
+    type State = (Matrix3<f64>, Vector3<f64>);
+
+    fn linearise(&self, y: &Self::State) -> Linearisation<6> {
+        let full = self.bundle.linearise(&self.with_x(y));
+        Linearisation {
+            jtj: full.jtj.fixed_view::<6, 6>(6, 6).into_owned(),
+            jtr: full.jtr.fixed_rows::<6>(6).into_owned(),
+            cost: full.cost,
+        }
+    }
+
+    fn step(&self, (r_y, t_y): &Self::State, d: &Vector6<f64>) -> Self::State {
+        let e: Vector3<f64> = d.fixed_rows::<3>(0).into_owned();
+        (proj_so3(&(exp_so3(&e) * r_y)), t_y + d.fixed_rows::<3>(3))
+    }
+
+    fn cost_drop(&self, _: &Self::State, to: &Self::State, cost: f64) -> f64 {
+        cost - self.bundle.cost(&self.with_x(to))
+    }
+
+    fn size(&self, (_, t_y): &Self::State) -> f64 {
+        1.0 + self.x.1.norm() + t_y.norm()
     }
 }
 
