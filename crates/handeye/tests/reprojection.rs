@@ -428,3 +428,64 @@ fn the_robot_world_job_on_the_pixels_gives_the_target_too() {
     .unwrap_err();
     assert!(e.to_string().contains("left out"), "{e}");
 }
+
+/// `verify_on_pixels` over many simulated recordings: the true X consistent, one turned by 1° about
+/// an axis of X's parent frame inconsistent; the largest distance of the truth printed
+/// (`--nocapture`).
+#[test]
+fn verify_on_the_pixels_accepts_the_truth_and_rejects_a_degree() {
+    let mut truth_sigmas = Vec::new();
+    let mut turned_sigmas = Vec::new();
+    for setup in SETUPS {
+        for config in [PixelSimConfig::board(), PixelSimConfig::tag()] {
+            for seed in 200..206 {
+                let sim = simulate_pixels(&config.with_setup(setup), seed);
+                let axis = nalgebra::Vector3::ith(seed as usize % 3, 1.0_f64.to_radians());
+                let turn = nalgebra::Rotation3::new(axis);
+                let turned = handeye::model::pose::transform_from_parts(
+                    &(turn.matrix() * sim.x.rotation.matrix()),
+                    &sim.x.translation.vector,
+                );
+                for (x, sigmas, want) in [
+                    (sim.x, &mut truth_sigmas, handeye::Consistency::Consistent),
+                    (
+                        turned,
+                        &mut turned_sigmas,
+                        handeye::Consistency::Inconsistent,
+                    ),
+                ] {
+                    let saved = handeye::SavedX {
+                        x,
+                        setup: Some(setup),
+                        covariance: None,
+                        unit: handeye::SavedUnit::Unknown,
+                    };
+                    let v = handeye::verify_on_pixels(
+                        &saved,
+                        &sim.frames,
+                        &sim.intrinsics,
+                        setup,
+                        &handeye::Options::default(),
+                    )
+                    .expect("verified");
+                    assert_eq!(
+                        v.verdict, want,
+                        "{setup:?} {:?} seed {seed}: {}",
+                        config.target, v.message
+                    );
+                    let p = v.pixels.expect("the pixels compared");
+                    assert!(p.saved_rms_px >= p.own_rms_px - 1e-9, "{p:?}");
+                    sigmas.push(v.distance_sigmas);
+                }
+            }
+        }
+    }
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    println!(
+        "the truth: at most {:.2} sigmas; turned by 1°: at least {:.2} sigmas ({} recordings)",
+        max(&truth_sigmas),
+        min(&turned_sigmas),
+        truth_sigmas.len()
+    );
+}
