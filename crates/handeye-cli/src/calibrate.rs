@@ -251,8 +251,11 @@ fn carries_detections(input: &InputArgs) -> bool {
         .is_some_and(|l| l.contains("\"detections\""))
 }
 
-/// `calibrate --method reprojection`: X on the pixels of the detections of a JSON Lines file.
-fn run_pixels(args: &Args, options: Options) -> Result<()> {
+/// The pixel calibrations' input: the intrinsics and the records with detections (a JSON Lines
+/// file), each record named `file:line`; the flags that do not apply refused (exit 2).
+fn pixel_input(
+    args: &Args,
+) -> Result<(handeye::Intrinsics, handeye::io::FrameSeries, Vec<String>)> {
     let refuse = |message: String| -> anyhow::Error {
         Error::InvalidParameter {
             name: "method",
@@ -288,13 +291,49 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
     }
     let camera = handeye::io::read_intrinsics(intrinsics)?;
     let series = handeye::io::read_frames(path)?;
-    let setup = args.input.setup();
-    let frames = output_frames(args)?;
     let names: Vec<String> = series
         .lines
         .iter()
         .map(|l| format!("{}:{l}", path.display()))
         .collect();
+    Ok((camera, series, names))
+}
+
+/// The refusals of a solve on the pixels, said in the text face too.
+fn refused_on_pixels(e: Error, face: Face) -> anyhow::Error {
+    if face == Face::Text
+        && matches!(
+            e,
+            Error::Degenerate { .. }
+                | Error::TooFewMotions { .. }
+                | Error::Misread { .. }
+                | Error::PixelsUnfit { .. }
+        )
+        && let Err(printed) = print_text(&faces::refused(&e))
+    {
+        return printed;
+    }
+    e.into()
+}
+
+/// The records' robot poses with their PnP poses (identity where a record has none), for the
+/// unit and the `--report` page.
+fn frame_poses(series: &handeye::io::FrameSeries) -> Vec<PosePair> {
+    series
+        .frames
+        .iter()
+        .map(|f| PosePair {
+            base_from_gripper: f.base_from_gripper,
+            camera_from_target: f.camera_from_target.unwrap_or_default(),
+        })
+        .collect()
+}
+
+/// `calibrate --method reprojection`: X on the pixels of the detections of a JSON Lines file.
+fn run_pixels(args: &Args, options: Options) -> Result<()> {
+    let (camera, series, names) = pixel_input(args)?;
+    let setup = args.input.setup();
+    let frames = output_frames(args)?;
     let face = Face::chosen(args.output);
     let report = match handeye::calibrate_on_pixels(
         &series.frames,
@@ -306,29 +345,9 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         },
     ) {
         Ok(report) => report,
-        Err(e) => {
-            if face == Face::Text
-                && matches!(
-                    e,
-                    Error::Degenerate { .. }
-                        | Error::TooFewMotions { .. }
-                        | Error::Misread { .. }
-                        | Error::PixelsUnfit { .. }
-                )
-            {
-                print_text(&faces::refused(&e))?;
-            }
-            return Err(e.into());
-        }
+        Err(e) => return Err(refused_on_pixels(e, face)),
     };
-    let poses: Vec<handeye::PosePair> = series
-        .frames
-        .iter()
-        .map(|f| handeye::PosePair {
-            base_from_gripper: f.base_from_gripper,
-            camera_from_target: f.camera_from_target.unwrap_or_default(),
-        })
-        .collect();
+    let poses = frame_poses(&series);
     let unit = length_unit(&poses);
     if face != Face::Text {
         for w in &report.warnings {
@@ -362,13 +381,6 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
 
 /// `calibrate --robot-world`: X and the target's pose together.
 fn run_robot_world(args: &Args) -> Result<()> {
-    if args.method.as_deref() == Some(Method::Reprojection.name()) {
-        return Err(Error::InvalidParameter {
-            name: "method",
-            message: "reprojection with --robot-world is not offered yet: drop --robot-world (`--method reprojection` solves X and the target's pose together already)".into(),
-        }
-        .into());
-    }
     for (flag, given) in [
         ("--pairs", args.pairs.is_some()),
         ("--tsai-opencv-filter", args.tsai_opencv_filter),
@@ -394,9 +406,20 @@ fn run_robot_world(args: &Args) -> Result<()> {
                 ),
             })?,
     };
+    if method == RobotWorldMethod::Reprojection {
+        return run_robot_world_on_pixels(args);
+    }
+    if args.intrinsics.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "intrinsics",
+            message: "--intrinsics is read by --method reprojection (calibration on the pixels of the detections)".into(),
+        }
+        .into());
+    }
     let (fix, replicates) = (args.fix.unwrap_or_default(), args.bootstrap);
     let setup = args.input.setup();
-    let frames = output_frames(args)?;
+    // The frame names are checked before the input is read.
+    output_frames(args)?;
     if let Some(path) = &args.report {
         crate::report::check_writable(path)?;
     }
@@ -437,6 +460,81 @@ fn run_robot_world(args: &Args) -> Result<()> {
             report.outliers.poses.len() + report.poses
         );
     }
+    print_robot_world(
+        args,
+        &report,
+        RobotWorldInput {
+            poses: &poses,
+            names: &recording.names,
+            written,
+            unit,
+            mount: recording.camera_mount.as_ref(),
+            time_offset: (time_offset, time_offset_sigma),
+        },
+        face,
+    )
+}
+
+/// `calibrate --robot-world --method reprojection`: X and the target's pose on the pixels of the
+/// detections, printed as the pose-based robot-world result.
+fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
+    let (camera, series, names) = pixel_input(args)?;
+    let setup = args.input.setup();
+    output_frames(args)?;
+    let face = Face::chosen(args.output);
+    let report = match handeye::calibrate_robot_world_on_pixels(
+        &series.frames,
+        &camera,
+        setup,
+        &RobotWorldOptions {
+            method: RobotWorldMethod::Reprojection,
+            fix: args.fix.unwrap_or_default(),
+            point: args.point,
+            pose_names: names.clone(),
+            ..RobotWorldOptions::default()
+        },
+    ) {
+        Ok(report) => report,
+        Err(e) => return Err(refused_on_pixels(e, face)),
+    };
+    let poses = frame_poses(&series);
+    print_robot_world(
+        args,
+        &report,
+        RobotWorldInput {
+            poses: &poses,
+            names: &names,
+            written: handeye::Written::NAMED,
+            unit: length_unit(&poses),
+            mount: None,
+            time_offset: (None, None),
+        },
+        face,
+    )
+}
+
+/// What a robot-world result is printed with, besides the report.
+struct RobotWorldInput<'a> {
+    poses: &'a [PosePair],
+    names: &'a [String],
+    written: handeye::Written,
+    unit: Option<handeye::Unit>,
+    mount: Option<&'a CameraMount>,
+    /// `--time-offset` and its one-sigma, seconds.
+    time_offset: (Option<f64>, Option<f64>),
+}
+
+/// Prints a robot-world result in the face asked for, writes `--report`, and sets the exit code
+/// (`--strict`).
+fn print_robot_world(
+    args: &Args,
+    report: &RobotWorldReport,
+    input: RobotWorldInput,
+    face: Face,
+) -> Result<()> {
+    let setup = report.setup;
+    let frames = output_frames(args)?;
+    let unit = input.unit;
     if face != Face::Text {
         for w in &report.warnings {
             crate::tell!("warning: {}", faces::warning(w));
@@ -445,8 +543,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
     let source = format!("calibrate, robot-world method {}", report.method);
     let ros = matches!(face, Face::Ros2 | Face::Urdf);
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
-    let mount = recording.camera_mount.as_ref();
-    let publication = publication(args, &report.transform, &frames, mount);
+    let publication = publication(args, &report.transform, &frames, input.mount);
     // X, then the target's pose: `base_from_target` (eye-in-hand) or `gripper_from_target`.
     let x = publication.of(Published {
         x: &report.transform,
@@ -473,11 +570,11 @@ fn run_robot_world(args: &Args) -> Result<()> {
         child,
         ..frames.clone()
     };
-    let summary = faces::robot_world_text(&report, &frames, unit);
+    let summary = faces::robot_world_text(report, &frames, unit);
     match face {
         Face::Text => print_text(&summary)?,
         // The YAML lists X, the target, their one-sigma and the residuals.
-        Face::Yaml => print_text(&robot_world_yaml(&report))?,
+        Face::Yaml => print_text(&robot_world_yaml(report))?,
         Face::Ros2 => print_text(&format!(
             "{}\n{}",
             faces::ros2(x, &publication.frames),
@@ -489,22 +586,22 @@ fn run_robot_world(args: &Args) -> Result<()> {
             faces::urdf(target, &target_frames)
         ))?,
         Face::Json => print_json(&WithTimeOffset {
-            report: &report,
-            time_offset_s: time_offset,
-            time_offset_sigma_s: time_offset_sigma,
+            report,
+            time_offset_s: input.time_offset.0,
+            time_offset_sigma_s: input.time_offset.1,
             publish: publication.json(),
         })?,
     }
     let page = crate::report::RunPage {
-        poses: &poses,
-        names: &recording.names,
-        written,
+        poses: input.poses,
+        names: input.names,
+        written: input.written,
         setup,
         unit,
         summary,
     };
     after_result(args, report.verdict, |path| {
-        crate::report::write_robot_world(path, &page, &report)
+        crate::report::write_robot_world(path, &page, report)
     })
 }
 

@@ -596,22 +596,7 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
         );
     }
     if let Some(p) = &r.reprojection {
-        let worst = p
-            .per_frame
-            .iter()
-            .max_by(|a, b| a.rms_px.total_cmp(&b.rms_px));
-        let _ = writeln!(
-            s,
-            "Reprojection: {:.3} px RMS over {} detections ({} left out as mis-detections){}",
-            p.rms_px,
-            p.detections,
-            p.outlier_detections.len(),
-            worst.map_or(String::new(), |w| format!(
-                "; worst frame {} at {:.3} px",
-                w.name, w.rms_px
-            ))
-        );
-        let _ = writeln!(s, "  readings checked {}", p.reading_check);
+        reprojection_lines(&mut s, p);
     }
     let _ = writeln!(
         s,
@@ -736,9 +721,18 @@ pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) ->
     if let Some(p) = &r.uncertainty.at_point {
         let _ = writeln!(s, "{}", at_point(p, unit));
     }
+    if let Some(p) = &r.reprojection {
+        reprojection_lines(&mut s, p);
+    }
     let _ = writeln!(
         s,
-        "Residuals of A X = Y B over the poses: rotation {:.4}° RMS ({:.4}° max), translation {} {u} RMS ({} {u} max)",
+        "Residuals of A X = Y B over the{} poses: rotation {:.4}° RMS ({:.4}° max), translation {} {u} RMS ({} {u} max)",
+        if r.reprojection.is_some() {
+            // X and the target were fitted to the pixels: these are the PnP poses' noise.
+            " PnP"
+        } else {
+            ""
+        },
         r.residual.rotation_deg_rms,
         r.residual.rotation_deg_max,
         short(r.residual.translation_rms),
@@ -757,6 +751,26 @@ pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) ->
         );
     }
     s
+}
+
+/// The fit on the pixels: the RMS, the detections left out, the worst frame, the reading check.
+fn reprojection_lines(s: &mut String, p: &handeye::ReprojectionSummary) {
+    let worst = p
+        .per_frame
+        .iter()
+        .max_by(|a, b| a.rms_px.total_cmp(&b.rms_px));
+    let _ = writeln!(
+        s,
+        "Reprojection: {:.3} px RMS over {} detections ({} left out as mis-detections){}",
+        p.rms_px,
+        p.detections,
+        p.outlier_detections.len(),
+        worst.map_or(String::new(), |w| format!(
+            "; worst frame {} at {:.3} px",
+            w.name, w.rms_px
+        ))
+    );
+    let _ = writeln!(s, "  readings checked {}", p.reading_check);
 }
 
 /// The tf frames of the robot-world target pose: `base_from_target` (eye-in-hand) or

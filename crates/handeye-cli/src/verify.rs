@@ -23,9 +23,10 @@ pub struct Args {
     saved: PathBuf,
     #[command(flatten)]
     input: InputArgs,
-    /// The hand–eye method the recording is calibrated with.
-    #[arg(long, default_value_t = Method::Andreff, value_parser = values::named::<Method>())]
-    method: Method,
+    /// The hand–eye method the recording is calibrated with [default: andreff; reprojection with
+    /// --intrinsics].
+    #[arg(long, value_parser = values::named_of(&Method::WITH_PIXELS))]
+    method: Option<Method>,
     /// Motions from every pair of poses (default) or from consecutive ones.
     #[arg(long, default_value_t = Pairing::All, value_parser = values::named::<Pairing>())]
     pairs: Pairing,
@@ -54,6 +55,10 @@ pub struct Args {
     /// pose.
     #[arg(long, value_name = "FILE.html")]
     report: Option<PathBuf>,
+    /// The camera's intrinsics (OpenCV YAML or ROS camera_info): check the saved X on the pixels
+    /// of the recording's `detections` (a JSON Lines file), as `calibrate --method reprojection`.
+    #[arg(long, value_name = "FILE")]
+    intrinsics: Option<PathBuf>,
 }
 
 /// Runs the command.
@@ -73,9 +78,30 @@ pub fn run(args: Args) -> Result<()> {
     }
     let saved = handeye::io::read_saved_x(&args.saved)?;
     let fix = args.fix.unwrap_or_default();
+    let method = match (args.method, &args.intrinsics) {
+        (None | Some(Method::Reprojection), Some(_)) => Method::Reprojection,
+        (Some(Method::Reprojection), None) => {
+            return Err(invalid(
+                "method",
+                "reprojection needs the camera's intrinsics: --intrinsics FILE (OpenCV YAML or ROS camera_info)",
+            ));
+        }
+        (Some(m), Some(_)) => {
+            return Err(invalid(
+                "intrinsics",
+                &format!(
+                    "--intrinsics is read on the pixels (--method reprojection), not by --method {m}"
+                ),
+            ));
+        }
+        (m, None) => m.unwrap_or(Method::Andreff),
+    };
+    if method == Method::Reprojection {
+        return run_pixels(&args, &saved, face);
+    }
     let recording = read_all(&args.input, fix.reading())?;
     let options = Options {
-        method: args.method,
+        method,
         pairing: args.pairs,
         reject_outliers: args.reject_outliers,
         fix,
@@ -88,20 +114,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let setup = args.input.setup();
     let v = handeye::verify(&saved, &recording.poses, setup, &options)?;
-    match face {
-        Face::Text => print_text(&text(&v))?,
-        _ => {
-            for note in &v.notes {
-                crate::tell!("note: {note}");
-            }
-            if let Some(r) = &v.recording {
-                for w in &r.warnings {
-                    crate::tell!("warning: {}", faces::warning(w));
-                }
-            }
-            print_json(&v)?
-        }
-    }
+    show(&v, face)?;
     // After the result: a report that cannot be written loses nothing computed.
     if let Some(path) = &args.report {
         let reading = v
@@ -120,8 +133,111 @@ pub fn run(args: Args) -> Result<()> {
         crate::report::write_verify(path, &page, &v)?;
         crate::tell!("wrote {}", path.display());
     }
+    exit(v, args.strict)
+}
+
+fn invalid(name: &'static str, message: &str) -> anyhow::Error {
+    handeye::Error::InvalidParameter {
+        name,
+        message: message.into(),
+    }
+    .into()
+}
+
+/// `verify --intrinsics`: the saved X on the pixels of a JSON Lines file with `detections`.
+fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
+    for (flag, given) in [
+        ("--robot/--camera streams", args.input.robot.is_some()),
+        ("a ROS 2 recording", args.input.is_bag()),
+        ("--reject-outliers", args.reject_outliers),
+        ("--rotation", !args.input.rotation.is_empty()),
+        ("--prior", !args.prior.is_empty()),
+    ] {
+        if given {
+            return Err(invalid(
+                "intrinsics",
+                &format!(
+                    "{flag} is not offered on the pixels (yet): give a JSON Lines file with `detections`"
+                ),
+            ));
+        }
+    }
+    let Some(path) = &args.input.input else {
+        return Err(invalid(
+            "intrinsics",
+            "verify on the pixels needs a JSON Lines file with `detections`",
+        ));
+    };
+    let Some(intrinsics) = &args.intrinsics else {
+        return Err(invalid(
+            "intrinsics",
+            "the camera's intrinsics: --intrinsics FILE",
+        ));
+    };
+    let camera = handeye::io::read_intrinsics(intrinsics)?;
+    let series = handeye::io::read_frames(path)?;
+    let names: Vec<String> = series
+        .lines
+        .iter()
+        .map(|l| format!("{}:{l}", path.display()))
+        .collect();
+    let setup = args.input.setup();
+    let options = Options {
+        method: Method::Reprojection,
+        pairing: args.pairs,
+        fix: args.fix.unwrap_or_default(),
+        pose_names: names.clone(),
+        ..Options::default()
+    };
+    let v = handeye::verify_on_pixels(saved, &series.frames, &camera, setup, &options)?;
+    show(&v, face)?;
+    if let Some(report) = &args.report {
+        let poses: Vec<handeye::PosePair> = series
+            .frames
+            .iter()
+            .map(|f| handeye::PosePair {
+                base_from_gripper: f.base_from_gripper,
+                camera_from_target: f.camera_from_target.unwrap_or_default(),
+            })
+            .collect();
+        let page = crate::report::RunPage {
+            poses: &poses,
+            names: &names,
+            written: handeye::Written::NAMED,
+            setup,
+            unit: faces::length_unit(&poses),
+            summary: text(&v),
+        };
+        crate::report::write_verify(report, &page, &v)?;
+        crate::tell!("wrote {}", report.display());
+    }
+    exit(v, args.strict)
+}
+
+/// Prints the verification in its face (notes and warnings on stderr beside the JSON).
+fn show(v: &handeye::Verification, face: Face) -> Result<()> {
+    match face {
+        Face::Text => print_text(&text(v))?,
+        _ => {
+            for note in &v.notes {
+                crate::tell!("note: {note}");
+            }
+            if let Some(r) = &v.recording {
+                for w in &r.warnings {
+                    crate::tell!("warning: {}", faces::warning(w));
+                }
+            }
+            print_json(&v)?
+        }
+    }
+    Ok(())
+}
+
+/// The exit of a verification: 0 consistent, 4 inconsistent, 3 cannot tell; 5 with `--strict` on
+/// a questionable recording.
+fn exit(v: handeye::Verification, strict: bool) -> Result<()> {
     match v.verdict {
-        Consistency::Consistent if args.strict && v.quality == Assessment::Questionable => {
+        Consistency::Consistent if strict && v.quality == Assessment::Questionable => {
             Err(Questionable.into())
         }
         Consistency::Consistent => Ok(()),
@@ -157,6 +273,22 @@ fn text(v: &handeye::Verification) -> String {
             faces::short(v.sigma.translation),
             v.distance_sigmas,
             v.limit_sigmas
+        );
+    }
+    if let Some(p) = &v.pixels {
+        let worst = p
+            .per_frame
+            .iter()
+            .max_by(|a, b| (a.saved_px - a.own_px).total_cmp(&(b.saved_px - b.own_px)));
+        let _ = writeln!(
+            s,
+            "On the pixels (the target's pose fitted to each X): saved X {:.3} px RMS, the recording's own X {:.3} px RMS{}",
+            p.saved_rms_px,
+            p.own_rms_px,
+            worst.map_or(String::new(), |w| format!(
+                "; most worse at {} ({:.3} px against {:.3} px)",
+                w.name, w.saved_px, w.own_px
+            ))
         );
     }
     for note in &v.notes {

@@ -513,6 +513,99 @@ fn robot_world_report<'py>(
     serde_json::to_string(&report).map_err(value_error)
 }
 
+/// The calibration on the pixels of a JSON Lines file with `detections` and the camera's
+/// intrinsics ([`handeye::calibrate_on_pixels`], with `robot_world`
+/// [`handeye::calibrate_robot_world_on_pixels`]): its report as JSON, the same object
+/// `handeye calibrate FILE --method reprojection --intrinsics I [--robot-world]` prints; the
+/// records named `file:line` as there.
+#[pyfunction]
+#[pyo3(signature = (path, intrinsics, setup="eye-in-hand", robot_world=false, fix=None, point=None))]
+fn pixels_report(
+    py: Python<'_>,
+    path: PathBuf,
+    intrinsics: PathBuf,
+    setup: &str,
+    robot_world: bool,
+    fix: Option<&str>,
+    point: Option<[f64; 3]>,
+) -> PyResult<String> {
+    let setup = parse_setup(setup)?;
+    let fix = parse_fix(fix)?;
+    let point = checked_point(point)?;
+    let camera = handeye::io::read_intrinsics(&intrinsics).map_err(value_error)?;
+    let series = handeye::io::read_frames(&path).map_err(value_error)?;
+    let pose_names: Vec<String> = series
+        .lines
+        .iter()
+        .map(|l| format!("{}:{l}", path.display()))
+        .collect();
+    if robot_world {
+        let options = handeye::RobotWorldOptions {
+            method: handeye::RobotWorldMethod::Reprojection,
+            fix,
+            point,
+            pose_names,
+            ..Default::default()
+        };
+        let report = py
+            .allow_threads(|| {
+                handeye::calibrate_robot_world_on_pixels(&series.frames, &camera, setup, &options)
+            })
+            .map_err(value_error)?;
+        return serde_json::to_string(&report).map_err(value_error);
+    }
+    let options = handeye::Options {
+        method: handeye::Method::Reprojection,
+        // As the command line's report says it (every face prints one object).
+        pairing: handeye::Pairing::All,
+        fix,
+        point,
+        pose_names,
+        ..Default::default()
+    };
+    let report = py
+        .allow_threads(|| handeye::calibrate_on_pixels(&series.frames, &camera, setup, &options))
+        .map_err(value_error)?;
+    serde_json::to_string(&report).map_err(value_error)
+}
+
+/// A saved X checked on the pixels of a JSON Lines file with `detections`
+/// ([`handeye::verify_on_pixels`]): its result as JSON, the same object `handeye verify --x SAVED
+/// FILE --intrinsics I` prints.
+#[pyfunction]
+#[pyo3(signature = (saved, path, intrinsics, setup="eye-in-hand", fix=None))]
+fn verify_pixels_report(
+    py: Python<'_>,
+    saved: PathBuf,
+    path: PathBuf,
+    intrinsics: PathBuf,
+    setup: &str,
+    fix: Option<&str>,
+) -> PyResult<String> {
+    let setup = parse_setup(setup)?;
+    let fix = parse_fix(fix)?;
+    let saved = handeye::io::read_saved_x(&saved).map_err(value_error)?;
+    let camera = handeye::io::read_intrinsics(&intrinsics).map_err(value_error)?;
+    let series = handeye::io::read_frames(&path).map_err(value_error)?;
+    let options = handeye::Options {
+        method: handeye::Method::Reprojection,
+        pairing: handeye::Pairing::All,
+        fix,
+        pose_names: series
+            .lines
+            .iter()
+            .map(|l| format!("{}:{l}", path.display()))
+            .collect(),
+        ..Default::default()
+    };
+    let v = py
+        .allow_threads(|| {
+            handeye::verify_on_pixels(&saved, &series.frames, &camera, setup, &options)
+        })
+        .map_err(value_error)?;
+    serde_json::to_string(&v).map_err(value_error)
+}
+
 /// A point given for `uncertainty.at_point`: three finite numbers (the camera frame, the input's
 /// unit), as `--point` checks them.
 fn checked_point(point: Option<[f64; 3]>) -> PyResult<Option<[f64; 3]>> {
@@ -1046,6 +1139,8 @@ fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_opencv_robot_world, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
     m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
+    m.add_function(wrap_pyfunction!(pixels_report, m)?)?;
+    m.add_function(wrap_pyfunction!(verify_pixels_report, m)?)?;
     m.add_function(wrap_pyfunction!(advise_report, m)?)?;
     m.add_function(wrap_pyfunction!(verify_report, m)?)?;
     m.add_function(wrap_pyfunction!(read_recording, m)?)?;

@@ -358,3 +358,66 @@ def _series():
     """A realistic kinhec recording (eye-in-hand): robot poses, camera poses."""
     read = handeye.read_recording(str(TESTDATA / "kinhec" / "pairs" / "nominal_stations_eih_s1.jsonl"))
     return read["base_from_gripper"], read["camera_from_target"], None, None
+
+
+#: The committed recordings with detections and their setups.
+PIXEL_SETS = [("tag_eih", "eye-in-hand"), ("board_eth", "eye-to-hand")]
+
+
+@pytest.mark.parametrize("robot_world", [False, True], ids=["hand-eye", "robot-world"])
+@pytest.mark.parametrize("name,setup", PIXEL_SETS, ids=[n for n, _ in PIXEL_SETS])
+def test_the_pixel_calibration_is_one_result_in_every_face(name, setup, robot_world):
+    """`calibrate_on_pixels` prints what `handeye calibrate --method reprojection` prints (with
+    `--robot-world`, the robot-world result with the target): the same object, field for field."""
+    assert CLI.exists(), f"build the command line first ({CLI}): cargo build --release"
+    path = TESTDATA / "pixels" / f"{name}.jsonl"
+    intrinsics = TESTDATA / "pixels" / f"{name}.intrinsics.yml"
+    args = [str(CLI), "calibrate", str(path), "--method", "reprojection", "--intrinsics",
+            str(intrinsics), "--setup", setup, "--output", "json"]
+    if robot_world:
+        args.append("--robot-world")
+    done = subprocess.run(args, capture_output=True, text=True, check=True)
+    cli = json.loads(done.stdout)
+    py = handeye.calibrate_on_pixels(path, intrinsics, setup=setup, robot_world=robot_world)
+    py["matrix"] = py["matrix"].tolist()
+    if robot_world:
+        py["target"]["matrix"] = py["target"]["matrix"].tolist()
+        assert py["method"] == "reprojection" and py["formulation"] == "robot-world"
+        assert py["target"]["uncertainty"]["rotation_deg"] > 0
+    assert py == cli
+
+
+def test_the_pixel_calibration_refuses_inverted_robot_poses(tmp_path):
+    """Robot poses that fit the pixels far better inverted: a ValueError naming the reading, as
+    the command line refuses them."""
+    text = (TESTDATA / "pixels" / "board_eth.jsonl").read_text()
+    bad = tmp_path / "inverted.jsonl"
+    bad.write_text(text.replace('"base_from_gripper"', '"gripper_from_base"'))
+    intrinsics = TESTDATA / "pixels" / "board_eth.intrinsics.yml"
+    with pytest.raises(ValueError, match="inverted"):
+        handeye.calibrate_on_pixels(bad, intrinsics, setup="eye-to-hand", robot_world=True)
+
+
+@pytest.mark.parametrize("turn_deg", [0.0, 1.0], ids=["true", "turned"])
+def test_verify_on_the_pixels_is_one_result_in_every_face(tmp_path, turn_deg):
+    """`verify_on_pixels` prints what `handeye verify --intrinsics` prints: the true X consistent,
+    one turned by 1° inconsistent, in both."""
+    truth = json.loads((TESTDATA / "pixels" / "tag_eih.truth.json").read_text())["gripper_from_camera"]
+    half = np.radians(turn_deg) / 2
+    x, y, z, w = truth["quaternion_xyzw"]
+    # A turn about the parent frame's x axis: (sin, 0, 0, cos) ⊗ q.
+    s, c = np.sin(half), np.cos(half)
+    q = [c * x + s * w, c * y - s * z, c * z + s * y, c * w - s * x]
+    saved = tmp_path / "saved.json"
+    saved.write_text(json.dumps({"frame": "gripper_from_camera", "setup": "eye-in-hand",
+                                 "translation": truth["translation"], "quaternion_xyzw": q}))
+    path = TESTDATA / "pixels" / "tag_eih.jsonl"
+    intrinsics = TESTDATA / "pixels" / "tag_eih.intrinsics.yml"
+    done = subprocess.run([str(CLI), "verify", "--x", str(saved), str(path), "--intrinsics", str(intrinsics),
+                           "--output", "json"], capture_output=True, text=True)
+    cli = json.loads(done.stdout)
+    py = handeye.verify_on_pixels(saved, path, intrinsics)
+    assert py["verdict"] == ("consistent" if turn_deg == 0 else "inconsistent")
+    py["saved"]["matrix"] = py["saved"]["matrix"].tolist()
+    py["recording"]["matrix"] = py["recording"]["matrix"].tolist()
+    assert py == cli

@@ -158,9 +158,14 @@ pub use calibrate::advice::{
 };
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
-pub use calibrate::pixels::{FrameRms, ReprojectionSummary, calibrate_on_pixels};
+pub use calibrate::pixels::{
+    FrameRms, ReprojectionSummary, calibrate_on_pixels, calibrate_robot_world_on_pixels,
+    verify_on_pixels,
+};
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
-pub use calibrate::verify::{Consistency, SavedUnit, SavedX, Sizes, Verification, verify};
+pub use calibrate::verify::{
+    Consistency, FramePixels, PixelComparison, SavedUnit, SavedX, Sizes, Verification, verify,
+};
 // Online: the paper's calibrator and the accumulating estimator.
 pub use online::select::{AdaptiveParams, Selection};
 pub use online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};

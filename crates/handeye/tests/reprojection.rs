@@ -208,40 +208,59 @@ fn mis_detected_corners_are_left_out() {
     }
 }
 
+/// The share of error/sigma ratios within 3 and their median, over X's and the target's own.
+struct Honesty {
+    ratios: Vec<f64>,
+}
+
+impl Honesty {
+    fn add(&mut self, gap: &Gap, c: &nalgebra::Matrix6<f64>) {
+        let rot_sigma = c.fixed_view::<3, 3>(0, 0).trace().sqrt().to_degrees();
+        let trans_sigma = c.fixed_view::<3, 3>(3, 3).trace().sqrt();
+        self.ratios.push(gap.rot_deg / rot_sigma);
+        self.ratios.push(gap.trans / trans_sigma);
+    }
+
+    fn check(mut self, what: &str) {
+        self.ratios.sort_by(f64::total_cmp);
+        let total = self.ratios.len();
+        let within = self.ratios.iter().filter(|r| **r <= 3.0).count();
+        let median = self.ratios[total / 2];
+        assert!(
+            within * 10 >= total * 9,
+            "{what}: {within} of {total} within 3 sigma: {:?}",
+            self.ratios
+        );
+        assert!(
+            (0.3..2.0).contains(&median),
+            "{what}: median error/sigma {median}: {:?}",
+            self.ratios
+        );
+    }
+}
+
 #[test]
 fn the_sigma_is_honest_over_many_recordings() {
-    let mut within = 0;
-    let mut total = 0;
-    let mut ratios = Vec::new();
+    let mut x = Honesty { ratios: Vec::new() };
+    let mut target = Honesty { ratios: Vec::new() };
     for setup in SETUPS {
         for config in [PixelSimConfig::board(), PixelSimConfig::tag()] {
             for seed in 100..115 {
                 let sim = simulate_pixels(&config.with_setup(setup), seed);
                 let s = solve(&sim);
-                let c = s.covariance.expect("a covariance");
-                let e = errors_against_truth(&s.calibration.x, &sim.x);
-                let rot_sigma = c.fixed_view::<3, 3>(0, 0).trace().sqrt().to_degrees();
-                let trans_sigma = c.fixed_view::<3, 3>(3, 3).trace().sqrt();
-                for r in [e.rot_deg / rot_sigma, e.trans / trans_sigma] {
-                    ratios.push(r);
-                    total += 1;
-                    if r <= 3.0 {
-                        within += 1;
-                    }
-                }
+                x.add(
+                    &errors_against_truth(&s.calibration.x, &sim.x),
+                    &s.covariance.expect("a covariance"),
+                );
+                target.add(
+                    &errors_against_truth(&s.target, &sim.y),
+                    &s.target_covariance.expect("the target's covariance"),
+                );
             }
         }
     }
-    ratios.sort_by(f64::total_cmp);
-    let median = ratios[ratios.len() / 2];
-    assert!(
-        within * 10 >= total * 9,
-        "{within} of {total} within 3 sigma: {ratios:?}"
-    );
-    assert!(
-        (0.3..2.0).contains(&median),
-        "median error/sigma {median}: {ratios:?}"
-    );
+    x.check("X");
+    target.check("the target");
 }
 
 // The job (`calibrate --method reprojection`): bad input is refused or answered right.
@@ -370,4 +389,122 @@ fn bad_detections_are_refused_with_the_frame() {
     frames[4].detections.pixels[1][0] = f64::NAN;
     let e = job(&sim, &frames).unwrap_err();
     assert!(e.to_string().contains("frame 4"), "{e}");
+}
+
+/// `calibrate --robot-world --method reprojection`: the robot-world result (X, the target, both
+/// uncertainties from the pixel solve), X the same as the hand–eye job's on the pixels, the
+/// target within its bounds of the truth.
+#[test]
+fn the_robot_world_job_on_the_pixels_gives_the_target_too() {
+    for setup in SETUPS {
+        for config in [PixelSimConfig::board(), PixelSimConfig::tag()] {
+            let sim = simulate_pixels(&config.with_setup(setup), 21);
+            let r = handeye::calibrate_robot_world_on_pixels(
+                &sim.frames,
+                &sim.intrinsics,
+                setup,
+                &handeye::RobotWorldOptions::default(),
+            )
+            .expect("solved");
+            let hand_eye = job(&sim, &sim.frames).expect("solved");
+            assert_eq!(r.method, handeye::RobotWorldMethod::Reprojection);
+            assert_eq!(r.x, hand_eye.x, "{setup:?}: one solve, one X");
+            assert_eq!(r.uncertainty, hand_eye.uncertainty);
+            assert_eq!(r.reprojection, hand_eye.reprojection);
+            let gap = errors_against_truth(&r.target_transform, &sim.y);
+            let u = &r.target.uncertainty;
+            assert!(
+                gap.rot_deg <= 3.0 * u.rotation_deg.max(1e-6) && gap.trans <= 3.0 * u.translation,
+                "{setup:?} {:?}: target {gap:?}, sigma {}° {} m",
+                config.target,
+                u.rotation_deg,
+                u.translation
+            );
+            assert!(gap.rot_deg < 1.0 && gap.trans < 0.005, "{gap:?}");
+            let json = serde_json::to_value(&r).unwrap();
+            assert_eq!(json["formulation"], "robot-world");
+            assert_eq!(json["method"], "reprojection");
+            assert!(
+                json["target"]["uncertainty"]["rotation_deg"]
+                    .as_f64()
+                    .unwrap()
+                    > 0.0
+            );
+            assert!(json["reprojection"]["rms_px"].as_f64().unwrap() > 0.0);
+        }
+    }
+    // Leaving out poses is the solve's own on the pixels: asked for, it is refused.
+    let sim = simulate_pixels(&PixelSimConfig::tag(), 21);
+    let e = handeye::calibrate_robot_world_on_pixels(
+        &sim.frames,
+        &sim.intrinsics,
+        sim.setup,
+        &handeye::RobotWorldOptions {
+            reject_outliers: true,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("left out"), "{e}");
+}
+
+/// `verify_on_pixels` over many simulated recordings: the true X consistent, one turned by 1° about
+/// an axis of X's parent frame inconsistent; the largest distance of the truth printed
+/// (`--nocapture`).
+#[test]
+fn verify_on_the_pixels_accepts_the_truth_and_rejects_a_degree() {
+    let mut truth_sigmas = Vec::new();
+    let mut turned_sigmas = Vec::new();
+    for setup in SETUPS {
+        for config in [PixelSimConfig::board(), PixelSimConfig::tag()] {
+            for seed in 200..206 {
+                let sim = simulate_pixels(&config.with_setup(setup), seed);
+                let axis = nalgebra::Vector3::ith(seed as usize % 3, 1.0_f64.to_radians());
+                let turn = nalgebra::Rotation3::new(axis);
+                let turned = handeye::model::pose::transform_from_parts(
+                    &(turn.matrix() * sim.x.rotation.matrix()),
+                    &sim.x.translation.vector,
+                );
+                for (x, sigmas, want) in [
+                    (sim.x, &mut truth_sigmas, handeye::Consistency::Consistent),
+                    (
+                        turned,
+                        &mut turned_sigmas,
+                        handeye::Consistency::Inconsistent,
+                    ),
+                ] {
+                    let saved = handeye::SavedX {
+                        x,
+                        setup: Some(setup),
+                        covariance: None,
+                        unit: handeye::SavedUnit::Unknown,
+                    };
+                    let v = handeye::verify_on_pixels(
+                        &saved,
+                        &sim.frames,
+                        &sim.intrinsics,
+                        setup,
+                        &handeye::Options::default(),
+                    )
+                    .expect("verified");
+                    assert_eq!(
+                        v.verdict, want,
+                        "{setup:?} {:?} seed {seed}: {}",
+                        config.target, v.message
+                    );
+                    let p = v.pixels.expect("the pixels compared");
+                    assert!(p.saved_rms_px >= p.own_rms_px - 1e-9, "{p:?}");
+                    sigmas.push(v.distance_sigmas);
+                }
+            }
+        }
+    }
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let min = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+    println!(
+        "the truth: at most {:.2} sigmas; turned by 1°: at least {:.2} sigmas ({} recordings)",
+        max(&truth_sigmas),
+        min(&turned_sigmas),
+        truth_sigmas.len()
+    );
 }

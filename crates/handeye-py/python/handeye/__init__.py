@@ -23,14 +23,16 @@ import numpy as np
 from ._handeye import _OnlineCalibrator
 from ._handeye import advise_report as _advise_report
 from ._handeye import calibrate_report as _calibrate_report
+from ._handeye import pixels_report as _pixels_report
 from ._handeye import read_recording as _read_recording
 from ._handeye import robot_world_report as _robot_world_report
 from ._handeye import solve_opencv as _solve_opencv
 from ._handeye import solve_opencv_robot_world as _solve_opencv_robot_world
 from ._handeye import solve_opencv_sequences as _solve_opencv_sequences
+from ._handeye import verify_pixels_report as _verify_pixels_report
 from ._handeye import verify_report as _verify_report
 
-__all__ = ["calibrate_hand_eye", "calibrate_robot_world_hand_eye", "calibrate", "advise", "verify", "read_recording", "OnlineCalibrator", "METHODS"]
+__all__ = ["calibrate_hand_eye", "calibrate_robot_world_hand_eye", "calibrate", "calibrate_on_pixels", "advise", "verify", "verify_on_pixels", "read_recording", "OnlineCalibrator", "METHODS"]
 
 #: OpenCV's constants (cv2.CALIB_HAND_EYE_*) and handeye's names.
 METHODS = {0: "tsai", 1: "park", 2: "horaud", 3: "andreff-joint", 4: "daniilidis"}
@@ -304,6 +306,20 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
     return result
 
 
+def verify_on_pixels(saved, path, intrinsics, *, setup="eye-in-hand", fix=None) -> dict:
+    """Whether a saved X still fits a new recording with detections, checked on its pixels as
+    ``handeye verify --x SAVED PATH --intrinsics INTRINSICS`` does: the recording calibrated on
+    the pixels (``calibrate_on_pixels``) and its X compared with the saved one by ``verify``'s test
+    and words. The dict is ``verify``'s plus ``pixels``: ``saved_rms_px`` and ``own_rms_px`` (the
+    reprojection RMS of the recording's detections with the saved X and with its own, the target's
+    pose fitted to each) and ``per_frame`` (``name``, ``saved_px``, ``own_px``)."""
+    result = json.loads(_verify_pixels_report(str(saved), str(path), str(intrinsics), setup=setup, fix=fix))
+    result["saved"]["matrix"] = np.array(result["saved"]["matrix"], dtype=np.float64)
+    if isinstance(result.get("recording"), dict) and "matrix" in result["recording"]:
+        result["recording"]["matrix"] = np.array(result["recording"]["matrix"], dtype=np.float64)
+    return result
+
+
 def _transforms(base_from_gripper, camera_from_target):
     """The two pose lists as contiguous (N, 4, 4) float arrays."""
     g = np.ascontiguousarray(base_from_gripper, dtype=np.float64)
@@ -329,6 +345,34 @@ def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, 
         if len(goal) != 2:
             raise ValueError("goal: expected (degrees, length), a one-sigma rotation and translation")
     return json.loads(_advise_report(g, c, setup=setup, count=count, prior=_priors(prior), goal=goal))
+
+
+def calibrate_on_pixels(path, intrinsics, *, setup="eye-in-hand", robot_world=False, fix=None, point=None) -> dict:
+    """Calibration on the pixels of the detections: a JSON Lines file whose records carry
+    ``detections`` (``target`` points and their ``pixels``) and the camera's ``intrinsics`` (OpenCV
+    FileStorage YAML or a ROS ``camera_info`` YAML). Returns the same object ``handeye calibrate
+    PATH --method reprojection --intrinsics INTRINSICS`` prints, as a dict (``matrix`` a (4,4)
+    array), with ``reprojection`` (``rms_px``, ``per_frame``, ``outlier_detections``, ...). With
+    ``robot_world=True`` the robot-world result of ``calibrate(..., robot_world=True)``
+    (``--robot-world``): X and ``target`` (its ``matrix`` a (4,4) array), each with its
+    uncertainty from the pixel solve, ``method`` "reprojection". ``fix`` ("auto", "as-given",
+    "robot-inverted") and ``point`` as in ``calibrate``. Raises ValueError where the command line
+    refuses (robot poses that fit the pixels far better inverted, a fit far above detection noise,
+    bad input naming the file, line and field)."""
+    result = json.loads(
+        _pixels_report(
+            str(path),
+            str(intrinsics),
+            setup=setup,
+            robot_world=robot_world,
+            fix=fix,
+            point=_point(point),
+        )
+    )
+    result["matrix"] = np.array(result["matrix"], dtype=np.float64)
+    if robot_world:
+        result["target"]["matrix"] = np.array(result["target"]["matrix"], dtype=np.float64)
+    return result
 
 
 def read_recording(

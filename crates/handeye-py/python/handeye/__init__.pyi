@@ -65,6 +65,25 @@ def verify(
     fix: Optional[str] = None,
 ) -> dict[str, Any]: ...
 
+def calibrate_on_pixels(
+    path: Union[str, "os.PathLike[str]"],
+    intrinsics: Union[str, "os.PathLike[str]"],
+    *,
+    setup: str = "eye-in-hand",
+    robot_world: bool = False,
+    fix: Optional[str] = None,
+    point: Optional[Sequence[float]] = None,
+) -> dict[str, Any]: ...
+
+def verify_on_pixels(
+    saved: Union[str, "os.PathLike[str]"],
+    path: Union[str, "os.PathLike[str]"],
+    intrinsics: Union[str, "os.PathLike[str]"],
+    *,
+    setup: str = "eye-in-hand",
+    fix: Optional[str] = None,
+) -> dict[str, Any]: ...
+
 def read_recording(
     path: Optional[Union[str, "os.PathLike[str]"]] = None,
     *,

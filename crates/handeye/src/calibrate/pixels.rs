@@ -12,6 +12,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::calibrate::robot_world::{
+    PoseResidualSummary, RobotWorldOptions, RobotWorldReport, TargetReport,
+};
 use crate::calibrate::batch::{
     Assessment, Options, Outliers, ReadingReport, Report, Spread, Units, Fix, refuse_if_undetermined,
     warn_weak, working_distance,
@@ -23,10 +26,14 @@ use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::Reading;
 use crate::model::motion::{PosePair, Setup};
-use crate::model::pose::TransformJson;
+use crate::model::pose::{Transform, TransformJson};
 use crate::solve::motions::AllPairs;
-use crate::solve::reprojection::{PixelOptions, PixelSolution, reprojection};
-use crate::solve::Method;
+use crate::calibrate::verify::{
+    FramePixels, PixelComparison, SavedX, Verification, cannot_tell, compared, setup_notes,
+    unit_scale,
+};
+use crate::solve::reprojection::{PixelOptions, PixelSolution, reprojection, target_with_x};
+use crate::solve::{Method, RobotWorldMethod, pose_residuals, target_frame};
 
 /// The robust sigma (pixels, per coordinate) above which the detections do not fit: detectors
 /// give 0.05–1 px; a wrong unit, wrong intrinsics or robot poses of other images give tens.
@@ -85,6 +92,191 @@ pub fn calibrate_on_pixels(
     setup: Setup,
     options: &Options,
 ) -> Result<Report> {
+    let (used, solution, applied, reading_check) = solved(frames, camera, setup, options.fix)?;
+    report(&used, setup, options, solution, applied, reading_check)
+}
+
+/// X and the target's pose on the pixels, with the same checks as [`calibrate_on_pixels`] (the
+/// reading of the robot poses on the pixels, a fit far above noise refused), in the result shape
+/// of the pose-based robot-world calibration
+/// ([`calibrate_robot_world`](crate::calibrate_robot_world)): one result for every face.
+///
+/// Both uncertainties are the pixel solve's own (X's and the target's blocks of one covariance,
+/// the larger of the Gauss–Newton and the per-frame sandwich one), judged by the same bounds;
+/// `residual` is Q_i X C_i = Y over the PnP poses the solve started from (their noise, not X's
+/// error: X and the target were fitted to the pixels), and `reprojection` the fit on the pixels.
+/// `options.method` is ignored (this is [`RobotWorldMethod::Reprojection`]), as are
+/// `replicates`, `written`, `outlier_deg` and `joints` (no bootstrap, no systematic-error test on
+/// the pixels); `fix` may force `as-given` or `robot-inverted`; `point` places `at_point`;
+/// `pose_names` names the frames.
+///
+/// Errors: those of [`calibrate_on_pixels`], and [`Error::InvalidParameter`] for
+/// `reject_outliers` (mis-detected corners are left out, and listed, by the solve itself).
+pub fn calibrate_robot_world_on_pixels(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &RobotWorldOptions,
+) -> Result<RobotWorldReport> {
+    if options.reject_outliers {
+        return Err(Error::InvalidParameter {
+            name: "reject_outliers",
+            message: "not offered on the pixels: mis-detected corners are left out (and listed) by the solve itself".into(),
+        });
+    }
+    let (used, solution, applied, reading_check) = solved(frames, camera, setup, options.fix)?;
+    let hand_eye = Options {
+        fix: options.fix,
+        point: options.point,
+        pose_names: options.pose_names.clone(),
+        ..Options::default()
+    };
+    let target = solution.target;
+    let target_covariance = solution.target_covariance;
+    let poses = pose_pairs(&used, &solution.start_poses);
+    let Report {
+        verdict,
+        x,
+        uncertainty,
+        conditioning,
+        reading,
+        outliers,
+        warnings,
+        units,
+        transform,
+        reprojection,
+        ..
+    } = report(&used, setup, &hand_eye, solution, applied, reading_check)?;
+    let scene = translation_scale(&poses, setup).max(working_distance(&poses));
+    let Some(target_covariance) = target_covariance else {
+        return Err(Error::Degenerate {
+            reason: Degeneracy::IllConditioned,
+            conditioning,
+        });
+    };
+    let target_uncertainty = summarise(target_covariance, 0, 0, scene);
+    refuse_if_undetermined(&target_uncertainty, setup, conditioning)?;
+    let residual = PoseResidualSummary::of(pose_residuals(&poses, setup, &transform, &target));
+    Ok(RobotWorldReport {
+        verdict,
+        method: RobotWorldMethod::Reprojection,
+        setup,
+        formulation: "robot-world".into(),
+        frame: setup.x_frame().into(),
+        x,
+        uncertainty,
+        target: TargetReport {
+            frame: target_frame(setup).into(),
+            pose: TransformJson::from(&target),
+            uncertainty: target_uncertainty,
+        },
+        poses: used.len(),
+        conditioning,
+        reading,
+        outliers,
+        residual,
+        warnings,
+        units,
+        transform,
+        target_transform: target,
+        systematic: None,
+        reprojection,
+    })
+}
+
+/// Checks a saved X against a recording with detections (`verify --intrinsics`): the recording is
+/// calibrated on the pixels as [`calibrate_on_pixels`] does it, and its X compared with the saved
+/// one by the same test and words as [`verify`](crate::verify) (the covariance is the pixel
+/// solve's). `pixels` adds the reprojection error of the recording's detections with the saved X
+/// and with the recording's own, the target's pose fitted to each with X held fixed
+/// ([`target_with_x`]): how much worse the saved X explains the pixels, frame by frame.
+///
+/// Errors: those of [`calibrate_on_pixels`] but a refusal for degenerate or too few motions, which
+/// is the verdict `undetermined`.
+pub fn verify_on_pixels(
+    saved: &SavedX,
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &Options,
+) -> Result<Verification> {
+    let notes = setup_notes(saved, setup);
+    let (used, solution, applied, reading_check) = match solved(frames, camera, setup, options.fix) {
+        Ok(s) => s,
+        Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
+            let poses = pose_pairs(
+                frames,
+                &frames
+                    .iter()
+                    .map(|f| f.camera_from_target.unwrap_or_default())
+                    .collect::<Vec<_>>(),
+            );
+            return Ok(cannot_tell(saved, &poses, &e, notes));
+        }
+        Err(e) => return Err(e),
+    };
+    let poses = pose_pairs(&used, &solution.start_poses);
+    let own = solution.calibration.x;
+    let mut x = saved.x;
+    x.translation.vector *= unit_scale(saved, &poses, &own, &mut Vec::new());
+    let pixel_options = PixelOptions::default();
+    let with_saved = target_with_x(&used, camera, setup, &x, &solution, &pixel_options);
+    let with_own = target_with_x(&used, camera, setup, &own, &solution, &pixel_options);
+    let report = match report(&used, setup, options, solution, applied, reading_check) {
+        Ok(r) => r,
+        Err(e @ Error::Degenerate { .. }) => return Ok(cannot_tell(saved, &poses, &e, notes)),
+        Err(e) => return Err(e),
+    };
+    let names = report.reprojection.as_ref().map(|r| {
+        r.per_frame
+            .iter()
+            .map(|f| f.name.clone())
+            .collect::<Vec<_>>()
+    });
+    let per_frame = with_saved
+        .per_frame_rms_px
+        .iter()
+        .zip(&with_own.per_frame_rms_px)
+        .enumerate()
+        .map(|(i, (s, o))| FramePixels {
+            name: names
+                .as_ref()
+                .and_then(|n| n.get(i).cloned())
+                .unwrap_or_else(|| format!("frame {i}")),
+            saved_px: *s,
+            own_px: *o,
+        })
+        .collect();
+    let mut v = compared(saved, &poses, report, notes);
+    v.pixels = Some(PixelComparison {
+        saved_rms_px: with_saved.rms_px,
+        own_rms_px: with_own.rms_px,
+        per_frame,
+    });
+    Ok(v)
+}
+
+/// The robot poses with the camera poses the solve started from (the PnP pose of each frame
+/// chosen by the robot's motion).
+fn pose_pairs(frames: &[Frame], start_poses: &[Transform]) -> Vec<PosePair> {
+    frames
+        .iter()
+        .zip(start_poses)
+        .map(|(f, c)| PosePair {
+            base_from_gripper: f.base_from_gripper,
+            camera_from_target: *c,
+        })
+        .collect()
+}
+
+/// The solve on the pixels with its checks: the frames as read (the robot poses inverted when
+/// that reading was applied), the solution, the reading and how it was checked.
+fn solved(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    fix: Fix,
+) -> Result<(Vec<Frame>, PixelSolution, Reading, String)> {
     camera.check().map_err(|(field, message)| Error::InvalidParameter {
         name: "intrinsics",
         message: format!("{field}: {message}"),
@@ -106,7 +298,7 @@ pub fn calibrate_on_pixels(
             ..f.clone()
         })
         .collect();
-    let (applied, solution, reading_check) = match options.fix {
+    let (applied, solution, reading_check) = match fix {
         Fix::Read(Reading::AsGiven) => (
             Reading::AsGiven,
             reprojection(frames, camera, setup, &pixel_options)?,
@@ -127,18 +319,18 @@ pub fn calibrate_on_pixels(
             });
         }
         Fix::Refuse | Fix::Auto => {
-            checked_reading(frames, &inverted, camera, setup, options.fix, &pixel_options)?
+            checked_reading(frames, &inverted, camera, setup, fix, &pixel_options)?
         }
     };
     let used = if applied == Reading::RobotInverted {
-        &inverted[..]
+        inverted
     } else {
-        frames
+        frames.to_vec()
     };
     if solution.sigma_px > REFUSE_SIGMA_PX {
-        return Err(unfit(&solution, used, camera, setup, &pixel_options));
+        return Err(unfit(&solution, &used, camera, setup, &pixel_options));
     }
-    report(used, setup, options, solution, applied, reading_check)
+    Ok((used, solution, applied, reading_check))
 }
 
 /// The reading on the pixels: as given, unless the robot poses inverted fit far better (then a
@@ -241,14 +433,7 @@ fn report(
     reading_check: String,
 ) -> Result<Report> {
     let x = solution.calibration.x;
-    let poses: Vec<PosePair> = frames
-        .iter()
-        .zip(&solution.start_poses)
-        .map(|(f, c)| PosePair {
-            base_from_gripper: f.base_from_gripper,
-            camera_from_target: *c,
-        })
-        .collect();
+    let poses = pose_pairs(frames, &solution.start_poses);
     let scene = translation_scale(&poses, setup).max(working_distance(&poses));
     let conditioning = solution.calibration.conditioning;
     let Some(covariance) = solution.covariance else {

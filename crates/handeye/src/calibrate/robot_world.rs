@@ -121,6 +121,24 @@ pub struct PoseResidualSummary {
     pub per_pose: Vec<PoseResidual>,
 }
 
+impl PoseResidualSummary {
+    /// The summary of the per-pose residuals.
+    pub(crate) fn of(per_pose: Vec<PoseResidual>) -> Self {
+        let n = per_pose.len().max(1) as f64;
+        let rms = |f: fn(&PoseResidual) -> f64| {
+            (per_pose.iter().map(|r| f(r).powi(2)).sum::<f64>() / n).sqrt()
+        };
+        let max = |f: fn(&PoseResidual) -> f64| per_pose.iter().map(f).fold(0.0, f64::max);
+        Self {
+            rotation_deg_rms: rms(PoseResidual::angle_deg),
+            rotation_deg_max: max(PoseResidual::angle_deg),
+            translation_rms: rms(PoseResidual::distance),
+            translation_max: max(PoseResidual::distance),
+            per_pose,
+        }
+    }
+}
+
 /// A pose's residual as a report prints it: its angle and its distance.
 #[derive(Serialize, Deserialize)]
 struct Printed {
@@ -208,6 +226,10 @@ pub struct RobotWorldReport {
     /// The test for an error that follows the robot's configuration, as in the hand–eye report.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub systematic: Option<Systematic>,
+    /// The fit on the pixels, when X and the target were solved on the detections
+    /// ([`crate::calibrate_robot_world_on_pixels`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reprojection: Option<crate::calibrate::pixels::ReprojectionSummary>,
 }
 
 /// Calibrates X and the target's pose from `poses` (see the module docs for the steps).
@@ -303,19 +325,8 @@ pub fn calibrate_robot_world(
     warnings.extend(solved.warnings.iter().cloned());
     warn_weak(&x_unc, setup, None, &mut warnings);
     warnings.extend(kept_outliers);
-    let per_pose = pose_residuals(&used, setup, &solved.x, &solved.target);
-    let n = per_pose.len().max(1) as f64;
-    let rms = |f: fn(&PoseResidual) -> f64| {
-        (per_pose.iter().map(|r| f(r).powi(2)).sum::<f64>() / n).sqrt()
-    };
-    let max = |f: fn(&PoseResidual) -> f64| per_pose.iter().map(f).fold(0.0, f64::max);
-    let residual = PoseResidualSummary {
-        rotation_deg_rms: rms(PoseResidual::angle_deg),
-        rotation_deg_max: max(PoseResidual::angle_deg),
-        translation_rms: rms(PoseResidual::distance),
-        translation_max: max(PoseResidual::distance),
-        per_pose,
-    };
+    let residual =
+        PoseResidualSummary::of(pose_residuals(&used, setup, &solved.x, &solved.target));
     Ok(RobotWorldReport {
         verdict: Assessment::of(&warnings),
         method: options.method,
@@ -339,6 +350,7 @@ pub fn calibrate_robot_world(
         transform: solved.x,
         systematic,
         target_transform: solved.target,
+        reprojection: None,
     })
 }
 

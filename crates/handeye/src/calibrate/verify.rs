@@ -113,6 +113,33 @@ pub struct Verification {
     pub notes: Vec<String>,
     /// The recording's own calibration (absent when it was refused).
     pub recording: Option<Report>,
+    /// On the pixels (`verify --intrinsics`): the reprojection error of the recording's
+    /// detections with the saved X and with the recording's own, the target's pose fitted to each.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pixels: Option<PixelComparison>,
+}
+
+/// The saved X and the recording's own on the pixels: the target's pose fitted with each X held
+/// fixed, over the detections the recording's solve kept.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PixelComparison {
+    /// RMS reprojection error with the saved X, pixels.
+    pub saved_rms_px: f64,
+    /// RMS reprojection error with the recording's own X, pixels.
+    pub own_rms_px: f64,
+    /// Per frame, in input order.
+    pub per_frame: Vec<FramePixels>,
+}
+
+/// One frame's reprojection RMS with each X.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FramePixels {
+    /// The frame's name (`file:line` from the command line).
+    pub name: String,
+    /// With the saved X, pixels.
+    pub saved_px: f64,
+    /// With the recording's own X, pixels.
+    pub own_px: f64,
 }
 
 /// Checks a saved X against a recording of poses (see the module docs).
@@ -125,16 +152,7 @@ pub fn verify(
     setup: Setup,
     options: &Options,
 ) -> Result<Verification> {
-    let mut notes = Vec::new();
-    if let Some(s) = saved.setup
-        && s != setup
-    {
-        notes.push(format!(
-            "the saved X is for {}, the recording is read as {}",
-            s.name(),
-            setup.name()
-        ));
-    }
+    let mut notes = setup_notes(saved, setup);
     let report = match calibrate(poses, setup, options) {
         Err(e) => match crate::calibrate::low_dof::wants_prior(&e) {
             Some(free) => with_saved_prior(saved, poses, setup, options, free, &mut notes),
@@ -149,6 +167,29 @@ pub fn verify(
         }
         Err(e) => return Err(e),
     };
+    Ok(compared(saved, poses, report, notes))
+}
+
+/// A note when the saved X's setup is not the recording's.
+pub(crate) fn setup_notes(saved: &SavedX, setup: Setup) -> Vec<String> {
+    match saved.setup {
+        Some(s) if s != setup => vec![format!(
+            "the saved X is for {}, the recording is read as {}",
+            s.name(),
+            setup.name()
+        )],
+        _ => Vec::new(),
+    }
+}
+
+/// The saved X against the recording's own calibration `report` (the poses give the recording's
+/// unit and working distance): the χ² test of the module docs, its verdict and words.
+pub(crate) fn compared(
+    saved: &SavedX,
+    poses: &[PosePair],
+    report: Report,
+    mut notes: Vec<String>,
+) -> Verification {
     let new = report.transform;
     let scale = unit_scale(saved, poses, &new, &mut notes);
     let mut x = saved.x;
@@ -239,7 +280,7 @@ pub fn verify(
             ),
         )
     };
-    Ok(Verification {
+    Verification {
         verdict,
         difference,
         sigma,
@@ -253,7 +294,8 @@ pub fn verify(
         message,
         notes,
         recording: Some(report),
-    })
+        pixels: None,
+    }
 }
 
 /// The largest ratio of a difference's size to its one sigma (√trace of its block) that the same
@@ -317,7 +359,7 @@ fn with_saved_prior(
     Ok(report)
 }
 
-fn cannot_tell(
+pub(crate) fn cannot_tell(
     saved: &SavedX,
     poses: &[PosePair],
     refusal: &Error,
@@ -352,6 +394,7 @@ fn cannot_tell(
         ),
         notes,
         recording: None,
+        pixels: None,
     }
 }
 
@@ -403,7 +446,7 @@ pub fn limit_sigmas() -> f64 {
 
 /// The factor bringing the saved translation into the recording's unit, with a note when it is
 /// not 1.
-fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, notes: &mut Vec<String>) -> f64 {
+pub(crate) fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, notes: &mut Vec<String>) -> f64 {
     let (scale, words) = match (told_scale(saved, poses), saved.unit) {
         (Some(told), _) => told,
         (None, SavedUnit::Unknown) => {

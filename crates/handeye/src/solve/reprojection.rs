@@ -89,6 +89,10 @@ pub struct PixelSolution {
     /// detections share its robot pose's error: the sandwich over frames) and never below the
     /// Gauss–Newton one; `None` when the normal matrix is singular.
     pub covariance: Option<Matrix6<f64>>,
+    /// Covariance of Y (left rotation increment `exp([δ]×) R_y`, then t_y), from the same
+    /// Jacobian and the same choice (the larger of the Gauss–Newton and the sandwich one, by Y's
+    /// own trace); `None` when the normal matrix is singular.
+    pub target_covariance: Option<Matrix6<f64>>,
     /// RMS reprojection error over the kept detections, pixels.
     pub rms_px: f64,
     /// RMS reprojection error of each frame (every detection of it), pixels.
@@ -169,7 +173,10 @@ pub fn reprojection(
         .filter(|(_, k)| !**k)
         .map(|(i, _)| *i)
         .collect();
-    let covariance = plain.covariance(&state).map(|c| in_unit(c, unit));
+    let (covariance, target_covariance) = match plain.covariance(&state) {
+        Some((x, y)) => (Some(in_unit(x, unit)), Some(in_unit(y, unit))),
+        None => (None, None),
+    };
     let x = transform_from_parts(&state.0, &(state.1 * unit));
     let target = transform_from_parts(&state.2, &(state.3 * unit));
     Ok(PixelSolution {
@@ -182,6 +189,7 @@ pub fn reprojection(
         },
         target,
         covariance,
+        target_covariance,
         rms_px,
         per_frame_rms_px,
         outliers,
@@ -191,6 +199,75 @@ pub fn reprojection(
         iterations: first.iterations + last.iterations,
         termination: last.termination,
     })
+}
+
+/// The target's pose fitted to the pixels with X held fixed ([`target_with_x`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TargetFit {
+    /// Y fitted with X fixed.
+    pub target: Transform,
+    /// RMS reprojection error over the detections the solve kept, pixels.
+    pub rms_px: f64,
+    /// Each frame's RMS over its detections the solve kept (0 for a frame with none), pixels.
+    pub per_frame_rms_px: Vec<f64>,
+}
+
+/// Fits only the target's pose Y to the pixels with X fixed at `x`, over the detections `solved`
+/// kept (its mis-detections left out), started from `solved`'s Y: how well a given X (a saved one)
+/// explains the pixels of a recording, against [`PixelSolution`]'s own X. Plain least squares
+/// with the Levenberg–Marquardt settings of `options`.
+pub fn target_with_x(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    x: &Transform,
+    solved: &PixelSolution,
+    options: &PixelOptions,
+) -> TargetFit {
+    let unit = length_unit(&solved.start_poses);
+    let data = Data::new(frames, camera, setup, unit);
+    let keep: Vec<bool> = data
+        .index
+        .iter()
+        .map(|i| !solved.outliers.contains(i))
+        .collect();
+    let problem = TargetOnly {
+        bundle: Bundle {
+            data: &data,
+            loss: Loss::Squared,
+            keep: Some(&keep),
+        },
+        x: (
+            *x.rotation.matrix(),
+            x.translation.vector / unit,
+        ),
+    };
+    let y0 = scaled(&solved.target, 1.0 / unit);
+    let end = levenberg_marquardt(
+        &problem,
+        (*y0.rotation.matrix(), y0.translation.vector),
+        &options.lm,
+    );
+    let state = (problem.x.0, problem.x.1, end.state.0, end.state.1);
+    let residuals = data.residual_norms(&state);
+    let (rms_px, _) = data.rms(&residuals, &keep);
+    let per_frame_rms_px = data
+        .starts
+        .windows(2)
+        .map(|w| {
+            let kept: Vec<f64> = (w[0]..w[1])
+                .filter(|k| keep[*k])
+                .map(|k| residuals[k])
+                .collect();
+            let n = kept.len().max(1) as f64;
+            (kept.iter().map(|r| r * r).sum::<f64>() / n).sqrt()
+        })
+        .collect();
+    TargetFit {
+        target: transform_from_parts(&end.state.0, &(end.state.1 * unit)),
+        rms_px,
+        per_frame_rms_px,
+    }
 }
 
 /// Refuses frames whose detections cannot be used, naming the frame.
@@ -823,11 +900,11 @@ impl Bundle<'_> {
         (per_frame, jtj, cost, count)
     }
 
-    /// Covariance of X's 6 parameters: the larger (by trace) of the Gauss–Newton one, s² (JᵀJ)⁻¹
-    /// with s² = Σr²/(m − 12), and the sandwich over frames, H⁻¹ (Σ_f g_f g_fᵀ) H⁻¹ · F/(F − 12)
-    /// with g_f = J_fᵀ r_f (a frame's detections share its robot pose's error, which the
-    /// Gauss–Newton covariance takes as independent pixel noise).
-    fn covariance(&self, s: &State) -> Option<Matrix6<f64>> {
+    /// Covariances of X's and of Y's 6 parameters: each the larger (by its trace) of the
+    /// Gauss–Newton one, s² (JᵀJ)⁻¹ with s² = Σr²/(m − 12), and the sandwich over frames,
+    /// H⁻¹ (Σ_f g_f g_fᵀ) H⁻¹ · F/(F − 12) with g_f = J_fᵀ r_f (a frame's detections share its
+    /// robot pose's error, which the Gauss–Newton covariance takes as independent pixel noise).
+    fn covariance(&self, s: &State) -> Option<(Matrix6<f64>, Matrix6<f64>)> {
         let (per_frame, jtj, cost, count) = self.gradients(s);
         let frames = per_frame.len();
         if count <= 12 || frames <= 12 {
@@ -841,13 +918,55 @@ impl Bundle<'_> {
             meat += g * g.transpose();
         }
         let sandwich = inv * meat * inv * (frames as f64 / (frames - 12) as f64);
-        let x_block = |c: &SMatrix<f64, 12, 12>| c.fixed_view::<6, 6>(0, 0).into_owned();
-        let (a, b) = (x_block(&classic), x_block(&sandwich));
         let scale = |c: &Matrix6<f64>| {
             c.fixed_view::<3, 3>(0, 0).trace() * 1e4 + c.fixed_view::<3, 3>(3, 3).trace()
         };
-        let c = if scale(&b) > scale(&a) { b } else { a };
-        c.iter().all(|v| v.is_finite()).then_some(c)
+        let block = |at: usize| {
+            let a: Matrix6<f64> = classic.fixed_view::<6, 6>(at, at).into_owned();
+            let b: Matrix6<f64> = sandwich.fixed_view::<6, 6>(at, at).into_owned();
+            let c = if scale(&b) > scale(&a) { b } else { a };
+            c.iter().all(|v| v.is_finite()).then_some(c)
+        };
+        Some((block(0)?, block(6)?))
+    }
+}
+
+/// The bundle with X held fixed: Y's 6 parameters only.
+struct TargetOnly<'a> {
+    bundle: Bundle<'a>,
+    /// X (R_x, t_x), in the solve's unit.
+    x: (Matrix3<f64>, Vector3<f64>),
+}
+
+impl TargetOnly<'_> {
+    fn with_x(&self, (r_y, t_y): &(Matrix3<f64>, Vector3<f64>)) -> State {
+        (self.x.0, self.x.1, *r_y, *t_y)
+    }
+}
+
+impl LeastSquares<6> for TargetOnly<'_> {
+    type State = (Matrix3<f64>, Vector3<f64>);
+
+    fn linearise(&self, y: &Self::State) -> Linearisation<6> {
+        let full = self.bundle.linearise(&self.with_x(y));
+        Linearisation {
+            jtj: full.jtj.fixed_view::<6, 6>(6, 6).into_owned(),
+            jtr: full.jtr.fixed_rows::<6>(6).into_owned(),
+            cost: full.cost,
+        }
+    }
+
+    fn step(&self, (r_y, t_y): &Self::State, d: &Vector6<f64>) -> Self::State {
+        let e: Vector3<f64> = d.fixed_rows::<3>(0).into_owned();
+        (proj_so3(&(exp_so3(&e) * r_y)), t_y + d.fixed_rows::<3>(3))
+    }
+
+    fn cost_drop(&self, _: &Self::State, to: &Self::State, cost: f64) -> f64 {
+        cost - self.bundle.cost(&self.with_x(to))
+    }
+
+    fn size(&self, (_, t_y): &Self::State) -> f64 {
+        1.0 + self.x.1.norm() + t_y.norm()
     }
 }
 

@@ -60,12 +60,17 @@ pub enum RobotWorldMethod {
     Li,
     /// Joint Levenberg–Marquardt over X and the target pose, started from Shah.
     Refine,
+    /// X and the target pose on the pixels of the detections
+    /// ([`calibrate_robot_world_on_pixels`](crate::calibrate_robot_world_on_pixels)): not a
+    /// solver of poses, so not in [`RobotWorldMethod::ALL`], and [`robot_world`] refuses it.
+    Reprojection,
 }
 
 crate::named_enum!(RobotWorldMethod, "robot-world method", "method" {
     Shah => "shah",
     Li => "li",
-    Refine => "refine",
+    Refine => "refine";
+    not listed: Reprojection => "reprojection",
 });
 
 /// The result of a robot-world solve.
@@ -377,6 +382,10 @@ pub fn robot_world(
         RobotWorldMethod::Shah => shah(poses, setup),
         RobotWorldMethod::Li => li(poses, setup),
         RobotWorldMethod::Refine => refine_robot_world(poses, setup).map(|r| r.solution),
+        RobotWorldMethod::Reprojection => Err(Error::InvalidParameter {
+            name: "method",
+            message: "`reprojection` solves on the pixels: give detections and intrinsics (`--intrinsics FILE`), not poses".into(),
+        }),
     }
 }
 
