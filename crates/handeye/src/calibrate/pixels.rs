@@ -189,7 +189,7 @@ pub fn calibrate_robot_world_on_pixels(
 /// one by the same test and words as [`verify`](crate::verify) (the covariance is the pixel
 /// solve's). `pixels` adds the reprojection error of the recording's detections with the saved X
 /// and with the recording's own, the target's pose fitted to each with X held fixed
-/// ([`target_with_x`]): how much worse the saved X explains the pixels, frame by frame.
+/// (`target_with_x`): how much worse the saved X explains the pixels, frame by frame.
 ///
 /// Errors: those of [`calibrate_on_pixels`] but a refusal for degenerate or too few motions, which
 /// is the verdict `undetermined`.

@@ -62,7 +62,7 @@ pub enum RobotWorldMethod {
     Refine,
     /// X and the target pose on the pixels of the detections
     /// ([`calibrate_robot_world_on_pixels`](crate::calibrate_robot_world_on_pixels)): not a
-    /// solver of poses, so not in [`RobotWorldMethod::ALL`], and [`robot_world`] refuses it.
+    /// solver of poses, so not in [`RobotWorldMethod::ALL`], and the pose solver `robot_world` refuses it.
     Reprojection,
 }
 
