@@ -447,6 +447,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             written,
             point: args.point,
             joints: recording.joints,
+            priors: Vec::new(),
         },
     ) {
         Ok(report) => report,

@@ -641,7 +641,7 @@ pub(crate) fn wider(ordinary: Uncertainty, regions: Uncertainty) -> Uncertainty 
 /// lack instead when, given the prior, they would not determine the rest either (a single joint
 /// turning, no translation across the axis): the user is told first what a prior cannot fix. The
 /// check calibrates with a stand-in prior of 0 (the component does not enter the motions' fit).
-fn first_what_motions_lack(
+pub(crate) fn first_what_motions_lack(
     poses: &[PosePair],
     setup: Setup,
     options: &Options,

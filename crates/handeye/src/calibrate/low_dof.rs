@@ -391,3 +391,41 @@ pub(crate) fn check_determined(
         }
     }
 }
+
+/// The direction, in the target pose's reference frame (the robot base eye-in-hand, the gripper
+/// eye-to-hand), along which the target's translation moves with X's along the axis: Q_i X C_i = Y
+/// holds for (t_X + λ k, t_Y + λ R_Q k) at every pose alike, R_Q k being the same for every pose
+/// (each hand pose turns about the axis only), so the poses leave that one combination free.
+/// The mean of R_Q k over the poses, normalised.
+pub(crate) fn target_axis(plan: &Plan, poses: &[PosePair], setup: Setup) -> Vector3<f64> {
+    let sum: Vector3<f64> = poses
+        .iter()
+        .map(|p| setup.hand_pose(&p.base_from_gripper).rotation * plan.axis.hand)
+        .sum();
+    sum.try_normalize(f64::MIN_POSITIVE)
+        .unwrap_or(plan.axis.hand)
+}
+
+/// X and the target's pose of a low-DOF robot-world recording: X as the hand–eye low-DOF solve
+/// gives it over every pair of poses (its component along the axis the prior's), the target's pose
+/// the one that best agrees with every pose at that X ([`crate::solve::target_given`]), its
+/// coupled component thereby following from the prior. `refine` only (the default): Shah's and
+/// Li's forms cannot solve such poses. The conditioning is the low-DOF translation system's.
+pub(crate) fn solve_robot_world(
+    plan: &Plan,
+    poses: &[PosePair],
+    setup: Setup,
+    method: crate::solve::RobotWorldMethod,
+) -> Result<(Transform, Transform, f64)> {
+    if method != crate::solve::RobotWorldMethod::Refine {
+        return Err(Error::InvalidParameter {
+            name: "method",
+            message: format!(
+                "every motion rotates about one axis (a low-DOF robot): `{method}` cannot solve such poses; use `refine` (the default)"
+            ),
+        });
+    }
+    let solved = solve(plan, poses, setup, Pairing::All, Method::Refine)?;
+    let target = crate::solve::target_given(poses, setup, &solved.x);
+    Ok((solved.x, target, solved.conditioning))
+}

@@ -181,6 +181,8 @@ pub fn calibrate_robot_world_on_pixels(
         target_transform: target,
         systematic: None,
         reprojection,
+        prior: Default::default(),
+        low_dof: None,
     })
 }
 

@@ -22,27 +22,31 @@
 //! 4. the residuals per pose: the angle between R_Y and R_Q R_X R_C (degrees) and how far pose i
 //!    puts the target's origin from Y's (input units).
 
+use std::collections::BTreeMap;
+
 use nalgebra::{Matrix3, Matrix6};
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::batch::{
-    plausible,
+    first_what_motions_lack, plausible,
     Fix, Options, Outliers, ReadingReport, Units, explained, outlier_report,
     check_joints, outlier_warning, read_poses, systematic_test, warn_weak, widened_for_systematic, without,
     working_distance,
 };
+use crate::calibrate::low_dof::{self, LowDofReport, Plan};
 use crate::check::systematic::Systematic;
 use crate::check::outliers::translation_scale;
 use crate::check::quality::OUTLIER_DEG;
 use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, median_target, summarise};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::{Assessment, Part, Verdict, Written};
-use crate::model::motion::{PosePair, Setup};
+use crate::model::motion::{Pairing, PosePair, Setup};
+use crate::model::prior::{Prior, PriorsUsed, check_priors};
 use crate::model::pose::TransformJson;
 use crate::model::pose::{Transform, rotation_matrix};
 use crate::solve::{
-    JointCovariance, PoseResidual, RobotWorldMethod, joint_covariance, pose_residuals, robot_world,
-    target_frame,
+    JointCovariance, PoseResidual, RobotWorldMethod, joint_covariance, joint_covariance_given,
+    pose_residuals, robot_world, target_frame,
 };
 
 /// How to calibrate X and the target together.
@@ -72,6 +76,10 @@ pub struct RobotWorldOptions {
     pub point: Option<[f64; 3]>,
     /// The joint angles of each pose by input index (radians), as in the hand–eye options.
     pub joints: Vec<Vec<f64>>,
+    /// Priors on components of X's translation, as in the hand–eye options (`--prior`): a
+    /// low-DOF recording's free component of X comes from its prior, and the target's coupled
+    /// component follows from it. Default empty.
+    pub priors: Vec<Prior>,
 }
 
 impl Default for RobotWorldOptions {
@@ -86,6 +94,7 @@ impl Default for RobotWorldOptions {
             written: Written::NAMED,
             point: None,
             joints: Vec::new(),
+            priors: Vec::new(),
         }
     }
 }
@@ -230,6 +239,13 @@ pub struct RobotWorldReport {
     /// ([`crate::calibrate_robot_world_on_pixels`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reprojection: Option<crate::calibrate::pixels::ReprojectionSummary>,
+    /// The components of X's translation that came from a prior, as in the hand–eye report
+    /// (`"prior": {"tz": {"value", "sigma"}}`); absent when none did.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub prior: PriorsUsed,
+    /// A low-DOF recording, as in the hand–eye report; absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low_dof: Option<LowDofReport>,
 }
 
 /// Calibrates X and the target's pose from `poses` (see the module docs for the steps).
@@ -255,6 +271,8 @@ pub fn calibrate_robot_world(
 ) -> Result<RobotWorldReport> {
     check_replicates(options.replicates)?;
     check_joints(&options.joints, poses.len())?;
+    check_priors(&options.priors)?;
+    let priors = crate::check::units::in_poses_unit(&options.priors, poses)?;
     let mut warnings = Vec::new();
     let (applied, check, read, found) = read_poses(
         poses,
@@ -279,18 +297,67 @@ pub fn calibrate_robot_world(
         read
     };
     let explain = |e: Error| explained(e, &warnings, kept_outliers.as_ref());
-    let solved = robot_world(options.method, &used, setup).map_err(explain)?;
+    // A low-DOF robot (every motion about one axis) leaves X's component along the axis and the
+    // target's coupled one free: refused without a prior on it, in the hand–eye refusal's words.
+    let plan = match low_dof::plan(&used, setup, Pairing::All, &priors) {
+        Err(e) if low_dof::wants_prior(&e).is_some() => {
+            return Err(first_what_motions_lack(
+                poses,
+                setup,
+                &Options {
+                    pairing: Pairing::All,
+                    fix: options.fix,
+                    written: options.written,
+                    outlier_deg: options.outlier_deg,
+                    reject_outliers: options.reject_outliers,
+                    pose_names: options.pose_names.clone(),
+                    priors: priors.clone(),
+                    replicates: options.replicates,
+                    ..Options::default()
+                },
+                e,
+            ));
+        }
+        other => other.map_err(explain)?,
+    };
+    let solved = match &plan {
+        Some(plan) => {
+            let (x, target, conditioning) =
+                low_dof::solve_robot_world(plan, &used, setup, options.method)
+                    .map_err(explain)?;
+            crate::solve::RobotWorld {
+                x,
+                target,
+                method: options.method,
+                poses: used.len(),
+                conditioning,
+                warnings: Vec::new(),
+            }
+        }
+        None => robot_world(options.method, &used, setup).map_err(explain)?,
+    };
     plausible(&solved.x, "X")?;
     plausible(&solved.target, "the target's pose")?;
     let undetermined = |conditioning| Error::Degenerate {
         reason: Degeneracy::IllConditioned,
         conditioning,
     };
-    let cov = joint_covariance(&used, setup, &solved.x, &solved.target)
-        .ok_or_else(|| explain(undetermined(solved.conditioning)))?;
+    let cov = match &plan {
+        Some(plan) => joint_covariance_given(
+            &used,
+            setup,
+            (&solved.x, &solved.target),
+            plan.prior.component.index(),
+        ),
+        None => joint_covariance(&used, setup, &solved.x, &solved.target),
+    }
+    .ok_or_else(|| explain(undetermined(solved.conditioning)))?;
     let scene = translation_scale(&used, setup).max(working_distance(&used));
     let method = options.method;
-    let solve_x = |p: &[PosePair]| robot_world(method, p, setup).map(|r| r.x);
+    let solve_x = |p: &[PosePair]| match &plan {
+        Some(plan) => low_dof::solve_replicate(plan, p, setup, Pairing::All),
+        None => robot_world(method, p, setup).map(|r| r.x),
+    };
     let mut x_unc = bootstrap(&used, setup, &solved.x, &solve_x, options.replicates, scene);
     x_unc.at_point = Some(x_unc.place(
         &solved.x,
@@ -317,13 +384,24 @@ pub fn calibrate_robot_world(
         (options.replicates, scene),
     );
     // Refused when undetermined, the widened uncertainty included: a systematic error the poses
-    // cannot separate from X leaves X undetermined too.
+    // cannot separate from X leaves X undetermined too. A low-DOF recording's part is judged
+    // without the prior's sigma, and refused for what its motions lack.
     for u in [&x_unc, &y_unc] {
-        refuse_if_undetermined(u, setup, solved.conditioning).map_err(explain)?;
+        refuse_if_undetermined(u, setup, solved.conditioning)
+            .map_err(|e| match &plan {
+                Some(plan) => low_dof::undetermined(plan, setup),
+                None => e,
+            })
+            .map_err(explain)?;
     }
     warnings.extend(systematic_found);
     warnings.extend(solved.warnings.iter().cloned());
-    warn_weak(&x_unc, setup, None, &mut warnings);
+    warn_weak(&x_unc, setup, plan.as_ref().map(Plan::axis), &mut warnings);
+    let (x_unc, y_unc, prior) = match &plan {
+        Some(plan) => with_prior(plan, (x_unc, y_unc), (&used, setup), scene),
+        None => (x_unc, y_unc, PriorsUsed::new()),
+    };
+    low_dof::check_determined(&priors, &prior, &solved.x, &x_unc, &mut warnings);
     warnings.extend(kept_outliers);
     let residual =
         PoseResidualSummary::of(pose_residuals(&used, setup, &solved.x, &solved.target));
@@ -351,7 +429,26 @@ pub fn calibrate_robot_world(
         systematic,
         target_transform: solved.target,
         reprojection: None,
+        prior,
+        low_dof: plan.map(|p| p.report(solved.conditioning)),
     })
+}
+
+/// X's and the target's uncertainty with the prior's sigma: along the free direction for X (as
+/// the hand–eye report's) and along the coupled direction for the target (its translation moves
+/// by k_Y / k_i per unit of the prior's value, [`low_dof::target_axis`]); and the report's
+/// `prior`.
+fn with_prior(
+    plan: &Plan,
+    (x_unc, y_unc): (Uncertainty, Uncertainty),
+    (poses, setup): (&[PosePair], Setup),
+    scene: f64,
+) -> (Uncertainty, Uncertainty, PriorsUsed) {
+    let (x_unc, used) = low_dof::with_prior(plan, &x_unc, scene);
+    let k = plan.axis.hand[plan.prior.component.index()];
+    let gain = low_dof::target_axis(plan, poses, setup) / k;
+    let y_unc = y_unc.with_prior(&gain, plan.prior.sigma, scene);
+    (x_unc, y_unc, used)
 }
 
 /// The 6×6 covariance of one transform (at `offset` 0 for X, 6 for Y) with its rotation turned

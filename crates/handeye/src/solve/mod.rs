@@ -41,7 +41,8 @@ pub use refine::{refine, refine_from, refine_unchecked};
 pub use refine::{Refinement, covariance_at};
 pub use residual::PoseResidual;
 pub use robot_world::{
-    JointCovariance, RobotWorld, RobotWorldMethod, joint_covariance, pose_residuals, robot_world,
+    JointCovariance, RobotWorld, RobotWorldMethod, joint_covariance, joint_covariance_given,
+    pose_residuals, robot_world, target_given,
     target_frame,
 };
 #[cfg(feature = "internals")]

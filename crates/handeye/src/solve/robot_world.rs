@@ -694,10 +694,58 @@ pub fn joint_covariance(
     covariance_scaled(&qc, &s, unit)
 }
 
+/// [`joint_covariance`] with X's translation component `fixed` (0, 1, 2) held: the covariance of
+/// the other eleven unknowns given it, its own row and column 0. A low-DOF robot's poses leave one
+/// combination free (X's translation along the motions' axis and the target's along the same axis
+/// seen from the target's frame); a prior on X's component takes it away, and this is what the
+/// poses say of the rest, the target's coupled component included. `None` as [`joint_covariance`].
+pub fn joint_covariance_given(
+    poses: &[PosePair],
+    setup: Setup,
+    (x, target): (&Transform, &Transform),
+    fixed: usize,
+) -> Option<JointCovariance> {
+    let (qc, unit) = scaled_problem(poses, setup);
+    let s = State {
+        r_x: rotation_matrix(x),
+        t_x: x.translation.vector / unit,
+        r_y: rotation_matrix(target),
+        t_y: target.translation.vector / unit,
+    };
+    covariance_of(&qc, &s, unit, Some(3 + fixed))
+}
+
+/// The target's pose that best agrees with every pose at a given X: the rotation nearest the sum
+/// of R_Q R_X R_C, the translation the mean of R_Q (R_X t_C + t_X) + t_Q.
+pub fn target_given(poses: &[PosePair], setup: Setup, x: &Transform) -> Transform {
+    let r_x = rotation_matrix(x);
+    let mut rotations = Matrix3::zeros();
+    let mut origin = Vector3::zeros();
+    for p in poses {
+        let q = setup.hand_pose(&p.base_from_gripper);
+        let r_q = rotation_matrix(&q);
+        rotations += r_q * r_x * rotation_matrix(&p.camera_from_target);
+        origin += r_q * (r_x * p.camera_from_target.translation.vector + x.translation.vector)
+            + q.translation.vector;
+    }
+    let n = poses.len().max(1) as f64;
+    transform_from_parts(&proj_so3(&(rotations / n)), &(origin / n))
+}
+
 fn covariance_scaled(
     qc: &[(Transform, Transform)],
     s: &State,
     unit: f64,
+) -> Option<JointCovariance> {
+    covariance_of(qc, s, unit, None)
+}
+
+/// The first-order covariance, with the unknown `fixed` (an index of the 12) held when given.
+fn covariance_of(
+    qc: &[(Transform, Transform)],
+    s: &State,
+    unit: f64,
+    fixed: Option<usize>,
 ) -> Option<JointCovariance> {
     if qc.len() < 2 {
         return None;
@@ -708,8 +756,24 @@ fn covariance_scaled(
         weights: [1.0 / scales[0], 1.0 / scales[1]],
     };
     let Linearisation { jtj, cost, .. } = problem.linearise(s);
-    let s2 = 2.0 * cost / (12 * qc.len() - 12) as f64;
-    let inv = jtj.try_inverse()?;
+    let free = 12 - usize::from(fixed.is_some());
+    let s2 = 2.0 * cost / (12 * qc.len() - free) as f64;
+    let inv = match fixed {
+        None => jtj.try_inverse()?,
+        Some(k) => {
+            // The held unknown's row and column out, the rest inverted, put back around zeros.
+            let kept: Vec<usize> = (0..12).filter(|&i| i != k).collect();
+            let reduced = nalgebra::DMatrix::from_fn(11, 11, |i, j| jtj[(kept[i], kept[j])]);
+            let reduced = reduced.try_inverse()?;
+            let mut inv = SMatrix::<f64, 12, 12>::zeros();
+            for (a, &i) in kept.iter().enumerate() {
+                for (b, &j) in kept.iter().enumerate() {
+                    inv[(i, j)] = reduced[(a, b)];
+                }
+            }
+            inv
+        }
+    };
     let mut d = SVector::<f64, 12>::repeat(1.0);
     for i in [3, 4, 5, 9, 10, 11] {
         d[i] = unit;
