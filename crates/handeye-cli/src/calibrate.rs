@@ -384,7 +384,6 @@ fn run_robot_world(args: &Args) -> Result<()> {
     for (flag, given) in [
         ("--pairs", args.pairs.is_some()),
         ("--tsai-opencv-filter", args.tsai_opencv_filter),
-        ("--prior", !args.prior.is_empty()),
     ] {
         if given {
             return Err(Error::InvalidParameter {
@@ -447,7 +446,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             written,
             point: args.point,
             joints: recording.joints,
-            priors: Vec::new(),
+            priors: args.prior.clone(),
         },
     ) {
         Ok(report) => report,

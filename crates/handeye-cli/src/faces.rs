@@ -574,27 +574,7 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
     if let Some(p) = &r.uncertainty.at_point {
         let _ = writeln!(s, "{}", at_point(p, unit));
     }
-    if let Some(low) = &r.low_dof {
-        let [x, y, z] = low.axis.map(|v| if v.abs() < 5e-4 { 0.0 } else { v });
-        let _ = writeln!(
-            s,
-            "Low-DOF robot: every motion rotates about one axis ({x:.3}, {y:.3}, {z:.3}) (within {:.2}°); X's {} is the prior's, the rest is the motions'",
-            low.spread_deg,
-            low.free.name()
-        );
-    }
-    for (name, p) in &r.prior {
-        let _ = writeln!(
-            s,
-            "Prior: {name} = {} {u}{}",
-            p.value,
-            if p.sigma > 0.0 {
-                format!(" +- {} {u}", p.sigma)
-            } else {
-                " (exact)".into()
-            }
-        );
-    }
+    low_dof_lines(&mut s, r.low_dof.as_ref(), &r.prior, u);
     if let Some(p) = &r.reprojection {
         reprojection_lines(&mut s, p);
     }
@@ -721,6 +701,14 @@ pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) ->
     if let Some(p) = &r.uncertainty.at_point {
         let _ = writeln!(s, "{}", at_point(p, unit));
     }
+    low_dof_lines(&mut s, r.low_dof.as_ref(), &r.prior, u);
+    if let Some(low) = &r.low_dof {
+        let _ = writeln!(
+            s,
+            "The target's translation along that axis follows from X's {}: the poses leave the two free together",
+            low.free.name()
+        );
+    }
     if let Some(p) = &r.reprojection {
         reprojection_lines(&mut s, p);
     }
@@ -751,6 +739,36 @@ pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) ->
         );
     }
     s
+}
+
+/// Which component of X came from the prior (a low-DOF robot), and the prior itself.
+fn low_dof_lines(
+    s: &mut String,
+    low_dof: Option<&handeye::LowDofReport>,
+    prior: &std::collections::BTreeMap<String, handeye::PriorValue>,
+    u: &str,
+) {
+    if let Some(low) = low_dof {
+        let [x, y, z] = low.axis.map(|v| if v.abs() < 5e-4 { 0.0 } else { v });
+        let _ = writeln!(
+            s,
+            "Low-DOF robot: every motion rotates about one axis ({x:.3}, {y:.3}, {z:.3}) (within {:.2}°); X's {} is the prior's, the rest is the motions'",
+            low.spread_deg,
+            low.free.name()
+        );
+    }
+    for (name, p) in prior {
+        let _ = writeln!(
+            s,
+            "Prior: {name} = {} {u}{}",
+            p.value,
+            if p.sigma > 0.0 {
+                format!(" +- {} {u}", p.sigma)
+            } else {
+                " (exact)".into()
+            }
+        );
+    }
 }
 
 /// The fit on the pixels: the RMS, the detections left out, the worst frame, the reading check.

@@ -450,3 +450,147 @@ fn online_prior_in_another_unit_is_refused_or_converted() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("accumulating estimator"), "{err}");
 }
+
+/// The truth file's X (`*_from_camera`) or target pose (`*_from_target`): translation, quaternion.
+fn truth_of(name: &str, suffix: &str) -> (Vec<f64>, Vec<f64>) {
+    let text = std::fs::read_to_string(testdata(&format!("low_dof/{name}.truth.json"))).unwrap();
+    let t: Value = serde_json::from_str(&text).unwrap();
+    let x = t
+        .as_object()
+        .unwrap()
+        .iter()
+        .find(|(k, _)| k.ends_with(suffix))
+        .unwrap()
+        .1;
+    let v = |f: &str| -> Vec<f64> {
+        x[f].as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    (v("translation"), v("quaternion_xyzw"))
+}
+
+/// Rotation (degrees) and translation error of a printed pose against a truth.
+fn pose_errors(r: &Value, (t, q): &(Vec<f64>, Vec<f64>)) -> (f64, f64) {
+    let dt = (0..3)
+        .map(|i| (r["translation"][i].as_f64().unwrap() - t[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let dot = (0..4)
+        .map(|i| r["quaternion_xyzw"][i].as_f64().unwrap() * q[i])
+        .sum::<f64>()
+        .abs()
+        .min(1.0);
+    ((2.0 * dot.acos()).to_degrees(), dt)
+}
+
+/// `calibrate --robot-world` with a prior: X's tz is the prior's, the target's height follows,
+/// both within 3 sigma of the truth; a prior's sigma widens both.
+#[test]
+fn robot_world_with_the_true_height_is_within_three_sigma() {
+    for (name, setup) in RECORDINGS {
+        let x = truth_of(name, "_from_camera");
+        let target = truth_of(name, "_from_target");
+        let prior = format!("tz={}", x.0[2]);
+        let f = file(name);
+        let args = [
+            "calibrate",
+            &f,
+            "--setup",
+            setup,
+            "--robot-world",
+            "--prior",
+            &prior,
+            "--output",
+            "json",
+        ];
+        let (code, out, err) = run(&args);
+        assert_eq!(code, 0, "{name}: {err}");
+        let r: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(r["formulation"], "robot-world");
+        assert_eq!(r["prior"]["tz"]["value"].as_f64(), Some(x.0[2]));
+        assert_eq!(r["prior"]["tz"]["sigma"].as_f64(), Some(0.0));
+        assert_eq!(r["translation"][2].as_f64(), Some(x.0[2]));
+        assert_eq!(r["low_dof"]["free"], "tz");
+        let (xr, xt) = pose_errors(&r, &x);
+        let (yr, yt) = pose_errors(&r["target"], &target);
+        let sigma = |u: &Value| {
+            (
+                u["rotation_deg"].as_f64().unwrap(),
+                u["translation"].as_f64().unwrap(),
+            )
+        };
+        let ((sxr, sxt), (syr, syt)) =
+            (sigma(&r["uncertainty"]), sigma(&r["target"]["uncertainty"]));
+        println!(
+            "{name}: X {xr:.4}° ({sxr:.4}°) {xt:.6} ({sxt:.6}); target {yr:.4}° ({syr:.4}°) {yt:.6} ({syt:.6})"
+        );
+        assert!(xr <= 3.0 * sxr && xt <= 3.0 * sxt, "{name}");
+        assert!(yr <= 3.0 * syr && yt <= 3.0 * syt, "{name}");
+        // With a sigma: X's tz and the target's coupled component at least that uncertain.
+        let prior = format!("tz={}+-0.002", x.0[2]);
+        let mut args = args;
+        args[6] = &prior;
+        let (code, out, err) = run(&args);
+        assert_eq!(code, 0, "{name}: {err}");
+        let r: Value = serde_json::from_str(&out).unwrap();
+        let tz = r["uncertainty"]["covariance"][5][5]
+            .as_f64()
+            .unwrap()
+            .sqrt();
+        assert!(tz >= 0.002 - 1e-12, "{name}: {tz}");
+        // The SCARA's axis is the base's z: eye-in-hand, the target's height.
+        let c = &r["target"]["uncertainty"]["covariance"];
+        let target_sigma = (3..6)
+            .map(|i| c[i][i].as_f64().unwrap())
+            .sum::<f64>()
+            .sqrt();
+        assert!(target_sigma >= 0.002, "{name}: {target_sigma}");
+        if setup == "eye-in-hand" {
+            assert!(c[5][5].as_f64().unwrap().sqrt() >= 0.002, "{name}");
+        }
+        args[args.len() - 1] = "text";
+        let (code, out, _) = run(&args);
+        assert_eq!(code, 0);
+        assert!(out.contains("X's tz is the prior's"), "{out}");
+        assert!(
+            out.contains("Prior: tz = ") && out.contains("+- 0.002"),
+            "{out}"
+        );
+        assert!(
+            out.contains("The target's translation along that axis follows"),
+            "{out}"
+        );
+    }
+}
+
+/// Without a prior, `--robot-world` refuses a SCARA recording in the hand–eye refusal's words; a
+/// prior in the wrong unit is refused as for hand–eye.
+#[test]
+fn robot_world_without_a_prior_is_refused_as_hand_eye_is() {
+    for (name, setup) in RECORDINGS {
+        let f = file(name);
+        let (code, out, hand_eye) = run(&["calibrate", &f, "--setup", setup]);
+        assert_eq!(code, 3, "{out}");
+        let (code, out, err) = run(&["calibrate", &f, "--setup", setup, "--robot-world"]);
+        assert_eq!(code, 3, "{name}: {out}");
+        assert_eq!(err, hand_eye);
+        assert!(err.contains("--prior tz="), "{err}");
+        let (t, _) = truth(name);
+        let mm = format!("tz={}", t[2] * 1000.0);
+        let (code, _, hand_eye) = run(&["calibrate", &f, "--setup", setup, "--prior", &mm]);
+        let (rw_code, _, err) = run(&[
+            "calibrate",
+            &f,
+            "--setup",
+            setup,
+            "--robot-world",
+            "--prior",
+            &mm,
+        ]);
+        assert_eq!((rw_code, &err), (code, &hand_eye), "{name}");
+        assert!(err.contains("another length unit"), "{err}");
+    }
+}

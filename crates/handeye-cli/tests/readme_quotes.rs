@@ -45,9 +45,9 @@ const QUOTES: &[Quote] = &[
         exit: 0,
     },
     Quote {
-        readme: "\"the rotation of X about the gripper z axis (-0.00, -0.00, 1.00) is not determined (one-sigma 20.70° under the data's own noise): the motions rotate mostly about this axis; add motions that rotate about the gripper x or y axis\"",
+        readme: "\"every motion rotates about the same axis (the\n  gripper's z, (0.000, 0.000, 1.000) in the gripper frame, within 0.96°): a SCARA or 4-axis robot,\n  or a gantry with one wrist joint. X's rotation about the axis and its translation across it come\n  from the motions' translations across the axis and their turns about it, and these motions do\n  not fix them\"",
         parts: &[
-            "the rotation of X about the gripper z axis (-0.00, -0.00, 1.00) is not determined (one-sigma 20.70° under the data's own noise): the motions rotate mostly about this axis; add motions that rotate about the gripper x or y axis",
+            "every motion rotates about the same axis (the gripper's z, (0.000, 0.000, 1.000) in the gripper frame, within 0.96°): a SCARA or 4-axis robot, or a gantry with one wrist joint. X's rotation about the axis and its translation across it come from the motions' translations across the axis and their turns about it, and these motions do not fix them",
         ],
         args: &[
             "calibrate",
