@@ -482,7 +482,7 @@ fn calibrate_report<'py>(
 /// The robot-world calibration ([`handeye::calibrate_robot_world`]): its report as
 /// JSON, the same object `handeye calibrate --robot-world` prints.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::Options::default().replicates, reject_outliers=false, point=None, joints=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::Options::default().replicates, reject_outliers=false, point=None, joints=None, prior=None))]
 #[allow(clippy::too_many_arguments)]
 fn robot_world_report<'py>(
     py: Python<'py>,
@@ -495,9 +495,11 @@ fn robot_world_report<'py>(
     reject_outliers: bool,
     point: Option<[f64; 3]>,
     joints: Option<Vec<Vec<f64>>>,
+    prior: Option<Vec<String>>,
 ) -> PyResult<String> {
     let options = handeye::RobotWorldOptions {
         joints: checked_joints(joints)?,
+        priors: priors(prior)?,
         method: method.parse().map_err(value_error)?,
         fix: parse_fix(fix)?,
         replicates: bootstrap,

@@ -845,8 +845,21 @@ def test_a_low_dof_robot_takes_its_prior_in_python_as_on_the_command_line(tmp_pa
                       (f"tz={tz * 1000}", "another length unit")):
         with pytest.raises(ValueError, match=says):
             handeye.calibrate(g, c, prior=bad)
-    with pytest.raises(ValueError, match="robot_world"):
-        handeye.calibrate(g, c, robot_world=True, prior=given)
+    # Robot-world: the same object as `calibrate --robot-world --prior`, and the same refusal
+    # without a prior.
+    rw = handeye.calibrate(g, c, robot_world=True, prior=given)
+    cli_rw = _cli_json("calibrate", path, "--robot-world", "--prior", given)
+    assert np.abs(rw["matrix"] - np.array(cli_rw["matrix"])).max() < 1e-12
+    assert np.abs(rw["target"]["matrix"] - np.array(cli_rw["target"]["matrix"])).max() < 1e-12
+    assert rw["prior"] == cli_rw["prior"] == {"tz": {"value": tz, "sigma": 0.001}}
+    assert rw["low_dof"] == cli_rw["low_dof"] and rw["low_dof"]["free"] == "tz"
+    assert rw["uncertainty"] == cli_rw["uncertainty"]
+    assert rw["target"]["uncertainty"] == cli_rw["target"]["uncertainty"]
+    assert rw["matrix"][2, 3] == tz
+    with pytest.raises(ValueError, match='prior="tz=VALUE\\+-SIGMA"'):
+        handeye.calibrate(g, c, robot_world=True)
+    with pytest.raises(ValueError, match="another length unit"):
+        handeye.calibrate(g, c, robot_world=True, prior=f"tz={tz * 1000}")
     # The drop-in refuses, naming what to call instead and no flag.
     with pytest.raises(ValueError) as e:
         handeye.calibrate_hand_eye([m[:3, :3] for m in g], [m[:3, 3] for m in g],

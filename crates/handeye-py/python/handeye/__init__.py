@@ -176,13 +176,13 @@ def calibrate(
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
     (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
     with ``target`` (``frame`` "base_from_target" or "gripper_from_target", ``matrix`` as a (4,4)
-    array, ``translation``, ``quaternion_xyzw``, ``uncertainty``) and ``residual`` per pose."""
+    array, ``translation``, ``quaternion_xyzw``, ``uncertainty``) and ``residual`` per pose. On a
+    low-DOF robot ``prior`` gives X's free component as above; the target's coupled component
+    follows from it (``calibrate --robot-world --prior``)."""
     g, c = _transforms(base_from_gripper, camera_from_target)
     if robot_world:
         if pairs is not None:
             raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
-        if prior is not None:
-            raise ValueError("prior does not apply to robot_world=True (a low-DOF robot is calibrated hand-eye)")
         result = json.loads(
             _robot_world_report(
                 g,
@@ -194,6 +194,7 @@ def calibrate(
                 reject_outliers=reject_outliers,
                 point=_point(point),
                 joints=joints,
+                prior=_priors(prior),
             )
         )
         result["matrix"] = np.array(result["matrix"], dtype=np.float64)
