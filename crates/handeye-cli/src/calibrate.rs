@@ -316,15 +316,23 @@ fn refused_on_pixels(e: Error, face: Face) -> anyhow::Error {
     e.into()
 }
 
-/// The records' robot poses with their PnP poses (identity where a record has none), for the
-/// unit and the `--report` page.
-fn frame_poses(series: &handeye::io::FrameSeries) -> Vec<PosePair> {
+/// The records' robot poses as written with the camera poses the pixel solve started from under
+/// the result's reading (PnP poses for records with detections only), for the unit and the
+/// `--report` page.
+pub(crate) fn frame_poses(
+    series: &handeye::io::FrameSeries,
+    camera: &handeye::Intrinsics,
+    setup: handeye::Setup,
+    reading: handeye::Reading,
+) -> Vec<PosePair> {
+    let cameras = handeye::pixel_camera_poses(&series.frames, camera, setup, reading);
     series
         .frames
         .iter()
-        .map(|f| PosePair {
+        .zip(cameras)
+        .map(|(f, c)| PosePair {
             base_from_gripper: f.base_from_gripper,
-            camera_from_target: f.camera_from_target.unwrap_or_default(),
+            camera_from_target: c,
         })
         .collect()
 }
@@ -347,7 +355,7 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         Ok(report) => report,
         Err(e) => return Err(refused_on_pixels(e, face)),
     };
-    let poses = frame_poses(&series);
+    let poses = frame_poses(&series, &camera, setup, report.reading.applied);
     let unit = length_unit(&poses);
     if face != Face::Text {
         for w in &report.warnings {
@@ -497,7 +505,7 @@ fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
         Ok(report) => report,
         Err(e) => return Err(refused_on_pixels(e, face)),
     };
-    let poses = frame_poses(&series);
+    let poses = frame_poses(&series, &camera, setup, report.reading.applied);
     print_robot_world(
         args,
         &report,

@@ -192,14 +192,11 @@ fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
     let v = handeye::verify_on_pixels(saved, &series.frames, &camera, setup, &options)?;
     show(&v, face)?;
     if let Some(report) = &args.report {
-        let poses: Vec<handeye::PosePair> = series
-            .frames
-            .iter()
-            .map(|f| handeye::PosePair {
-                base_from_gripper: f.base_from_gripper,
-                camera_from_target: f.camera_from_target.unwrap_or_default(),
-            })
-            .collect();
+        let reading = v
+            .recording
+            .as_ref()
+            .map_or(handeye::Reading::AsGiven, |r| r.reading.applied);
+        let poses = crate::calibrate::frame_poses(&series, &camera, setup, reading);
         let page = crate::report::RunPage {
             poses: &poses,
             names: &names,

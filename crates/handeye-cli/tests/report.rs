@@ -189,6 +189,89 @@ fn the_pixels_page_has_each_frames_reprojection_error() {
     assert_eq!(html.matches("<svg").count(), 3);
 }
 
+/// A copy of `testdata/pixels/tag_eih.jsonl` in `dir` with detections only: no record has a
+/// `camera_from_target`.
+fn detections_only(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(testdata("pixels/tag_eih.jsonl")).unwrap();
+    let mut out = String::new();
+    for line in text.lines() {
+        if line.trim_start().starts_with('{') {
+            let mut record: serde_json::Value = serde_json::from_str(line).unwrap();
+            assert!(record["camera_from_target"].is_object());
+            record.as_object_mut().unwrap().remove("camera_from_target");
+            out.push_str(&record.to_string());
+        } else {
+            out.push_str(line);
+        }
+        out.push('\n');
+    }
+    let path = dir.join("tag_eih_detections_only.jsonl");
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+/// The page's figures (their SVG), in order.
+fn figures(html: &str) -> Vec<&str> {
+    html.split("<svg")
+        .skip(1)
+        .map(|f| &f[..f.find("</svg>").unwrap()])
+        .collect()
+}
+
+/// The pages of the pixel paths draw each record's camera pose as the solve started from it, the
+/// PnP pose of its detections, where the record gives none (not the identity): on a copy of
+/// `tag_eih.jsonl` without `camera_from_target`, every figure (where the recording's and the
+/// saved X place the target, pose by pose; the robot's motions) and the unit are those of the
+/// file with its poses, whose PnP poses are those poses.
+#[test]
+fn detection_only_pages_draw_the_poses_the_pixel_solve_starts_from() {
+    let dir = tempfile::tempdir().unwrap();
+    let given = testdata("pixels/tag_eih.jsonl");
+    let only = detections_only(dir.path());
+    let intrinsics = testdata("pixels/tag_eih.intrinsics.yml");
+    let k = intrinsics.to_str().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_handeye"))
+        .args(["calibrate", "--method", "reprojection", "--intrinsics", k])
+        .args(["--output", "json"])
+        .arg(&given)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let saved = dir.path().join("saved.json");
+    std::fs::write(&saved, &out.stdout).unwrap();
+    let saved = saved.to_str().unwrap();
+    let runs: [(&str, &[&str]); 3] = [
+        ("pixels", &["calibrate", "--method", "reprojection"]),
+        (
+            "robot_world",
+            &["calibrate", "--robot-world", "--method", "reprojection"],
+        ),
+        ("verify", &["verify", "--x", saved]),
+    ];
+    for (name, command) in runs {
+        let page = |file: &Path, which: &str| {
+            let mut args = command.to_vec();
+            args.extend([
+                "--intrinsics",
+                k,
+                "--output",
+                "json",
+                file.to_str().unwrap(),
+            ]);
+            page_of(&args, &dir.path().join(format!("{name}_{which}.html")), 0)
+        };
+        let with_poses = page(&given, "given");
+        let without = page(&only, "only");
+        self_contained(&without);
+        let (a, b) = (figures(&with_poses), figures(&without));
+        assert!(!a.is_empty() && a.len() == b.len(), "{name}");
+        for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+            assert_eq!(a, b, "{name}: figure {i}");
+        }
+        assert!(without.contains("unit&quot;: &quot;m&quot;"), "{name}");
+    }
+}
+
 /// A saved X: the calibration of `file`, as `calibrate --output json` wrote it.
 fn saved_x(file: &Path, dir: &Path) -> PathBuf {
     let out = Command::new(env!("CARGO_BIN_EXE_handeye"))
@@ -309,11 +392,29 @@ fn every_figure_renders_in_headless_chromium() {
         &robot_world,
         0,
     );
+    // The pixels page of a recording with detections only.
+    let pixels = dir.path().join("pixels.html");
+    let only = detections_only(dir.path());
+    page_of(
+        &[
+            "calibrate",
+            "--method",
+            "reprojection",
+            "--intrinsics",
+            testdata("pixels/tag_eih.intrinsics.yml").to_str().unwrap(),
+            "--output",
+            "json",
+            only.to_str().unwrap(),
+        ],
+        &pixels,
+        0,
+    );
     for (path, figures) in [
         (page(dir.path()), 4),
         (online_page(dir.path()), 4),
         (verify, 3),
         (robot_world, 4),
+        (pixels, 3),
     ] {
         rendered(browser, &path, figures, dir.path());
     }

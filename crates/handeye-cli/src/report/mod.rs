@@ -192,7 +192,8 @@ pub fn write_pixels(path: &Path, run: &RunPage<'_>, r: &Report) -> Result<()> {
         );
     }
     page.copyable("X and the target's pose, to copy", &json!(copy));
-    motions(&mut page, run.poses, Pairing::All, run.setup, f64::NAN)?;
+    let poses = run.read(r.reading.applied);
+    motions(&mut page, &poses, Pairing::All, run.setup, f64::NAN)?;
     page.write(path)
 }
 

@@ -32,7 +32,9 @@ use crate::calibrate::verify::{
     FramePixels, PixelComparison, SavedX, Verification, cannot_tell, compared, setup_notes,
     unit_scale,
 };
-use crate::solve::reprojection::{PixelOptions, PixelSolution, reprojection, target_with_x};
+use crate::solve::reprojection::{
+    PixelOptions, PixelSolution, reprojection, start_camera_poses, target_with_x,
+};
 use crate::solve::{Method, RobotWorldMethod, pose_residuals, target_frame};
 
 /// The robust sigma (pixels, per coordinate) above which the detections do not fit: detectors
@@ -206,13 +208,7 @@ pub fn verify_on_pixels(
     let (used, solution, applied, reading_check) = match solved(frames, camera, setup, options.fix) {
         Ok(s) => s,
         Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
-            let poses = pose_pairs(
-                frames,
-                &frames
-                    .iter()
-                    .map(|f| f.camera_from_target.unwrap_or_default())
-                    .collect::<Vec<_>>(),
-            );
+            let poses = pose_pairs(frames, &start_camera_poses(frames, camera, setup));
             return Ok(cannot_tell(saved, &poses, &e, notes));
         }
         Err(e) => return Err(e),
@@ -256,6 +252,31 @@ pub fn verify_on_pixels(
         per_frame,
     });
     Ok(v)
+}
+
+/// The camera pose of each record that the solve on the pixels starts from, under `reading` (the
+/// robot poses inverted for [`Reading::RobotInverted`], as the result's `reading.applied` says):
+/// the PnP pose chosen by the robot's motion, or the record's own `camera_from_target` where it
+/// fits the pixels better. The poses a report page or a unit guess should use for records that
+/// carry detections only. Never fails: a frame that cannot be posed keeps its own
+/// `camera_from_target`, or the identity.
+pub fn pixel_camera_poses(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    reading: Reading,
+) -> Vec<Transform> {
+    if reading == Reading::RobotInverted {
+        let inverted: Vec<Frame> = frames
+            .iter()
+            .map(|f| Frame {
+                base_from_gripper: f.base_from_gripper.inverse(),
+                ..f.clone()
+            })
+            .collect();
+        return start_camera_poses(&inverted, camera, setup);
+    }
+    start_camera_poses(frames, camera, setup)
 }
 
 /// The robot poses with the camera poses the solve started from (the PnP pose of each frame

@@ -413,6 +413,27 @@ fn start_poses(frames: &[Frame], camera: &Intrinsics, setup: Setup) -> Result<St
     })
 }
 
+/// The camera pose of each frame that [`reprojection`] starts from: the PnP pose (or the record's
+/// own `camera_from_target`) chosen by the robot's motion. Where that choice cannot be made (the
+/// motions do not determine X), each frame's pose with the smaller pixel residual; where a frame
+/// has no usable detections, its own `camera_from_target`, or the identity.
+pub fn start_camera_poses(frames: &[Frame], camera: &Intrinsics, setup: Setup) -> Vec<Transform> {
+    if let Ok(start) = start_poses(frames, camera, setup) {
+        return start.poses;
+    }
+    frames
+        .iter()
+        .map(|f| {
+            candidates(f, camera)
+                .ok()
+                .and_then(|c| c.into_iter().min_by(|a, b| a.1.total_cmp(&b.1)))
+                .map(|(pose, _)| pose)
+                .or(f.camera_from_target)
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
 fn frame_error(i: usize, message: String) -> Error {
     Error::InvalidParameter {
         name: "detections",
