@@ -619,6 +619,17 @@ fn checked_point(point: Option<[f64; 3]>) -> PyResult<Option<[f64; 3]>> {
     }
 }
 
+/// A count given to the online calibrator: a negative one is a `ValueError` naming it (as a
+/// `usize` argument it was an `OverflowError` that named nothing).
+fn count(name: &str, value: Option<i64>) -> PyResult<Option<usize>> {
+    value
+        .map(|v| {
+            usize::try_from(v)
+                .map_err(|_| PyValueError::new_err(format!("{name} must not be negative, got {v}")))
+        })
+        .transpose()
+}
+
 /// Joint angles given to a calibration: every pose's, finite, one count (as JSON Lines gives them).
 fn checked_joints(joints: Option<Vec<Vec<f64>>>) -> PyResult<Vec<Vec<f64>>> {
     let joints = joints.unwrap_or_default();
@@ -943,8 +954,8 @@ impl PyOnline {
         error_source: &str,
         truth: Option<PyReadonlyArray2<'_, f64>>,
         optimal: bool,
-        n_init: Option<usize>,
-        interval: Option<usize>,
+        n_init: Option<i64>,
+        interval: Option<i64>,
         relax_down: Option<f64>,
         relax_up: Option<f64>,
         explore: Option<f64>,
@@ -955,7 +966,7 @@ impl PyOnline {
         d_max: Option<f64>,
         unfreeze: bool,
         unit: &str,
-        every: Option<usize>,
+        every: Option<i64>,
         shrink: Option<f64>,
         point: Option<[f64; 3]>,
         prior: Option<Vec<String>>,
@@ -970,8 +981,8 @@ impl PyOnline {
             setup: parse_setup(setup)?,
             selection: selection.parse::<Selection>().map_err(value_error)?,
             params: AdaptiveParams {
-                n_init: n_init.unwrap_or(d.n_init),
-                interval: interval.unwrap_or(d.interval),
+                n_init: count("n_init", n_init)?.unwrap_or(d.n_init),
+                interval: count("interval", interval)?.unwrap_or(d.interval),
                 relax_down: relax_down.unwrap_or(d.relax_down),
                 relax_up: relax_up.unwrap_or(d.relax_up),
                 explore: explore.unwrap_or(d.explore),
@@ -987,7 +998,7 @@ impl PyOnline {
             optimal,
             estimator: estimator.parse::<Estimator>().map_err(value_error)?,
             tracking: TrackOptions {
-                every: every.unwrap_or(tracking.every),
+                every: count("every", every)?.unwrap_or(tracking.every),
                 shrink: shrink.unwrap_or(tracking.shrink),
                 point: checked_point(point)?,
                 ..tracking

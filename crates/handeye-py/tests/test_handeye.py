@@ -323,6 +323,7 @@ def test_private_functions_and_the_online_bounds_raise_value_errors():
         with pytest.raises(ValueError, match="0-d"):
             _handeye.solve_opencv(np.asarray(zero_d), np.zeros((1, 3)), np.asarray(zero_d), np.zeros((1, 3)))
     for bad in ({"shrink": float("nan")}, {"shrink": 0.0}, {"shrink": float("inf")}, {"every": 0},
+                {"every": -1}, {"n_init": -3}, {"interval": -1},
                 {"relax_up": 1e308}, {"explore": 1e-320}, {"relax_down": 1e-320}):
         name = next(iter(bad))
         with pytest.raises(ValueError, match=name):
