@@ -251,10 +251,14 @@ fn carries_detections(input: &InputArgs) -> bool {
         .is_some_and(|l| l.contains("\"detections\""))
 }
 
-/// The pixel calibrations' input: the intrinsics and the records with detections (a JSON Lines
-/// file), each record named `file:line`; the flags that do not apply refused (exit 2).
-fn pixel_input(
-    args: &Args,
+/// The pixel calibrations' input (`calibrate` and `verify` on the pixels): the intrinsics and the
+/// records with detections (a JSON Lines file), each record named `file:line`; the input flags
+/// that do not apply there refused (exit 2; the library refuses the options it does not take);
+/// `--report` checked writable first.
+pub(crate) fn pixel_input(
+    input: &InputArgs,
+    intrinsics: Option<&std::path::PathBuf>,
+    report: Option<&std::path::PathBuf>,
 ) -> Result<(handeye::Intrinsics, handeye::io::FrameSeries, Vec<String>)> {
     let refuse = |message: String| -> anyhow::Error {
         Error::InvalidParameter {
@@ -263,30 +267,28 @@ fn pixel_input(
         }
         .into()
     };
-    for (flag, given) in [
-        ("--robot/--camera streams", args.input.robot.is_some()),
-        ("a ROS 2 recording", args.input.is_bag()),
-        ("--reject-outliers", args.reject_outliers),
+    let given = [
+        ("--robot/--camera streams", input.robot.is_some()),
+        ("a ROS 2 recording", input.is_bag()),
         // The records' JSON fields name their own conventions (`kuka_abc_deg`, `rvec`, …).
-        ("--rotation", !args.input.rotation.is_empty()),
-    ] {
-        if given {
-            return Err(refuse(format!(
-                "{flag} is not offered with --method reprojection (yet): give a JSON Lines file with `detections`"
-            )));
-        }
+        ("--rotation", !input.rotation.is_empty()),
+    ];
+    if let Some((flag, _)) = given.iter().find(|(_, given)| *given) {
+        return Err(refuse(format!(
+            "{flag} is not offered with --method reprojection (yet): give a JSON Lines file with `detections`"
+        )));
     }
-    let Some(intrinsics) = &args.intrinsics else {
+    let Some(intrinsics) = intrinsics else {
         return Err(refuse(
             "reprojection needs the camera's intrinsics: --intrinsics FILE (OpenCV YAML or ROS camera_info)".into(),
         ));
     };
-    let Some(path) = &args.input.input else {
+    let Some(path) = &input.input else {
         return Err(refuse(
             "reprojection needs a JSON Lines file with `detections`".into(),
         ));
     };
-    if let Some(path) = &args.report {
+    if let Some(path) = report {
         crate::report::check_writable(path)?;
     }
     let camera = handeye::io::read_intrinsics(intrinsics)?;
@@ -339,7 +341,8 @@ pub(crate) fn frame_poses(
 
 /// `calibrate --method reprojection`: X on the pixels of the detections of a JSON Lines file.
 fn run_pixels(args: &Args, options: Options) -> Result<()> {
-    let (camera, series, names) = pixel_input(args)?;
+    let (camera, series, names) =
+        pixel_input(&args.input, args.intrinsics.as_ref(), args.report.as_ref())?;
     let setup = args.input.setup();
     let frames = output_frames(args)?;
     let face = Face::chosen(args.output);
@@ -486,7 +489,8 @@ fn run_robot_world(args: &Args) -> Result<()> {
 /// `calibrate --robot-world --method reprojection`: X and the target's pose on the pixels of the
 /// detections, printed as the pose-based robot-world result.
 fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
-    let (camera, series, names) = pixel_input(args)?;
+    let (camera, series, names) =
+        pixel_input(&args.input, args.intrinsics.as_ref(), args.report.as_ref())?;
     let setup = args.input.setup();
     output_frames(args)?;
     let face = Face::chosen(args.output);
@@ -499,6 +503,8 @@ fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
             fix: args.fix.unwrap_or_default(),
             point: args.point,
             pose_names: names.clone(),
+            priors: args.prior.clone(),
+            reject_outliers: args.reject_outliers,
             ..RobotWorldOptions::default()
         },
     ) {

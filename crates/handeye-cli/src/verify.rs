@@ -146,47 +146,16 @@ fn invalid(name: &'static str, message: &str) -> anyhow::Error {
 
 /// `verify --intrinsics`: the saved X on the pixels of a JSON Lines file with `detections`.
 fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
-    for (flag, given) in [
-        ("--robot/--camera streams", args.input.robot.is_some()),
-        ("a ROS 2 recording", args.input.is_bag()),
-        ("--reject-outliers", args.reject_outliers),
-        ("--rotation", !args.input.rotation.is_empty()),
-        ("--prior", !args.prior.is_empty()),
-    ] {
-        if given {
-            return Err(invalid(
-                "intrinsics",
-                &format!(
-                    "{flag} is not offered on the pixels (yet): give a JSON Lines file with `detections`"
-                ),
-            ));
-        }
-    }
-    let Some(path) = &args.input.input else {
-        return Err(invalid(
-            "intrinsics",
-            "verify on the pixels needs a JSON Lines file with `detections`",
-        ));
-    };
-    let Some(intrinsics) = &args.intrinsics else {
-        return Err(invalid(
-            "intrinsics",
-            "the camera's intrinsics: --intrinsics FILE",
-        ));
-    };
-    let camera = handeye::io::read_intrinsics(intrinsics)?;
-    let series = handeye::io::read_frames(path)?;
-    let names: Vec<String> = series
-        .lines
-        .iter()
-        .map(|l| format!("{}:{l}", path.display()))
-        .collect();
+    let (camera, series, names) =
+        crate::calibrate::pixel_input(&args.input, args.intrinsics.as_ref(), None)?;
     let setup = args.input.setup();
     let options = Options {
         method: Method::Reprojection,
         pairing: args.pairs,
         fix: args.fix.unwrap_or_default(),
         pose_names: names.clone(),
+        reject_outliers: args.reject_outliers,
+        priors: args.prior.clone(),
         ..Options::default()
     };
     let v = handeye::verify_on_pixels(saved, &series.frames, &camera, setup, &options)?;

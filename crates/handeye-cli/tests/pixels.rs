@@ -608,3 +608,29 @@ fn verify_on_the_pixels_refuses_what_it_cannot_read() {
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("inverted"), "{err}");
 }
+
+/// A prior is refused on the pixels, never taken silently: the pixel solve has no low-DOF form,
+/// so an answer would carry the data's tz, not the one the user gave (it answered "good", exit 0).
+#[test]
+fn a_prior_on_the_pixels_is_refused_not_ignored() {
+    let (file, k) = (path("tag_eih.jsonl"), path("tag_eih.intrinsics.yml"));
+    for extra in [&[][..], &["--robot-world"][..]] {
+        let mut args = vec![
+            "calibrate",
+            file.as_str(),
+            "--method",
+            "reprojection",
+            "--intrinsics",
+            k.as_str(),
+            "--prior",
+            "tz=0.05",
+        ];
+        args.extend_from_slice(extra);
+        let (code, out, err) = run(&args);
+        assert_eq!(code, 2, "{extra:?}: {out}{err}");
+        assert!(
+            err.contains("prior") && err.contains("pixels"),
+            "{extra:?}: {err}"
+        );
+    }
+}

@@ -87,15 +87,36 @@ const PIXEL_PARAMETERS: usize = 12;
 /// Errors: [`Error::Misread`] when the robot poses inverted fit the pixels far better,
 /// [`Error::PixelsUnfit`], [`Error::Degenerate`] (motions or covariance that do not determine X),
 /// [`Error::TooFewMotions`] for fewer than 13 frames, [`Error::InvalidParameter`] for unusable
-/// detections or intrinsics.
+/// detections or intrinsics, a prior or `reject_outliers` (not taken on the pixels).
 pub fn calibrate_on_pixels(
     frames: &[Frame],
     camera: &Intrinsics,
     setup: Setup,
     options: &Options,
 ) -> Result<Report> {
+    not_on_pixels(options.reject_outliers, &options.priors)?;
     let (used, solution, applied, reading_check) = solved(frames, camera, setup, options.fix)?;
     report(&used, setup, options, solution, applied, reading_check)
+}
+
+/// Refuses the options the pixel solve does not take, rather than answer without them: a prior
+/// (the pixel solve has no low-DOF form: X's free component would come from the data's noise,
+/// not from the prior the user gave) and `reject_outliers` (mis-detected corners are left out,
+/// and listed, by the solve itself).
+fn not_on_pixels(reject_outliers: bool, priors: &[crate::model::prior::Prior]) -> Result<()> {
+    if reject_outliers {
+        return Err(Error::InvalidParameter {
+            name: "reject_outliers",
+            message: "not offered on the pixels: mis-detected corners are left out (and listed) by the solve itself".into(),
+        });
+    }
+    if !priors.is_empty() {
+        return Err(Error::InvalidParameter {
+            name: "prior",
+            message: "a prior is not taken on the pixels (yet): calibrate the PnP poses with it instead (without `--method reprojection`)".into(),
+        });
+    }
+    Ok(())
 }
 
 /// X and the target's pose on the pixels, with the same checks as [`calibrate_on_pixels`] (the
@@ -112,20 +133,14 @@ pub fn calibrate_on_pixels(
 /// the pixels); `fix` may force `as-given` or `robot-inverted`; `point` places `at_point`;
 /// `pose_names` names the frames.
 ///
-/// Errors: those of [`calibrate_on_pixels`], and [`Error::InvalidParameter`] for
-/// `reject_outliers` (mis-detected corners are left out, and listed, by the solve itself).
+/// Errors: those of [`calibrate_on_pixels`].
 pub fn calibrate_robot_world_on_pixels(
     frames: &[Frame],
     camera: &Intrinsics,
     setup: Setup,
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
-    if options.reject_outliers {
-        return Err(Error::InvalidParameter {
-            name: "reject_outliers",
-            message: "not offered on the pixels: mis-detected corners are left out (and listed) by the solve itself".into(),
-        });
-    }
+    not_on_pixels(options.reject_outliers, &options.priors)?;
     let (used, solution, applied, reading_check) = solved(frames, camera, setup, options.fix)?;
     let hand_eye = Options {
         fix: options.fix,
@@ -204,6 +219,7 @@ pub fn verify_on_pixels(
     setup: Setup,
     options: &Options,
 ) -> Result<Verification> {
+    not_on_pixels(options.reject_outliers, &options.priors)?;
     let notes = setup_notes(saved, setup);
     let (used, solution, applied, reading_check) = match solved(frames, camera, setup, options.fix) {
         Ok(s) => s,
