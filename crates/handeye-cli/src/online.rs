@@ -17,6 +17,8 @@ use crate::input::{InputArgs, read_ahead};
 use crate::output::{LineOut, print_text};
 use crate::values;
 
+mod pixels;
+
 /// Options of `handeye online`.
 #[derive(ClapArgs, Debug)]
 pub struct Args {
@@ -139,6 +141,11 @@ pub struct Args {
     /// file).
     #[arg(long, value_name = "FILE.html")]
     report: Option<PathBuf>,
+    /// The camera's intrinsics (OpenCV FileStorage YAML or ROS camera_info), for a stream of
+    /// records with `detections` (SPEC sec. 9): X is calibrated on their pixels as `calibrate
+    /// --method reprojection` does it, reported at 16, 32, 64, … records and at the end.
+    #[arg(long, value_name = "FILE")]
+    intrinsics: Option<PathBuf>,
 }
 
 /// Default floor of a predicted α₀, degrees (the library's sin 15°).
@@ -149,6 +156,9 @@ const SHOWN_BAD_LINES: usize = 100;
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
+    if args.intrinsics.is_some() {
+        return pixels::run(&args);
+    }
     let truth = args.truth.as_ref().map(|p| read_truth(p)).transpose()?;
     let setup = args.input.setup();
     if let Some(t) = &truth
@@ -253,6 +263,8 @@ pub fn run(args: Args) -> Result<()> {
         .as_ref()
         .map(|_| crate::report::OnlineTrace::default());
     let mut told_unit = false;
+    // Bad lines that are records with detections alone, for the refusal's words.
+    let mut on_pixels = 0usize;
     // The input's length unit as the first poses tell, for the ROS outputs (in metres).
     let mut pose_unit: Option<Unit> = None;
     // The paper's estimator has no checks of its own: the batch's check of the readings runs on
@@ -265,6 +277,7 @@ pub fn run(args: Args) -> Result<()> {
         let record = match record {
             Ok(r) => r,
             Err(e) => {
+                on_pixels += usize::from(detections_only(&e));
                 bad_line(e, args.on_bad_line, &mut messages)?;
                 continue;
             }
@@ -378,9 +391,12 @@ pub fn run(args: Args) -> Result<()> {
             file: source,
             line: 0,
             field: "-".into(),
-            message: match messages.bad_lines {
-                0 => "no pose pair in the input".into(),
-                n => format!("no pose pair in the input: all {n} record line(s) were bad"),
+            message: match (messages.bad_lines, on_pixels) {
+                (0, _) => "no pose pair in the input".into(),
+                (n, 0) => format!("no pose pair in the input: all {n} record line(s) were bad"),
+                (n, p) => format!(
+                    "no pose pair in the input: all {n} record line(s) were bad, {p} of them records with `detections` and no camera pose: calibrate them on the pixels with `handeye online --intrinsics FILE` (the camera's intrinsics: OpenCV YAML or ROS camera_info)"
+                ),
             },
         }
         .into());
@@ -394,46 +410,67 @@ pub fn run(args: Args) -> Result<()> {
             .into());
         };
         // In metres whatever the input.
-        let unit = faces::ros_unit(match calibrator.unit() {
+        let unit = match calibrator.unit() {
             Unit::Millimetre => Some(Unit::Millimetre),
             Unit::Metre => Some(Unit::Metre),
             Unit::Auto | Unit::AsGiven => pose_unit,
-        });
-        let e = &report.estimate;
-        let (scale, unit_name) = match unit {
-            Some(Unit::Millimetre) => (1e-3, " m"),
-            Some(_) => (1.0, " m"),
-            None => (1.0, " (input unit)"),
         };
-        let x = e.x;
-        let source = format!(
-            "online, estimate {} from {} poses, uncertainty (one sigma) {:.4}° / {:.6}{unit_name}",
-            report.number,
-            e.poses,
-            e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
-            e.uncertainty_translation.unwrap_or(f64::NAN) * scale,
-        );
-        let child_given = args.child_frame.is_some();
-        let mount = opened.camera_mount.as_ref();
-        let publication = crate::publish::publication(&x, &frames, mount, child_given);
-        let published = publication.of(Published {
-            x: &x,
-            frame: setup.x_frame(),
-            setup,
-            source: &source,
+        publish_report(
+            report,
+            &args,
+            &frames,
+            opened.camera_mount.as_ref(),
+            face,
             unit,
-            note: None,
-            warning: None,
-        });
-        publication.tell(published, false);
-        let to = &publication.frames;
-        print_text(&match face {
-            Face::Yaml => faces::yaml(published, to, None),
-            Face::Ros2 => faces::ros2(published, to),
-            _ => faces::urdf(published, to),
-        })?;
+        )?;
     }
     Ok(())
+}
+
+/// Publishes a report's X as `--output yaml|ros2|urdf` says (in metres whatever the input's
+/// `unit`).
+fn publish_report(
+    report: &Report,
+    args: &Args,
+    frames: &faces::Frames,
+    mount: Option<&handeye::io::CameraMount>,
+    face: Face,
+    unit: Option<Unit>,
+) -> Result<()> {
+    let setup = args.input.setup();
+    let unit = faces::ros_unit(unit);
+    let e = &report.estimate;
+    let (scale, unit_name) = match unit {
+        Some(Unit::Millimetre) => (1e-3, " m"),
+        Some(_) => (1.0, " m"),
+        None => (1.0, " (input unit)"),
+    };
+    let x = e.x;
+    let source = format!(
+        "online, estimate {} from {} poses, uncertainty (one sigma) {:.4}° / {:.6}{unit_name}",
+        report.number,
+        e.poses,
+        e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
+        e.uncertainty_translation.unwrap_or(f64::NAN) * scale,
+    );
+    let child_given = args.child_frame.is_some();
+    let publication = crate::publish::publication(&x, frames, mount, child_given);
+    let published = publication.of(Published {
+        x: &x,
+        frame: setup.x_frame(),
+        setup,
+        source: &source,
+        unit,
+        note: None,
+        warning: None,
+    });
+    publication.tell(published, false);
+    let to = &publication.frames;
+    print_text(&match face {
+        Face::Yaml => faces::yaml(published, to, None),
+        Face::Ros2 => faces::ros2(published, to),
+        _ => faces::urdf(published, to),
+    })
 }
 
 /// A report of the accumulating estimator on stdout, in the face chosen.
@@ -479,8 +516,15 @@ fn estimate_words(r: &Report, unit: Unit) -> String {
             length(p.sigma, unit)
         )
     });
+    // An estimate on the pixels says how well it fits them, as calibrate's text does.
+    let pixels = e.reprojection.map_or(String::new(), |p| {
+        format!(
+            "; reprojection RMS {:.3} px over {} detections ({} left out)",
+            p.rms_px, p.detections, p.outlier_detections
+        )
+    });
     format!(
-        "{}, uncertainty {:.3}° / {}{at_point}{prior}; verdict {}",
+        "{}, uncertainty {:.3}° / {}{at_point}{prior}{pixels}; verdict {}",
         describe(&e.x, unit),
         e.uncertainty_rotation_deg.unwrap_or(f64::NAN),
         length(e.uncertainty_translation.unwrap_or(f64::NAN), unit),
@@ -539,6 +583,12 @@ struct Thinned {
     bad_lines: usize,
     held_out: usize,
     out: LineOut,
+}
+
+/// Whether a bad line is a record with `detections` and no camera pose (the pose reader's words
+/// for it): one for `online --intrinsics`.
+fn detections_only(e: &handeye::Error) -> bool {
+    matches!(e, handeye::Error::Parse { message, .. } if message.contains("`detections` alone"))
 }
 
 impl Thinned {

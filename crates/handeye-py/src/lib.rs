@@ -940,12 +940,15 @@ struct PyOnline {
     readings: Option<StreamReadings>,
     /// What it found, until Python takes it as a warning.
     found: Option<String>,
+    /// With `intrinsics`: the calibrator on the pixels of records with detections, which takes
+    /// the place of `inner`.
+    pixels: Option<handeye::OnlinePixels>,
 }
 
 #[pymethods]
 impl PyOnline {
     #[new]
-    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None, prior=None))]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None, prior=None, intrinsics=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         selection: &str,
@@ -970,6 +973,7 @@ impl PyOnline {
         shrink: Option<f64>,
         point: Option<[f64; 3]>,
         prior: Option<Vec<String>>,
+        intrinsics: Option<PathBuf>,
     ) -> PyResult<Self> {
         let tracking = TrackOptions::default();
         // A parameter left out takes the library's default.
@@ -1014,12 +1018,17 @@ impl PyOnline {
         let given = priors(prior)?;
         let readings =
             (config.estimator != Estimator::Accumulate).then(|| StreamReadings::new(config.setup));
+        let pixels = match intrinsics {
+            Some(path) => Some(online_pixels(&path, &config, &given)?),
+            None => None,
+        };
         Ok(Self {
             inner: OnlineCalibrator::new(config)
                 .and_then(|c| c.with_priors(&given))
                 .map_err(value_error)?,
             readings,
             found: None,
+            pixels,
         })
     }
 
@@ -1030,6 +1039,11 @@ impl PyOnline {
         base_from_gripper: PyReadonlyArray2<'py, f64>,
         camera_from_target: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        if self.pixels.is_some() {
+            return Err(value_error(
+                "this calibrator is on the pixels (intrinsics given): push records with detections (push_detections, push_record)",
+            ));
+        }
         let pose = PosePair {
             base_from_gripper: transform(base_from_gripper.as_array(), "base_from_gripper")?,
             camera_from_target: transform(camera_from_target.as_array(), "camera_from_target")?,
@@ -1053,6 +1067,38 @@ impl PyOnline {
         }
     }
 
+    /// Pushes one record with `detections` (its JSON text, a line of a JSON Lines recording,
+    /// SPEC sec. 9), read by the library's reader of such records; returns the estimates it
+    /// completes (at 16, 32, 64, … records). A bad record raises `ValueError` naming its field
+    /// and is not kept.
+    fn push_record<'py>(
+        &mut self,
+        py: Python<'py>,
+        text: &str,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let Some(pixels) = self.pixels.as_mut() else {
+            return Err(value_error(
+                "records with detections are calibrated on the pixels: give OnlineCalibrator(intrinsics=FILE)",
+            ));
+        };
+        let number = pixels.frames() + 1;
+        let source = format!("record {number}");
+        let frame = match handeye::io::frame_records(text.as_bytes(), &source).next() {
+            Some(Ok((_, frame))) => frame,
+            Some(Err(handeye::Error::Parse { field, message, .. })) => {
+                return Err(value_error(format!("{source}: field `{field}`: {message}")));
+            }
+            Some(Err(e)) => return Err(value_error(e)),
+            None => return Err(value_error(format!("{source}: an empty record"))),
+        };
+        let setup = self.inner.config().setup;
+        let report = py.allow_threads(|| pixels.push(frame, source));
+        report
+            .map(|r| json_dict(py, &r.json(setup, None)))
+            .into_iter()
+            .collect()
+    }
+
     /// What the readings check of the first poses found (once), or None.
     fn take_warning(&mut self) -> Option<String> {
         self.found.take()
@@ -1060,7 +1106,17 @@ impl PyOnline {
 
     /// The accumulating estimator's final report (JSON text), or None; a readings check not run
     /// yet runs on a short stream (see `take_warning`).
-    fn finish(&mut self) -> PyResult<Option<String>> {
+    fn finish(&mut self, py: Python<'_>) -> PyResult<Option<String>> {
+        let setup = self.inner.config().setup;
+        if let Some(pixels) = self.pixels.as_mut() {
+            let report = py.allow_threads(|| pixels.finish()).map_err(value_error)?;
+            // The cautions of the solve, as the command line tells them.
+            let words: Vec<String> = pixels.warnings().iter().map(|w| w.to_string()).collect();
+            if !words.is_empty() {
+                self.found = Some(words.join("; "));
+            }
+            return Ok(Some(report.json(setup, None).to_string()));
+        }
         if let Some(found) = self.readings.as_mut().and_then(StreamReadings::finish) {
             self.found = Some(found.to_string());
         }
@@ -1078,6 +1134,11 @@ impl PyOnline {
     /// (`pending()` says why). A report from before a change is not the current X.
     fn last_report(&self) -> Option<String> {
         let setup = self.inner.config().setup;
+        if let Some(pixels) = &self.pixels {
+            return pixels
+                .last_report()
+                .map(|r| r.json(setup, None).to_string());
+        }
         self.inner
             .tracker()?
             .last_report()
@@ -1086,11 +1147,24 @@ impl PyOnline {
 
     /// Why the accumulating estimator has nothing to report now, or None.
     fn pending(&self) -> Option<String> {
+        if let Some(pixels) = &self.pixels {
+            return match (pixels.last_report(), pixels.refused()) {
+                (_, Some(why)) => Some(why.to_string()),
+                (None, None) => Some(format!(
+                    "{} record(s) with detections so far: an estimate is solved at 16, 32, 64, … records and at finish()",
+                    pixels.frames()
+                )),
+                (Some(_), None) => None,
+            };
+        }
         self.inner.pending().map(|p| p.to_string())
     }
 
     /// Poses pushed so far.
     fn poses(&self) -> usize {
+        if let Some(pixels) = &self.pixels {
+            return pixels.frames();
+        }
         self.inner.poses()
     }
 
@@ -1101,6 +1175,11 @@ impl PyOnline {
 
     /// The whole state as JSON (restore with `from_state`).
     fn state(&self) -> PyResult<String> {
+        if self.pixels.is_some() {
+            return Err(value_error(
+                "state() is not offered on the pixels (yet): keep the records and push them again",
+            ));
+        }
         serde_json::to_string(&self.inner).map_err(value_error)
     }
 
@@ -1116,8 +1195,41 @@ impl PyOnline {
             inner,
             readings: None,
             found: None,
+            pixels: None,
         })
     }
+}
+
+/// The calibrator on the pixels of `OnlineCalibrator(intrinsics=...)`; the settings that do not
+/// apply there refused rather than ignored.
+fn online_pixels(
+    path: &std::path::Path,
+    config: &OnlineConfig,
+    priors: &[handeye::Prior],
+) -> PyResult<handeye::OnlinePixels> {
+    let given = [
+        ("estimator=\"paper\"", config.estimator == Estimator::Paper),
+        ("optimal", config.optimal),
+        (
+            "error_source=\"truth\"",
+            config.error_source == ErrorSource::Truth,
+        ),
+        ("truth", config.truth.is_some()),
+    ];
+    if let Some((name, _)) = given.iter().find(|(_, given)| *given) {
+        return Err(value_error(format!(
+            "{name} is not offered on the pixels (intrinsics given) (yet)"
+        )));
+    }
+    let camera = handeye::io::read_intrinsics(path).map_err(value_error)?;
+    let options = handeye::Options {
+        method: handeye::Method::Reprojection,
+        pairing: handeye::Pairing::All,
+        point: config.tracking.point,
+        priors: priors.to_vec(),
+        ..Default::default()
+    };
+    handeye::OnlinePixels::new(camera, config.setup, options).map_err(value_error)
 }
 
 /// Characters of a message kept by [`shortened`].

@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -449,6 +450,22 @@ def _with_arrays(event):
     return event
 
 
+def _json_numbers(value):
+    """Arrays and nested sequences as JSON lists; a number that is not finite as its text, so that
+    the reader of the record names its field rather than failing on the JSON."""
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    if isinstance(value, Mapping):
+        return {str(k): _json_numbers(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_numbers(v) for v in value]
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else str(float(value))
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
 class OnlineCalibrator:
     """The online calibrator: ``push`` one pose pair at a time and get what it reports.
 
@@ -472,7 +489,15 @@ class OnlineCalibrator:
     better read another way, have sizes the setup makes unlikely, or turn about one axis.
     With ``estimator="accumulate"``, ``push`` returns the estimator's own
     reports (``estimate``, X as ``matrix``, ``uncertainty``, ``target``, ...) and changes
-    (``change``), the same fields as ``handeye online --estimator accumulate`` prints."""
+    (``change``), the same fields as ``handeye online --estimator accumulate`` prints.
+
+    On the pixels: with ``intrinsics`` (a path: OpenCV YAML or ROS camera_info) the calibrator
+    takes records with detections (``push_detections`` or ``push_record``, not ``push``) and
+    calibrates X on their pixels as ``calibrate_on_pixels`` does, reporting an estimate at 16,
+    32, 64, ... records and at ``finish()`` (which raises ``ValueError`` when the calibration on
+    the pixels refuses the records): the same objects ``handeye online --intrinsics`` prints, with
+    ``estimator`` "reprojection" and the fit in ``reprojection`` (``rms_px``, ``sigma_px``, ...).
+    ``point`` applies; ``estimator="paper"``, ``optimal``, ``truth`` and ``prior`` are refused."""
 
     def __init__(self, **params):
         if "alpha_min_deg" in params:
@@ -505,6 +530,26 @@ class OnlineCalibrator:
         )
         self._warn_readings()
         return [_with_arrays(e) for e in events]
+
+    def push_detections(self, base_from_gripper, detections, camera_from_target=None):
+        """Pushes one record on the pixels (needs ``intrinsics``): the robot pose (4x4), the
+        detections ``{"target": [[x, y, z], ...], "pixels": [[u, v], ...]}`` (SPEC sec. 9, the
+        target's points in the robot's length unit) and optionally the camera pose (4x4). Returns
+        the estimates it completes (a list, usually empty). A bad record raises ``ValueError``
+        naming its field and is not kept."""
+        record = {
+            "base_from_gripper": {"matrix": _json_numbers(base_from_gripper)},
+            "detections": _json_numbers(detections),
+        }
+        if camera_from_target is not None:
+            record["camera_from_target"] = {"matrix": _json_numbers(camera_from_target)}
+        return self.push_record(json.dumps(record))
+
+    def push_record(self, line):
+        """Pushes one record on the pixels as its JSON text (a line of a JSON Lines recording
+        with ``detections``, as ``handeye online --intrinsics`` reads it). Returns the estimates
+        it completes; a bad record raises ``ValueError`` naming its field and is not kept."""
+        return [_with_arrays(e) for e in self._inner.push_record(line)]
 
     def finish(self):
         """The accumulating estimator's final report (a dict), or None: call it at the end of the

@@ -37,6 +37,9 @@ use crate::solve::reprojection::{
 };
 use crate::solve::{Method, RobotWorldMethod, pose_residuals, target_frame};
 
+mod online;
+pub use online::OnlinePixels;
+
 /// The robust sigma (pixels, per coordinate) above which the detections do not fit: detectors
 /// give 0.05–1 px; a wrong unit, wrong intrinsics or robot poses of other images give tens.
 pub const REFUSE_SIGMA_PX: f64 = 3.0;

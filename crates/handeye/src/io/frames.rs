@@ -36,25 +36,49 @@ pub fn read_frames(path: &Path) -> Result<FrameSeries> {
 
 /// [`read_frames`] on any input, named `source` in messages.
 pub fn frames_of<R: BufRead>(input: R, source: &str) -> Result<FrameSeries> {
-    let mut lines = Lines::new(input);
     let mut series = FrameSeries {
         frames: Vec::new(),
         lines: Vec::new(),
     };
-    while let Some(record) = lines.next_record(source) {
-        let (number, text) = record?;
-        let text = std::str::from_utf8(text)
-            .map_err(|_| parse_error(source, number, "-", "the line is not valid UTF-8 text"))?
-            .trim();
-        if text.is_empty() || text.starts_with('#') {
-            continue;
-        }
-        series
-            .frames
-            .push(parse_frame_record(text, source, number)?);
+    for record in frame_records(input, source) {
+        let (number, frame) = record?;
+        series.frames.push(frame);
         series.lines.push(number);
     }
     Ok(series)
+}
+
+/// The records of a recording on the pixels one at a time, as they come (a stream: `handeye
+/// online --intrinsics`), each with its line number: the reader of [`read_frames`] record by
+/// record. A bad record is its own [`Error::Parse`] (file, line, field) and the reading goes on
+/// with the next line; blank lines and `#` comments are skipped; a failing input ends it after
+/// its error.
+pub fn frame_records<R: BufRead>(
+    input: R,
+    source: &str,
+) -> impl Iterator<Item = Result<(usize, Frame)>> + use<'_, R> {
+    let mut lines = Lines::new(input);
+    std::iter::from_fn(move || {
+        loop {
+            let (number, text) = match lines.next_record(source)? {
+                Ok(record) => record,
+                Err(e) => return Some(Err(e)),
+            };
+            let Ok(text) = std::str::from_utf8(text) else {
+                return Some(Err(parse_error(
+                    source,
+                    number,
+                    "-",
+                    "the line is not valid UTF-8 text",
+                )));
+            };
+            let text = text.trim();
+            if text.is_empty() || text.starts_with('#') {
+                continue;
+            }
+            return Some(parse_frame_record(text, source, number).map(|f| (number, f)));
+        }
+    })
 }
 
 #[cfg(test)]

@@ -42,7 +42,7 @@ use lines::{Line, Lines};
 // `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
 // two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
 // public with `internals` for this crate's tests.
-pub use frames::{FrameSeries, read_frames};
+pub use frames::{FrameSeries, frame_records, read_frames};
 pub use intrinsics::read_intrinsics;
 pub use jsonl::parse_pose_line;
 #[cfg(feature = "rosbag")]

@@ -56,6 +56,30 @@ pub struct TrackEstimate {
     /// along it, [`crate::solve::low_dof_accumulate`]): the component that came from the prior.
     #[serde(default)]
     pub prior: Option<TrackPrior>,
+    /// Set when X was solved on the pixels of the detections (`handeye online --intrinsics`,
+    /// `OnlinePixels`): the fit on the pixels. `None` on poses.
+    #[serde(default)]
+    pub reprojection: Option<PixelFit>,
+}
+
+/// The fit on the pixels of an estimate solved on them (as the batch `ReprojectionSummary`, in
+/// counts: the frames are named in the batch report).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PixelFit {
+    /// RMS reprojection error over the detections kept, pixels.
+    pub rms_px: f64,
+    /// Robust sigma of one pixel coordinate, pixels.
+    pub sigma_px: f64,
+    /// Detections used in all.
+    pub detections: usize,
+    /// Detections left out as mis-detections (beyond 5 robust sigmas).
+    pub outlier_detections: usize,
+    /// Frames whose start pose was the other pose of the planar ambiguity: chosen by the robot's
+    /// motion.
+    pub flips_resolved: usize,
+    /// The verdict of the calibration on the pixels (its cautions: a weakly determined direction
+    /// of X, …): a `questionable` one makes the report's verdict `questionable`.
+    pub verdict: Assessment,
 }
 
 /// The component of a low-DOF X that came from the prior, not from the data.
@@ -398,7 +422,11 @@ impl Report {
         out.insert("estimate".into(), self.number.into());
         out.insert("pose".into(), self.pose.into());
         out.insert("reason".into(), serde_json::json!(self.reason));
-        out.insert("estimator".into(), "accumulate".into());
+        let estimator = match e.reprojection {
+            Some(_) => "reprojection",
+            None => "accumulate",
+        };
+        out.insert("estimator".into(), estimator.into());
         out.insert("frame".into(), setup.x_frame().into());
         insert_transform(&mut out, &e.x);
         out.insert("poses".into(), e.poses.into());
@@ -441,6 +469,18 @@ impl Report {
                 serde_json::json!({"axis": p.axis, "spread_deg": p.spread_deg, "free": p.component}),
             );
         }
+        if let Some(p) = &e.reprojection {
+            out.insert(
+                "reprojection".into(),
+                serde_json::json!({
+                    "rms_px": p.rms_px,
+                    "sigma_px": p.sigma_px,
+                    "detections": p.detections,
+                    "outlier_detections": p.outlier_detections,
+                    "flips_resolved": p.flips_resolved,
+                }),
+            );
+        }
         if let Some(w) = &self.weak {
             out.insert("weak".into(), w.to_string().into());
         }
@@ -461,7 +501,11 @@ impl Report {
     /// The verdict every report carries (SPEC sec. 9): `questionable` for a weak final report or
     /// sizes the setup makes unlikely, else `good` (an estimate is reported only once determined).
     pub fn verdict(&self) -> Assessment {
-        if self.weak.is_some() || self.implausible {
+        let pixels = self
+            .estimate
+            .reprojection
+            .is_some_and(|p| p.verdict == Assessment::Questionable);
+        if self.weak.is_some() || self.implausible || pixels {
             Assessment::Questionable
         } else {
             Assessment::Good

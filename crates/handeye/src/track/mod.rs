@@ -47,7 +47,8 @@ use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{axis_angle, rotation_angle_between};
 
 pub use events::{
-    Change, HeldOut, Pending, Reason, Report, RobotWorldPair, Step, TrackEstimate, TrackPrior,
+    Change, HeldOut, Pending, PixelFit, Reason, Report, RobotWorldPair, Step, TrackEstimate,
+    TrackPrior,
 };
 #[cfg(feature = "internals")]
 pub use events::target_frame;

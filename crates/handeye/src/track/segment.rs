@@ -326,6 +326,7 @@ impl Segment {
                     target: r.target,
                 }),
                 prior,
+                reprojection: None,
             },
             scatter,
             local,

@@ -1,0 +1,170 @@
+//! `handeye online --intrinsics FILE`: the online calibrator on a stream of records with
+//! `detections` (SPEC sec. 9), calibrated on their pixels ([`handeye::OnlinePixels`]): each record
+//! read by the library's one reader of such records, a bad one costing its line.
+
+use anyhow::{Result, bail};
+use handeye::{Error, Estimator, OnlinePixels, Unit};
+
+use super::{Args, Thinned, bad_line, print_report, publish_report};
+use crate::faces::{self, Face};
+use crate::output::LineOut;
+
+/// Runs `online --intrinsics`.
+pub(super) fn run(args: &Args) -> Result<()> {
+    refuse_flags(args)?;
+    let Some(intrinsics) = &args.intrinsics else {
+        bail!("--intrinsics FILE is needed on the pixels");
+    };
+    let Some(path) = &args.input.input else {
+        bail!("online --intrinsics reads a JSON Lines file with `detections` (or - for stdin)");
+    };
+    let setup = args.input.setup();
+    let face = Face::chosen(args.output);
+    let publish_x = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
+    // The frame names and the name are checked before the input is read.
+    let frames = faces::frames(
+        &args.input,
+        args.parent_frame.as_deref(),
+        args.child_frame.as_deref(),
+        &args.name,
+    )?;
+    let camera = handeye::io::read_intrinsics(intrinsics)?;
+    let options = handeye::Options {
+        method: handeye::Method::Reprojection,
+        pairing: handeye::Pairing::All,
+        point: args.point,
+        ..handeye::Options::default()
+    };
+    let mut calibrator = OnlinePixels::new(camera, setup, options)?;
+    let out = LineOut::stdout();
+    let mut messages = Thinned {
+        bad_lines: 0,
+        held_out: 0,
+        out: out.clone(),
+    };
+    let source = path.display().to_string();
+    // The robot translation of the first record, for the length unit.
+    let mut first_robot: Option<handeye::Transform> = None;
+    let mut read = |input: &mut dyn std::io::BufRead| -> Result<()> {
+        for record in handeye::io::frame_records(input, &source) {
+            let (line, frame) = match record {
+                Ok(r) => r,
+                Err(e) => {
+                    bad_line(e, args.on_bad_line, &mut messages)?;
+                    continue;
+                }
+            };
+            first_robot.get_or_insert(frame.base_from_gripper);
+            if let Some(report) = calibrator.push(frame, format!("{source}:{line}")) {
+                print_report(
+                    &report,
+                    setup,
+                    None,
+                    face,
+                    &out,
+                    unit_of(args, first_robot, &report),
+                )?;
+                out.flush_quietly();
+            }
+        }
+        Ok(())
+    };
+    if path.as_os_str() == "-" {
+        read(&mut std::io::stdin().lock())?;
+    } else {
+        let file = std::fs::File::open(path).map_err(|e| Error::Io {
+            file: source.clone(),
+            source: e,
+        })?;
+        read(&mut std::io::BufReader::new(file))?;
+    }
+    if calibrator.frames() == 0 {
+        out.flush()?;
+        return Err(Error::Parse {
+            file: source,
+            line: 0,
+            field: "-".into(),
+            message: match messages.bad_lines {
+                0 => "no record with `detections` in the input".into(),
+                n => format!(
+                    "no record with `detections` in the input: all {n} record line(s) were bad"
+                ),
+            },
+        }
+        .into());
+    }
+    let bad = match messages.bad_lines {
+        0 => String::new(),
+        n => format!(", {n} bad line(s) skipped"),
+    };
+    let report = match calibrator.finish() {
+        Ok(report) => report,
+        Err(e) => {
+            out.flush()?;
+            crate::tell!(
+                "no estimate from {} record(s){bad}: the calibration on the pixels refused them",
+                calibrator.frames()
+            );
+            return Err(e.into());
+        }
+    };
+    let unit = unit_of(args, first_robot, &report);
+    print_report(&report, setup, None, face, &out, unit)?;
+    out.flush()?;
+    for w in calibrator.warnings() {
+        crate::tell!("warning: {}", faces::warning(w));
+    }
+    crate::tell!(
+        "last estimate ({}) from {} record(s){bad}, on the pixels: {}",
+        report.number,
+        report.estimate.poses,
+        super::estimate_words(&report, unit)
+    );
+    if publish_x {
+        let known = matches!(unit, Unit::Metre | Unit::Millimetre).then_some(unit);
+        publish_report(&report, args, &frames, None, face, known)?;
+    }
+    Ok(())
+}
+
+/// The length unit: `--unit`, or told by the first robot pose and the target's place.
+fn unit_of(args: &Args, robot: Option<handeye::Transform>, report: &handeye::TrackReport) -> Unit {
+    if matches!(args.unit, Unit::Metre | Unit::Millimetre) {
+        return args.unit;
+    }
+    let pose = handeye::PosePair {
+        base_from_gripper: robot.unwrap_or_else(handeye::Transform::identity),
+        camera_from_target: report.estimate.target,
+    };
+    Unit::infer(&pose).unwrap_or(Unit::AsGiven)
+}
+
+/// The flags that do not apply on the pixels, refused before the input is read (exit 2) rather
+/// than ignored.
+fn refuse_flags(args: &Args) -> Result<()> {
+    let given = [
+        ("--estimator paper", args.estimator == Estimator::Paper),
+        ("--prior", !args.prior.is_empty()),
+        ("--optimal", args.optimal),
+        (
+            "--error-source truth",
+            args.error_source == handeye::ErrorSource::Truth,
+        ),
+        ("--truth", args.truth.is_some()),
+        ("--report", args.report.is_some()),
+        ("--robot/--camera streams", args.input.robot.is_some()),
+        ("a ROS 2 recording", args.input.is_bag()),
+        // The records' JSON fields name their own conventions.
+        ("--rotation", !args.input.rotation.is_empty()),
+    ];
+    if let Some((flag, _)) = given.iter().find(|(_, given)| *given) {
+        return Err(Error::InvalidParameter {
+            name: "intrinsics",
+            message: format!(
+                "{flag} is not offered on the pixels (online --intrinsics) (yet): give a JSON Lines file with `detections`"
+            ),
+        }
+        .into());
+    }
+    Ok(())
+}

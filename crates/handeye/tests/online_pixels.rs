@@ -1,0 +1,250 @@
+//! The online calibrator on the pixels (`OnlinePixels`, `handeye online --intrinsics`, issue 35):
+//! records with detections pushed one at a time give, at the end, the batch's calibration on the
+//! pixels of the same records, and its refusals.
+
+use handeye::model::camera::{Detections, Frame};
+use handeye::sim::pixels::{PixelSim, PixelSimConfig, simulate_pixels};
+use handeye::{OnlinePixels, Options, Setup, Transform};
+use nalgebra::{Translation3, UnitQuaternion, Vector3};
+
+fn testdata(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../testdata/pixels")
+        .join(name)
+}
+
+fn names(frames: &[Frame]) -> Vec<String> {
+    (1..=frames.len()).map(|i| format!("frame {i}")).collect()
+}
+
+/// Pushes every frame, returns the reports made on the way and the final one.
+fn online(
+    frames: &[Frame],
+    camera: &handeye::Intrinsics,
+    setup: Setup,
+) -> (
+    Vec<handeye::TrackReport>,
+    handeye::Result<handeye::TrackReport>,
+) {
+    let mut c = OnlinePixels::new(*camera, setup, Options::default()).unwrap();
+    let mut on_the_way = Vec::new();
+    for (f, name) in frames.iter().zip(names(frames)) {
+        on_the_way.extend(c.push(f.clone(), name));
+    }
+    assert_eq!(c.frames(), frames.len());
+    (on_the_way, c.finish())
+}
+
+fn batch(
+    frames: &[Frame],
+    camera: &handeye::Intrinsics,
+    setup: Setup,
+) -> handeye::Result<handeye::Report> {
+    handeye::calibrate_on_pixels(frames, camera, setup, &Options::default())
+}
+
+/// The largest difference of the entries of two transforms' matrices (the angle of R̂ᵀR from its
+/// trace is only good to about 1e-8 rad near zero).
+fn entry_gap(a: &Transform, b: &Transform) -> f64 {
+    (a.to_homogeneous() - b.to_homogeneous()).abs().max()
+}
+
+fn gap(a: &Transform, b: &Transform) -> (f64, f64) {
+    (
+        (a.rotation.inverse() * b.rotation).angle().to_degrees(),
+        (a.translation.vector - b.translation.vector).norm(),
+    )
+}
+
+#[test]
+fn the_end_of_the_stream_is_the_batch_calibration_on_the_pixels_within_3_sigma_of_the_truth() {
+    for (name, setup, frame) in [
+        ("board_eth", Setup::EyeToHand, "base_from_camera"),
+        ("tag_eih", Setup::EyeInHand, "gripper_from_camera"),
+    ] {
+        let camera =
+            handeye::io::read_intrinsics(&testdata(&format!("{name}.intrinsics.yml"))).unwrap();
+        let series = handeye::io::read_frames(&testdata(&format!("{name}.jsonl"))).unwrap();
+        let (on_the_way, end) = online(&series.frames, &camera, setup);
+        let end = end.unwrap();
+        let b = batch(&series.frames, &camera, setup).unwrap();
+        // The same solve: the same X, to rounding.
+        let d = entry_gap(&end.estimate.x, &b.transform);
+        assert!(d < 1e-9, "{name}: {d}");
+        assert_eq!(end.reason, handeye::track::Reason::End);
+        assert_eq!(end.estimate.poses, 30);
+        let p = end.estimate.reprojection.expect("the fit on the pixels");
+        let bp = b.reprojection.as_ref().unwrap();
+        assert_eq!(p.rms_px, bp.rms_px);
+        assert_eq!(p.outlier_detections, bp.outlier_detections.len());
+        assert_eq!(end.verdict(), b.verdict, "{name}");
+        assert_eq!(
+            end.estimate.uncertainty_rotation_deg,
+            Some(b.uncertainty.rotation_deg)
+        );
+        // One estimate on the way, at 16 records, from the pixels of those 16.
+        assert_eq!(on_the_way.len(), 1, "{name}");
+        assert_eq!(on_the_way[0].pose, 16);
+        let b16 = batch(&series.frames[..16], &camera, setup).unwrap();
+        let d = entry_gap(&on_the_way[0].estimate.x, &b16.transform);
+        assert!(d < 1e-9, "{name} at 16: {d}");
+        assert_eq!(end.number, 2);
+        // Within three sigmas of the truth.
+        let truth: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(testdata(&format!("{name}.truth.json"))).unwrap(),
+        )
+        .unwrap();
+        let truth = handeye::io::transform_from_json(&truth[frame]).unwrap();
+        let (deg, t) = gap(&end.estimate.x, &truth);
+        let (sr, st) = (
+            end.estimate.uncertainty_rotation_deg.unwrap(),
+            end.estimate.uncertainty_translation.unwrap(),
+        );
+        assert!(
+            deg < 3.0 * sr && t < 3.0 * st,
+            "{name}: {deg}° {t} vs {sr}° {st}"
+        );
+        // The JSON line says where X came from and how it fits the pixels.
+        let json = end.json(setup, None);
+        assert_eq!(json["estimator"], "reprojection");
+        assert_eq!(json["reason"], "end");
+        assert_eq!(json["reprojection"]["rms_px"].as_f64(), Some(bp.rms_px));
+    }
+}
+
+/// A recording whose frames all turn about one axis: refused, as the batch refuses it.
+#[test]
+fn rotations_about_one_axis_are_refused_as_the_batch_refuses_them() {
+    let sim = simulate_pixels(&PixelSimConfig::board().noise_free(), 3);
+    let frames = one_axis(&sim);
+    let b = batch(&frames, &sim.intrinsics, sim.setup).unwrap_err();
+    let (on_the_way, end) = online(&frames, &sim.intrinsics, sim.setup);
+    let end = end.unwrap_err();
+    assert!(on_the_way.is_empty());
+    assert_eq!(end.to_string(), b.to_string());
+    assert!(matches!(end, handeye::Error::Degenerate { .. }), "{end}");
+}
+
+/// Frames of a noise-free board whose robot poses turn about the gripper's z axis only, each seen
+/// from where the truth puts the camera.
+fn one_axis(sim: &PixelSim) -> Vec<Frame> {
+    assert_eq!(sim.setup, Setup::EyeInHand);
+    let q0 = sim.frames[0].base_from_gripper;
+    let points = &sim.frames[0].detections.target;
+    (0..30)
+        .map(|i| {
+            let angle = (i as f64 - 15.0).to_radians();
+            let turn = Transform::from_parts(
+                Translation3::new(0.002 * i as f64, -0.001 * i as f64, 0.0),
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), angle).into(),
+            );
+            let q = q0 * turn;
+            let camera_from_target = (q * sim.x).inverse() * sim.y;
+            let pixels = points
+                .iter()
+                .map(|p| {
+                    let c = camera_from_target * nalgebra::Point3::from(Vector3::from(*p));
+                    let px = sim.intrinsics.pixel(&c.coords);
+                    [px.x, px.y]
+                })
+                .collect();
+            Frame {
+                base_from_gripper: q,
+                camera_from_target: None,
+                detections: Detections {
+                    target: points.clone(),
+                    pixels,
+                },
+            }
+        })
+        .collect()
+}
+
+/// Robot poses written inverted, a target in millimetres with the robot in metres: refused with
+/// the batch's words; mis-detected corners: left out and counted, X still right.
+#[test]
+fn inverted_unit_mismatched_and_outlier_laden_streams_as_the_batch() {
+    for setup in [Setup::EyeInHand, Setup::EyeToHand] {
+        let sim = simulate_pixels(&PixelSimConfig::board().with_setup(setup), 5);
+        let inverted: Vec<Frame> = sim
+            .frames
+            .iter()
+            .map(|f| Frame {
+                base_from_gripper: f.base_from_gripper.inverse(),
+                ..f.clone()
+            })
+            .collect();
+        let mm: Vec<Frame> = sim
+            .frames
+            .iter()
+            .map(|f| {
+                let mut f = f.clone();
+                f.base_from_gripper.translation.vector *= 1000.0;
+                f
+            })
+            .collect();
+        for (what, frames) in [("inverted", &inverted), ("mm robot", &mm)] {
+            let b = batch(frames, &sim.intrinsics, setup).unwrap_err();
+            let (on_the_way, end) = online(frames, &sim.intrinsics, setup);
+            let end = end.unwrap_err();
+            assert!(on_the_way.is_empty(), "{what}: an estimate on the way");
+            assert_eq!(end.to_string(), b.to_string(), "{what}");
+            assert!(
+                matches!(
+                    end,
+                    handeye::Error::Misread { .. } | handeye::Error::PixelsUnfit { .. }
+                ),
+                "{what}: {end}"
+            );
+        }
+    }
+    let mut config = PixelSimConfig::board();
+    config.outliers = 6;
+    let sim = simulate_pixels(&config, 11);
+    let (_, end) = online(&sim.frames, &sim.intrinsics, sim.setup);
+    let end = end.unwrap();
+    let p = end.estimate.reprojection.unwrap();
+    assert!(p.outlier_detections >= 6, "{p:?}");
+    let (deg, t) = gap(&end.estimate.x, &sim.x);
+    assert!(deg < 0.5 && t < 0.005, "{deg}° {t}");
+}
+
+/// The one reader of records with detections, record by record: a bad record costs its line and
+/// names it; the others are read as `read_frames` reads them.
+#[test]
+fn a_bad_record_costs_its_line_only() {
+    let text = std::fs::read_to_string(testdata("tag_eih.jsonl")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let n = lines.len();
+    lines[2] = "{\"base_from_gripper\": ".into();
+    lines[5] = lines[5].replacen("[[", "[[1, 2], [", 1); // one pixel more than target points
+    lines[8] = lines[8].replacen("\"pixels\": [[", "\"pixels\": [[\"nan\", ", 1);
+    lines[11] = lines[11].replace("\"pixels\"", "\"pixelz\"");
+    let joined = lines.join("\n");
+    let records: Vec<_> = handeye::io::frame_records(joined.as_bytes(), "s.jsonl").collect();
+    let bad: Vec<(usize, String)> = records
+        .iter()
+        .filter_map(|r| match r {
+            Err(handeye::Error::Parse { line, field, .. }) => Some((*line, field.clone())),
+            Err(e) => panic!("{e}"),
+            Ok(_) => None,
+        })
+        .collect();
+    assert_eq!(
+        bad.iter().map(|b| b.0).collect::<Vec<_>>(),
+        vec![3, 6, 9, 12],
+        "{bad:?}"
+    );
+    assert!(bad[1].1.starts_with("detections"), "{bad:?}");
+    assert!(bad[2].1.starts_with("detections.pixels"), "{bad:?}");
+    assert!(bad[3].1.starts_with("detections"), "{bad:?}");
+    let good: Vec<usize> = records
+        .iter()
+        .filter_map(|r| r.as_ref().ok().map(|(l, _)| *l))
+        .collect();
+    assert_eq!(good.len(), n - 4);
+    let whole = handeye::io::read_frames(&testdata("tag_eih.jsonl")).unwrap();
+    for (line, frame) in records.iter().filter_map(|r| r.as_ref().ok()) {
+        assert_eq!(frame, &whole.frames[line - 1]);
+    }
+}
