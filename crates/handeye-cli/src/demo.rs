@@ -135,7 +135,7 @@ pub fn run(args: Args) -> Result<()> {
     let started = Instant::now();
     for p in &sim.poses {
         calibrator.push(p)?;
-        reports.extend(calibrator.step().and_then(|s| s.report));
+        reports.extend(calibrator.step().and_then(|s| s.report.clone()));
     }
     reports.extend(calibrator.finish());
     let per_pose = started.elapsed().as_secs_f64() / sim.poses.len() as f64;

@@ -450,6 +450,8 @@ fn file_records<R: BufRead + 'static>(
                     stamp: None,
                     pose,
                     written,
+                    joints: [0.0; 16],
+                    joint_count: 0,
                 })
             });
             Box::new(records.collect::<Vec<_>>().into_iter())

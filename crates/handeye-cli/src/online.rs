@@ -284,7 +284,12 @@ pub fn run(args: Args) -> Result<()> {
         };
         // A pose the calibrator refuses (not finite, overflowing) is a bad line too, named by its
         // place; a unit it cannot tell stops the run.
-        let events = match calibrator.push(&record.pose) {
+        // The joint angles, where the record gives them (the systematic-error test's order).
+        let pushed = match record.joint_count {
+            0 => calibrator.push(&record.pose),
+            n => calibrator.push_with_joints(&record.pose, &record.joints[..n]),
+        };
+        let events = match pushed {
             Ok(events) => events,
             Err(e @ handeye::Error::InvalidTransform { .. }) => {
                 let e = handeye::Error::Parse {
@@ -775,8 +780,14 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
             } else {
                 ""
             };
+            // The library's own cautions (a systematic error), in its words.
+            let warnings: String = r
+                .warnings
+                .iter()
+                .map(|w| format!("\nwarning: {w}"))
+                .collect();
             format!(
-                "last estimate ({}) from {} of {counts}: {}{weak}{implausible}",
+                "last estimate ({}) from {} of {counts}: {}{weak}{implausible}{warnings}",
                 r.number,
                 e.poses,
                 estimate_words(r, calibrator.unit())

@@ -1032,12 +1032,15 @@ impl PyOnline {
         })
     }
 
-    /// Pushes one pose pair (4×4 arrays); returns the list of events it completes (usually empty).
+    /// Pushes one pose pair (4×4 arrays), with the joint angles at it if given; returns the list
+    /// of events it completes (usually empty).
+    #[pyo3(signature = (base_from_gripper, camera_from_target, joints=None))]
     fn push<'py>(
         &mut self,
         py: Python<'py>,
         base_from_gripper: PyReadonlyArray2<'py, f64>,
         camera_from_target: PyReadonlyArray2<'py, f64>,
+        joints: Option<Vec<f64>>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
         if self.pixels.is_some() {
             return Err(value_error(
@@ -1048,7 +1051,11 @@ impl PyOnline {
             base_from_gripper: transform(base_from_gripper.as_array(), "base_from_gripper")?,
             camera_from_target: transform(camera_from_target.as_array(), "camera_from_target")?,
         };
-        let events = self.inner.push(&pose).map_err(value_error)?;
+        let events = match &joints {
+            Some(q) => self.inner.push_with_joints(&pose, q),
+            None => self.inner.push(&pose),
+        }
+        .map_err(value_error)?;
         if let Some(found) = self.readings.as_mut().and_then(|r| r.push(&pose)) {
             self.found = Some(found.to_string());
         }
@@ -1060,7 +1067,7 @@ impl PyOnline {
                     .change
                     .map(|c| c.json())
                     .into_iter()
-                    .chain(step.report.map(|r| r.json(setup, None)));
+                    .chain(step.report.as_ref().map(|r| r.json(setup, None)));
                 lines.map(|v| json_dict(py, &v)).collect()
             }
             None => events.iter().map(|e| json_dict(py, &e.json())).collect(),

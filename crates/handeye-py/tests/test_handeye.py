@@ -842,6 +842,32 @@ def test_joint_angles_reach_the_systematic_test_in_python_as_on_the_command_line
         handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], setup=setup, joints=r["joints"][:-1])
 
 
+def test_the_online_estimator_flags_a_systematic_error_as_calibrate_and_the_command_line():
+    # Issue 29 in Python's OnlineCalibrator: the joints pushed with each pose order the poses for
+    # the systematic-error test; the final report is questionable with the warning, its joint
+    # and its widened uncertainty, as `handeye online` prints them and as `calibrate` gives them.
+    path = TESTDATA / "kinhec" / "systematic" / "dh2_iiwa14_eih_s1.jsonl"
+    r = handeye.read_recording(path)
+    cal = handeye.OnlineCalibrator()
+    for g, c, q in zip(r["base_from_gripper"], r["camera_from_target"], r["joints"]):
+        cal.push(g, c, joints=q)
+    end = cal.finish()
+    assert end["verdict"] == "questionable"
+    assert [w["code"] for w in end["warnings"]] == ["systematic_error"]
+    assert end["systematic"]["configuration"] == "joints" and end["systematic"]["joint"]["joint"] == 1
+    batch = handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], pairs="all", joints=r["joints"])
+    assert abs(end["uncertainty"]["rotation_deg"] - batch["uncertainty"]["rotation_deg"]) < 1e-9
+    cli = _cli_json("online", path)
+    assert cli[-1]["verdict"] == "questionable" and cli[-1]["systematic"]["joint"] == end["systematic"]["joint"]
+    # Without joints the test orders by the hand pose (not flagged on this stream, as calibrate).
+    plain = handeye.OnlineCalibrator()
+    for g, c in zip(r["base_from_gripper"], r["camera_from_target"]):
+        plain.push(g, c)
+    assert plain.finish()["verdict"] == "good"
+    with pytest.raises(ValueError, match="joint 2 is NaN"):
+        plain.push(r["base_from_gripper"][0], r["camera_from_target"][0], joints=[0.1, float("nan")])
+
+
 def test_a_low_dof_robot_takes_its_prior_in_python_as_on_the_command_line(tmp_path):
     # Issue 30 in Python: a SCARA recording (every motion about the gripper's z) is refused without
     # the camera's height, naming Python's keyword; with it, X is the command line's. The drop-in

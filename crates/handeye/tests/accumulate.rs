@@ -165,7 +165,7 @@ fn the_reported_uncertainty_holds_and_is_not_wildly_conservative() {
         let mut reports = Vec::new();
         for p in &sim.poses {
             c.push(p).unwrap();
-            reports.extend(c.step().and_then(|s| s.report));
+            reports.extend(c.step().and_then(|s| s.report.clone()));
         }
         reports.extend(c.finish());
         assert!(!reports.is_empty(), "series {s}: no report");

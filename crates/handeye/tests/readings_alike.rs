@@ -205,7 +205,7 @@ fn a_change_withdraws_the_estimate_from_before_it() {
         first = tracker.push(pose).report.or(first);
     }
     let first = first.expect("a report before the change");
-    assert_eq!(tracker.last_report(), Some(first));
+    assert_eq!(tracker.last_report(), Some(first.clone()));
     let mut changed = false;
     for pose in &after {
         let step = tracker.push(pose);

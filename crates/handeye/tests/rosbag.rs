@@ -618,3 +618,84 @@ fn swapped_frame_names_are_named_as_such_not_as_inverted_poses() {
         e.remedy()
     );
 }
+
+/// Issue 29: the joint angles of `/joint_states` at each pose pair. The `eih_joints_dh2_*` bags
+/// replay kinhec's `systematic/dh2_iiwa14_eih_s1.jsonl` (an uncalibrated robot) with its joint
+/// angles, in shuffled joint orders with a gripper joint among them, and two bad messages.
+#[test]
+fn joint_states_give_each_pair_its_angles_and_the_systematic_test_orders_by_them() {
+    use handeye::calibrate::batch::{Options, calibrate};
+    let stream = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../testdata/kinhec/systematic/dh2_iiwa14_eih_s1.jsonl");
+    let text = std::fs::read_to_string(&stream).unwrap();
+    let joints = handeye::io::read_joints(&text, "stream").unwrap().unwrap();
+    let series = handeye::io::read_pose_file(&stream, handeye::io::Format::Auto).unwrap();
+    let batch = |poses: &[handeye::PosePair], joints: Vec<Vec<f64>>| {
+        calibrate(
+            poses,
+            Setup::EyeInHand,
+            &Options {
+                pairing: Pairing::All,
+                joints,
+                ..Options::default()
+            },
+        )
+        .unwrap()
+    };
+    let from_stream = batch(&series.pairs, joints.clone());
+    let s = from_stream.systematic.clone().unwrap();
+    assert!(s.flagged && s.configuration == "joints", "{s:?}");
+    for name in ["eih_joints_dh2_mcap", "eih_joints_dh2_sqlite3"] {
+        let source = Source::Bag {
+            path: bag(name),
+            frames: BagFrames {
+                base: "base_link".into(),
+                gripper: "tool0".into(),
+                camera: "camera_link".into(),
+                target: None,
+                target_topic: Some("/board_pose".into()),
+            },
+        };
+        let r = Recording::read(&source, &RecordingOptions::default()).unwrap();
+        assert_eq!(r.poses.len(), joints.len(), "{name}");
+        // The angles of every pair, in the first message's joint order, as the stream has them.
+        assert_eq!(r.joints.len(), joints.len(), "{name}");
+        // (The eighth, the gripper's, stands still at 0.04.)
+        for (k, (a, b)) in r.joints.iter().zip(&joints).enumerate() {
+            assert_eq!(a.len(), b.len() + 1, "{name} pair {k}");
+            let d = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(d < 1e-12 && a[7] == 0.04, "{name} pair {k}: {a:?} vs {b:?}");
+        }
+        let told = r
+            .notes
+            .iter()
+            .find(|n| matches!(n, Note::BagJoints { .. }))
+            .expect("a note of the joint angles")
+            .to_string();
+        for want in [
+            "joint angles from /joint_states at every pose pair (8 joint(s): iiwa_joint_1",
+            "topic /joint_states, message 3: 7 name(s) but 6 position(s)",
+            "topic /joint_states, message 4: no positions",
+        ] {
+            assert!(told.contains(want), "{name}: {want}: {told}");
+        }
+        // The bag calibrates as the stream: the same X, the same flag, ordered by the joints.
+        let from_bag = batch(&r.poses, r.joints.clone());
+        let d = diff(&from_bag.transform, &from_stream.transform);
+        assert!(d < 1e-9, "{name}: X off the stream's by {d:e}");
+        let b = from_bag.systematic.clone().unwrap();
+        assert_eq!(b.configuration, "joints", "{name}");
+        assert_eq!(b.flagged, s.flagged, "{name}");
+        assert_eq!(b.joint.map(|j| j.joint), s.joint.map(|j| j.joint), "{name}");
+        assert!(
+            (b.p_value - s.p_value).abs() <= 1e-6 * s.p_value.max(1e-300),
+            "{name}: p {} vs {}",
+            b.p_value,
+            s.p_value
+        );
+    }
+}

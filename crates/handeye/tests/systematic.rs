@@ -268,3 +268,207 @@ fn degenerate_inverted_unit_mismatched_and_outlier_laden_inputs_do_not_cry_syste
     );
     assert!(outlier_files >= 18);
 }
+
+/// The accumulating online estimator (`handeye online`, Python `OnlineCalibrator`) over a stream,
+/// joint angles with each pose where the file gives them: its last report (the end's, or the last
+/// one made), `None` when it reported nothing.
+fn online(
+    poses: &[handeye::PosePair],
+    joints: Option<&[Vec<f64>]>,
+    setup: Setup,
+) -> Option<handeye::TrackReport> {
+    let mut calibrator = handeye::OnlineCalibrator::new(handeye::OnlineConfig {
+        setup,
+        estimator: handeye::Estimator::Accumulate,
+        ..handeye::OnlineConfig::default()
+    })
+    .unwrap();
+    for (i, pose) in poses.iter().enumerate() {
+        match joints {
+            Some(q) => calibrator.push_with_joints(pose, &q[i]).unwrap(),
+            None => calibrator.push(pose).unwrap(),
+        };
+    }
+    calibrator
+        .finish()
+        .or_else(|| calibrator.tracker().and_then(|t| t.last_report()))
+}
+
+fn online_flagged(r: &handeye::TrackReport) -> bool {
+    r.warnings
+        .iter()
+        .any(|w| matches!(w, Warning::SystematicError { .. }))
+}
+
+/// The larger of the rotation's and the translation's error over the report's one-sigma.
+fn online_error_over_sigma(r: &handeye::TrackReport, x: &Transform) -> f64 {
+    let e = &r.estimate;
+    let rot = errors_against_truth(&e.x, x).rot_deg;
+    let t = (e.x.translation.vector - x.translation.vector).norm();
+    (rot / e.uncertainty_rotation_deg.unwrap_or(f64::NAN))
+        .max(t / e.uncertainty_translation.unwrap_or(f64::NAN))
+}
+
+/// Issue 29 in the accumulating online estimator: the same streams as the batch's table, the same
+/// acceptance, and beside each stream the batch with the estimator's own solve (all pairs,
+/// Andreff: `handeye calibrate`'s default) on the same poses and joints.
+/// `cargo test --release -p handeye --test systematic online -- --nocapture`.
+///
+/// Measured (2026-12-04): 1 and 2 mm flagged 88% (21 of 24), as the batch with the same solve
+/// (21 of 24, the same runs; the batch table's 92% pools its consecutive-pairs run, 23 of 24, with
+/// all-pairs refine, 21 of 24). The three missed are 1 mm eye-to-hand streams whose p-value is
+/// 0.016–0.063 under the all-pairs X, online and batch alike: the test's power at 32 poses, not
+/// the online port. The issue's 90% bar is not met online (nor by that batch); it stays asserted
+/// on the pooled table of the batch
+/// (`an_uncalibrated_robot_is_flagged_and_covered`); here, that the online estimator decides as the
+/// batch with its solve, run for run, meets every other bar, and flags at least 85% (a guard
+/// against falling below the 88% measured).
+#[test]
+fn the_online_estimator_flags_and_covers_as_the_batch() {
+    let all_pairs = Options {
+        pairing: Pairing::All,
+        ..Options::default()
+    };
+    let mut dh = Vec::new();
+    let mut controls = Vec::new();
+    let mut unreported = Vec::new();
+    let mut disagree = Vec::new();
+    let mut row = |file: String,
+                   level: String,
+                   r: Option<handeye::TrackReport>,
+                   x: &Transform,
+                   batch: bool| {
+        let Some(r) = r else {
+            println!("{file:<34} {level:<11} online     no estimate");
+            unreported.push(file);
+            return;
+        };
+        let p = r.systematic.as_ref().map_or(f64::NAN, |s| s.p_value);
+        let joint = r.systematic.as_ref().map_or(String::new(), |s| {
+            format!(
+                "{} {}",
+                s.configuration,
+                s.joint
+                    .map_or(String::new(), |j| format!("joint {}", j.joint))
+            )
+        });
+        let row = Row {
+            file,
+            level,
+            method: "online",
+            flagged: online_flagged(&r),
+            ratio: online_error_over_sigma(&r, x),
+        };
+        println!(
+            "{:<34} {:<11} {:<10} flagged {:<5} (batch all pairs {batch:<5}) error/sigma {:>6.2}  p {:.1e}  {joint}",
+            row.file, row.level, row.method, row.flagged, row.ratio, p
+        );
+        if row.flagged != batch {
+            disagree.push(row.file.clone());
+        }
+        if row.level.starts_with("dh") {
+            dh.push(row);
+        } else {
+            controls.push(row);
+        }
+    };
+    for e in manifest("systematic/manifest.json") {
+        let file = e["file"].as_str().unwrap();
+        let series = read_pose_file(&suite().join(file), Format::Auto).unwrap();
+        let text = std::fs::read_to_string(suite().join(file)).unwrap();
+        let joints = read_joints(&text, file).unwrap();
+        let r = online(&series.pairs, joints.as_deref(), setup(&e));
+        let batch = flagged(&run(&e, &all_pairs).unwrap());
+        row(
+            file.replace("systematic/", ""),
+            e["kind"].as_str().unwrap().into(),
+            r,
+            &truth(&e),
+            batch,
+        );
+    }
+    for seed in 0..12 {
+        let config = SimConfig {
+            poses: 40,
+            ..SimConfig::large_motions()
+        };
+        let s = simulate(&config, seed, 0);
+        let r = online(&s.poses, None, Setup::EyeInHand);
+        let batch = flagged(&calibrate(&s.poses, Setup::EyeInHand, &all_pairs).unwrap());
+        row(
+            format!("sim eye-in-hand seed {seed}"),
+            "sim".into(),
+            r,
+            &s.gripper_from_camera,
+            batch,
+        );
+    }
+    let large: Vec<&Row> = dh.iter().filter(|r| r.level != "dh05").collect();
+    let large_flagged =
+        large.iter().filter(|r| r.flagged).count() as f64 / large.len().max(1) as f64;
+    let summary = format!(
+        "online: DH errors {} runs, 1 and 2 mm flagged {:.0}%, all levels flagged {:.0}%, silently beyond 3 sigma {:.1}%, within 3 sigma {:.0}%; controls {} runs, flagged {:.1}%, within 3 sigma {:.0}%; no estimate {}; flagged otherwise than the batch with the same solve: {:?}",
+        dh.len(),
+        100.0 * large_flagged,
+        100.0 * share(&dh, |r| r.flagged),
+        100.0 * share(&dh, |r| !r.flagged && r.ratio > 3.0),
+        100.0 * share(&dh, |r| r.ratio <= 3.0),
+        controls.len(),
+        100.0 * share(&controls, |r| r.flagged),
+        100.0 * share(&controls, |r| r.ratio <= 3.0),
+        unreported.len(),
+        disagree
+    );
+    println!("{summary}");
+    assert!(dh.len() >= 24 && controls.len() >= 24, "{summary}");
+    assert!(unreported.is_empty(), "{summary}: {unreported:?}");
+    assert!(disagree.is_empty(), "{summary}");
+    assert!(large_flagged >= 0.85, "{summary}");
+    assert!(
+        share(&dh, |r| !r.flagged && r.ratio > 3.0) <= 1.0 / 12.0,
+        "{summary}"
+    );
+    assert!(share(&dh, |r| r.ratio <= 3.0) >= 0.75, "{summary}");
+    assert!(share(&controls, |r| r.flagged) <= 0.1, "{summary}");
+    assert!(share(&controls, |r| r.ratio <= 3.0) >= 0.9, "{summary}");
+}
+
+/// The online estimator on the same degenerate, inverted, unit-mismatched and outlier-laden
+/// streams: never `systematic_error` (measured: 30 streams, none; the gates hold the outliers out,
+/// the others report nothing or the sizes' warning).
+#[test]
+fn the_online_estimator_does_not_cry_systematic_on_mistakes_and_outliers() {
+    let mut streams = 0;
+    for e in manifest("manifest.json") {
+        let kind = e["kind"].as_str().unwrap_or("");
+        let Some(file) = e["file"].as_str() else {
+            continue;
+        };
+        let mistake = file.starts_with("mistakes/")
+            && ["robot_inverted", "both_inverted", "robot_mm"]
+                .iter()
+                .any(|m| file.contains(m));
+        if !(kind.starts_with("outliers_") || kind == "degenerate_single_joint" || mistake) {
+            continue;
+        }
+        let series = read_pose_file(&suite().join(file), Format::Auto).unwrap();
+        let mut calibrator = handeye::OnlineCalibrator::new(handeye::OnlineConfig {
+            setup: setup(&e),
+            estimator: handeye::Estimator::Accumulate,
+            ..handeye::OnlineConfig::default()
+        })
+        .unwrap();
+        let mut reports = Vec::new();
+        for pose in &series.pairs {
+            calibrator.push(pose).unwrap();
+            reports.extend(calibrator.step().and_then(|s| s.report.clone()));
+        }
+        reports.extend(calibrator.finish());
+        streams += 1;
+        for r in &reports {
+            assert!(!online_flagged(r), "{file}: report {} flagged", r.number);
+        }
+        println!("{file:<56} {} report(s), none flagged", reports.len());
+    }
+    assert!(streams >= 30, "{streams}");
+}

@@ -520,13 +520,17 @@ class OnlineCalibrator:
             params["prior"] = _priors(params["prior"])
         self._inner = _OnlineCalibrator(truth=truth, **params)
 
-    def push(self, base_from_gripper, camera_from_target):
+    def push(self, base_from_gripper, camera_from_target, joints=None):
         """Pushes one pose pair (4x4 arrays). Returns a list, usually empty: the reports and
         changes of the accumulating estimator, or the events of the calibrations the paper's
-        estimator completes (each a dict, X's ``matrix`` a (4,4) array)."""
+        estimator completes (each a dict, X's ``matrix`` a (4,4) array). ``joints``: the robot's
+        joint angles at the pose (radians, every pose the same joints); the accumulating
+        estimator's systematic-error test then names the joint whose angle the residual follows
+        (``warnings`` of a report: ``systematic_error``)."""
         events = self._inner.push(
             np.ascontiguousarray(base_from_gripper, dtype=np.float64),
             np.ascontiguousarray(camera_from_target, dtype=np.float64),
+            None if joints is None else [float(q) for q in joints],
         )
         self._warn_readings()
         return [_with_arrays(e) for e in events]

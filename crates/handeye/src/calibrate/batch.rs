@@ -20,9 +20,10 @@ use crate::check::holdout::{HeldOutCheck, leave_one_out};
 use crate::check::outliers::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::check::quality::{MotionQuality, QualityReport, ResidualSummary, quality_report};
 use crate::check::readings::{ReadingCheck, check_readings};
-use crate::check::systematic::{Systematic, halves_determine, systematic_error};
+use crate::check::systematic::Systematic;
+pub(crate) use crate::check::systematic::{systematic_test, widened_for_systematic};
 use crate::check::uncertainty::{
-    Uncertainty, bootstrap, bootstrap_by_region, check_replicates, median_target,
+    Uncertainty, bootstrap, check_replicates, median_target,
 };
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::OutlierPose;
@@ -546,95 +547,6 @@ pub(crate) fn check_joints(joints: &[Vec<f64>], poses: usize) -> Result<()> {
             joints.len()
         ),
     })
-}
-
-/// The systematic-error test (`check::systematic`) of the poses `used` (`solved`: the poses,
-/// their setup and X), with the joint angles of the poses kept (`joints` by input index, `kept`,
-/// of `read_len` poses read) where the input gives every pose's. It waits while outliers are
-/// kept: they pull X, and a wrong X leaves residuals that follow the pose, so their own warning
-/// comes first and the test runs once they are left out.
-pub(crate) fn systematic_test(
-    (used, setup, x): (&[PosePair], Setup, &Transform),
-    (joints, kept, read_len): (&[Vec<f64>], &[usize], usize),
-    outliers_kept: bool,
-    solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
-    scene: f64,
-) -> Option<Systematic> {
-    if outliers_kept {
-        return None;
-    }
-    let joints: Option<Vec<Vec<f64>>> =
-        (joints.len() == read_len).then(|| kept.iter().map(|&i| joints[i].clone()).collect());
-    let mut found = systematic_error(used, setup, x, joints.as_deref(), solve_x)?;
-    found.weigh(scene);
-    // The halves count only where each determines X; checked where they would widen the answer.
-    if found.flagged
-        && found.halves.is_some()
-        && !halves_determine(used, setup, &found.order, solve_x, scene)
-    {
-        found.halves = None;
-    }
-    Some(found)
-}
-
-/// X's uncertainty where the test `found` flags an error that follows the configuration:
-/// resampled by workspace region, at least the halves' disagreement, `at_point` placed again
-/// at its point; with the caution that says so. Unflagged, the uncertainty as it was.
-pub(crate) fn widened_for_systematic(
-    uncertainty: Uncertainty,
-    found: Option<&Systematic>,
-    (used, setup, x): (&[PosePair], Setup, &Transform),
-    solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
-    (replicates, scene): (usize, f64),
-) -> (Uncertainty, Option<Warning>) {
-    let Some(found) = found.filter(|s| s.flagged) else {
-        return (uncertainty, None);
-    };
-    let regions = bootstrap_by_region(used, setup, x, solve_x, (replicates, scene), &found.order);
-    let at_point = uncertainty.at_point.clone();
-    let mut wide = covering(wider(uncertainty, regions), found, scene);
-    wide.at_point = at_point.map(|p| wide.place(x, p.point));
-    let caution = systematic_warning(found, &wide);
-    (wide, Some(caution))
-}
-
-/// The warning of an error that follows the configuration, with its effect on X.
-pub(crate) fn systematic_warning(found: &Systematic, regions: &Uncertainty) -> Warning {
-    Warning::SystematicError {
-        p_value: found.p_value,
-        halves_rotation_deg: found.halves.map(|h| h.rotation_deg),
-        halves_translation: found.halves.map(|h| h.translation),
-        rotation_sigma_deg: regions.rotation_deg,
-        translation_sigma: regions.translation,
-        joint: found.joint.map(|j| j.joint),
-    }
-}
-
-/// An uncertainty that covers what the halves of the workspace disagree by: each half's X is off
-/// by the systematic error as it weighs on that half, so half their distance is the least
-/// one-sigma an honest answer reports (`check::systematic::Halves`).
-pub(crate) fn covering(u: Uncertainty, found: &Systematic, scene: f64) -> Uncertainty {
-    match found.halves {
-        Some(h) => u.at_least(HALVES_SHARE * h.rotation_deg, HALVES_SHARE * h.translation, scene),
-        None => u,
-    }
-}
-
-/// The share of the halves' disagreement that [`covering`] takes as the least one-sigma.
-const HALVES_SHARE: f64 = 1.0;
-
-/// The region bootstrap's uncertainty where it is the wider (the sum of the two parts' ratios),
-/// else the ordinary one: a systematic error never narrows what the poses' own noise gives.
-pub(crate) fn wider(ordinary: Uncertainty, regions: Uncertainty) -> Uncertainty {
-    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 1.0 };
-    if ratio(regions.rotation_deg, ordinary.rotation_deg)
-        + ratio(regions.translation, ordinary.translation)
-        >= 2.0
-    {
-        regions
-    } else {
-        ordinary
-    }
 }
 
 /// A low-DOF recording refused for want of a prior (`refusal`) is refused for what its motions

@@ -36,6 +36,9 @@ use crate::check::outliers::{PoseResiduals, median};
 use crate::model::pose::rotation_angle_between;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, log_so3};
+use crate::check::uncertainty::{Uncertainty, bootstrap_by_region};
+use crate::model::error::Result;
+use crate::model::warning::Warning;
 use crate::solve::residual::PoseResidual;
 
 /// Random orders drawn for the null distribution of the neighbour ratio.
@@ -312,15 +315,26 @@ fn explained_z(
     (r2, if sd > 0.0 { (m - r2) / sd } else { 0.0 })
 }
 
+/// A coordinate whose spread is below this (relative to its size plus one: radians, or the
+/// hand pose's normalised units) never changes: the rounding of a mean of equal numbers.
+const STILL: f64 = 1e-9;
+
 /// The features of the linear model: an intercept and the configuration, each coordinate
-/// centred and scaled to unit spread.
+/// centred and scaled to unit spread. A coordinate that never changes (a gripper's joint, a joint
+/// the poses never turn) is left out: its column would make the model singular and silence the
+/// test.
 fn features(c: &Configurations, n: usize) -> DMatrix<f64> {
-    let mut f = DMatrix::from_element(n, c.dim + 1, 1.0);
-    for k in 0..c.dim {
-        let mean = (0..n).map(|i| c.at(i, k)).sum::<f64>() / n as f64;
-        let sd = ((0..n).map(|i| (c.at(i, k) - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+    let moving: Vec<(usize, f64, f64)> = (0..c.dim)
+        .filter_map(|k| {
+            let mean = (0..n).map(|i| c.at(i, k)).sum::<f64>() / n as f64;
+            let sd = ((0..n).map(|i| (c.at(i, k) - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+            (sd > STILL * (1.0 + mean.abs())).then_some((k, mean, sd))
+        })
+        .collect();
+    let mut f = DMatrix::from_element(n, moving.len() + 1, 1.0);
+    for (column, &(k, mean, sd)) in moving.iter().enumerate() {
         for i in 0..n {
-            f[(i, k + 1)] = if sd > 0.0 { (c.at(i, k) - mean) / sd } else { 0.0 };
+            f[(i, column + 1)] = (c.at(i, k) - mean) / sd;
         }
     }
     f
@@ -393,7 +407,14 @@ fn joint_followed(
     c: &Configurations,
 ) -> Option<JointFollow> {
     let n = rot.len();
+    // A joint that never turns orders nothing (the poses' own order would stand in for it).
     (0..c.dim)
+        .filter(|&k| {
+            let (lo, hi) = (0..n).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
+                (lo.min(c.at(i, k)), hi.max(c.at(i, k)))
+            });
+            hi - lo > STILL * (1.0 + lo.abs())
+        })
         .map(|k| {
             let mut order: Vec<usize> = (0..n).collect();
             order.sort_by(|&a, &b| c.at(a, k).total_cmp(&c.at(b, k)));
@@ -477,7 +498,7 @@ pub fn systematic_error(
 /// poses interpolated at the camera's stamps, a clock offset's residue, a smooth trajectory's
 /// share of the camera error): on the repository's dense recordings (the ROS 2 bags, ethz-asl's
 /// simulation, kinhec's continuous recordings) the test flagged random noise. Not tested yet.
-fn dense_stream(poses: &[PosePair]) -> bool {
+pub(crate) fn dense_stream(poses: &[PosePair]) -> bool {
     let n = poses.len();
     if n < 2 * DENSE_STRIDE {
         return false;
@@ -501,6 +522,110 @@ fn dense_stream(poses: &[PosePair]) -> bool {
 const DENSE_STRIDE: usize = 8;
 /// See [`dense_stream`].
 const DENSE_SHARE: f64 = 0.35;
+
+/// The systematic-error test (`check::systematic`) of the poses `used` (`solved`: the poses,
+/// their setup and X), with the joint angles of the poses kept (`joints` by input index, `kept`,
+/// of `read_len` poses read) where the input gives every pose's. It waits while outliers are
+/// kept: they pull X, and a wrong X leaves residuals that follow the pose, so their own warning
+/// comes first and the test runs once they are left out.
+pub(crate) fn systematic_test(
+    (used, setup, x): (&[PosePair], Setup, &Transform),
+    (joints, kept, read_len): (&[Vec<f64>], &[usize], usize),
+    outliers_kept: bool,
+    solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
+    scene: f64,
+) -> Option<Systematic> {
+    if outliers_kept {
+        return None;
+    }
+    let joints: Option<Vec<Vec<f64>>> =
+        (joints.len() == read_len).then(|| kept.iter().map(|&i| joints[i].clone()).collect());
+    let mut found = systematic_error(used, setup, x, joints.as_deref(), solve_x)?;
+    found.weigh(scene);
+    // The halves count only where each determines X; checked where they would widen the answer.
+    if found.flagged
+        && found.halves.is_some()
+        && !halves_determine(used, setup, &found.order, solve_x, scene)
+    {
+        found.halves = None;
+    }
+    Some(found)
+}
+
+/// X's uncertainty where the test `found` flags an error that follows the configuration:
+/// resampled by workspace region, at least the halves' disagreement, `at_point` placed again
+/// at its point; with the caution that says so. Unflagged, the uncertainty as it was.
+pub(crate) fn widened_for_systematic(
+    uncertainty: Uncertainty,
+    found: Option<&Systematic>,
+    (used, setup, x): (&[PosePair], Setup, &Transform),
+    solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
+    (replicates, scene): (usize, f64),
+) -> (Uncertainty, Option<Warning>) {
+    let Some(found) = found.filter(|s| s.flagged) else {
+        return (uncertainty, None);
+    };
+    let regions = bootstrap_by_region(used, setup, x, solve_x, (replicates, scene), &found.order);
+    let wide = widen_by(uncertainty, &regions, found, x, scene);
+    let caution = systematic_warning(found, &wide);
+    (wide, Some(caution))
+}
+
+/// The uncertainty widened by a flagged test `found`: the region bootstrap's `regions` where it
+/// is the wider ([`wider`]), at least the halves' disagreement ([`covering`]), `at_point` placed
+/// again at its point under `x`. The accumulating estimator applies it to each estimate after a
+/// test, with the region bootstrap of that test.
+pub(crate) fn widen_by(
+    uncertainty: Uncertainty,
+    regions: &Uncertainty,
+    found: &Systematic,
+    x: &Transform,
+    scene: f64,
+) -> Uncertainty {
+    let at_point = uncertainty.at_point.clone();
+    let mut wide = covering(wider(uncertainty, regions.clone()), found, scene);
+    wide.at_point = at_point.map(|p| wide.place(x, p.point));
+    wide
+}
+
+/// The warning of an error that follows the configuration, with its effect on X.
+pub(crate) fn systematic_warning(found: &Systematic, regions: &Uncertainty) -> Warning {
+    Warning::SystematicError {
+        p_value: found.p_value,
+        halves_rotation_deg: found.halves.map(|h| h.rotation_deg),
+        halves_translation: found.halves.map(|h| h.translation),
+        rotation_sigma_deg: regions.rotation_deg,
+        translation_sigma: regions.translation,
+        joint: found.joint.map(|j| j.joint),
+    }
+}
+
+/// An uncertainty that covers what the halves of the workspace disagree by: each half's X is off
+/// by the systematic error as it weighs on that half, so half their distance is the least
+/// one-sigma an honest answer reports (`check::systematic::Halves`).
+pub(crate) fn covering(u: Uncertainty, found: &Systematic, scene: f64) -> Uncertainty {
+    match found.halves {
+        Some(h) => u.at_least(HALVES_SHARE * h.rotation_deg, HALVES_SHARE * h.translation, scene),
+        None => u,
+    }
+}
+
+/// The share of the halves' disagreement that [`covering`] takes as the least one-sigma.
+const HALVES_SHARE: f64 = 1.0;
+
+/// The region bootstrap's uncertainty where it is the wider (the sum of the two parts' ratios),
+/// else the ordinary one: a systematic error never narrows what the poses' own noise gives.
+pub(crate) fn wider(ordinary: Uncertainty, regions: Uncertainty) -> Uncertainty {
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 1.0 };
+    if ratio(regions.rotation_deg, ordinary.rotation_deg)
+        + ratio(regions.translation, ordinary.translation)
+        >= 2.0
+    {
+        regions
+    } else {
+        ordinary
+    }
+}
 
 #[cfg(test)]
 mod tests {
@@ -566,6 +691,23 @@ mod tests {
         // A SCARA rotates about one axis only: X's translation along it is free in each half.
         let scara = simulate_low_dof(&LowDofConfig { poses: 24, ..LowDofConfig::default() }, 7, 0);
         assert!(!halves_determine(&scara.poses, Setup::EyeInHand, &order, &all_pairs, 0.3));
+    }
+
+    #[test]
+    fn a_joint_that_never_turns_changes_nothing() {
+        for seed in 0..5 {
+            let (r, c) = case(40, 2.0, seed);
+            let with_still = Configurations {
+                values: c.values.chunks(2).flat_map(|q| [q[0], 0.04, q[1]]).collect(),
+                dim: 3,
+                kind: "joints",
+            };
+            let (a, b) = (test(&r, &c).unwrap(), test(&r, &with_still).unwrap());
+            assert_eq!(a.p_value, b.p_value, "{seed}");
+            assert_eq!(a.rotation_explained, b.rotation_explained, "{seed}");
+            assert!(b.rotation_explained > 0.0 || b.translation_explained > 0.0);
+            assert_eq!(b.joint.map(|j| j.joint), Some(1), "{seed}");
+        }
     }
 
     #[test]

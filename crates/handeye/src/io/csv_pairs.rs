@@ -217,19 +217,19 @@ impl<R: BufRead> CsvPairs<R> {
         let (camera_from_target, camera_degrees) = self.pose(&self.camera, line)?;
         self.degrees.add(true, robot_degrees);
         self.degrees.add(false, camera_degrees);
-        Ok(StampedPosePair {
+        Ok(StampedPosePair::new(
             line,
             stamp,
-            pose: PosePair {
+            PosePair {
                 base_from_gripper,
                 camera_from_target,
             },
-            written: Written {
+            Written {
                 robot: written_as(self.robot.inverted),
                 camera: written_as(self.camera.inverted),
                 frames: false,
             },
-        })
+        ))
     }
 
     fn number(&self, column: usize, field: &str, line: usize) -> Result<f64> {

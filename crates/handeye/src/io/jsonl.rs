@@ -113,6 +113,10 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
 /// stamp and transforms are all valid; `None` leaves the line to [`parse_record`], which reads
 /// every other line and names the problem of a bad one.
 fn fast_record(text: &str, line: usize, projections: &mut Projections) -> Option<StampedPosePair> {
+    // Joint angles are read by the full parser.
+    if text.contains("\"joints\"") {
+        return None;
+    }
     let scanned = scan(text)?;
     let stamp = scanned.stamp.map(check_stamp).transpose().ok()?;
     let read = |(numbers, inverted): (TransformNumbers, bool)| {
@@ -135,15 +139,15 @@ fn fast_record(text: &str, line: usize, projections: &mut Projections) -> Option
     let camera = read(scanned.camera)?;
     projections.add(&robot);
     projections.add(&camera);
-    Some(StampedPosePair {
+    Some(StampedPosePair::new(
         line,
         stamp,
-        pose: PosePair {
+        PosePair {
             base_from_gripper: robot.transform,
             camera_from_target: camera.transform,
         },
         written,
-    })
+    ))
 }
 
 /// Parses one JSON Lines record (line number `line` of `source`): exactly one of
@@ -219,19 +223,24 @@ fn parse_record(
     degrees.add(true, robot.degrees);
     degrees.add(false, camera.degrees);
     let (base_from_gripper, camera_from_target) = (robot.transform, camera.transform);
-    Ok(StampedPosePair {
+    let joints = match object.get("joints") {
+        None | Some(Value::Null) => Vec::new(),
+        Some(v) => joint_angles(v, source, line)?,
+    };
+    Ok(StampedPosePair::new(
         line,
         stamp,
-        pose: PosePair {
+        PosePair {
             base_from_gripper,
             camera_from_target,
         },
-        written: Written {
+        Written {
             robot: robot_written,
             camera: camera_written,
             frames: false,
         },
-    })
+    )
+    .with_joints(&joints))
 }
 
 /// The `joints` of every record of a JSON Lines pose file (radians, the robot's joint order), in
@@ -628,8 +637,10 @@ mod tests {
                 if !line.trim_start().starts_with('{') {
                     continue;
                 }
-                // Detections are read by their own pass, on the general path.
-                if !line.contains("\"detections\"") {
+                // Detections are read by their own pass, and joint angles by the general parser
+                // (a record keeps them), on the general path.
+                let general_only = line.contains("\"detections\"") || line.contains("\"joints\"");
+                if !general_only {
                     lines += 1;
                 }
                 let (mut p_fast, mut p_general) = (Projections::default(), Projections::default());
@@ -640,7 +651,7 @@ mod tests {
                     (&mut p_general, &mut DegreeAngles::default()),
                 );
                 if let Some(record) = fast_record(line, k + 1, &mut p_fast) {
-                    fast += usize::from(!line.contains("\"detections\""));
+                    fast += usize::from(!general_only);
                     assert_eq!(
                         Ok(record),
                         general.map_err(|e| e.to_string()),

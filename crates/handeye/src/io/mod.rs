@@ -136,6 +136,39 @@ pub struct StampedPosePair {
     pub pose: PosePair,
     /// The directions in which the record wrote its two poses.
     pub written: Written,
+    /// The robot's joint angles at the pose (radians, its joint order), where the record gives
+    /// them (JSON Lines `joints`, a ROS 2 recording's `/joint_states`): the first `joint_count`
+    /// numbers (at most 16; a record of more joints keeps none here). Inline, so that a record
+    /// stays `Copy` and a stream allocates nothing for it.
+    pub joints: [f64; RECORD_JOINTS],
+    /// How many of `joints` the record gives (0: none).
+    pub joint_count: usize,
+}
+
+/// The most joint angles a [`StampedPosePair`] holds.
+pub(crate) const RECORD_JOINTS: usize = 16;
+
+impl StampedPosePair {
+    /// A record without joint angles.
+    pub(crate) fn new(line: usize, stamp: Option<f64>, pose: PosePair, written: Written) -> Self {
+        Self {
+            line,
+            stamp,
+            pose,
+            written,
+            joints: [0.0; RECORD_JOINTS],
+            joint_count: 0,
+        }
+    }
+
+    /// The same with `joints` (none kept when there are more than [`RECORD_JOINTS`]).
+    pub(crate) fn with_joints(mut self, joints: &[f64]) -> Self {
+        if joints.len() <= RECORD_JOINTS {
+            self.joints[..joints.len()].copy_from_slice(joints);
+            self.joint_count = joints.len();
+        }
+        self
+    }
 }
 
 /// A whole pose file.

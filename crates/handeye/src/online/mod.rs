@@ -439,6 +439,29 @@ impl OnlineCalibrator {
     /// With `Unit::Auto`, the first pose whose size fits a unit fixes it ([`Unit::infer`]);
     /// until then `params.d_max` is in force ([`OnlineCalibrator::unit`] tells which).
     pub fn push(&mut self, pose: &PosePair) -> Result<Vec<Event>> {
+        self.push_joints(pose, None)
+    }
+
+    /// [`OnlineCalibrator::push`] with the robot's joint angles at the pose (radians, every pose
+    /// the same joints): the accumulating estimator's systematic-error test orders the poses by
+    /// them and names the joint whose angle the residual follows
+    /// (`track::Tracker::push_with_joints`); the paper's estimator does not use them. A
+    /// joint angle that is not finite is refused with an error and leaves the state untouched.
+    pub fn push_with_joints(&mut self, pose: &PosePair, joints: &[f64]) -> Result<Vec<Event>> {
+        if let Some(k) = joints.iter().position(|q| !q.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "joints",
+                message: format!(
+                    "joint {} is {}: every joint angle must be a finite number of radians",
+                    k + 1,
+                    joints[k]
+                ),
+            });
+        }
+        self.push_joints(pose, Some(joints))
+    }
+
+    fn push_joints(&mut self, pose: &PosePair, joints: Option<&[f64]>) -> Result<Vec<Event>> {
         check_finite(pose)?;
         if self.poses == 0 || self.unit == Unit::Auto {
             self.fix_unit(pose);
@@ -452,7 +475,10 @@ impl OnlineCalibrator {
         }
         self.previous = Some(hand);
         if let Some(tracker) = &mut self.tracker {
-            self.step = tracker.push(pose);
+            self.step = match joints {
+                Some(q) => tracker.push_with_joints(pose, q),
+                None => tracker.push(pose),
+            };
             if let Some(e) = tracker.refusal() {
                 return Err(e);
             }

@@ -174,7 +174,7 @@ pub enum Reason {
 }
 
 /// A reported estimate.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Report {
     /// Number of this report (1, 2, …).
     pub number: usize,
@@ -191,6 +191,16 @@ pub struct Report {
     /// the gripper than the target from the base, eye-in-hand): the data fit exactly as well with
     /// both inputs inverted, X and the target swapped.
     pub implausible: bool,
+    /// The last systematic-error test of the segment's poses (as the batch report's
+    /// `systematic`, `check::systematic`): run at a report once the segment has doubled since
+    /// the last one, and at the end. `None` before the segment has 12 poses.
+    #[serde(default)]
+    pub systematic: Option<crate::check::systematic::Systematic>,
+    /// The cautions on the estimate, as the batch report's (`systematic_error` when the test
+    /// flags an error that follows the configuration: the uncertainty is then widened as the
+    /// batch widens it).
+    #[serde(default)]
+    pub warnings: Vec<crate::model::warning::Warning>,
 }
 
 /// What one pose did.
@@ -484,6 +494,18 @@ impl Report {
         if let Some(w) = &self.weak {
             out.insert("weak".into(), w.to_string().into());
         }
+        // A flagged systematic error: its finding and the warning, as the batch report lists
+        // them (an unflagged test adds nothing to the line).
+        if let Some(s) = self.systematic.as_ref().filter(|s| s.flagged) {
+            out.insert("systematic".into(), serde_json::json!(s));
+        }
+        if !self.warnings.is_empty() {
+            let described =
+                crate::model::warning::described(&self.warnings, serde_json::value::Serializer);
+            if let Ok(w) = described {
+                out.insert("warnings".into(), w);
+            }
+        }
         if self.implausible {
             out.insert(
                 "warning".into(),
@@ -498,14 +520,16 @@ impl Report {
 }
 
 impl Report {
-    /// The verdict every report carries (SPEC sec. 9): `questionable` for a weak final report or
-    /// sizes the setup makes unlikely, else `good` (an estimate is reported only once determined).
+    /// The verdict every report carries (SPEC sec. 9): `questionable` for a weak final report,
+    /// sizes the setup makes unlikely or a warning (a systematic error), else `good` (an estimate
+    /// is reported only once determined).
     pub fn verdict(&self) -> Assessment {
         let pixels = self
             .estimate
             .reprojection
+            .as_ref()
             .is_some_and(|p| p.verdict == Assessment::Questionable);
-        if self.weak.is_some() || self.implausible || pixels {
+        if self.weak.is_some() || self.implausible || pixels || !self.warnings.is_empty() {
             Assessment::Questionable
         } else {
             Assessment::Good

@@ -32,6 +32,7 @@
 
 mod events;
 mod segment;
+mod systematic;
 
 use std::collections::VecDeque;
 
@@ -54,6 +55,7 @@ pub use events::{
 pub use events::target_frame;
 use crate::check::uncertainty::point_sigma;
 use segment::{Segment, Snapshot};
+use systematic::{JointRing, Watch};
 
 /// Settings of the tracker; `Default` gives the values on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -192,6 +194,9 @@ struct Challenger {
     elevated: usize,
     /// Elevated poses kept out of the incumbent meanwhile, with their numbers and statistics.
     pending: Vec<(usize, PosePair, f64)>,
+    /// The sample of its poses for the systematic-error test, kept on when it is confirmed.
+    #[serde(default)]
+    watch: Watch,
 }
 
 /// The accumulating estimator on a stream (see the module documentation).
@@ -240,6 +245,12 @@ pub struct Tracker {
     /// The priors on X's translation for a low-DOF robot ([`Tracker::with_priors`]).
     #[serde(default)]
     priors: Option<TrackPriors>,
+    /// The incumbent's sample of accepted poses and its last systematic-error test (issue 29).
+    #[serde(default)]
+    watch: Watch,
+    /// The joint angles of the recent poses, where they were given ([`Tracker::push_with_joints`]).
+    #[serde(default)]
+    joints: JointRing,
 }
 
 /// A tracker's priors: as given, and in the poses' length unit once the first poses tell it (or
@@ -281,6 +292,8 @@ impl Tracker {
             held_out: 0,
             changes: 0,
             priors: None,
+            watch: Watch::default(),
+            joints: JointRing::default(),
         }
     }
 
@@ -368,7 +381,7 @@ impl Tracker {
     /// have since been found misread. `None` when there is none (see [`Tracker::pending`]): an
     /// estimate from before a change is not the current X.
     pub fn last_report(&self) -> Option<Report> {
-        self.last.filter(|_| self.misread.is_none())
+        self.last.clone().filter(|_| self.misread.is_none())
     }
 
     /// Poses pushed so far.
@@ -417,6 +430,15 @@ impl Tracker {
         self.incumbent
             .pending(self.estimate().as_ref(), &self.options)
             .or((!self.readings_judged && !self.readings_moot()).then_some(unjudged))
+    }
+
+    /// Takes the next pose with the robot's joint angles at it (radians, in the robot's joint
+    /// order, every pose the same joints): the systematic-error test then orders the poses by
+    /// their joint angles and names the joint whose angle the residual follows, as the batch
+    /// does with joints given. Otherwise as [`Tracker::push`].
+    pub fn push_with_joints(&mut self, pose: &PosePair, joints: &[f64]) -> Step {
+        self.joints.put(self.poses + 1, joints);
+        self.push(pose)
     }
 
     /// Takes the next pose (module documentation).
@@ -528,6 +550,7 @@ impl Tracker {
     /// keeps; returns the ones it holds out.
     fn add(&mut self, pose: &PosePair, number: usize) -> Vec<(usize, HeldOut)> {
         self.incumbent.add(pose);
+        self.watch.add(pose, self.joints.get(number));
         let Some(warmup) = &mut self.warmup else {
             return Vec::new();
         };
@@ -549,6 +572,8 @@ impl Tracker {
         let mut held = Vec::new();
         if !found.poses.is_empty() {
             let mut segment = Segment::new(self.setup, self.incumbent.since, self.segment_priors());
+            let mut watch = Watch::default();
+            let ring = &self.joints;
             let mut gaps = found.poses.iter().peekable();
             let mut k = 0;
             warmup.retain(|(n, p)| {
@@ -567,11 +592,13 @@ impl Tracker {
                     }
                     None => {
                         segment.add(p);
+                        watch.add(p, ring.get(*n));
                         true
                     }
                 }
             });
             self.incumbent = segment;
+            self.watch = watch;
             self.held_out += held.len();
             self.current = self.incumbent.refresh(&self.options);
         }
@@ -691,10 +718,12 @@ impl Tracker {
                 poses: 0,
                 elevated: 0,
                 pending: Vec::new(),
+                watch: Watch::default(),
             });
         }
         if let Some(c) = &mut self.challenger {
             c.segment.add(pose);
+            c.watch.add(pose, self.joints.get(number));
             c.current = c.segment.refresh(&options);
             c.poses += 1;
             c.elevated += usize::from(elevated);
@@ -750,6 +779,7 @@ impl Tracker {
                 .norm(),
         };
         self.incumbent = c.segment;
+        self.watch = c.watch;
         self.current = Some(snapshot);
         self.warmup = None;
         self.last_report = None;
@@ -827,11 +857,17 @@ impl Tracker {
             estimate.at_point = Some((point, point_sigma(&c, &estimate.x, point)));
         }
         self.reports += 1;
+        // The schedule is the estimate's own (its uncertainty before any widening).
         self.last_report = Some((
             self.poses,
             estimate.uncertainty_rotation_deg.unwrap_or(f64::INFINITY),
             estimate.uncertainty_translation.unwrap_or(f64::INFINITY),
         ));
+        // The systematic-error test, when due (module `systematic`), and its widening.
+        if self.watch.due(reason == Reason::End) {
+            self.watch.test(self.setup, &estimate.x);
+        }
+        let warnings: Vec<_> = self.watch.widen(&mut estimate).into_iter().collect();
         let report = Report {
             number: self.reports,
             pose: self.poses,
@@ -839,8 +875,10 @@ impl Tracker {
             estimate,
             weak: None,
             implausible: self.implausible,
+            systematic: self.watch.found.as_ref().map(|f| f.systematic.clone()),
+            warnings,
         };
-        self.last = Some(report);
+        self.last = Some(report.clone());
         report
     }
 }

@@ -93,6 +93,15 @@ pub(super) fn read_bag(
         repeated: pairs.dropped_repeated,
         robot_repeated: pairs.robot_repeated,
     });
+    if let Some(topic) = &pairs.joints.topic {
+        notes.add(Note::BagJoints {
+            path: path.display().to_string(),
+            topic: topic.clone(),
+            joints: pairs.joints.names.clone(),
+            used: !pairs.joints.angles.is_empty(),
+            skipped: pairs.joints.skipped.clone(),
+        });
+    }
     if let Some(mount) = &pairs.camera_mount {
         notes.add(Note::CameraMount {
             path: path.display().to_string(),
@@ -111,6 +120,6 @@ pub(super) fn read_bag(
         camera_mount: pairs.camera_mount,
         notes: Vec::new(),
         written: Written::FRAMES,
-        joints: Vec::new(),
+        joints: pairs.joints.angles,
     })
 }

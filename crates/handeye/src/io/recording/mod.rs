@@ -192,11 +192,13 @@ impl Recording {
             .iter()
             .zip(&self.lines)
             .zip(&self.stamps)
-            .map(|((&pose, &line), &stamp)| StampedPosePair {
-                line,
-                stamp,
-                pose,
-                written: self.written,
+            .enumerate()
+            .map(|(k, ((&pose, &line), &stamp))| {
+                let record = StampedPosePair::new(line, stamp, pose, self.written);
+                match self.joints.get(k) {
+                    Some(q) => record.with_joints(q),
+                    None => record,
+                }
             })
             .collect()
     }

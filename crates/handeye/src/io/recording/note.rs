@@ -96,6 +96,20 @@ pub enum Note {
         /// Where tf places the camera frame.
         mount: CameraMount,
     },
+    /// The joint angles a ROS 2 recording gave (a `sensor_msgs/msg/JointState` topic), or why
+    /// they are not used.
+    BagJoints {
+        /// The recording.
+        path: String,
+        /// The topic read.
+        topic: String,
+        /// The joints, in the order of the angles.
+        joints: Vec<String>,
+        /// Whether every pose pair has its angles (else none are used).
+        used: bool,
+        /// Messages skipped and why (topic and message number), and why the angles are not used.
+        skipped: Vec<String>,
+    },
 }
 
 impl fmt::Display for Note {
@@ -144,6 +158,28 @@ impl fmt::Display for Note {
             ),
             Self::BagPairs { .. } => self.fmt_bag_pairs(f),
             Self::CameraMount { path, mount } => mount.fmt_note(path, f),
+            Self::BagJoints {
+                path,
+                topic,
+                joints,
+                used,
+                skipped,
+            } => {
+                if *used {
+                    write!(
+                        f,
+                        "{path}: joint angles from {topic} at every pose pair ({} joint(s): {})",
+                        joints.len(),
+                        joints.join(", ")
+                    )?;
+                } else {
+                    write!(f, "{path}: joint angles of {topic} not used")?;
+                }
+                for why in skipped {
+                    write!(f, "; {why}")?;
+                }
+                Ok(())
+            }
         }
     }
 }

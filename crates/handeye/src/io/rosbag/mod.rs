@@ -17,6 +17,7 @@
 //! gripper; the setup is applied afterwards). [`inspect_bag`] lists the topics and the tf tree.
 
 mod cdr;
+mod joints;
 mod mount;
 mod msg;
 mod pairs;
@@ -165,12 +166,30 @@ struct Observation {
     frame_from_target: Transform,
 }
 
+/// A `sensor_msgs/msg/JointState` message of a joint-state topic ([`is_joints_topic`]), or why
+/// it could not be read.
+struct JointSample {
+    topic: String,
+    index: usize,
+    decoded: std::result::Result<msg::JointState, String>,
+}
+
 /// What a recording holds for a calibration.
 struct Loaded {
     tf: TfBuffer,
     topics: Topics,
     target: Vec<Observation>,
+    joints: Vec<JointSample>,
     messages: usize,
+}
+
+/// The topic of the robot's joint states (`robot_state_publisher`'s input).
+pub(crate) const JOINT_STATES_TOPIC: &str = "/joint_states";
+
+/// Whether the joint angles are read from `topic`: `/joint_states`, or a namespaced one
+/// (`/arm/joint_states`).
+fn is_joints_topic(topic: &str) -> bool {
+    topic == JOINT_STATES_TOPIC || topic.ends_with(JOINT_STATES_TOPIC)
 }
 
 fn at(topic: &str, index: usize) -> Option<String> {
@@ -185,11 +204,16 @@ fn transform_of(raw: &RawPose) -> std::result::Result<Transform, String> {
 fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
     let mut tf = TfBuffer::default();
     let mut target = Vec::new();
+    let mut joints = Vec::new();
     let mut topics = Topics::default();
     let mut index: HashMap<String, usize> = HashMap::new();
     let mut messages = 0usize;
-    let wanted =
-        |topic: &str| topic == TF_TOPIC || topic == TF_STATIC_TOPIC || Some(topic) == target_topic;
+    let wanted = |topic: &str| {
+        topic == TF_TOPIC
+            || topic == TF_STATIC_TOPIC
+            || Some(topic) == target_topic
+            || is_joints_topic(topic)
+    };
     for file in &bag.files {
         let mut on_message = |m: Message<'_>| -> Result<()> {
             let k = index.entry(m.topic.to_string()).or_insert(0);
@@ -227,6 +251,18 @@ fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
                         is_static,
                     )
                     .map_err(|e| err(format!("{name}: {e}")))?;
+                }
+                return Ok(());
+            }
+            // The joint angles are an extra: a message that does not decode is skipped, and told.
+            if is_joints_topic(m.topic) && Some(m.topic) != target_topic {
+                if m.msg_type == msg::JOINT_STATE {
+                    joints.push(JointSample {
+                        topic: m.topic.to_string(),
+                        index: k,
+                        decoded: msg::decode_joint_state(m.data)
+                            .map_err(|e| format!("cannot decode `{}`: {e}", msg::JOINT_STATE)),
+                    });
                 }
                 return Ok(());
             }
@@ -272,6 +308,7 @@ fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
         tf,
         topics,
         target,
+        joints,
         messages,
     })
 }

@@ -1,5 +1,6 @@
 //! The ROS 2 messages a calibration needs, decoded from CDR: `tf2_msgs/msg/TFMessage`,
-//! `geometry_msgs/msg/TransformStamped` and `geometry_msgs/msg/PoseStamped`.
+//! `geometry_msgs/msg/TransformStamped` and `geometry_msgs/msg/PoseStamped`, and the joint angles
+//! of `sensor_msgs/msg/JointState`.
 
 use super::cdr::{CdrError, CdrReader};
 
@@ -9,6 +10,9 @@ pub(crate) const TF_MESSAGE: &str = "tf2_msgs/msg/TFMessage";
 pub(crate) const TRANSFORM_STAMPED: &str = "geometry_msgs/msg/TransformStamped";
 /// `geometry_msgs/msg/PoseStamped`.
 pub(crate) const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
+
+/// `sensor_msgs/msg/JointState`.
+pub(crate) const JOINT_STATE: &str = "sensor_msgs/msg/JointState";
 
 /// Nanoseconds in a second.
 pub(crate) const NS: i64 = 1_000_000_000;
@@ -114,6 +118,35 @@ pub(crate) fn decode_pose_stamped(bytes: &[u8]) -> Result<PoseStamped, CdrError>
     let header = header(&mut r, "header")?;
     let pose = raw_pose(&mut r, "pose", ["position", "orientation"])?;
     Ok(PoseStamped { header, pose })
+}
+
+/// `sensor_msgs/msg/JointState`: the joints' names and positions (velocity and effort are not
+/// read).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct JointState {
+    pub header: Header,
+    pub name: Vec<String>,
+    pub position: Vec<f64>,
+}
+
+/// Decodes a `sensor_msgs/msg/JointState` (header, `name`, `position`; the rest is left unread).
+pub(crate) fn decode_joint_state(bytes: &[u8]) -> Result<JointState, CdrError> {
+    let mut r = CdrReader::new(bytes)?;
+    let header = header(&mut r, "header")?;
+    // A string takes at least its length and its NUL: 5 bytes.
+    let n = r.sequence_len("name", 5)?;
+    let name = (0..n)
+        .map(|k| r.string(&format!("name[{k}]")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let m = r.sequence_len("position", 8)?;
+    let position = (0..m)
+        .map(|k| r.f64(&format!("position[{k}]")))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(JointState {
+        header,
+        name,
+        position,
+    })
 }
 
 #[cfg(test)]

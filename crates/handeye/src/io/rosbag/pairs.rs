@@ -80,6 +80,9 @@ pub struct BagPairs {
     /// Where tf places the camera frame, when it gives it a parent (an optical frame under
     /// `camera_link`): X is then published for the root of the camera's subtree.
     pub camera_mount: Option<CameraMount>,
+    /// The joint angles at each pair, from a `sensor_msgs/msg/JointState` topic
+    /// (`/joint_states`), where every pair has them.
+    pub(crate) joints: super::joints::BagJoints,
 }
 
 impl BagPairs {
@@ -346,28 +349,33 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         robot_stream,
         camera_stream,
         camera_mount: camera_mount(tf, &camera, [&base, &gripper], options.setup),
+        joints: super::joints::BagJoints::default(),
     };
+    // The robot clock's stamp of each pair kept, for its joint angles.
+    let mut robot_stamps_ns = Vec::new();
     for (index, stamp_ns, camera_from_target) in observations {
         let robot = tf.lookup(&robot_path, stamp_ns.saturating_sub(offset_ns), max_gap_ns);
         match (robot, camera_from_target) {
             (Lookup::Pose(base_from_gripper), Lookup::Pose(camera_from_target)) => {
                 let stamp = seconds(stamp_ns);
-                out.pairs.push(StampedPosePair {
-                    line: index,
-                    stamp: Some(stamp),
-                    pose: PosePair {
+                out.pairs.push(StampedPosePair::new(
+                    index,
+                    Some(stamp),
+                    PosePair {
                         base_from_gripper,
                         camera_from_target,
                     },
-                    written: Written::NAMED,
-                });
+                    Written::NAMED,
+                ));
                 out.names
                     .push(format!("{target_source} #{index} (t = {stamp:.3} s)"));
+                robot_stamps_ns.push(stamp_ns.saturating_sub(offset_ns));
             }
             (Lookup::Gap, _) | (_, Lookup::Gap) => out.dropped_gap += 1,
             _ => out.dropped_outside += 1,
         }
     }
+    out.joints = super::joints::joints_at(&loaded.joints, &robot_stamps_ns, max_gap_ns);
     if out.pairs.len() < 2 {
         return Err(whole(format!(
             "{} observation(s) of the target ({target_source}), {} within the robot's transforms ({} outside them, {} in their gaps longer than {max_gap} s{}): at least 2 pose pairs are needed",
