@@ -411,7 +411,12 @@ def test_refined_intrinsics_are_one_result_in_every_face(robot_world):
     for name, value in true.items():
         assert abs(k[name] - value) <= 3 * k["sigma"][name], (name, k[name], k["sigma"][name])
     assert k["held"] == ["k3"] and k["sigma"]["distortion"][4] is None
-    plain = handeye.calibrate_on_pixels(path, wrong, setup="eye-in-hand")
+    # Without the flag the wrong intrinsics do not fit (refused), the right ones give no
+    # `intrinsics`.
+    with pytest.raises(ValueError, match="the intrinsics are this camera's"):
+        handeye.calibrate_on_pixels(path, wrong, setup="eye-in-hand")
+    right = TESTDATA / "pixels" / "board_span_eih.intrinsics.yml"
+    plain = handeye.calibrate_on_pixels(path, right, setup="eye-in-hand")
     assert "intrinsics" not in plain["reprojection"]
 
 
