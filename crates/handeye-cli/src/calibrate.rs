@@ -102,6 +102,40 @@ pub struct Args {
     /// (`camera_matrix`, `distortion_coefficients`) or a ROS `camera_info` YAML (`k`, `d`).
     #[arg(long, value_name = "FILE")]
     intrinsics: Option<std::path::PathBuf>,
+    /// With --method reprojection: refine the camera's intrinsics with X (fx, fy, cx, cy, k1, k2,
+    /// p1, p2; k3 kept as given), reported with their sigmas (`reprojection.intrinsics`) and
+    /// accounted for in X's uncertainty. Refused (exit 2) when the frames do not determine them:
+    /// the detections must reach the image's corners and the target tilt about both image axes,
+    /// over more than 20 frames.
+    #[arg(long)]
+    refine_intrinsics: bool,
+}
+
+/// Refuses the flags of the calibration on the pixels without `--method reprojection` (exit 2).
+fn pixels_only(args: &Args) -> Result<()> {
+    for (flag, given, words) in [
+        (
+            "intrinsics",
+            args.intrinsics.is_some(),
+            "--intrinsics is read by",
+        ),
+        (
+            "refine-intrinsics",
+            args.refine_intrinsics,
+            "--refine-intrinsics refines the intrinsics on the pixels: it needs",
+        ),
+    ] {
+        if given {
+            return Err(Error::InvalidParameter {
+                name: flag,
+                message: format!(
+                    "{words} --method reprojection (calibration on the pixels of the detections)"
+                ),
+            }
+            .into());
+        }
+    }
+    Ok(())
 }
 
 /// The names of `--method`: the hand–eye methods and the robot-world ones, each once.
@@ -121,13 +155,7 @@ pub fn run(args: Args) -> Result<()> {
     if options.method == Method::Reprojection {
         return run_pixels(&args, options);
     }
-    if args.intrinsics.is_some() {
-        return Err(Error::InvalidParameter {
-            name: "intrinsics",
-            message: "--intrinsics is read by --method reprojection (calibration on the pixels of the detections)".into(),
-        }
-        .into());
-    }
+    pixels_only(&args)?;
     let setup = args.input.setup();
     // The frame names and the name are checked before the input is read, and so is the report's
     // path.
@@ -352,6 +380,7 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         setup,
         &Options {
             pose_names: names.clone(),
+            refine_intrinsics: args.refine_intrinsics,
             ..options
         },
     ) {
@@ -419,13 +448,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
     if method == RobotWorldMethod::Reprojection {
         return run_robot_world_on_pixels(args);
     }
-    if args.intrinsics.is_some() {
-        return Err(Error::InvalidParameter {
-            name: "intrinsics",
-            message: "--intrinsics is read by --method reprojection (calibration on the pixels of the detections)".into(),
-        }
-        .into());
-    }
+    pixels_only(args)?;
     let (fix, replicates) = (args.fix.unwrap_or_default(), args.bootstrap);
     let setup = args.input.setup();
     // The frame names are checked before the input is read.
@@ -458,6 +481,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             point: args.point,
             joints: recording.joints,
             priors: args.prior.clone(),
+            refine_intrinsics: false,
         },
     ) {
         Ok(report) => report,
@@ -505,6 +529,7 @@ fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
             pose_names: names.clone(),
             priors: args.prior.clone(),
             reject_outliers: args.reject_outliers,
+            refine_intrinsics: args.refine_intrinsics,
             ..RobotWorldOptions::default()
         },
     ) {

@@ -789,6 +789,39 @@ fn reprojection_lines(s: &mut String, p: &handeye::ReprojectionSummary) {
         ))
     );
     let _ = writeln!(s, "  readings checked {}", p.reading_check);
+    if let Some(k) = &p.intrinsics {
+        let g = &k.sigma;
+        let d = &k.distortion;
+        let sd = |i: usize| g.distortion[i].map_or("held".to_string(), |v| format!("{v:.2e}"));
+        let _ = writeln!(
+            s,
+            "Intrinsics refined (± one sigma): fx {:.2} ± {:.2}, fy {:.2} ± {:.2}, cx {:.2} ± {:.2}, cy {:.2} ± {:.2} px",
+            k.fx, g.fx, k.fy, g.fy, k.cx, g.cx, k.cy, g.cy
+        );
+        let _ = writeln!(
+            s,
+            "  k1 {:.5} ± {}, k2 {:.5} ± {}, p1 {:.6} ± {}, p2 {:.6} ± {}, k3 {:.5} ({})",
+            d[0],
+            sd(0),
+            d[1],
+            sd(1),
+            d[2],
+            sd(2),
+            d[3],
+            sd(3),
+            d[4],
+            if k.held.iter().any(|h| h == "k3") {
+                "held as given".to_string()
+            } else {
+                sd(4)
+            }
+        );
+        let _ = writeln!(
+            s,
+            "  determined by: {} of 4 image corner cells reached, tilt {:.1}° (RMS) about the weaker image axis",
+            k.corner_cells, k.tilt_deg
+        );
+    }
 }
 
 /// The tf frames of the robot-world target pose: `base_from_target` (eye-in-hand) or

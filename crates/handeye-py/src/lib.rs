@@ -521,7 +521,8 @@ fn robot_world_report<'py>(
 /// `handeye calibrate FILE --method reprojection --intrinsics I [--robot-world]` prints; the
 /// records named `file:line` as there.
 #[pyfunction]
-#[pyo3(signature = (path, intrinsics, setup="eye-in-hand", robot_world=false, fix=None, point=None))]
+#[pyo3(signature = (path, intrinsics, setup="eye-in-hand", robot_world=false, fix=None, point=None, refine_intrinsics=false))]
+#[allow(clippy::too_many_arguments)]
 fn pixels_report(
     py: Python<'_>,
     path: PathBuf,
@@ -530,6 +531,7 @@ fn pixels_report(
     robot_world: bool,
     fix: Option<&str>,
     point: Option<[f64; 3]>,
+    refine_intrinsics: bool,
 ) -> PyResult<String> {
     let setup = parse_setup(setup)?;
     let fix = parse_fix(fix)?;
@@ -547,6 +549,7 @@ fn pixels_report(
             fix,
             point,
             pose_names,
+            refine_intrinsics,
             ..Default::default()
         };
         let report = py
@@ -563,6 +566,7 @@ fn pixels_report(
         fix,
         point,
         pose_names,
+        refine_intrinsics,
         ..Default::default()
     };
     let report = py

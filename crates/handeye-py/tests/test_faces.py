@@ -387,6 +387,48 @@ def test_the_pixel_calibration_is_one_result_in_every_face(name, setup, robot_wo
     assert py == cli
 
 
+@pytest.mark.parametrize("robot_world", [False, True], ids=["hand-eye", "robot-world"])
+def test_refined_intrinsics_are_one_result_in_every_face(robot_world):
+    """`calibrate_on_pixels(..., refine_intrinsics=True)` prints what `--refine-intrinsics` prints,
+    and from the wrong intrinsics of `board_span_eih` the refined ones are within 3 sigma of the
+    true ones, k3 held (its sigma null)."""
+    assert CLI.exists(), f"build the command line first ({CLI}): cargo build --release"
+    path = TESTDATA / "pixels" / "board_span_eih.jsonl"
+    wrong = TESTDATA / "pixels" / "board_span_eih.wrong.intrinsics.yml"
+    args = [str(CLI), "calibrate", str(path), "--method", "reprojection", "--refine-intrinsics",
+            "--intrinsics", str(wrong), "--setup", "eye-in-hand", "--output", "json"]
+    if robot_world:
+        args.append("--robot-world")
+    cli = json.loads(subprocess.run(args, capture_output=True, text=True, check=True).stdout)
+    py = handeye.calibrate_on_pixels(path, wrong, setup="eye-in-hand", robot_world=robot_world,
+                                     refine_intrinsics=True)
+    py["matrix"] = py["matrix"].tolist()
+    if robot_world:
+        py["target"]["matrix"] = py["target"]["matrix"].tolist()
+    assert py == cli
+    k = py["reprojection"]["intrinsics"]
+    true = {"fx": 905.0, "fy": 903.5, "cx": 641.2, "cy": 358.7}
+    for name, value in true.items():
+        assert abs(k[name] - value) <= 3 * k["sigma"][name], (name, k[name], k["sigma"][name])
+    assert k["held"] == ["k3"] and k["sigma"]["distortion"][4] is None
+    # Without the flag the wrong intrinsics do not fit (refused), the right ones give no
+    # `intrinsics`.
+    with pytest.raises(ValueError, match="the intrinsics are this camera's"):
+        handeye.calibrate_on_pixels(path, wrong, setup="eye-in-hand")
+    right = TESTDATA / "pixels" / "board_span_eih.intrinsics.yml"
+    plain = handeye.calibrate_on_pixels(path, right, setup="eye-in-hand")
+    assert "intrinsics" not in plain["reprojection"]
+
+
+def test_refining_the_intrinsics_of_one_tag_is_refused():
+    """A single tag's 4 corners do not determine the intrinsics: a ValueError saying to use a
+    board, as the command line refuses it (exit 2)."""
+    path = TESTDATA / "pixels" / "tag_eih.jsonl"
+    intrinsics = TESTDATA / "pixels" / "tag_eih.intrinsics.yml"
+    with pytest.raises(ValueError, match="use a board"):
+        handeye.calibrate_on_pixels(path, intrinsics, refine_intrinsics=True)
+
+
 def test_the_pixel_calibration_refuses_inverted_robot_poses(tmp_path):
     """Robot poses that fit the pixels far better inverted: a ValueError naming the reading, as
     the command line refuses them."""

@@ -1,7 +1,8 @@
 //! The solve on the pixels (`solve::reprojection`: PnP of every frame, the start, both
 //! Levenberg–Marquardt passes and the covariance) on 25, 50 and 100 frames of a 9×6 board (54
 //! corners each), beside the pose-based `refine` over every pair of the same frames' PnP poses,
-//! measured in the same run (fixed seeds).
+//! measured in the same run (fixed seeds); and on frames that span the image, the solve with the
+//! intrinsics refined (`refine_intrinsics`) beside the one with them fixed.
 //!
 //! `cargo bench -p handeye --bench reprojection`
 
@@ -61,6 +62,30 @@ fn on_pixels(c: &mut Criterion) {
                 .unwrap()
             })
         });
+        // The intrinsics refined too (`--refine-intrinsics`), on frames that span the image; the
+        // fixed-intrinsics solve of the same frames beside it for the ratio.
+        let spanning = simulate_pixels(
+            &PixelSimConfig {
+                frames,
+                ..PixelSimConfig::board().spanning()
+            },
+            7,
+        );
+        for (name, refine) in [
+            ("spanning_fixed", false),
+            ("spanning_refine_intrinsics", true),
+        ] {
+            let options = PixelOptions {
+                refine_intrinsics: refine,
+                ..PixelOptions::default()
+            };
+            group.bench_with_input(BenchmarkId::new(name, frames), &spanning, |b, sim| {
+                b.iter(|| {
+                    reprojection(black_box(&sim.frames), &sim.intrinsics, sim.setup, &options)
+                        .unwrap()
+                })
+            });
+        }
         group.bench_with_input(BenchmarkId::new("refine_poses", frames), &poses, |b, p| {
             b.iter(|| solve(Method::Refine, &AllPairs::new(black_box(p), sim.setup)).unwrap())
         });

@@ -5,7 +5,11 @@
 //! PnP pose (the smaller-residual pose of the planar ambiguity: flips included) and 3 corners
 //! mis-detected. `board_eth`: a 9×6 board of 25 mm squares at 0.35–0.6 m, eye-to-hand, seed 2,
 //! detections only. Both: 30 frames, 1280×720 intrinsics with distortion, pixel noise 0.5–1 px,
-//! robot noise 0.2 mm / 0.2 mrad; metres.
+//! robot noise 0.2 mm / 0.2 mrad; metres. `board_span_eih`: the board eye-in-hand, seed 3, its
+//! centre anywhere in the central 75 % of the image (`PixelSimConfig::spanning`: frames that reach
+//! the image's corners), detections only, with `board_span_eih.wrong.intrinsics.yml` beside the
+//! true intrinsics: fx 2.5 % long, fy 2.5 % short, cx 8 px and cy −6 px off, k1 off by 0.04 (for
+//! `--refine-intrinsics`).
 
 use std::fmt::Write as _;
 
@@ -48,6 +52,12 @@ fn main() -> std::io::Result<()> {
             "board_eth",
             PixelSimConfig::board().with_setup(Setup::EyeToHand),
             2,
+            false,
+        ),
+        (
+            "board_span_eih",
+            PixelSimConfig::board().spanning(),
+            3,
             false,
         ),
     ];
@@ -93,6 +103,15 @@ fn main() -> std::io::Result<()> {
             format!("{dir}/{name}.intrinsics.yml"),
             yaml(&sim.intrinsics),
         )?;
+        if name == "board_span_eih" {
+            let mut wrong = sim.intrinsics;
+            wrong.fx *= 1.025;
+            wrong.fy *= 0.975;
+            wrong.cx += 8.0;
+            wrong.cy -= 6.0;
+            wrong.distortion[0] += 0.04;
+            std::fs::write(format!("{dir}/{name}.wrong.intrinsics.yml"), yaml(&wrong))?;
+        }
         let (x_name, y_name) = match sim.setup {
             Setup::EyeInHand => ("gripper_from_camera", "base_from_target"),
             Setup::EyeToHand => ("base_from_camera", "gripper_from_target"),

@@ -144,7 +144,7 @@ pub use model::rotation::{RotationConvention, Rotations};
 pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.
 pub use solve::motions::{AllPairs, MotionSource};
-pub use solve::reprojection::planar_poses;
+pub use solve::reprojection::{IntrinsicsSigma, RefinedIntrinsics, planar_poses};
 pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 // Check.
 pub use check::holdout::leave_one_out;

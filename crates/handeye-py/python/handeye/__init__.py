@@ -349,7 +349,9 @@ def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, 
     return json.loads(_advise_report(g, c, setup=setup, count=count, prior=_priors(prior), goal=goal))
 
 
-def calibrate_on_pixels(path, intrinsics, *, setup="eye-in-hand", robot_world=False, fix=None, point=None) -> dict:
+def calibrate_on_pixels(
+    path, intrinsics, *, setup="eye-in-hand", robot_world=False, fix=None, point=None, refine_intrinsics=False
+) -> dict:
     """Calibration on the pixels of the detections: a JSON Lines file whose records carry
     ``detections`` (``target`` points and their ``pixels``) and the camera's ``intrinsics`` (OpenCV
     FileStorage YAML or a ROS ``camera_info`` YAML). Returns the same object ``handeye calibrate
@@ -358,8 +360,11 @@ def calibrate_on_pixels(path, intrinsics, *, setup="eye-in-hand", robot_world=Fa
     ``robot_world=True`` the robot-world result of ``calibrate(..., robot_world=True)``
     (``--robot-world``): X and ``target`` (its ``matrix`` a (4,4) array), each with its
     uncertainty from the pixel solve, ``method`` "reprojection". ``fix`` ("auto", "as-given",
-    "robot-inverted") and ``point`` as in ``calibrate``. Raises ValueError where the command line
-    refuses (robot poses that fit the pixels far better inverted, a fit far above detection noise,
+    "robot-inverted") and ``point`` as in ``calibrate``. ``refine_intrinsics=True``
+    (``--refine-intrinsics``) refines fx, fy, cx, cy, k1, k2, p1, p2 with X (k3 kept as given):
+    ``reprojection["intrinsics"]`` gives them with their ``sigma``, and X's uncertainty accounts for
+    them. Raises ValueError where the command line refuses (robot poses that fit the pixels far
+    better inverted, a fit far above detection noise, frames that do not determine the intrinsics,
     bad input naming the file, line and field)."""
     result = json.loads(
         _pixels_report(
@@ -369,6 +374,7 @@ def calibrate_on_pixels(path, intrinsics, *, setup="eye-in-hand", robot_world=Fa
             robot_world=robot_world,
             fix=fix,
             point=_point(point),
+            refine_intrinsics=bool(refine_intrinsics),
         )
     )
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)

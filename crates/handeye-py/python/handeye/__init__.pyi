@@ -73,6 +73,7 @@ def calibrate_on_pixels(
     robot_world: bool = False,
     fix: Optional[str] = None,
     point: Optional[Sequence[float]] = None,
+    refine_intrinsics: bool = False,
 ) -> dict[str, Any]: ...
 
 def verify_on_pixels(

@@ -159,6 +159,9 @@ pub struct Options {
     /// free component comes from its prior; a prior on a component the motions determine is
     /// checked against the data (the data's value is kept). Default none.
     pub priors: Vec<Prior>,
+    /// Refine the camera's intrinsics with X on the pixels (`--refine-intrinsics`; only with the
+    /// calibration on the pixels, refused elsewhere). Default false.
+    pub refine_intrinsics: bool,
 }
 
 impl Options {
@@ -184,8 +187,20 @@ impl Default for Options {
             point: None,
             joints: Vec::new(),
             priors: Vec::new(),
+            refine_intrinsics: false,
         }
     }
+}
+
+/// Refuses `refine_intrinsics` on poses: the intrinsics are refined on the pixels only.
+pub(crate) fn not_without_pixels(refine_intrinsics: bool) -> Result<()> {
+    if refine_intrinsics {
+        return Err(Error::InvalidParameter {
+            name: "refine_intrinsics",
+            message: "the intrinsics are refined on the pixels only: --method reprojection with a JSON Lines file with `detections` and --intrinsics FILE".into(),
+        });
+    }
+    Ok(())
 }
 
 /// The outliers in a [`Report`].
@@ -359,6 +374,7 @@ pub(crate) fn plausible(x: &Transform, what: &str) -> Result<()> {
 /// Errors: [`Error::Misread`] when another reading fits far better (and [`Fix::Refuse`]),
 /// [`Error::Degenerate`] when the motions do not determine X, [`Error::TooFewMotions`].
 pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
+    not_without_pixels(options.refine_intrinsics)?;
     check_replicates(options.replicates)?;
     check_joints(&options.joints, poses.len())?;
     check_priors(&options.priors)?;

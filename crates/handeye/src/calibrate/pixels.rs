@@ -33,7 +33,8 @@ use crate::calibrate::verify::{
     unit_scale,
 };
 use crate::solve::reprojection::{
-    PixelOptions, PixelSolution, reprojection, start_camera_poses, target_with_x,
+    PixelOptions, PixelSolution, RefinedIntrinsics, check_determined, reprojection, start_camera_poses,
+    target_with_x,
 };
 use crate::solve::{Method, RobotWorldMethod, pose_residuals, target_frame};
 
@@ -69,6 +70,10 @@ pub struct ReprojectionSummary {
     pub target: TransformJson,
     /// How the reading of the robot poses was checked.
     pub reading_check: String,
+    /// The intrinsics refined with X (`--refine-intrinsics`), with their sigmas; absent when the
+    /// given intrinsics were used as they are.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intrinsics: Option<RefinedIntrinsics>,
 }
 
 /// One frame's reprojection RMS.
@@ -98,7 +103,8 @@ pub fn calibrate_on_pixels(
     options: &Options,
 ) -> Result<Report> {
     not_on_pixels(options.reject_outliers, &options.priors)?;
-    let (used, solution, applied, reading_check) = solved(frames, camera, setup, options.fix)?;
+    let (used, solution, applied, reading_check) =
+        solved(frames, camera, setup, options.fix, options.refine_intrinsics)?;
     report(&used, setup, options, solution, applied, reading_check)
 }
 
@@ -144,7 +150,8 @@ pub fn calibrate_robot_world_on_pixels(
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
     not_on_pixels(options.reject_outliers, &options.priors)?;
-    let (used, solution, applied, reading_check) = solved(frames, camera, setup, options.fix)?;
+    let (used, solution, applied, reading_check) =
+        solved(frames, camera, setup, options.fix, options.refine_intrinsics)?;
     let hand_eye = Options {
         fix: options.fix,
         point: options.point,
@@ -223,8 +230,14 @@ pub fn verify_on_pixels(
     options: &Options,
 ) -> Result<Verification> {
     not_on_pixels(options.reject_outliers, &options.priors)?;
+    if options.refine_intrinsics {
+        return Err(Error::InvalidParameter {
+            name: "refine_intrinsics",
+            message: "not offered by verify: a saved X is checked with the intrinsics it was calibrated with (give the refined ones with --intrinsics)".into(),
+        });
+    }
     let notes = setup_notes(saved, setup);
-    let (used, solution, applied, reading_check) = match solved(frames, camera, setup, options.fix) {
+    let (used, solution, applied, reading_check) = match solved(frames, camera, setup, options.fix, false) {
         Ok(s) => s,
         Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
             let poses = pose_pairs(frames, &start_camera_poses(frames, camera, setup));
@@ -318,6 +331,7 @@ fn solved(
     camera: &Intrinsics,
     setup: Setup,
     fix: Fix,
+    refine_intrinsics: bool,
 ) -> Result<(Vec<Frame>, PixelSolution, Reading, String)> {
     camera.check().map_err(|(field, message)| Error::InvalidParameter {
         name: "intrinsics",
@@ -332,7 +346,10 @@ fn solved(
             need: PIXEL_PARAMETERS,
         });
     }
-    let pixel_options = PixelOptions::default();
+    let pixel_options = PixelOptions {
+        refine_intrinsics,
+        ..PixelOptions::default()
+    };
     let inverted: Vec<Frame> = frames
         .iter()
         .map(|f| Frame {
@@ -371,6 +388,9 @@ fn solved(
     };
     if solution.sigma_px > REFUSE_SIGMA_PX {
         return Err(unfit(&solution, &used, camera, setup, &pixel_options));
+    }
+    if let Some(k) = &solution.intrinsics {
+        check_determined(k, camera)?;
     }
     Ok((used, solution, applied, reading_check))
 }
@@ -527,6 +547,7 @@ fn report(
         .into(),
         target: TransformJson::from(&solution.target),
         reading_check,
+        intrinsics: solution.intrinsics.clone(),
     };
     warnings.sort_by_key(|w| w.remedy().is_none());
     Ok(Report {

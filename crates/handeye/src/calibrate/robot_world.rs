@@ -80,6 +80,9 @@ pub struct RobotWorldOptions {
     /// low-DOF recording's free component of X comes from its prior, and the target's coupled
     /// component follows from it. Default empty.
     pub priors: Vec<Prior>,
+    /// Refine the camera's intrinsics with X on the pixels (`--refine-intrinsics`; only with the
+    /// calibration on the pixels, refused elsewhere). Default false.
+    pub refine_intrinsics: bool,
 }
 
 impl Default for RobotWorldOptions {
@@ -95,6 +98,7 @@ impl Default for RobotWorldOptions {
             point: None,
             joints: Vec::new(),
             priors: Vec::new(),
+            refine_intrinsics: false,
         }
     }
 }
@@ -269,6 +273,7 @@ pub fn calibrate_robot_world(
     setup: Setup,
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
+    crate::calibrate::batch::not_without_pixels(options.refine_intrinsics)?;
     check_replicates(options.replicates)?;
     check_joints(&options.joints, poses.len())?;
     check_priors(&options.priors)?;

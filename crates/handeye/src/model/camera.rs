@@ -13,7 +13,7 @@
 //! D. C. Brown, "Decentering distortion of lenses", Photogrammetric Engineering 32(3), 1966;
 //! A. E. Conrady (1919); the coefficient order of OpenCV's `calib3d` (k1, k2, p1, p2, k3).
 
-use nalgebra::{Matrix2, Matrix2x3, Vector2, Vector3};
+use nalgebra::{Matrix2, Matrix2x3, SMatrix, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::model::pose::Transform;
@@ -101,6 +101,33 @@ impl Intrinsics {
     pub fn pixel(&self, p: &Vector3<f64>) -> Vector2<f64> {
         let (d, _) = self.distort(p.x / p.z, p.y / p.z);
         Vector2::new(self.fx * d.x + self.cx, self.fy * d.y + self.cy)
+    }
+
+    /// ∂(u, v)/∂(fx, fy, cx, cy, k1, k2, p1, p2, k3) of the pixel of `p` (a point in the camera
+    /// frame, Z > 0 assumed): the columns of the intrinsics a solve refines.
+    pub(crate) fn intrinsic_jacobian(&self, p: &Vector3<f64>) -> SMatrix<f64, 2, 9> {
+        let (x, y) = (p.x / p.z, p.y / p.z);
+        let (d, _) = self.distort(x, y);
+        let r2 = x * x + y * y;
+        let (fx, fy) = (self.fx, self.fy);
+        let mut j = SMatrix::<f64, 2, 9>::zeros();
+        j[(0, 0)] = d.x;
+        j[(1, 1)] = d.y;
+        j[(0, 2)] = 1.0;
+        j[(1, 3)] = 1.0;
+        // ∂(x_d, y_d)/∂(k1, k2, p1, p2, k3), scaled by fx and fy.
+        let columns = [
+            (x * r2, y * r2),
+            (x * r2 * r2, y * r2 * r2),
+            (2.0 * x * y, r2 + 2.0 * y * y),
+            (r2 + 2.0 * x * x, 2.0 * x * y),
+            (x * r2 * r2 * r2, y * r2 * r2 * r2),
+        ];
+        for (c, (dx, dy)) in columns.into_iter().enumerate() {
+            j[(0, 4 + c)] = fx * dx;
+            j[(1, 4 + c)] = fy * dy;
+        }
+        j
     }
 
     /// The undistorted normalised coordinates (x, y) of a pixel: Gauss–Newton on
@@ -207,6 +234,47 @@ mod tests {
                     let scale = j[(r, k)].abs().max(1.0);
                     assert!(
                         (d[r] - j[(r, k)]).abs() < 1e-5 * scale,
+                        "{p:?} ({r},{k}): {} vs {}",
+                        d[r],
+                        j[(r, k)]
+                    );
+                }
+            }
+        }
+    }
+
+    /// The Jacobian with respect to the intrinsics agrees with central differences.
+    #[test]
+    fn intrinsic_jacobian_matches_central_differences() {
+        let c = camera();
+        let set = |c: &Intrinsics, k: usize, v: f64| {
+            let mut c = *c;
+            match k {
+                0 => c.fx += v,
+                1 => c.fy += v,
+                2 => c.cx += v,
+                3 => c.cy += v,
+                4 => c.distortion[0] += v,
+                5 => c.distortion[1] += v,
+                6 => c.distortion[2] += v,
+                7 => c.distortion[3] += v,
+                _ => c.distortion[4] += v,
+            }
+            c
+        };
+        for p in [
+            Vector3::new(0.1, -0.05, 0.6),
+            Vector3::new(-0.2, 0.15, 0.5),
+            Vector3::new(0.25, 0.14, 0.45),
+        ] {
+            let j = c.intrinsic_jacobian(&p);
+            for k in 0..9 {
+                let h = if k < 4 { 1e-4 } else { 1e-7 };
+                let d = (set(&c, k, h).pixel(&p) - set(&c, k, -h).pixel(&p)) / (2.0 * h);
+                for r in 0..2 {
+                    let scale = j[(r, k)].abs().max(1.0);
+                    assert!(
+                        (d[r] - j[(r, k)]).abs() < 1e-6 * scale,
                         "{p:?} ({r},{k}): {} vs {}",
                         d[r],
                         j[(r, k)]

@@ -82,6 +82,13 @@ pub struct PixelSimConfig {
     pub outliers: usize,
     /// The setup.
     pub setup: Setup,
+    /// Where in the image the target's centre is placed: uniformly within this fraction of the
+    /// image's half-width and half-height around the principal point (the camera turned about its
+    /// centre), frames that leave the image drawn again. 0 in both constructors: the camera aims
+    /// at the target's centre (within 3 cm); [`PixelSimConfig::spanning`] gives 0.75, frames that
+    /// reach the image's corners (what refining the intrinsics needs).
+    #[serde(default)]
+    pub spread: f64,
 }
 
 /// Realistic intrinsics: 1280×720, f ≈ 900 px, barrel distortion.
@@ -115,6 +122,7 @@ impl PixelSimConfig {
             robot_rotation_noise: 2e-4,
             outliers: 0,
             setup: Setup::EyeInHand,
+            spread: 0.0,
         }
     }
 
@@ -134,6 +142,15 @@ impl PixelSimConfig {
             robot_translation_noise: 0.0,
             robot_rotation_noise: 0.0,
             outliers: 0,
+            ..self
+        }
+    }
+
+    /// The same with the target's centre anywhere in the central 75 % of the image (`spread`
+    /// 0.75): frames that reach the image's corners.
+    pub fn spanning(self) -> Self {
+        Self {
+            spread: 0.75,
             ..self
         }
     }
@@ -303,7 +320,26 @@ fn view(rng: &mut impl Rng, config: &PixelSimConfig, centre: &Vector3<f64>) -> T
     let ya = z.cross(&xa);
     // target_from_camera: columns are the camera's axes in the target frame.
     let r = Matrix3::from_columns(&[xa, ya, z]);
-    transform_from_parts(&r, &eye).inverse()
+    let camera_from_target = transform_from_parts(&r, &eye).inverse();
+    if config.spread <= 0.0 {
+        return camera_from_target;
+    }
+    // Turn the camera about its centre so that the target's centre is seen at a pixel drawn
+    // within `spread` of the image's half-size.
+    let c = &config.intrinsics;
+    let (w, h) = (f64::from(c.width), f64::from(c.height));
+    let pixel = Vector2::new(
+        c.cx + rng.random_range(-config.spread..config.spread) * w / 2.0,
+        c.cy + rng.random_range(-config.spread..config.spread) * h / 2.0,
+    );
+    let xy = c.normalised(&pixel);
+    let ray = Vector3::new(xy.x, xy.y, 1.0).normalize();
+    let seen = (camera_from_target * Point3::from(*centre))
+        .coords
+        .normalize();
+    let turn = nalgebra::Rotation3::rotation_between(&seen, &ray)
+        .map_or_else(Matrix3::identity, |r| *r.matrix());
+    transform_from_parts(&turn, &Vector3::zeros()) * camera_from_target
 }
 
 fn inside(camera: &Intrinsics, u: &Vector2<f64>) -> bool {

@@ -39,6 +39,10 @@ use crate::solve::lm::{
 use crate::solve::motions::AllPairs;
 use crate::solve::{Calibration, Method, solve};
 
+mod intrinsics;
+pub(crate) use intrinsics::check_determined;
+pub use intrinsics::{IntrinsicsSigma, RefinedIntrinsics};
+
 /// Settings of [`reprojection`]; `Default` gives the values documented on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PixelOptions {
@@ -49,6 +53,11 @@ pub struct PixelOptions {
     /// relative cost tolerance of 1e-12 (a pixel cost's last digits move X by far less than its
     /// noise).
     pub lm: RefineOptions,
+    /// Refine fx, fy, cx, cy, k1, k2, p1, p2 with X and the target's pose (k3 held at the given
+    /// value), after checking that the frames determine them (they reach the image's corners and
+    /// tilt the target about both image axes). Default false.
+    #[serde(default)]
+    pub refine_intrinsics: bool,
 }
 
 impl Default for PixelOptions {
@@ -59,6 +68,7 @@ impl Default for PixelOptions {
                 cost_tolerance: 1e-12,
                 ..RefineOptions::default()
             },
+            refine_intrinsics: false,
         }
     }
 }
@@ -110,6 +120,9 @@ pub struct PixelSolution {
     pub iterations: usize,
     /// Why the final pass stopped.
     pub termination: Termination,
+    /// The intrinsics refined with X (with [`PixelOptions::refine_intrinsics`]); the covariances
+    /// above then account for their being estimated.
+    pub intrinsics: Option<RefinedIntrinsics>,
 }
 
 /// X and Y from the pixels (see the module docs).
@@ -137,6 +150,11 @@ pub fn reprojection(
 ) -> Result<PixelSolution> {
     check_frames(frames)?;
     let start = start_poses(frames, camera, setup)?;
+    let span = if options.refine_intrinsics {
+        Some(intrinsics::check_span(frames, camera, &start.poses)?)
+    } else {
+        None
+    };
     let unit = length_unit(&start.poses);
     let data = Data::new(frames, camera, setup, unit);
     let x0 = scaled(&start.x, 1.0 / unit);
@@ -163,8 +181,69 @@ pub fn reprojection(
         keep: Some(&keep),
     };
     let last = levenberg_marquardt(&plain, first.state, &options.lm);
-    let state = last.state;
-    let residuals = data.residual_norms(&state);
+    if let Some(span) = span {
+        let refined = intrinsics::refine(&data, last.state, span, options.cauchy_px, &options.lm);
+        return Ok(solution(
+            frames,
+            &data,
+            start,
+            unit,
+            Fitted {
+                state: refined.state,
+                camera: refined.camera,
+                keep: refined.keep,
+                covariance: refined.covariance,
+                sigma_px: refined.sigma_px,
+                iterations: first.iterations + last.iterations + refined.iterations,
+                termination: refined.termination,
+                intrinsics: Some(refined.intrinsics),
+            },
+        ));
+    }
+    let covariance = plain.covariance(&last.state);
+    Ok(solution(
+        frames,
+        &data,
+        start,
+        unit,
+        Fitted {
+            state: last.state,
+            camera: *camera,
+            keep,
+            covariance,
+            sigma_px,
+            iterations: first.iterations + last.iterations,
+            termination: last.termination,
+            intrinsics: None,
+        },
+    ))
+}
+
+/// The end of a solve: X, Y, their covariances (solve unit), the camera, the detections kept.
+struct Fitted {
+    state: State,
+    camera: Intrinsics,
+    keep: Vec<bool>,
+    covariance: Option<(Matrix6<f64>, Matrix6<f64>)>,
+    sigma_px: f64,
+    iterations: usize,
+    termination: Termination,
+    intrinsics: Option<RefinedIntrinsics>,
+}
+
+/// The solution of a fit, in the input's unit.
+fn solution(frames: &[Frame], data: &Data, start: Start, unit: f64, fit: Fitted) -> PixelSolution {
+    let Fitted {
+        state,
+        camera,
+        keep,
+        covariance,
+        sigma_px,
+        iterations,
+        termination,
+        intrinsics,
+    } = fit;
+    let residuals = intrinsics::norms(data, &(state, camera));
     let (rms_px, per_frame_rms_px) = data.rms(&residuals, &keep);
     let outliers = data
         .index
@@ -173,13 +252,13 @@ pub fn reprojection(
         .filter(|(_, k)| !**k)
         .map(|(i, _)| *i)
         .collect();
-    let (covariance, target_covariance) = match plain.covariance(&state) {
+    let (covariance, target_covariance) = match covariance {
         Some((x, y)) => (Some(in_unit(x, unit)), Some(in_unit(y, unit))),
         None => (None, None),
     };
     let x = transform_from_parts(&state.0, &(state.1 * unit));
     let target = transform_from_parts(&state.2, &(state.3 * unit));
-    Ok(PixelSolution {
+    PixelSolution {
         calibration: Calibration {
             x,
             method: Method::Reprojection,
@@ -196,9 +275,10 @@ pub fn reprojection(
         start_poses: start.poses,
         flips_resolved: start.flips_resolved,
         sigma_px,
-        iterations: first.iterations + last.iterations,
-        termination: last.termination,
-    })
+        iterations,
+        termination,
+        intrinsics,
+    }
 }
 
 /// The target's pose fitted to the pixels with X held fixed ([`target_with_x`]).
