@@ -102,11 +102,12 @@ impl OnlinePixels {
         if let Some((n, last)) = &self.last
             && *n == self.frames.len()
         {
-            let mut report = *last;
+            let n = *n;
+            let mut report = last.clone();
             self.reports += 1;
             report.number = self.reports;
             report.reason = Reason::End;
-            self.last = Some((*n, report));
+            self.last = Some((n, report.clone()));
             return Ok(report);
         }
         self.estimate(Reason::End)
@@ -129,14 +130,20 @@ impl OnlinePixels {
 
     /// The last estimate reported, or `None`.
     pub fn last_report(&self) -> Option<TrackReport> {
-        self.last.map(|(_, r)| r)
+        self.last.as_ref().map(|(_, r)| r.clone())
     }
 
     /// Solves on every frame so far and reports it.
     fn estimate(&mut self, reason: Reason) -> Result<TrackReport> {
         let setup = self.setup;
         let (used, solution, applied, reading_check) =
-            solved(&self.frames, &self.camera, setup, self.options.fix)?;
+            solved(
+            &self.frames,
+            &self.camera,
+            setup,
+            self.options.fix,
+            self.options.refine_intrinsics,
+        )?;
         let poses = pose_pairs(&used, &solution.start_poses);
         let target = solution.target;
         let batch = report(&used, setup, &self.options, solution, applied, reading_check)?;
@@ -178,10 +185,14 @@ impl OnlinePixels {
             },
             weak: None,
             implausible: false,
+            // The pixel solve's cautions are the calibrator's (`warnings()`), its verdict the
+            // estimate's `reprojection.verdict`.
+            systematic: None,
+            warnings: Vec::new(),
         };
         self.warnings = batch.warnings;
         self.refused = None;
-        self.last = Some((self.frames.len(), report));
+        self.last = Some((self.frames.len(), report.clone()));
         Ok(report)
     }
 }
