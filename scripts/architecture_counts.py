@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """The library's shape in numbers, as docs/DECISIONS.md quotes them (issue 31).
 
-    python3 scripts/architecture_counts.py [--doc]
+    python3 scripts/architecture_counts.py [--doc] [--rosbag] [--unnameable]
 
 - public items: item pages of `cargo doc -p handeye --no-deps` (structs, enums, functions, traits,
   types, constants, macros, statics; rustdoc's redirect pages left out): what a user can name. With --doc the docs are built first
-  (otherwise target/doc/handeye is read as it is).
+  (otherwise target/doc/handeye is read as it is); with --rosbag, with the `rosbag` feature.
+- unnameable types (--unnameable): public types a user reaches through a public field, variant or
+  return type but cannot name (rustc's `unnameable_types` lint over the library), listed.
 - public modules: module pages of the same docs.
 - files over 400 lines: crates/handeye/src/**/*.rs.
 - upward imports: `crate::` paths that climb a layer (the rule of crates/handeye/tests/layers.rs).
@@ -62,10 +64,21 @@ def long_files():
     return sorted(out, reverse=True)
 
 
+def unnameable(features):
+    """The types rustc's `unnameable_types` lint names (the library rebuilt with the lint on)."""
+    out = subprocess.run(
+        ["cargo", "rustc", "-p", "handeye", "--lib", "-q", *features, "--", "-W", "unnameable_types"],
+        cwd=ROOT, capture_output=True, text=True, check=True,
+    )
+    found = re.findall(r"warning: (?:struct|enum|trait|type alias|union) `([^`]+)` is reachable but cannot be named", out.stderr)
+    return sorted(set(found))
+
+
 def main():
+    features = ["--features", "rosbag"] if "--rosbag" in sys.argv else []
     if "--doc" in sys.argv:
         shutil.rmtree(doc_dir(), ignore_errors=True)  # no pages left from an earlier shape
-        subprocess.run(["cargo", "doc", "-p", "handeye", "--no-deps", "-q"], cwd=ROOT, check=True)
+        subprocess.run(["cargo", "doc", "-p", "handeye", "--no-deps", "-q", *features], cwd=ROOT, check=True)
     doc = doc_dir()
     if not os.path.isdir(doc):
         sys.exit(f"no docs at {doc}: run with --doc")
@@ -73,6 +86,11 @@ def main():
     total = sum(kinds.values())
     print(f"public items: {total} ({', '.join(f'{n} {k}' for k, n in kinds.most_common())})")
     print(f"public modules: {modules}")
+    if "--unnameable" in sys.argv:
+        names = unnameable(features)
+        print(f"unnameable types: {len(names)}")
+        for name in names:
+            print(f"  {name}")
     files = long_files()
     print(f"files over 400 lines: {len(files)}")
     for lines, path in files:

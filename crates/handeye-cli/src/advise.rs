@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::{Advice, AdviseOptions, Pivot, Unit, WeaknessKind, advise};
+use handeye::{Advice, AdviseOptions, Part, Pivot, Unit, advise};
 
 use crate::faces::{self, short};
 use crate::input::{InputArgs, read_all};
@@ -25,7 +25,7 @@ pub struct Args {
     /// `0.1,0.001` for 0.1° and 1 mm in metres): the advice says when you are done, or after
     /// which suggested motion the prediction is within it.
     #[arg(long, value_name = "DEGREES,LENGTH", value_parser = crate::values::goal)]
-    goal: Option<handeye::Predicted>,
+    goal: Option<handeye::Sizes>,
 }
 
 /// Runs the command: the advice as JSON on stdout, in words on stderr.
@@ -72,11 +72,11 @@ fn in_words(advice: &Advice, unit: Option<Unit>) -> String {
     for w in &advice.weakest {
         let [x, y, z] = w.axis_gripper;
         out.push_str(&match w.kind {
-            WeaknessKind::Rotation => format!(
+            Part::Rotation => format!(
                 "  weakest rotation: about the gripper axis ({x:.2}, {y:.2}, {z:.2}), sigma {:.3}°\n",
                 w.sigma
             ),
-            WeaknessKind::Translation => format!(
+            Part::Translation => format!(
                 "  weakest translation: along ({x:.2}, {y:.2}, {z:.2}), sigma {} {u}\n",
                 short(w.sigma)
             ),

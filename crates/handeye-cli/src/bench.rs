@@ -14,7 +14,7 @@ use clap::Args as ClapArgs;
 use handeye::AdaptiveParams;
 use handeye::TransformJson;
 use handeye::errors_against_truth;
-use handeye::io::{Format, parse_pose_line, read_pose_file, read_truth};
+use handeye::io::{Format, PoseStream, Recording, RecordingOptions, Source, read_truth};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{AllPairs, Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
 use handeye::{OnlineCalibrator, OnlineConfig};
@@ -193,7 +193,11 @@ fn datasets(args: &Args) -> Result<Vec<Dataset>> {
         .iter()
         .enumerate()
         .map(|(k, path)| {
-            let poses = read_pose_file(path, Format::Auto)?.pairs;
+            let source = Source::File {
+                path: path.clone(),
+                format: Format::Auto,
+            };
+            let poses = Recording::read(&source, &RecordingOptions::default())?.poses;
             let beside = path.with_extension("truth.json");
             let truth_path = args
                 .truth
@@ -293,7 +297,25 @@ fn online_throughput(budget: Duration, progress: &Progress) -> Result<Value> {
         "camera_from_target": matrix(&s.poses[1].camera_from_target),
     })
     .to_string();
-    let (parse, _) = time(|| parse_pose_line(black_box(&line), "-", 1).is_ok(), budget);
+    // Lines per timed call: the stream's opening (its format told from the first line) is
+    // spread over as many lines as a real stream's is.
+    const LINES: usize = 1000;
+    let text: std::rc::Rc<[u8]> = format!("{line}\n").repeat(LINES).into_bytes().into();
+    let (stream, _) = time(
+        || {
+            let input = std::io::Cursor::new(black_box(text.clone()));
+            PoseStream::from_reader(
+                input,
+                "-",
+                Format::Auto,
+                Default::default(),
+                Setup::EyeInHand,
+            )
+            .is_ok_and(|s| s.filter(Result::is_ok).count() == LINES)
+        },
+        budget,
+    );
+    let parse = stream / LINES as f64;
     Ok(json!({
         "push_s": push,
         "push_per_s": 1.0 / push,

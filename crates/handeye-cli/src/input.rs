@@ -13,8 +13,8 @@ use anyhow::Result;
 use clap::Args as ClapArgs;
 use handeye::io::rosbag::is_bag;
 use handeye::io::{
-    BagFrames, CameraMount, Format, Note, PoseInput, PoseReader, Projections, Recording,
-    RecordingOptions, Source, StampedPosePair, TimeOffset, open_pose_stream, open_poses,
+    BagFrames, CameraMount, Format, Note, PoseStream, Recording, RecordingOptions, Source,
+    StampedPosePair, TimeOffset,
 };
 use handeye::{Reading, Rotations, Setup};
 
@@ -255,38 +255,31 @@ pub fn read_all(args: &InputArgs, reading: Reading) -> Result<Recording> {
     Ok(recording)
 }
 
-/// Tells on stderr the lines skipped before the first record, if any was not blank nor a comment.
-fn preamble<R: BufRead>(reader: &PoseReader<R>, source: &str) {
-    if let Some(p) = reader.preamble() {
-        crate::tell!("{source}: {}", p.note());
+/// A pose stream that tells its notes on stderr: those of its opening at once, the rest when it
+/// ends.
+struct NotingStream(PoseStream);
+
+impl NotingStream {
+    fn new(stream: PoseStream) -> Self {
+        let mut noting = Self(stream);
+        noting.tell();
+        noting
+    }
+
+    fn tell(&mut self) {
+        for note in self.0.notes() {
+            crate::tell!("{note}");
+        }
     }
 }
 
-/// Tells on stderr how many rotation matrices of `source` were projected onto SO(3), if any.
-fn note(source: &str, projections: &Projections) {
-    if let Some(note) = projections.note() {
-        crate::tell!("{source}: {note}");
-    }
-}
-
-/// A streaming reader that tells its note (see [`note`]) when it ends.
-struct NotingReader<R: BufRead> {
-    reader: PoseReader<R>,
-    source: String,
-    told: bool,
-}
-
-impl<R: BufRead> Iterator for NotingReader<R> {
+impl Iterator for NotingStream {
     type Item = handeye::Result<StampedPosePair>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        let next = self.reader.next();
-        if next.is_none() && !self.told {
-            self.told = true;
-            note(&self.source, &self.reader.projections());
-            for n in handeye::io::Note::small_degrees(&self.source, &self.reader.degree_angles()) {
-                eprintln!("{n}");
-            }
+        let next = self.0.next();
+        if next.is_none() {
+            self.tell();
         }
         next
     }
@@ -391,37 +384,26 @@ pub fn records(args: &InputArgs, before_wait: Rc<dyn Fn()>) -> Result<(Records, 
     }
     let path = args.input.clone().unwrap_or_else(|| PathBuf::from("-"));
     let source = path.display().to_string();
-    if path.as_os_str() == "-" {
+    let (format, rotations, setup) = (args.format, args.rotations()?, args.setup());
+    let stream = if path.as_os_str() == "-" {
         let stdin = WaitHook::new(std::io::stdin().lock(), before_wait);
-        let reader = PoseReader::with_rotations(stdin, "-", args.format, args.rotations()?)?;
-        preamble(&reader, &source);
-        let records = NotingReader {
-            reader,
-            source: source.clone(),
-            told: false,
-        };
-        return Ok((Box::new(records), opened(source)));
-    }
-    let format = args.format;
-    let records = if format == Format::Visp || path.is_dir() {
-        file_records(
-            open_poses(&path, format, args.rotations()?)?,
-            &source,
-            args.setup(),
-        )?
+        PoseStream::from_reader(stdin, "-", format, rotations, setup)?
+    } else if format == Format::Visp || path.is_dir() {
+        PoseStream::open(&path, format, rotations, setup)?
     } else {
         let file = File::open(&path).map_err(|e| handeye::Error::Io {
             file: source.clone(),
             source: e,
         })?;
-        let input = WaitHook::new(file, before_wait);
-        file_records(
-            open_pose_stream(input, &source, format, args.rotations()?)?,
+        PoseStream::from_reader(
+            WaitHook::new(file, before_wait),
             &source,
-            args.setup(),
+            format,
+            rotations,
+            setup,
         )?
     };
-    Ok((records, opened(source)))
+    Ok((Box::new(NotingStream::new(stream)), opened(source)))
 }
 
 /// A pose file's: its name alone.
@@ -431,40 +413,6 @@ fn opened(source: String) -> Opened {
         offset: None,
         camera_mount: None,
     }
-}
-
-/// The records of a file opened by [`open_poses`] or [`open_pose_stream`].
-fn file_records<R: BufRead + 'static>(
-    input: PoseInput<R>,
-    source: &str,
-    setup: Setup,
-) -> Result<Records> {
-    Ok(match input {
-        PoseInput::Whole(series) => {
-            series.check_setup(setup, source)?;
-            note(source, &series.projections);
-            let written = series.written;
-            let records = series.pairs.into_iter().enumerate().map(move |(k, pose)| {
-                Ok(StampedPosePair {
-                    line: k + 1,
-                    stamp: None,
-                    pose,
-                    written,
-                    joints: [0.0; 16],
-                    joint_count: 0,
-                })
-            });
-            Box::new(records.collect::<Vec<_>>().into_iter())
-        }
-        PoseInput::Stream(reader) => {
-            preamble(&reader, source);
-            Box::new(NotingReader {
-                reader,
-                source: source.to_string(),
-                told: false,
-            })
-        }
-    })
 }
 
 /// The records of [`records`], read and parsed on a second thread while this one calibrates.

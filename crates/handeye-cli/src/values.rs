@@ -212,14 +212,14 @@ pub fn point(s: &str) -> Result<[f64; 3], String> {
 }
 
 /// `--goal DEGREES,LENGTH`: two positive sizes, a one-sigma rotation and translation.
-pub fn goal(s: &str) -> Result<handeye::Predicted, String> {
+pub fn goal(s: &str) -> Result<handeye::Sizes, String> {
     let parts: Vec<&str> = s.split(',').collect();
     if parts.len() != 2 {
         return Err(format!(
             "expected DEGREES,LENGTH (a one-sigma rotation and translation), got `{s}`"
         ));
     }
-    Ok(handeye::Predicted {
+    Ok(handeye::Sizes {
         rotation_deg: positive(parts[0])?,
         translation: positive(parts[1])?,
     })

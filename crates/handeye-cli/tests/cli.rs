@@ -117,13 +117,13 @@ fn calibrate_eye_to_hand_and_all_pairs_match_opencv() {
 
 /// The exact fixture rewritten as CSV with quaternions (and the camera direction inverted).
 fn fixture_as_csv(dir: &Path) -> PathBuf {
-    use handeye::io::{Format, read_pose_file};
+    use handeye::io::{Format, Recording, RecordingOptions, Source};
     use handeye::quaternion_xyzw;
-    let series = read_pose_file(
-        &testdata("opencv/opencv_eye-in-hand_exact_10_11.jsonl"),
-        Format::Auto,
-    )
-    .unwrap();
+    let source = Source::File {
+        path: testdata("opencv/opencv_eye-in-hand_exact_10_11.jsonl"),
+        format: Format::Auto,
+    };
+    let series = Recording::read(&source, &RecordingOptions::default()).unwrap();
     let mut text = String::from("stamp");
     for f in ["base_from_gripper", "target_from_camera"] {
         for s in ["x", "y", "z", "qx", "qy", "qz", "qw"] {
@@ -131,7 +131,7 @@ fn fixture_as_csv(dir: &Path) -> PathBuf {
         }
     }
     text.push('\n');
-    for (k, p) in series.pairs.iter().enumerate() {
+    for (k, p) in series.poses.iter().enumerate() {
         text += &format!("{k}");
         for t in [p.base_from_gripper, p.camera_from_target.inverse()] {
             let v = t.translation.vector;

@@ -64,11 +64,11 @@ fn csv(dir: &Path, convention: &str, letters: [&str; 3]) -> PathBuf {
 
 /// [`csv`] with the robot's and the camera's conventions.
 fn csv_sides(dir: &Path, conventions: [&str; 2], letters: [&str; 3]) -> PathBuf {
-    let series = handeye::io::read_pose_file(
-        &testdata("kinhec/pairs/nominal_stations_eih_s0.jsonl"),
-        handeye::io::Format::Auto,
-    )
-    .unwrap();
+    let source = handeye::io::Source::File {
+        path: testdata("kinhec/pairs/nominal_stations_eih_s0.jsonl"),
+        format: handeye::io::Format::Auto,
+    };
+    let series = handeye::io::Recording::read(&source, &Default::default()).unwrap();
     let columns = |frame: &str| {
         ["x", "y", "z"]
             .iter()
@@ -82,7 +82,7 @@ fn csv_sides(dir: &Path, conventions: [&str; 2], letters: [&str; 3]) -> PathBuf 
         columns("base_from_gripper"),
         columns("camera_from_target")
     );
-    for p in &series.pairs {
+    for p in &series.poses {
         let side = |t: &handeye::Transform, convention: &str| {
             written(&t.translation.vector, &t.rotation, convention, ",")
         };

@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use handeye::io::{Format, PoseReader};
+use handeye::io::{Format, PoseStream};
 use serde_json::Value;
 
 fn testdata(rel: &str) -> PathBuf {
@@ -107,7 +107,15 @@ fn clean_streams() -> [(Vec<String>, &'static str); 2] {
             .collect::<Vec<_>>()
             .join(","),
     ];
-    for r in PoseReader::new(text.as_bytes(), "-", Format::Auto).unwrap() {
+    let input = std::io::Cursor::new(text.clone());
+    let stream = PoseStream::from_reader(
+        input,
+        "-",
+        Format::Auto,
+        Default::default(),
+        handeye::Setup::EyeInHand,
+    );
+    for r in stream.unwrap() {
         let p = r.unwrap().pose;
         let mut v = Vec::new();
         for t in [p.base_from_gripper, p.camera_from_target] {

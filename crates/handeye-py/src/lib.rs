@@ -709,7 +709,7 @@ fn advise_report<'py>(
     let options = handeye::AdviseOptions {
         count,
         priors: priors(prior)?,
-        goal: goal.map(|(rotation_deg, translation)| handeye::Predicted {
+        goal: goal.map(|(rotation_deg, translation)| handeye::Sizes {
             rotation_deg,
             translation,
         }),

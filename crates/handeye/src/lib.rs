@@ -133,18 +133,17 @@ pub mod experiment {
 // Model: poses, motions, the setup, errors, warnings and what they carry.
 pub use model::camera::{Detections, Frame, Intrinsics};
 pub use model::error::{Degeneracy, Error, LowDofMissing, Result, TransformProblem};
-pub use model::findings::{Direction, OutlierPose, Part, Reading, Verdict, Written, WrittenAs};
+pub use model::findings::{Part, Reading, Sizes, Verdict, Written, WrittenAs};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
 pub use model::names::Named;
 pub use model::pose::{
     Transform, TransformJson, quaternion_xyzw, rotation_angle_between, transform_from_matrix4,
 };
-pub use model::prior::{Component, Prior, PriorUnit, PriorValue};
+pub use model::prior::{Component, LengthUnit, Prior, PriorValue};
 pub use model::rotation::{RotationConvention, Rotations};
 pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.
-pub use solve::motions::{AllPairs, MotionSource};
-pub use solve::reprojection::{IntrinsicsSigma, RefinedIntrinsics, planar_poses};
+pub use solve::motions::AllPairs;
 pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 // Check.
 pub use check::holdout::leave_one_out;
@@ -153,9 +152,7 @@ pub use check::quality::errors_against_truth;
 pub use check::stream::{StreamReading, StreamReadings};
 pub use check::uncertainty::{AtPoint, Uncertainty};
 // The jobs: batch, robot-world, advice.
-pub use calibrate::advice::{
-    Advice, AdviseOptions, GoalReport, Pivot, Predicted, WeaknessKind, advise,
-};
+pub use calibrate::advice::{Advice, AdviseOptions, Pivot, advise};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
 pub use calibrate::pixels::{
@@ -163,9 +160,7 @@ pub use calibrate::pixels::{
     calibrate_robot_world_on_pixels, pixel_camera_poses, verify_on_pixels,
 };
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
-pub use calibrate::verify::{
-    Consistency, FramePixels, PixelComparison, SavedUnit, SavedX, Sizes, Verification, verify,
-};
+pub use calibrate::verify::{Consistency, SavedX, Verification, verify};
 // Online: the paper's calibrator and the accumulating estimator.
 pub use online::select::{AdaptiveParams, Selection};
 pub use online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};

@@ -376,7 +376,7 @@ fn a_goal_says_when_you_are_done_and_after_which_motion_you_will_be() {
     // own bootstrap sigma agrees within a factor of 1.5), a goal between now and the third
     // suggestion's prediction is reached after the first suggestion that predicts it, and a goal
     // beyond every prediction is not reached.
-    use handeye::{Options, Predicted, calibrate};
+    use handeye::{Options, Sizes, calibrate};
     let kinhec = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec/pairs");
     for (name, setup) in [
         ("nominal_stations_eih_s0", Setup::EyeInHand),
@@ -389,7 +389,7 @@ fn a_goal_says_when_you_are_done_and_after_which_motion_you_will_be() {
         )
         .unwrap()
         .pairs;
-        let ask = |goal: Predicted| {
+        let ask = |goal: Sizes| {
             advise(
                 &poses,
                 setup,
@@ -403,7 +403,7 @@ fn a_goal_says_when_you_are_done_and_after_which_motion_you_will_be() {
         };
         let plain = advise(&poses, setup, Written::NAMED, &AdviseOptions::default()).unwrap();
         let now = plain.current.unwrap();
-        let scaled = |f: f64| Predicted {
+        let scaled = |f: f64| Sizes {
             rotation_deg: now.rotation_deg * f,
             translation: now.translation * f,
         };
@@ -426,7 +426,7 @@ fn a_goal_says_when_you_are_done_and_after_which_motion_you_will_be() {
             );
         }
         let last = plain.suggestions.last().unwrap().predicted.unwrap();
-        let between = Predicted {
+        let between = Sizes {
             rotation_deg: 0.5 * (now.rotation_deg + last.rotation_deg),
             translation: 0.5 * (now.translation + last.translation),
         };
@@ -456,7 +456,7 @@ fn a_goal_says_when_you_are_done_and_after_which_motion_you_will_be() {
             Setup::EyeInHand,
             Written::NAMED,
             &AdviseOptions {
-                goal: Some(Predicted {
+                goal: Some(Sizes {
                     rotation_deg: bad.0,
                     translation: bad.1,
                 }),

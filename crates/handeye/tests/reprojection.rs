@@ -477,7 +477,7 @@ fn verify_on_the_pixels_accepts_the_truth_and_rejects_a_degree() {
                         x,
                         setup: Some(setup),
                         covariance: None,
-                        unit: handeye::SavedUnit::Unknown,
+                        unit: None,
                     };
                     let v = handeye::verify_on_pixels(
                         &saved,

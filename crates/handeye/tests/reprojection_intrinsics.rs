@@ -293,7 +293,7 @@ fn recordings_that_do_not_determine_the_intrinsics_are_refused() {
         x: sim.x,
         setup: None,
         covariance: None,
-        unit: handeye::SavedUnit::Metre,
+        unit: Some(handeye::LengthUnit::Metre),
     };
     let e = handeye::verify_on_pixels(&saved, &sim.frames, &sim.intrinsics, sim.setup, &refine)
         .unwrap_err();

@@ -6,8 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
+use handeye::LengthUnit;
 use handeye::calibrate::batch::{Options, calibrate};
-use handeye::calibrate::verify::{Consistency, SavedUnit, SavedX, Verification, verify};
+use handeye::calibrate::verify::{Consistency, SavedX, Verification, verify};
 use handeye::io::{Format, read_pose_file, transform_from_json};
 use handeye::model::pose::{exp_so3, transform_from_parts};
 use handeye::{Pairing, PosePair, Setup, Transform};
@@ -65,7 +66,7 @@ fn saved(poses: &[PosePair], setup: Setup) -> SavedX {
         x: r.transform,
         setup: Some(setup),
         covariance: Some(r.uncertainty.covariance),
-        unit: SavedUnit::Unknown,
+        unit: None,
     }
 }
 
@@ -203,7 +204,7 @@ fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
     let e = &entries("nominal_stations")[0];
     let (first, second) = halves(e);
     let mut s = saved(&first, setup(e));
-    s.unit = SavedUnit::Metre;
+    s.unit = Some(LengthUnit::Metre);
     let mm: Vec<PosePair> = second
         .iter()
         .map(|p| {
@@ -227,7 +228,7 @@ fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
     let ratio = v.difference.translation / metres.difference.translation;
     assert!((ratio - 1000.0).abs() < 50.0, "{ratio}");
     // A file that does not say its unit is converted by its size.
-    s.unit = SavedUnit::Unknown;
+    s.unit = None;
     let v = verify(&s, &mm, setup(e), &options()).unwrap();
     assert_eq!(v.verdict, Consistency::Consistent, "{v:?}");
     assert_eq!(v.unit_scale, 1000.0);
@@ -274,7 +275,7 @@ fn outliers_in_the_recording_are_named_and_rejecting_them_restores_consistency()
             x: transform_from_json(&e["x"]).unwrap(),
             setup: Some(setup(&e)),
             covariance: None,
-            unit: SavedUnit::Unknown,
+            unit: None,
         };
         let kept = verify(&s, &p, setup(&e), &options()).unwrap();
         let rejected = verify(
@@ -537,7 +538,7 @@ fn a_low_dof_recording_checks_what_it_determines_and_takes_tz_from_the_saved_x()
             x: r.transform,
             setup: Some(setup),
             covariance: Some(r.uncertainty.covariance),
-            unit: SavedUnit::Unknown,
+            unit: None,
         };
         // Without a prior the recording alone would be refused; verify takes tz from the saved X.
         let v = verify(&saved, second, setup, &options()).unwrap();
@@ -631,7 +632,7 @@ fn a_low_dof_recording_checks_what_it_determines_and_takes_tz_from_the_saved_x()
             x: transform(Vector3::zeros(), Vector3::new(0.03, -0.04, -0.1)),
             setup: Some(setup),
             covariance: None,
-            unit: SavedUnit::Unknown,
+            unit: None,
         },
         &all,
         setup,

@@ -18,7 +18,7 @@ use crate::check::outliers::pose_outliers;
 use crate::check::quality::OUTLIER_DEG;
 use crate::check::readings::check_readings;
 use crate::model::error::{Error, Result};
-use crate::model::findings::Written;
+use crate::model::findings::{Part, Sizes, Written};
 use crate::model::motion::{MotionFeatures, Pairing, PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, transform_from_parts};
 use crate::model::prior::{Prior, check_priors};
@@ -28,34 +28,15 @@ use crate::solve::accumulate::PoseAccumulator;
 /// Angles a suggestion may turn by, degrees.
 const ANGLES_DEG: [f64; 3] = [15.0, 30.0, 60.0];
 
-/// One-sigma sizes of the error of X: rotation in degrees, translation in the input's unit.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Predicted {
-    /// Rotation, degrees.
-    pub rotation_deg: f64,
-    /// Translation, input units.
-    pub translation: f64,
-}
-
 /// A least determined direction of X.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Weakness {
     /// `rotation` (about the axis) or `translation` (along it).
-    pub kind: WeaknessKind,
+    pub kind: Part,
     /// The direction in the gripper frame (X's own frame for the translation).
     pub axis_gripper: [f64; 3],
     /// One-sigma along it: degrees for a rotation, input units for a translation.
     pub sigma: f64,
-}
-
-/// Rotation or translation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum WeaknessKind {
-    /// A rotation of X about the axis.
-    Rotation,
-    /// A translation of X along the axis.
-    Translation,
 }
 
 /// A motion to record next.
@@ -74,7 +55,7 @@ pub struct Suggestion {
     pub pivot_gripper: [f64; 3],
     /// X's uncertainty once this motion and the ones before it are recorded (`None` while X is not
     /// determined).
-    pub predicted: Option<Predicted>,
+    pub predicted: Option<Sizes>,
 }
 
 /// The point a suggested turn is about.
@@ -97,7 +78,7 @@ pub struct Advice {
     /// Poses left out as outliers (the batch's per-pose test).
     pub outliers: usize,
     /// X's uncertainty now (`None` when X is not determined at all).
-    pub current: Option<Predicted>,
+    pub current: Option<Sizes>,
     /// The least determined rotation and translation directions, weakest first.
     pub weakest: Vec<Weakness>,
     /// The next motions, in the order to record them.
@@ -123,7 +104,7 @@ pub struct AdviseOptions {
     pub priors: Vec<Prior>,
     /// The uncertainty the user needs (`--goal`): reached, the advice says so and suggests
     /// nothing more; else it says after which suggested motion the prediction reaches it.
-    pub goal: Option<Predicted>,
+    pub goal: Option<Sizes>,
 }
 
 impl Default for AdviseOptions {
@@ -140,19 +121,12 @@ impl Default for AdviseOptions {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GoalReport {
     /// The goal: one-sigma rotation in degrees and translation in the input unit.
-    pub goal: Predicted,
+    pub goal: Sizes,
     /// X's uncertainty now is within the goal in both: record no more for it.
     pub done: bool,
     /// The number of suggested motions after which the prediction is within the goal (`None`
     /// when done, or when the suggestions do not reach it).
     pub after: Option<usize>,
-}
-
-impl Predicted {
-    /// Within `goal` in both sizes.
-    pub fn within(&self, goal: &Predicted) -> bool {
-        self.rotation_deg <= goal.rotation_deg && self.translation <= goal.translation
-    }
 }
 
 /// The advice for `poses` (module documentation): `options.count` suggestions, from the poses
@@ -299,7 +273,7 @@ pub fn advise(
 }
 
 /// Refuses a goal that is not two positive finite sizes.
-fn check_goal(goal: Option<Predicted>) -> Result<()> {
+fn check_goal(goal: Option<Sizes>) -> Result<()> {
     match goal {
         Some(g)
             if !(g.rotation_deg.is_finite()
@@ -334,9 +308,9 @@ impl Model<'_> {
     }
 
     /// The one-sigma sizes from the covariance.
-    fn predicted(&self, acc: &PoseAccumulator) -> Option<Predicted> {
+    fn predicted(&self, acc: &PoseAccumulator) -> Option<Sizes> {
         let c = self.covariance(acc)?;
-        Some(Predicted {
+        Some(Sizes {
             rotation_deg: (c[(0, 0)] + c[(1, 1)] + c[(2, 2)]).sqrt().to_degrees(),
             translation: (c[(3, 3)] + c[(4, 4)] + c[(5, 5)]).sqrt(),
         })
@@ -349,7 +323,7 @@ impl Model<'_> {
         };
         let block = |k: usize| -> Matrix3<f64> { c.fixed_view::<3, 3>(k, k).into_owned() };
         let mut out = Vec::new();
-        for (kind, k) in [(WeaknessKind::Rotation, 0), (WeaknessKind::Translation, 3)] {
+        for (kind, k) in [(Part::Rotation, 0), (Part::Translation, 3)] {
             let e = block(k).symmetric_eigen();
             let i = e.eigenvalues.imax();
             let sigma = e.eigenvalues[i].max(0.0).sqrt();
@@ -358,8 +332,8 @@ impl Model<'_> {
                 kind,
                 axis_gripper: v.into(),
                 sigma: match kind {
-                    WeaknessKind::Rotation => sigma.to_degrees(),
-                    WeaknessKind::Translation => sigma,
+                    Part::Rotation => sigma.to_degrees(),
+                    Part::Translation => sigma,
                 },
             });
         }
@@ -385,9 +359,9 @@ impl Model<'_> {
         setup: Setup,
         from: &Transform,
         candidates: &[Turn],
-    ) -> Option<(Turn, PosePair, Predicted)> {
+    ) -> Option<(Turn, PosePair, Sizes)> {
         let now = self.predicted(acc)?;
-        let mut best: Option<(f64, Turn, PosePair, Predicted)> = None;
+        let mut best: Option<(f64, Turn, PosePair, Sizes)> = None;
         for &turn in candidates {
             let pivot = self.pivot_point(setup, from, turn.pivot);
             // The target's place in the gripper frame comes through X: offered only when X's

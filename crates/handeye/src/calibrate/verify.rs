@@ -16,26 +16,14 @@ use statrs::distribution::{ChiSquared, ContinuousCDF};
 
 use crate::calibrate::batch::{Assessment, Options, Report, calibrate, working_distance};
 use crate::model::error::{Error, Result};
-use crate::model::findings::Verdict;
+use crate::model::findings::{Sizes, Verdict};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson, log_so3};
-use crate::model::prior::{Component, Prior, PriorUnit};
+use crate::model::prior::{Component, Prior, LengthUnit};
 
 /// The probability of the χ² test's acceptance region for a saved X of the same rig: one
 /// same-rig recording in a thousand is refused.
 pub const LEVEL: f64 = 0.999;
-
-/// The length unit a saved X is in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SavedUnit {
-    /// Metres (a ROS file: easy_handeye2's YAML is in metres).
-    Metre,
-    /// Millimetres.
-    Millimetre,
-    /// The unit of the recording it came from, not told by the file (`calibrate`'s JSON).
-    Unknown,
-}
 
 /// An X that a calibration saved: `calibrate --output json` or `--output yaml`.
 #[derive(Debug, Clone, PartialEq)]
@@ -49,8 +37,10 @@ pub struct SavedX {
     ///
     /// [`Uncertainty`]: crate::check::uncertainty::Uncertainty
     pub covariance: Option<[[f64; 6]; 6]>,
-    /// The unit of its translation.
-    pub unit: SavedUnit,
+    /// The unit of its translation, when the file tells it (a ROS file: easy_handeye2's YAML is
+    /// in metres); `None` for the unit of the recording it came from, not told (`calibrate`'s
+    /// JSON).
+    pub unit: Option<LengthUnit>,
 }
 
 /// The verdict of [`verify`].
@@ -70,15 +60,6 @@ crate::named_enum!(Consistency, "verify verdict", "verdict" {
     Inconsistent => "inconsistent",
     Undetermined => "undetermined",
 });
-
-/// A rotation and a translation size.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Sizes {
-    /// Degrees.
-    pub rotation_deg: f64,
-    /// The recording's length unit.
-    pub translation: f64,
-}
 
 /// What [`verify`] found: the verdict, the difference, its one-sigma and the words.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -340,8 +321,8 @@ fn with_saved_prior(
     let size = saved.x.translation.vector.norm();
     let guess = match (told_scale(saved, poses), recording_unit(poses)) {
         (Some((scale, _)), _) => scale,
-        (None, Some(SavedUnit::Metre)) if size > NOT_METRES => 1e-3,
-        (None, Some(SavedUnit::Millimetre)) if size < NOT_MILLIMETRES => 1000.0,
+        (None, Some(LengthUnit::Metre)) if size > NOT_METRES => 1e-3,
+        (None, Some(LengthUnit::Millimetre)) if size < NOT_MILLIMETRES => 1000.0,
         _ => 1.0,
     };
     let first = solve(guess)?;
@@ -399,7 +380,7 @@ pub(crate) fn cannot_tell(
 }
 
 /// The words of an inconsistent X: by how much, and the likely cause.
-fn inconsistent_words(d: &Sizes, distance: f64, length: f64, unit: Option<SavedUnit>) -> String {
+fn inconsistent_words(d: &Sizes, distance: f64, length: f64, unit: Option<LengthUnit>) -> String {
     let cause = if d.rotation_deg > LARGE_ROTATION_DEG || d.translation > LARGE_TRANSLATION * length
     {
         "far more than a bump moves a camera: a different rig or setup, or a saved X that was wrong"
@@ -413,19 +394,19 @@ fn inconsistent_words(d: &Sizes, distance: f64, length: f64, unit: Option<SavedU
     )
 }
 
-fn unit_name(unit: Option<SavedUnit>) -> &'static str {
+fn unit_name(unit: Option<LengthUnit>) -> &'static str {
     match unit {
-        Some(SavedUnit::Metre) => "m",
-        Some(SavedUnit::Millimetre) => "mm",
+        Some(LengthUnit::Metre) => "m",
+        Some(LengthUnit::Millimetre) => "mm",
         _ => "unknown",
     }
 }
 
 /// A length in millimetres when the recording's unit is known, else in its own unit.
-fn length_words(v: f64, unit: Option<SavedUnit>) -> String {
+fn length_words(v: f64, unit: Option<LengthUnit>) -> String {
     match unit {
-        Some(SavedUnit::Metre) => format!("{:.2} mm", v * 1e3),
-        Some(SavedUnit::Millimetre) => format!("{v:.2} mm"),
+        Some(LengthUnit::Metre) => format!("{:.2} mm", v * 1e3),
+        Some(LengthUnit::Millimetre) => format!("{v:.2} mm"),
         _ => format!("{v:.4} (the input's unit)"),
     }
 }
@@ -449,7 +430,7 @@ pub fn limit_sigmas() -> f64 {
 pub(crate) fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, notes: &mut Vec<String>) -> f64 {
     let (scale, words) = match (told_scale(saved, poses), saved.unit) {
         (Some(told), _) => told,
-        (None, SavedUnit::Unknown) => {
+        (None, None) => {
             // A file that does not say: the unit whose X is nearer the recording's, when a factor
             // of 1000 brings it ten times nearer.
             let gap = |k: f64| (saved.x.translation.vector * k - new.translation.vector).norm();
@@ -475,10 +456,10 @@ pub(crate) fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, no
 /// the recording's, with the words of the note.
 fn told_scale(saved: &SavedX, poses: &[PosePair]) -> Option<(f64, &'static str)> {
     match (saved.unit, recording_unit(poses)) {
-        (SavedUnit::Metre, Some(SavedUnit::Millimetre)) => {
+        (Some(LengthUnit::Metre), Some(LengthUnit::Millimetre)) => {
             Some((1000.0, "metres, the recording in millimetres"))
         }
-        (SavedUnit::Millimetre, Some(SavedUnit::Metre)) => {
+        (Some(LengthUnit::Millimetre), Some(LengthUnit::Metre)) => {
             Some((1e-3, "millimetres, the recording in metres"))
         }
         _ => None,
@@ -495,11 +476,8 @@ const NOT_MILLIMETRES: f64 = 2.0;
 
 /// Metres or millimetres from the size of the poses' translations (the median of each pose's
 /// larger translation), `None` when it fits neither.
-fn recording_unit(poses: &[PosePair]) -> Option<SavedUnit> {
-    crate::check::units::length_unit(poses).map(|u| match u {
-        PriorUnit::Metre => SavedUnit::Metre,
-        PriorUnit::Millimetre => SavedUnit::Millimetre,
-    })
+fn recording_unit(poses: &[PosePair]) -> Option<LengthUnit> {
+    crate::check::units::length_unit(poses)
 }
 
 /// (log(R_a R_bᵀ), t_a − t_b): the convention of the bootstrap's replicate errors.

@@ -5,7 +5,7 @@
 use crate::check::outliers::{median, working_distance};
 use crate::model::error::{Error, Result};
 use crate::model::motion::PosePair;
-use crate::model::prior::{Prior, PriorUnit};
+use crate::model::prior::{Prior, LengthUnit};
 
 /// A prior larger than this many times the poses' size (the larger of the median robot and camera
 /// translation) is in another length unit: a millimetre prior on a recording in metres is 1000
@@ -52,7 +52,7 @@ const MIXED_UNITS_RATIO: f64 = 50.0;
 
 /// The poses' length unit told by their size (the median over the poses of the larger of the
 /// robot's and the camera's translation): metres when it is 0.05–10, millimetres when 50–10,000.
-pub(crate) fn length_unit(poses: &[PosePair]) -> Option<PriorUnit> {
+pub(crate) fn length_unit(poses: &[PosePair]) -> Option<LengthUnit> {
     let size = median(
         poses
             .iter()
@@ -66,16 +66,16 @@ pub(crate) fn length_unit(poses: &[PosePair]) -> Option<PriorUnit> {
             .collect(),
     );
     if (0.05..=10.0).contains(&size) {
-        Some(PriorUnit::Metre)
+        Some(LengthUnit::Metre)
     } else if (50.0..=10_000.0).contains(&size) {
-        Some(PriorUnit::Millimetre)
+        Some(LengthUnit::Millimetre)
     } else {
         None
     }
 }
 
 /// One prior in the unit of poses of size `size` and unit `poses_unit` (see [`in_poses_unit`]).
-fn in_unit(prior: &Prior, size: f64, poses_unit: Option<PriorUnit>) -> Result<Prior> {
+fn in_unit(prior: &Prior, size: f64, poses_unit: Option<LengthUnit>) -> Result<Prior> {
     let refuse = |message: String| {
         Err(Error::InvalidParameter {
             name: "prior",

@@ -6,13 +6,14 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::calibrate::verify::{SavedUnit, SavedX};
+use crate::calibrate::verify::SavedX;
 use crate::io::json_text::{line_of, steps};
 use crate::io::peer::{declared_setup, yaml_transform};
 use crate::io::yaml_tree::YamlTree;
 use crate::io::{parse_error, read_text, transform_from_json};
 use crate::model::error::Result;
 use crate::model::motion::Setup;
+use crate::model::prior::LengthUnit;
 
 /// Reads a saved X from a file (JSON when its first character is `{`, YAML otherwise); errors name
 /// the file, the line and the field.
@@ -84,7 +85,7 @@ fn parse_json(text: &str, file: &str) -> Result<SavedX> {
         x,
         setup,
         covariance,
-        unit: SavedUnit::Unknown,
+        unit: None,
     })
 }
 
@@ -137,11 +138,11 @@ fn covariance(v: &Value) -> std::result::Result<[[f64; 6]; 6], (String, String)>
 /// names the line and the field.
 fn parse_yaml(text: &str, file: &str) -> Result<SavedX> {
     let mut sigma: Option<(f64, f64)> = None;
-    let mut unit = SavedUnit::Metre;
+    let mut unit = Some(LengthUnit::Metre);
     for comment in text.lines().filter_map(|l| l.trim().strip_prefix('#')) {
         let comment = comment.trim();
         if comment.starts_with("frame:") && comment.contains("translation in the input's unit") {
-            unit = SavedUnit::Unknown;
+            unit = None;
         }
         if let Some(rest) = comment.strip_prefix("uncertainty (one sigma):") {
             sigma = one_sigma(rest);

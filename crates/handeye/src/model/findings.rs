@@ -33,6 +33,22 @@ pub struct Direction {
     pub verdict: Verdict,
 }
 
+/// A rotation and a translation size of X (an error, its one-sigma, a difference, a goal).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Sizes {
+    /// Rotation, degrees.
+    pub rotation_deg: f64,
+    /// Translation, the recording's length unit.
+    pub translation: f64,
+}
+
+impl Sizes {
+    /// Within `goal` in both sizes.
+    pub fn within(&self, goal: &Sizes) -> bool {
+        self.rotation_deg <= goal.rotation_deg && self.translation <= goal.translation
+    }
+}
+
 /// Rotation or translation of X.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

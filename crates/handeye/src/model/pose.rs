@@ -104,7 +104,8 @@ impl ReadTransform {
 }
 
 /// Reads a homogeneous 4×4 matrix (row-major, last row `0 0 0 1`) as a transform, refusing
-/// anything that is not a rigid transform (see [`crate::io::Projections`] for what is rounded).
+/// anything that is not a rigid transform; a rotation orthonormal only to the precision it was
+/// printed with is projected onto the nearest rotation.
 pub fn transform_from_matrix4(m: &Matrix4<f64>) -> Result<Transform, TransformProblem> {
     read_matrix4(m).map(|r| r.transform)
 }

@@ -50,9 +50,9 @@ impl Component {
     }
 }
 
-/// The length unit a prior names (`tz=0.12m`, `tz=120mm`), converted to the poses' own.
+/// A length unit: the one a prior names (`tz=0.12m`, `tz=120mm`, converted to the poses' own), a saved X's, a recording's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum PriorUnit {
+pub enum LengthUnit {
     /// Metres (`m`).
     #[serde(rename = "m")]
     Metre,
@@ -61,7 +61,7 @@ pub enum PriorUnit {
     Millimetre,
 }
 
-impl PriorUnit {
+impl LengthUnit {
     /// Its suffix: `m` or `mm`.
     pub fn suffix(self) -> &'static str {
         match self {
@@ -92,7 +92,7 @@ pub struct Prior {
     /// The unit the value was written in when it names one (`tz=0.12m`): converted to the
     /// poses' unit, told by their sizes, before use. `None`: the poses' unit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub unit: Option<PriorUnit>,
+    pub unit: Option<LengthUnit>,
 }
 
 /// A prior as a report gives it (`"prior": {"tz": {"value", "sigma"}}`).
@@ -168,12 +168,12 @@ impl std::str::FromStr for Prior {
             Some((v, sg)) => (v, Some(sg)),
             None => (rest, None),
         };
-        let number = |t: &str| -> Result<(f64, Option<PriorUnit>)> {
+        let number = |t: &str| -> Result<(f64, Option<LengthUnit>)> {
             let t = t.trim();
             let (digits, unit) = if let Some(d) = t.strip_suffix("mm") {
-                (d, Some(PriorUnit::Millimetre))
+                (d, Some(LengthUnit::Millimetre))
             } else if let Some(d) = t.strip_suffix('m') {
-                (d, Some(PriorUnit::Metre))
+                (d, Some(LengthUnit::Metre))
             } else {
                 (t, None)
             };
@@ -205,7 +205,7 @@ impl std::str::FromStr for Prior {
 
 impl std::fmt::Display for Prior {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let unit = self.unit.map_or("", PriorUnit::suffix);
+        let unit = self.unit.map_or("", LengthUnit::suffix);
         if self.sigma > 0.0 {
             write!(
                 f,
@@ -239,13 +239,13 @@ mod tests {
         let p: Prior = "tz=120mm+-2".parse().unwrap();
         assert_eq!(
             (p.value, p.sigma, p.unit),
-            (120.0, 2.0, Some(PriorUnit::Millimetre))
+            (120.0, 2.0, Some(LengthUnit::Millimetre))
         );
         assert_eq!(p.to_string(), "tz=120mm+-2mm");
         let p: Prior = "tz=0.12+-0.002m".parse().unwrap();
         assert_eq!(
             (p.value, p.sigma, p.unit),
-            (0.12, 0.002, Some(PriorUnit::Metre))
+            (0.12, 0.002, Some(LengthUnit::Metre))
         );
         assert!("tz=0.12m+-2mm".parse::<Prior>().is_err());
         assert!("tz=0.12km".parse::<Prior>().is_err());

@@ -41,7 +41,9 @@ use crate::solve::{Calibration, Method, solve};
 
 mod intrinsics;
 pub(crate) use intrinsics::check_determined;
-pub use intrinsics::{IntrinsicsSigma, RefinedIntrinsics};
+pub use intrinsics::RefinedIntrinsics;
+#[cfg(feature = "internals")]
+pub use intrinsics::IntrinsicsSigma;
 
 /// Settings of [`reprojection`]; `Default` gives the values documented on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

@@ -21,7 +21,9 @@ mod convention;
 mod mount;
 mod note;
 
-pub use mount::{CameraMount, MountFrame};
+pub use mount::CameraMount;
+#[cfg(feature = "rosbag")]
+pub use mount::MountFrame;
 pub use note::Note;
 
 /// Where a [`Recording`] is read from.
@@ -235,7 +237,7 @@ fn read_source(
         }
         #[cfg(feature = "rosbag")]
         Source::Bag { path, frames } => {
-            crate::io::no_rotations(
+            crate::io::pose_reader::no_rotations(
                 options.rotations,
                 &path.display().to_string(),
                 "a ROS 2 recording (tf and pose messages: x, y, z, w quaternions)",

@@ -57,7 +57,7 @@ pub enum Note {
         max_gap: f64,
     },
     /// Every angle one side of `source` gave in degrees (a convention in degrees) is within ±2π:
-    /// radians given to a convention in degrees, most likely (see [`crate::io::DegreeAngles`]).
+    /// radians given to a convention in degrees, most likely (every angle within a turn of a whole recording).
     SmallDegrees {
         /// The file.
         source: String,
