@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use anyhow::{Context, Result, anyhow};
-use handeye::experiment::{Experiment, ExperimentReport, MethodSummary};
+use handeye::experiment::{Experiment, ExperimentReport};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -23,8 +23,27 @@ pub fn register_font() {
     });
 }
 
-/// A number read off a method's summary.
-type Metric = fn(&MethodSummary) -> f64;
+/// A number read off a method's summary (the real-time panels).
+#[derive(Clone, Copy)]
+enum Summary {
+    /// Time per calibration, µs.
+    Time,
+    /// Mean ‖R_est − R‖_F.
+    Rotation,
+    /// Mean ‖t − t_est‖ / ‖t‖.
+    Translation,
+}
+
+/// A number read off each series of a method (the accuracy and adaptability curves).
+#[derive(Clone, Copy)]
+enum PerSeries {
+    /// ‖R_est − R‖_F.
+    Rotation,
+    /// ‖t − t_est‖ / ‖t‖.
+    Translation,
+    /// Calibrations made.
+    Calibrations,
+}
 
 /// Figure size in pixels (SVG units).
 const SIZE: (u32, u32) = (1000, 420);
@@ -61,10 +80,19 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-    let per = |name: &str, f: fn(&handeye::experiment::SeriesResult) -> f64| -> Vec<f64> {
+    let per = |name: &str, of: PerSeries| -> Vec<f64> {
+        let value = |r: f64, t: f64, n: usize| match of {
+            PerSeries::Rotation => r,
+            PerSeries::Translation => t,
+            PerSeries::Calibrations => n as f64,
+        };
         report
             .method(name)
-            .map(|m| m.per_series.iter().map(f).collect())
+            .map(|m| {
+                (m.per_series.iter())
+                    .map(|s| value(s.rot_fro, s.trans_rel, s.calibrations))
+                    .collect()
+            })
             .unwrap_or_default()
     };
     let curve = |label, name: &'static str, f, color, dotted| Curve {
@@ -76,8 +104,7 @@ where
     match report.experiment {
         Experiment::Accuracy => {
             let (left, right) = root.split_horizontally(SIZE.0 / 2);
-            let rot = |r: &handeye::experiment::SeriesResult| r.rot_fro;
-            let trans = |r: &handeye::experiment::SeriesResult| r.trans_rel;
+            let (rot, trans) = (PerSeries::Rotation, PerSeries::Translation);
             lines(
                 &left,
                 "(a) mean rotation error ‖R_est − R‖_F per series",
@@ -96,7 +123,7 @@ where
             )?;
         }
         Experiment::Adaptability => {
-            let n = |r: &handeye::experiment::SeriesResult| r.calibrations as f64;
+            let n = PerSeries::Calibrations;
             lines(
                 &root,
                 "calibrations per series",
@@ -107,27 +134,28 @@ where
             )?;
         }
         Experiment::Realtime => {
-            let methods: Vec<&MethodSummary> = ["adaptive", "optimal"]
+            let methods: Vec<_> = ["adaptive", "optimal"]
                 .iter()
                 .filter_map(|m| report.method(m))
                 .collect();
             let areas = root.split_evenly((1, 3));
-            let panels: [(&str, Metric); 3] = [
-                ("time per calibration (µs)", |m| {
-                    m.time_per_calibration_s * 1e6
-                }),
-                ("mean ‖R_est − R‖_F", |m| m.rot_fro_mean),
-                ("mean ‖t − t_est‖ / ‖t‖", |m| m.trans_rel_mean),
+            let panels = [
+                ("time per calibration (µs)", Summary::Time),
+                ("mean ‖R_est − R‖_F", Summary::Rotation),
+                ("mean ‖t − t_est‖ / ‖t‖", Summary::Translation),
             ];
-            for (area, (title, f)) in areas.iter().zip(panels) {
-                bars(
-                    area,
-                    title,
-                    &methods
-                        .iter()
-                        .map(|m| (m.method.as_str(), f(m)))
-                        .collect::<Vec<_>>(),
-                )?;
+            for (area, (title, summary)) in areas.iter().zip(panels) {
+                let bars_of: Vec<(&str, f64)> = (methods.iter())
+                    .map(|m| {
+                        let value = match summary {
+                            Summary::Time => m.time_per_calibration_s * 1e6,
+                            Summary::Rotation => m.rot_fro_mean,
+                            Summary::Translation => m.trans_rel_mean,
+                        };
+                        (m.method.as_str(), value)
+                    })
+                    .collect();
+                bars(area, title, &bars_of)?;
             }
         }
     }
@@ -287,16 +315,15 @@ where
         (&left, "mean ‖R_est − R‖_F vs poses seen", 0usize),
         (&right, "mean ‖t − t_est‖ / ‖t‖ vs poses seen", 1usize),
     ] {
-        let values = |c: &handeye::experiment::TrackingCurve| {
+        let values = |k: usize| {
+            let c = &report.curves[k];
             if pick == 0 {
                 c.rot_fro.clone()
             } else {
                 c.trans_rel.clone()
             }
         };
-        let all: Vec<f64> = report
-            .curves
-            .iter()
+        let all: Vec<f64> = (0..report.curves.len())
             .flat_map(values)
             .filter(|v| v.is_finite() && *v > 0.0)
             .collect();
@@ -322,11 +349,11 @@ where
             .label_style(("sans-serif", 12))
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
-        for (c, color) in report.curves.iter().zip(colors) {
+        for (k, (c, color)) in report.curves.iter().zip(colors).enumerate() {
             let points: Vec<(f64, f64)> = c
                 .poses
                 .iter()
-                .zip(values(c))
+                .zip(values(k))
                 .filter(|(_, v)| v.is_finite() && *v > 0.0)
                 .map(|(p, v)| (*p as f64, v))
                 .collect();

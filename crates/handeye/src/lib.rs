@@ -126,7 +126,10 @@ pub mod experiment {
     //! turns and [`advise`](crate::advise)'s suggestions need to reach the same uncertainty.
 
     pub use crate::calibrate::advice::{ClosedLoop, closed_loop};
-    pub use crate::online::experiment::*;
+    pub use crate::online::experiment::{
+        Experiment, ExperimentConfig, ExperimentReport, TrackingConfig, TrackingReport,
+        run_experiment, run_tracking,
+    };
 }
 
 // # The public surface, layer by layer.
