@@ -8,7 +8,7 @@ use std::rc::Rc;
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::read_truth;
-use handeye::{AdaptiveParams, Selection, StreamReading, StreamReadings};
+use handeye::{AdaptiveParams, Selection, StreamReading};
 use handeye::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::{Step, TrackOptions, TrackReport as Report};
 
@@ -267,9 +267,6 @@ pub fn run(args: Args) -> Result<()> {
     let mut on_pixels = 0usize;
     // The input's length unit as the first poses tell, for the ROS outputs (in metres).
     let mut pose_unit: Option<Unit> = None;
-    // The paper's estimator has no checks of its own: the batch's check of the readings runs on
-    // the first poses (the accumulating estimator runs it itself).
-    let mut readings = StreamReadings::new(setup);
     // Input lines of the recent poses, for naming the ones held out (the tracker may hold out a
     // pose up to 256 poses after it came, when it judges its first poses together).
     let mut lines: VecDeque<(usize, usize, Option<f64>)> = VecDeque::with_capacity(LINES_KEPT);
@@ -309,7 +306,9 @@ pub fn run(args: Args) -> Result<()> {
         if pose_unit.is_none() {
             pose_unit = Unit::infer(&record.pose);
         }
-        if !accumulate && let Some(found) = readings.push(&record.pose) {
+        // The paper's estimator has no checks of its own: the calibrator runs the batch's check
+        // of the readings on the first poses (the accumulating estimator runs it itself).
+        if let Some(found) = calibrator.misread() {
             out.flush_quietly();
             warn_misread(found);
         }
@@ -359,10 +358,10 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
-    if !accumulate && let Some(found) = readings.finish() {
+    let finished = calibrator.finish();
+    if let Some(found) = calibrator.misread() {
         warn_misread(found);
     }
-    let finished = calibrator.finish();
     if let Some(e) = calibrator.refusal() {
         out.flush()?;
         return Err(e.into());

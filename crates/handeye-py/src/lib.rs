@@ -11,7 +11,7 @@ use handeye::io::{
     BagFrames, CameraMount, Format, Recording, RecordingOptions, Source, TimeOffset,
 };
 use handeye::transform_from_matrix4;
-use handeye::{AdaptiveParams, Selection, StreamReadings};
+use handeye::{AdaptiveParams, Selection};
 use handeye::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::{Method, Pairing, PosePair, Setup, Transform};
 use nalgebra::{Matrix3, Matrix4, Vector3};
@@ -938,11 +938,8 @@ fn parse_setup(setup: &str) -> PyResult<Setup> {
 #[pyclass(name = "_OnlineCalibrator")]
 struct PyOnline {
     inner: OnlineCalibrator,
-    /// The readings check of the first poses, as the command line runs it: for the paper's
-    /// estimator, which has none of its own (the accumulating one runs it itself, and a restored
-    /// calibrator has had its first poses).
-    readings: Option<StreamReadings>,
-    /// What it found, until Python takes it as a warning.
+    /// What the calibrator's readings check of the first poses found (the paper's estimator),
+    /// until Python takes it as a warning.
     found: Option<String>,
     /// With `intrinsics`: the calibrator on the pixels of records with detections, which takes
     /// the place of `inner`.
@@ -1020,8 +1017,6 @@ impl PyOnline {
             written: handeye::Written::NAMED,
         };
         let given = priors(prior)?;
-        let readings =
-            (config.estimator != Estimator::Accumulate).then(|| StreamReadings::new(config.setup));
         let pixels = match intrinsics {
             Some(path) => Some(online_pixels(&path, &config, &given)?),
             None => None,
@@ -1030,7 +1025,6 @@ impl PyOnline {
             inner: OnlineCalibrator::new(config)
                 .and_then(|c| c.with_priors(&given))
                 .map_err(value_error)?,
-            readings,
             found: None,
             pixels,
         })
@@ -1060,7 +1054,7 @@ impl PyOnline {
             None => self.inner.push(&pose),
         }
         .map_err(value_error)?;
-        if let Some(found) = self.readings.as_mut().and_then(|r| r.push(&pose)) {
+        if let Some(found) = self.inner.misread() {
             self.found = Some(found.to_string());
         }
         let setup = self.inner.config().setup;
@@ -1128,11 +1122,11 @@ impl PyOnline {
             }
             return Ok(Some(report.json(setup, None).to_string()));
         }
-        if let Some(found) = self.readings.as_mut().and_then(StreamReadings::finish) {
-            self.found = Some(found.to_string());
-        }
         let setup = self.inner.config().setup;
         let report = self.inner.finish();
+        if let Some(found) = self.inner.misread() {
+            self.found = Some(found.to_string());
+        }
         // A prior in another length unit than the poses, told only now on a short stream.
         if let Some(e) = self.inner.refusal() {
             return Err(value_error(e));
@@ -1204,7 +1198,6 @@ impl PyOnline {
         inner.config().validate().map_err(value_error)?;
         Ok(Self {
             inner,
-            readings: None,
             found: None,
             pixels: None,
         })

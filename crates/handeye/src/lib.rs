@@ -152,7 +152,7 @@ pub use solve::{Calibration, Method, RobotWorldMethod, TsaiOptions, solve};
 pub use check::holdout::leave_one_out;
 pub use check::outliers::PoseResiduals;
 pub use check::quality::errors_against_truth;
-pub use check::stream::{StreamReading, StreamReadings};
+pub use check::stream::StreamReading;
 pub use check::uncertainty::{AtPoint, Uncertainty};
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, AdviseOptions, Pivot, advise};

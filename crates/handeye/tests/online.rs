@@ -371,3 +371,46 @@ fn an_absurd_n_init_is_refused_before_anything_is_allocated() {
     };
     assert!(fine.validate().is_ok());
 }
+
+/// The paper's estimator has no checks of its own: the calibrator runs `calibrate`'s readings
+/// check on its first 64 poses and says once what it found; as given, it finds nothing; the
+/// accumulating estimator checks its readings itself.
+#[test]
+fn the_paper_estimator_checks_the_readings_of_its_first_poses() {
+    use handeye::StreamReading;
+    let s = simulate(&SimConfig::large_motions(), 5, 0);
+    let inverted: Vec<PosePair> = (s.poses.iter())
+        .map(|p| PosePair {
+            base_from_gripper: p.base_from_gripper.inverse(),
+            ..*p
+        })
+        .collect();
+    let run = |poses: &[PosePair], estimator| {
+        let config = OnlineConfig {
+            estimator,
+            ..OnlineConfig::default()
+        };
+        let mut calibrator = OnlineCalibrator::new(config).unwrap();
+        let mut found = Vec::new();
+        for (k, pose) in poses.iter().enumerate() {
+            calibrator.push(pose).unwrap();
+            found.extend(calibrator.misread().map(|f| (k + 1, f)));
+        }
+        calibrator.finish();
+        found.extend(calibrator.misread().map(|f| (0, f)));
+        found
+    };
+    let found = run(&inverted, Estimator::Paper);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(found[0].0, 64, "told at the 64th pose");
+    assert!(
+        matches!(found[0].1, StreamReading::ReadWrongly(_)),
+        "{found:?}"
+    );
+    assert!(run(&s.poses, Estimator::Paper).is_empty());
+    // A short stream is checked at its end.
+    let short = run(&inverted[..30], Estimator::Paper);
+    assert_eq!(short.len(), 1, "{short:?}");
+    assert_eq!(short[0].0, 0, "told at finish");
+    assert!(run(&inverted, Estimator::Accumulate).is_empty());
+}

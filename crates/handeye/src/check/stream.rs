@@ -1,6 +1,8 @@
 //! The readings check on the first poses of a stream: what `calibrate` checks on a whole
 //! recording, for an online calibrator that has only its first poses.
 
+use serde::{Deserialize, Serialize};
+
 use crate::check::outliers::{axis_scatter, pose_outliers};
 use crate::check::readings::{DEGENERATE_SCATTER, check_readings};
 use crate::model::findings::Written;
@@ -9,7 +11,7 @@ use crate::model::warning::Warning;
 
 /// What the first poses of a stream say about how they were read: the checks `calibrate` makes
 /// on a whole recording, for an online calibrator that has only its first poses.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum StreamReading {
     /// Every rotation of the first `poses` poses is about one axis: X's rotation about it, and
     /// its translation along it, are not determined by them.
@@ -41,7 +43,7 @@ impl std::fmt::Display for StreamReading {
 
 /// The readings check of a stream, as every face runs it: on the first [`StreamReadings::SAMPLE`]
 /// poses, or at the end on a shorter stream of at least [`StreamReadings::MIN_POSES`].
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StreamReadings {
     setup: Setup,
     first: Vec<PosePair>,

@@ -19,6 +19,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use crate::check::quality::{errors_against_truth, residual_rms};
+use crate::check::stream::{StreamReading, StreamReadings};
 use crate::model::error::{Error, Result};
 use crate::model::motion::{MotionPair, PosePair, Setup};
 use crate::model::findings::Written;
@@ -335,6 +336,13 @@ pub struct OnlineCalibrator {
     /// The accumulating estimator and what it did with the last pose.
     tracker: Option<Tracker>,
     step: Step,
+    /// The paper's estimator: the readings check of the first poses (the accumulating estimator
+    /// checks its readings itself), and what it found, until taken. Absent from a calibrator
+    /// saved before they were kept here: no check then.
+    #[serde(default)]
+    readings: Option<StreamReadings>,
+    #[serde(default)]
+    misread: Option<StreamReading>,
 }
 
 impl OnlineCalibrator {
@@ -357,6 +365,9 @@ impl OnlineCalibrator {
             tracker: (config.estimator == Estimator::Accumulate)
                 .then(|| Tracker::new(config.setup, config.tracking).with_written(config.written)),
             step: Step::default(),
+            readings: (config.estimator != Estimator::Accumulate)
+                .then(|| StreamReadings::new(config.setup)),
+            misread: None,
         })
     }
 
@@ -483,6 +494,9 @@ impl OnlineCalibrator {
                 return Err(e);
             }
         }
+        if let Some(found) = self.readings.as_mut().and_then(|r| r.push(pose)) {
+            self.misread = Some(found);
+        }
         let selections = self.selector.offer(self.poses, pose);
         Ok(selections
             .into_iter()
@@ -540,9 +554,22 @@ impl OnlineCalibrator {
     }
 
     /// The accumulating estimator's report at the end of the stream (the current estimate, if it
-    /// is determined and was not just reported).
+    /// is determined and was not just reported). With the paper's estimator, the readings check
+    /// runs now on a stream shorter than its sample ([`OnlineCalibrator::misread`]).
     pub fn finish(&mut self) -> Option<Report> {
+        if let Some(found) = self.readings.as_mut().and_then(StreamReadings::finish) {
+            self.misread = Some(found);
+        }
         self.tracker.as_mut()?.finish()
+    }
+
+    /// What the readings check of the first poses found, once (then `None`): with the paper's
+    /// estimator, which has no checks of its own, the check `calibrate` makes on a recording runs
+    /// on the first 64 poses (or at [`OnlineCalibrator::finish`] on a stream of 16 to 63);
+    /// its calibrations are then from poses read wrongly, or about one axis. The
+    /// accumulating estimator checks its readings itself and refuses.
+    pub fn misread(&mut self) -> Option<StreamReading> {
+        self.misread.take()
     }
 
     /// The same calibrator with priors on X's translation for a low-DOF robot (the accumulating
