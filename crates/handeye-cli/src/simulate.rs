@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
-use handeye::io::{Truth, truth_json};
+use handeye::io::Truth;
 use handeye::sim::{SimConfig, simulate};
 use serde_json::json;
 
@@ -95,7 +95,7 @@ pub fn run(args: Args) -> Result<()> {
         };
         std::fs::write(
             path,
-            serde_json::to_string_pretty(&truth_json(&truth))? + "\n",
+            serde_json::to_string_pretty(&truth.json())? + "\n",
         )
         .with_context(|| format!("cannot write {}", path.display()))?;
     }

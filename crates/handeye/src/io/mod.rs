@@ -66,7 +66,7 @@ pub use pose_reader::{
     open_pose_stream, open_poses, read_pose_file,
 };
 pub use sync::TimeOffset;
-pub use truth::{Truth, read_truth, truth_json};
+pub use truth::{Truth, read_truth};
 // Each format's own reader, the io helpers, and the parsers of text behind the file readers
 // (`parse_intrinsics`, `parse_saved_x`, `frames_of`, the joints of a pose file): crate-internal;
 // public with `internals` for this crate's tests.

@@ -113,24 +113,26 @@ fn line_of_field(text: &str, field: &str) -> usize {
     line_of(text, &steps(field)).unwrap_or(1)
 }
 
-/// The JSON of a truth file: X under its frame name, and the target pose when known, each as a
-/// full transform (translation, quaternion and matrix).
-pub fn truth_json(truth: &Truth) -> Value {
-    let mut v = json!({ truth.frame.as_str(): TransformJson::from(&truth.x) });
-    if let Some((name, t)) = &truth.target {
-        v[name.as_str()] = json!(TransformJson::from(t));
+impl Truth {
+    /// The JSON of its truth file: X under its frame name, and the target pose when known, each
+    /// as a full transform (translation, quaternion and matrix).
+    pub fn json(&self) -> Value {
+        let mut v = json!({ self.frame.as_str(): TransformJson::from(&self.x) });
+        if let Some((name, t)) = &self.target {
+            v[name.as_str()] = json!(TransformJson::from(t));
+        }
+        v
     }
-    v
 }
 
-/// Writes a truth file (pretty JSON, see [`truth_json`]).
+/// Writes a truth file (pretty JSON, see [`Truth::json`]).
 #[cfg(any(test, feature = "internals"))]
 pub fn write_truth(path: &Path, truth: &Truth) -> Result<()> {
     let io_error = |e: std::io::Error| crate::model::error::Error::Io {
         file: path.display().to_string(),
         source: e,
     };
-    let text = serde_json::to_string_pretty(&truth_json(truth))
+    let text = serde_json::to_string_pretty(&truth.json())
         .map_err(|e| io_error(std::io::Error::other(e)))?;
     std::fs::write(path, text + "\n").map_err(io_error)
 }
