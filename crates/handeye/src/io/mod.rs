@@ -47,6 +47,8 @@ pub use intrinsics::read_intrinsics;
 pub use jsonl::parse_pose_line;
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
+#[cfg(feature = "rosbag")]
+pub use recording::{BagFrameRecording, read_bag_frames};
 pub use recording::{CameraMount, MountFrame, Note, Recording, RecordingOptions, Source};
 pub use saved::read_saved_x;
 pub use sync::TimeOffset;
