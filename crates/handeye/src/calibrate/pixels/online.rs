@@ -136,7 +136,7 @@ impl OnlinePixels {
     /// Solves on every frame so far and reports it.
     fn estimate(&mut self, reason: Reason) -> Result<TrackReport> {
         let setup = self.setup;
-        let (used, solution, applied, reading_check) =
+        let (used, solution, applied, reading_check, choice) =
             solved(
             &self.frames,
             &self.camera,
@@ -146,7 +146,14 @@ impl OnlinePixels {
         )?;
         let poses = pose_pairs(&used, &solution.start_poses);
         let target = solution.target;
-        let batch = report(&used, setup, &self.options, solution, applied, reading_check)?;
+        let batch = report(
+            &used,
+            setup,
+            &self.options,
+            solution,
+            (applied, reading_check),
+            &choice,
+        )?;
         let residual = PoseResidualSummary::of(pose_residuals(
             &poses,
             setup,
