@@ -109,6 +109,7 @@ pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
 
 /// The intrinsics of a ROS `sensor_msgs/msg/CameraInfo` message (`k`, `d`, `distortion_model`,
 /// `width`, `height`), or what is wrong with them, naming the field.
+#[cfg(feature = "rosbag")]
 pub(crate) fn intrinsics_of_camera_info(
     k: &[f64; 9],
     d: &[f64],
