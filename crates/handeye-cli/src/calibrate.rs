@@ -297,14 +297,28 @@ pub(crate) fn pixel_input(
     };
     let given = [
         ("--robot/--camera streams", input.robot.is_some()),
-        ("a ROS 2 recording", input.is_bag()),
         // The records' JSON fields name their own conventions (`kuka_abc_deg`, `rvec`, …).
         ("--rotation", !input.rotation.is_empty()),
     ];
     if let Some((flag, _)) = given.iter().find(|(_, given)| *given) {
         return Err(refuse(format!(
-            "{flag} is not offered with --method reprojection (yet): give a JSON Lines file with `detections`"
+            "{flag} is not offered with --method reprojection (yet): give a JSON Lines file with `detections`, or a ROS 2 recording of a tag's detections"
         )));
+    }
+    if let Some(path) = report {
+        crate::report::check_writable(path)?;
+    }
+    if let Some(read) = crate::input::read_bag_pixels(input)? {
+        let camera = match (intrinsics, read.intrinsics) {
+            (Some(file), _) => handeye::io::read_intrinsics(file)?,
+            (None, Some(camera)) => camera,
+            (None, None) => {
+                return Err(refuse(
+                    "reprojection needs the camera's intrinsics: the recording has no sensor_msgs/CameraInfo topic (…camera_info); give --intrinsics FILE (OpenCV YAML or ROS camera_info) or --camera-info-topic TOPIC".into(),
+                ));
+            }
+        };
+        return Ok((camera, read.series, read.names));
     }
     let Some(intrinsics) = intrinsics else {
         return Err(refuse(
@@ -316,9 +330,6 @@ pub(crate) fn pixel_input(
             "reprojection needs a JSON Lines file with `detections`".into(),
         ));
     };
-    if let Some(path) = report {
-        crate::report::check_writable(path)?;
-    }
     let camera = handeye::io::read_intrinsics(intrinsics)?;
     let series = handeye::io::read_frames(path)?;
     let names: Vec<String> = series

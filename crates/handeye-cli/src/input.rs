@@ -80,6 +80,32 @@ pub struct InputArgs {
         help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
     )]
     pub target_topic: Option<String>,
+    /// ROS 2 recording, with --method reprojection and a --target-topic of
+    /// apriltag_msgs/AprilTagDetectionArray (apriltag_ros): the side of the tag's black square,
+    /// metres. Its corners are placed in AprilTag's order: (−s/2, s/2), (s/2, s/2), (s/2, −s/2),
+    /// (−s/2, −s/2) in the tag's frame.
+    #[arg(
+        long,
+        value_name = "METRES",
+        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+    )]
+    pub tag_size: Option<f64>,
+    /// ROS 2 recording, with --tag-size: the id of the tag that is the target (detections of
+    /// other ids are left out). Default: the only id the topic shows.
+    #[arg(
+        long,
+        value_name = "ID",
+        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+    )]
+    pub tag_id: Option<i32>,
+    /// ROS 2 recording, with --tag-size: a sensor_msgs/CameraInfo topic for the intrinsics
+    /// (--intrinsics FILE overrides it). Default: the recording's one topic named `…camera_info`.
+    #[arg(
+        long,
+        value_name = "TOPIC",
+        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+    )]
+    pub camera_info_topic: Option<String>,
     /// Camera on the gripper (X = gripper_from_camera) or fixed (X = base_from_camera).
     #[arg(long, default_value_t = Setup::EyeInHand, value_parser = crate::values::named::<Setup>())]
     pub setup: Setup,
@@ -173,6 +199,47 @@ fn bag_source(args: &InputArgs) -> Result<Option<Source>> {
     }))
 }
 
+/// The flags of a tag's detections in a ROS 2 recording, given.
+fn tag_flags(args: &InputArgs) -> Option<&'static str> {
+    [
+        ("--tag-size", args.tag_size.is_some()),
+        ("--tag-id", args.tag_id.is_some()),
+        ("--camera-info-topic", args.camera_info_topic.is_some()),
+    ]
+    .into_iter()
+    .find(|(_, given)| *given)
+    .map(|(flag, _)| flag)
+}
+
+/// The frames of a calibration on the pixels from a ROS 2 recording (`--target-topic` of tag
+/// detections, `--tag-size`), its notes told on stderr; `None` when INPUT is not a recording.
+pub fn read_bag_pixels(args: &InputArgs) -> Result<Option<handeye::io::BagFrameRecording>> {
+    let Some(Source::Bag { path, frames }) = bag_source(args)? else {
+        return Ok(None);
+    };
+    let Some(size) = args.tag_size else {
+        return Err(handeye::Error::InvalidParameter {
+            name: "tag_size",
+            message: "a ROS 2 recording is calibrated on the pixels from a tag's detections: give --target-topic (apriltag_msgs/AprilTagDetectionArray) and --tag-size METRES".into(),
+        }
+        .into());
+    };
+    let tags = handeye::io::rosbag::BagTags {
+        size,
+        id: args.tag_id,
+        camera_info_topic: args.camera_info_topic.clone(),
+    };
+    let read =
+        handeye::io::read_bag_frames(&path, &frames, &tags, &options(args, Reading::AsGiven)?)?;
+    for note in &read.notes {
+        match note {
+            Note::CameraMount { .. } => crate::tell!("warning: {note}"),
+            _ => crate::tell!("{note}"),
+        }
+    }
+    Ok(Some(read))
+}
+
 /// The options of [`Recording::read`] from the flags, for poses to be solved read as `reading`.
 fn options(args: &InputArgs, reading: Reading) -> Result<RecordingOptions> {
     Ok(RecordingOptions {
@@ -225,6 +292,15 @@ fn read(source: &Source, options: &RecordingOptions) -> Result<Recording> {
 /// The ROS 2 recording or the two streams of `args` read whole, or `None` for a pose file (or
 /// stdin).
 fn read_recorded(args: &InputArgs, reading: Reading) -> Result<Option<Recording>> {
+    if let Some(flag) = tag_flags(args) {
+        return Err(handeye::Error::InvalidParameter {
+            name: "input",
+            message: format!(
+                "{flag} reads a tag's detections in a ROS 2 recording, calibrated on the pixels: it needs `calibrate --method reprojection`"
+            ),
+        }
+        .into());
+    }
     if let Some(source) = bag_source(args)? {
         return read(&source, &options(args, reading)?).map(Some);
     }

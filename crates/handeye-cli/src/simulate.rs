@@ -93,11 +93,8 @@ pub fn run(args: Args) -> Result<()> {
             frame: "gripper_from_camera".into(),
             target: Some(("base_from_target".into(), s.base_from_target)),
         };
-        std::fs::write(
-            path,
-            serde_json::to_string_pretty(&truth.json())? + "\n",
-        )
-        .with_context(|| format!("cannot write {}", path.display()))?;
+        std::fs::write(path, serde_json::to_string_pretty(&truth.json())? + "\n")
+            .with_context(|| format!("cannot write {}", path.display()))?;
     }
     crate::tell!(
         "wrote {} poses (millimetres) to {}",

@@ -634,3 +634,120 @@ fn a_prior_on_the_pixels_is_refused_not_ignored() {
         );
     }
 }
+
+/// The arguments of `calibrate --method reprojection` on a ROS 2 recording of a tag
+/// (testdata/rosbag/make_tag_bags.py, made from tag_eih.jsonl).
+fn bag_args(bag: &str) -> Vec<String> {
+    [
+        "calibrate",
+        &testdata(&format!("rosbag/{bag}")).display().to_string(),
+        "--method",
+        "reprojection",
+        "--base-frame",
+        "base_link",
+        "--gripper-frame",
+        "tool0",
+        "--camera-frame",
+        "camera",
+        "--target-topic",
+        "/apriltag/detections",
+        "--tag-size",
+        "0.06",
+        "--output",
+        "json",
+    ]
+    .iter()
+    .map(ToString::to_string)
+    .collect()
+}
+
+#[test]
+fn a_recording_of_tag_detections_gives_the_x_of_the_json_lines_file() {
+    let (code, out, err) = run(&[
+        "calibrate",
+        &path("tag_eih.jsonl"),
+        "--method",
+        "reprojection",
+        "--intrinsics",
+        &path("tag_eih.intrinsics.yml"),
+        "--output",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let jsonl: Value = serde_json::from_str(&out).unwrap();
+    let args = bag_args("tag_eih_mcap");
+    let (code, out, err) = run(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    let bag: Value = serde_json::from_str(&out).unwrap();
+    // The JSON Lines file starts from its own PnP poses, the bag from handeye's: the same
+    // minimum, to the solver's convergence.
+    let (deg, t) = gap(&bag, &jsonl);
+    assert!(deg < 1e-6 && t < 1e-8, "{deg}° {t} m");
+    assert!(
+        err.contains("30 image(s) of tag 3") && err.contains("intrinsics from /camera/camera_info"),
+        "{err}"
+    );
+    assert_eq!(
+        bag["reprojection"]["per_frame"][0]["name"]
+            .as_str()
+            .unwrap()
+            .split(" (")
+            .next(),
+        Some("/apriltag/detections #1")
+    );
+}
+
+#[test]
+fn a_recording_of_tag_detections_without_intrinsics_or_method_is_refused_in_words() {
+    let args = bag_args("tag_eih_noinfo_sqlite3");
+    let (code, _, err) = run(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--intrinsics FILE") && err.contains("camera_info"),
+        "{err}"
+    );
+    // With the intrinsics given, the same recording is calibrated.
+    let mut with = args.clone();
+    with.extend(["--intrinsics".to_string(), path("tag_eih.intrinsics.yml")]);
+    let (code, _, err) = run(&with.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    // Without --method reprojection: the tag flags and the topic say what they need.
+    let pose: Vec<&str> = args
+        .iter()
+        .map(String::as_str)
+        .filter(|a| *a != "--method" && *a != "reprojection")
+        .collect();
+    let (code, _, err) = run(&pose);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--method reprojection"), "{err}");
+    let no_size: Vec<&str> = pose
+        .iter()
+        .copied()
+        .filter(|a| *a != "--tag-size" && *a != "0.06")
+        .collect();
+    let (code, _, err) = run(&no_size);
+    assert_ne!(code, 0, "{err}");
+    assert!(err.contains("calibrated on the pixels"), "{err}");
+    // A hostile recording: its bad messages are skipped and named, never a panic.
+    let args = bag_args("tag_eih_hostile_mcap");
+    let mut with_id = args.clone();
+    with_id.extend(["--tag-id".to_string(), "3".to_string()]);
+    let (code, out, err) = run(&with_id.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("message 3: cannot decode")
+            && err.contains("message 9: no detection of tag 3"),
+        "{err}"
+    );
+    let report: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        report["reprojection"]["per_frame"]
+            .as_array()
+            .unwrap()
+            .len(),
+        27
+    );
+    let (code, _, err) = run(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--tag-id"), "{err}");
+}

@@ -248,3 +248,72 @@ fn a_bad_record_costs_its_line_only() {
         assert_eq!(frame, &whole.frames[line - 1]);
     }
 }
+
+/// A long stream keeps at most `max_frames` frames (memory bounded: counted, not timed), solves
+/// over them on a bounded schedule, and its end stays within 3 sigma of the truth; the frames
+/// thinned out are the ones whose robot pose another kept frame repeats.
+#[test]
+fn a_long_stream_keeps_a_bounded_number_of_frames() {
+    for (k, setup) in [Setup::EyeInHand, Setup::EyeToHand].into_iter().enumerate() {
+        let config = PixelSimConfig {
+            frames: 1500,
+            ..PixelSimConfig::tag().with_setup(setup)
+        };
+        let sim = simulate_pixels(&config, 9100 + k as u64);
+        let mut c = OnlinePixels::new(sim.intrinsics, setup, Options::default())
+            .unwrap()
+            .with_max_frames(64)
+            .unwrap();
+        let start = std::time::Instant::now();
+        let mut most = 0;
+        let mut reports = Vec::new();
+        for (i, f) in sim.frames.iter().enumerate() {
+            reports.extend(c.push(f.clone(), format!("frame {}", i + 1)));
+            most = most.max(c.kept_frames());
+        }
+        let end = c.finish().unwrap();
+        eprintln!(
+            "{setup:?}: 1500 records, at most {most} frames kept, {} reports, {:.2} s",
+            reports.len() + 1,
+            start.elapsed().as_secs_f64()
+        );
+        assert_eq!(most, 64);
+        assert_eq!(c.frames(), 1500);
+        assert!(end.estimate.poses <= 64, "{}", end.estimate.poses);
+        assert_eq!(end.pose, 1500);
+        // 16, 32, 64, then every 64 records: 1500 / 64 = 23 more.
+        let at: Vec<usize> = reports.iter().map(|r| r.pose).collect();
+        assert_eq!(&at[..4], [16, 32, 64, 128]);
+        assert!(at.windows(2).all(|w| w[1] - w[0] <= 64), "{at:?}");
+        let (deg, t) = gap(&end.estimate.x, &sim.x);
+        let (sr, st) = (
+            end.estimate.uncertainty_rotation_deg.unwrap(),
+            end.estimate.uncertainty_translation.unwrap(),
+        );
+        assert!(
+            deg < 3.0 * sr && t < 3.0 * st,
+            "{setup:?}: {deg}° {t} vs {sr}° {st}"
+        );
+    }
+    // A stream that repeats one robot pose 30 times after 20 views keeps 20 frames, and solves.
+    let sim = simulate_pixels(&PixelSimConfig::tag(), 9110);
+    let mut c = OnlinePixels::new(sim.intrinsics, sim.setup, Options::default())
+        .unwrap()
+        .with_max_frames(20)
+        .unwrap();
+    for (i, f) in sim.frames.iter().take(20).enumerate() {
+        c.push(f.clone(), format!("frame {}", i + 1));
+    }
+    for i in 0..30 {
+        c.push(sim.frames[3].clone(), format!("repeat {i}"));
+    }
+    assert_eq!(c.kept_frames(), 20);
+    let end = c.finish().unwrap();
+    assert_eq!(end.estimate.poses, 20);
+    assert!(
+        OnlinePixels::new(sim.intrinsics, sim.setup, Options::default())
+            .unwrap()
+            .with_max_frames(15)
+            .is_err()
+    );
+}

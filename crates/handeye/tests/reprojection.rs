@@ -508,3 +508,99 @@ fn verify_on_the_pixels_accepts_the_truth_and_rejects_a_degree() {
         truth_sigmas.len()
     );
 }
+
+/// Two frames with a wrong robot pose (one moved by 2° and 2 cm, one paired with the next
+/// image's pose, a mis-associated image) are named as outlier poses, left out, and X stays
+/// within 3 sigma of the truth; boards and tags, both setups, seeds never used to choose the rule
+/// (it is the detections' own: more than half of a frame's corners beyond the inlier threshold).
+#[test]
+fn frames_with_a_wrong_robot_pose_are_named_and_left_out() {
+    let mut within = 0;
+    let mut total = 0;
+    for (k, config) in [PixelSimConfig::tag(), PixelSimConfig::board()]
+        .into_iter()
+        .enumerate()
+    {
+        for setup in SETUPS {
+            for seed in 0..4u64 {
+                let sim = simulate_pixels(&config.with_setup(setup), 7000 + 10 * k as u64 + seed);
+                let mut frames = sim.frames.clone();
+                let turn = Transform::from_parts(
+                    nalgebra::Translation3::new(0.02, -0.01, 0.0),
+                    nalgebra::Rotation3::from_scaled_axis(Vector3::new(
+                        0.0,
+                        2f64.to_radians(),
+                        0.0,
+                    )),
+                );
+                frames[4].base_from_gripper *= turn;
+                frames[19].base_from_gripper = frames[20].base_from_gripper;
+                let names: Vec<String> = (0..frames.len())
+                    .map(|i| format!("r.jsonl:{}", i + 1))
+                    .collect();
+                let r = handeye::calibrate_on_pixels(
+                    &frames,
+                    &sim.intrinsics,
+                    setup,
+                    &handeye::Options {
+                        pose_names: names,
+                        ..handeye::Options::default()
+                    },
+                )
+                .unwrap();
+                let named: Vec<(usize, &str)> = r
+                    .outliers
+                    .poses
+                    .iter()
+                    .map(|p| (p.pose, p.name.as_str()))
+                    .collect();
+                assert_eq!(
+                    named,
+                    [(4, "r.jsonl:5"), (19, "r.jsonl:20")],
+                    "{setup:?} seed {seed}"
+                );
+                assert!(r.outliers.rejected);
+                assert!(
+                    r.outliers.poses.iter().all(
+                        |p| p.rms_px.unwrap() > 5.0 * r.reprojection.as_ref().unwrap().sigma_px
+                    )
+                );
+                assert_eq!(r.poses, frames.len() - 2);
+                let p = r.reprojection.as_ref().unwrap();
+                assert_eq!(p.per_frame.len(), frames.len() - 2);
+                assert!(
+                    p.per_frame
+                        .iter()
+                        .all(|f| f.name != "r.jsonl:5" && f.name != "r.jsonl:20")
+                );
+                let gap = errors_against_truth(&r.transform, &sim.x);
+                // For the record: the solve keeping every frame (its mis-fit corners alone left
+                // out).
+                let all = reprojection(&frames, &sim.intrinsics, setup, &PixelOptions::default())
+                    .unwrap();
+                let kept_all = errors_against_truth(&all.calibration.x, &sim.x);
+                eprintln!("{setup:?} seed {seed}: left out {gap:?}, every frame {kept_all:?}");
+                let u = &r.uncertainty;
+                for ratio in [gap.rot_deg / u.rotation_deg, gap.trans / u.translation] {
+                    total += 1;
+                    within += usize::from(ratio <= 3.0);
+                }
+                // The same recording without the corrupted frames: no outlier pose named.
+                let clean = handeye::calibrate_on_pixels(
+                    &sim.frames,
+                    &sim.intrinsics,
+                    setup,
+                    &handeye::Options::default(),
+                )
+                .unwrap();
+                assert!(
+                    clean.outliers.poses.is_empty(),
+                    "{setup:?} seed {seed}: {:?}",
+                    clean.outliers.poses
+                );
+            }
+        }
+    }
+    eprintln!("X within 3 sigma of the truth in {within} of {total} ratios");
+    assert!(within * 10 >= total * 9, "{within} of {total}");
+}

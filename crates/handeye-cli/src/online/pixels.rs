@@ -114,10 +114,15 @@ pub(super) fn run(args: &Args) -> Result<()> {
     for w in calibrator.warnings() {
         crate::tell!("warning: {}", faces::warning(w));
     }
+    // Beyond 256 records the calibrator keeps a spread of views (and leaves outlier poses out).
+    let records = if report.estimate.poses < report.pose {
+        format!("{} of {} record(s)", report.estimate.poses, report.pose)
+    } else {
+        format!("{} record(s)", report.estimate.poses)
+    };
     crate::tell!(
-        "last estimate ({}) from {} record(s){bad}, on the pixels: {}",
+        "last estimate ({}) from {records}{bad}, on the pixels: {}",
         report.number,
-        report.estimate.poses,
         super::estimate_words(&report, unit)
     );
     if publish_x {

@@ -961,6 +961,7 @@ pub(crate) fn outlier_report(found: &PoseOutliers, options: &Options) -> Outlier
                     .unwrap_or_else(|| format!("pose {}", g.pose)),
                 angle_gap_deg: g.angle_gap_deg,
                 pitch_gap: g.pitch_gap,
+                rms_px: None,
             })
             .collect(),
         rejected: options.reject_outliers,

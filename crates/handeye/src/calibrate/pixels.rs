@@ -24,7 +24,7 @@ use crate::check::quality::quality_report;
 use crate::check::uncertainty::{median_target, summarise};
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Degeneracy, Error, Result};
-use crate::model::findings::Reading;
+use crate::model::findings::{OutlierPose, Reading};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson};
 use crate::solve::motions::AllPairs;
@@ -103,9 +103,9 @@ pub fn calibrate_on_pixels(
     options: &Options,
 ) -> Result<Report> {
     not_on_pixels(options.reject_outliers, &options.priors)?;
-    let (used, solution, applied, reading_check) =
+    let (used, solution, applied, reading_check, choice) =
         solved(frames, camera, setup, options.fix, options.refine_intrinsics)?;
-    report(&used, setup, options, solution, applied, reading_check)
+    report(&used, setup, options, solution, (applied, reading_check), &choice)
 }
 
 /// Refuses the options the pixel solve does not take, rather than answer without them: a prior
@@ -150,7 +150,7 @@ pub fn calibrate_robot_world_on_pixels(
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
     not_on_pixels(options.reject_outliers, &options.priors)?;
-    let (used, solution, applied, reading_check) =
+    let (used, solution, applied, reading_check, choice) =
         solved(frames, camera, setup, options.fix, options.refine_intrinsics)?;
     let hand_eye = Options {
         fix: options.fix,
@@ -173,7 +173,7 @@ pub fn calibrate_robot_world_on_pixels(
         transform,
         reprojection,
         ..
-    } = report(&used, setup, &hand_eye, solution, applied, reading_check)?;
+    } = report(&used, setup, &hand_eye, solution, (applied, reading_check), &choice)?;
     let scene = translation_scale(&poses, setup).max(working_distance(&poses));
     let Some(target_covariance) = target_covariance else {
         return Err(Error::Degenerate {
@@ -237,7 +237,7 @@ pub fn verify_on_pixels(
         });
     }
     let notes = setup_notes(saved, setup);
-    let (used, solution, applied, reading_check) = match solved(frames, camera, setup, options.fix, false) {
+    let (used, solution, applied, reading_check, choice) = match solved(frames, camera, setup, options.fix, false) {
         Ok(s) => s,
         Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
             let poses = pose_pairs(frames, &start_camera_poses(frames, camera, setup));
@@ -252,7 +252,7 @@ pub fn verify_on_pixels(
     let pixel_options = PixelOptions::default();
     let with_saved = target_with_x(&used, camera, setup, &x, &solution, &pixel_options);
     let with_own = target_with_x(&used, camera, setup, &own, &solution, &pixel_options);
-    let report = match report(&used, setup, options, solution, applied, reading_check) {
+    let report = match report(&used, setup, options, solution, (applied, reading_check), &choice) {
         Ok(r) => r,
         Err(e @ Error::Degenerate { .. }) => return Ok(cannot_tell(saved, &poses, &e, notes)),
         Err(e) => return Err(e),
@@ -324,15 +324,48 @@ fn pose_pairs(frames: &[Frame], start_poses: &[Transform]) -> Vec<PosePair> {
         .collect()
 }
 
-/// The solve on the pixels with its checks: the frames as read (the robot poses inverted when
-/// that reading was applied), the solution, the reading and how it was checked.
+/// Which frames of the input a solve on the pixels used, and those it named as outlier poses.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct FrameChoice {
+    /// The input index of each frame used, in order.
+    pub kept: Vec<usize>,
+    /// The outlier poses: input index and reprojection RMS (every detection) in the solve over
+    /// every frame, pixels.
+    pub outliers: Vec<(usize, f64)>,
+    /// Whether they were left out (not when too few frames would be left).
+    pub rejected: bool,
+}
+
+/// The frames most of whose detections the solve left out as mis-fits (more than half beyond
+/// [`INLIER_SIGMAS`](crate::solve::reprojection::INLIER_SIGMAS) robust sigmas): the frame, not a
+/// corner, is wrong (its robot pose, or an image paired with another pose). A mis-detected corner
+/// leaves out that corner; a frame whose robot pose is off moves all of its corners together.
+fn outlier_frames(frames: &[Frame], solution: &PixelSolution) -> Vec<usize> {
+    let mut left_out = vec![0usize; frames.len()];
+    for (f, _) in &solution.outliers {
+        if let Some(n) = left_out.get_mut(*f) {
+            *n += 1;
+        }
+    }
+    frames
+        .iter()
+        .zip(&left_out)
+        .enumerate()
+        .filter(|(_, (f, n))| 2 * **n > f.detections.pixels.len())
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// The solve on the pixels with its checks: the frames used (the robot poses inverted when that
+/// reading was applied; the outlier poses left out), the solution, the reading, how it was
+/// checked, and which frames were used.
 fn solved(
     frames: &[Frame],
     camera: &Intrinsics,
     setup: Setup,
     fix: Fix,
     refine_intrinsics: bool,
-) -> Result<(Vec<Frame>, PixelSolution, Reading, String)> {
+) -> Result<(Vec<Frame>, PixelSolution, Reading, String, FrameChoice)> {
     camera.check().map_err(|(field, message)| Error::InvalidParameter {
         name: "intrinsics",
         message: format!("{field}: {message}"),
@@ -381,18 +414,38 @@ fn solved(
             checked_reading(frames, &inverted, camera, setup, fix, &pixel_options)?
         }
     };
-    let used = if applied == Reading::RobotInverted {
+    let mut used = if applied == Reading::RobotInverted {
         inverted
     } else {
         frames.to_vec()
     };
+    let mut solution = solution;
+    let mut choice = FrameChoice {
+        kept: (0..frames.len()).collect(),
+        ..FrameChoice::default()
+    };
+    let outliers = outlier_frames(&used, &solution);
+    if !outliers.is_empty() {
+        choice.outliers = outliers
+            .iter()
+            .map(|&i| (i, solution.per_frame_rms_px.get(i).copied().unwrap_or(f64::NAN)))
+            .collect();
+        // Left out, and solved again on the others, when enough frames remain for an honest
+        // uncertainty; else named only.
+        if frames.len() - outliers.len() > PIXEL_PARAMETERS {
+            choice.kept.retain(|i| !outliers.contains(i));
+            used = choice.kept.iter().map(|&i| used[i].clone()).collect();
+            solution = reprojection(&used, camera, setup, &pixel_options)?;
+            choice.rejected = true;
+        }
+    }
     if solution.sigma_px > REFUSE_SIGMA_PX {
         return Err(unfit(&solution, &used, camera, setup, &pixel_options));
     }
     if let Some(k) = &solution.intrinsics {
         check_determined(k, camera)?;
     }
-    Ok((used, solution, applied, reading_check))
+    Ok((used, solution, applied, reading_check, choice))
 }
 
 /// The reading on the pixels: as given, unless the robot poses inverted fit far better (then a
@@ -491,8 +544,8 @@ fn report(
     setup: Setup,
     options: &Options,
     solution: PixelSolution,
-    applied: Reading,
-    reading_check: String,
+    (applied, reading_check): (Reading, String),
+    choice: &FrameChoice,
 ) -> Result<Report> {
     let x = solution.calibration.x;
     let poses = pose_pairs(frames, &solution.start_poses);
@@ -514,13 +567,16 @@ fn report(
     warn_weak(&uncertainty, setup, None, &mut warnings);
     let quality = quality_report(&AllPairs::new(&poses, setup), &x, 0);
     let residuals = PoseResiduals::at(&poses, setup, &x);
-    let name = |i: usize| {
+    // The name of input frame i.
+    let input_name = |i: usize| {
         options
             .pose_names
             .get(i)
             .cloned()
             .unwrap_or_else(|| format!("frame {i}"))
     };
+    // The name of used frame i.
+    let name = |i: usize| input_name(choice.kept.get(i).copied().unwrap_or(i));
     let summary = ReprojectionSummary {
         rms_px: solution.rms_px,
         per_frame: solution
@@ -566,8 +622,18 @@ fn report(
             check: None,
         },
         outliers: Outliers {
-            poses: Vec::new(),
-            rejected: false,
+            poses: choice
+                .outliers
+                .iter()
+                .map(|&(i, rms_px)| OutlierPose {
+                    pose: i,
+                    name: input_name(i),
+                    angle_gap_deg: 0.0,
+                    pitch_gap: 0.0,
+                    rms_px: Some(rms_px),
+                })
+                .collect(),
+            rejected: choice.rejected,
             angle_threshold_deg: 0.0,
             pitch_threshold: 0.0,
         },

@@ -107,6 +107,41 @@ pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
     Ok(intrinsics)
 }
 
+/// The intrinsics of a ROS `sensor_msgs/msg/CameraInfo` message (`k`, `d`, `distortion_model`,
+/// `width`, `height`), or what is wrong with them, naming the field.
+#[cfg(feature = "rosbag")]
+pub(crate) fn intrinsics_of_camera_info(
+    k: &[f64; 9],
+    d: &[f64],
+    model: &str,
+    (width, height): (u32, u32),
+) -> std::result::Result<Intrinsics, String> {
+    if k[1] != 0.0 || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0 {
+        return Err(format!(
+            "`k`: expected [fx 0 cx; 0 fy cy; 0 0 1], got {k:?} (a skewed or unnormalised matrix is not supported; all zeros: the camera is not calibrated)"
+        ));
+    }
+    if !matches!(model, "plumb_bob" | "rational_polynomial" | "radtan" | "") {
+        return Err(format!(
+            "`distortion_model`: `{model}` is not supported: plumb_bob (k1 k2 p1 p2 k3) only"
+        ));
+    }
+    let distortion = distortion(d).map_err(|m| format!("`d`: {m}"))?;
+    let intrinsics = Intrinsics {
+        fx: k[0],
+        fy: k[4],
+        cx: k[2],
+        cy: k[5],
+        distortion,
+        width,
+        height,
+    };
+    intrinsics
+        .check()
+        .map_err(|(field, message)| format!("`k` ({field}): {message}"))?;
+    Ok(intrinsics)
+}
+
 /// The text with OpenCV's `%YAML:1.0` first line blanked.
 fn opencv_header_blanked(text: &str) -> String {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);

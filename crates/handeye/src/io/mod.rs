@@ -50,6 +50,8 @@ pub use intrinsics::read_intrinsics;
 pub use recording::BagFrames;
 #[cfg(feature = "rosbag")]
 pub(crate) use recording::MountFrame;
+#[cfg(feature = "rosbag")]
+pub use recording::{BagFrameRecording, read_bag_frames};
 pub use recording::{CameraMount, Note, Recording, RecordingOptions, Source};
 pub use saved::read_saved_x;
 pub use stream::PoseStream;

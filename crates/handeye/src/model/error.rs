@@ -578,6 +578,7 @@ mod tests {
                 name: "pose 3".into(),
                 angle_gap_deg: 2.0,
                 pitch_gap: 0.01,
+                rms_px: None,
             }],
         }
     }

@@ -349,6 +349,10 @@ pub struct OutlierPose {
     pub angle_gap_deg: f64,
     /// Median |k_A·t_A − k_B·t_B| of its motions, input units.
     pub pitch_gap: f64,
+    /// On the pixels: the frame's reprojection RMS (every detection) in the solve over every
+    /// frame, pixels (the gaps above are then 0: not measured).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rms_px: Option<f64>,
 }
 
 /// The verdict on an X that a job found, the same in every face: good, or questionable while a

@@ -16,21 +16,134 @@ use super::calibrate_on_pixels;
 /// Frames at which [`OnlinePixels`] first solves on the pixels (then at each doubling).
 const FIRST_ONLINE_SOLVE: usize = 16;
 
+/// The most frames [`OnlinePixels`] keeps: beyond, one is thinned out per record
+/// ([`Thinning`]). A solve over 256 frames of a 54-corner board takes tens of milliseconds.
+pub(crate) const MAX_ONLINE_FRAMES: usize = 256;
+
+/// Which frame to drop when the calibrator holds more than it keeps: one of the two whose robot
+/// poses are nearest each other (the older), so that the views kept stay spread. The distance of
+/// two robot poses is the angle of their relative rotation (radians) plus the distance of their
+/// translations over `scale` (the RMS spread of the translations of the frames held when the
+/// buffer first filled): unit-free, deterministic. Each frame's nearest neighbour is kept up to
+/// date, so a record costs O(n) distances, not O(n²).
+#[derive(Debug, Clone)]
+struct Thinning {
+    scale: f64,
+    /// For each frame held: the distance to its nearest other frame, and that frame's index.
+    nearest: Vec<(f64, usize)>,
+}
+
+impl Thinning {
+    fn distance(&self, a: &Frame, b: &Frame) -> f64 {
+        let (p, q) = (&a.base_from_gripper, &b.base_from_gripper);
+        (p.rotation.inverse() * q.rotation).angle()
+            + (p.translation.vector - q.translation.vector).norm() / self.scale
+    }
+
+    /// The nearest other frame of frame `i`.
+    fn nearest_of(&self, frames: &[Frame], i: usize) -> (f64, usize) {
+        frames
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != i)
+            .map(|(j, f)| (self.distance(&frames[i], f), j))
+            .fold((f64::INFINITY, i), |best, c| if c.0 < best.0 { c } else { best })
+    }
+
+    /// Starts on the frames held.
+    fn new(frames: &[Frame]) -> Self {
+        let n = frames.len().max(1) as f64;
+        let mean = frames
+            .iter()
+            .map(|f| f.base_from_gripper.translation.vector)
+            .sum::<nalgebra::Vector3<f64>>()
+            / n;
+        let spread = (frames
+            .iter()
+            .map(|f| (f.base_from_gripper.translation.vector - mean).norm_squared())
+            .sum::<f64>()
+            / n)
+            .sqrt();
+        let mut t = Self {
+            scale: if spread > 0.0 && spread.is_finite() {
+                spread
+            } else {
+                1.0
+            },
+            nearest: Vec::new(),
+        };
+        t.nearest = (0..frames.len()).map(|i| t.nearest_of(frames, i)).collect();
+        t
+    }
+
+    /// Takes in the last frame of `frames`.
+    fn add(&mut self, frames: &[Frame]) {
+        let new = frames.len() - 1;
+        let mut best = (f64::INFINITY, new);
+        for (j, f) in frames[..new].iter().enumerate() {
+            let d = self.distance(&frames[new], f);
+            if d < self.nearest[j].0 {
+                self.nearest[j] = (d, new);
+            }
+            if d < best.0 {
+                best = (d, j);
+            }
+        }
+        self.nearest.push(best);
+    }
+
+    /// The frame to drop: the older of the two nearest each other.
+    fn victim(&self) -> usize {
+        self.nearest
+            .iter()
+            .enumerate()
+            .fold((f64::INFINITY, 0), |best, (i, (d, _))| {
+                if *d < best.0 { (*d, i) } else { best }
+            })
+            .1
+    }
+
+    /// Forgets frame `r`, already removed from `frames`.
+    fn remove(&mut self, frames: &[Frame], r: usize) {
+        self.nearest.remove(r);
+        let mut stale = Vec::new();
+        for (i, n) in self.nearest.iter_mut().enumerate() {
+            if n.1 == r {
+                stale.push(i);
+            } else if n.1 > r {
+                n.1 -= 1;
+            }
+        }
+        for i in stale {
+            self.nearest[i] = self.nearest_of(frames, i);
+        }
+    }
+}
+
 /// The online calibrator on the pixels (`handeye online --intrinsics`): records with detections
 /// pushed one at a time, calibrated by [`calibrate_on_pixels`] itself, with its checks (the
 /// reading of the robot poses on the pixels, a fit far above noise refused), never from PnP
 /// poses alone (a planar target's flipped PnP pose would give a wrong X). An estimate is reported
-/// at 16, 32, 64, … frames (each solve over every frame so far: the solves cost at most twice the
-/// last one) and at the end, in the accumulating estimator's report ([`crate::TrackReport`]) with
-/// the fit on the pixels in `estimate.reprojection`. The end's X is the batch's on the same
-/// records.
+/// at 16, 32, 64, 128, 256 records and then every 256 records (each solve over the frames kept) and
+/// at the end, in the accumulating estimator's report ([`crate::TrackReport`]) with the fit on the
+/// pixels in `estimate.reprojection`. At most 256 frames are kept: beyond, one of the two frames
+/// whose robot poses are nearest each other is dropped per record (the older), so that memory and
+/// each solve's cost stay bounded on an endless stream and the views kept stay spread. On up to 256
+/// records the end's X is the batch's on the same records; beyond, the batch's on the frames kept.
 #[derive(Debug, Clone)]
 pub struct OnlinePixels {
     camera: Intrinsics,
     setup: Setup,
     options: Options,
+    /// The frames kept, at most `max_frames`.
     frames: Vec<Frame>,
-    /// Frames at which the next estimate is solved.
+    /// Records pushed.
+    pushed: usize,
+    /// The most frames kept.
+    max_frames: usize,
+    /// Which frame to drop, once more than `max_frames` were pushed.
+    thinning: Option<Thinning>,
+    /// Records pushed at which the next estimate is solved.
     next_solve: usize,
     /// Reports made so far.
     reports: usize,
@@ -62,6 +175,9 @@ impl OnlinePixels {
                 ..options
             },
             frames: Vec::new(),
+            pushed: 0,
+            max_frames: MAX_ONLINE_FRAMES,
+            thinning: None,
             next_solve: FIRST_ONLINE_SOLVE,
             reports: 0,
             last: None,
@@ -75,10 +191,29 @@ impl OnlinePixels {
     pub fn push(&mut self, frame: Frame, name: String) -> Option<TrackReport> {
         self.frames.push(frame);
         self.options.pose_names.push(name);
-        if self.frames.len() < self.next_solve {
+        self.pushed += 1;
+        if self.frames.len() > self.max_frames {
+            let thinning = match &mut self.thinning {
+                Some(t) => {
+                    t.add(&self.frames);
+                    t
+                }
+                None => self.thinning.insert(Thinning::new(&self.frames)),
+            };
+            let r = thinning.victim();
+            self.frames.remove(r);
+            self.options.pose_names.remove(r);
+            thinning.remove(&self.frames, r);
+        }
+        if self.pushed < self.next_solve {
             return None;
         }
-        self.next_solve = self.next_solve.saturating_mul(2);
+        // Doubling while the frames kept grow; then once every `max_frames` records, each solve
+        // over the frames kept: a bounded cost per record.
+        self.next_solve = self
+            .pushed
+            .saturating_mul(2)
+            .min(self.pushed.saturating_add(self.max_frames));
         let reason = if self.last.is_some() {
             Reason::Every
         } else {
@@ -100,7 +235,7 @@ impl OnlinePixels {
     /// that fit the pixels far better inverted, a fit far above detection noise).
     pub fn finish(&mut self) -> Result<TrackReport> {
         if let Some((n, last)) = &self.last
-            && *n == self.frames.len()
+            && *n == self.pushed
         {
             let n = *n;
             let mut report = last.clone();
@@ -115,6 +250,30 @@ impl OnlinePixels {
 
     /// Records pushed so far.
     pub fn frames(&self) -> usize {
+        self.pushed
+    }
+
+    /// Keeps at most `max_frames` frames (default 256; at least 16): beyond, one of the two frames
+    /// whose robot poses are nearest each other is dropped per record, so that memory and the
+    /// cost of a solve stay bounded on an endless stream and the views kept stay spread.
+    ///
+    /// Errors: [`Error::InvalidParameter`] below 16.
+    #[cfg(feature = "internals")]
+    pub fn with_max_frames(mut self, max_frames: usize) -> Result<Self> {
+        // More than the 12 parameters of the pixel solve, and the first solve's frames.
+        if max_frames < FIRST_ONLINE_SOLVE {
+            return Err(Error::InvalidParameter {
+                name: "max_frames",
+                message: format!("{max_frames}: at least {FIRST_ONLINE_SOLVE} frames are kept"),
+            });
+        }
+        self.max_frames = max_frames;
+        Ok(self)
+    }
+
+    /// Frames kept (at most `max_frames`).
+    #[cfg(feature = "internals")]
+    pub fn kept_frames(&self) -> usize {
         self.frames.len()
     }
 
@@ -136,7 +295,7 @@ impl OnlinePixels {
     /// Solves on every frame so far and reports it.
     fn estimate(&mut self, reason: Reason) -> Result<TrackReport> {
         let setup = self.setup;
-        let (used, solution, applied, reading_check) =
+        let (used, solution, applied, reading_check, choice) =
             solved(
             &self.frames,
             &self.camera,
@@ -146,7 +305,14 @@ impl OnlinePixels {
         )?;
         let poses = pose_pairs(&used, &solution.start_poses);
         let target = solution.target;
-        let batch = report(&used, setup, &self.options, solution, applied, reading_check)?;
+        let batch = report(
+            &used,
+            setup,
+            &self.options,
+            solution,
+            (applied, reading_check),
+            &choice,
+        )?;
         let residual = PoseResidualSummary::of(pose_residuals(
             &poses,
             setup,
@@ -165,7 +331,7 @@ impl OnlinePixels {
         self.reports += 1;
         let report = TrackReport {
             number: self.reports,
-            pose: self.frames.len(),
+            pose: self.pushed,
             reason,
             estimate: TrackEstimate {
                 x: batch.transform,
@@ -192,7 +358,7 @@ impl OnlinePixels {
         };
         self.warnings = batch.warnings;
         self.refused = None;
-        self.last = Some((self.frames.len(), report.clone()));
+        self.last = Some((self.pushed, report.clone()));
         Ok(report)
     }
 }

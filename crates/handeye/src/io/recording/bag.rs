@@ -2,9 +2,11 @@
 
 use std::path::Path;
 
-use super::{BagFrames, Note, Notes, Recording, RecordingOptions};
-use crate::io::rosbag::{BagOptions, read_bag_pairs};
+use super::{BagFrames, CameraMount, Note, Notes, Recording, RecordingOptions};
+use crate::io::FrameSeries;
+use crate::io::rosbag::{BagOptions, BagTags, read_bag_pairs, read_bag_tags};
 use crate::io::sync::{FoundOffset, StampedPose, TimeOffset, find_time_offset, read_as};
+use crate::model::camera::Intrinsics;
 use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
 
@@ -121,5 +123,100 @@ pub(super) fn read_bag(
         notes: Vec::new(),
         written: Written::FRAMES,
         joints: pairs.joints.angles,
+    })
+}
+
+/// A recording on the pixels read from a ROS 2 recording ([`read_bag_frames`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BagFrameRecording {
+    /// The frames (robot pose and the tag's corners; no `camera_from_target`) with each one's
+    /// message number in the detections topic.
+    pub series: FrameSeries,
+    /// A name for each frame: topic, message number and stamp.
+    pub names: Vec<String>,
+    /// The intrinsics of the recording's `sensor_msgs/msg/CameraInfo` topic, when it has one.
+    pub intrinsics: Option<Intrinsics>,
+    /// Where tf places the camera frame, when it gives it a parent.
+    pub camera_mount: Option<CameraMount>,
+    /// The clock offset used (camera − robot), seconds.
+    pub time_offset: f64,
+    /// What reading found worth telling, in order.
+    pub notes: Vec<Note>,
+}
+
+/// Reads the frames of a calibration on the pixels from a ROS 2 recording: the tag `tags` names
+/// on `frames.target_topic` (an `apriltag_msgs/msg/AprilTagDetectionArray` topic; corner order in
+/// [`TAG_CORNERS`](crate::io::rosbag::TAG_CORNERS)), the robot's pose from tf at each image's stamp
+/// (less the clock offset), and the intrinsics of a `CameraInfo` topic.
+///
+/// One bad message costs that message (told in a [`Note::BagTags`]). The clock offset is
+/// `options.time_offset` when fixed, else 0 s (told): the detections carry no pose whose motion
+/// could be correlated with the robot's, and `auto` is refused.
+///
+/// Errors: those of the pose reader ([`Error::Bag`] naming the file, topic and message), a tag
+/// size that is not a positive length, several tag ids and none chosen.
+pub fn read_bag_frames(
+    path: &Path,
+    frames: &BagFrames,
+    tags: &BagTags,
+    options: &RecordingOptions,
+) -> Result<BagFrameRecording> {
+    let mut notes = Vec::new();
+    let time_offset = match options.time_offset {
+        Some(TimeOffset::Fixed(t)) => t,
+        Some(TimeOffset::Auto) => {
+            return Err(Error::InvalidParameter {
+                name: "time_offset",
+                message: "`auto` is not offered on tag detections: they carry no pose whose motion could be correlated with the robot's; give the offset in seconds".into(),
+            });
+        }
+        None => {
+            notes.push(Note::NoTimeOffset {
+                why:
+                    "tag detections carry no pose whose motion could be correlated with the robot's"
+                        .into(),
+            });
+            0.0
+        }
+    };
+    let bag_options = BagOptions {
+        base_frame: frames.base.clone(),
+        gripper_frame: frames.gripper.clone(),
+        camera_frame: frames.camera.clone(),
+        target_frame: frames.target.clone(),
+        target_topic: frames.target_topic.clone(),
+        time_offset,
+        max_gap: options.max_gap,
+        setup: options.setup,
+    };
+    let read = read_bag_tags(path, &bag_options, tags)?;
+    let display = path.display().to_string();
+    notes.push(Note::BagTags {
+        path: display.clone(),
+        topic: frames.target_topic.clone().unwrap_or_default(),
+        id: read.id,
+        frames: read.frames.len(),
+        messages: read.messages,
+        other_tags: read.other_tags,
+        dropped: read.dropped,
+        skipped: read.skipped.clone(),
+        intrinsics_topic: read.intrinsics.as_ref().map(|(t, _)| t.clone()),
+    });
+    if let Some(mount) = &read.camera_mount {
+        notes.push(Note::CameraMount {
+            path: display,
+            mount: mount.clone(),
+        });
+    }
+    Ok(BagFrameRecording {
+        series: FrameSeries {
+            frames: read.frames,
+            lines: read.lines,
+        },
+        names: read.names,
+        intrinsics: read.intrinsics.map(|(_, k)| k),
+        camera_mount: read.camera_mount,
+        time_offset,
+        notes,
     })
 }

@@ -21,6 +21,8 @@ mod convention;
 mod mount;
 mod note;
 
+#[cfg(feature = "rosbag")]
+pub use bag::{BagFrameRecording, read_bag_frames};
 pub use mount::CameraMount;
 #[cfg(feature = "rosbag")]
 pub use mount::MountFrame;

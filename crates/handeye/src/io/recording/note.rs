@@ -110,6 +110,28 @@ pub enum Note {
         /// Messages skipped and why (topic and message number), and why the angles are not used.
         skipped: Vec<String>,
     },
+    /// The images of a tag a ROS 2 recording gave (an `apriltag_msgs/msg/AprilTagDetectionArray`
+    /// topic), for a calibration on the pixels.
+    BagTags {
+        /// The recording.
+        path: String,
+        /// The detections topic.
+        topic: String,
+        /// The tag id used.
+        id: i32,
+        /// Images kept.
+        frames: usize,
+        /// Messages of the topic.
+        messages: usize,
+        /// Detections of other tag ids left out.
+        other_tags: usize,
+        /// Images outside the robot's transforms or in their gaps.
+        dropped: usize,
+        /// Messages skipped and why (topic and message number).
+        skipped: Vec<String>,
+        /// The camera_info topic the intrinsics were read from, if any.
+        intrinsics_topic: Option<String>,
+    },
 }
 
 impl fmt::Display for Note {
@@ -157,6 +179,38 @@ impl fmt::Display for Note {
                 "{source}: every {side} angle given in degrees is within ±{largest:.2}, so the {side} poses turn by a few degrees at most: if these are radians, convert them to degrees (× 180/π)"
             ),
             Self::BagPairs { .. } => self.fmt_bag_pairs(f),
+            Self::BagTags {
+                path,
+                topic,
+                id,
+                frames,
+                messages,
+                other_tags,
+                dropped,
+                skipped,
+                intrinsics_topic,
+            } => {
+                write!(
+                    f,
+                    "{path}: {frames} image(s) of tag {id} from {messages} message(s) of {topic}"
+                )?;
+                if let Some(t) = intrinsics_topic {
+                    write!(f, "; intrinsics from {t}")?;
+                }
+                if *other_tags > 0 {
+                    write!(f, "; {other_tags} detection(s) of other tags left out")?;
+                }
+                if *dropped > 0 {
+                    write!(
+                        f,
+                        "; dropped {dropped} outside the robot's transforms or in their gaps"
+                    )?;
+                }
+                for why in skipped {
+                    write!(f, "; skipped {why}")?;
+                }
+                Ok(())
+            }
             Self::CameraMount { path, mount } => mount.fmt_note(path, f),
             Self::BagJoints {
                 path,

@@ -110,6 +110,16 @@ impl<'a> CdrReader<'a> {
         })
     }
 
+    /// A `float32`.
+    pub fn f32(&mut self, field: &str) -> Result<f32, CdrError> {
+        let b: [u8; 4] = self.take(4, 4, field)?.try_into().unwrap_or([0; 4]);
+        Ok(if self.little {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        })
+    }
+
     /// A `float64`.
     pub fn f64(&mut self, field: &str) -> Result<f64, CdrError> {
         let b: [u8; 8] = self.take(8, 8, field)?.try_into().unwrap_or([0; 8]);

@@ -22,6 +22,7 @@ mod mount;
 mod msg;
 mod pairs;
 mod storage;
+mod tags;
 mod tf;
 
 use std::collections::HashMap;
@@ -39,6 +40,8 @@ pub use pairs::{BagOptions, BagPairs, read_bag_pairs};
 #[cfg(not(feature = "internals"))]
 pub(crate) use pairs::{BagOptions, read_bag_pairs};
 pub use storage::Storage;
+pub(crate) use tags::read_bag_tags;
+pub use tags::{BagTags, TAG_CORNERS};
 pub use tf::TfEdge;
 #[cfg(feature = "internals")]
 pub use tf::tree_steps;
@@ -174,13 +177,40 @@ struct JointSample {
     decoded: std::result::Result<msg::JointState, String>,
 }
 
+/// A message of a detections topic (`apriltag_msgs/msg/AprilTagDetectionArray`), or why it could
+/// not be read.
+struct TagSample {
+    index: usize,
+    decoded: std::result::Result<msg::TagDetections, String>,
+}
+
+/// A `sensor_msgs/msg/CameraInfo` message, or why it could not be read.
+struct InfoSample {
+    topic: String,
+    index: usize,
+    decoded: std::result::Result<msg::CameraInfo, String>,
+}
+
 /// What a recording holds for a calibration.
 struct Loaded {
     tf: TfBuffer,
     topics: Topics,
     target: Vec<Observation>,
+    tags: Vec<TagSample>,
+    infos: Vec<InfoSample>,
     joints: Vec<JointSample>,
     messages: usize,
+}
+
+/// Which camera_info topics [`load`] reads.
+#[derive(Clone, Copy)]
+enum InfoTopics<'a> {
+    /// None.
+    None,
+    /// This one.
+    Named(&'a str),
+    /// Every topic named `…camera_info`.
+    Any,
 }
 
 /// The topic of the robot's joint states (`robot_state_publisher`'s input).
@@ -200,10 +230,18 @@ fn transform_of(raw: &RawPose) -> std::result::Result<Transform, String> {
     transform_from_xyz_quat_xyzw(raw.translation, raw.quaternion_xyzw).map_err(|p| p.to_string())
 }
 
-/// Reads the tf tree and, when `target_topic` is given, the target's poses.
-fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
+/// Reads the tf tree and, when `target_topic` is given, the target's poses (or its detections);
+/// and the camera_info topics `infos` names.
+fn load(bag: &Bag, target_topic: Option<&str>, info_topics: InfoTopics<'_>) -> Result<Loaded> {
     let mut tf = TfBuffer::default();
     let mut target = Vec::new();
+    let mut tags = Vec::new();
+    let mut infos = Vec::new();
+    let is_info = |topic: &str| match info_topics {
+        InfoTopics::None => false,
+        InfoTopics::Named(t) => topic == t,
+        InfoTopics::Any => topic.ends_with("camera_info"),
+    };
     let mut joints = Vec::new();
     let mut topics = Topics::default();
     let mut index: HashMap<String, usize> = HashMap::new();
@@ -213,6 +251,7 @@ fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
             || topic == TF_STATIC_TOPIC
             || Some(topic) == target_topic
             || is_joints_topic(topic)
+            || is_info(topic)
     };
     for file in &bag.files {
         let mut on_message = |m: Message<'_>| -> Result<()> {
@@ -266,6 +305,28 @@ fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
                 }
                 return Ok(());
             }
+            // The intrinsics are read from the first message that decodes; the others are skipped.
+            if is_info(m.topic) && Some(m.topic) != target_topic {
+                if m.msg_type == msg::CAMERA_INFO {
+                    infos.push(InfoSample {
+                        topic: m.topic.to_string(),
+                        index: k,
+                        decoded: msg::decode_camera_info(m.data)
+                            .map_err(|e| format!("cannot decode `{}`: {e}", msg::CAMERA_INFO)),
+                    });
+                }
+                return Ok(());
+            }
+            // Detections: a message that does not decode costs that message (the reader of the
+            // pixels names it).
+            if m.msg_type == msg::APRILTAG_DETECTIONS {
+                tags.push(TagSample {
+                    index: k,
+                    decoded: msg::decode_tag_detections(m.data)
+                        .map_err(|e| format!("cannot decode `{}`: {e}", msg::APRILTAG_DETECTIONS)),
+                });
+                return Ok(());
+            }
             let (header, child, raw) = match m.msg_type {
                 POSE_STAMPED => {
                     let p = msg::decode_pose_stamped(m.data)
@@ -279,7 +340,8 @@ fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
                 }
                 other => {
                     return Err(err(format!(
-                        "has type `{other}`; a target topic must be `{POSE_STAMPED}` or `{TRANSFORM_STAMPED}`"
+                        "has type `{other}`; a target topic must be `{POSE_STAMPED}` or `{TRANSFORM_STAMPED}` (or `{}`, calibrated on the pixels)",
+                        msg::APRILTAG_DETECTIONS
                     )));
                 }
             };
@@ -308,6 +370,8 @@ fn load(bag: &Bag, target_topic: Option<&str>) -> Result<Loaded> {
         tf,
         topics,
         target,
+        tags,
+        infos,
         joints,
         messages,
     })
@@ -363,14 +427,15 @@ pub struct BagSummary {
     pub loops: Vec<Vec<String>>,
     /// Every edge of the tf tree.
     pub tf: Vec<TfEdge>,
-    /// The topics that can hold the target's pose (`PoseStamped`, `TransformStamped`).
+    /// The topics that can hold the target's pose (`PoseStamped`, `TransformStamped`) or its
+    /// detections (`apriltag_msgs/msg/AprilTagDetectionArray`).
     pub target_topics: Vec<String>,
 }
 
 /// Lists the topics and the tf tree of a recording.
 pub fn inspect_bag(path: &Path) -> Result<BagSummary> {
     let bag = Bag::open(path)?;
-    let loaded = load(&bag, None)?;
+    let loaded = load(&bag, None, InfoTopics::None)?;
     let topics: Vec<TopicSummary> = loaded
         .topics
         .iter()
@@ -388,7 +453,11 @@ pub fn inspect_bag(path: &Path) -> Result<BagSummary> {
         messages: loaded.messages,
         target_topics: topics
             .iter()
-            .filter(|t| t.msg_type == POSE_STAMPED || t.msg_type == TRANSFORM_STAMPED)
+            .filter(|t| {
+                t.msg_type == POSE_STAMPED
+                    || t.msg_type == TRANSFORM_STAMPED
+                    || t.msg_type == msg::APRILTAG_DETECTIONS
+            })
             .map(|t| t.topic.clone())
             .fold(Vec::new(), |mut names, t| {
                 if names.last() != Some(&t) {

@@ -11,6 +11,12 @@ pub(crate) const TRANSFORM_STAMPED: &str = "geometry_msgs/msg/TransformStamped";
 /// `geometry_msgs/msg/PoseStamped`.
 pub(crate) const POSE_STAMPED: &str = "geometry_msgs/msg/PoseStamped";
 
+/// `apriltag_msgs/msg/AprilTagDetectionArray` (apriltag_ros, ROS 2): the corners of the tags
+/// seen in one image.
+pub(crate) const APRILTAG_DETECTIONS: &str = "apriltag_msgs/msg/AprilTagDetectionArray";
+/// `sensor_msgs/msg/CameraInfo`: the camera's intrinsics.
+pub(crate) const CAMERA_INFO: &str = "sensor_msgs/msg/CameraInfo";
+
 /// `sensor_msgs/msg/JointState`.
 pub(crate) const JOINT_STATE: &str = "sensor_msgs/msg/JointState";
 
@@ -146,6 +152,117 @@ pub(crate) fn decode_joint_state(bytes: &[u8]) -> Result<JointState, CdrError> {
         header,
         name,
         position,
+    })
+}
+
+/// One tag of an `apriltag_msgs/msg/AprilTagDetection`: its family, id and the pixels of its four
+/// corners in the detector's order (AprilTag's: counter-clockwise in the image, see
+/// [`super::tags`]). `hamming`, `goodness`, `decision_margin`, `centre` and `homography` are
+/// read past.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct TagDetection {
+    pub family: String,
+    pub id: i32,
+    pub corners: [[f64; 2]; 4],
+}
+
+/// `apriltag_msgs/msg/AprilTagDetectionArray`: the header of the image and its tags.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct TagDetections {
+    pub header: Header,
+    pub detections: Vec<TagDetection>,
+}
+
+/// Smallest serialised AprilTagDetection: family (4 + 1), id, hamming, goodness, margin (16),
+/// centre (16), corners (64), homography (72).
+const MIN_TAG_DETECTION: usize = 173;
+
+/// Bytes a message may hold past its last field (CDR pads to at most 8).
+const MAX_TRAILING: usize = 7;
+
+/// Refuses a message with bytes left past its last field: another definition of the type (a
+/// corner array of another length, the ROS 1 message) read as this one.
+fn whole(r: &CdrReader<'_>, what: &str) -> Result<(), CdrError> {
+    if r.remaining() > MAX_TRAILING {
+        return Err(CdrError {
+            offset: 0,
+            message: format!(
+                "{} byte(s) left past the last field: not a `{what}` as defined (another version of the message?)",
+                r.remaining()
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Decodes an `apriltag_msgs/msg/AprilTagDetectionArray` (apriltag_msgs 2.x: `Point centre`,
+/// `Point[4] corners`, `float64[9] homography`).
+pub(crate) fn decode_tag_detections(bytes: &[u8]) -> Result<TagDetections, CdrError> {
+    let mut r = CdrReader::new(bytes)?;
+    let header = header(&mut r, "header")?;
+    let n = r.sequence_len("detections", MIN_TAG_DETECTION)?;
+    let mut detections = Vec::with_capacity(n);
+    for k in 0..n {
+        let f = |name: &str| format!("detections[{k}].{name}");
+        let family = r.string(&f("family"))?;
+        let id = r.i32(&f("id"))?;
+        r.i32(&f("hamming"))?;
+        r.f32(&f("goodness"))?;
+        r.f32(&f("decision_margin"))?;
+        r.f64(&f("centre.x"))?;
+        r.f64(&f("centre.y"))?;
+        let mut corners = [[0.0; 2]; 4];
+        for (j, c) in corners.iter_mut().enumerate() {
+            c[0] = r.f64(&f(&format!("corners[{j}].x")))?;
+            c[1] = r.f64(&f(&format!("corners[{j}].y")))?;
+        }
+        for j in 0..9 {
+            r.f64(&f(&format!("homography[{j}]")))?;
+        }
+        detections.push(TagDetection {
+            family,
+            id,
+            corners,
+        });
+    }
+    whole(&r, APRILTAG_DETECTIONS)?;
+    Ok(TagDetections { header, detections })
+}
+
+/// `sensor_msgs/msg/CameraInfo`: what the intrinsics are made of (`r`, `p`, binning and the
+/// region of interest are not read).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct CameraInfo {
+    pub header: Header,
+    pub height: u32,
+    pub width: u32,
+    pub distortion_model: String,
+    pub d: Vec<f64>,
+    pub k: [f64; 9],
+}
+
+/// Decodes a `sensor_msgs/msg/CameraInfo` up to `k`.
+pub(crate) fn decode_camera_info(bytes: &[u8]) -> Result<CameraInfo, CdrError> {
+    let mut r = CdrReader::new(bytes)?;
+    let header = header(&mut r, "header")?;
+    let height = r.u32("height")?;
+    let width = r.u32("width")?;
+    let distortion_model = r.string("distortion_model")?;
+    let n = r.sequence_len("d", 8)?;
+    let d = (0..n)
+        .map(|j| r.f64(&format!("d[{j}]")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut k = [0.0; 9];
+    for (j, v) in k.iter_mut().enumerate() {
+        *v = r.f64(&format!("k[{j}]"))?;
+    }
+    Ok(CameraInfo {
+        header,
+        height,
+        width,
+        distortion_model,
+        d,
+        k,
     })
 }
 
@@ -299,6 +416,58 @@ pub(crate) mod tests {
         assert!(e.message.contains("nanosec"), "{e}");
     }
 
+    /// An `AprilTagDetectionArray` of one tag, little-endian, with `corners` corners.
+    fn tag_message(corners: usize) -> Vec<u8> {
+        let mut b = vec![0, 1, 0, 0];
+        let pad = |b: &mut Vec<u8>, a: usize| {
+            while !(b.len() - 4).is_multiple_of(a) {
+                b.push(0);
+            }
+        };
+        b.extend(7i32.to_le_bytes());
+        b.extend(9u32.to_le_bytes());
+        b.extend(7u32.to_le_bytes());
+        b.extend(b"camera\0");
+        pad(&mut b, 4);
+        b.extend(1u32.to_le_bytes());
+        b.extend(6u32.to_le_bytes());
+        b.extend(b"36h11\0");
+        pad(&mut b, 4);
+        b.extend(3i32.to_le_bytes());
+        b.extend(0i32.to_le_bytes());
+        b.extend(0f32.to_le_bytes());
+        b.extend(50f32.to_le_bytes());
+        pad(&mut b, 8);
+        let values = (0..2 + 2 * corners)
+            .map(|k| 100.0 + k as f64)
+            .chain([0.0; 9]);
+        for v in values {
+            b.extend(v.to_le_bytes());
+        }
+        b
+    }
+
+    #[test]
+    fn tag_detections_decode_and_every_truncation_or_extra_corner_is_an_error() {
+        let bytes = tag_message(4);
+        let d = decode_tag_detections(&bytes).unwrap();
+        assert_eq!(d.header.stamp_ns, 7 * NS + 9);
+        assert_eq!(d.header.frame_id, "camera");
+        assert_eq!(d.detections.len(), 1);
+        assert_eq!(
+            (d.detections[0].family.as_str(), d.detections[0].id),
+            ("36h11", 3)
+        );
+        assert_eq!(d.detections[0].corners[0], [102.0, 103.0]);
+        assert_eq!(d.detections[0].corners[3], [108.0, 109.0]);
+        for cut in 0..bytes.len() {
+            assert!(decode_tag_detections(&bytes[..cut]).is_err(), "{cut}");
+        }
+        let e = decode_tag_detections(&tag_message(5)).unwrap_err();
+        assert!(e.message.contains("16 byte(s) left"), "{e}");
+        assert!(decode_tag_detections(&tag_message(3)).is_err());
+    }
+
     proptest::proptest! {
         /// No bytes make a decoder panic.
         #[test]
@@ -308,6 +477,8 @@ pub(crate) mod tests {
             let _ = decode_tf_message(&b);
             let _ = decode_pose_stamped(&b);
             let _ = decode_transform_stamped(&b);
+            let _ = decode_tag_detections(&b);
+            let _ = decode_camera_info(&b);
         }
     }
 }

@@ -107,7 +107,7 @@ fn nanoseconds(name: &'static str, value: f64, most: f64) -> Result<i64> {
 
 /// Where `tf` places the camera frame, X's parent frame being the gripper's or the base's by
 /// `setup`.
-fn camera_mount(
+pub(super) fn camera_mount(
     tf: &tf::TfBuffer,
     camera: &str,
     [base, gripper]: [&str; 2],
@@ -118,6 +118,38 @@ fn camera_mount(
         Setup::EyeToHand => base,
     };
     super::mount::camera_mount(tf, camera, [base, gripper], x_parent)
+}
+
+/// The tf path from the base to the gripper, refused when the two frames are swapped (the base
+/// below the gripper) or when no transform on it moves.
+pub(super) fn robot_path(
+    tf: &tf::TfBuffer,
+    base: &str,
+    gripper: &str,
+    whole: &dyn Fn(String) -> Error,
+) -> Result<tf::TfPath> {
+    let robot_path = tf
+        .path(base, gripper)
+        .map_err(|e| whole(format!("the robot's pose: {e}")))?;
+    // A robot's tf tree runs from its base down to its tool (robot_state_publisher publishes each
+    // link under its parent): a base frame below the gripper frame is the two flags swapped, told
+    // by the tree itself, whatever the poses fit (issue 33 item 13).
+    if robot_path.down.is_empty() && !robot_path.up.is_empty() {
+        let chain = std::iter::once(gripper)
+            .chain(robot_path.up.iter().rev().map(String::as_str))
+            .collect::<Vec<_>>()
+            .join(" → ");
+        return Err(whole(format!(
+            "the base frame `{base}` is below the gripper frame `{gripper}` in the tf tree ({chain}, parent to child): the two frame names are swapped; swap the two frame flags, `--base-frame {gripper} --gripper-frame {base}` (`base_frame=\"{gripper}\", gripper_frame=\"{base}\"` in Python); tf's directions are the recording's own, and inverting the poses is not the fix"
+        )));
+    }
+    if tf.dynamic_on(&robot_path).is_empty() {
+        return Err(whole(format!(
+            "the pose of `{gripper}` in `{base}` never changes: every transform between them is in /tf_static (is the gripper frame right?)"
+        )));
+    }
+
+    Ok(robot_path)
 }
 
 /// The pose pairs of a recording: at each stamp of the target's pose, `base_from_gripper` from
@@ -179,7 +211,7 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
         DEFAULT_MAX_GAP
     };
     let max_gap_ns = nanoseconds("max_gap", max_gap, MAX_GAP)?;
-    let loaded = load(&bag, target_topic)?;
+    let loaded = load(&bag, target_topic, super::InfoTopics::None)?;
     let whole = |message: String| bag_error(path, None, message);
     let tf_error = |what: &str, e: TfError| whole(format!("{what}: {e}"));
     let tf = &loaded.tf;
@@ -190,26 +222,7 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
             topic_list(&loaded.topics)
         )));
     }
-    let robot_path = tf
-        .path(&base, &gripper)
-        .map_err(|e| tf_error("the robot's pose", e))?;
-    // A robot's tf tree runs from its base down to its tool (robot_state_publisher publishes each
-    // link under its parent): a base frame below the gripper frame is the two flags swapped, told
-    // by the tree itself, whatever the poses fit (issue 33 item 13).
-    if robot_path.down.is_empty() && !robot_path.up.is_empty() {
-        let chain = std::iter::once(gripper.as_str())
-            .chain(robot_path.up.iter().rev().map(String::as_str))
-            .collect::<Vec<_>>()
-            .join(" → ");
-        return Err(whole(format!(
-            "the base frame `{base}` is below the gripper frame `{gripper}` in the tf tree ({chain}, parent to child): the two frame names are swapped; swap the two frame flags, `--base-frame {gripper} --gripper-frame {base}` (`base_frame=\"{gripper}\", gripper_frame=\"{base}\"` in Python); tf's directions are the recording's own, and inverting the poses is not the fix"
-        )));
-    }
-    if tf.dynamic_on(&robot_path).is_empty() {
-        return Err(whole(format!(
-            "the pose of `{gripper}` in `{base}` never changes: every transform between them is in /tf_static (is the gripper frame right?)"
-        )));
-    }
+    let robot_path = robot_path(tf, &base, &gripper, &whole)?;
 
     // The target's observations: (number, stamp, camera_from_target or why not).
     let mut observations: Vec<(usize, i64, Lookup)> = Vec::new();
@@ -230,6 +243,12 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
                 return Err(whole(format!(
                     "no topic `{topic}` in the recording{near}; the topics are: {}",
                     topic_list(&loaded.topics)
+                )));
+            }
+            if types.contains(&super::msg::APRILTAG_DETECTIONS) {
+                return Err(whole(format!(
+                    "topic `{topic}` has type `{}`: tag detections are calibrated on the pixels (`--method reprojection --tag-size METRES`)",
+                    super::msg::APRILTAG_DETECTIONS
                 )));
             }
             if !types
