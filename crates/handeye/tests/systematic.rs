@@ -483,3 +483,63 @@ fn the_online_estimator_does_not_cry_systematic_on_mistakes_and_outliers() {
     }
     assert!(streams >= 30, "{streams}");
 }
+
+/// The end of the stream always has its systematic-error test, also when the last pose was
+/// itself reported (a report every pose: the test before ran on the doubling schedule, on fewer
+/// poses): `finish` then reports again, with the test on every pose.
+#[test]
+fn the_end_of_stream_test_runs_when_the_last_pose_was_reported() {
+    let mut ends = 0;
+    for file in [
+        "systematic/dh2_iiwa14_eih_s1.jsonl",
+        "systematic/ctl_encoder_panda_eih_s0.jsonl",
+        "systematic/dh1_ur5_eih_s0.jsonl",
+        "systematic/ctl_pnp_iiwa14_eih_s1.jsonl",
+    ] {
+        let series = read_pose_file(&root(file).join(file), Format::Auto).unwrap();
+        let text = std::fs::read_to_string(root(file).join(file)).unwrap();
+        let joints = read_joints(&text, file).unwrap().unwrap();
+        let mut calibrator = handeye::OnlineCalibrator::new(handeye::OnlineConfig {
+            setup: Setup::EyeInHand,
+            estimator: handeye::Estimator::Accumulate,
+            tracking: handeye::TrackOptions {
+                every: 1,
+                ..handeye::TrackOptions::default()
+            },
+            ..handeye::OnlineConfig::default()
+        })
+        .unwrap();
+        let mut last = None;
+        for (pose, q) in series.pairs.iter().zip(&joints) {
+            calibrator.push_with_joints(pose, q).unwrap();
+            if let Some(r) = calibrator.step().and_then(|s| s.report.clone()) {
+                last = Some(r);
+            }
+        }
+        let last = last.expect("reports");
+        assert_eq!(
+            last.pose,
+            series.pairs.len(),
+            "{file}: the last pose is reported"
+        );
+        let tested = |r: &handeye::TrackReport| r.systematic.as_ref().map_or(0, |s| s.poses);
+        // The last word: the end's report, or the last pose's when its test was on every pose.
+        let end = calibrator.finish();
+        let word = end.as_ref().unwrap_or(&last);
+        println!(
+            "{file}: last pose's report tested {} of {} poses, the end's {:?} (p {:.1e})",
+            tested(&last),
+            last.estimate.poses,
+            end.as_ref().map(tested),
+            word.systematic.as_ref().map_or(f64::NAN, |s| s.p_value)
+        );
+        assert_eq!(tested(word), word.estimate.poses, "{file}");
+        assert_eq!(end.is_some(), tested(&last) < last.estimate.poses, "{file}");
+        assert!(calibrator.finish().is_none(), "{file}: one end");
+        ends += usize::from(end.is_some());
+    }
+    assert!(
+        ends >= 1,
+        "no stream whose last report's test was on fewer poses"
+    );
+}
