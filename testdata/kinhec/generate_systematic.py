@@ -17,7 +17,13 @@ measured joint angles (radians, the robot's joint order) the reported pose was c
 
 Run: ``/tmp/venv-k/bin/python testdata/kinhec/generate_systematic.py`` (deterministic; writes
 ``systematic/`` and ``systematic/manifest.json``; about a minute on two cores).
+
+Fresh streams for a check on data not tuned on: ``--out DIR --global-seed N`` writes the same suite
+with another seed into ``DIR/systematic/``; ``HANDEYE_KINHEC_SUITE=DIR cargo test --release -p handeye
+--test systematic -- --nocapture`` runs the suite's tests on them.
 """
+
+import argparse
 
 import json
 import os
@@ -127,6 +133,15 @@ def build(job, result):
 
 
 def main():
+    global OUT
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", help="write DIR/systematic/ instead of the repository's suite")
+    ap.add_argument("--global-seed", type=int, default=g.GLOBAL_SEED)
+    args = ap.parse_args()
+    if args.out:
+        g.OUT = Path(args.out).resolve()
+        OUT = g.OUT / "systematic"
+    g.GLOBAL_SEED = args.global_seed
     if OUT.exists():
         shutil.rmtree(OUT)
     OUT.mkdir(parents=True)

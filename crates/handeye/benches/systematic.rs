@@ -1,6 +1,10 @@
 //! The systematic-error test (`check::systematic`) at 1,000, 10,000 and 100,000 poses of the
-//! simulator: the neighbour order (a k-d split, O(n log n)) and both statistics against their
-//! permutation nulls (O(n) each for a fixed number of permutations), without the halves' solves.
+//! simulator: the neighbour order (a k-d split, O(n log n)) and the statistics against their
+//! permutation nulls (O(n) each for a fixed number of permutations), without the halves' solves;
+//! beside it, in the same run, a plain all-pairs solve of the same poses (the accumulated sums of
+//! every pair, `solve::accumulate`, O(n)), the reference for its cost. And the online estimator's
+//! test step (`track::test_step`: the test, the halves' solves and, flagged, the region
+//! bootstrap) on its sample of at most 512 poses.
 //!
 //! `cargo bench -p handeye --bench systematic`
 
@@ -8,6 +12,7 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use handeye::check::outliers::PoseResiduals;
 use handeye::check::systematic::{Configurations, test};
 use handeye::sim::{SimConfig, simulate};
+use handeye::solve::accumulate::PoseAccumulator;
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
 use std::hint::black_box;
 
@@ -32,6 +37,23 @@ fn systematic(c: &mut Criterion) {
         group.bench_with_input(BenchmarkId::new("test", poses), &poses, |b, _| {
             b.iter(|| test(black_box(&residuals), black_box(&configurations)))
         });
+        group.bench_with_input(
+            BenchmarkId::new("all_pairs_solve", poses),
+            &poses,
+            |b, _| {
+                b.iter(|| {
+                    let mut sums = PoseAccumulator::new(Setup::EyeInHand);
+                    black_box(&sim.poses).iter().for_each(|p| sums.add(p));
+                    sums.estimate().map(|e| e.x)
+                })
+            },
+        );
+        if poses == 1_000 {
+            // The online step tests the tracker's sample: at most 512 of the poses.
+            group.bench_with_input(BenchmarkId::new("online_step", 512), &poses, |b, _| {
+                b.iter(|| handeye::track::test_step(black_box(&sim.poses), Setup::EyeInHand, &x))
+            });
+        }
     }
     group.finish();
 }

@@ -15,12 +15,22 @@ use handeye::sim::{SimConfig, simulate};
 use handeye::{Method, Pairing, Setup, Transform, Warning};
 use serde_json::Value;
 
+/// The repository's kinhec suite, or for the systematic streams the directory
+/// `HANDEYE_KINHEC_SUITE` names (fresh streams of `generate_systematic.py --out DIR --global-seed N`,
+/// to check the statistic on data it was not tuned on).
 fn suite() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec")
 }
 
+fn root(path: &str) -> PathBuf {
+    match std::env::var_os("HANDEYE_KINHEC_SUITE") {
+        Some(dir) if path.starts_with("systematic/") => PathBuf::from(dir),
+        _ => suite(),
+    }
+}
+
 fn manifest(path: &str) -> Vec<Value> {
-    let text = std::fs::read_to_string(suite().join(path)).unwrap();
+    let text = std::fs::read_to_string(root(path).join(path)).unwrap();
     let manifest: Value = serde_json::from_str(&text).unwrap();
     manifest["files"].as_array().unwrap().clone()
 }
@@ -35,7 +45,8 @@ fn setup(e: &Value) -> Setup {
 
 /// X of the truth file (its first entry is X under its frame name).
 fn truth(e: &Value) -> Transform {
-    let text = std::fs::read_to_string(suite().join(e["truth"].as_str().unwrap())).unwrap();
+    let file = e["truth"].as_str().unwrap();
+    let text = std::fs::read_to_string(root(file).join(file)).unwrap();
     let t: Value = serde_json::from_str(&text).unwrap();
     let frame = match setup(e) {
         Setup::EyeInHand => "gripper_from_camera",
@@ -46,8 +57,8 @@ fn truth(e: &Value) -> Transform {
 
 fn run(e: &Value, options: &Options) -> handeye::Result<Report> {
     let file = e["file"].as_str().unwrap();
-    let series = read_pose_file(&suite().join(file), Format::Auto)?;
-    let text = std::fs::read_to_string(suite().join(file)).unwrap();
+    let series = read_pose_file(&root(file).join(file), Format::Auto)?;
+    let text = std::fs::read_to_string(root(file).join(file)).unwrap();
     let joints = read_joints(&text, file)?;
     calibrate(
         &series.pairs,
@@ -374,8 +385,8 @@ fn the_online_estimator_flags_and_covers_as_the_batch() {
     };
     for e in manifest("systematic/manifest.json") {
         let file = e["file"].as_str().unwrap();
-        let series = read_pose_file(&suite().join(file), Format::Auto).unwrap();
-        let text = std::fs::read_to_string(suite().join(file)).unwrap();
+        let series = read_pose_file(&root(file).join(file), Format::Auto).unwrap();
+        let text = std::fs::read_to_string(root(file).join(file)).unwrap();
         let joints = read_joints(&text, file).unwrap();
         let r = online(&series.pairs, joints.as_deref(), setup(&e));
         let batch = flagged(&run(&e, &all_pairs).unwrap());
@@ -471,4 +482,64 @@ fn the_online_estimator_does_not_cry_systematic_on_mistakes_and_outliers() {
         println!("{file:<56} {} report(s), none flagged", reports.len());
     }
     assert!(streams >= 30, "{streams}");
+}
+
+/// The end of the stream always has its systematic-error test, also when the last pose was
+/// itself reported (a report every pose: the test before ran on the doubling schedule, on fewer
+/// poses): `finish` then reports again, with the test on every pose.
+#[test]
+fn the_end_of_stream_test_runs_when_the_last_pose_was_reported() {
+    let mut ends = 0;
+    for file in [
+        "systematic/dh2_iiwa14_eih_s1.jsonl",
+        "systematic/ctl_encoder_panda_eih_s0.jsonl",
+        "systematic/dh1_ur5_eih_s0.jsonl",
+        "systematic/ctl_pnp_iiwa14_eih_s1.jsonl",
+    ] {
+        let series = read_pose_file(&root(file).join(file), Format::Auto).unwrap();
+        let text = std::fs::read_to_string(root(file).join(file)).unwrap();
+        let joints = read_joints(&text, file).unwrap().unwrap();
+        let mut calibrator = handeye::OnlineCalibrator::new(handeye::OnlineConfig {
+            setup: Setup::EyeInHand,
+            estimator: handeye::Estimator::Accumulate,
+            tracking: handeye::TrackOptions {
+                every: 1,
+                ..handeye::TrackOptions::default()
+            },
+            ..handeye::OnlineConfig::default()
+        })
+        .unwrap();
+        let mut last = None;
+        for (pose, q) in series.pairs.iter().zip(&joints) {
+            calibrator.push_with_joints(pose, q).unwrap();
+            if let Some(r) = calibrator.step().and_then(|s| s.report.clone()) {
+                last = Some(r);
+            }
+        }
+        let last = last.expect("reports");
+        assert_eq!(
+            last.pose,
+            series.pairs.len(),
+            "{file}: the last pose is reported"
+        );
+        let tested = |r: &handeye::TrackReport| r.systematic.as_ref().map_or(0, |s| s.poses);
+        // The last word: the end's report, or the last pose's when its test was on every pose.
+        let end = calibrator.finish();
+        let word = end.as_ref().unwrap_or(&last);
+        println!(
+            "{file}: last pose's report tested {} of {} poses, the end's {:?} (p {:.1e})",
+            tested(&last),
+            last.estimate.poses,
+            end.as_ref().map(tested),
+            word.systematic.as_ref().map_or(f64::NAN, |s| s.p_value)
+        );
+        assert_eq!(tested(word), word.estimate.poses, "{file}");
+        assert_eq!(end.is_some(), tested(&last) < last.estimate.poses, "{file}");
+        assert!(calibrator.finish().is_none(), "{file}: one end");
+        ends += usize::from(end.is_some());
+    }
+    assert!(
+        ends >= 1,
+        "no stream whose last report's test was on fewer poses"
+    );
 }

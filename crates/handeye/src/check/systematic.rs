@@ -95,6 +95,11 @@ pub struct Systematic {
     /// ([`Systematic::weigh`]); a test that finds a pattern of no weight on X is not flagged.
     #[serde(default = "material_default")]
     pub material: bool,
+    /// An online test below the threshold that is not yet a finding: a flag of a test before the
+    /// end of a stream counts once the next test, on the larger sample, flags too
+    /// (`track::systematic`); the batch never sets it.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub unconfirmed: bool,
 }
 
 fn material_default() -> bool {
@@ -384,6 +389,7 @@ pub fn test(residuals: &[PoseResidual], configurations: &Configurations) -> Opti
     Some(Systematic {
         flagged: p_value < P_FLAG,
         material: true,
+        unconfirmed: false,
         rotation_ratio,
         translation_ratio,
         rotation_explained,

@@ -33,6 +33,8 @@
 mod events;
 mod segment;
 mod systematic;
+#[cfg(feature = "internals")]
+pub use systematic::test_step;
 
 use std::collections::VecDeque;
 
@@ -503,8 +505,8 @@ impl Tracker {
         step.change = step.change.or(self.judge_challenger());
     }
 
-    /// The final report at the end of the stream, unless the last pose was just reported: the
-    /// current estimate when it is determined, or flagged `weak` when its uncertainty is above the
+    /// The final report at the end of the stream, unless the last pose was just reported with a
+    /// systematic-error test on every pose (the end's test always runs): the current estimate when it is determined, or flagged `weak` when its uncertainty is above the
     /// reporting bounds but below the batch refusal's (10°, half the scene). `None` when there is
     /// no estimate or it is not determined at all ([`Tracker::pending`] says why).
     pub fn finish(&mut self) -> Option<Report> {
@@ -521,7 +523,9 @@ impl Tracker {
         if !self.readings_judged && !self.readings_moot() {
             return None;
         }
-        if self.last_report.is_some_and(|(p, _, _)| p == self.poses) {
+        // The last pose was just reported: again only for the end's systematic-error test, when
+        // that report's test was not on every pose (it runs on a doubling schedule).
+        if self.last_report.is_some_and(|(p, _, _)| p == self.poses) && !self.watch.due(true) {
             return None;
         }
         let e = self.estimate()?;
@@ -865,7 +869,7 @@ impl Tracker {
         ));
         // The systematic-error test, when due (module `systematic`), and its widening.
         if self.watch.due(reason == Reason::End) {
-            self.watch.test(self.setup, &estimate.x);
+            self.watch.test(self.setup, &estimate.x, reason == Reason::End);
         }
         let warnings: Vec<_> = self.watch.widen(&mut estimate).into_iter().collect();
         let report = Report {
