@@ -1,6 +1,6 @@
 //! The A X − X B residual of one motion, and what the solvers and the metrics build on it: the
 //! residual summaries, the block scales, the Jacobian of the refinement and its Gauss–Newton
-//! covariance. Below both [`crate::solve`] and [`crate::metrics`].
+//! covariance. Below the solvers ([`solve()`](crate::solve())) and the checks of an X (`check::quality`).
 //!
 //! The residual of a motion pair (A, B) under X is ΔR = R_a R_x − R_x R_b and
 //! ΔT = R_a t_x + t_a − R_x t_b − t_x (the paper's sec. 4.2). Both are linear in
