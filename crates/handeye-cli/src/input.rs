@@ -18,6 +18,9 @@ use handeye::io::{
 };
 use handeye::{Reading, Rotations, Setup};
 
+/// The help heading of the ROS 2 recording's flags.
+const BAG_HEADING: &str = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)";
+
 /// Input options shared by `calibrate` and `online`.
 #[derive(ClapArgs, Debug, Clone)]
 pub struct InputArgs {
@@ -45,14 +48,14 @@ pub struct InputArgs {
     /// ROS 2 recording: the robot's base frame in /tf (e.g. base_link).
     #[arg(
         long,
-        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+        help_heading = BAG_HEADING
     )]
     pub base_frame: Option<String>,
     /// ROS 2 recording: the gripper's frame (e.g. tool0); base_from_gripper is composed along the
     /// tf tree, static and dynamic transforms alike.
     #[arg(
         long,
-        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+        help_heading = BAG_HEADING
     )]
     pub gripper_frame: Option<String>,
     /// ROS 2 recording: the camera frame X is found for: the root of the camera's subtree in tf
@@ -62,14 +65,14 @@ pub struct InputArgs {
     /// tree already (calibrated before), X is compared with tf's, not published.
     #[arg(
         long,
-        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+        help_heading = BAG_HEADING
     )]
     pub camera_frame: Option<String>,
     /// ROS 2 recording: the target's frame in /tf (e.g. board); with --target-topic of
     /// TransformStamped its child_frame_id must be it.
     #[arg(
         long,
-        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+        help_heading = BAG_HEADING
     )]
     pub target_frame: Option<String>,
     /// ROS 2 recording: a geometry_msgs/PoseStamped or TransformStamped topic of the target's
@@ -77,7 +80,7 @@ pub struct InputArgs {
     /// target's pose is taken from /tf.
     #[arg(
         long,
-        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+        help_heading = BAG_HEADING
     )]
     pub target_topic: Option<String>,
     /// ROS 2 recording, with --method reprojection and a --target-topic of
@@ -87,7 +90,7 @@ pub struct InputArgs {
     #[arg(
         long,
         value_name = "METRES",
-        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+        help_heading = BAG_HEADING
     )]
     pub tag_size: Option<f64>,
     /// ROS 2 recording, with --tag-size: the id of the tag that is the target (detections of
@@ -95,7 +98,7 @@ pub struct InputArgs {
     #[arg(
         long,
         value_name = "ID",
-        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+        help_heading = BAG_HEADING
     )]
     pub tag_id: Option<i32>,
     /// ROS 2 recording, with --tag-size: a sensor_msgs/CameraInfo topic for the intrinsics
@@ -103,7 +106,7 @@ pub struct InputArgs {
     #[arg(
         long,
         value_name = "TOPIC",
-        help_heading = "ROS 2 recording (INPUT a rosbag2 directory, .mcap or .db3)"
+        help_heading = BAG_HEADING
     )]
     pub camera_info_topic: Option<String>,
     /// Camera on the gripper (X = gripper_from_camera) or fixed (X = base_from_camera).

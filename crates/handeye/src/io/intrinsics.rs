@@ -92,15 +92,8 @@ pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
             }
         }
     };
-    let intrinsics = Intrinsics {
-        fx: k[0],
-        fy: k[4],
-        cx: k[2],
-        cy: k[5],
-        distortion,
-        width: size(&["image_width", "width"])?,
-        height: size(&["image_height", "height"])?,
-    };
+    let width = size(&["image_width", "width"])?;
+    let intrinsics = pinhole(&k, distortion, (width, size(&["image_height", "height"])?));
     intrinsics
         .check()
         .map_err(|(field, message)| err(&format!("{k_name}.{field}"), message))?;
@@ -127,7 +120,17 @@ pub(crate) fn intrinsics_of_camera_info(
         ));
     }
     let distortion = distortion(d).map_err(|m| format!("`d`: {m}"))?;
-    let intrinsics = Intrinsics {
+    let intrinsics = pinhole(k, distortion, (width, height));
+    intrinsics
+        .check()
+        .map_err(|(field, message)| format!("`k` ({field}): {message}"))?;
+    Ok(intrinsics)
+}
+
+/// The intrinsics of the camera matrix `k` (row-major [fx 0 cx; 0 fy cy; 0 0 1], checked by the
+/// caller), with `distortion` and the image size.
+fn pinhole(k: &[f64], distortion: [f64; 5], (width, height): (u32, u32)) -> Intrinsics {
+    Intrinsics {
         fx: k[0],
         fy: k[4],
         cx: k[2],
@@ -135,11 +138,7 @@ pub(crate) fn intrinsics_of_camera_info(
         distortion,
         width,
         height,
-    };
-    intrinsics
-        .check()
-        .map_err(|(field, message)| format!("`k` ({field}): {message}"))?;
-    Ok(intrinsics)
+    }
 }
 
 /// The text with OpenCV's `%YAML:1.0` first line blanked.

@@ -152,6 +152,18 @@ pub(super) fn robot_path(
     Ok(robot_path)
 }
 
+/// The frame `value` names (the flag or field `name`), as tf2 keys it; refused when empty.
+pub(crate) fn required_frame(name: &'static str, value: &str) -> Result<String> {
+    let f = frame_name(value.trim());
+    if f.is_empty() {
+        return Err(Error::InvalidParameter {
+            name,
+            message: "a frame name is needed to read a ROS 2 recording".into(),
+        });
+    }
+    Ok(f)
+}
+
 /// The pose pairs of a recording: at each stamp of the target's pose, `base_from_gripper` from
 /// the tf tree and `camera_from_target` (see the [module](super) documentation).
 ///
@@ -184,17 +196,7 @@ pub(super) fn robot_path(
 /// ```
 pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
     let bag = Bag::open(path)?;
-    let frame = |name: &'static str, value: &str| {
-        let f = frame_name(value.trim());
-        if f.is_empty() {
-            Err(Error::InvalidParameter {
-                name,
-                message: "a frame name is needed to read a ROS 2 recording".into(),
-            })
-        } else {
-            Ok(f)
-        }
-    };
+    let frame = required_frame;
     let base = frame("base_frame", &options.base_frame)?;
     let gripper = frame("gripper_frame", &options.gripper_frame)?;
     let camera = frame("camera_frame", &options.camera_frame)?;

@@ -108,17 +108,7 @@ pub(crate) fn read_bag_tags(
         });
     }
     let bag = Bag::open(path)?;
-    let frame = |name: &'static str, value: &str| {
-        let f = frame_name(value.trim());
-        if f.is_empty() {
-            Err(Error::InvalidParameter {
-                name,
-                message: "a frame name is needed to read a ROS 2 recording".into(),
-            })
-        } else {
-            Ok(f)
-        }
-    };
+    let frame = super::pairs::required_frame;
     let base = frame("base_frame", &options.base_frame)?;
     let gripper = frame("gripper_frame", &options.gripper_frame)?;
     let camera = frame("camera_frame", &options.camera_frame)?;
