@@ -377,6 +377,30 @@ fn load(bag: &Bag, target_topic: Option<&str>, info_topics: InfoTopics<'_>) -> R
     })
 }
 
+/// The message types of `topic` in the recording, or what to say when it has none: the nearest
+/// topic name when one is near, and every topic with its type (`whole` makes the recording's
+/// error).
+fn topic_types<'a>(
+    topics: &'a Topics,
+    topic: &'a str,
+    whole: impl Fn(String) -> Error,
+) -> Result<Vec<&'a str>> {
+    let types: Vec<&str> = topics
+        .of(topic)
+        .map(|info| info.msg_type.as_str())
+        .collect();
+    if types.is_empty() {
+        let names = topics.names();
+        let near =
+            tf::nearest(topic, &names).map_or(String::new(), |n| format!(" (did you mean `{n}`?)"));
+        return Err(whole(format!(
+            "no topic `{topic}` in the recording{near}; the topics are: {}",
+            topic_list(topics)
+        )));
+    }
+    Ok(types)
+}
+
 /// The topics of a recording as `name (type)`, for messages.
 fn topic_list(topics: &Topics) -> String {
     if topics.is_empty() {

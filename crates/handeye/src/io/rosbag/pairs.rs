@@ -233,20 +233,7 @@ pub fn read_bag_pairs(path: &Path, options: &BagOptions) -> Result<BagPairs> {
     let target_source;
     match target_topic {
         Some(topic) => {
-            let types: Vec<&str> = loaded
-                .topics
-                .of(topic)
-                .map(|info| info.msg_type.as_str())
-                .collect();
-            if types.is_empty() {
-                let names = loaded.topics.names();
-                let near = tf::nearest(topic, &names)
-                    .map_or(String::new(), |n| format!(" (did you mean `{n}`?)"));
-                return Err(whole(format!(
-                    "no topic `{topic}` in the recording{near}; the topics are: {}",
-                    topic_list(&loaded.topics)
-                )));
-            }
+            let types = super::topic_types(&loaded.topics, topic, whole)?;
             if types.contains(&super::msg::APRILTAG_DETECTIONS) {
                 return Err(whole(format!(
                     "topic `{topic}` has type `{}`: tag detections are calibrated on the pixels (`--method reprojection --tag-size METRES`)",

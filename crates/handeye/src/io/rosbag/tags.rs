@@ -139,17 +139,7 @@ pub(crate) fn read_bag_tags(
     };
     let loaded = load(&bag, Some(topic), info_topics)?;
     let whole = |message: String| bag_error(path, None, message);
-    let types: Vec<&str> = loaded
-        .topics
-        .of(topic)
-        .map(|info| info.msg_type.as_str())
-        .collect();
-    if types.is_empty() {
-        return Err(whole(format!(
-            "no topic `{topic}` in the recording; the topics are: {}",
-            topic_list(&loaded.topics)
-        )));
-    }
+    let types = super::topic_types(&loaded.topics, topic, whole)?;
     if !types.contains(&APRILTAG_DETECTIONS) {
         return Err(whole(format!(
             "topic `{topic}` has type `{}`; the detections of a tag are `{APRILTAG_DETECTIONS}` (a pose topic is calibrated without `--method reprojection`)",
