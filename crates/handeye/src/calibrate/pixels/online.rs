@@ -106,16 +106,14 @@ impl Thinning {
     /// Forgets frame `r`, already removed from `frames`.
     fn remove(&mut self, frames: &[Frame], r: usize) {
         self.nearest.remove(r);
-        let mut stale = Vec::new();
-        for (i, n) in self.nearest.iter_mut().enumerate() {
-            if n.1 == r {
-                stale.push(i);
-            } else if n.1 > r {
-                n.1 -= 1;
+        // One pass, no allocation per record: a frame whose nearest was `r` finds its nearest
+        // again among the frames left; the others' indices past `r` move down by one.
+        for i in 0..self.nearest.len() {
+            match self.nearest[i].1 {
+                n if n == r => self.nearest[i] = self.nearest_of(frames, i),
+                n if n > r => self.nearest[i].1 -= 1,
+                _ => {}
             }
-        }
-        for i in stale {
-            self.nearest[i] = self.nearest_of(frames, i);
         }
     }
 }
