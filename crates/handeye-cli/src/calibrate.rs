@@ -758,6 +758,7 @@ fn enough(input: &InputArgs, got: usize, need: usize, what: &str) -> Result<()> 
         line: 0,
         field: "-".into(),
         message: format!("{got} pose pair(s): at least {need} are needed {what}"),
+        remedy: None,
     }
     .into())
 }

@@ -893,13 +893,43 @@ pub fn frames(
 /// A warning as the command line says it: its words, then its remedy as a flag
 /// ("…; pass `--reject-outliers` to leave them out").
 pub fn warning(w: &handeye::Warning) -> String {
-    let Some(remedy) = w.remedy() else {
-        return w.to_string();
-    };
+    match w.remedy() {
+        Some(r) => format!("{w}; {}", remedy(r, "calibrate")),
+        None => w.to_string(),
+    }
+}
+
+/// A remedy as the flags of `command` say it ("pass `--reject-outliers` to leave them out"). On
+/// the pixels, `calibrate` needs the method with the intrinsics; `online` and `verify` take the
+/// intrinsics alone; another command names the calibration that reads such records.
+pub fn remedy(remedy: handeye::Remedy, command: &str) -> String {
     let flag = format!("--{}", remedy.option().replace('_', "-"));
-    let flag = match remedy.value() {
-        serde_json::Value::String(value) => format!("{flag} {value}"),
-        _ => flag,
+    let call = match (remedy, command) {
+        (handeye::Remedy::Pixels, "online" | "verify") => format!("{flag} FILE"),
+        (handeye::Remedy::Pixels, "calibrate") => format!("--method reprojection {flag} FILE"),
+        (handeye::Remedy::Pixels, _) => {
+            return format!(
+                "`handeye calibrate --method reprojection {flag} FILE` calibrates the records on their pixels"
+            );
+        }
+        _ => match remedy.value() {
+            serde_json::Value::String(value) => format!("{flag} {value}"),
+            _ => flag,
+        },
     };
-    format!("{w}; pass `{flag}` {}", remedy.purpose())
+    format!("pass `{call}` {}", remedy.purpose())
+}
+
+/// An error as `command` says it: a line's error with the flag that reads it, where the library
+/// leaves the wording to the face ([`handeye::Error::Parse`]'s remedy); the library's refusals
+/// word their remedies themselves.
+pub fn error(e: &anyhow::Error, command: &str) -> String {
+    let message = crate::output::error_message(e);
+    match e.downcast_ref::<handeye::Error>() {
+        Some(parse @ handeye::Error::Parse { .. }) => match parse.remedy() {
+            Some(r) => format!("{message}; {}", remedy(r, command)),
+            None => message,
+        },
+        _ => message,
+    }
 }

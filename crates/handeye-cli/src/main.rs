@@ -71,9 +71,27 @@ enum Command {
     Bench(bench::Args),
 }
 
+impl Command {
+    /// The command's name, as typed (a remedy is worded in its flags).
+    fn name(&self) -> &'static str {
+        match self {
+            Self::Calibrate(_) => "calibrate",
+            Self::Online(_) => "online",
+            Self::Inspect(_) => "inspect",
+            Self::Advise(_) => "advise",
+            Self::Verify(_) => "verify",
+            Self::Simulate(_) => "simulate",
+            Self::Experiment(_) => "experiment",
+            Self::Demo(_) => "demo",
+            Self::Bench(_) => "bench",
+        }
+    }
+}
+
 fn main() -> ExitCode {
     output::quiet_on_closed_pipe();
     let cli = Cli::parse();
+    let command = cli.command.name();
     let result = match cli.command {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Online(a) => online::run(a),
@@ -89,7 +107,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if output::is_closed_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
-            crate::tell!("error: {}", output::error_message(&e));
+            crate::tell!("error: {}", faces::error(&e, command));
             ExitCode::from(output::exit_code(&e))
         }
     }

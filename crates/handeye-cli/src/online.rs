@@ -294,6 +294,7 @@ pub fn run(args: Args) -> Result<()> {
                     line: record.line,
                     field: "-".to_string(),
                     message: e.to_string(),
+                    remedy: None,
                 };
                 bad_line(e, args.on_bad_line, &mut messages)?;
                 continue;
@@ -402,6 +403,7 @@ pub fn run(args: Args) -> Result<()> {
                     "no pose pair in the input: all {n} record line(s) were bad, {p} of them records with `detections` and no camera pose: calibrate them on the pixels with `handeye online --intrinsics FILE` (the camera's intrinsics: OpenCV YAML or ROS camera_info)"
                 ),
             },
+            remedy: None,
         }
         .into());
     }
@@ -589,10 +591,10 @@ struct Thinned {
     out: LineOut,
 }
 
-/// Whether a bad line is a record with `detections` and no camera pose (the pose reader's words
-/// for it): one for `online --intrinsics`.
+/// Whether a bad line is a record with `detections` and no camera pose (the pose reader's
+/// remedy for it): one for `online --intrinsics`.
 fn detections_only(e: &handeye::Error) -> bool {
-    matches!(e, handeye::Error::Parse { message, .. } if message.contains("`detections` alone"))
+    e.remedy() == Some(handeye::Remedy::Pixels)
 }
 
 impl Thinned {
@@ -632,7 +634,10 @@ fn bad_line(e: handeye::Error, on_bad_line: OnBadLine, messages: &mut Thinned) -
         Thinned::show(
             &mut messages.bad_lines,
             "bad lines",
-            format!("skipped: {e}"),
+            match e.remedy() {
+                Some(r) => format!("skipped: {e}; {}", crate::faces::remedy(r, "online")),
+                None => format!("skipped: {e}"),
+            },
             &messages.out,
         );
         Ok(())

@@ -197,6 +197,34 @@ fn detections_without_intrinsics_are_refused_naming_the_flag() {
     assert_eq!(code, 2, "{err}");
     assert!(out.is_empty());
     assert!(err.contains("online --intrinsics FILE"), "{err}");
+    // Each skipped line names online's flag, not calibrate's.
+    let skipped: Vec<&str> = err.lines().filter(|l| l.starts_with("skipped:")).collect();
+    assert!(!skipped.is_empty(), "{err}");
+    for line in skipped {
+        assert!(
+            line.ends_with("pass `--intrinsics FILE` to calibrate the records on their pixels"),
+            "{line}"
+        );
+    }
+    // Each command words the library's typed remedy in its own flags.
+    for (command, words) in [
+        (
+            "calibrate",
+            "pass `--method reprojection --intrinsics FILE`",
+        ),
+        (
+            "advise",
+            "`handeye calibrate --method reprojection --intrinsics FILE` calibrates",
+        ),
+    ] {
+        let (code, _, err) = run(&[command, &path(&format!("{name}.jsonl")), "--setup", setup]);
+        assert_eq!(code, 2, "{command}: {err}");
+        assert!(
+            err.contains(&format!("{name}.jsonl:1:")),
+            "{command}: {err}"
+        );
+        assert!(err.contains(words), "{command}: {err}");
+    }
 }
 
 #[test]

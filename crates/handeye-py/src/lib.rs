@@ -28,6 +28,18 @@ fn value_error(e: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 
+/// A reading error, with the call that reads the line in Python's words where the library leaves
+/// the wording to the face (a record with `detections` alone: [`handeye::Remedy::Pixels`]).
+fn read_error(e: handeye::Error) -> PyErr {
+    match e.remedy() {
+        Some(handeye::Remedy::Pixels) => value_error(format!(
+            "{e}; pass `intrinsics=FILE` {}: calibrate_on_pixels(path, intrinsics=FILE), or OnlineCalibrator(intrinsics=FILE) online",
+            handeye::Remedy::Pixels.purpose()
+        )),
+        _ => value_error(e),
+    }
+}
+
 /// A 4×4 transform from a numpy view, refusing non-rigid ones with `what` in the message.
 fn transform(m: ndarray_view::View<'_>, what: &str) -> PyResult<Transform> {
     rigid(m).map_err(|p| value_error(format!("{what}: {p}")))
@@ -878,7 +890,7 @@ fn read_recording<'py>(
     };
     let r = py
         .allow_threads(|| Recording::read(&source, &options))
-        .map_err(value_error)?;
+        .map_err(read_error)?;
     let [g, c] = pose_arrays(py, &r.poses);
     let d = PyDict::new(py);
     d.set_item("base_from_gripper", g)?;

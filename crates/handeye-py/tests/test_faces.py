@@ -364,6 +364,17 @@ def _series():
 PIXEL_SETS = [("tag_eih", "eye-in-hand"), ("board_eth", "eye-to-hand")]
 
 
+def test_records_with_detections_alone_name_pythons_call():
+    """The pose-based reading of records with `detections` and no camera pose refuses the first
+    one by its line and names Python's call that calibrates them on the pixels, not a flag."""
+    path = TESTDATA / "pixels" / "board_eth.jsonl"
+    with pytest.raises(ValueError) as refused:
+        handeye.read_recording(str(path), setup="eye-to-hand")
+    words = str(refused.value)
+    assert f"{path}:1:" in words and "calibrate_on_pixels(path, intrinsics=FILE)" in words, words
+    assert "--" not in words, words
+
+
 @pytest.mark.parametrize("robot_world", [False, True], ids=["hand-eye", "robot-world"])
 @pytest.mark.parametrize("name,setup", PIXEL_SETS, ids=[n for n, _ in PIXEL_SETS])
 def test_the_pixel_calibration_is_one_result_in_every_face(name, setup, robot_world):

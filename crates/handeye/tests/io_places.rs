@@ -351,6 +351,7 @@ fn check_error(e: &Error, files: &BTreeMap<String, usize>, tally: &mut Tally, wh
             line,
             field,
             message,
+            ..
         } => {
             let lines = files
                 .get(file)

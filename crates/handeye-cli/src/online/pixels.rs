@@ -90,6 +90,7 @@ pub(super) fn run(args: &Args) -> Result<()> {
                     "no record with `detections` in the input: all {n} record line(s) were bad"
                 ),
             },
+            remedy: None,
         }
         .into());
     }

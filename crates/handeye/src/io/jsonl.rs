@@ -15,11 +15,12 @@ use crate::io::{
     check_stamp, parse_error, written_as,
 };
 use crate::model::camera::{Detections, Frame, MIN_DETECTIONS};
-use crate::model::error::Result;
+use crate::model::error::{Error, Result};
 use crate::model::findings::{Written, WrittenAs};
 use crate::model::motion::PosePair;
 use crate::model::pose::ReadTransform;
 use crate::model::rotation::{RotationConvention, Rotations};
+use crate::model::warning::Remedy;
 
 /// Streaming reader of JSON Lines pose pairs (blank lines and `#` comments are skipped).
 ///
@@ -452,17 +453,21 @@ fn frame(
     let &&(name, inverted) = match present.as_slice() {
         [one] => one,
         [] => {
-            let pixels = if object.contains_key("detections") {
-                " (a record with `detections` alone is calibrated on the pixels: `--method reprojection --intrinsics FILE`)"
-            } else {
-                ""
-            };
-            return Err(parse_error(
-                source,
+            let missing = format!("missing: give `{}` or `{}`", names[0].0, names[1].0);
+            let field = format!("{}|{}", names[0].0, names[1].0);
+            if !object.contains_key("detections") {
+                return Err(parse_error(source, line, field, missing));
+            }
+            // Each face words the call that calibrates it ([`Remedy::Pixels`]).
+            return Err(Error::Parse {
+                file: source.to_string(),
                 line,
-                format!("{}|{}", names[0].0, names[1].0),
-                format!("missing: give `{}` or `{}`{pixels}", names[0].0, names[1].0),
-            ));
+                field,
+                message: format!(
+                    "{missing} (this record has `detections` alone: it is calibrated on its pixels)"
+                ),
+                remedy: Some(Remedy::Pixels),
+            });
         }
         _ => {
             return Err(parse_error(
@@ -497,6 +502,33 @@ mod tests {
 
     fn read(text: &str) -> Vec<Result<StampedPosePair>> {
         JsonlPairs::new(text.as_bytes(), "t.jsonl").collect()
+    }
+
+    /// A record with `detections` and no camera pose is a bad line whose remedy is typed (each
+    /// face words the call that calibrates it on the pixels): the library's words name no flag.
+    #[test]
+    fn a_record_with_detections_alone_carries_the_pixels_remedy() {
+        let detections = r#""detections": {"target": [[0,0,0]], "pixels": [[1,2]]}"#;
+        let errors: Vec<_> = [
+            format!("{{\"base_from_gripper\": {I}, {detections}}}"),
+            format!("{{\"base_from_gripper\": {I}}}"),
+        ]
+        .iter()
+        .map(|line| read(line).remove(0).unwrap_err())
+        .collect();
+        assert_eq!(errors[0].remedy(), Some(Remedy::Pixels));
+        assert_eq!(errors[1].remedy(), None);
+        for e in &errors {
+            let Error::Parse { line, field, .. } = e else {
+                panic!("{e}");
+            };
+            assert_eq!(
+                (*line, field.as_str()),
+                (1, "camera_from_target|target_from_camera")
+            );
+            assert!(!e.to_string().contains("--"), "{e}");
+        }
+        assert!(errors[0].to_string().contains("pixels"), "{}", errors[0]);
     }
 
     #[test]

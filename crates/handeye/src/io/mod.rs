@@ -460,6 +460,7 @@ pub(crate) fn parse_error(
         line,
         field: field.into(),
         message: message.into(),
+        remedy: None,
     }
 }
 

@@ -604,12 +604,12 @@ pub(crate) fn at_least_two_pairs(pairs: usize, source: String) -> Result<()> {
     if pairs >= 2 {
         return Ok(());
     }
-    Err(Error::Parse {
-        file: source,
-        line: 0,
-        field: "-".to_string(),
-        message: format!("{pairs} pose pair(s): at least 2 are needed to make a motion"),
-    })
+    Err(parse_error(
+        &source,
+        0,
+        "-",
+        format!("{pairs} pose pair(s): at least 2 are needed to make a motion"),
+    ))
 }
 
 #[cfg(feature = "internals")]

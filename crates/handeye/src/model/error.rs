@@ -368,6 +368,9 @@ pub enum Error {
         field: String,
         /// What is wrong.
         message: String,
+        /// The one option that would read the line, where one would (a record with `detections`
+        /// and no camera pose: [`Remedy::Pixels`]); each face words it ([`Error::remedy`]).
+        remedy: Option<Remedy>,
     },
     /// A ROS 2 recording that cannot be read or used: the file, the place (topic and message
     /// number) when one message is at fault, and what is wrong.
@@ -421,8 +424,9 @@ pub enum Error {
 
 impl Error {
     /// The one option of the call that would fix the refusal, if one would (as
-    /// [`Warning::remedy`] for a caution): the better reading of a misread input, or the first
-    /// remedy of what makes X untrusted.
+    /// [`Warning::remedy`] for a caution): the better reading of a misread input, the first
+    /// remedy of what makes X untrusted, or the option that reads a line (calibrating a record
+    /// with `detections` alone on its pixels).
     pub fn remedy(&self) -> Option<Remedy> {
         match self {
             Self::Misread {
@@ -437,6 +441,7 @@ impl Error {
             } if readings.first().is_some_and(|r| r.inverts()) => None,
             Self::Misread { readings, .. } => readings.first().map(|&r| Remedy::Fix(r)),
             Self::Untrusted { why, .. } => why.iter().find_map(|w| w.remedy()),
+            Self::Parse { remedy, .. } => *remedy,
             _ => None,
         }
     }

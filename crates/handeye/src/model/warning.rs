@@ -163,6 +163,10 @@ pub enum Remedy {
     Fix(Reading),
     /// Read the poses as a recording of this setup (`setup`).
     Setup(Setup),
+    /// Calibrate the records on their pixels, with the camera's intrinsics (`intrinsics`): a
+    /// record with `detections` and no camera pose. Each face words the call (the command line's
+    /// `calibrate` needs `--method reprojection` with `--intrinsics FILE`, `online` the latter).
+    Pixels,
 }
 
 impl Remedy {
@@ -173,15 +177,17 @@ impl Remedy {
             Self::RejectOutliers => "reject_outliers",
             Self::Fix(_) => "fix",
             Self::Setup(_) => "setup",
+            Self::Pixels => "intrinsics",
         }
     }
 
-    /// The option's value, as JSON.
+    /// The option's value, as JSON (`null` where it is the user's: the intrinsics' file).
     pub fn value(self) -> serde_json::Value {
         match self {
             Self::RejectOutliers => true.into(),
             Self::Fix(reading) => reading.name().into(),
             Self::Setup(setup) => setup.name().into(),
+            Self::Pixels => serde_json::Value::Null,
         }
     }
 
@@ -199,6 +205,7 @@ impl Remedy {
                 format!("{flag} {}", s.name()),
                 format!("{}=\"{}\"", self.option(), s.name()),
             ),
+            Self::Pixels => (format!("{flag} FILE"), format!("{}=FILE", self.option())),
         };
         format!("pass `{cli}` (`{py}` in Python) {}", self.purpose())
     }
@@ -209,6 +216,7 @@ impl Remedy {
             Self::RejectOutliers => "to leave them out",
             Self::Fix(_) => "to read the input that way",
             Self::Setup(_) => "to calibrate that setup",
+            Self::Pixels => "to calibrate the records on their pixels",
         }
     }
 }

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use crate::io::sync::{MAX_TIME_OFFSET, TimeOffset, pair_stream_files};
 use crate::io::{
     Conventions, DegreeAngles, Format, PoseInput, PoseReader, PoseSeries, Projections,
-    StampedPosePair, at_least_two_pairs, open_poses_as, read_joints, read_records, reread_text,
+    StampedPosePair, at_least_two_pairs, open_poses_as, parse_error, read_joints, read_records,
+    reread_text,
 };
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Reading, Written, WrittenAs};
@@ -462,11 +463,11 @@ fn read_streams(
     }
     if s.pairs.len() < 2 {
         // The camera stamps decide the pairs: name that file.
-        return Err(Error::Parse {
-            file: camera.display().to_string(),
-            line: 0,
-            field: "t".into(),
-            message: format!(
+        return Err(parse_error(
+            &camera.display().to_string(),
+            0,
+            "t",
+            format!(
                 "{} camera sample(s) within the robot stream {} ({} outside it, {} in its gaps longer than {} s){}: at least 2 pose pairs are needed",
                 s.pairs.len(),
                 robot.display(),
@@ -482,7 +483,7 @@ fn read_streams(
                     )
                 }
             ),
-        });
+        ));
     }
     let camera = camera.display().to_string();
     Ok(Recording {
