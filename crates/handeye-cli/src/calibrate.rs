@@ -331,13 +331,13 @@ pub(crate) fn pixel_input(
         ));
     };
     let camera = handeye::io::read_intrinsics(intrinsics)?;
-    let series = handeye::io::read_frames(path)?;
-    let names: Vec<String> = series
-        .lines
-        .iter()
-        .map(|l| format!("{}:{l}", path.display()))
-        .collect();
-    Ok((camera, series, names))
+    let source = handeye::io::Source::File {
+        path: path.clone(),
+        format: handeye::io::Format::Jsonl,
+    };
+    let read =
+        handeye::io::FrameRecording::read(&source, &handeye::io::RecordingOptions::default())?;
+    Ok((camera, read.series, read.names))
 }
 
 /// The refusals of a solve on the pixels, said in the text face too.

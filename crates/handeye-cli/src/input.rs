@@ -195,6 +195,7 @@ fn bag_source(args: &InputArgs) -> Result<Option<Source>> {
         camera: args.camera_frame.clone().unwrap_or_default(),
         target: args.target_frame.clone(),
         target_topic: args.target_topic.clone(),
+        tags: None,
     };
     Ok(Some(Source::Bag {
         path: path.clone(),
@@ -216,8 +217,8 @@ fn tag_flags(args: &InputArgs) -> Option<&'static str> {
 
 /// The frames of a calibration on the pixels from a ROS 2 recording (`--target-topic` of tag
 /// detections, `--tag-size`), its notes told on stderr; `None` when INPUT is not a recording.
-pub fn read_bag_pixels(args: &InputArgs) -> Result<Option<handeye::io::BagFrameRecording>> {
-    let Some(Source::Bag { path, frames }) = bag_source(args)? else {
+pub fn read_bag_pixels(args: &InputArgs) -> Result<Option<handeye::io::FrameRecording>> {
+    let Some(Source::Bag { path, mut frames }) = bag_source(args)? else {
         return Ok(None);
     };
     let Some(size) = args.tag_size else {
@@ -227,13 +228,15 @@ pub fn read_bag_pixels(args: &InputArgs) -> Result<Option<handeye::io::BagFrameR
         }
         .into());
     };
-    let tags = handeye::io::rosbag::BagTags {
+    frames.tags = Some(handeye::io::rosbag::BagTags {
         size,
         id: args.tag_id,
         camera_info_topic: args.camera_info_topic.clone(),
-    };
-    let read =
-        handeye::io::read_bag_frames(&path, &frames, &tags, &options(args, Reading::AsGiven)?)?;
+    });
+    let read = handeye::io::FrameRecording::read(
+        &Source::Bag { path, frames },
+        &options(args, Reading::AsGiven)?,
+    )?;
     for note in &read.notes {
         match note {
             Note::CameraMount { .. } => crate::tell!("warning: {note}"),

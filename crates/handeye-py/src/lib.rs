@@ -7,8 +7,9 @@
 use std::path::PathBuf;
 
 use handeye::TrackOptions;
+use handeye::io::rosbag::BagTags;
 use handeye::io::{
-    BagFrames, CameraMount, Format, Recording, RecordingOptions, Source, TimeOffset,
+    BagFrames, CameraMount, Format, FrameRecording, Recording, RecordingOptions, Source, TimeOffset,
 };
 use handeye::transform_from_matrix4;
 use handeye::{AdaptiveParams, Selection};
@@ -527,34 +528,124 @@ fn robot_world_report<'py>(
     serde_json::to_string(&report).map_err(value_error)
 }
 
-/// The calibration on the pixels of a JSON Lines file with `detections` and the camera's
-/// intrinsics ([`handeye::calibrate_on_pixels`], with `robot_world`
-/// [`handeye::calibrate_robot_world_on_pixels`]): its report as JSON, the same object
-/// `handeye calibrate FILE --method reprojection --intrinsics I [--robot-world]` prints; the
-/// records named `file:line` as there.
+/// A ROS 2 recording of a tag's detections, as the keywords of `calibrate_on_pixels` name it
+/// (the command line's `--base-frame … --target-topic … --tag-size …`).
+struct TagBag {
+    frames: [Option<String>; 3],
+    target_topic: Option<String>,
+    tag_size: Option<f64>,
+    tag_id: Option<i32>,
+    camera_info_topic: Option<String>,
+}
+
+/// The frames of a calibration on the pixels (the library's `FrameRecording`, its one entry) and
+/// the camera's intrinsics: a JSON Lines file with `detections` and `intrinsics`, or a ROS 2
+/// recording of a tag's detections whose `CameraInfo` topic gives them when `intrinsics` does not.
+fn pixel_recording(
+    path: PathBuf,
+    intrinsics: Option<PathBuf>,
+    bag: TagBag,
+    options: &RecordingOptions,
+) -> PyResult<(handeye::Intrinsics, FrameRecording)> {
+    let [base, gripper, camera] = bag.frames;
+    let tag_keywords = [
+        ("tag_size", bag.tag_size.is_some()),
+        ("tag_id", bag.tag_id.is_some()),
+        ("camera_info_topic", bag.camera_info_topic.is_some()),
+    ];
+    let mut source = recording_source(
+        Some(path),
+        "auto",
+        None,
+        None,
+        [base, gripper, camera, None, bag.target_topic],
+    )?;
+    match &mut source {
+        Source::Bag { frames, .. } => {
+            let Some(size) = bag.tag_size else {
+                return Err(value_error(
+                    "a ROS 2 recording is calibrated on the pixels from a tag's detections: give target_topic (apriltag_msgs/AprilTagDetectionArray) and tag_size (metres)",
+                ));
+            };
+            frames.tags = Some(BagTags {
+                size,
+                id: bag.tag_id,
+                camera_info_topic: bag.camera_info_topic,
+            });
+        }
+        Source::File { path, .. } => {
+            if let Some((name, _)) = tag_keywords.iter().find(|(_, given)| *given) {
+                return Err(value_error(format!(
+                    "{name} is for a ROS 2 recording of a tag's detections, and {} is not one",
+                    path.display()
+                )));
+            }
+        }
+        Source::Streams { .. } => unreachable!("a single path is never two streams"),
+    }
+    let read = FrameRecording::read(&source, options).map_err(read_error)?;
+    let camera = match (intrinsics, &read.intrinsics) {
+        (Some(file), _) => handeye::io::read_intrinsics(&file).map_err(value_error)?,
+        (None, Some(camera)) => *camera,
+        (None, None) => {
+            return Err(value_error(match source {
+                Source::Bag { .. } => {
+                    "reprojection needs the camera's intrinsics: the recording has no sensor_msgs/CameraInfo topic (…camera_info); give intrinsics=FILE (OpenCV YAML or ROS camera_info) or camera_info_topic"
+                }
+                _ => {
+                    "reprojection needs the camera's intrinsics: intrinsics=FILE (OpenCV YAML or ROS camera_info)"
+                }
+            }));
+        }
+    };
+    Ok((camera, read))
+}
+
+/// The calibration on the pixels of a recording with detections ([`pixel_recording`]: a JSON
+/// Lines file, or a ROS 2 recording of a tag's detections) ([`handeye::calibrate_on_pixels`], with
+/// `robot_world` [`handeye::calibrate_robot_world_on_pixels`]): its report as JSON, the same
+/// object `handeye calibrate INPUT --method reprojection [--intrinsics I] [--robot-world]` prints;
+/// the records named as there.
 #[pyfunction]
-#[pyo3(signature = (path, intrinsics, setup="eye-in-hand", robot_world=false, fix=None, point=None, refine_intrinsics=false))]
+#[pyo3(signature = (path, intrinsics=None, setup="eye-in-hand", robot_world=false, fix=None, point=None, refine_intrinsics=false, base_frame=None, gripper_frame=None, camera_frame=None, target_topic=None, tag_size=None, tag_id=None, camera_info_topic=None, time_offset=None, max_gap=0.1))]
 #[allow(clippy::too_many_arguments)]
 fn pixels_report(
     py: Python<'_>,
     path: PathBuf,
-    intrinsics: PathBuf,
+    intrinsics: Option<PathBuf>,
     setup: &str,
     robot_world: bool,
     fix: Option<&str>,
     point: Option<[f64; 3]>,
     refine_intrinsics: bool,
+    base_frame: Option<String>,
+    gripper_frame: Option<String>,
+    camera_frame: Option<String>,
+    target_topic: Option<String>,
+    tag_size: Option<f64>,
+    tag_id: Option<i32>,
+    camera_info_topic: Option<String>,
+    time_offset: Option<&Bound<'_, PyAny>>,
+    max_gap: f64,
 ) -> PyResult<String> {
     let setup = parse_setup(setup)?;
     let fix = parse_fix(fix)?;
     let point = checked_point(point)?;
-    let camera = handeye::io::read_intrinsics(&intrinsics).map_err(value_error)?;
-    let series = handeye::io::read_frames(&path).map_err(value_error)?;
-    let pose_names: Vec<String> = series
-        .lines
-        .iter()
-        .map(|l| format!("{}:{l}", path.display()))
-        .collect();
+    let bag = TagBag {
+        frames: [base_frame, gripper_frame, camera_frame],
+        target_topic,
+        tag_size,
+        tag_id,
+        camera_info_topic,
+    };
+    let options = RecordingOptions {
+        setup,
+        time_offset: self::time_offset(time_offset)?,
+        max_gap,
+        ..RecordingOptions::default()
+    };
+    let (camera, read) = py.allow_threads(|| pixel_recording(path, intrinsics, bag, &options))?;
+    let (frames, pose_names) = (read.series.frames, read.names);
     if robot_world {
         let options = handeye::RobotWorldOptions {
             method: handeye::RobotWorldMethod::Reprojection,
@@ -566,7 +657,7 @@ fn pixels_report(
         };
         let report = py
             .allow_threads(|| {
-                handeye::calibrate_robot_world_on_pixels(&series.frames, &camera, setup, &options)
+                handeye::calibrate_robot_world_on_pixels(&frames, &camera, setup, &options)
             })
             .map_err(value_error)?;
         return serde_json::to_string(&report).map_err(value_error);
@@ -582,7 +673,7 @@ fn pixels_report(
         ..Default::default()
     };
     let report = py
-        .allow_threads(|| handeye::calibrate_on_pixels(&series.frames, &camera, setup, &options))
+        .allow_threads(|| handeye::calibrate_on_pixels(&frames, &camera, setup, &options))
         .map_err(value_error)?;
     serde_json::to_string(&report).map_err(value_error)
 }
@@ -603,22 +694,25 @@ fn verify_pixels_report(
     let setup = parse_setup(setup)?;
     let fix = parse_fix(fix)?;
     let saved = handeye::io::read_saved_x(&saved).map_err(value_error)?;
-    let camera = handeye::io::read_intrinsics(&intrinsics).map_err(value_error)?;
-    let series = handeye::io::read_frames(&path).map_err(value_error)?;
+    let bag = TagBag {
+        frames: [None, None, None],
+        target_topic: None,
+        tag_size: None,
+        tag_id: None,
+        camera_info_topic: None,
+    };
+    let (camera, read) =
+        pixel_recording(path, Some(intrinsics), bag, &RecordingOptions::default())?;
     let options = handeye::Options {
         method: handeye::Method::Reprojection,
         pairing: handeye::Pairing::All,
         fix,
-        pose_names: series
-            .lines
-            .iter()
-            .map(|l| format!("{}:{l}", path.display()))
-            .collect(),
+        pose_names: read.names,
         ..Default::default()
     };
     let v = py
         .allow_threads(|| {
-            handeye::verify_on_pixels(&saved, &series.frames, &camera, setup, &options)
+            handeye::verify_on_pixels(&saved, &read.series.frames, &camera, setup, &options)
         })
         .map_err(value_error)?;
     serde_json::to_string(&v).map_err(value_error)
@@ -779,6 +873,7 @@ fn recording_source(
                 camera: camera.unwrap_or_default(),
                 target,
                 target_topic,
+                tags: None,
             };
             Ok(Source::Bag { path, frames })
         }

@@ -398,6 +398,49 @@ def test_the_pixel_calibration_is_one_result_in_every_face(name, setup, robot_wo
     assert py == cli
 
 
+#: The frames of the committed ROS 2 recordings of a tag's detections (testdata/rosbag/make_tag_bags.py).
+TAG_BAG = dict(base_frame="base_link", gripper_frame="tool0", camera_frame="camera",
+               target_topic="/apriltag/detections", tag_size=0.06)
+
+
+@pytest.mark.parametrize("bag", ["tag_eih_mcap", "tag_eih_sqlite3", "tag_eih_noinfo_sqlite3"])
+def test_a_recording_of_tag_detections_is_one_result_in_every_face(bag):
+    """`calibrate_on_pixels` reads a ROS 2 recording of a tag's detections as `handeye calibrate
+    BAG --method reprojection --target-topic T --tag-size S` does: the same object, field for
+    field; the intrinsics from the recording's CameraInfo, or from a file when it has none."""
+    assert CLI.exists(), f"build the command line first ({CLI}): cargo build --release"
+    path = TESTDATA / "rosbag" / bag
+    intrinsics = TESTDATA / "pixels" / "tag_eih.intrinsics.yml" if "noinfo" in bag else None
+    args = [str(CLI), "calibrate", str(path), "--method", "reprojection", "--output", "json",
+            "--time-offset", "0"]
+    for key, value in TAG_BAG.items():
+        args += ["--" + key.replace("_", "-"), str(value)]
+    if intrinsics is not None:
+        args += ["--intrinsics", str(intrinsics)]
+    done = subprocess.run(args, capture_output=True, text=True, check=True)
+    cli = json.loads(done.stdout)
+    py = handeye.calibrate_on_pixels(path, intrinsics, time_offset=0.0, **TAG_BAG)
+    py["matrix"] = py["matrix"].tolist()
+    assert py == cli
+    assert py["reprojection"]["rms_px"] < 2.0
+
+
+def test_a_recording_of_tag_detections_is_refused_in_words():
+    """What the command line refuses on a tag recording, Python refuses with a ValueError naming
+    its keyword: no tag size, tag keywords on a JSON Lines file, no intrinsics anywhere."""
+    bag = TESTDATA / "rosbag" / "tag_eih_mcap"
+    no_size = {k: v for k, v in TAG_BAG.items() if k != "tag_size"}
+    with pytest.raises(ValueError, match="tag_size"):
+        handeye.calibrate_on_pixels(bag, **no_size)
+    jsonl = TESTDATA / "pixels" / "tag_eih.jsonl"
+    with pytest.raises(ValueError, match="tag_size is for a ROS 2 recording"):
+        handeye.calibrate_on_pixels(jsonl, TESTDATA / "pixels" / "tag_eih.intrinsics.yml", tag_size=0.06)
+    with pytest.raises(ValueError, match="camera_info_topic"):
+        handeye.calibrate_on_pixels(TESTDATA / "rosbag" / "tag_eih_noinfo_sqlite3", **TAG_BAG)
+    with pytest.raises(ValueError, match="intrinsics=FILE"):
+        handeye.calibrate_on_pixels(jsonl)
+
+
 @pytest.mark.parametrize("robot_world", [False, True], ids=["hand-eye", "robot-world"])
 def test_refined_intrinsics_are_one_result_in_every_face(robot_world):
     """`calibrate_on_pixels(..., refine_intrinsics=True)` prints what `--refine-intrinsics` prints,

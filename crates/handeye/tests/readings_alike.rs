@@ -31,6 +31,7 @@ fn bag(name: &str, setup: Setup, camera: &str, target: &str) -> Recording {
             camera: camera.into(),
             target: Some(target.into()),
             target_topic: None,
+            tags: None,
         },
     };
     let options = RecordingOptions {

@@ -152,6 +152,7 @@ fn offset_bag() -> Source {
             camera: "camera_link".into(),
             target: None,
             target_topic: Some("/board_pose".into()),
+            tags: None,
         },
     }
 }

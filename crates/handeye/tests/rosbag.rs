@@ -129,6 +129,7 @@ fn a_camera_frame_with_a_parent_is_told_with_the_root_x_is_published_for() {
                     camera: camera.into(),
                     target: Some("board".into()),
                     target_topic: None,
+                    tags: None,
                 },
             };
             let options = RecordingOptions {
@@ -563,6 +564,7 @@ fn swapped_frame_names_are_named_as_such_not_as_inverted_poses() {
                 camera: camera.into(),
                 target: Some(target.into()),
                 target_topic: None,
+                tags: None,
             },
         };
         Recording::read(&source, &RecordingOptions::default())
@@ -654,6 +656,7 @@ fn joint_states_give_each_pair_its_angles_and_the_systematic_test_orders_by_them
                 camera: "camera_link".into(),
                 target: None,
                 target_topic: Some("/board_pose".into()),
+                tags: None,
             },
         };
         let r = Recording::read(&source, &RecordingOptions::default()).unwrap();

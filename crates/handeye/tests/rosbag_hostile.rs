@@ -199,6 +199,7 @@ fn repeated_stamps_keep_the_first_pose_and_are_counted_in_both_target_sources() 
                 camera: "camera".into(),
                 target: Some("board".into()),
                 target_topic: topic.map(str::to_string),
+                tags: None,
             },
         };
         let options = RecordingOptions {

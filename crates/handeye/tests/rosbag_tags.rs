@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use handeye::io::rosbag::{BagTags, TAG_CORNERS};
-use handeye::io::{BagFrames, RecordingOptions, TimeOffset, read_bag_frames, read_frames};
+use handeye::io::{BagFrames, FrameRecording, RecordingOptions, Source, TimeOffset};
 use handeye::{Frame, Options, Setup, Transform};
 
 fn data(path: &str) -> PathBuf {
@@ -22,7 +22,35 @@ fn frames() -> BagFrames {
         camera: "camera".into(),
         target: None,
         target_topic: Some("/apriltag/detections".into()),
+        tags: None,
     }
+}
+
+/// The one entry of recordings on the pixels, on the recording `path` with the tag `tags`.
+fn read_bag_frames(
+    path: &Path,
+    frames: &BagFrames,
+    tags: &BagTags,
+    options: &RecordingOptions,
+) -> handeye::Result<FrameRecording> {
+    let frames = BagFrames {
+        tags: Some(tags.clone()),
+        ..frames.clone()
+    };
+    let source = Source::Bag {
+        path: path.to_path_buf(),
+        frames,
+    };
+    FrameRecording::read(&source, options)
+}
+
+/// The frames of a JSON Lines file of records with detections.
+fn read_frames(path: &Path) -> handeye::Result<handeye::io::FrameSeries> {
+    let source = Source::File {
+        path: path.to_path_buf(),
+        format: handeye::io::Format::Auto,
+    };
+    FrameRecording::read(&source, &RecordingOptions::default()).map(|r| r.series)
 }
 
 fn tags(id: Option<i32>) -> BagTags {
@@ -174,4 +202,72 @@ fn refusals_name_what_is_missing() {
     };
     let e = read_bag_frames(&path, &poses, &tags(None), &options()).unwrap_err();
     assert!(e.to_string().contains("AprilTagDetectionArray"), "{e}");
+}
+
+/// One [`Source`] names the input of both entries: a recording of a tag's detections is read on
+/// the pixels only, a tag-less recording or two pose streams carry no detections, and a file's
+/// records are paired already (no clock offset) and are JSON Lines.
+#[test]
+fn each_entry_refuses_the_sources_of_the_other() {
+    let bag = data("rosbag/tag_eih_mcap");
+    let tagged = Source::Bag {
+        path: bag.clone(),
+        frames: BagFrames {
+            tags: Some(tags(None)),
+            ..frames()
+        },
+    };
+    let e = handeye::io::Recording::read(&tagged, &options()).unwrap_err();
+    assert!(e.to_string().contains("calibrated on their pixels"), "{e}");
+    let untagged = Source::Bag {
+        path: bag,
+        frames: frames(),
+    };
+    let e = FrameRecording::read(&untagged, &options()).unwrap_err();
+    assert!(
+        matches!(e, handeye::Error::InvalidParameter { name: "tags", .. }),
+        "{e}"
+    );
+    let streams = Source::Streams {
+        robot: data("pixels/tag_eih.jsonl"),
+        camera: data("pixels/tag_eih.jsonl"),
+    };
+    let e = FrameRecording::read(&streams, &RecordingOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("carry no detections"), "{e}");
+    let file = |format| Source::File {
+        path: data("pixels/tag_eih.jsonl"),
+        format,
+    };
+    let e = FrameRecording::read(
+        &file(handeye::io::Format::Csv),
+        &RecordingOptions::default(),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(e, handeye::Error::InvalidParameter { name: "format", .. }),
+        "{e}"
+    );
+    let e = FrameRecording::read(&file(handeye::io::Format::Auto), &options()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            handeye::Error::InvalidParameter {
+                name: "time_offset",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let read = FrameRecording::read(
+        &file(handeye::io::Format::Jsonl),
+        &RecordingOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(read.names.len(), read.series.frames.len());
+    assert!(
+        read.names[0].ends_with("tag_eih.jsonl:1"),
+        "{}",
+        read.names[0]
+    );
+    assert_eq!((read.intrinsics, read.time_offset), (None, None));
 }

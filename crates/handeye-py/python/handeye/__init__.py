@@ -350,7 +350,23 @@ def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, 
 
 
 def calibrate_on_pixels(
-    path, intrinsics, *, setup="eye-in-hand", robot_world=False, fix=None, point=None, refine_intrinsics=False
+    path,
+    intrinsics=None,
+    *,
+    setup="eye-in-hand",
+    robot_world=False,
+    fix=None,
+    point=None,
+    refine_intrinsics=False,
+    base_frame=None,
+    gripper_frame=None,
+    camera_frame=None,
+    target_topic=None,
+    tag_size=None,
+    tag_id=None,
+    camera_info_topic=None,
+    time_offset=None,
+    max_gap=0.1,
 ) -> dict:
     """Calibration on the pixels of the detections: a JSON Lines file whose records carry
     ``detections`` (``target`` points and their ``pixels``) and the camera's ``intrinsics`` (OpenCV
@@ -365,16 +381,34 @@ def calibrate_on_pixels(
     ``reprojection["intrinsics"]`` gives them with their ``sigma``, and X's uncertainty accounts for
     them. Raises ValueError where the command line refuses (robot poses that fit the pixels far
     better inverted, a fit far above detection noise, frames that do not determine the intrinsics,
-    bad input naming the file, line and field)."""
+    bad input naming the file, line and field).
+
+    ``path`` may also be a ROS 2 recording (a rosbag2 directory, an ``.mcap`` or a ``.db3`` file)
+    of a tag's detections, as ``handeye calibrate BAG --method reprojection --target-topic T
+    --tag-size S`` reads it: ``base_frame``, ``gripper_frame``, ``camera_frame`` (tf),
+    ``target_topic`` (``apriltag_msgs/msg/AprilTagDetectionArray``), ``tag_size`` (the side of
+    the tag's black square, metres), ``tag_id`` (when the recording shows several), the
+    intrinsics from ``intrinsics`` or else the recording's ``CameraInfo`` topic
+    (``camera_info_topic`` when it has several), ``time_offset`` (seconds; 0 by default) and
+    ``max_gap`` as in ``read_recording``."""
     result = json.loads(
         _pixels_report(
             str(path),
-            str(intrinsics),
+            None if intrinsics is None else str(intrinsics),
             setup=setup,
             robot_world=robot_world,
             fix=fix,
             point=_point(point),
             refine_intrinsics=bool(refine_intrinsics),
+            base_frame=base_frame,
+            gripper_frame=gripper_frame,
+            camera_frame=camera_frame,
+            target_topic=target_topic,
+            tag_size=None if tag_size is None else float(tag_size),
+            tag_id=None if tag_id is None else int(tag_id),
+            camera_info_topic=camera_info_topic,
+            time_offset=time_offset,
+            max_gap=float(max_gap),
         )
     )
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)

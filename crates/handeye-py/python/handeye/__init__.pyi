@@ -67,13 +67,22 @@ def verify(
 
 def calibrate_on_pixels(
     path: Union[str, "os.PathLike[str]"],
-    intrinsics: Union[str, "os.PathLike[str]"],
+    intrinsics: Optional[Union[str, "os.PathLike[str]"]] = None,
     *,
     setup: str = "eye-in-hand",
     robot_world: bool = False,
     fix: Optional[str] = None,
     point: Optional[Sequence[float]] = None,
     refine_intrinsics: bool = False,
+    base_frame: Optional[str] = None,
+    gripper_frame: Optional[str] = None,
+    camera_frame: Optional[str] = None,
+    target_topic: Optional[str] = None,
+    tag_size: Optional[float] = None,
+    tag_id: Optional[int] = None,
+    camera_info_topic: Optional[str] = None,
+    time_offset: Optional[Union[float, str]] = None,
+    max_gap: float = 0.1,
 ) -> dict[str, Any]: ...
 
 def verify_on_pixels(

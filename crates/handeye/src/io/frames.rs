@@ -49,8 +49,8 @@ pub fn frames_of<R: BufRead>(input: R, source: &str) -> Result<FrameSeries> {
 }
 
 /// The records of a recording on the pixels one at a time, as they come (a stream: `handeye
-/// online --intrinsics`), each with its line number: the reader of [`read_frames`] record by
-/// record. A bad record is its own [`Error::Parse`] (file, line, field) and the reading goes on
+/// online --intrinsics`), each with its line number: the reader of
+/// [`FrameRecording::read`](crate::io::FrameRecording::read) record by record. A bad record is its own [`Error::Parse`] (file, line, field) and the reading goes on
 /// with the next line; blank lines and `#` comments are skipped; a failing input ends it after
 /// its error.
 pub fn frame_records<R: BufRead>(
@@ -148,10 +148,16 @@ mod tests {
         }
     }
 
-    /// The pose reader refuses a record without a camera pose, and says what reads it.
+    /// The pose reader refuses a record without a camera pose, and says what reads it: the
+    /// pixels, as a typed remedy each face words in its own flags.
     #[test]
     fn the_pose_reader_points_detections_only_records_to_the_pixels() {
         let e = crate::io::parse_pose_line(&format!("{{{Q}, {D}}}"), "r.jsonl", 1).unwrap_err();
-        assert!(e.to_string().contains("--method reprojection"), "{e}");
+        assert_eq!(
+            e.remedy(),
+            Some(crate::model::warning::Remedy::Pixels),
+            "{e}"
+        );
+        assert!(e.to_string().contains("calibrated on its pixels"), "{e}");
     }
 }

@@ -40,19 +40,21 @@ use crate::model::rotation::Rotations;
 use lines::{Line, Lines};
 
 // What the faces use: one entry for every input (`Recording`: a pose file, two streams, a ROS 2
-// recording), one reader for every pose-file format (`read_pose_file`, `open_poses`,
+// recording; `FrameRecording` for the pixels of the same sources), one reader for every pose-file format (`read_pose_file`, `open_poses`,
 // `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
 // two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
 // public with `internals` for this crate's tests.
-pub use frames::{FrameSeries, frame_records, read_frames};
+#[cfg(feature = "internals")]
+pub use frames::read_frames;
+#[cfg(not(feature = "internals"))]
+pub(crate) use frames::read_frames;
+pub use frames::{FrameSeries, frame_records};
 pub use intrinsics::read_intrinsics;
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
 #[cfg(feature = "rosbag")]
 pub(crate) use recording::MountFrame;
-#[cfg(feature = "rosbag")]
-pub use recording::{BagFrameRecording, read_bag_frames};
-pub use recording::{CameraMount, Note, Recording, RecordingOptions, Source};
+pub use recording::{CameraMount, FrameRecording, Note, Recording, RecordingOptions, Source};
 pub use saved::read_saved_x;
 pub use stream::PoseStream;
 // The pose-file readers behind `PoseStream` and `Recording`: public with `internals` only.

@@ -2,11 +2,10 @@
 
 use std::path::Path;
 
-use super::{BagFrames, CameraMount, Note, Notes, Recording, RecordingOptions};
+use super::{BagFrames, FrameRecording, Note, Notes, Recording, RecordingOptions};
 use crate::io::FrameSeries;
 use crate::io::rosbag::{BagOptions, BagTags, read_bag_pairs, read_bag_tags};
 use crate::io::sync::{FoundOffset, StampedPose, TimeOffset, find_time_offset, read_as};
-use crate::model::camera::Intrinsics;
 use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
 
@@ -126,24 +125,6 @@ pub(super) fn read_bag(
     })
 }
 
-/// A recording on the pixels read from a ROS 2 recording ([`read_bag_frames`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct BagFrameRecording {
-    /// The frames (robot pose and the tag's corners; no `camera_from_target`) with each one's
-    /// message number in the detections topic.
-    pub series: FrameSeries,
-    /// A name for each frame: topic, message number and stamp.
-    pub names: Vec<String>,
-    /// The intrinsics of the recording's `sensor_msgs/msg/CameraInfo` topic, when it has one.
-    pub intrinsics: Option<Intrinsics>,
-    /// Where tf places the camera frame, when it gives it a parent.
-    pub camera_mount: Option<CameraMount>,
-    /// The clock offset used (camera − robot), seconds.
-    pub time_offset: f64,
-    /// What reading found worth telling, in order.
-    pub notes: Vec<Note>,
-}
-
 /// Reads the frames of a calibration on the pixels from a ROS 2 recording: the tag `tags` names
 /// on `frames.target_topic` (an `apriltag_msgs/msg/AprilTagDetectionArray` topic; corner order in
 /// [`TAG_CORNERS`](crate::io::rosbag::TAG_CORNERS)), the robot's pose from tf at each image's stamp
@@ -155,12 +136,12 @@ pub struct BagFrameRecording {
 ///
 /// Errors: those of the pose reader ([`Error::Bag`] naming the file, topic and message), a tag
 /// size that is not a positive length, several tag ids and none chosen.
-pub fn read_bag_frames(
+pub(super) fn read_bag_frames(
     path: &Path,
     frames: &BagFrames,
     tags: &BagTags,
     options: &RecordingOptions,
-) -> Result<BagFrameRecording> {
+) -> Result<FrameRecording> {
     let mut notes = Vec::new();
     let time_offset = match options.time_offset {
         Some(TimeOffset::Fixed(t)) => t,
@@ -208,7 +189,7 @@ pub fn read_bag_frames(
             mount: mount.clone(),
         });
     }
-    Ok(BagFrameRecording {
+    Ok(FrameRecording {
         series: FrameSeries {
             frames: read.frames,
             lines: read.lines,
@@ -216,7 +197,7 @@ pub fn read_bag_frames(
         names: read.names,
         intrinsics: read.intrinsics.map(|(_, k)| k),
         camera_mount: read.camera_mount,
-        time_offset,
+        time_offset: Some(time_offset),
         notes,
     })
 }

@@ -1,6 +1,8 @@
 //! One entry for reading every input: a pose file (any [`Format`], a ViSP directory, standard
 //! input), two stamped streams, or a ROS 2 recording, read into a [`Recording`] of pose pairs with
-//! their names, stamps, the clock offset used and the notes a face shows.
+//! their names, stamps, the clock offset used and the notes a face shows; the same [`Source`]
+//! read into a [`FrameRecording`] for a calibration on the pixels (a JSON Lines file of records
+//! with `detections`, a ROS 2 recording of a tag's detections).
 
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
@@ -19,11 +21,11 @@ use crate::model::rotation::Rotations;
 #[cfg(feature = "rosbag")]
 mod bag;
 mod convention;
+mod frames;
 mod mount;
 mod note;
 
-#[cfg(feature = "rosbag")]
-pub use bag::{BagFrameRecording, read_bag_frames};
+pub use frames::FrameRecording;
 pub use mount::CameraMount;
 #[cfg(feature = "rosbag")]
 pub use mount::MountFrame;
@@ -74,8 +76,12 @@ pub struct BagFrames {
     /// `child_frame_id` must be it.
     pub target: Option<String>,
     /// A `geometry_msgs/msg/PoseStamped` or `TransformStamped` topic of the target's pose; none:
-    /// the target is in `/tf`.
+    /// the target is in `/tf`. With `tags`, an `apriltag_msgs/msg/AprilTagDetectionArray` topic
+    /// of the tag's detections.
     pub target_topic: Option<String>,
+    /// The tag whose detections `target_topic` carries, for a calibration on the pixels
+    /// ([`FrameRecording::read`]); none: the target topic (or tf) gives the target's pose.
+    pub tags: Option<crate::io::rosbag::BagTags>,
 }
 
 /// How a [`Recording`] is read; `Default` gives the values on each field.
@@ -240,6 +246,12 @@ fn read_source(
         }
         #[cfg(feature = "rosbag")]
         Source::Bag { path, frames } => {
+            if frames.tags.is_some() {
+                return Err(Error::InvalidParameter {
+                    name: "tags",
+                    message: "a tag's detections carry no target pose: they are calibrated on their pixels, with the camera's intrinsics (FrameRecording::read)".into(),
+                });
+            }
             crate::io::pose_reader::no_rotations(
                 options.rotations,
                 &path.display().to_string(),
