@@ -277,7 +277,8 @@ fn upstream_stats(
     )
 }
 
-fn reprojection(dir: &std::path::Path, name: &str, setup: &str) -> Value {
+/// The calibration on the pixels of a set, with the warnings it must carry (their codes).
+fn reprojection(dir: &std::path::Path, name: &str, setup: &str, warned: &[&str]) -> Value {
     let k = dir.join("intrinsics.yml");
     let (code, report, err) = calibrate(
         dir,
@@ -291,7 +292,19 @@ fn reprojection(dir: &std::path::Path, name: &str, setup: &str) -> Value {
     );
     let report = report.unwrap_or_else(|| panic!("{name}: exit {code}: {err}"));
     assert_eq!(report["method"], "reprojection");
-    assert_eq!(report["verdict"], "good", "{name}: {}", report["warnings"]);
+    let codes: Vec<&str> = report["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["code"].as_str().unwrap())
+        .collect();
+    assert_eq!(codes, warned, "{name}: {}", report["warnings"]);
+    let verdict = if warned.is_empty() {
+        "good"
+    } else {
+        "questionable"
+    };
+    assert_eq!(report["verdict"], verdict, "{name}");
     report
 }
 
@@ -301,7 +314,7 @@ fn industrial_calibrations_circle_grid_is_within_its_tests_bounds() {
     let Some(dir) = set(name) else { return };
     let p = peer(&dir);
     let b = &p["bounds"];
-    let pixels = reprojection(&dir, name, "eye-in-hand");
+    let pixels = reprojection(&dir, name, "eye-in-hand", &[]);
     let report = &pixels;
     let (rms, pos, ori) = upstream_stats(&dir, report, |_| true);
     eprintln!(
@@ -359,7 +372,14 @@ fn industrial_calibrations_charuco_is_within_its_tests_bounds() {
     let Some(dir) = set(name) else { return };
     let p = peer(&dir);
     let b = &p["bounds"];
-    let report = reprojection(&dir, name, "eye-to-hand");
+    // The pixels and the robot's motions agree better with the focal length 2.1% shorter, and X
+    // moves 10 mm (3.6 sigma) with it: X depends on the intrinsics more than its sigma says.
+    // OpenCV's calibrateCamera on the same detections alone (no robot) finds the focal length
+    // 1.5% longer (focal only) or 0.3% (with the centre, k1, k2): the camera alone does not
+    // show it, the robot's motions with the camera do (DECISIONS, "Intrinsics that disagree").
+    let report = reprojection(&dir, name, "eye-to-hand", &["intrinsics_disagree"]);
+    let focal = report["warnings"][0]["focal_scale"].as_f64().unwrap();
+    assert!((0.97..0.99).contains(&focal), "{name}: {focal}");
     // Upstream's PnP comparison over the images whose PnP is posed: the last image (upstream's
     // images/15.png) shows 9 corners, a 3×3 patch 80 px wide at the image's left edge, whose PnP
     // is 40 mm off the fit in depth (every other image: at most 11 mm). Its pixels still count in

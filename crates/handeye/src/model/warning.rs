@@ -140,6 +140,24 @@ pub enum Warning {
         /// The joint (1-based) whose angle the residual follows most, where joint angles are given.
         joint: Option<usize>,
     },
+    /// On the pixels: the detections fit significantly better with the camera's focal length
+    /// scaled, and X moves beyond its uncertainty between the two fits: intrinsics that are not
+    /// this camera's (or a target size or robot kinematics that disagree with the camera on
+    /// scale), which X's uncertainty (the given intrinsics taken as exact) does not cover.
+    IntrinsicsDisagree {
+        /// The focal length's scale that fits best (fx and fy together).
+        focal_scale: f64,
+        /// The reprojection sigma with the given intrinsics, pixels.
+        sigma_px: f64,
+        /// The same with the focal length scaled.
+        scaled_sigma_px: f64,
+        /// How far X moves between the two fits: degrees.
+        rotation_deg: f64,
+        /// The same, input units.
+        translation: f64,
+        /// That move over X's one-sigma (the larger of rotation's and translation's).
+        sigmas: f64,
+    },
     /// A prior names a component of X's translation that the motions determine: the data's value
     /// is kept, and it disagrees with the prior by more than 3 sigma.
     PriorDisagrees {
@@ -249,6 +267,7 @@ impl Warning {
             Self::SystematicError { .. } => "systematic_error",
             Self::ReadingsAlike { .. } => "readings_alike",
             Self::PriorDisagrees { .. } => "prior_disagrees",
+            Self::IntrinsicsDisagree { .. } => "intrinsics_disagree",
         }
     }
 
@@ -338,6 +357,17 @@ impl fmt::Display for Warning {
             Self::KeptAsGiven { finding, .. } => {
                 write!(f, "kept as given (fix as-given), but {finding}")
             }
+            Self::IntrinsicsDisagree {
+                focal_scale,
+                sigma_px,
+                scaled_sigma_px,
+                rotation_deg,
+                translation,
+                sigmas,
+            } => write!(
+                f,
+                "the detections and the robot's motions agree better with the focal length scaled by {focal_scale:.3} (reprojection sigma {scaled_sigma_px:.2} px instead of {sigma_px:.2} px), and X moves by {rotation_deg:.3}° and {translation:.4} between the two fits ({sigmas:.1} sigma): X's uncertainty, which takes the intrinsics as exact, does not cover this; check that the intrinsics are this camera's at this resolution, zoom and focus (calibrate them again; refining them with X needs a board that spans the image) and the target's size; a robot whose kinematics are off shows the same way"
+            ),
             Self::PriorDisagrees {
                 component,
                 prior,
@@ -583,6 +613,14 @@ mod tests {
                 rotation_sigma_deg: 0.2,
                 translation_sigma: 0.003,
                 joint: Some(2),
+            },
+            Warning::IntrinsicsDisagree {
+                focal_scale: 0.98,
+                sigma_px: 1.6,
+                scaled_sigma_px: 1.4,
+                rotation_deg: 0.07,
+                translation: 0.01,
+                sigmas: 3.6,
             },
         ];
         for w in &every {

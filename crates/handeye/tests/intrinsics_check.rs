@@ -1,0 +1,125 @@
+//! Intrinsics that are not the camera's, on the pixels: a focal length off by 10–35% gives a
+//! calibration whose fit stays below the refusal's threshold and whose X is centimetres off,
+//! far beyond its uncertainty (which takes the intrinsics as exact). The focal-length check
+//! (`calibrate::pixels`, [`Warning::IntrinsicsDisagree`]) must then warn; with the camera's own
+//! intrinsics it must not. `-- --nocapture` prints the table.
+
+use handeye::sim::pixels::{PixelSimConfig, simulate_pixels};
+use handeye::{Intrinsics, Options, Setup, Transform, Warning};
+
+const SETUPS: [Setup; 2] = [Setup::EyeInHand, Setup::EyeToHand];
+
+/// Rotation (degrees) and translation between two transforms.
+fn gap(a: &Transform, b: &Transform) -> (f64, f64) {
+    (
+        (a.inverse() * b).rotation.angle().to_degrees(),
+        (a.translation.vector - b.translation.vector).norm(),
+    )
+}
+
+fn scaled(camera: &Intrinsics, scale: f64) -> Intrinsics {
+    Intrinsics {
+        fx: camera.fx * scale,
+        fy: camera.fy * scale,
+        ..*camera
+    }
+}
+
+/// One calibration with the focal length scaled: warned, and the error in sigmas (the larger
+/// of rotation's and translation's); none when refused.
+fn run(config: PixelSimConfig, seed: u64, scale: f64) -> Option<(bool, f64, Option<f64>)> {
+    let sim = simulate_pixels(&config, seed);
+    let camera = scaled(&sim.intrinsics, scale);
+    let r =
+        handeye::calibrate_on_pixels(&sim.frames, &camera, sim.setup, &Options::default()).ok()?;
+    let (deg, t) = gap(&r.transform, &sim.x);
+    let sigmas = (deg / r.uncertainty.rotation_deg).max(t / r.uncertainty.translation);
+    let found = r.warnings.iter().find_map(|w| match w {
+        Warning::IntrinsicsDisagree { focal_scale, .. } => Some(*focal_scale),
+        _ => None,
+    });
+    Some((found.is_some(), sigmas, found))
+}
+
+/// With the camera's own intrinsics no recording is warned; with a focal length 10–35% off,
+/// no recording is silently beyond 3 sigma (every one is warned, refused, or within 3 sigma),
+/// and the scale found undoes the error.
+#[test]
+fn a_wrong_focal_length_is_warned_and_the_right_one_is_not() {
+    let mut table = Vec::new();
+    for setup in SETUPS {
+        for (kind, config) in [
+            ("tag", PixelSimConfig::tag()),
+            ("board", PixelSimConfig::board()),
+        ] {
+            for seed in 400..403 {
+                for scale in [1.0, 0.66, 0.8, 0.9, 1.1, 1.25] {
+                    let outcome = run(config.with_setup(setup), seed, scale);
+                    table.push((setup, kind, seed, scale, outcome));
+                }
+            }
+        }
+    }
+    eprintln!("setup kind seed scale: warned, error/sigma, scale found");
+    for (setup, kind, seed, scale, outcome) in &table {
+        eprintln!("{setup:?} {kind} {seed} {scale}: {outcome:?}");
+    }
+    for (setup, kind, seed, scale, outcome) in &table {
+        let what = format!("{setup:?} {kind} seed {seed} focal x{scale}");
+        if *scale == 1.0 {
+            let (warned, sigmas, _) = outcome.unwrap_or_else(|| panic!("{what}: refused"));
+            assert!(!warned, "{what}: warned with the camera's own intrinsics");
+            assert!(sigmas < 4.0, "{what}: {sigmas} sigma");
+            continue;
+        }
+        let Some((warned, sigmas, found)) = *outcome else {
+            continue; // refused: not silent
+        };
+        assert!(
+            warned || sigmas <= 3.0,
+            "{what}: silently {sigmas:.1} sigma off"
+        );
+        if let Some(found) = found {
+            assert!(
+                (found * scale - 1.0).abs() < 0.05,
+                "{what}: scale found {found}, the error undone by {}",
+                1.0 / scale
+            );
+        }
+    }
+    // The larger errors are warned, not refused: the user hears what to fix.
+    let warned = table
+        .iter()
+        .filter(|t| (t.3 - 1.0).abs() >= 0.2)
+        .filter(|t| t.4.is_some_and(|o| o.0))
+        .count();
+    let large = table.iter().filter(|t| (t.3 - 1.0).abs() >= 0.2).count();
+    eprintln!("focal length 20% or more off: {warned} of {large} warned");
+    assert!(2 * warned > large, "{warned} of {large}");
+}
+
+/// The camera's own intrinsics are rarely warned: over 80 simulated recordings (tags and
+/// boards, both setups, seeds not used elsewhere) at most 2 (the test's level is p = 0.001,
+/// and X must move beyond 3 sigma too).
+#[test]
+fn the_cameras_own_intrinsics_are_rarely_warned() {
+    let mut warned = Vec::new();
+    let mut count = 0;
+    for setup in SETUPS {
+        for config in [PixelSimConfig::tag(), PixelSimConfig::board()] {
+            for seed in 500..520 {
+                let outcome = run(config.with_setup(setup), seed, 1.0);
+                let (w, _, found) = outcome.expect("the camera's own intrinsics are not refused");
+                count += 1;
+                if w {
+                    warned.push((setup, seed, found));
+                }
+            }
+        }
+    }
+    eprintln!(
+        "the camera's own intrinsics: {} of {count} warned: {warned:?}",
+        warned.len()
+    );
+    assert!(warned.len() <= 2, "{warned:?}");
+}
