@@ -277,6 +277,16 @@ fn upstream_stats(
     )
 }
 
+/// The codes of a report's warnings, in order.
+fn warning_codes(report: &Value) -> Vec<&str> {
+    report["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["code"].as_str().unwrap())
+        .collect()
+}
+
 /// The calibration on the pixels of a set, with the warnings it must carry (their codes).
 fn reprojection(dir: &std::path::Path, name: &str, setup: &str, warned: &[&str]) -> Value {
     let k = dir.join("intrinsics.yml");
@@ -292,12 +302,7 @@ fn reprojection(dir: &std::path::Path, name: &str, setup: &str, warned: &[&str])
     );
     let report = report.unwrap_or_else(|| panic!("{name}: exit {code}: {err}"));
     assert_eq!(report["method"], "reprojection");
-    let codes: Vec<&str> = report["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|w| w["code"].as_str().unwrap())
-        .collect();
+    let codes = warning_codes(&report);
     assert_eq!(codes, warned, "{name}: {}", report["warnings"]);
     let verdict = if warned.is_empty() {
         "good"
@@ -335,12 +340,7 @@ fn industrial_calibrations_circle_grid_is_within_its_tests_bounds() {
     let (code, report, err) = calibrate(&dir, "eye-in-hand", &["--method", "andreff"]);
     let report = report.unwrap_or_else(|| panic!("{name} andreff: exit {code}: {err}"));
     assert_eq!(report["verdict"], "questionable", "{name}: {report}");
-    let codes: Vec<&str> = report["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|w| w["code"].as_str().unwrap())
-        .collect();
+    let codes = warning_codes(&report);
     assert!(codes.contains(&"systematic_error"), "{name}: {codes:?}");
     // Its uncertainty covers its distance to the pixel fit, and is no wider than the scene: a
     // 7-pose half of the workspace that does not determine X on its own put it at 50° and 1.4 km.
