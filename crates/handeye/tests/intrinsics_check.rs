@@ -123,3 +123,43 @@ fn the_cameras_own_intrinsics_are_rarely_warned() {
     );
     assert!(warned.len() <= 2, "{warned:?}");
 }
+
+/// `verify` on the pixels with a focal length 20% off and the true X saved: the recording's own
+/// X is far off, but the verdict is not "the camera moved": the recording cannot tell until its
+/// intrinsics agree. With the camera's own intrinsics the same saved X is consistent.
+#[test]
+fn verify_does_not_blame_the_camera_for_wrong_intrinsics() {
+    for setup in SETUPS {
+        let sim = simulate_pixels(&PixelSimConfig::tag().with_setup(setup), 430);
+        let saved = handeye::SavedX {
+            x: sim.x,
+            setup: Some(setup),
+            covariance: None,
+            unit: None,
+        };
+        let verify = |camera: &Intrinsics| {
+            handeye::verify_on_pixels(&saved, &sim.frames, camera, setup, &Options::default())
+                .expect("verified")
+        };
+        let right = verify(&sim.intrinsics);
+        assert_eq!(
+            right.verdict,
+            handeye::Consistency::Consistent,
+            "{}",
+            right.message
+        );
+        let wrong = verify(&scaled(&sim.intrinsics, 0.8));
+        assert_eq!(
+            wrong.verdict,
+            handeye::Consistency::Undetermined,
+            "{}",
+            wrong.message
+        );
+        assert!(
+            wrong.message.contains("focal length scaled by 1.2"),
+            "{}",
+            wrong.message
+        );
+        assert!(wrong.distance_sigmas > 10.0, "{}", wrong.distance_sigmas);
+    }
+}

@@ -20,6 +20,7 @@ use crate::model::findings::{Sizes, Verdict};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson, log_so3};
 use crate::model::prior::{Component, Prior, LengthUnit};
+use crate::model::warning::Warning;
 
 /// The probability of the χ² test's acceptance region for a saved X of the same rig: one
 /// same-rig recording in a thousand is refused.
@@ -212,7 +213,32 @@ pub(crate) fn compared(
     let sizes = (difference.rotation_deg / sigma.rotation_deg)
         .max(difference.translation / sigma.translation);
     let shape_reliable = poses.len() >= SHAPE_POSES;
-    let (verdict, message) = if distance > limit && (shape_reliable || sizes > SIZE_LIMIT) {
+    let intrinsics = report.warnings.iter().find_map(|w| match w {
+        Warning::IntrinsicsDisagree {
+            focal_scale,
+            rotation_deg,
+            translation,
+            sigmas,
+            ..
+        } => Some((*focal_scale, *rotation_deg, *translation, *sigmas)),
+        _ => None,
+    });
+    let (verdict, message) = if distance > limit
+        && (shape_reliable || sizes > SIZE_LIMIT)
+        && let Some((focal, rotation_deg, translation, sigmas)) = intrinsics
+    {
+        // The recording's own X depends on intrinsics its detections disagree with: a
+        // difference is no evidence that the camera moved.
+        (
+            Consistency::Undetermined,
+            format!(
+                "this recording cannot tell: the saved X differs by {:.3}° and {} ({distance:.1} sigmas), but the recording's detections and robot motions agree better with the focal length scaled by {focal:.3}, which moves the recording's own X by {rotation_deg:.3}° and {} ({sigmas:.1} sigmas): check the intrinsics (this camera's, at this resolution, zoom and focus) and the target's size, then verify again",
+                difference.rotation_deg,
+                len(difference.translation),
+                len(translation),
+            ),
+        )
+    } else if distance > limit && (shape_reliable || sizes > SIZE_LIMIT) {
         (
             Consistency::Inconsistent,
             inconsistent_words(&difference, distance, length, unit),
