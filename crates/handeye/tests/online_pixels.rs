@@ -317,3 +317,42 @@ fn a_long_stream_keeps_a_bounded_number_of_frames() {
             .is_err()
     );
 }
+
+/// A long stream of distinct views with the camera's own intrinsics: the focal-length check runs at
+/// every estimate over the frames kept, and warns none of them (the estimates of one stream share
+/// most of their frames, so one false alarm would repeat).
+#[test]
+fn the_camera_s_own_intrinsics_raise_no_focal_warning_on_a_long_stream() {
+    let mut warned = Vec::new();
+    let mut estimates = 0;
+    for (config, name) in [
+        (PixelSimConfig::tag(), "tag"),
+        (PixelSimConfig::board(), "board"),
+    ] {
+        for setup in [Setup::EyeInHand, Setup::EyeToHand] {
+            for seed in 0..1 {
+                let config = PixelSimConfig {
+                    frames: 1200,
+                    ..config.with_setup(setup)
+                };
+                let sim = simulate_pixels(&config, 8100 + seed);
+                let mut c = OnlinePixels::new(sim.intrinsics, setup, Options::default()).unwrap();
+                for (f, frame_name) in sim.frames.iter().zip(names(&sim.frames)) {
+                    if c.push(f.clone(), frame_name).is_some() {
+                        estimates += 1;
+                        let codes: Vec<&str> = c.warnings().iter().map(|w| w.code()).collect();
+                        if codes.contains(&"intrinsics_disagree") {
+                            warned.push(format!("{name} {setup:?} {seed} at {}", c.frames()));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{} of {estimates} estimates warned: {warned:?}",
+        warned.len()
+    );
+    assert!(estimates >= 30, "{estimates}");
+    assert!(warned.is_empty(), "{warned:?}");
+}

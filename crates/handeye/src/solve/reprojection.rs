@@ -150,6 +150,31 @@ pub fn reprojection(
     setup: Setup,
     options: &PixelOptions,
 ) -> Result<PixelSolution> {
+    solve_pixels(frames, camera, setup, options, None)
+}
+
+/// [`reprojection`] with the detections its final pass leaves out given (`left_out`, (frame,
+/// point) each: another solve's [`PixelSolution::outliers`]) instead of chosen by this solve's
+/// robust pass: fits of the same detections under other intrinsics, whose RMS compare as a
+/// likelihood ratio (a solve that left out more detections would fit fewer, and look better).
+pub(crate) fn reprojection_leaving_out(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &PixelOptions,
+    left_out: &[(usize, usize)],
+) -> Result<PixelSolution> {
+    solve_pixels(frames, camera, setup, options, Some(left_out))
+}
+
+/// The solve of [`reprojection`]; `left_out` as in [`reprojection_leaving_out`].
+fn solve_pixels(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &PixelOptions,
+    left_out: Option<&[(usize, usize)]>,
+) -> Result<PixelSolution> {
     check_frames(frames)?;
     let start = start_poses(frames, camera, setup)?;
     let span = if options.refine_intrinsics {
@@ -176,7 +201,10 @@ pub fn reprojection(
     let residuals = data.residual_norms(&first.state);
     let sigma_px = robust_sigma(&residuals);
     let threshold = (INLIER_SIGMAS * sigma_px).max(INLIER_FLOOR_PX);
-    let keep: Vec<bool> = residuals.iter().map(|r| *r <= threshold).collect();
+    let keep: Vec<bool> = match left_out {
+        Some(left_out) => data.index.iter().map(|i| !left_out.contains(i)).collect(),
+        None => residuals.iter().map(|r| *r <= threshold).collect(),
+    };
     let plain = Bundle {
         data: &data,
         loss: Loss::Squared,
