@@ -356,3 +356,58 @@ fn the_camera_s_own_intrinsics_raise_no_focal_warning_on_a_long_stream() {
     assert!(estimates >= 30, "{estimates}");
     assert!(warned.is_empty(), "{warned:?}");
 }
+
+/// A robot program that tours the same 30 poses again and again (fresh images each time, as a
+/// camera takes them): thinning drops repeated poses first and keeps every distinct view, and the
+/// images of one pose count once (they share its robot error). Before, two equal rotations had a
+/// NaN distance (nalgebra's acos), so repeated poses were never "nearest": the distinct views were
+/// thinned out instead, the uncertainty grew tenfold and the stream ended refused at 11 poses.
+#[test]
+fn a_stream_that_tours_the_same_poses_keeps_every_view_and_counts_each_pose_once() {
+    use rand::{RngExt, SeedableRng};
+    for setup in [Setup::EyeInHand, Setup::EyeToHand] {
+        let sim = simulate_pixels(&PixelSimConfig::tag().with_setup(setup), 8200);
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(1);
+        let tours: Vec<Frame> = (0..60)
+            .flat_map(|_| sim.frames.iter().cloned())
+            .map(|mut f| {
+                for p in &mut f.detections.pixels {
+                    p[0] += rng.random_range(-0.5..0.5);
+                    p[1] += rng.random_range(-0.5..0.5);
+                }
+                f
+            })
+            .collect();
+        let one_tour = batch(&tours[..30], &sim.intrinsics, setup).unwrap();
+        let (_, end) = online(&tours, &sim.intrinsics, setup);
+        let end = end.unwrap_or_else(|e| panic!("{setup:?}: {e}"));
+        let (deg, t) = gap(&end.estimate.x, &sim.x);
+        let (sigma_deg, sigma_t) = (
+            end.estimate.uncertainty_rotation_deg.unwrap(),
+            end.estimate.uncertainty_translation.unwrap(),
+        );
+        eprintln!(
+            "{setup:?}: end {deg:.3}° {:.2} mm, sigma {sigma_deg:.3}° {:.2} mm; one tour's sigma {:.3}° {:.2} mm",
+            t * 1e3,
+            sigma_t * 1e3,
+            one_tour.uncertainty.rotation_deg,
+            one_tour.uncertainty.translation * 1e3
+        );
+        assert!(
+            deg < 3.0 * sigma_deg && t < 3.0 * sigma_t,
+            "{setup:?}: beyond 3 sigma"
+        );
+        // Sixty tours of the same poses know what one tour knows about the robot's error, and
+        // about as much: not ten times less (views thinned out), not eight times more (images
+        // counted as poses).
+        for (online, once) in [
+            (sigma_deg, one_tour.uncertainty.rotation_deg),
+            (sigma_t, one_tour.uncertainty.translation),
+        ] {
+            assert!(
+                online < 1.5 * once && online > 0.4 * once,
+                "{setup:?}: {online} vs {once}"
+            );
+        }
+    }
+}

@@ -27,7 +27,7 @@ use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::{OutlierPose, Reading};
 use crate::model::warning::Warning;
 use crate::model::motion::{PosePair, Setup};
-use crate::model::pose::{Transform, TransformJson};
+use crate::model::pose::{Transform, TransformJson, rotation_angle_between};
 use crate::solve::motions::AllPairs;
 use crate::calibrate::verify::{
     FramePixels, PixelComparison, SavedX, Verification, cannot_tell, compared, setup_notes,
@@ -501,8 +501,7 @@ fn intrinsics_warning(
 ) -> Option<Warning> {
     let n = coordinates as f64;
     let chi2 = n * (rms_px.powi(2) - focal.rms_px.powi(2)) / focal.rms_px.powi(2).max(1e-300);
-    let moved = x.inverse() * focal.x;
-    let rotation_deg = moved.rotation.angle().to_degrees();
+    let rotation_deg = rotation_angle_between(&x.rotation, &focal.x.rotation).to_degrees();
     let translation = (focal.x.translation.vector - x.translation.vector).norm();
     let sigmas = (rotation_deg / uncertainty.rotation_deg.max(1e-300))
         .max(translation / uncertainty.translation.max(1e-300));
@@ -551,9 +550,10 @@ fn solved(
         name: "intrinsics",
         message: format!("{field}: {message}"),
     })?;
-    // X's covariance takes the sandwich over frames with the factor F/(F − 12) (12 parameters):
-    // fewer than 13 frames have no honest uncertainty, and are refused here, by count, rather
-    // than after the solve as if the motions were degenerate.
+    // X's covariance takes the sandwich over the robot's stations with the factor S/(S − 12) (12
+    // parameters): fewer than 13 frames have no honest uncertainty, and are refused here, by
+    // count, rather than after the solve as if the motions were degenerate (and fewer than 13
+    // stations after it, by the same error).
     if frames.len() <= PIXEL_PARAMETERS {
         return Err(Error::TooFewMotions {
             got: frames.len().saturating_sub(1),
@@ -734,6 +734,13 @@ fn report(
     let poses = pose_pairs(frames, &solution.start_poses);
     let scene = translation_scale(&poses, setup).max(working_distance(&poses));
     let conditioning = solution.calibration.conditioning;
+    // Images at 12 robot poses or fewer have no honest uncertainty, however many there are.
+    if solution.stations <= PIXEL_PARAMETERS {
+        return Err(Error::TooFewMotions {
+            got: solution.stations.saturating_sub(1),
+            need: PIXEL_PARAMETERS,
+        });
+    }
     let Some(covariance) = solution.covariance else {
         return Err(Error::Degenerate {
             reason: Degeneracy::IllConditioned,

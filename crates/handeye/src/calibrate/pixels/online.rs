@@ -7,6 +7,7 @@ use crate::calibrate::robot_world::PoseResidualSummary;
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
 use crate::model::motion::Setup;
+use crate::model::pose::rotation_angle_between;
 use crate::solve::pose_residuals;
 use crate::track::{PixelFit, Reason, Report as TrackReport, TrackEstimate};
 
@@ -36,7 +37,9 @@ struct Thinning {
 impl Thinning {
     fn distance(&self, a: &Frame, b: &Frame) -> f64 {
         let (p, q) = (&a.base_from_gripper, &b.base_from_gripper);
-        (p.rotation.inverse() * q.rotation).angle()
+        // Not nalgebra's `angle()`: its acos is NaN for two equal rotations, and a NaN distance
+        // is never the nearest, so repeated poses were kept and distinct views thinned out.
+        rotation_angle_between(&p.rotation, &q.rotation)
             + (p.translation.vector - q.translation.vector).norm() / self.scale
     }
 

@@ -22,7 +22,9 @@
 use nalgebra::{Matrix6, SMatrix, SVector, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
-use super::{BEHIND_PX, Data, INLIER_FLOOR_PX, INLIER_SIGMAS, Loss, State, robust_sigma};
+use super::{
+    BEHIND_PX, Data, INLIER_FLOOR_PX, INLIER_SIGMAS, Loss, State, robust_sigma, station_meat,
+};
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
 use crate::model::pose::{Transform, exp_so3, proj_so3};
@@ -361,7 +363,7 @@ impl Free<'_> {
 
     /// The covariances of X, Y (6 each) and the intrinsics (8, in the
     /// solve's scaled units): each block the larger of the Gauss–Newton one and the sandwich over
-    /// frames (as [`super::Bundle::covariance`]); `None` when singular or with too few frames.
+    /// the robot's stations (as [`super::Bundle::covariance`]); `None` when singular or with too few frames.
     fn covariance(&self, s: &Full) -> Option<(Matrix6<f64>, Matrix6<f64>, SMatrix<f64, FREE, FREE>)> {
         let frames = self.data.motions.len();
         let mut per_frame = vec![SVector::<f64, ALL>::zeros(); frames];
@@ -373,16 +375,13 @@ impl Free<'_> {
             cost += 0.5 * r.norm_squared();
             count += 1;
         });
-        if count <= ALL || frames <= ALL {
+        let (meat, stations) = station_meat(&per_frame, &self.data.stations);
+        if count <= ALL || stations <= ALL {
             return None;
         }
         let inv = jtj.try_inverse()?;
         let classic = inv * (2.0 * cost / (count - ALL) as f64);
-        let mut meat = SMatrix::<f64, ALL, ALL>::zeros();
-        for g in &per_frame {
-            meat += g * g.transpose();
-        }
-        let sandwich = inv * meat * inv * (frames as f64 / (frames - ALL) as f64);
+        let sandwich = inv * meat * inv * (stations as f64 / (stations - ALL) as f64);
         let pose_scale =
             |c: &Matrix6<f64>| c.fixed_view::<3, 3>(0, 0).trace() * 1e4 + c.fixed_view::<3, 3>(3, 3).trace();
         let pose = |at: usize| {
