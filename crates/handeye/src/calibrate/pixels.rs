@@ -396,9 +396,9 @@ fn focal_check(
         s.rms_px
     };
     let (low, high) = (FOCAL_RANGE.0.ln(), FOCAL_RANGE.1.ln());
-    let (log_scale, least) = brent_minimum(&mut rms, (low, high), (0.0, solved.rms_px), 2.5e-4);
-    // The search's best is at scale 1 itself: nothing fits better than the intrinsics given.
-    best.filter(|b| b.rms_px <= least && log_scale != 0.0)
+    brent_minimum(&mut rms, (low, high), (0.0, solved.rms_px), 2.5e-4);
+    // None when no scale fits better than the intrinsics given.
+    best.filter(|b| b.rms_px < solved.rms_px)
 }
 
 /// The minimum of `f` on `(a, b)` by Brent's method (R. P. Brent, *Algorithms for Minimization
@@ -623,6 +623,14 @@ fn solved(
     if solution.sigma_px > REFUSE_SIGMA_PX {
         return Err(unfit(&solution, &used, camera, setup, &pixel_options));
     }
+    // Images at 12 robot poses or fewer have no honest uncertainty, however many there are:
+    // refused before the focal-length check's solves.
+    if solution.stations <= PIXEL_PARAMETERS {
+        return Err(Error::TooFewMotions {
+            got: solution.stations.saturating_sub(1),
+            need: PIXEL_PARAMETERS,
+        });
+    }
     if let Some(k) = &solution.intrinsics {
         check_determined(k, camera)?;
     } else {
@@ -734,13 +742,6 @@ fn report(
     let poses = pose_pairs(frames, &solution.start_poses);
     let scene = translation_scale(&poses, setup).max(working_distance(&poses));
     let conditioning = solution.calibration.conditioning;
-    // Images at 12 robot poses or fewer have no honest uncertainty, however many there are.
-    if solution.stations <= PIXEL_PARAMETERS {
-        return Err(Error::TooFewMotions {
-            got: solution.stations.saturating_sub(1),
-            need: PIXEL_PARAMETERS,
-        });
-    }
     let Some(covariance) = solution.covariance else {
         return Err(Error::Degenerate {
             reason: Degeneracy::IllConditioned,

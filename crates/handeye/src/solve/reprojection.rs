@@ -308,7 +308,7 @@ fn solution(frames: &[Frame], data: &Data, start: Start, unit: f64, fit: Fitted)
         outliers,
         start_poses: start.poses,
         flips_resolved: start.flips_resolved,
-        stations: data.stations.iter().max().map_or(0, |s| s + 1),
+        stations: station_count(&data.stations),
         sigma_px,
         iterations,
         termination,
@@ -880,31 +880,44 @@ fn stations(motions: &[(Matrix3<f64>, Vector3<f64>)]) -> Vec<usize> {
     };
     let mut along: Vec<usize> = (0..motions.len()).collect();
     along.sort_by(|&a, &b| motions[a].1.x.total_cmp(&motions[b].1.x).then(a.cmp(&b)));
-    // Each frame's representative: the first frame (in recording order) of its station.
-    let mut first: Vec<usize> = (0..motions.len()).collect();
+    // Union–find: each frame's parent, a root being the first frame (in recording order) of its
+    // station.
+    let mut parent: Vec<usize> = (0..motions.len()).collect();
+    let root = |parent: &[usize], mut i: usize| {
+        while parent[i] != i {
+            i = parent[i];
+        }
+        i
+    };
     for (k, &i) in along.iter().enumerate() {
         for &j in along[..k].iter().rev() {
             if motions[i].1.x - motions[j].1.x >= SAME_STATION {
                 break;
             }
             if same(i, j) {
-                first[i] = first[i].min(first[j]);
-                first[j] = first[i];
+                let (a, b) = (root(&parent, i), root(&parent, j));
+                parent[a.max(b)] = a.min(b);
             }
         }
     }
+    // Numbered in the order of their first frame: a root comes before the rest of its station.
     let mut number = vec![usize::MAX; motions.len()];
     let mut next = 0;
     (0..motions.len())
         .map(|i| {
-            let f = first[i];
-            if number[f] == usize::MAX {
-                number[f] = next;
+            let r = root(&parent, i);
+            if number[r] == usize::MAX {
+                number[r] = next;
                 next += 1;
             }
-            number[f]
+            number[r]
         })
         .collect()
+}
+
+/// The number of stations of [`stations`]' numbering (numbered from 0 in order).
+fn station_count(stations: &[usize]) -> usize {
+    stations.iter().max().map_or(0, |s| s + 1)
 }
 
 /// The largest difference of two robot poses taken as one station: 1e-4 rad (0.006°) and 1e-4 of
@@ -917,7 +930,7 @@ pub(super) fn station_meat<const N: usize>(
     per_frame: &[SVector<f64, N>],
     stations: &[usize],
 ) -> (SMatrix<f64, N, N>, usize) {
-    let count = stations.iter().max().map_or(0, |s| s + 1);
+    let count = station_count(stations);
     let mut sums = vec![SVector::<f64, N>::zeros(); count];
     for (g, &s) in per_frame.iter().zip(stations) {
         sums[s] += g;
