@@ -14,7 +14,7 @@ use handeye::check::readings::check_readings;
 use handeye::io::sync::{TimeOffset, pair_stream_files};
 use handeye::model::pose::rotation_angle_between;
 use handeye::track::{TrackOptions, Tracker};
-use handeye::{Assessment, Options, Pairing, Setup, calibrate};
+use handeye::{Options, Pairing, Setup, calibrate};
 
 fn testdata() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata")
@@ -43,7 +43,20 @@ fn online_and_batch_give_one_answer_on_the_ethz_simulation() {
         },
     )
     .unwrap();
-    assert_eq!(batch.verdict, Assessment::Good, "{:?}", batch.warnings);
+    // The batch counts the robot's held poses once (1,050 images at 410 robot poses): X's
+    // translation, 1.7 cm long, has a one-sigma of 2.4 cm and is weakly determined along the
+    // gripper x axis, which the batch says; nothing else is wrong with the recording.
+    assert!(
+        batch.warnings.iter().all(|w| matches!(
+            w,
+            handeye::Warning::WeakDirection {
+                part: handeye::Part::Translation,
+                ..
+            }
+        )),
+        "{:?}",
+        batch.warnings
+    );
 
     let mut tracker = Tracker::new(Setup::EyeInHand, TrackOptions::default());
     let mut last = None;

@@ -36,7 +36,7 @@ use crate::check::outliers::{PoseResiduals, median};
 use crate::model::pose::rotation_angle_between;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, log_so3};
-use crate::check::uncertainty::{Uncertainty, bootstrap_by_region};
+use crate::check::uncertainty::{Uncertainty, bootstrap_by_region, per_station, stations_of};
 use crate::model::error::Result;
 use crate::model::warning::Warning;
 use crate::solve::residual::PoseResidual;
@@ -76,7 +76,8 @@ pub struct Systematic {
     pub p_value: f64,
     /// The threshold the p-value was judged by.
     pub threshold: f64,
-    /// Poses tested.
+    /// Robot poses tested: the stations (`model::station`), images at one robot pose counted
+    /// once.
     pub poses: usize,
     /// Random orders of the null.
     pub permutations: usize,
@@ -485,15 +486,23 @@ pub fn systematic_error(
     joints: Option<&[Vec<f64>]>,
     solve: &dyn Fn(&[PosePair]) -> crate::model::error::Result<Transform>,
 ) -> Option<Systematic> {
-    if dense_stream(poses) {
+    // Images at one robot pose share its error: the test is on the stations, each its first
+    // pose's configuration and its poses' mean residual (repeats of a pose are neighbours alike
+    // by their shared random error, and would look like a pattern).
+    let stations = stations_of(poses);
+    let first = stations.first_poses();
+    let representatives: Vec<PosePair> = first.iter().map(|&i| poses[i]).collect();
+    if dense_motion(&representatives) {
         return None;
     }
     let residuals = PoseResiduals::at(poses, setup, x);
     let configurations = joints
         .filter(|j| j.len() == poses.len())
-        .and_then(Configurations::of_joints)
-        .unwrap_or_else(|| Configurations::of_hand_poses(poses));
-    let mut found = test(&residuals.residuals, &configurations)?;
+        .and_then(|j| Configurations::of_joints(&first.iter().map(|&i| j[i].clone()).collect::<Vec<_>>()))
+        .unwrap_or_else(|| Configurations::of_hand_poses(&representatives));
+    let mut found = test(&per_station(&stations, &residuals.residuals), &configurations)?;
+    // The order of the poses, each station's together: the halves and regions keep a station whole.
+    found.order = stations.expand(&found.order);
     found.halves = halves_disagree(poses, &found.order, solve);
     Some(found)
 }
@@ -504,7 +513,21 @@ pub fn systematic_error(
 /// poses interpolated at the camera's stamps, a clock offset's residue, a smooth trajectory's
 /// share of the camera error): on the repository's dense recordings (the ROS 2 bags, ethz-asl's
 /// simulation, kinhec's continuous recordings) the test flagged random noise. Not tested yet.
+///
+/// Judged on the robot's stations ([`stations_of`]): images the camera takes while the robot
+/// stands still are one pose of the robot, not a dense stream.
 pub(crate) fn dense_stream(poses: &[PosePair]) -> bool {
+    let stations = stations_of(poses);
+    if stations.distinct() {
+        return dense_motion(poses);
+    }
+    let representatives: Vec<PosePair> =
+        stations.first_poses().iter().map(|&i| poses[i]).collect();
+    dense_motion(&representatives)
+}
+
+/// [`dense_stream`] on distinct robot poses.
+fn dense_motion(poses: &[PosePair]) -> bool {
     let n = poses.len();
     if n < 2 * DENSE_STRIDE {
         return false;

@@ -19,11 +19,12 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 
-use crate::check::outliers::PoseResiduals;
+use crate::check::outliers::{PoseResiduals, translation_scale};
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Direction, Verdict};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, log_so3};
+use crate::model::station::Stations;
 use crate::solve::residual::PoseResidual;
 
 /// Default number of bootstrap replicates: the one-sigma is known to about ±1/√(2·40) ≈ 11%.
@@ -234,8 +235,11 @@ pub fn bootstrap(
     scene: f64,
 ) -> Uncertainty {
     let residuals = PoseResiduals::at(poses, setup, x);
-    let block = block_length(&residuals.residuals);
-    let groups: Vec<usize> = (0..poses.len()).map(|i| i / block).collect();
+    // A station's poses (images at one robot pose) share one sign: their errors are one. The
+    // blocks are runs of consecutive stations.
+    let stations = stations_of(poses);
+    let block = block_length(&per_station(&stations, &residuals.residuals));
+    let groups: Vec<usize> = stations.of.iter().map(|&s| s / block).collect();
     resample(poses, setup, x, solve, (replicates, scene), (&residuals, &groups))
 }
 
@@ -257,13 +261,45 @@ pub fn bootstrap_by_region(
     order: &[usize],
 ) -> Uncertainty {
     let residuals = PoseResiduals::at(poses, setup, x);
-    let along: Vec<PoseResidual> = order.iter().map(|&i| residuals.residuals[i]).collect();
-    let block = block_length(&along).max(region_floor(poses.len()));
-    let mut groups = vec![0; poses.len()];
-    for (rank, &i) in order.iter().enumerate() {
-        groups[i] = rank / block;
+    // Regions of stations (images at one robot pose share one sign), in the order's station order.
+    let stations = stations_of(poses);
+    let station_order = stations.order_of(order);
+    let of_station = per_station(&stations, &residuals.residuals);
+    let along: Vec<PoseResidual> = station_order.iter().map(|&s| of_station[s]).collect();
+    let block = block_length(&along).max(region_floor(stations.count));
+    let mut rank_of = vec![0; stations.count];
+    for (rank, &s) in station_order.iter().enumerate() {
+        rank_of[s] = rank;
     }
+    let groups: Vec<usize> = stations.of.iter().map(|&s| rank_of[s] / block).collect();
     resample(poses, setup, x, solve, (replicates, scene), (&residuals, &groups))
+}
+
+/// The stations of `poses` ([`Stations`]): robot poses within [`crate::model::station::SAME_STATION`]
+/// in rotation and of the gripper positions' spread in the base frame ([`translation_scale`] of
+/// `base_from_gripper` itself, whatever the setup: the robot's own unit) in translation.
+pub(crate) fn stations_of(poses: &[PosePair]) -> Stations {
+    Stations::of_poses(poses, translation_scale(poses, Setup::EyeInHand))
+}
+
+/// The residual of each station, in station order: the mean of its poses' (the residuals
+/// themselves where every pose is its own station).
+pub(crate) fn per_station(stations: &Stations, residuals: &[PoseResidual]) -> Vec<PoseResidual> {
+    if stations.distinct() {
+        return residuals.to_vec();
+    }
+    let rotations: Vec<Vector3<f64>> = residuals.iter().map(|r| r.rotation).collect();
+    let translations: Vec<Vector3<f64>> = residuals.iter().map(|r| r.translation).collect();
+    stations
+        .means(&rotations)
+        .into_iter()
+        .zip(stations.means(&translations))
+        .map(|(rotation, translation)| PoseResidual {
+            rotation,
+            angle: rotation.norm(),
+            translation,
+        })
+        .collect()
 }
 
 /// The shortest region of [`bootstrap_by_region`]: an error that follows the configuration spans

@@ -9,4 +9,5 @@ pub mod names;
 pub mod pose;
 pub mod prior;
 pub mod rotation;
+pub(crate) mod station;
 pub mod warning;

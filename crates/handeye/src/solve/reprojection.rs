@@ -33,6 +33,7 @@ use crate::model::camera::Detections;
 use crate::model::error::{Error, Result};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, log_so3, proj_so3, transform_from_parts};
+use crate::model::station::{SAME_STATION, Stations};
 use crate::solve::lm::{
     LeastSquares, Linearisation, RefineOptions, Termination, levenberg_marquardt,
 };
@@ -308,7 +309,7 @@ fn solution(frames: &[Frame], data: &Data, start: Start, unit: f64, fit: Fitted)
         outliers,
         start_poses: start.poses,
         flips_resolved: start.flips_resolved,
-        stations: station_count(&data.stations),
+        stations: data.stations.count,
         sigma_px,
         iterations,
         termination,
@@ -861,78 +862,19 @@ struct Data<'a> {
     pixels: Vec<Vector2<f64>>,
     /// (frame, point within the frame) of each detection.
     index: Vec<(usize, usize)>,
-    /// The robot pose of each frame, numbered in order ([`stations`]): frames at one pose share
-    /// its error.
-    stations: Vec<usize>,
+    /// The robot pose of each frame ([`Stations`]): frames at one pose share its error.
+    stations: Stations,
 }
-
-/// Frames whose robot poses differ by less than [`SAME_STATION`] (rotation in radians,
-/// translation in the solve's unit: the median distance to the target) are one station: the images
-/// a camera takes while the robot stands still, or at a pose the robot's program comes back to.
-/// They share the robot pose's error (a robot's error follows its configuration), which no
-/// number of images of it averages out. Returns each frame's station, numbered from 0 in the
-/// order of their first frame. O(n log n) for distinct poses: frames sorted along the
-/// translation's first axis, each compared with those within the tolerance along it.
-fn stations(motions: &[(Matrix3<f64>, Vector3<f64>)]) -> Vec<usize> {
-    let same = |a: usize, b: usize| {
-        let ((ra, ta), (rb, tb)) = (&motions[a], &motions[b]);
-        (ta - tb).norm() < SAME_STATION && log_so3(&(ra * rb.transpose())).norm() < SAME_STATION
-    };
-    let mut along: Vec<usize> = (0..motions.len()).collect();
-    along.sort_by(|&a, &b| motions[a].1.x.total_cmp(&motions[b].1.x).then(a.cmp(&b)));
-    // Union–find: each frame's parent, a root being the first frame (in recording order) of its
-    // station.
-    let mut parent: Vec<usize> = (0..motions.len()).collect();
-    let root = |parent: &[usize], mut i: usize| {
-        while parent[i] != i {
-            i = parent[i];
-        }
-        i
-    };
-    for (k, &i) in along.iter().enumerate() {
-        for &j in along[..k].iter().rev() {
-            if motions[i].1.x - motions[j].1.x >= SAME_STATION {
-                break;
-            }
-            if same(i, j) {
-                let (a, b) = (root(&parent, i), root(&parent, j));
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    // Numbered in the order of their first frame: a root comes before the rest of its station.
-    let mut number = vec![usize::MAX; motions.len()];
-    let mut next = 0;
-    (0..motions.len())
-        .map(|i| {
-            let r = root(&parent, i);
-            if number[r] == usize::MAX {
-                number[r] = next;
-                next += 1;
-            }
-            number[r]
-        })
-        .collect()
-}
-
-/// The number of stations of [`stations`]' numbering (numbered from 0 in order).
-fn station_count(stations: &[usize]) -> usize {
-    stations.iter().max().map_or(0, |s| s + 1)
-}
-
-/// The largest difference of two robot poses taken as one station: 1e-4 rad (0.006°) and 1e-4 of
-/// the distance to the target (0.05 mm at 0.5 m), below an industrial robot's repeatability.
-const SAME_STATION: f64 = 1e-4;
 
 /// The middle of the sandwich covariance, Σ_s g_s g_sᵀ over stations (g_s the sum of the
 /// per-frame Jᵀr of a station's frames: their errors are one), and the number of stations.
 pub(super) fn station_meat<const N: usize>(
     per_frame: &[SVector<f64, N>],
-    stations: &[usize],
+    stations: &Stations,
 ) -> (SMatrix<f64, N, N>, usize) {
-    let count = station_count(stations);
+    let count = stations.count;
     let mut sums = vec![SVector::<f64, N>::zeros(); count];
-    for (g, &s) in per_frame.iter().zip(stations) {
+    for (g, &s) in per_frame.iter().zip(&stations.of) {
         sums[s] += g;
     }
     let meat = sums.iter().fold(SMatrix::<f64, N, N>::zeros(), |m, g| m + g * g.transpose());
@@ -952,7 +894,7 @@ impl<'a> Data<'a> {
             points: Vec::with_capacity(total),
             pixels: Vec::with_capacity(total),
             index: Vec::with_capacity(total),
-            stations: Vec::new(),
+            stations: Stations { of: Vec::new(), count: 0 },
         };
         for (i, f) in frames.iter().enumerate() {
             let m = motion_of(setup, &f.base_from_gripper);
@@ -966,7 +908,8 @@ impl<'a> Data<'a> {
             }
         }
         data.starts.push(data.points.len());
-        data.stations = stations(&data.motions);
+        // The solve's unit is the median distance to the target: the tolerance is SAME_STATION of it.
+        data.stations = Stations::of_motions(&data.motions, SAME_STATION);
         data
     }
 
