@@ -3,8 +3,10 @@
 //! poses.
 //!
 //! **Cost.** The segment's poses are kept as a bounded, deterministic sample: every pose until
-//! [`SAMPLE`] are kept, then the sample is thinned by half and its stride doubled each time it
-//! fills (constant memory, as the tracker's sample of the readings). The test runs when a report
+//! [`SAMPLE`] are kept; each time it fills, the repeats of a robot pose (`model::station`) are
+//! dropped first, and a sample still more than half full is thinned by half and its stride
+//! doubled (constant memory, as the tracker's sample of the readings; a robot program that tours
+//! the same poses keeps every pose of its tour). The test runs when a report
 //! is made and the segment has doubled since the last test (at 12, 24, 48, … poses; so about
 //! log₂ n times over a stream of n poses, each on at most [`SAMPLE`] poses), and at the end of the
 //! stream. Between two tests, each report carries the last test's finding and widening: an error
@@ -33,7 +35,9 @@ use crate::check::outliers::{translation_scale, working_distance};
 use crate::check::systematic::{
     Systematic, dense_stream, systematic_test, systematic_warning, widen_by,
 };
-use crate::check::uncertainty::{REPLICATES, Uncertainty, bootstrap_by_region, summarise};
+use crate::check::uncertainty::{
+    REPLICATES, Uncertainty, bootstrap_by_region, stations_of, summarise,
+};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::Transform;
@@ -162,26 +166,38 @@ impl Watch {
         if self.poses.len() < SAMPLE {
             return;
         }
-        // Full: every other pose is kept, and every other pose offered from now on.
-        if self.stride == 1 {
+        if self.dense.is_none() {
             self.dense = Some(dense_stream(&self.poses));
         }
-        let mut k = 0;
-        self.poses.retain(|_| {
-            k += 1;
-            k % 2 == 1
-        });
-        if let Some(d) = self.dim.filter(|d| *d > 0) {
-            let kept: Vec<f64> = self
-                .joints
-                .chunks(d)
-                .step_by(2)
-                .flatten()
-                .copied()
-                .collect();
-            self.joints = kept;
+        // Full. Repeats of a robot pose go first (the test counts a station once: a robot
+        // program touring 40 poses would otherwise leave, by every other pose, 20 of them); then,
+        // still more than half full, every other pose is kept, and every other pose offered from
+        // now on.
+        let stations = stations_of(&self.poses);
+        if !stations.distinct() {
+            let first = stations.first_poses();
+            self.keep(&first);
         }
-        self.stride *= 2;
+        if self.poses.len() > SAMPLE / 2 {
+            let every_other: Vec<usize> = (0..self.poses.len()).step_by(2).collect();
+            self.keep(&every_other);
+            self.stride *= 2;
+        }
+    }
+
+    /// Keeps the sampled poses `kept` (increasing indices) and their joint angles, in place.
+    fn keep(&mut self, kept: &[usize]) {
+        let joints = self.dim.filter(|d| *d > 0 && self.joints.len() == d * self.poses.len());
+        for (to, &from) in kept.iter().enumerate() {
+            self.poses[to] = self.poses[from];
+            if let Some(d) = joints {
+                self.joints.copy_within(from * d..(from + 1) * d, to * d);
+            }
+        }
+        self.poses.truncate(kept.len());
+        if let Some(d) = joints {
+            self.joints.truncate(kept.len() * d);
+        }
     }
 
     /// Whether a test is due: at the end when poses came since the last one or its flag is
