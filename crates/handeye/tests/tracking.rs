@@ -101,6 +101,67 @@ fn the_ethz_recordings_raise_no_alarm_and_end_at_the_batch_answer() {
     }
 }
 
+/// The ethz-asl simulation with each robot pose once (the first image of each run the robot held
+/// still, within 1e-4 rad and 0.1 mm of the previous image's pose): a dense stream, a slow path through one part of the workspace at a time. Its early
+/// reports rest on a short stretch of that path, whose errors are correlated in time: with the
+/// first-order covariance (independent poses) alone, the second report was 1.6° off the end with
+/// a sigma of 0.19° (8 sigma, "good"), where `calibrate` on the same 134 poses says 1.62°
+/// (issue 29). Every report must hold within three sigma of the batch answer on the whole
+/// recording.
+#[test]
+fn a_dense_stream_s_early_reports_hold_within_their_uncertainty() {
+    let dir = testdata().join("real/ethz-asl");
+    let pairing = pair_stream_files(
+        &dir.join("robot_arm_sim_B_H.csv"),
+        &dir.join("robot_arm_sim_W_E.csv"),
+        Setup::EyeInHand,
+        (TimeOffset::Fixed(0.0), handeye::Reading::AsGiven),
+        0.1,
+        handeye::Rotations::default(),
+    )
+    .unwrap();
+    let mut once = pairing.clone();
+    let pairs = &mut once.synced.pairs;
+    let mut previous: Option<Transform> = None;
+    pairs.retain(|p| {
+        let q = p.base_from_gripper;
+        let held = previous.is_some_and(|r| {
+            let (dr, dt) = gap(&q, &r);
+            dr.to_radians() < 1e-4 && dt < 1e-4
+        });
+        previous = Some(q);
+        !held
+    });
+    let poses = &once.synced.pairs;
+    assert!(
+        (350..500).contains(&poses.len()),
+        "{} robot poses",
+        poses.len()
+    );
+    let run = track(&once, Setup::EyeInHand);
+    let batch = solve(
+        Method::Andreff,
+        &motion_pairs(&pairing.synced.pairs, Pairing::All, Setup::EyeInHand),
+    )
+    .unwrap()
+    .x;
+    for r in &run.reports {
+        let (dr, dt) = gap(&r.estimate.x, &batch);
+        let e = &r.estimate;
+        println!(
+            "report {} at {} poses: {dr:.3}° ({:.3}° sigma), {:.1} mm ({:.1} mm sigma)",
+            r.number,
+            r.pose,
+            e.uncertainty_rotation_deg.unwrap(),
+            1e3 * dt,
+            1e3 * e.uncertainty_translation.unwrap()
+        );
+    }
+    let worst = worst_ratio(&run.reports, &batch);
+    assert!(run.reports.len() >= 3, "{} reports", run.reports.len());
+    assert!(worst < 3.0, "a report {worst:.1} sigma off");
+}
+
 /// The kinhec stream entries of the manifest.
 fn streams() -> Vec<Value> {
     let text = std::fs::read_to_string(testdata().join("kinhec/manifest.json")).unwrap();

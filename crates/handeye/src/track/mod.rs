@@ -871,6 +871,11 @@ impl Tracker {
         if self.watch.due(reason == Reason::End) {
             self.watch.test(self.setup, &estimate.x, reason == Reason::End);
         }
+        // A low-DOF robot solved with its prior: the general solve of the bootstrap cannot
+        // determine X (one rotation axis), as the readings' check cannot judge it.
+        if !self.readings_moot() {
+            self.watch.at_least_batch(self.setup, &mut estimate);
+        }
         let warnings: Vec<_> = self.watch.widen(&mut estimate).into_iter().collect();
         let report = Report {
             number: self.reports,
