@@ -93,6 +93,19 @@ fn online_and_batch_give_one_answer_on_the_ethz_simulation() {
     ] {
         assert!(a < 2.0 * b && b < 2.0 * a, "sigmas {a} and {b}");
     }
+    // And one verdict: the online report says what the batch says, for the same reason.
+    assert_eq!(report.verdict(), handeye::Assessment::Questionable);
+    assert!(
+        report.warnings.iter().any(|w| matches!(
+            w,
+            handeye::Warning::WeakDirection {
+                part: handeye::Part::Translation,
+                ..
+            }
+        )),
+        "{:?}",
+        report.warnings
+    );
 }
 
 /// The still start alone: no reading is judged from a robot that has not turned.

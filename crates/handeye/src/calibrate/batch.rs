@@ -23,7 +23,7 @@ use crate::check::readings::{ReadingCheck, check_readings};
 use crate::check::systematic::Systematic;
 pub(crate) use crate::check::systematic::{systematic_test, widened_for_systematic};
 use crate::check::uncertainty::{
-    Uncertainty, bootstrap, check_replicates, median_target,
+    Uncertainty, bootstrap, check_replicates, median_target, warn_weak,
 };
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::OutlierPose;
@@ -905,30 +905,6 @@ fn undetermined(part: Part, d: &crate::model::findings::Direction, setup: Setup)
         axis: d.axis,
         sigma: d.sigma,
         setup,
-    }
-}
-
-/// Warnings for weakly determined directions; `one_axis`: the axis every motion turns about, on a
-/// low-DOF recording (its advice is then what such a robot can record).
-pub(crate) fn warn_weak(
-    u: &Uncertainty,
-    setup: Setup,
-    one_axis: Option<[f64; 3]>,
-    warnings: &mut Vec<Warning>,
-) {
-    for (part, d) in [
-        (Part::Rotation, &u.weakest_rotation),
-        (Part::Translation, &u.weakest_translation),
-    ] {
-        if d.verdict == Verdict::Weak {
-            warnings.push(Warning::WeakDirection {
-                part,
-                axis: d.axis,
-                sigma: d.sigma,
-                setup,
-                one_axis,
-            });
-        }
     }
 }
 

@@ -17,11 +17,11 @@ use crate::calibrate::robot_world::{
 };
 use crate::calibrate::batch::{
     Assessment, Options, Outliers, ReadingReport, Report, Spread, Units, Fix, refuse_if_undetermined,
-    warn_weak, working_distance,
+    working_distance,
 };
 use crate::check::outliers::{PoseResiduals, translation_scale};
 use crate::check::quality::quality_report;
-use crate::check::uncertainty::{median_target, summarise};
+use crate::check::uncertainty::{median_target, summarise, warn_weak};
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::{OutlierPose, Reading};

@@ -30,14 +30,16 @@ use serde::{Deserialize, Serialize};
 use crate::calibrate::batch::{
     first_what_motions_lack, plausible,
     Fix, Options, Outliers, ReadingReport, Units, explained, outlier_report,
-    check_joints, outlier_warning, read_poses, systematic_test, warn_weak, widened_for_systematic, without,
+    check_joints, outlier_warning, read_poses, systematic_test, widened_for_systematic, without,
     working_distance,
 };
 use crate::calibrate::low_dof::{self, LowDofReport, Plan};
 use crate::check::systematic::Systematic;
 use crate::check::outliers::translation_scale;
 use crate::check::quality::OUTLIER_DEG;
-use crate::check::uncertainty::{Uncertainty, bootstrap, check_replicates, median_target, summarise};
+use crate::check::uncertainty::{
+    Uncertainty, bootstrap, check_replicates, median_target, summarise, warn_weak,
+};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::{Assessment, Part, Verdict, Written};
 use crate::model::motion::{Pairing, PosePair, Setup};

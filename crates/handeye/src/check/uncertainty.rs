@@ -21,7 +21,8 @@ use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 
 use crate::check::outliers::{PoseResiduals, translation_scale};
 use crate::model::error::{Error, Result};
-use crate::model::findings::{Direction, Verdict};
+use crate::model::findings::{Direction, Part, Verdict};
+use crate::model::warning::Warning;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, log_so3};
 use crate::model::station::Stations;
@@ -483,6 +484,33 @@ pub(crate) fn summarise(
         refused,
         at_point: None,
         samples: Vec::new(),
+    }
+}
+
+/// Warnings for weakly determined directions; `one_axis`: the axis every motion turns about, on a
+/// low-DOF recording (its advice is then what such a robot can record). Every face's verdict on a
+/// weakly determined direction: the batch's, the pixels', robot-world's and each online report's.
+pub(crate) fn warn_weak(
+    u: &Uncertainty,
+    setup: Setup,
+    one_axis: Option<[f64; 3]>,
+    warnings: &mut Vec<Warning>,
+) {
+    for (part, d) in [
+        (Part::Rotation, &u.weakest_rotation),
+        (Part::Translation, &u.weakest_translation),
+    ] {
+        // Undetermined here is past a refusal (an online report, or a batch widened for a
+        // systematic error after its check): at least weak.
+        if d.verdict != Verdict::Determined {
+            warnings.push(Warning::WeakDirection {
+                part,
+                axis: d.axis,
+                sigma: d.sigma,
+                setup,
+                one_axis,
+            });
+        }
     }
 }
 

@@ -43,7 +43,9 @@ use serde::{Deserialize, Serialize};
 use crate::check::outliers::{OUTLIER_FACTOR, median_in, pose_outliers, screw_gaps};
 use crate::check::precision::resolution;
 use crate::check::readings::check_readings;
-use crate::check::uncertainty::{UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION};
+use crate::check::uncertainty::{
+    UNDETERMINED_ROTATION_DEG, UNDETERMINED_TRANSLATION, point_sigma, summarise, warn_weak,
+};
 use crate::model::findings::Reading;
 use crate::model::findings::Written;
 use crate::model::motion::{PosePair, Setup};
@@ -55,7 +57,6 @@ pub use events::{
 };
 #[cfg(feature = "internals")]
 pub use events::target_frame;
-use crate::check::uncertainty::point_sigma;
 use segment::{Segment, Snapshot};
 use systematic::{JointRing, Watch};
 
@@ -876,7 +877,15 @@ impl Tracker {
         if !self.readings_moot() {
             self.watch.at_least_batch(self.setup, &mut estimate);
         }
-        let warnings: Vec<_> = self.watch.widen(&mut estimate).into_iter().collect();
+        let mut warnings: Vec<_> = self.watch.widen(&mut estimate).into_iter().collect();
+        // A weakly determined direction of X, as `calibrate` judges it (one verdict in every
+        // face): the report's covariance (widened as its sizes are) against the batch's bounds.
+        if !self.readings_moot()
+            && let (Some(c), Some(scene)) = (estimate.covariance, self.watch.scene(self.setup))
+        {
+            let c = nalgebra::Matrix6::from_fn(|i, j| c[i][j]);
+            warn_weak(&summarise(c, 0, 0, scene), self.setup, None, &mut warnings);
+        }
         let report = Report {
             number: self.reports,
             pose: self.poses,

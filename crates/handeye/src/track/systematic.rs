@@ -312,7 +312,7 @@ impl Watch {
             return;
         };
         let poses = &self.poses;
-        let scene = translation_scale(poses, setup).max(working_distance(poses));
+        let scene = self.scene(setup).unwrap_or(0.0);
         let solve = |p: &[PosePair]| all_pairs(p, setup);
         let batch = bootstrap(poses, setup, &estimate.x, &solve, REPLICATES, scene);
         let at_least = |a: f64, b: f64| if b > 0.0 && a > b && a.is_finite() { a / b } else { 1.0 };
@@ -330,6 +330,16 @@ impl Watch {
         if let Some((point, _)) = estimate.at_point {
             estimate.at_point = Some((point, point_sigma(&wide, &estimate.x, point)));
         }
+    }
+}
+
+impl Watch {
+    /// The scene's size as `calibrate` measures it (the larger of the hand positions' median
+    /// spread and the camera's median distance from the target) on the sample, or `None` while
+    /// it is empty.
+    pub(super) fn scene(&self, setup: Setup) -> Option<f64> {
+        (!self.poses.is_empty())
+            .then(|| translation_scale(&self.poses, setup).max(working_distance(&self.poses)))
     }
 }
 
