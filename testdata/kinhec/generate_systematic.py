@@ -18,6 +18,10 @@ measured joint angles (radians, the robot's joint order) the reported pose was c
 Run: ``/tmp/venv-k/bin/python testdata/kinhec/generate_systematic.py`` (deterministic; writes
 ``systematic/`` and ``systematic/manifest.json``; about a minute on two cores).
 
+Then ``/tmp/venv-k/bin/python testdata/kinhec/nominal_model_x.py [DIR]`` adds to each DH-error entry
+of the manifest the X the robot's nominal model needs (the tests print the error against it beside
+the truth's).
+
 Fresh streams for a check on data not tuned on: ``--out DIR --global-seed N`` writes the same suite
 with another seed into ``DIR/systematic/``; ``HANDEYE_KINHEC_SUITE=DIR cargo test --release -p handeye
 --test systematic -- --nocapture`` runs the suite's tests on them.

@@ -104,6 +104,20 @@ struct Row {
     method: &'static str,
     flagged: bool,
     ratio: f64,
+    /// Against the X the robot's nominal model needs (`nominal_model_x` of the manifest, made by
+    /// `nominal_model_x.py`): the truth with the DH error's constant parts at the base (eye-to-hand)
+    /// or the flange (eye-in-hand) taken in, which no pose can tell from X.
+    nominal_ratio: Option<f64>,
+}
+
+/// The X an uncalibrated robot's nominal model needs, for a DH-error entry.
+fn nominal_model_x(e: &Value) -> Option<Transform> {
+    let frame = match setup(e) {
+        Setup::EyeInHand => "gripper_from_camera",
+        Setup::EyeToHand => "base_from_camera",
+    };
+    e.get("nominal_model_x")
+        .map(|x| transform_from_json(&x[frame]).unwrap())
 }
 
 fn rows(kinds: &[&str]) -> Vec<Row> {
@@ -123,10 +137,14 @@ fn rows(kinds: &[&str]) -> Vec<Row> {
                 method,
                 flagged: flagged(&r),
                 ratio: error_over_sigma(&r, &truth(&e)),
+                nominal_ratio: nominal_model_x(&e).map(|x| error_over_sigma(&r, &x)),
             };
             let p = r.systematic.as_ref().map_or(f64::NAN, |s| s.p_value);
+            let nominal = row
+                .nominal_ratio
+                .map_or(String::new(), |n| format!("  nominal model's X {n:>6.2}"));
             println!(
-                "{:<34} {:<11} {:<10} flagged {:<5} error/sigma {:>6.2}  p {:.1e}",
+                "{:<34} {:<11} {:<10} flagged {:<5} error/sigma {:>6.2}{nominal}  p {:.1e}",
                 row.file, row.level, row.method, row.flagged, row.ratio, p
             );
             out.push(row);
@@ -156,6 +174,25 @@ fn an_uncalibrated_robot_is_flagged_and_covered() {
         100.0 * within
     );
     println!("{summary}");
+    // Printed beside the truth, not asserted: against the X the nominal model needs. The DH
+    // error's constant parts move X in a way no pose can see (ur10 eye-to-hand of a fresh seed:
+    // 10.5 sigma from the truth, unflagged, 2.2 sigma from the nominal model's X), but that
+    // reference does not explain every silent run (this suite: 8.3 % silent against the truth,
+    // 12.5 % against it; docs/DECISIONS.md).
+    let nominal: Vec<f64> = rows.iter().filter_map(|r| r.nominal_ratio).collect();
+    assert_eq!(
+        nominal.len(),
+        rows.len(),
+        "nominal_model_x.py has not run on the suite"
+    );
+    let silent_nominal = share(&rows, |r| !r.flagged && r.nominal_ratio.unwrap() > 3.0);
+    let within_nominal = share(&rows, |r| r.nominal_ratio.unwrap() <= 3.0);
+    let summary_nominal = format!(
+        "against the nominal model's X: silently beyond 3 sigma {:.1}%; within 3 sigma {:.0}%",
+        100.0 * silent_nominal,
+        100.0 * within_nominal
+    );
+    println!("{summary_nominal}");
     assert!(large_flagged >= 0.9, "{summary}");
     assert!(silent <= 1.0 / 12.0, "{summary}");
     assert!(within >= 0.75, "{summary}");
@@ -181,6 +218,7 @@ fn random_errors_are_not_flagged_and_stay_covered() {
                     method,
                     flagged: flagged(&r),
                     ratio: error_over_sigma(&r, &s.gripper_from_camera),
+                    nominal_ratio: None,
                 };
                 println!(
                     "{:<34} {:<11} {:<10} flagged {:<5} error/sigma {:>6.2}",
@@ -348,6 +386,7 @@ fn the_online_estimator_flags_and_covers_as_the_batch() {
                    level: String,
                    r: Option<handeye::TrackReport>,
                    x: &Transform,
+                   nominal: Option<Transform>,
                    batch: bool| {
         let Some(r) = r else {
             println!("{file:<34} {level:<11} online     no estimate");
@@ -369,6 +408,7 @@ fn the_online_estimator_flags_and_covers_as_the_batch() {
             method: "online",
             flagged: online_flagged(&r),
             ratio: online_error_over_sigma(&r, x),
+            nominal_ratio: nominal.map(|n| online_error_over_sigma(&r, &n)),
         };
         println!(
             "{:<34} {:<11} {:<10} flagged {:<5} (batch all pairs {batch:<5}) error/sigma {:>6.2}  p {:.1e}  {joint}",
@@ -395,6 +435,7 @@ fn the_online_estimator_flags_and_covers_as_the_batch() {
             e["kind"].as_str().unwrap().into(),
             r,
             &truth(&e),
+            nominal_model_x(&e),
             batch,
         );
     }
@@ -411,6 +452,7 @@ fn the_online_estimator_flags_and_covers_as_the_batch() {
             "sim".into(),
             r,
             &s.gripper_from_camera,
+            None,
             batch,
         );
     }
@@ -431,6 +473,14 @@ fn the_online_estimator_flags_and_covers_as_the_batch() {
         disagree
     );
     println!("{summary}");
+    let silent_nominal = share(&dh, |r| !r.flagged && r.nominal_ratio.unwrap() > 3.0);
+    let within_nominal = share(&dh, |r| r.nominal_ratio.unwrap() <= 3.0);
+    let summary_nominal = format!(
+        "online, against the nominal model's X: silently beyond 3 sigma {:.1}%; within 3 sigma {:.0}%",
+        100.0 * silent_nominal,
+        100.0 * within_nominal
+    );
+    println!("{summary_nominal}");
     assert!(dh.len() >= 24 && controls.len() >= 24, "{summary}");
     assert!(unreported.is_empty(), "{summary}: {unreported:?}");
     assert!(disagree.is_empty(), "{summary}");
