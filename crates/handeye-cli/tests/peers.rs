@@ -11,8 +11,9 @@
 //!   detection: the per-detection RMS over 2), and per image the fitted camera-from-target pose
 //!   against that image's own PnP (the mean position and orientation differences).
 //!
-//! A set whose converted files are absent is skipped with a message (the files are made from the
-//! upstream repositories by make_peers.py); `HANDEYE_PEERS_REQUIRED=1` makes an absent set fail.
+//! industrial_calibration's sets (Apache-2.0) are kept in the repository and always run. ViSP's
+//! (GPL-2.0-or-later) are made from the upstream repository by make_peers.py; absent, they are
+//! skipped with a message, and `HANDEYE_PEERS_REQUIRED=1` makes an absent set fail.
 
 mod common;
 
@@ -22,12 +23,19 @@ use common::{run, testdata};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde_json::Value;
 
+/// The sets kept in the repository (Apache-2.0): never skipped.
+const COMMITTED: [&str; 2] = ["ic_circle_grid_eye_in_hand", "ic_charuco_eye_to_hand"];
+
 /// The directory of a converted set, or `None` (with a message) when it was not made here.
 fn set(name: &str) -> Option<PathBuf> {
     let dir = testdata(&format!("peers/{name}"));
     if dir.join("poses.jsonl").exists() && dir.join("peer.json").exists() {
         return Some(dir);
     }
+    assert!(
+        !COMMITTED.contains(&name),
+        "{name}: testdata/peers/{name} is kept in the repository, but its poses.jsonl/peer.json are missing"
+    );
     assert!(
         std::env::var_os("HANDEYE_PEERS_REQUIRED").is_none(),
         "{name}: testdata/peers/{name} has no poses.jsonl/peer.json (make them with make_peers.py)"
