@@ -426,7 +426,9 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         summary,
     };
     after_result(args, report.verdict, |path| {
-        crate::report::write_pixels(path, &page, &report)
+        let image = (camera.width > 0 && camera.height > 0)
+            .then(|| (f64::from(camera.width), f64::from(camera.height)));
+        crate::report::write_pixels(path, &page, &report, image)
     })
 }
 

@@ -185,8 +185,10 @@ fn the_pixels_page_has_each_frames_reprojection_error() {
     );
     let both = copied(&html, "X and the target's pose, to copy");
     assert_eq!(both[1]["frame"], "base_from_target");
-    // The per-frame figure, and the robot motions' axes and angles.
-    assert_eq!(html.matches("<svg").count(), 3);
+    // The per-frame figure, each detection's residual in the image, and the robot motions' axes
+    // and angles.
+    assert_eq!(html.matches("<svg").count(), 4);
+    assert!(html.contains("its residual (detected less projected"));
 }
 
 /// A copy of `testdata/pixels/tag_eih.jsonl` in `dir` with detections only: no record has a
@@ -414,7 +416,7 @@ fn every_figure_renders_in_headless_chromium() {
         (online_page(dir.path()), 4),
         (verify, 3),
         (robot_world, 4),
-        (pixels, 3),
+        (pixels, 4),
     ] {
         rendered(browser, &path, figures, dir.path());
     }

@@ -159,7 +159,7 @@ pub use calibrate::advice::{Advice, AdviseOptions, Pivot, advise};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
 pub use calibrate::pixels::{
-    FrameRms, OnlinePixels, ReprojectionSummary, calibrate_on_pixels,
+    CornerResidual, FrameRms, OnlinePixels, ReprojectionSummary, calibrate_on_pixels,
     calibrate_robot_world_on_pixels, pixel_camera_poses, verify_on_pixels,
 };
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};

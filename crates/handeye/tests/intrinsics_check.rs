@@ -2,7 +2,8 @@
 //! calibration whose fit stays below the refusal's threshold and whose X is centimetres off,
 //! far beyond its uncertainty (which takes the intrinsics as exact). The focal-length check
 //! (`calibrate::pixels`, [`Warning::IntrinsicsDisagree`]) must then warn; with the camera's own
-//! intrinsics it must not. `-- --nocapture` prints the table.
+//! intrinsics it must not. A radial distortion k1 that is not the camera's does the same to X,
+//! and its check ([`Warning::DistortionDisagrees`]) likewise. `-- --nocapture` prints the tables.
 
 use handeye::sim::pixels::{PixelSimConfig, simulate_pixels};
 use handeye::{Intrinsics, Options, Setup, Transform, Warning};
@@ -25,20 +26,40 @@ fn scaled(camera: &Intrinsics, scale: f64) -> Intrinsics {
     }
 }
 
+/// What a calibration gave: warned, the error in sigmas, the focal length's scale found; none
+/// when refused.
+type Outcome = Option<(bool, f64, Option<f64>)>;
+
 /// One calibration with the focal length scaled: warned, and the error in sigmas (the larger
 /// of rotation's and translation's); none when refused.
-fn run(config: PixelSimConfig, seed: u64, scale: f64) -> Option<(bool, f64, Option<f64>)> {
+fn run(config: PixelSimConfig, seed: u64, scale: f64) -> Outcome {
+    run_with(config, seed, |camera| scaled(camera, scale))
+}
+
+/// One calibration with the intrinsics `changed`: warned (the focal length's or the distortion's
+/// warning), the error in sigmas, and the focal length's scale found when that one warned.
+fn run_with(
+    config: PixelSimConfig,
+    seed: u64,
+    changed: impl Fn(&Intrinsics) -> Intrinsics,
+) -> Outcome {
     let sim = simulate_pixels(&config, seed);
-    let camera = scaled(&sim.intrinsics, scale);
+    let camera = changed(&sim.intrinsics);
     let r =
         handeye::calibrate_on_pixels(&sim.frames, &camera, sim.setup, &Options::default()).ok()?;
     let (deg, t) = gap(&r.transform, &sim.x);
     let sigmas = (deg / r.uncertainty.rotation_deg).max(t / r.uncertainty.translation);
+    let warned = r.warnings.iter().any(|w| {
+        matches!(
+            w,
+            Warning::IntrinsicsDisagree { .. } | Warning::DistortionDisagrees { .. }
+        )
+    });
     let found = r.warnings.iter().find_map(|w| match w {
         Warning::IntrinsicsDisagree { focal_scale, .. } => Some(*focal_scale),
         _ => None,
     });
-    Some((found.is_some(), sigmas, found))
+    Some((warned, sigmas, found))
 }
 
 /// With the camera's own intrinsics no recording is warned; with a focal length 10–35% off,
@@ -124,6 +145,62 @@ fn the_cameras_own_intrinsics_are_rarely_warned() {
     assert!(warned.len() <= 2, "{warned:?}");
 }
 
+/// A radial distortion k1 that is not the camera's (a board at 1280×720 with k1 = −0.21 or so,
+/// a tag): the fit stays below the refusal's threshold while X moves millimetres, beyond its
+/// uncertainty (measured on `testdata/pixels/board_span_eih`: k1 off by 0.03, X 3.0 mm off at
+/// 4.5 sigma, good, before the k1 check). No recording silently beyond 3 sigma; the camera's own
+/// k1 not warned; the larger errors on boards mostly warned.
+#[test]
+fn a_wrong_radial_distortion_is_warned_and_the_right_one_is_not() {
+    let mut table = Vec::new();
+    for setup in SETUPS {
+        for (kind, config) in [
+            ("tag", PixelSimConfig::tag()),
+            ("board", PixelSimConfig::board()),
+        ] {
+            for seed in 600..603 {
+                for change in [0.0, -0.08, -0.04, -0.02, 0.02, 0.04, 0.08] {
+                    let outcome = run_with(config.with_setup(setup), seed, |camera| {
+                        let mut c = *camera;
+                        c.distortion[0] += change;
+                        c
+                    });
+                    table.push((setup, kind, seed, change, outcome));
+                }
+            }
+        }
+    }
+    eprintln!("setup kind seed k1 change: warned, error/sigma");
+    for (setup, kind, seed, change, outcome) in &table {
+        eprintln!("{setup:?} {kind} {seed} {change:+}: {outcome:?}");
+    }
+    for (setup, kind, seed, change, outcome) in &table {
+        let what = format!("{setup:?} {kind} seed {seed} k1 {change:+}");
+        if *change == 0.0 {
+            let (warned, sigmas, _) = outcome.unwrap_or_else(|| panic!("{what}: refused"));
+            assert!(!warned, "{what}: warned with the camera's own intrinsics");
+            assert!(sigmas < 4.0, "{what}: {sigmas} sigma");
+            continue;
+        }
+        let Some((warned, sigmas, _)) = *outcome else {
+            continue; // refused: not silent
+        };
+        assert!(
+            warned || sigmas <= 3.0,
+            "{what}: silently {sigmas:.1} sigma off"
+        );
+    }
+    let large = |t: &&(Setup, &str, u64, f64, Outcome)| t.1 == "board" && t.3.abs() >= 0.04;
+    let boards = table.iter().filter(large).count();
+    let warned = table
+        .iter()
+        .filter(large)
+        .filter(|t| t.4.is_none_or(|o| o.0))
+        .count();
+    eprintln!("boards with k1 0.04 or more off: {warned} of {boards} warned or refused");
+    assert!(2 * warned > boards, "{warned} of {boards}");
+}
+
 /// `verify` on the pixels with a focal length 20% off and the true X saved: the recording's own
 /// X is far off, but the verdict is not "the camera moved": the recording cannot tell until its
 /// intrinsics agree. With the camera's own intrinsics the same saved X is consistent.
@@ -157,6 +234,50 @@ fn verify_does_not_blame_the_camera_for_wrong_intrinsics() {
         );
         assert!(
             wrong.message.contains("focal length scaled by 1.2"),
+            "{}",
+            wrong.message
+        );
+        assert!(wrong.distance_sigmas > 10.0, "{}", wrong.distance_sigmas);
+    }
+}
+
+/// The same with a radial distortion k1 off by 0.08 on a board: the recording's own X is
+/// millimetres off, and the verdict is "cannot tell" naming k1, not "the camera moved" (which
+/// the build before the k1 check said, exit 4, on `testdata/pixels/board_span_eih` with k1 off
+/// by 0.04).
+#[test]
+fn verify_does_not_blame_the_camera_for_a_wrong_distortion() {
+    for setup in SETUPS {
+        let sim = simulate_pixels(&PixelSimConfig::board().with_setup(setup), 431);
+        let saved = handeye::SavedX {
+            x: sim.x,
+            setup: Some(setup),
+            covariance: None,
+            unit: None,
+        };
+        let verify = |camera: &Intrinsics| {
+            handeye::verify_on_pixels(&saved, &sim.frames, camera, setup, &Options::default())
+                .expect("verified")
+        };
+        let right = verify(&sim.intrinsics);
+        assert_eq!(
+            right.verdict,
+            handeye::Consistency::Consistent,
+            "{}",
+            right.message
+        );
+        let mut bent = sim.intrinsics;
+        bent.distortion[0] += 0.08;
+        let wrong = verify(&bent);
+        // 12–14 sigma apart, "inconsistent" without the k1 check.
+        assert_eq!(
+            wrong.verdict,
+            handeye::Consistency::Undetermined,
+            "{}",
+            wrong.message
+        );
+        assert!(
+            wrong.message.contains("radial distortion k1"),
             "{}",
             wrong.message
         );

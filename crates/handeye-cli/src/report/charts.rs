@@ -217,6 +217,83 @@ pub(super) fn angles_figure(motions: &[Drawn]) -> Result<String> {
     })
 }
 
+/// Detections drawn in the residual figure at most (spread over the recording).
+pub(super) const CORNERS_DRAWN: usize = 4000;
+
+/// Each detection where it is in the image, with its reprojection residual as an arrow scaled
+/// so that the 95th percentile is 4 % of the image's width (`scale`, returned with the number
+/// drawn); mis-detections the solve left out as red crosses. A pattern (arrows that turn about the
+/// centre, grow towards the edges, or all point one way in part of the image) is what a wrong
+/// distortion, focal length or target size leaves; random noise leaves none.
+pub(super) fn corners_figure(
+    corners: &[handeye::CornerResidual],
+    size: Option<(f64, f64)>,
+) -> Result<(String, f64, usize)> {
+    let step = corners.len().div_ceil(CORNERS_DRAWN).max(1);
+    let drawn: Vec<&handeye::CornerResidual> = corners.iter().step_by(step).collect();
+    let (width, height) = size.unwrap_or_else(|| {
+        let top = |k: usize| corners.iter().map(|c| c.pixel[k]).fold(1.0, f64::max);
+        (top(0) * 1.05, top(1) * 1.05)
+    });
+    let mut lengths: Vec<f64> = drawn
+        .iter()
+        .filter(|c| c.kept)
+        .map(|c| c.residual_px[0].hypot(c.residual_px[1]))
+        .collect();
+    lengths.sort_by(f64::total_cmp);
+    let p95 = lengths
+        .get((lengths.len() * 95 / 100).min(lengths.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(0.0);
+    let scale = if p95 > 0.0 { 0.04 * width / p95 } else { 1.0 };
+    // The image's aspect ratio, within a 900-unit-wide figure.
+    let tall = (900.0 * height / width).clamp(300.0, 900.0) as u32;
+    let text = svg((900, tall + 60), |root| {
+        let mut chart = chart(
+            &root,
+            &format!("reprojection residual of each detection (arrows ×{scale:.0})"),
+            (36, 60),
+        )
+        .build_cartesian_2d(0f64..width, height..0f64)
+        .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("u (px)")
+            .y_desc("v (px)")
+            .disable_mesh()
+            .draw()
+            .map_err(|e| anyhow!("{e}"))?;
+        let (kept, left_out): (Vec<&handeye::CornerResidual>, Vec<_>) =
+            drawn.iter().partition(|c| c.kept);
+        chart
+            .draw_series(kept.iter().map(|c| {
+                let [u, v] = c.pixel;
+                let [du, dv] = c.residual_px;
+                PathElement::new(
+                    vec![(u, v), (u + scale * du, v + scale * dv)],
+                    BLUE.stroke_width(1),
+                )
+            }))
+            .map_err(|e| anyhow!("{e}"))?;
+        chart
+            .draw_series(
+                kept.iter()
+                    .map(|c| Circle::new((c.pixel[0], c.pixel[1]), 1, BLUE.filled())),
+            )
+            .map_err(|e| anyhow!("{e}"))?;
+        // A mis-detection's residual is off the scale: a cross where it was detected.
+        chart
+            .draw_series(
+                left_out
+                    .iter()
+                    .map(|c| Cross::new((c.pixel[0], c.pixel[1]), 4, RED.stroke_width(2))),
+            )
+            .map_err(|e| anyhow!("{e}"))?;
+        Ok(())
+    })?;
+    Ok((text, scale, drawn.len()))
+}
+
 /// An SVG figure drawn by `draw` into a string.
 pub(super) fn svg(
     size: (u32, u32),

@@ -21,7 +21,7 @@ use serde_json::{Value, json};
 
 use crate::faces::{rpy, unit_name};
 use crate::figures::register_font;
-use charts::{Series, angles_figure, axes_figure, motions_used, per_pose_figure};
+use charts::{Series, angles_figure, axes_figure, corners_figure, motions_used, per_pose_figure};
 pub use online::{OnlineTrace, write_online};
 
 /// The poses worst predicted, listed by name under the per-pose figures.
@@ -143,8 +143,14 @@ pub fn write_robot_world(path: &Path, run: &RunPage<'_>, r: &RobotWorldReport) -
 }
 
 /// Writes the page of a calibration on the pixels (`--method reprojection`): X and the target's
-/// pose, each frame's reprojection RMS, the robot's motions.
-pub fn write_pixels(path: &Path, run: &RunPage<'_>, r: &Report) -> Result<()> {
+/// pose, each frame's reprojection RMS, each detection's residual in the image (`image`: its
+/// width and height in pixels, when the intrinsics give them), the robot's motions.
+pub fn write_pixels(
+    path: &Path,
+    run: &RunPage<'_>,
+    r: &Report,
+    image: Option<(f64, f64)>,
+) -> Result<()> {
     register_font();
     let mut page = Page::new(
         "handeye calibrate --method reprojection",
@@ -178,6 +184,23 @@ pub fn write_pixels(path: &Path, run: &RunPage<'_>, r: &Report) -> Result<()> {
                 p.outlier_detections.len()
             ),
         );
+        if !p.corners.is_empty() {
+            let (svg, scale, drawn) = corners_figure(&p.corners, image)?;
+            let shown = if drawn < p.corners.len() {
+                format!(
+                    "{drawn} of the {} detections, spread over the recording",
+                    p.corners.len()
+                )
+            } else {
+                format!("all {} detections", p.corners.len())
+            };
+            page.figure(
+                svg,
+                &format!(
+                    "Where each detection is in the image, and its residual (detected less projected under the solved X and target pose) as an arrow {scale:.0} times its length ({shown}; red crosses: left out as mis-detections). Random detection noise points every way; arrows that turn about the centre, grow towards the edges or share a direction in one part of the image come from the camera's model (distortion, focal length) or the target's size, which more frames will not average out."
+                ),
+            );
+        }
         let mut worst: Vec<&handeye::FrameRms> = p.per_frame.iter().collect();
         worst.sort_by(|a, b| b.rms_px.total_cmp(&a.rms_px));
         let rows = worst

@@ -76,6 +76,23 @@ pub struct ReprojectionSummary {
     /// given intrinsics were used as they are.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub intrinsics: Option<RefinedIntrinsics>,
+    /// Every detection's residual where it is in the image, for a figure (the HTML report's):
+    /// not in the JSON, whose size it would make grow with the detections.
+    #[serde(skip)]
+    pub corners: Vec<CornerResidual>,
+}
+
+/// One detection's reprojection residual.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CornerResidual {
+    /// The frame's name (`file:line` from the command line).
+    pub frame: String,
+    /// Where it was detected, pixels (u, v).
+    pub pixel: [f64; 2],
+    /// The detected pixel less the projected one under the solved X and target pose, pixels.
+    pub residual_px: [f64; 2],
+    /// Whether the solve kept it (not a mis-detection).
+    pub kept: bool,
 }
 
 /// One frame's reprojection RMS.
@@ -338,14 +355,19 @@ pub(crate) struct FrameChoice {
     pub rejected: bool,
     /// The same frames solved with the focal length that fits best ([`focal_check`]); none with
     /// the intrinsics refined, or when no scale solves.
-    pub focal: Option<FocalFit>,
+    pub focal: Option<CameraFit>,
+    /// The same with the radial distortion k1 that fits best ([`k1_check`]).
+    pub k1: Option<CameraFit>,
 }
 
-/// A solve of the frames used with the camera's focal length (fx and fy together) scaled.
+/// A solve of the frames used with one of the camera's parameters changed: the focal length's
+/// scale (fx and fy together), or k1.
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct FocalFit {
-    /// The scale.
-    pub scale: f64,
+pub(crate) struct CameraFit {
+    /// The parameter's value: the focal length's scale, or k1.
+    pub value: f64,
+    /// Its value as given: 1 for the scale, the camera's k1.
+    pub given: f64,
     /// The robust reprojection sigma with it, pixels.
     pub sigma_px: f64,
     /// The RMS over the detections kept with it, pixels.
@@ -372,8 +394,8 @@ fn focal_check(
     setup: Setup,
     options: &PixelOptions,
     solved: &PixelSolution,
-) -> Option<FocalFit> {
-    let mut best: Option<FocalFit> = None;
+) -> Option<CameraFit> {
+    let mut best: Option<CameraFit> = None;
     let mut rms = |log_scale: f64| {
         let scale = log_scale.exp();
         let scaled = Intrinsics {
@@ -386,8 +408,9 @@ fn focal_check(
             return f64::INFINITY;
         };
         if best.as_ref().is_none_or(|b| s.rms_px < b.rms_px) {
-            best = Some(FocalFit {
-                scale,
+            best = Some(CameraFit {
+                value: scale,
+                given: 1.0,
                 sigma_px: s.sigma_px,
                 rms_px: s.rms_px,
                 x: s.calibration.x,
@@ -398,6 +421,46 @@ fn focal_check(
     let (low, high) = (FOCAL_RANGE.0.ln(), FOCAL_RANGE.1.ln());
     brent_minimum(&mut rms, (low, high), (0.0, solved.rms_px), 2.5e-4);
     // None when no scale fits better than the intrinsics given.
+    best.filter(|b| b.rms_px < solved.rms_px)
+}
+
+/// How far from the given k1 [`k1_check`] searches, either way: at the corner of a typical image
+/// (normalised radius 0.8, 900 px focal length) 0.5 moves a point by 230 px, another lens.
+const K1_RANGE: f64 = 0.5;
+
+/// The radial distortion k1 that fits the detections best, as [`focal_check`] finds the focal
+/// length's scale (the same detections at every k1, X and the target's pose solved anew, Brent's
+/// minimisation from the given k1 to 1e-4): a wrong k1 bends the image's outer detections, which
+/// the robot's motions do not follow, so it shows as a better fit at another k1. The other
+/// coefficients stay as given (k1 is the one a wrong calibration or model gets most wrong).
+fn k1_check(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &PixelOptions,
+    solved: &PixelSolution,
+) -> Option<CameraFit> {
+    let mut best: Option<CameraFit> = None;
+    let mut rms = |k1: f64| {
+        let mut changed = *camera;
+        changed.distortion[0] = k1;
+        let Ok(s) = reprojection_leaving_out(frames, &changed, setup, options, &solved.outliers)
+        else {
+            return f64::INFINITY;
+        };
+        if best.as_ref().is_none_or(|b| s.rms_px < b.rms_px) {
+            best = Some(CameraFit {
+                value: k1,
+                given: camera.distortion[0],
+                sigma_px: s.sigma_px,
+                rms_px: s.rms_px,
+                x: s.calibration.x,
+            });
+        }
+        s.rms_px
+    };
+    let k1 = camera.distortion[0];
+    brent_minimum(&mut rms, (k1 - K1_RANGE, k1 + K1_RANGE), (k1, solved.rms_px), 1e-4);
     best.filter(|b| b.rms_px < solved.rms_px)
 }
 
@@ -488,32 +551,73 @@ const FOCAL_CHI2: f64 = 10.83;
 /// calibration's own (a few tenths of a percent).
 const FOCAL_MATERIAL: f64 = 0.01;
 
-/// The warning of intrinsics that disagree with the detections: the fit at the best focal length
-/// is significantly better (the drop in the sum of squares over the `n` coordinates kept, over
-/// its residual variance: a likelihood-ratio test of one parameter) and X moves by more than 3
-/// sigma between the two. `fit` is the robust sigma and the RMS with the given intrinsics.
+/// The least change of k1 warned: a calibration's own uncertainty on k1 is a few thousandths.
+const K1_MATERIAL: f64 = 0.005;
+
+/// How far X must move between the two fits, in its sigmas, for the warning: the given
+/// intrinsics' X is then off by that much and by its own noise besides (measured: a k1 off by
+/// 0.04 moved X by 1.6–2.6 sigma while X was 3.4 sigma from the truth; a gate of 3 left it
+/// silent).
+const MOVED_SIGMAS: f64 = 2.0;
+
+/// The warning of intrinsics that disagree with the detections: the fit at the best focal length,
+/// or at the best k1, is significantly better (the drop in the sum of squares over the `n`
+/// coordinates kept, over its residual variance: a likelihood-ratio test of one parameter) and X
+/// moves by more than 3 sigma between the two. Of the two, the one that fits better by more.
+/// `fit` is the robust sigma and the RMS with the given intrinsics.
 fn intrinsics_warning(
-    focal: &FocalFit,
+    choice: &FrameChoice,
     (sigma_px, rms_px): (f64, f64),
     coordinates: usize,
     x: &Transform,
     uncertainty: &crate::check::uncertainty::Uncertainty,
 ) -> Option<Warning> {
     let n = coordinates as f64;
-    let chi2 = n * (rms_px.powi(2) - focal.rms_px.powi(2)) / focal.rms_px.powi(2).max(1e-300);
-    let rotation_deg = rotation_angle_between(&x.rotation, &focal.x.rotation).to_degrees();
-    let translation = (focal.x.translation.vector - x.translation.vector).norm();
-    let sigmas = (rotation_deg / uncertainty.rotation_deg.max(1e-300))
-        .max(translation / uncertainty.translation.max(1e-300));
-    let material = (focal.scale.ln()).abs() > FOCAL_MATERIAL.ln_1p();
-    (chi2 > FOCAL_CHI2 && material && sigmas > 3.0).then_some(Warning::IntrinsicsDisagree {
-        focal_scale: focal.scale,
-        sigma_px,
-        scaled_sigma_px: focal.sigma_px,
-        rotation_deg,
-        translation,
-        sigmas,
-    })
+    // The likelihood ratio of a refit, and how far X moves with it (degrees, input unit, sigmas).
+    let judged = |fit: &CameraFit| {
+        let chi2 = n * (rms_px.powi(2) - fit.rms_px.powi(2)) / fit.rms_px.powi(2).max(1e-300);
+        let rotation_deg = rotation_angle_between(&x.rotation, &fit.x.rotation).to_degrees();
+        let translation = (fit.x.translation.vector - x.translation.vector).norm();
+        let sigmas = (rotation_deg / uncertainty.rotation_deg.max(1e-300))
+            .max(translation / uncertainty.translation.max(1e-300));
+        (chi2, rotation_deg, translation, sigmas)
+    };
+    let focal = choice.focal.as_ref().and_then(|fit| {
+        let (chi2, rotation_deg, translation, sigmas) = judged(fit);
+        let material = fit.value.ln().abs() > FOCAL_MATERIAL.ln_1p();
+        (chi2 > FOCAL_CHI2 && material && sigmas > MOVED_SIGMAS).then_some((
+            chi2,
+            Warning::IntrinsicsDisagree {
+                focal_scale: fit.value,
+                sigma_px,
+                scaled_sigma_px: fit.sigma_px,
+                rotation_deg,
+                translation,
+                sigmas,
+            },
+        ))
+    });
+    let k1 = choice.k1.as_ref().and_then(|fit| {
+        let (chi2, rotation_deg, translation, sigmas) = judged(fit);
+        let material = (fit.value - fit.given).abs() > K1_MATERIAL;
+        (chi2 > FOCAL_CHI2 && material && sigmas > MOVED_SIGMAS).then_some((
+            chi2,
+            Warning::DistortionDisagrees {
+                k1: fit.given,
+                k1_best: fit.value,
+                sigma_px,
+                refit_sigma_px: fit.sigma_px,
+                rotation_deg,
+                translation,
+                sigmas,
+            },
+        ))
+    });
+    [focal, k1]
+        .into_iter()
+        .flatten()
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, w)| w)
 }
 
 /// The frames most of whose detections the solve left out as mis-fits (more than half beyond
@@ -635,6 +739,7 @@ fn solved(
         check_determined(k, camera)?;
     } else {
         choice.focal = focal_check(&used, camera, setup, &pixel_options, &solution);
+        choice.k1 = k1_check(&used, camera, setup, &pixel_options, &solution);
     }
     Ok((used, solution, applied, reading_check, choice))
 }
@@ -758,10 +863,13 @@ fn report(
     warn_weak(&uncertainty, setup, None, &mut warnings);
     let detections: usize = frames.iter().map(|f| f.detections.pixels.len()).sum();
     let coordinates = 2 * detections.saturating_sub(solution.outliers.len());
-    warnings.extend(choice.focal.as_ref().and_then(|focal| {
-        let fit = (solution.sigma_px, solution.rms_px);
-        intrinsics_warning(focal, fit, coordinates, &x, &uncertainty)
-    }));
+    warnings.extend(intrinsics_warning(
+        choice,
+        (solution.sigma_px, solution.rms_px),
+        coordinates,
+        &x,
+        &uncertainty,
+    ));
     let quality = quality_report(&AllPairs::new(&poses, setup), &x, 0);
     let residuals = PoseResiduals::at(&poses, setup, &x);
     // The name of input frame i.
@@ -774,6 +882,8 @@ fn report(
     };
     // The name of used frame i.
     let name = |i: usize| input_name(choice.kept.get(i).copied().unwrap_or(i));
+    let left_out: std::collections::HashSet<(usize, usize)> =
+        solution.outliers.iter().copied().collect();
     let summary = ReprojectionSummary {
         rms_px: solution.rms_px,
         per_frame: solution
@@ -801,6 +911,16 @@ fn report(
         target: TransformJson::from(&solution.target),
         reading_check,
         intrinsics: solution.intrinsics.clone(),
+        corners: solution
+            .residuals_px
+            .iter()
+            .map(|&(f, k, residual_px)| CornerResidual {
+                frame: name(f),
+                pixel: frames[f].detections.pixels[k],
+                residual_px,
+                kept: !left_out.contains(&(f, k)),
+            })
+            .collect(),
     };
     warnings.sort_by_key(|w| w.remedy().is_none());
     Ok(Report {

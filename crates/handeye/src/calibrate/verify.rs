@@ -213,6 +213,7 @@ pub(crate) fn compared(
     let sizes = (difference.rotation_deg / sigma.rotation_deg)
         .max(difference.translation / sigma.translation);
     let shape_reliable = poses.len() >= SHAPE_POSES;
+    // What the recording's detections prefer (in words), and how far that moves its own X.
     let intrinsics = report.warnings.iter().find_map(|w| match w {
         Warning::IntrinsicsDisagree {
             focal_scale,
@@ -220,19 +221,36 @@ pub(crate) fn compared(
             translation,
             sigmas,
             ..
-        } => Some((*focal_scale, *rotation_deg, *translation, *sigmas)),
+        } => Some((
+            format!("the focal length scaled by {focal_scale:.3}"),
+            *rotation_deg,
+            *translation,
+            *sigmas,
+        )),
+        Warning::DistortionDisagrees {
+            k1_best,
+            rotation_deg,
+            translation,
+            sigmas,
+            ..
+        } => Some((
+            format!("the radial distortion k1 = {k1_best:.4}"),
+            *rotation_deg,
+            *translation,
+            *sigmas,
+        )),
         _ => None,
     });
     let (verdict, message) = if distance > limit
         && (shape_reliable || sizes > SIZE_LIMIT)
-        && let Some((focal, rotation_deg, translation, sigmas)) = intrinsics
+        && let Some((preferred, rotation_deg, translation, sigmas)) = intrinsics
     {
         // The recording's own X depends on intrinsics its detections disagree with: a
         // difference is no evidence that the camera moved.
         (
             Consistency::Undetermined,
             format!(
-                "this recording cannot tell: the saved X differs by {:.3}° and {} ({distance:.1} sigmas), but the recording's detections and robot motions agree better with the focal length scaled by {focal:.3}, which moves the recording's own X by {rotation_deg:.3}° and {} ({sigmas:.1} sigmas): check the intrinsics (this camera's, at this resolution, zoom and focus) and the target's size, then verify again",
+                "this recording cannot tell: the saved X differs by {:.3}° and {} ({distance:.1} sigmas), but the recording's detections and robot motions agree better with {preferred}, which moves the recording's own X by {rotation_deg:.3}° and {} ({sigmas:.1} sigmas): check the intrinsics (this camera's, at this resolution, zoom and focus) and the target's size, then verify again",
                 difference.rotation_deg,
                 len(difference.translation),
                 len(translation),

@@ -158,6 +158,25 @@ pub enum Warning {
         /// That move over X's one-sigma (the larger of rotation's and translation's).
         sigmas: f64,
     },
+    /// On the pixels: the detections and the robot's motions fit significantly better with the
+    /// camera's radial distortion k1 changed, and X moves beyond its uncertainty between the two
+    /// fits (that uncertainty takes the intrinsics as exact).
+    DistortionDisagrees {
+        /// k1 as given.
+        k1: f64,
+        /// The k1 that fits best.
+        k1_best: f64,
+        /// The reprojection sigma with the given intrinsics, pixels.
+        sigma_px: f64,
+        /// The same with k1 at its best.
+        refit_sigma_px: f64,
+        /// How far X moves between the two fits: degrees.
+        rotation_deg: f64,
+        /// The same, input units.
+        translation: f64,
+        /// That move over X's one-sigma (the larger of rotation's and translation's).
+        sigmas: f64,
+    },
     /// A prior names a component of X's translation that the motions determine: the data's value
     /// is kept, and it disagrees with the prior by more than 3 sigma.
     PriorDisagrees {
@@ -268,6 +287,7 @@ impl Warning {
             Self::ReadingsAlike { .. } => "readings_alike",
             Self::PriorDisagrees { .. } => "prior_disagrees",
             Self::IntrinsicsDisagree { .. } => "intrinsics_disagree",
+            Self::DistortionDisagrees { .. } => "distortion_disagrees",
         }
     }
 
@@ -367,6 +387,18 @@ impl fmt::Display for Warning {
             } => write!(
                 f,
                 "the detections and the robot's motions agree better with the focal length scaled by {focal_scale:.3} (reprojection sigma {scaled_sigma_px:.2} px instead of {sigma_px:.2} px), and X moves by {rotation_deg:.3}° and {translation:.4} between the two fits ({sigmas:.1} sigma): X's uncertainty, which takes the intrinsics as exact, does not cover this; check that the intrinsics are this camera's at this resolution, zoom and focus (calibrate them again; refining them with X needs a board that spans the image) and the target's size; a robot whose kinematics are off shows the same way"
+            ),
+            Self::DistortionDisagrees {
+                k1,
+                k1_best,
+                sigma_px,
+                refit_sigma_px,
+                rotation_deg,
+                translation,
+                sigmas,
+            } => write!(
+                f,
+                "the detections and the robot's motions agree better with the radial distortion k1 = {k1_best:.4} than with the {k1:.4} given (reprojection sigma {refit_sigma_px:.2} px instead of {sigma_px:.2} px), and X moves by {rotation_deg:.3}° and {translation:.4} between the two fits ({sigmas:.1} sigma): X's uncertainty, which takes the intrinsics as exact, does not cover this; check that the distortion coefficients are this camera's at this resolution, zoom and focus (calibrate them again; refining them with X needs a board that spans the image); the report's residual figure shows the pattern"
             ),
             Self::PriorDisagrees {
                 component,
@@ -621,6 +653,15 @@ mod tests {
                 rotation_deg: 0.07,
                 translation: 0.01,
                 sigmas: 3.6,
+            },
+            Warning::DistortionDisagrees {
+                k1: -0.18,
+                k1_best: -0.21,
+                sigma_px: 1.1,
+                refit_sigma_px: 0.97,
+                rotation_deg: 0.04,
+                translation: 0.003,
+                sigmas: 4.5,
             },
         ];
         for w in &every {

@@ -112,6 +112,9 @@ pub struct PixelSolution {
     pub per_frame_rms_px: Vec<f64>,
     /// Detections left out of the final least squares as outliers, (frame, point) each.
     pub outliers: Vec<(usize, usize)>,
+    /// Each detection's residual, the detected pixel less the projected one, pixels, as (frame,
+    /// point, residual); a point behind the camera is left out.
+    pub residuals_px: Vec<(usize, usize, [f64; 2])>,
     /// The camera pose chosen per frame for the start.
     pub start_poses: Vec<Transform>,
     /// Frames whose start pose was not the one with the smaller pixel residual (the planar
@@ -278,8 +281,18 @@ fn solution(frames: &[Frame], data: &Data, start: Start, unit: f64, fit: Fitted)
         termination,
         intrinsics,
     } = fit;
-    let residuals = intrinsics::norms(data, &(state, camera));
+    let vectors = intrinsics::residual_vectors(data, &(state, camera));
+    let residuals: Vec<f64> = vectors
+        .iter()
+        .map(|r| r.map_or(BEHIND_PX, |r| r.norm()))
+        .collect();
     let (rms_px, per_frame_rms_px) = data.rms(&residuals, &keep);
+    let residuals_px = data
+        .index
+        .iter()
+        .zip(&vectors)
+        .filter_map(|(&(f, k), r)| r.map(|r| (f, k, [r.x, r.y])))
+        .collect();
     let outliers = data
         .index
         .iter()
@@ -307,6 +320,7 @@ fn solution(frames: &[Frame], data: &Data, start: Start, unit: f64, fit: Fitted)
         rms_px,
         per_frame_rms_px,
         outliers,
+        residuals_px,
         start_poses: start.poses,
         flips_resolved: start.flips_resolved,
         stations: data.stations.count,

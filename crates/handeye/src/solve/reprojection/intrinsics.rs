@@ -289,14 +289,19 @@ pub(super) fn refine(
 }
 
 /// |π(p) − u| per detection with the camera of `s`, pixels.
-pub(super) fn norms(data: &Data, (state, camera): &Full) -> Vec<f64> {
+pub(super) fn norms(data: &Data, full: &Full) -> Vec<f64> {
+    residual_vectors(data, full)
+        .into_iter()
+        .map(|r| r.map_or(BEHIND_PX, |r| r.norm()))
+        .collect()
+}
+
+/// Per detection, the detected pixel less the projected one (`None`: the point is behind the
+/// camera).
+pub(super) fn residual_vectors(data: &Data, (state, camera): &Full) -> Vec<Option<Vector2<f64>>> {
     let mut out = Vec::with_capacity(data.points.len());
     data.each(state, false, |_, k, p, _| {
-        out.push(if p.z > 0.0 {
-            (camera.pixel(p) - data.pixels[k]).norm()
-        } else {
-            BEHIND_PX
-        });
+        out.push((p.z > 0.0).then(|| data.pixels[k] - camera.pixel(p)));
     });
     out
 }
