@@ -395,22 +395,40 @@ fn focal_check(
     options: &PixelOptions,
     solved: &PixelSolution,
 ) -> Option<CameraFit> {
-    let mut best: Option<CameraFit> = None;
-    let mut rms = |log_scale: f64| {
+    let at = |log_scale: f64| {
         let scale = log_scale.exp();
         let scaled = Intrinsics {
             fx: camera.fx * scale,
             fy: camera.fy * scale,
             ..*camera
         };
-        let Ok(s) = reprojection_leaving_out(frames, &scaled, setup, options, &solved.outliers)
+        (scale, scaled)
+    };
+    let bracket = (FOCAL_RANGE.0.ln(), FOCAL_RANGE.1.ln());
+    refit((frames, setup, options, solved), at, (bracket, 0.0, 2.5e-4), 1.0)
+}
+
+/// The best fit over one camera parameter: `at` gives, at a point of the search, the parameter's
+/// value and the camera with it; Brent's minimisation of the RMS over `bracket` from `start` (the
+/// given camera, whose RMS is `solved`'s) to `tolerance`; every solve fits the detections `solved`
+/// kept. `None` when no value fits better than `given`, the parameter as given.
+fn refit(
+    (frames, setup, options, solved): (&[Frame], Setup, &PixelOptions, &PixelSolution),
+    at: impl Fn(f64) -> (f64, Intrinsics),
+    (bracket, start, tolerance): ((f64, f64), f64, f64),
+    given: f64,
+) -> Option<CameraFit> {
+    let mut best: Option<CameraFit> = None;
+    let mut rms = |point: f64| {
+        let (value, camera) = at(point);
+        let Ok(s) = reprojection_leaving_out(frames, &camera, setup, options, &solved.outliers)
         else {
             return f64::INFINITY;
         };
         if best.as_ref().is_none_or(|b| s.rms_px < b.rms_px) {
             best = Some(CameraFit {
-                value: scale,
-                given: 1.0,
+                value,
+                given,
                 sigma_px: s.sigma_px,
                 rms_px: s.rms_px,
                 x: s.calibration.x,
@@ -418,9 +436,7 @@ fn focal_check(
         }
         s.rms_px
     };
-    let (low, high) = (FOCAL_RANGE.0.ln(), FOCAL_RANGE.1.ln());
-    brent_minimum(&mut rms, (low, high), (0.0, solved.rms_px), 2.5e-4);
-    // None when no scale fits better than the intrinsics given.
+    brent_minimum(&mut rms, bracket, (start, solved.rms_px), tolerance);
     best.filter(|b| b.rms_px < solved.rms_px)
 }
 
@@ -440,28 +456,14 @@ fn k1_check(
     options: &PixelOptions,
     solved: &PixelSolution,
 ) -> Option<CameraFit> {
-    let mut best: Option<CameraFit> = None;
-    let mut rms = |k1: f64| {
-        let mut changed = *camera;
-        changed.distortion[0] = k1;
-        let Ok(s) = reprojection_leaving_out(frames, &changed, setup, options, &solved.outliers)
-        else {
-            return f64::INFINITY;
-        };
-        if best.as_ref().is_none_or(|b| s.rms_px < b.rms_px) {
-            best = Some(CameraFit {
-                value: k1,
-                given: camera.distortion[0],
-                sigma_px: s.sigma_px,
-                rms_px: s.rms_px,
-                x: s.calibration.x,
-            });
-        }
-        s.rms_px
-    };
     let k1 = camera.distortion[0];
-    brent_minimum(&mut rms, (k1 - K1_RANGE, k1 + K1_RANGE), (k1, solved.rms_px), 1e-4);
-    best.filter(|b| b.rms_px < solved.rms_px)
+    let at = |value: f64| {
+        let mut changed = *camera;
+        changed.distortion[0] = value;
+        (value, changed)
+    };
+    let bracket = (k1 - K1_RANGE, k1 + K1_RANGE);
+    refit((frames, setup, options, solved), at, (bracket, k1, 1e-4), k1)
 }
 
 /// The minimum of `f` on `(a, b)` by Brent's method (R. P. Brent, *Algorithms for Minimization
