@@ -766,8 +766,12 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
             calibrator.poses()
         );
     };
+    let repeats = match tracker.repeats() {
+        0 => String::new(),
+        n => format!(" ({n} at the robot pose of the pose before, each counted with it)"),
+    };
     let counts = format!(
-        "{} pose(s){bad}, {} held out, {} change(s)",
+        "{} pose(s){repeats}{bad}, {} held out, {} change(s)",
         calibrator.poses(),
         tracker.held_out(),
         tracker.changes()

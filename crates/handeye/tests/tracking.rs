@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use handeye::io::sync::{StreamPairing, TimeOffset, pair_stream_files};
 use handeye::model::pose::rotation_angle_between;
 use handeye::track::{Report, TrackEstimate, TrackOptions, Tracker};
-use handeye::{Method, Pairing, Setup, Transform, motion_pairs, solve};
+use handeye::{Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
 use serde_json::Value;
 
 fn testdata() -> PathBuf {
@@ -22,13 +22,18 @@ struct Run {
     last: TrackEstimate,
     /// Pose numbers (from 1) held out.
     held: Vec<usize>,
+    /// The poses counted: all but those at the robot pose of the pose before (`Step::repeat`).
+    counted: Vec<PosePair>,
 }
 
 fn track(pairing: &StreamPairing, setup: Setup) -> Run {
     let mut tracker = Tracker::new(setup, TrackOptions::default());
-    let (mut alarms, mut reports, mut held) = (0, Vec::new(), Vec::new());
+    let (mut alarms, mut reports, mut held, mut counted) = (0, Vec::new(), Vec::new(), Vec::new());
     for pose in &pairing.synced.pairs {
         let step = tracker.push(pose);
+        if !step.repeat {
+            counted.push(*pose);
+        }
         alarms += usize::from(step.change.is_some());
         reports.extend(step.report);
         held.extend(step.held_out.map(|_| step.pose));
@@ -40,6 +45,7 @@ fn track(pairing: &StreamPairing, setup: Setup) -> Run {
         reports,
         last: tracker.estimate().expect("an estimate"),
         held,
+        counted,
     }
 }
 
@@ -78,9 +84,13 @@ fn the_ethz_recordings_raise_no_alarm_and_end_at_the_batch_answer() {
         .unwrap();
         let run = track(&pairing, Setup::EyeInHand);
         let poses = &pairing.synced.pairs;
+        // The batch all-pairs answer on the robot poses the tracker counts: robot_arm_sim holds 6
+        // poses for 641 of its 1,050 images, which weigh those 6 poses 100-fold in the all-pairs
+        // sums of every image (that answer is 0.39° / 23 mm away, within its own sigma of 0.58° /
+        // 24 mm).
         let batch = solve(
             Method::Andreff,
-            &motion_pairs(poses, Pairing::All, Setup::EyeInHand),
+            &motion_pairs(&run.counted, Pairing::All, Setup::EyeInHand),
         )
         .unwrap()
         .x;

@@ -217,6 +217,10 @@ pub struct Step {
     pub change: Option<Change>,
     /// Set when an estimate is reported at this pose.
     pub report: Option<Report>,
+    /// Set when the robot pose is the pose before's (the robot standing still while the camera
+    /// streams): one more image of that pose, whose error it shares, so it is not counted again.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub repeat: bool,
 }
 
 /// Why there is no estimate to report.

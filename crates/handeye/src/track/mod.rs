@@ -49,7 +49,7 @@ use crate::check::uncertainty::{
 use crate::model::findings::Reading;
 use crate::model::findings::Written;
 use crate::model::motion::{PosePair, Setup};
-use crate::model::pose::{axis_angle, rotation_angle_between};
+use crate::model::pose::{Transform, axis_angle, rotation_angle_between};
 
 pub use events::{
     Change, HeldOut, Pending, PixelFit, Reason, Report, RobotWorldPair, Step, TrackEstimate,
@@ -254,6 +254,12 @@ pub struct Tracker {
     /// The joint angles of the recent poses, where they were given ([`Tracker::push_with_joints`]).
     #[serde(default)]
     joints: JointRing,
+    /// The robot pose of the last pose pushed: a pose at it is one more image of that pose.
+    #[serde(default)]
+    previous: Option<Transform>,
+    /// Poses pushed at the robot pose of the pose before them ([`Step::repeat`]).
+    #[serde(default)]
+    repeats: usize,
 }
 
 /// A tracker's priors: as given, and in the poses' length unit once the first poses tell it (or
@@ -297,6 +303,8 @@ impl Tracker {
             priors: None,
             watch: Watch::default(),
             joints: JointRing::default(),
+            previous: None,
+            repeats: 0,
         }
     }
 
@@ -397,6 +405,12 @@ impl Tracker {
         self.held_out
     }
 
+    /// Poses pushed at the robot pose of the pose before them, each counted with it
+    /// ([`Step::repeat`]).
+    pub fn repeats(&self) -> usize {
+        self.repeats
+    }
+
     /// Changes confirmed so far.
     pub fn changes(&self) -> usize {
         self.changes
@@ -453,6 +467,14 @@ impl Tracker {
             pose: self.poses,
             ..Step::default()
         };
+        // A robot standing still while the camera streams: one more image of the pose before,
+        // whose error it shares; the pose is counted once (`model::station`).
+        let previous = self.previous.replace(pose.base_from_gripper);
+        if previous.is_some_and(|q| same_station(&q, &pose.base_from_gripper)) {
+            self.repeats += 1;
+            step.repeat = true;
+            return step;
+        }
         match self.screw_gate(pose) {
             Some(h) => {
                 self.held_out += 1;
@@ -900,3 +922,14 @@ impl Tracker {
         report
     }
 }
+
+/// Whether two robot poses are one station (`model::station`): within
+/// [`crate::model::station::SAME_STATION`] radians, and that share of the gripper's distance from
+/// the base (the robot's own unit, whatever the camera's) in translation.
+fn same_station(a: &Transform, b: &Transform) -> bool {
+    use crate::model::station::SAME_STATION;
+    let reach = a.translation.vector.norm().max(b.translation.vector.norm());
+    (a.translation.vector - b.translation.vector).norm() <= SAME_STATION * reach
+        && rotation_angle_between(&a.rotation, &b.rotation) < SAME_STATION
+}
+
