@@ -85,8 +85,8 @@ pub struct ReprojectionSummary {
 /// One detection's reprojection residual.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CornerResidual {
-    /// The frame's name (`file:line` from the command line).
-    pub frame: String,
+    /// Its frame: the index in [`ReprojectionSummary::per_frame`], which names it.
+    pub frame: usize,
     /// Where it was detected, pixels (u, v).
     pub pixel: [f64; 2],
     /// The detected pixel less the projected one under the solved X and target pose, pixels.
@@ -564,9 +564,10 @@ const MOVED_SIGMAS: f64 = 2.0;
 
 /// The warning of intrinsics that disagree with the detections: the fit at the best focal length,
 /// or at the best k1, is significantly better (the drop in the sum of squares over the `n`
-/// coordinates kept, over its residual variance: a likelihood-ratio test of one parameter) and X
-/// moves by more than 3 sigma between the two. Of the two, the one that fits better by more.
-/// `fit` is the robust sigma and the RMS with the given intrinsics.
+/// coordinates kept, over its residual variance: a likelihood-ratio test of one parameter), the
+/// parameter moved materially, and X moves by more than [`MOVED_SIGMAS`] between the two. Of the
+/// two, the one that fits better by more. `fit` is the robust sigma and the RMS with the given
+/// intrinsics.
 fn intrinsics_warning(
     choice: &FrameChoice,
     (sigma_px, rms_px): (f64, f64),
@@ -575,45 +576,43 @@ fn intrinsics_warning(
     uncertainty: &crate::check::uncertainty::Uncertainty,
 ) -> Option<Warning> {
     let n = coordinates as f64;
-    // The likelihood ratio of a refit, and how far X moves with it (degrees, input unit, sigmas).
-    let judged = |fit: &CameraFit| {
+    // A refit that passes the gates, `material` its parameter's own: its likelihood ratio and how
+    // far X moves with it (degrees, input unit, sigmas).
+    let judged = |fit: &CameraFit, material: bool| {
         let chi2 = n * (rms_px.powi(2) - fit.rms_px.powi(2)) / fit.rms_px.powi(2).max(1e-300);
         let rotation_deg = rotation_angle_between(&x.rotation, &fit.x.rotation).to_degrees();
         let translation = (fit.x.translation.vector - x.translation.vector).norm();
         let sigmas = (rotation_deg / uncertainty.rotation_deg.max(1e-300))
             .max(translation / uncertainty.translation.max(1e-300));
-        (chi2, rotation_deg, translation, sigmas)
+        (chi2 > FOCAL_CHI2 && material && sigmas > MOVED_SIGMAS)
+            .then_some((chi2, rotation_deg, translation, sigmas))
     };
     let focal = choice.focal.as_ref().and_then(|fit| {
-        let (chi2, rotation_deg, translation, sigmas) = judged(fit);
         let material = fit.value.ln().abs() > FOCAL_MATERIAL.ln_1p();
-        (chi2 > FOCAL_CHI2 && material && sigmas > MOVED_SIGMAS).then_some((
-            chi2,
-            Warning::IntrinsicsDisagree {
-                focal_scale: fit.value,
-                sigma_px,
-                scaled_sigma_px: fit.sigma_px,
-                rotation_deg,
-                translation,
-                sigmas,
-            },
-        ))
+        let (chi2, rotation_deg, translation, sigmas) = judged(fit, material)?;
+        let warning = Warning::IntrinsicsDisagree {
+            focal_scale: fit.value,
+            sigma_px,
+            scaled_sigma_px: fit.sigma_px,
+            rotation_deg,
+            translation,
+            sigmas,
+        };
+        Some((chi2, warning))
     });
     let k1 = choice.k1.as_ref().and_then(|fit| {
-        let (chi2, rotation_deg, translation, sigmas) = judged(fit);
         let material = (fit.value - fit.given).abs() > K1_MATERIAL;
-        (chi2 > FOCAL_CHI2 && material && sigmas > MOVED_SIGMAS).then_some((
-            chi2,
-            Warning::DistortionDisagrees {
-                k1: fit.given,
-                k1_best: fit.value,
-                sigma_px,
-                refit_sigma_px: fit.sigma_px,
-                rotation_deg,
-                translation,
-                sigmas,
-            },
-        ))
+        let (chi2, rotation_deg, translation, sigmas) = judged(fit, material)?;
+        let warning = Warning::DistortionDisagrees {
+            k1: fit.given,
+            k1_best: fit.value,
+            sigma_px,
+            refit_sigma_px: fit.sigma_px,
+            rotation_deg,
+            translation,
+            sigmas,
+        };
+        Some((chi2, warning))
     });
     [focal, k1]
         .into_iter()
@@ -917,7 +916,7 @@ fn report(
             .residuals_px
             .iter()
             .map(|&(f, k, residual_px)| CornerResidual {
-                frame: name(f),
+                frame: f,
                 pixel: frames[f].detections.pixels[k],
                 residual_px,
                 kept: !left_out.contains(&(f, k)),

@@ -16,6 +16,17 @@ use crate::model::pose::log_so3;
 /// industrial robot's repeatability.
 pub(crate) const SAME_STATION: f64 = 1e-4;
 
+/// Whether two robot poses, as rotation and translation, are one station: within
+/// [`SAME_STATION`] radians and `translation_tolerance`.
+pub(crate) fn same_station(
+    (ra, ta): (&Matrix3<f64>, &Vector3<f64>),
+    (rb, tb): (&Matrix3<f64>, &Vector3<f64>),
+    translation_tolerance: f64,
+) -> bool {
+    (ta - tb).norm() <= translation_tolerance
+        && log_so3(&(ra * rb.transpose())).norm() < SAME_STATION
+}
+
 /// How far apart (in the projection of [`Stations::of_motions`]) two poses of one station can be:
 /// 2√3, with room for rounding.
 const REACH: f64 = 3.5;
@@ -67,8 +78,7 @@ impl Stations {
     ) -> Self {
         let same = |a: usize, b: usize| {
             let ((ra, ta), (rb, tb)) = (&motions[a], &motions[b]);
-            (ta - tb).norm() <= translation_tolerance
-                && log_so3(&(ra * rb.transpose())).norm() < SAME_STATION
+            same_station((ra, ta), (rb, tb), translation_tolerance)
         };
         // The projection: the sum of the translation's and the rotation vector's coordinates,
         // each over its tolerance; two poses of one station are within 2√3 of each other in it

@@ -398,7 +398,7 @@ impl fmt::Display for Warning {
                 sigmas,
             } => write!(
                 f,
-                "the detections and the robot's motions agree better with the radial distortion k1 = {k1_best:.4} than with the {k1:.4} given (reprojection sigma {refit_sigma_px:.2} px instead of {sigma_px:.2} px), and X moves by {rotation_deg:.3}° and {translation:.4} between the two fits ({sigmas:.1} sigma): X's uncertainty, which takes the intrinsics as exact, does not cover this; check that the distortion coefficients are this camera's at this resolution, zoom and focus (calibrate them again; refining them with X needs a board that spans the image); the report's residual figure shows the pattern"
+                "the detections and the robot's motions agree better with the radial distortion k1 = {k1_best:.4} than with the {k1:.4} given (reprojection sigma {refit_sigma_px:.2} px instead of {sigma_px:.2} px), and X moves by {rotation_deg:.3}° and {translation:.4} between the two fits ({sigmas:.1} sigma): X's uncertainty, which takes the intrinsics as exact, does not cover this; check that the distortion coefficients are this camera's at this resolution, zoom and focus (calibrate them again; refining them with X needs a board that spans the image)"
             ),
             Self::PriorDisagrees {
                 component,

@@ -282,10 +282,7 @@ fn solution(frames: &[Frame], data: &Data, start: Start, unit: f64, fit: Fitted)
         intrinsics,
     } = fit;
     let vectors = intrinsics::residual_vectors(data, &(state, camera));
-    let residuals: Vec<f64> = vectors
-        .iter()
-        .map(|r| r.map_or(BEHIND_PX, |r| r.norm()))
-        .collect();
+    let residuals = intrinsics::norms_of(&vectors);
     let (rms_px, per_frame_rms_px) = data.rms(&residuals, &keep);
     let residuals_px = data
         .index

@@ -50,6 +50,7 @@ use crate::model::findings::Reading;
 use crate::model::findings::Written;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, axis_angle, rotation_angle_between};
+use crate::model::station::{self, SAME_STATION};
 
 pub use events::{
     Change, HeldOut, Pending, PixelFit, Reason, Report, RobotWorldPair, Step, TrackEstimate,
@@ -896,15 +897,16 @@ impl Tracker {
         }
         // A low-DOF robot solved with its prior: the general solve of the bootstrap cannot
         // determine X (one rotation axis), as the readings' check cannot judge it.
-        if !self.readings_moot() {
-            self.watch.at_least_batch(self.setup, &mut estimate);
+        let scene = (!self.readings_moot())
+            .then(|| self.watch.scene(self.setup))
+            .flatten();
+        if let Some(scene) = scene {
+            self.watch.at_least_batch(self.setup, scene, &mut estimate);
         }
         let mut warnings: Vec<_> = self.watch.widen(&mut estimate).into_iter().collect();
         // A weakly determined direction of X, as `calibrate` judges it (one verdict in every
         // face): the report's covariance (widened as its sizes are) against the batch's bounds.
-        if !self.readings_moot()
-            && let (Some(c), Some(scene)) = (estimate.covariance, self.watch.scene(self.setup))
-        {
+        if let (Some(c), Some(scene)) = (estimate.covariance, scene) {
             let c = nalgebra::Matrix6::from_fn(|i, j| c[i][j]);
             warn_weak(&summarise(c, 0, 0, scene), self.setup, None, &mut warnings);
         }
@@ -923,13 +925,15 @@ impl Tracker {
     }
 }
 
-/// Whether two robot poses are one station (`model::station`): within
-/// [`crate::model::station::SAME_STATION`] radians, and that share of the gripper's distance from
-/// the base (the robot's own unit, whatever the camera's) in translation.
+/// Whether two robot poses are one station ([`station::same_station`]), the translation's
+/// tolerance [`SAME_STATION`] of the gripper's distance from the base (the robot's own unit,
+/// whatever the camera's; a stream has no spread of hand positions yet to measure it by).
 fn same_station(a: &Transform, b: &Transform) -> bool {
-    use crate::model::station::SAME_STATION;
     let reach = a.translation.vector.norm().max(b.translation.vector.norm());
-    (a.translation.vector - b.translation.vector).norm() <= SAME_STATION * reach
-        && rotation_angle_between(&a.rotation, &b.rotation) < SAME_STATION
+    station::same_station(
+        (a.rotation.matrix(), &a.translation.vector),
+        (b.rotation.matrix(), &b.translation.vector),
+        SAME_STATION * reach,
+    )
 }
 

@@ -288,9 +288,7 @@ impl Watch {
         }
         Some(systematic_warning(&found.systematic, &wide))
     }
-}
 
-impl Watch {
     /// A report's uncertainty made at least the batch's on the segment's poses (the bootstrap of
     /// `calibrate`: runs of consecutive stations share one sign, as long as the residuals'
     /// correlation), while the sample holds every robot pose of the segment (up to [`SAMPLE`]).
@@ -300,7 +298,7 @@ impl Watch {
     /// (ethz-asl's simulation, each robot pose once: 1.6° off at 134 poses with a sigma of 0.19°,
     /// where `calibrate` on the same poses gives 1.62°). Later, with the sample thinned, the
     /// drift term watches the estimate.
-    pub(super) fn at_least_batch(&self, setup: Setup, estimate: &mut TrackEstimate) {
+    pub(super) fn at_least_batch(&self, setup: Setup, scene: f64, estimate: &mut TrackEstimate) {
         if self.stride > 1 || self.poses.len() < crate::check::systematic::MIN_POSES {
             return;
         }
@@ -312,7 +310,6 @@ impl Watch {
             return;
         };
         let poses = &self.poses;
-        let scene = self.scene(setup).unwrap_or(0.0);
         let solve = |p: &[PosePair]| all_pairs(p, setup);
         let batch = bootstrap(poses, setup, &estimate.x, &solve, REPLICATES, scene);
         let at_least = |a: f64, b: f64| if b > 0.0 && a > b && a.is_finite() { a / b } else { 1.0 };
@@ -331,9 +328,7 @@ impl Watch {
             estimate.at_point = Some((point, point_sigma(&wide, &estimate.x, point)));
         }
     }
-}
 
-impl Watch {
     /// The scene's size as `calibrate` measures it (the larger of the hand positions' median
     /// spread and the camera's median distance from the target) on the sample, or `None` while
     /// it is empty.

@@ -290,8 +290,13 @@ pub(super) fn refine(
 
 /// |π(p) − u| per detection with the camera of `s`, pixels.
 pub(super) fn norms(data: &Data, full: &Full) -> Vec<f64> {
-    residual_vectors(data, full)
-        .into_iter()
+    norms_of(&residual_vectors(data, full))
+}
+
+/// The sizes of [`residual_vectors`], pixels (a point behind the camera: [`BEHIND_PX`]).
+pub(super) fn norms_of(vectors: &[Option<Vector2<f64>>]) -> Vec<f64> {
+    vectors
+        .iter()
         .map(|r| r.map_or(BEHIND_PX, |r| r.norm()))
         .collect()
 }
