@@ -137,7 +137,7 @@ pub fn run(args: Args) -> Result<()> {
         calibrator.push(p)?;
         reports.extend(calibrator.step().and_then(|s| s.report.clone()));
     }
-    reports.extend(calibrator.finish());
+    reports.extend(calibrator.finish()?);
     let per_pose = started.elapsed().as_secs_f64() / sim.poses.len() as f64;
     for r in &reports {
         let err = errors_against_truth(&r.estimate.x, &truth);

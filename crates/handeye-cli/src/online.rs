@@ -157,7 +157,8 @@ const SHOWN_BAD_LINES: usize = 100;
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     if args.intrinsics.is_some() {
-        return pixels::run(&args);
+        // The flags that do not apply on the pixels are refused before anything is read.
+        pixels::refuse_flags(&args)?;
     }
     let truth = args.truth.as_ref().map(|p| read_truth(p)).transpose()?;
     let setup = args.input.setup();
@@ -225,6 +226,9 @@ pub fn run(args: Args) -> Result<()> {
         if !(value.is_finite() && value > 0.0) {
             bail!("{name} must be a positive number, found {value}");
         }
+    }
+    if let Some(intrinsics) = &args.intrinsics {
+        return pixels::run(&args, config, intrinsics);
     }
     let accumulate = config.estimator == Estimator::Accumulate;
     let face = Face::chosen(args.output);
@@ -363,10 +367,13 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(found) = calibrator.misread() {
         warn_misread(found);
     }
-    if let Some(e) = calibrator.refusal() {
-        out.flush()?;
-        return Err(e.into());
-    }
+    let finished = match finished {
+        Ok(report) => report,
+        Err(e) => {
+            out.flush()?;
+            return Err(e.into());
+        }
+    };
     if let Some(report) = finished {
         print_report(&report, setup, time_offset, face, &out, calibrator.unit())?;
         if let Some(t) = &mut trace {
@@ -381,7 +388,7 @@ pub fn run(args: Args) -> Result<()> {
     out.flush()?;
     // The estimate to use: the last report since the last change, from readings not found
     // misread since.
-    let last = calibrator.tracker().and_then(|t| t.last_report());
+    let last = calibrator.last_report();
     let summary = summary(&calibrator, last.as_ref(), messages.bad_lines);
     crate::tell!("{summary}");
     if let (Some(path), Some(mut trace)) = (&args.report, trace) {

@@ -1046,11 +1046,8 @@ fn parse_setup(setup: &str) -> PyResult<Setup> {
 struct PyOnline {
     inner: OnlineCalibrator,
     /// What the calibrator's readings check of the first poses found (the paper's estimator),
-    /// until Python takes it as a warning.
+    /// or the cautions of the solve on the pixels, until Python takes it as a warning.
     found: Option<String>,
-    /// With `intrinsics`: the calibrator on the pixels of records with detections, which takes
-    /// the place of `inner`.
-    pixels: Option<handeye::OnlinePixels>,
 }
 
 #[pymethods]
@@ -1124,16 +1121,18 @@ impl PyOnline {
             written: handeye::Written::NAMED,
         };
         let given = priors(prior)?;
-        let pixels = match intrinsics {
-            Some(path) => Some(online_pixels(&path, &config, &given)?),
-            None => None,
+        let inner = match intrinsics {
+            Some(path) => {
+                let camera = handeye::io::read_intrinsics(&path).map_err(value_error)?;
+                OnlineCalibrator::on_pixels(camera, config)
+            }
+            None => OnlineCalibrator::new(config),
         };
         Ok(Self {
-            inner: OnlineCalibrator::new(config)
+            inner: inner
                 .and_then(|c| c.with_priors(&given))
                 .map_err(value_error)?,
             found: None,
-            pixels,
         })
     }
 
@@ -1147,7 +1146,7 @@ impl PyOnline {
         camera_from_target: PyReadonlyArray2<'py, f64>,
         joints: Option<Vec<f64>>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        if self.pixels.is_some() {
+        if self.inner.on_the_pixels() {
             return Err(value_error(
                 "this calibrator is on the pixels (intrinsics given): push records with detections (push_detections, push_record)",
             ));
@@ -1188,12 +1187,12 @@ impl PyOnline {
         py: Python<'py>,
         text: &str,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let Some(pixels) = self.pixels.as_mut() else {
+        if !self.inner.on_the_pixels() {
             return Err(value_error(
                 "records with detections are calibrated on the pixels: give OnlineCalibrator(intrinsics=FILE)",
             ));
-        };
-        let number = pixels.frames() + 1;
+        }
+        let number = self.inner.poses() + 1;
         let source = format!("record {number}");
         let frame = match handeye::io::frame_records(text.as_bytes(), &source).next() {
             Some(Ok((_, frame))) => frame,
@@ -1204,7 +1203,10 @@ impl PyOnline {
             None => return Err(value_error(format!("{source}: an empty record"))),
         };
         let setup = self.inner.config().setup;
-        let report = py.allow_threads(|| pixels.push(frame, source));
+        let inner = &mut self.inner;
+        let report = py
+            .allow_threads(|| inner.push_frame(frame, source))
+            .map_err(value_error)?;
         report
             .map(|r| json_dict(py, &r.json(setup, None)))
             .into_iter()
@@ -1220,23 +1222,23 @@ impl PyOnline {
     /// yet runs on a short stream (see `take_warning`).
     fn finish(&mut self, py: Python<'_>) -> PyResult<Option<String>> {
         let setup = self.inner.config().setup;
-        if let Some(pixels) = self.pixels.as_mut() {
-            let report = py.allow_threads(|| pixels.finish()).map_err(value_error)?;
-            // The cautions of the solve, as the command line tells them.
-            let words: Vec<String> = pixels.warnings().iter().map(|w| w.to_string()).collect();
-            if !words.is_empty() {
-                self.found = Some(words.join("; "));
-            }
-            return Ok(Some(report.json(setup, None).to_string()));
-        }
-        let setup = self.inner.config().setup;
-        let report = self.inner.finish();
+        let inner = &mut self.inner;
+        let report = py.allow_threads(|| inner.finish());
         if let Some(found) = self.inner.misread() {
             self.found = Some(found.to_string());
         }
-        // A prior in another length unit than the poses, told only now on a short stream.
-        if let Some(e) = self.inner.refusal() {
-            return Err(value_error(e));
+        // A prior in another length unit than the poses, told only now on a short stream; on
+        // the pixels, the calibration's refusal.
+        let report = report.map_err(value_error)?;
+        // The cautions of the solve on the pixels, as the command line tells them.
+        let words: Vec<String> = self
+            .inner
+            .warnings()
+            .iter()
+            .map(|w| w.to_string())
+            .collect();
+        if !words.is_empty() {
+            self.found = Some(words.join("; "));
         }
         Ok(report.map(|r| r.json(setup, None).to_string()))
     }
@@ -1246,37 +1248,18 @@ impl PyOnline {
     /// (`pending()` says why). A report from before a change is not the current X.
     fn last_report(&self) -> Option<String> {
         let setup = self.inner.config().setup;
-        if let Some(pixels) = &self.pixels {
-            return pixels
-                .last_report()
-                .map(|r| r.json(setup, None).to_string());
-        }
         self.inner
-            .tracker()?
             .last_report()
             .map(|r| r.json(setup, None).to_string())
     }
 
     /// Why the accumulating estimator has nothing to report now, or None.
     fn pending(&self) -> Option<String> {
-        if let Some(pixels) = &self.pixels {
-            return match (pixels.last_report(), pixels.refused()) {
-                (_, Some(why)) => Some(why.to_string()),
-                (None, None) => Some(format!(
-                    "{} record(s) with detections so far: an estimate is solved at 16, 32, 64, … records and at finish()",
-                    pixels.frames()
-                )),
-                (Some(_), None) => None,
-            };
-        }
         self.inner.pending().map(|p| p.to_string())
     }
 
-    /// Poses pushed so far.
+    /// Poses pushed so far (records, on the pixels).
     fn poses(&self) -> usize {
-        if let Some(pixels) = &self.pixels {
-            return pixels.frames();
-        }
         self.inner.poses()
     }
 
@@ -1287,7 +1270,7 @@ impl PyOnline {
 
     /// The whole state as JSON (restore with `from_state`).
     fn state(&self) -> PyResult<String> {
-        if self.pixels.is_some() {
+        if self.inner.on_the_pixels() {
             return Err(value_error(
                 "state() is not offered on the pixels (yet): keep the records and push them again",
             ));
@@ -1303,44 +1286,8 @@ impl PyOnline {
             value_error(format!("not a saved state: {}", shortened(&e.to_string())))
         })?;
         inner.config().validate().map_err(value_error)?;
-        Ok(Self {
-            inner,
-            found: None,
-            pixels: None,
-        })
+        Ok(Self { inner, found: None })
     }
-}
-
-/// The calibrator on the pixels of `OnlineCalibrator(intrinsics=...)`; the settings that do not
-/// apply there refused rather than ignored.
-fn online_pixels(
-    path: &std::path::Path,
-    config: &OnlineConfig,
-    priors: &[handeye::Prior],
-) -> PyResult<handeye::OnlinePixels> {
-    let given = [
-        ("estimator=\"paper\"", config.estimator == Estimator::Paper),
-        ("optimal", config.optimal),
-        (
-            "error_source=\"truth\"",
-            config.error_source == ErrorSource::Truth,
-        ),
-        ("truth", config.truth.is_some()),
-    ];
-    if let Some((name, _)) = given.iter().find(|(_, given)| *given) {
-        return Err(value_error(format!(
-            "{name} is not offered on the pixels (intrinsics given) (yet)"
-        )));
-    }
-    let camera = handeye::io::read_intrinsics(path).map_err(value_error)?;
-    let options = handeye::Options {
-        method: handeye::Method::Reprojection,
-        pairing: handeye::Pairing::All,
-        point: config.tracking.point,
-        priors: priors.to_vec(),
-        ..Default::default()
-    };
-    handeye::OnlinePixels::new(camera, config.setup, options).map_err(value_error)
 }
 
 /// Characters of a message kept by [`shortened`].

@@ -23,8 +23,9 @@
 //! - Batch: [`calibrate()`] (readings, outliers, uncertainty, held-out check: the
 //!   report every face prints) on top of [`solve()`] with a [`Method`] over
 //!   [`motion_pairs`].
-//! - Online: [`OnlineCalibrator`] (the paper's selection, and with
-//!   [`Estimator::Accumulate`] the `track::Tracker`).
+//! - Online: [`OnlineCalibrator`], the one online calibrator every face drives (the paper's
+//!   selection, with [`Estimator::Accumulate`] the `track::Tracker`, and on the pixels
+//!   ([`OnlineCalibrator::on_pixels`]) the batch calibration on a doubling schedule).
 //! - Robot-world (X and the target pose together, A X = Z B):
 //!   [`calibrate_robot_world`] on top of `solve::shah`, `solve::li`,
 //!   `solve::refine_robot_world`; online, the sums of
@@ -46,8 +47,9 @@
 //! | 2 | `solve/` | [`Method`] and [`solve()`], every solver, the motion sources, the residuals, the accumulated all-pairs sums |
 //! | 3 | `check/` | readings, outliers, the bootstrap uncertainty, held-out poses, the motions' quality |
 //! | 4 | `track/` | the accumulating estimator on a stream: gating, change detection, reports |
-//! | 5 | `calibrate/`, `online/` | the jobs: batch, robot-world and advice; the paper's online calibrator, its selection and experiments |
-//! | 6 | [`io`] | files, two streams and their clock, ROS 2 recordings, truth files |
+//! | 5 | `calibrate/` | the batch jobs: poses and pixels, robot-world, verify and advice |
+//! | 6 | `online/` | the online calibrator both faces drive: the paper's selection, the accumulating estimator, the pixels on a doubling schedule; the experiments |
+//! | 7 | [`io`] | files, two streams and their clock, ROS 2 recordings, truth files |
 //!
 //! # The paper in the code
 //! Zhang, Shi, Liu, "Adaptive motion selection for online hand–eye calibration":
@@ -93,7 +95,7 @@ layers! {
     calibrate;
     /// Rank 3: the checks that judge an X.
     check;
-    /// Rank 5: the paper's online calibrator, its selection and experiments.
+    /// Rank 6: the online calibrator (poses or pixels), the paper's selection and experiments.
     online;
     /// Rank 2: the solvers.
     solve;
@@ -159,7 +161,7 @@ pub use calibrate::advice::{Advice, AdviseOptions, Pivot, advise};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
 pub use calibrate::pixels::{
-    CornerResidual, FrameRms, OnlinePixels, ReprojectionSummary, calibrate_on_pixels,
+    CornerResidual, FrameRms, ReprojectionSummary, calibrate_on_pixels,
     calibrate_robot_world_on_pixels, pixel_camera_poses, verify_on_pixels,
 };
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};

@@ -167,7 +167,7 @@ fn the_reported_uncertainty_holds_and_is_not_wildly_conservative() {
             c.push(p).unwrap();
             reports.extend(c.step().and_then(|s| s.report.clone()));
         }
-        reports.extend(c.finish());
+        reports.extend(c.finish().unwrap());
         assert!(!reports.is_empty(), "series {s}: no report");
         for r in reports {
             let e = errors_against_truth(&r.estimate.x, &truth);

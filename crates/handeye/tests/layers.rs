@@ -15,8 +15,8 @@ const LAYERS: &[(&str, usize)] = &[
     ("check", 3),
     ("track", 4),
     ("calibrate", 5),
-    ("online", 5),
-    ("io", 6),
+    ("online", 6),
+    ("io", 7),
 ];
 
 fn rank(layer: &str) -> Option<usize> {

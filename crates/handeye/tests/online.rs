@@ -396,7 +396,7 @@ fn the_paper_estimator_checks_the_readings_of_its_first_poses() {
             calibrator.push(pose).unwrap();
             found.extend(calibrator.misread().map(|f| (k + 1, f)));
         }
-        calibrator.finish();
+        calibrator.finish().unwrap();
         found.extend(calibrator.misread().map(|f| (0, f)));
         found
     };

@@ -2,9 +2,10 @@
 //! records with detections pushed one at a time give, at the end, the batch's calibration on the
 //! pixels of the same records, and its refusals.
 
+use handeye::calibrate::pixels::OnlinePixels;
 use handeye::model::camera::{Detections, Frame};
 use handeye::sim::pixels::{PixelSim, PixelSimConfig, simulate_pixels};
-use handeye::{OnlinePixels, Options, Setup, Transform};
+use handeye::{Options, Setup, Transform};
 use nalgebra::{Translation3, UnitQuaternion, Vector3};
 
 fn testdata(name: &str) -> std::path::PathBuf {

@@ -205,7 +205,8 @@ fn online(poses: &[PosePair], setup: Setup, truth: &Transform) -> Outcome {
     }
     let r = calibrator
         .finish()
-        .or_else(|| calibrator.tracker().and_then(|t| t.last_report()))
+        .unwrap()
+        .or_else(|| calibrator.last_report())
         .expect("an online estimate");
     let e = &r.estimate;
     let rot = errors_against_truth(&e.x, truth).rot_deg;

@@ -340,7 +340,8 @@ fn online(
     }
     calibrator
         .finish()
-        .or_else(|| calibrator.tracker().and_then(|t| t.last_report()))
+        .unwrap()
+        .or_else(|| calibrator.last_report())
 }
 
 fn online_flagged(r: &handeye::TrackReport) -> bool {
@@ -524,7 +525,7 @@ fn the_online_estimator_does_not_cry_systematic_on_mistakes_and_outliers() {
             calibrator.push(pose).unwrap();
             reports.extend(calibrator.step().and_then(|s| s.report.clone()));
         }
-        reports.extend(calibrator.finish());
+        reports.extend(calibrator.finish().unwrap());
         streams += 1;
         for r in &reports {
             assert!(!online_flagged(r), "{file}: report {} flagged", r.number);
@@ -574,7 +575,7 @@ fn the_end_of_stream_test_runs_when_the_last_pose_was_reported() {
         );
         let tested = |r: &handeye::TrackReport| r.systematic.as_ref().map_or(0, |s| s.poses);
         // The last word: the end's report, or the last pose's when its test was on every pose.
-        let end = calibrator.finish();
+        let end = calibrator.finish().unwrap();
         let word = end.as_ref().unwrap_or(&last);
         println!(
             "{file}: last pose's report tested {} of {} poses, the end's {:?} (p {:.1e})",
@@ -585,7 +586,7 @@ fn the_end_of_stream_test_runs_when_the_last_pose_was_reported() {
         );
         assert_eq!(tested(word), word.estimate.poses, "{file}");
         assert_eq!(end.is_some(), tested(&last) < last.estimate.poses, "{file}");
-        assert!(calibrator.finish().is_none(), "{file}: one end");
+        assert!(calibrator.finish().unwrap().is_none(), "{file}: one end");
         ends += usize::from(end.is_some());
     }
     assert!(

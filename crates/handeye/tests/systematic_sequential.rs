@@ -32,7 +32,7 @@ fn reports(poses: usize, seed: u64) -> Vec<TrackReport> {
         calibrator.push(pose).unwrap();
         out.extend(calibrator.step().and_then(|s| s.report.clone()));
     }
-    out.extend(calibrator.finish());
+    out.extend(calibrator.finish().unwrap());
     out
 }
 

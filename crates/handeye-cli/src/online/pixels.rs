@@ -1,24 +1,23 @@
 //! `handeye online --intrinsics FILE`: the online calibrator on a stream of records with
-//! `detections` (SPEC sec. 9), calibrated on their pixels ([`handeye::OnlinePixels`]): each record
-//! read by the library's one reader of such records, a bad one costing its line.
+//! `detections` (SPEC sec. 9), calibrated on their pixels by the library's online calibrator
+//! ([`handeye::OnlineCalibrator::on_pixels`]): each record read by the library's one reader of
+//! such records, a bad one costing its line.
 
 use anyhow::{Result, bail};
-use handeye::{Error, Estimator, OnlinePixels, Unit};
+use std::path::Path;
+
+use handeye::{Error, Estimator, OnlineCalibrator, OnlineConfig, Unit};
 
 use super::{Args, Thinned, bad_line, print_report, publish_report};
 use crate::faces::{self, Face};
 use crate::output::LineOut;
 
-/// Runs `online --intrinsics`.
-pub(super) fn run(args: &Args) -> Result<()> {
-    refuse_flags(args)?;
-    let Some(intrinsics) = &args.intrinsics else {
-        bail!("--intrinsics FILE is needed on the pixels");
-    };
+/// Runs `online --intrinsics`: the library's online calibrator on the pixels, printed.
+pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Result<()> {
     let Some(path) = &args.input.input else {
         bail!("online --intrinsics reads a JSON Lines file with `detections` (or - for stdin)");
     };
-    let setup = args.input.setup();
+    let setup = config.setup;
     let face = Face::chosen(args.output);
     let publish_x = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
     // The frame names and the name are checked before the input is read.
@@ -29,13 +28,7 @@ pub(super) fn run(args: &Args) -> Result<()> {
         &args.name,
     )?;
     let camera = handeye::io::read_intrinsics(intrinsics)?;
-    let options = handeye::Options {
-        method: handeye::Method::Reprojection,
-        pairing: handeye::Pairing::All,
-        point: args.point,
-        ..handeye::Options::default()
-    };
-    let mut calibrator = OnlinePixels::new(camera, setup, options)?;
+    let mut calibrator = OnlineCalibrator::on_pixels(camera, config)?;
     let out = LineOut::stdout();
     let mut messages = Thinned {
         bad_lines: 0,
@@ -43,8 +36,6 @@ pub(super) fn run(args: &Args) -> Result<()> {
         out: out.clone(),
     };
     let source = path.display().to_string();
-    // The robot translation of the first record, for the length unit.
-    let mut first_robot: Option<handeye::Transform> = None;
     let mut read = |input: &mut dyn std::io::BufRead| -> Result<()> {
         for record in handeye::io::frame_records(input, &source) {
             let (line, frame) = match record {
@@ -54,16 +45,8 @@ pub(super) fn run(args: &Args) -> Result<()> {
                     continue;
                 }
             };
-            first_robot.get_or_insert(frame.base_from_gripper);
-            if let Some(report) = calibrator.push(frame, format!("{source}:{line}")) {
-                print_report(
-                    &report,
-                    setup,
-                    None,
-                    face,
-                    &out,
-                    unit_of(args, first_robot, &report),
-                )?;
+            if let Some(report) = calibrator.push_frame(frame, format!("{source}:{line}"))? {
+                print_report(&report, setup, None, face, &out, calibrator.unit())?;
                 out.flush_quietly();
             }
         }
@@ -78,7 +61,7 @@ pub(super) fn run(args: &Args) -> Result<()> {
         })?;
         read(&mut std::io::BufReader::new(file))?;
     }
-    if calibrator.frames() == 0 {
+    if calibrator.poses() == 0 {
         out.flush()?;
         return Err(Error::Parse {
             file: source,
@@ -99,17 +82,18 @@ pub(super) fn run(args: &Args) -> Result<()> {
         n => format!(", {n} bad line(s) skipped"),
     };
     let report = match calibrator.finish() {
-        Ok(report) => report,
+        Ok(Some(report)) => report,
+        Ok(None) => bail!("no estimate on the pixels"),
         Err(e) => {
             out.flush()?;
             crate::tell!(
                 "no estimate from {} record(s){bad}: the calibration on the pixels refused them",
-                calibrator.frames()
+                calibrator.poses()
             );
             return Err(e.into());
         }
     };
-    let unit = unit_of(args, first_robot, &report);
+    let unit = calibrator.unit();
     print_report(&report, setup, None, face, &out, unit)?;
     out.flush()?;
     for w in calibrator.warnings() {
@@ -133,21 +117,9 @@ pub(super) fn run(args: &Args) -> Result<()> {
     Ok(())
 }
 
-/// The length unit: `--unit`, or told by the first robot pose and the target's place.
-fn unit_of(args: &Args, robot: Option<handeye::Transform>, report: &handeye::TrackReport) -> Unit {
-    if matches!(args.unit, Unit::Metre | Unit::Millimetre) {
-        return args.unit;
-    }
-    let pose = handeye::PosePair {
-        base_from_gripper: robot.unwrap_or_else(handeye::Transform::identity),
-        camera_from_target: report.estimate.target,
-    };
-    Unit::infer(&pose).unwrap_or(Unit::AsGiven)
-}
-
 /// The flags that do not apply on the pixels, refused before the input is read (exit 2) rather
 /// than ignored.
-fn refuse_flags(args: &Args) -> Result<()> {
+pub(super) fn refuse_flags(args: &Args) -> Result<()> {
     let given = [
         ("--estimator paper", args.estimator == Estimator::Paper),
         ("--prior", !args.prior.is_empty()),

@@ -131,7 +131,7 @@ pub fn calibrate_on_pixels(
 /// (the pixel solve has no low-DOF form: X's free component would come from the data's noise,
 /// not from the prior the user gave) and `reject_outliers` (mis-detected corners are left out,
 /// and listed, by the solve itself).
-fn not_on_pixels(reject_outliers: bool, priors: &[crate::model::prior::Prior]) -> Result<()> {
+pub(crate) fn not_on_pixels(reject_outliers: bool, priors: &[crate::model::prior::Prior]) -> Result<()> {
     if reject_outliers {
         return Err(Error::InvalidParameter {
             name: "reject_outliers",

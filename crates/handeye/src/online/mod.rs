@@ -9,6 +9,12 @@
 //! [`OnlineCalibrator::step`], [`OnlineCalibrator::finish`]). The one length threshold, `d_max`,
 //! follows the input's unit, inferred from the first pose unless given ([`Unit`]). The state is
 //! constant in size, and serialisable (serde) so that a run can be saved and resumed.
+//!
+//! On the pixels ([`OnlineCalibrator::on_pixels`], `handeye online --intrinsics`), the same
+//! calibrator takes frames with detections ([`OnlineCalibrator::push_frame`]) and reports the
+//! batch calibration on their pixels on a doubling schedule, in the same report type; its
+//! `step`, `finish`, `last_report`, `pending` and `unit` answer as on poses, so that the command
+//! line and Python print one calibrator's results. This layer sits above `calibrate/` for that.
 
 pub mod experiment;
 pub mod select;
@@ -18,8 +24,11 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use crate::calibrate::batch::Options;
+use crate::calibrate::pixels::OnlinePixels;
 use crate::check::quality::{errors_against_truth, residual_rms};
 use crate::check::stream::{StreamReading, StreamReadings};
+use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
 use crate::model::motion::{MotionPair, PosePair, Setup};
 use crate::model::findings::Written;
@@ -343,6 +352,15 @@ pub struct OnlineCalibrator {
     readings: Option<StreamReadings>,
     #[serde(default)]
     misread: Option<StreamReading>,
+    /// On the pixels ([`OnlineCalibrator::on_pixels`]): the batch calibration on the pixels of
+    /// the frames pushed, on a doubling schedule, in place of the paper's selection and the
+    /// tracker. Not part of the saved state ([`OnlineCalibrator::on_the_pixels`]).
+    #[serde(skip)]
+    pixels: Option<OnlinePixels>,
+    /// The robot pose of the first frame on the pixels: with a report's target pose, the length
+    /// unit.
+    #[serde(skip)]
+    first_robot: Option<Transform>,
 }
 
 impl OnlineCalibrator {
@@ -368,7 +386,120 @@ impl OnlineCalibrator {
             readings: (config.estimator != Estimator::Accumulate)
                 .then(|| StreamReadings::new(config.setup)),
             misread: None,
+            pixels: None,
+            first_robot: None,
         })
+    }
+
+    /// A calibrator on the pixels of `camera`: each frame (a robot pose and the target's
+    /// detections, [`OnlineCalibrator::push_frame`]) is kept, and X solved by the batch
+    /// calibration on the pixels ([`calibrate_on_pixels`](crate::calibrate_on_pixels), with its
+    /// checks) at 16, 32, 64, … frames and at the end, in the accumulating estimator's report
+    /// with the fit in `estimate.reprojection` (`handeye online --intrinsics`). `config` gives
+    /// the setup, `tracking.point` and the unit; the paper's estimator, the optimal method and
+    /// errors against the truth are not offered on the pixels (an error names which).
+    ///
+    /// Errors: [`Error::InvalidParameter`] for those, for unusable intrinsics, and for settings
+    /// out of range.
+    pub fn on_pixels(camera: Intrinsics, config: OnlineConfig) -> Result<Self> {
+        let given = [
+            ("the paper's estimator", config.estimator == Estimator::Paper),
+            ("the optimal method", config.optimal),
+            (
+                "errors against the truth",
+                config.error_source == ErrorSource::Truth || config.truth.is_some(),
+            ),
+        ];
+        if let Some((what, _)) = given.iter().find(|(_, given)| *given) {
+            return Err(Error::InvalidParameter {
+                name: "intrinsics",
+                message: format!("{what} is not offered on the pixels (yet)"),
+            });
+        }
+        let options = Options {
+            method: crate::solve::Method::Reprojection,
+            pairing: crate::model::motion::Pairing::All,
+            point: config.tracking.point,
+            ..Options::default()
+        };
+        let pixels = OnlinePixels::new(camera, config.setup, options)?;
+        // No length threshold applies on the pixels: the unit is the poses' (metres or
+        // millimetres when given, else told by the first report).
+        let unit = match config.unit {
+            Unit::AsGiven => Unit::Auto,
+            unit => unit,
+        };
+        Ok(Self {
+            tracker: None,
+            readings: None,
+            pixels: Some(pixels),
+            unit,
+            ..Self::new(OnlineConfig {
+                estimator: Estimator::Accumulate,
+                ..config
+            })?
+        })
+    }
+
+    /// Whether this calibrator is on the pixels ([`OnlineCalibrator::on_pixels`]), whose state
+    /// (the frames) is not saved with serde.
+    pub fn on_the_pixels(&self) -> bool {
+        self.pixels.is_some()
+    }
+
+    /// Pushes one frame on the pixels, named `name` (`file:line`, for the report's figures and
+    /// outlier lists); returns the estimate when one is solved at this frame (16, 32, 64, …
+    /// frames), also as [`OnlineCalibrator::step`]'s report.
+    ///
+    /// Errors: [`Error::InvalidParameter`] on a calibrator of pose pairs.
+    pub fn push_frame(&mut self, frame: Frame, name: String) -> Result<Option<Report>> {
+        let Some(pixels) = self.pixels.as_mut() else {
+            return Err(Error::InvalidParameter {
+                name: "intrinsics",
+                message: "frames with detections are calibrated on the pixels: give the camera's intrinsics (`OnlineCalibrator::on_pixels`)".into(),
+            });
+        };
+        self.first_robot.get_or_insert(frame.base_from_gripper);
+        let report = pixels.push(frame, name);
+        self.poses += 1;
+        if let Some(r) = &report {
+            self.unit_from(r);
+        }
+        self.step = Step {
+            pose: self.poses,
+            report: report.clone(),
+            ..Step::default()
+        };
+        Ok(report)
+    }
+
+    /// On the pixels, while the unit is not given: the one the first robot pose and a report's
+    /// target pose tell.
+    fn unit_from(&mut self, report: &Report) {
+        if self.unit != Unit::Auto {
+            return;
+        }
+        let pose = PosePair {
+            base_from_gripper: self.first_robot.unwrap_or_else(Transform::identity),
+            camera_from_target: report.estimate.target,
+        };
+        self.unit = Unit::infer(&pose).unwrap_or(Unit::Auto);
+    }
+
+    /// The cautions of the last estimate on the pixels (its verdict `questionable` when any);
+    /// on pose pairs the reports carry their own (`Report::warnings`).
+    pub fn warnings(&self) -> &[crate::model::warning::Warning] {
+        self.pixels.as_ref().map_or(&[], |p| p.warnings())
+    }
+
+    /// The estimate to use now: the last report since the last change of X, from readings not
+    /// found misread since (on the pixels: the last estimate solved); `None` with the paper's
+    /// estimator.
+    pub fn last_report(&self) -> Option<Report> {
+        match &self.pixels {
+            Some(p) => p.last_report(),
+            None => self.tracker.as_ref()?.last_report(),
+        }
     }
 
     /// The length unit in force: the configured one, or the one inferred from the poses (`Auto`
@@ -473,6 +604,12 @@ impl OnlineCalibrator {
     }
 
     fn push_joints(&mut self, pose: &PosePair, joints: Option<&[f64]>) -> Result<Vec<Event>> {
+        if self.pixels.is_some() {
+            return Err(Error::InvalidParameter {
+                name: "intrinsics",
+                message: "this calibrator is on the pixels (the camera's intrinsics given): push frames with detections".into(),
+            });
+        }
         check_finite(pose)?;
         if self.poses == 0 || self.unit == Unit::Auto {
             self.fix_unit(pose);
@@ -554,13 +691,32 @@ impl OnlineCalibrator {
     }
 
     /// The accumulating estimator's report at the end of the stream (the current estimate, if it
-    /// is determined and was not just reported). With the paper's estimator, the readings check
-    /// runs now on a stream shorter than its sample ([`OnlineCalibrator::misread`]).
-    pub fn finish(&mut self) -> Option<Report> {
+    /// is determined and was not just reported); on the pixels, the calibration on the pixels of
+    /// every frame pushed (or of the frames kept, beyond 256), reported with `reason` `end`. With
+    /// the paper's estimator, the readings check runs now on a stream shorter than its sample
+    /// ([`OnlineCalibrator::misread`]) and there is no report.
+    ///
+    /// Errors: the priors refused (a prior in another length unit than the poses, told only now
+    /// on a short stream); on the pixels, the calibration's refusal (too few frames, degenerate
+    /// motions, robot poses that fit the pixels far better inverted, a fit far above detection
+    /// noise).
+    pub fn finish(&mut self) -> Result<Option<Report>> {
         if let Some(found) = self.readings.as_mut().and_then(StreamReadings::finish) {
             self.misread = Some(found);
         }
-        self.tracker.as_mut()?.finish()
+        if let Some(pixels) = self.pixels.as_mut() {
+            let report = pixels.finish()?;
+            self.unit_from(&report);
+            return Ok(Some(report));
+        }
+        let Some(tracker) = self.tracker.as_mut() else {
+            return Ok(None);
+        };
+        let report = tracker.finish();
+        match tracker.refusal() {
+            Some(e) => Err(e),
+            None => Ok(report),
+        }
     }
 
     /// What the readings check of the first poses found, once (then `None`): with the paper's
@@ -580,6 +736,9 @@ impl OnlineCalibrator {
         if priors.is_empty() {
             return Ok(self);
         }
+        if self.pixels.is_some() {
+            crate::calibrate::pixels::not_on_pixels(false, priors)?;
+        }
         let Some(tracker) = self.tracker.take() else {
             return Err(Error::InvalidParameter {
                 name: "prior",
@@ -590,20 +749,26 @@ impl OnlineCalibrator {
         Ok(self)
     }
 
-    /// Why the priors were refused (a prior in another length unit than the poses, told on the
-    /// first poses or at the end of a short stream): `push` returns it as its error.
-    pub fn refusal(&self) -> Option<Error> {
-        self.tracker.as_ref()?.refusal()
-    }
-
     /// The accumulating estimator's current estimate, determined or not; `None` before it has
     /// one or with the paper's estimator.
     pub fn accumulated(&self) -> Option<TrackEstimate> {
         self.tracker.as_ref()?.estimate()
     }
 
-    /// Why the accumulating estimator has nothing to report now; `None` when it has.
+    /// Why the accumulating estimator has nothing to report now; `None` when it has. On the
+    /// pixels: why the last solve made no estimate, or that none was due yet.
     pub fn pending(&self) -> Option<Pending> {
+        if let Some(pixels) = &self.pixels {
+            return match (pixels.last_report(), pixels.refused()) {
+                (_, Some(why)) => Some(Pending::RefusedOnPixels {
+                    reason: why.to_string(),
+                }),
+                (None, None) => Some(Pending::FewFrames {
+                    frames: pixels.frames(),
+                }),
+                (Some(_), None) => None,
+            };
+        }
         self.tracker.as_ref()?.pending()
     }
 

@@ -224,7 +224,7 @@ pub struct Step {
 }
 
 /// Why there is no estimate to report.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "why")]
 pub enum Pending {
     /// Fewer than three accepted poses since the start or the last change.
@@ -295,6 +295,17 @@ pub enum Pending {
         /// The bound on the translation, input units.
         bound_translation: f64,
     },
+    /// On the pixels: no estimate is due yet (one is solved at 16, 32, 64, … frames and at the
+    /// end).
+    FewFrames {
+        /// Frames pushed.
+        frames: usize,
+    },
+    /// On the pixels: the last solve made no estimate.
+    RefusedOnPixels {
+        /// Why, in the calibration's words.
+        reason: String,
+    },
 }
 
 /// Where the camera is in a setup: "fixed (eye-to-hand)".
@@ -325,6 +336,11 @@ impl fmt::Display for Pending {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::FewPoses { poses } => write!(f, "only {poses} usable pose(s) so far"),
+            Self::FewFrames { frames } => write!(
+                f,
+                "{frames} record(s) with detections so far: an estimate is solved at 16, 32, 64, … records and at the end"
+            ),
+            Self::RefusedOnPixels { reason } => f.write_str(reason),
             Self::NoRotation { largest_deg } => write!(
                 f,
                 "no rotation above 2° yet (the largest is {largest_deg:.2}°): turn the gripper"

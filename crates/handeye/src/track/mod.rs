@@ -555,7 +555,10 @@ impl Tracker {
         let e = self.estimate()?;
         let weak = self.pending();
         // Only an estimate that is merely not determined enough may be reported as weak.
-        if weak.is_some_and(|w| !matches!(w, Pending::Undetermined { .. })) {
+        if weak
+            .as_ref()
+            .is_some_and(|w| !matches!(w, Pending::Undetermined { .. }))
+        {
             return None;
         }
         if weak.is_some() {

@@ -27,7 +27,7 @@ pub(crate) const MAX_ONLINE_FRAMES: usize = 256;
 /// translations over `scale` (the RMS spread of the translations of the frames held when the
 /// buffer first filled): unit-free, deterministic. Each frame's nearest neighbour is kept up to
 /// date, so a record costs O(n) distances, not O(n²).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 struct Thinning {
     scale: f64,
     /// For each frame held: the distance to its nearest other frame, and that frame's index.
@@ -131,7 +131,7 @@ impl Thinning {
 /// whose robot poses are nearest each other is dropped per record (the older), so that memory and
 /// each solve's cost stay bounded on an endless stream and the views kept stay spread. On up to 256
 /// records the end's X is the batch's on the same records; beyond, the batch's on the frames kept.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct OnlinePixels {
     camera: Intrinsics,
     setup: Setup,
