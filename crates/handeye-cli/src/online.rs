@@ -351,13 +351,8 @@ pub fn run(args: Args) -> Result<()> {
                     _ => {}
                 }
             }
-            // Said at 200, 400, 800, … poses without a calibration: a stuck stream is told
-            // so at growing intervals, not every 200 poses.
-            let since = calibrator.poses_since_calibration();
-            if since % QUIET_POSES == 0
-                && (since / QUIET_POSES).is_power_of_two()
-                && let Some(why) = calibrator.quiet(QUIET_POSES)
-            {
+            // Said at 200, 400, 800, … poses without a calibration.
+            if let Some(why) = calibrator.stuck() {
                 out.flush_quietly();
                 crate::tell!("{why}");
             }
@@ -571,10 +566,6 @@ fn event_text(e: &Event, unit: Unit) -> String {
     )
 }
 
-/// Poses without a calibration after which the summary says why (and the paper's estimator says
-/// it during the run too, at this many poses and at each doubling of it).
-const QUIET_POSES: usize = 200;
-
 /// Warns that the poses fit far better read another way (an inverted pose, `w, x, y, z`
 /// quaternions, millimetres on one side), have sizes the setup makes unlikely, or turn about one
 /// axis.
@@ -759,13 +750,8 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
         let last = calibrator
             .last_x()
             .map_or("none".to_string(), |x| describe(&x, calibrator.unit()));
-        let quiet_after = if calibrator.calibrations() == 0 {
-            1
-        } else {
-            QUIET_POSES
-        };
         let quiet = calibrator
-            .quiet(quiet_after)
+            .stuck_at_end()
             .map_or(String::new(), |why| format!("\n{why}"));
         return format!(
             "{} calibration(s) from {} pose(s){bad}; last X: {last}{quiet}",
@@ -814,12 +800,8 @@ fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usiz
 
 /// Why the accumulating estimator reported no estimate.
 fn no_estimate(calibrator: &OnlineCalibrator) -> String {
-    let changed = calibrator.tracker().is_some_and(|t| t.changes() > 0);
     match calibrator.pending() {
-        // An estimate from before a change is not the current X.
-        Some(why) if changed && why.of_motions() => {
-            format!("since the last change of X or of the target, {why}")
-        }
+        // After a change, why the poses since have none (`Pending::SinceChange`).
         Some(why) => why.to_string(),
         None if calibrator.poses() == 0 => "the input gave no pose".to_string(),
         None => "no estimate was determined".to_string(),

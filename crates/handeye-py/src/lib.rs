@@ -1045,9 +1045,10 @@ fn parse_setup(setup: &str) -> PyResult<Setup> {
 #[pyclass(name = "_OnlineCalibrator")]
 struct PyOnline {
     inner: OnlineCalibrator,
-    /// What the calibrator's readings check of the first poses found (the paper's estimator),
-    /// or the cautions of the solve on the pixels, until Python takes it as a warning.
-    found: Option<String>,
+    /// What the calibrator found that every face tells (the readings check of the first poses
+    /// and a stuck selection, with the paper's estimator; the cautions of the solve on the
+    /// pixels), until Python takes them as warnings.
+    found: Vec<String>,
 }
 
 #[pymethods]
@@ -1132,7 +1133,7 @@ impl PyOnline {
             inner: inner
                 .and_then(|c| c.with_priors(&given))
                 .map_err(value_error)?,
-            found: None,
+            found: Vec::new(),
         })
     }
 
@@ -1160,9 +1161,10 @@ impl PyOnline {
             None => self.inner.push(&pose),
         }
         .map_err(value_error)?;
-        if let Some(found) = self.inner.misread() {
-            self.found = Some(found.to_string());
-        }
+        self.found
+            .extend(self.inner.misread().map(|f| f.to_string()));
+        // A selection stuck for 200, 400, 800, … poses, as the command line tells it.
+        self.found.extend(self.inner.stuck());
         let setup = self.inner.config().setup;
         match self.inner.step() {
             // The accumulating estimator's own lines: a change, a report.
@@ -1213,20 +1215,19 @@ impl PyOnline {
             .collect()
     }
 
-    /// What the readings check of the first poses found (once), or None.
-    fn take_warning(&mut self) -> Option<String> {
-        self.found.take()
+    /// What the calibrator found since last asked (each once), in words.
+    fn take_warnings(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.found)
     }
 
     /// The accumulating estimator's final report (JSON text), or None; a readings check not run
-    /// yet runs on a short stream (see `take_warning`).
+    /// yet runs on a short stream (see `take_warnings`).
     fn finish(&mut self, py: Python<'_>) -> PyResult<Option<String>> {
         let setup = self.inner.config().setup;
         let inner = &mut self.inner;
         let report = py.allow_threads(|| inner.finish());
-        if let Some(found) = self.inner.misread() {
-            self.found = Some(found.to_string());
-        }
+        self.found
+            .extend(self.inner.misread().map(|f| f.to_string()));
         // A prior in another length unit than the poses, told only now on a short stream; on
         // the pixels, the calibration's refusal.
         let report = report.map_err(value_error)?;
@@ -1238,8 +1239,9 @@ impl PyOnline {
             .map(|w| w.to_string())
             .collect();
         if !words.is_empty() {
-            self.found = Some(words.join("; "));
+            self.found.push(words.join("; "));
         }
+
         Ok(report.map(|r| r.json(setup, None).to_string()))
     }
 
@@ -1286,7 +1288,10 @@ impl PyOnline {
             value_error(format!("not a saved state: {}", shortened(&e.to_string())))
         })?;
         inner.config().validate().map_err(value_error)?;
-        Ok(Self { inner, found: None })
+        Ok(Self {
+            inner,
+            found: Vec::new(),
+        })
     }
 }
 

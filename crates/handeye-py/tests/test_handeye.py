@@ -740,6 +740,30 @@ def test_online_checks_the_first_poses_as_the_command_line_does():
         _push_all(paper(), right)
 
 
+def test_online_says_a_stuck_selection_as_the_command_line_does():
+    # Issue 31: the paper's selection without a calibration is told at 200, 400, 800, ... poses
+    # (the command line's words and schedule, from the one online calibrator).
+    still = np.eye(4)
+    target = np.eye(4)
+    target[2, 3] = 0.5
+    cal = handeye.OnlineCalibrator(estimator="paper")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(500):
+            cal.push(still, target)
+        said = [str(w.message) for w in caught]
+    stuck = [m.split(":")[0] for m in said if m.startswith("no calibration")]
+    assert stuck == ["no calibration in 200 poses", "no calibration in 400 poses"], said
+    # The accumulating estimator says why it has no estimate through pending(), not a warning.
+    acc = handeye.OnlineCalibrator()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for _ in range(20):
+            acc.push(still, target)
+        acc.finish()
+    assert acc.pending() is not None
+
+
 def test_online_defaults_to_the_accumulating_estimator_and_push_returns_a_list():
     # Issue 33 items 2 and 19: Python's default is the command line's (every estimate with its
     # uncertainty, the readings checked), and push returns one type.

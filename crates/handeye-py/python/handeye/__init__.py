@@ -604,10 +604,10 @@ class OnlineCalibrator:
         return None if text is None else _with_arrays(json.loads(text))
 
     def _warn_readings(self):
-        # The command line's check of the first 64 poses (of a shorter stream of 16 or more, at
-        # finish()): data read wrongly, implausible sizes, or rotations about one axis.
-        found = self._inner.take_warning()
-        if found is not None:
+        # What the command line tells: the check of the first 64 poses (of a shorter stream of 16
+        # or more, at finish()), data read wrongly, implausible sizes, or rotations about one
+        # axis; the paper's selection stuck (no calibration in 200, 400, ... poses, or at all).
+        for found in self._inner.take_warnings():
             warnings.warn(found, UserWarning, stacklevel=3)
 
     def last_report(self):

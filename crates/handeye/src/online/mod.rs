@@ -41,6 +41,10 @@ use crate::track::{Pending, Report, Step, TrackEstimate, TrackOptions, Tracker};
 /// Number of selected motions the optimal method refines over (sec. 4.1.3).
 pub const OPTIMAL_WINDOW: usize = 5;
 
+/// Poses without a calibration after which the paper's estimator says why
+/// ([`OnlineCalibrator::stuck`]), and again at each doubling of it.
+const QUIET_POSES: usize = 200;
+
 /// Where rmsR and rmsT come from (SPEC sec. 2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -548,9 +552,31 @@ impl OnlineCalibrator {
         self.poses - self.last_calibration
     }
 
+    /// With the paper's estimator, why its selection has made no calibration for a while, told
+    /// at 200, 400, 800, … poses without one (a stuck stream is told so at growing intervals, not
+    /// every 200 poses): the words when the last push reached such a count, else `None`. Every
+    /// face tells them then.
+    pub fn stuck(&self) -> Option<String> {
+        if self.tracker.is_some() || self.pixels.is_some() {
+            return None;
+        }
+        let since = self.poses_since_calibration();
+        let due = since % QUIET_POSES == 0 && (since / QUIET_POSES).is_power_of_two();
+        due.then(|| self.quiet(QUIET_POSES)).flatten()
+    }
+
+    /// At the end of a stream, with the paper's estimator: why no calibration came (at all, or
+    /// in the last 200 poses), in words; `None` otherwise.
+    pub fn stuck_at_end(&self) -> Option<String> {
+        if self.tracker.is_some() || self.pixels.is_some() {
+            return None;
+        }
+        self.quiet(if self.calibrations == 0 { 1 } else { QUIET_POSES })
+    }
+
     /// Why the paper's selection has made no calibration for a while, in words: `None` when a
     /// calibration came within the last `poses` poses (or fewer were pushed).
-    pub fn quiet(&self, poses: usize) -> Option<String> {
+    fn quiet(&self, poses: usize) -> Option<String> {
         let since = self.poses_since_calibration();
         if since < poses.max(1) {
             return None;
@@ -769,7 +795,15 @@ impl OnlineCalibrator {
                 (Some(_), None) => None,
             };
         }
-        self.tracker.as_ref()?.pending()
+        let tracker = self.tracker.as_ref()?;
+        let why = tracker.pending()?;
+        Some(if tracker.changes() > 0 && why.of_motions() {
+            Pending::SinceChange {
+                pending: Box::new(why),
+            }
+        } else {
+            why
+        })
     }
 
     /// The accumulating estimator itself (its counts), if it runs.

@@ -306,6 +306,12 @@ pub enum Pending {
         /// Why, in the calibration's words.
         reason: String,
     },
+    /// After a change of X or of the target: why the poses since have no estimate (an estimate
+    /// from before the change is not the current X).
+    SinceChange {
+        /// Why, of the poses since the change ([`Pending::of_motions`]).
+        pending: Box<Pending>,
+    },
 }
 
 /// Where the camera is in a setup: "fixed (eye-to-hand)".
@@ -328,6 +334,7 @@ impl Pending {
                 | Self::ParallelAxes
                 | Self::LowDof { .. }
                 | Self::Undetermined { .. }
+                | Self::SinceChange { .. }
         )
     }
 }
@@ -341,6 +348,9 @@ impl fmt::Display for Pending {
                 "{frames} record(s) with detections so far: an estimate is solved at 16, 32, 64, … records and at the end"
             ),
             Self::RefusedOnPixels { reason } => f.write_str(reason),
+            Self::SinceChange { pending } => {
+                write!(f, "since the last change of X or of the target, {pending}")
+            }
             Self::NoRotation { largest_deg } => write!(
                 f,
                 "no rotation above 2° yet (the largest is {largest_deg:.2}°): turn the gripper"
