@@ -561,7 +561,7 @@ impl OnlineCalibrator {
             return None;
         }
         let since = self.poses_since_calibration();
-        let due = since % QUIET_POSES == 0 && (since / QUIET_POSES).is_power_of_two();
+        let due = since.is_multiple_of(QUIET_POSES) && (since / QUIET_POSES).is_power_of_two();
         due.then(|| self.quiet(QUIET_POSES)).flatten()
     }
 
