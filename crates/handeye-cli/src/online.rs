@@ -344,7 +344,10 @@ pub fn run(args: Args) -> Result<()> {
         if !accumulate {
             for event in events {
                 match face {
-                    Face::Json => out.json(&event.line(time_offset))?,
+                    Face::Json => out.json(&Event {
+                        time_offset_s: time_offset,
+                        ..event
+                    })?,
                     Face::Text => {
                         out.text(&format!("{}\n", event_text(&event, calibrator.unit())))?
                     }

@@ -206,7 +206,7 @@ impl Estimator {
 pub type Rms = crate::check::quality::ResidualRms;
 
 /// The optimal method's estimate at one calibration (SPEC sec. 4.5).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OptimalEstimate {
     /// Number of this optimal result (1 at the first calibration with five selected motions).
     pub number: usize,
@@ -214,12 +214,15 @@ pub struct OptimalEstimate {
     pub x: Transform,
     /// The five motions as pose-number pairs, oldest first.
     pub motions: [[usize; 2]; OPTIMAL_WINDOW],
-    /// Wall time of the refinement, including its Andreff start, seconds.
+    /// Wall time of the refinement, including its Andreff start, seconds (not in the line).
     pub seconds: f64,
 }
 
-/// One calibration of an online run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// One calibration of an online run; serialised (serde) as its JSON line (SPEC sec. 7), the one
+/// output of every face: `calibration`, `poses`, `thresholds` (adaptive and fixed selection),
+/// `rms_r`, `rms_t`, X (`translation`, `quaternion_xyzw`, `matrix`), `conditioning`, `optimal`
+/// (X, `number`, `motions`) when enabled, `seconds`; and `time_offset_s` when set.
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Event {
     /// Number of this calibration (1, 2, …).
     pub calibration: usize,
@@ -237,16 +240,20 @@ pub struct Event {
     pub seconds: f64,
     /// The optimal method's X, when enabled and five motions have been selected.
     pub optimal: Option<OptimalEstimate>,
+    /// The clock offset applied to a second stream (camera − robot), seconds: set by the face
+    /// that paired two streams; `None` from the calibrator.
+    pub time_offset_s: Option<f64>,
 }
 
 impl Event {
-    /// The event as its JSON line (SPEC sec. 7), the one output of every face: `calibration`,
-    /// `poses`, `thresholds` (adaptive and fixed selection), `rms_r`, `rms_t`, X (`translation`,
-    /// `quaternion_xyzw`, `matrix`), `conditioning`, `optimal` (X, `number`, `motions`) when
-    /// enabled, `seconds`; and `time_offset_s`, the clock offset applied, when one was.
-    ///
-    /// The CLI serialises it straight to its output; [`Self::json`] is the same line as a value.
-    pub fn line(&self, time_offset_s: Option<f64>) -> EventLine {
+    /// The event's JSON line as a value (its serde form).
+    pub fn json(&self) -> serde_json::Value {
+        serde_json::to_value(self).unwrap_or_default()
+    }
+}
+
+impl Serialize for Event {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
         EventLine {
             calibration: self.calibration,
             poses: self.poses,
@@ -261,55 +268,38 @@ impl Event {
                 motions: o.motions,
             }),
             seconds: self.seconds,
-            time_offset_s,
+            time_offset_s: self.time_offset_s,
         }
-    }
-
-    /// [`Self::line`] without a clock offset, as a JSON value.
-    pub fn json(&self) -> serde_json::Value {
-        serde_json::to_value(self.line(None)).unwrap_or_default()
+        .serialize(serializer)
     }
 }
 
-/// An [`Event`] as its JSON line ([`Event::line`]).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct EventLine {
-    /// Number of the calibration, from 1.
-    pub calibration: usize,
-    /// The three pose numbers of the two selected motions.
-    pub poses: [usize; 3],
-    /// The thresholds the motions passed (not with selection `none`).
+/// The field order and names of an [`Event`]'s line (its serde form), not a second model.
+#[derive(Serialize)]
+struct EventLine {
+    calibration: usize,
+    poses: [usize; 3],
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub thresholds: Option<Thresholds>,
-    /// rmsR of the calibration.
-    pub rms_r: f64,
-    /// rmsT of the calibration.
-    pub rms_t: f64,
-    /// X.
+    thresholds: Option<Thresholds>,
+    rms_r: f64,
+    rms_t: f64,
     #[serde(flatten)]
-    pub x: TransformJson,
-    /// The conditioning of the two motions.
-    pub conditioning: f64,
-    /// The optimal method's X, when enabled.
+    x: TransformJson,
+    conditioning: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub optimal: Option<OptimalLine>,
-    /// Wall time of the calibration, seconds.
-    pub seconds: f64,
-    /// The clock offset applied to a second stream, seconds.
+    optimal: Option<OptimalLine>,
+    seconds: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub time_offset_s: Option<f64>,
+    time_offset_s: Option<f64>,
 }
 
-/// The optimal method's part of an [`EventLine`].
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct OptimalLine {
-    /// X refined over the last five selected motions.
+/// The optimal method's part of an [`Event`]'s line.
+#[derive(Serialize)]
+struct OptimalLine {
     #[serde(flatten)]
-    pub x: TransformJson,
-    /// Number of this optimal result.
-    pub number: usize,
-    /// The five motions as pose-number pairs, oldest first.
-    pub motions: [[usize; 2]; OPTIMAL_WINDOW],
+    x: TransformJson,
+    number: usize,
+    motions: [[usize; 2]; OPTIMAL_WINDOW],
 }
 
 /// The online calibrator (see the module documentation).
@@ -697,6 +687,7 @@ impl OnlineCalibrator {
             conditioning: calibration.conditioning,
             seconds,
             optimal,
+            time_offset_s: None,
         })
     }
 

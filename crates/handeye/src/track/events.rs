@@ -455,7 +455,7 @@ impl Report {
     /// `since`, `uncertainty`, `noise`, `conditioning`, `target` (the fixed frame), `robot_world`
     /// (X and the target solved together by Shah over the same poses, when determined) and, on a
     /// weak final report, `weak` with the reason in words; last, `time_offset_s` when a clock
-    /// offset was applied to a second stream (as `crate::online::EventLine` carries it).
+    /// offset was applied to a second stream (as `crate::online::Event` carries it).
     pub fn json(&self, setup: Setup, time_offset_s: Option<f64>) -> serde_json::Value {
         let e = &self.estimate;
         let mut out = serde_json::Map::new();
