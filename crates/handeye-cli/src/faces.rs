@@ -523,20 +523,17 @@ pub fn urdf(p: Published<'_>, f: &Frames) -> String {
 
 /// The error where it matters, in one line: "a point at 0.45 m from the camera is placed within
 /// ±0.8 mm (one sigma)".
-pub fn at_point(p: &handeye::AtPoint, unit: Option<Unit>) -> String {
-    let distance = nalgebra::Vector3::from(p.point).norm();
+pub fn at_point(point: [f64; 3], sigma: f64, unit: Option<Unit>) -> String {
+    let distance = nalgebra::Vector3::from(point).norm();
     let (far, within) = match unit {
-        Some(Unit::Metre) => (
-            format!("{distance:.3} m"),
-            format!("{:.2} mm", p.sigma * 1e3),
-        ),
+        Some(Unit::Metre) => (format!("{distance:.3} m"), format!("{:.2} mm", sigma * 1e3)),
         Some(Unit::Millimetre) => (
             format!("{:.3} m", distance * 1e-3),
-            format!("{:.2} mm", p.sigma),
+            format!("{:.2} mm", sigma),
         ),
         _ => (
             format!("{} (input units)", short(distance)),
-            format!("{} (input units)", short(p.sigma)),
+            format!("{} (input units)", short(sigma)),
         ),
     };
     format!("A point at {far} from the camera is placed within ±{within} (one sigma)")
@@ -572,7 +569,7 @@ pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
         short(r.uncertainty.translation)
     );
     if let Some(p) = &r.uncertainty.at_point {
-        let _ = writeln!(s, "{}", at_point(p, unit));
+        let _ = writeln!(s, "{}", at_point(p.point, p.sigma, unit));
     }
     low_dof_lines(&mut s, r.low_dof.as_ref(), &r.prior, u);
     if let Some(p) = &r.reprojection {
@@ -699,7 +696,7 @@ pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) ->
         short(r.target.uncertainty.translation)
     );
     if let Some(p) = &r.uncertainty.at_point {
-        let _ = writeln!(s, "{}", at_point(p, unit));
+        let _ = writeln!(s, "{}", at_point(p.point, p.sigma, unit));
     }
     low_dof_lines(&mut s, r.low_dof.as_ref(), &r.prior, u);
     if let Some(low) = &r.low_dof {

@@ -510,12 +510,7 @@ fn print_report(
 fn estimate_words(r: &Report, unit: Unit) -> String {
     let e = &r.estimate;
     let at_point = e.at_point.map_or(String::new(), |(point, sigma)| {
-        let at = handeye::AtPoint {
-            point,
-            frame: "camera".into(),
-            sigma,
-        };
-        let words = faces::at_point(&at, known(unit));
+        let words = faces::at_point(point, sigma, known(unit));
         format!("; {}{}", words[..1].to_lowercase(), &words[1..])
     });
     // Which component came from the prior (a low-DOF robot), as the batch's text says it.

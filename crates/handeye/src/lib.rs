@@ -155,14 +155,14 @@ pub use check::holdout::leave_one_out;
 pub use check::outliers::PoseResiduals;
 pub use check::quality::errors_against_truth;
 pub use check::stream::StreamReading;
-pub use check::uncertainty::{AtPoint, Uncertainty};
+pub use check::uncertainty::Uncertainty;
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, AdviseOptions, Pivot, advise};
 pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
 pub use calibrate::low_dof::LowDofReport;
 pub use calibrate::pixels::{
-    CornerResidual, FrameRms, ReprojectionSummary, calibrate_on_pixels,
-    calibrate_robot_world_on_pixels, pixel_camera_poses, verify_on_pixels,
+    ReprojectionSummary, calibrate_on_pixels, calibrate_robot_world_on_pixels, pixel_camera_poses,
+    verify_on_pixels,
 };
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 pub use calibrate::verify::{Consistency, SavedX, Verification, verify};

@@ -226,11 +226,12 @@ pub(super) const CORNERS_DRAWN: usize = 4000;
 /// centre, grow towards the edges, or all point one way in part of the image) is what a wrong
 /// distortion, focal length or target size leaves; random noise leaves none.
 pub(super) fn corners_figure(
-    corners: &[handeye::CornerResidual],
+    fit: &handeye::ReprojectionSummary,
     size: Option<(f64, f64)>,
 ) -> Result<(String, f64, usize)> {
+    let corners = &fit.corners;
     let step = corners.len().div_ceil(CORNERS_DRAWN).max(1);
-    let drawn: Vec<&handeye::CornerResidual> = corners.iter().step_by(step).collect();
+    let drawn: Vec<_> = corners.iter().step_by(step).collect();
     let (width, height) = size.unwrap_or_else(|| {
         let top = |k: usize| corners.iter().map(|c| c.pixel[k]).fold(1.0, f64::max);
         (top(0) * 1.05, top(1) * 1.05)
@@ -263,8 +264,7 @@ pub(super) fn corners_figure(
             .disable_mesh()
             .draw()
             .map_err(|e| anyhow!("{e}"))?;
-        let (kept, left_out): (Vec<&handeye::CornerResidual>, Vec<_>) =
-            drawn.iter().partition(|c| c.kept);
+        let (kept, left_out): (Vec<_>, Vec<_>) = drawn.iter().copied().partition(|c| c.kept);
         chart
             .draw_series(kept.iter().map(|c| {
                 let [u, v] = c.pixel;

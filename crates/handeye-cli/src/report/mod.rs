@@ -185,7 +185,7 @@ pub fn write_pixels(
             ),
         );
         if !p.corners.is_empty() {
-            let (svg, scale, drawn) = corners_figure(&p.corners, image)?;
+            let (svg, scale, drawn) = corners_figure(p, image)?;
             let shown = if drawn < p.corners.len() {
                 format!(
                     "{drawn} of the {} detections, spread over the recording",
@@ -201,7 +201,7 @@ pub fn write_pixels(
                 ),
             );
         }
-        let mut worst: Vec<&handeye::FrameRms> = p.per_frame.iter().collect();
+        let mut worst: Vec<_> = p.per_frame.iter().collect();
         worst.sort_by(|a, b| b.rms_px.total_cmp(&a.rms_px));
         let rows = worst
             .iter()
