@@ -17,6 +17,7 @@ const LAYERS: &[(&str, usize)] = &[
     ("calibrate", 5),
     ("online", 5),
     ("io", 6),
+    ("experiment", 6),
 ];
 
 fn rank(layer: &str) -> Option<usize> {

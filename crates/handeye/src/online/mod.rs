@@ -10,7 +10,6 @@
 //! follows the input's unit, inferred from the first pose unless given ([`Unit`]). The state is
 //! constant in size, and serialisable (serde) so that a run can be saved and resumed.
 
-pub mod experiment;
 pub mod select;
 
 use std::collections::VecDeque;
