@@ -1,4 +1,5 @@
-//! `handeye experiment`: the paper's simulated experiments (SPEC sec. 6), with tables and figures.
+//! `handeye experiment`: the paper's simulated experiments (SPEC sec. 6) and the tracking and
+//! advice studies, with tables and figures.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -6,13 +7,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args as ClapArgs;
 use clap::builder::PossibleValuesParser;
-use handeye::experiment::{
-    Experiment, ExperimentConfig, ExperimentReport, TrackingConfig, TrackingReport, run_experiment,
-    run_tracking,
-};
+use handeye::experiment::{Experiment, ExperimentConfig, ExperimentReport, run_experiment};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use crate::figures::{write_figures, write_text, write_tracking_figures};
+use crate::figures::{write_figures, write_text};
 use crate::values;
 
 /// Options of `handeye experiment`.
@@ -32,36 +30,20 @@ pub struct Args {
     out: PathBuf,
 }
 
-/// The runs beyond the paper's experiments.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Study {
-    /// The accumulating estimator's tracking study.
-    Tracking,
-    /// The closed loop of `advise`.
-    Advice,
-    /// The paper's experiments, then both studies.
-    All,
-}
+/// `which` beyond the experiments themselves: all of them.
+const ALL: &str = "all";
 
-handeye::named_enum!(Study, "experiment", "experiment" {
-    Tracking => "tracking",
-    Advice => "advice",
-    All => "all",
-});
-
-/// The names of `which`: the paper's experiments, then the studies.
+/// The names of `which`: the experiments (the paper's, then the studies), then `all`.
 fn which() -> PossibleValuesParser {
-    let studies = Study::ALL.iter().map(|s| s.name());
-    PossibleValuesParser::new(Experiment::ALL.iter().map(|e| e.name()).chain(studies))
+    PossibleValuesParser::new(Experiment::ALL.iter().map(|e| e.name()).chain([ALL]))
 }
 
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
-    let study = args.which.parse::<Study>().ok();
-    let experiments: Vec<Experiment> = match study {
-        Some(Study::All) => Experiment::ALL.to_vec(),
-        Some(_) => Vec::new(),
-        None => vec![args.which.parse()?],
+    let experiments: Vec<Experiment> = if args.which == ALL {
+        Experiment::ALL.to_vec()
+    } else {
+        vec![args.which.parse()?]
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
@@ -78,25 +60,6 @@ pub fn run(args: Args) -> Result<()> {
         let figures = write_figures(&report, &args.out)?;
         publish(&args.out, experiment.name(), &table, &report, &figures)?;
     }
-    if matches!(study, Some(Study::All | Study::Tracking)) {
-        let mut config = TrackingConfig {
-            seed: args.seed,
-            ..TrackingConfig::default()
-        };
-        if let Some(n) = args.series {
-            config.series = n;
-        }
-        let bar = series_bar(config.series, "tracking");
-        let report = run_tracking(&config, || bar.inc(1))?;
-        bar.finish_and_clear();
-        let table = tracking_table(&report);
-        let figures = write_tracking_figures(&report, &args.out)?;
-        publish(&args.out, "tracking", &table, &report, &figures)?;
-    }
-    if matches!(study, Some(Study::All | Study::Advice)) {
-        let report = handeye::experiment::closed_loop(args.series.unwrap_or(20), args.seed);
-        publish(&args.out, "advice", &advice_table(&report), &report, &[])?;
-    }
     Ok(())
 }
 
@@ -112,20 +75,6 @@ fn series_bar(series: usize, name: &str) -> ProgressBar {
     );
     bar.set_message(name.to_string());
     bar
-}
-
-/// The closed loop of the advice as Markdown.
-fn advice_table(r: &handeye::experiment::ClosedLoop) -> String {
-    let cell = |n: Option<usize>| n.map_or(format!("> {}", r.most), |n| n.to_string());
-    format!(
-        "### advice ({} series of the paper's protocol, from its first 3 poses)\n\nPoses needed to reach a rotation one-sigma of {:.4}° (what the paper's walk reaches after {} poses), median over the series:\n\n| the paper's walk | turns about random axes | the advice |\n|---|---|---|\n| {} | {} | {} |\n",
-        r.series,
-        r.target_rotation_deg,
-        r.walk_poses,
-        cell(r.median_poses[0]),
-        cell(r.median_poses[1]),
-        cell(r.median_poses[2]),
-    )
 }
 
 /// Prints the table and writes `<name>.md` and `<name>.json` beside the figures already written.
@@ -149,70 +98,89 @@ fn publish(
     Ok(())
 }
 
-/// The report as a Markdown table.
+/// The report as Markdown: the experiment's table(s).
 fn markdown_table(report: &ExperimentReport) -> String {
-    let mut out = format!(
-        "### {} ({} series × {} poses, seed {})\n\n| method | series with calibration | calibrations (mean / median) | ‖ΔR‖_F | rotation (°) | t_rel | time per calibration (µs) |\n|---|---|---|---|---|---|---|\n",
-        report.experiment, report.config.series, report.config.sim.poses, report.config.seed
-    );
-    for m in &report.methods {
-        let name = if m.batch {
-            format!("batch `{}` (all poses)", m.method)
-        } else {
-            format!("**{}**", m.method)
-        };
-        out += &format!(
-            "| {name} | {}/{} | {:.2} / {:.1} | {:.4} | {:.3} | {:.4} | {:.2} |\n",
-            m.series_with_calibration,
-            m.series,
-            m.calibrations_mean,
-            m.calibrations_median,
-            m.rot_fro_mean,
-            m.rot_deg_mean,
-            m.trans_rel_mean,
-            m.time_per_calibration_s * 1e6
-        );
-    }
-    out
-}
-
-/// The tracking report as Markdown.
-fn tracking_table(report: &TrackingReport) -> String {
-    let mut out = format!(
-        "### tracking ({} series × {} poses, seed {})\n\n| poses |",
-        report.config.series, report.config.poses, report.config.seed
-    );
-    for c in &report.curves {
-        out += &format!(" {} ‖ΔR‖_F / t_rel |", c.method);
-    }
-    out += "\n|---|";
-    out += &"---|".repeat(report.curves.len());
-    out += "\n";
-    let n = report.curves.first().map_or(0, |c| c.poses.len());
-    for k in (0..n).filter(|k| (k + 1) % 2 == 0 || *k == 0) {
-        out += &format!("| {} |", report.curves[0].poses[k]);
-        for c in &report.curves {
-            out += &format!(" {:.4} / {:.3} |", c.rot_fro[k], c.trans_rel[k]);
+    match report {
+        ExperimentReport::Accuracy(report)
+        | ExperimentReport::Adaptability(report)
+        | ExperimentReport::Realtime(report) => {
+            let mut out = format!(
+                "### {} ({} series × {} poses, seed {})\n\n| method | series with calibration | calibrations (mean / median) | ‖ΔR‖_F | rotation (°) | t_rel | time per calibration (µs) |\n|---|---|---|---|---|---|---|\n",
+                report.experiment,
+                report.config.series,
+                report.config.sim.poses,
+                report.config.seed
+            );
+            for m in &report.methods {
+                let name = if m.batch {
+                    format!("batch `{}` (all poses)", m.method)
+                } else {
+                    format!("**{}**", m.method)
+                };
+                out += &format!(
+                    "| {name} | {}/{} | {:.2} / {:.1} | {:.4} | {:.3} | {:.4} | {:.2} |\n",
+                    m.series_with_calibration,
+                    m.series,
+                    m.calibrations_mean,
+                    m.calibrations_median,
+                    m.rot_fro_mean,
+                    m.rot_deg_mean,
+                    m.trans_rel_mean,
+                    m.time_per_calibration_s * 1e6
+                );
+            }
+            out
         }
-        out += "\n";
+        ExperimentReport::Tracking(report) => {
+            let mut out = format!(
+                "### tracking ({} series × {} poses, seed {})\n\n| poses |",
+                report.config.series, report.config.poses, report.config.seed
+            );
+            for c in &report.curves {
+                out += &format!(" {} ‖ΔR‖_F / t_rel |", c.method);
+            }
+            out += "\n|---|";
+            out += &"---|".repeat(report.curves.len());
+            out += "\n";
+            let n = report.curves.first().map_or(0, |c| c.poses.len());
+            for k in (0..n).filter(|k| (k + 1) % 2 == 0 || *k == 0) {
+                out += &format!("| {} |", report.curves[0].poses[k]);
+                for c in &report.curves {
+                    out += &format!(" {:.4} / {:.3} |", c.rot_fro[k], c.trans_rel[k]);
+                }
+                out += "\n";
+            }
+            out += &format!(
+                "\n### change detection ({} series × {} poses, jump at pose {})\n\n| jump | detected within 30 poses | median delay (poses) | false alarms / stationary poses | final error vs new X (°) |\n|---|---|---|---|---|\n",
+                report.config.series,
+                report.config.jump_poses,
+                report.config.jump_poses / 2
+            );
+            for d in &report.detection {
+                out += &format!(
+                    "| {}° / {} mm | {:.0}% | {} | {} / {} | {:.3} |\n",
+                    d.rotation_deg,
+                    d.translation,
+                    100.0 * d.detected_within_30,
+                    d.median_delay.map_or("–".to_string(), |m| m.to_string()),
+                    d.false_alarms,
+                    d.stationary_poses,
+                    d.final_rot_deg
+                );
+            }
+            out
+        }
+        ExperimentReport::Advice(r) => {
+            let cell = |n: Option<usize>| n.map_or(format!("> {}", r.most), |n| n.to_string());
+            format!(
+                "### advice ({} series of the paper's protocol, from its first 3 poses)\n\nPoses needed to reach a rotation one-sigma of {:.4}° (what the paper's walk reaches after {} poses), median over the series:\n\n| the paper's walk | turns about random axes | the advice |\n|---|---|---|\n| {} | {} | {} |\n",
+                r.series,
+                r.target_rotation_deg,
+                r.walk_poses,
+                cell(r.median_poses[0]),
+                cell(r.median_poses[1]),
+                cell(r.median_poses[2]),
+            )
+        }
     }
-    out += &format!(
-        "\n### change detection ({} series × {} poses, jump at pose {})\n\n| jump | detected within 30 poses | median delay (poses) | false alarms / stationary poses | final error vs new X (°) |\n|---|---|---|---|---|\n",
-        report.config.series,
-        report.config.jump_poses,
-        report.config.jump_poses / 2
-    );
-    for d in &report.detection {
-        out += &format!(
-            "| {}° / {} mm | {:.0}% | {} | {} / {} | {:.3} |\n",
-            d.rotation_deg,
-            d.translation,
-            100.0 * d.detected_within_30,
-            d.median_delay.map_or("–".to_string(), |m| m.to_string()),
-            d.false_alarms,
-            d.stationary_poses,
-            d.final_rot_deg
-        );
-    }
-    out
 }

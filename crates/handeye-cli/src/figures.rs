@@ -1,4 +1,5 @@
-//! Figures of the experiments (the paper's Fig. 2, Fig. 3 and a Table I chart), as SVG and PNG.
+//! Figures of the experiments (the paper's Fig. 2, Fig. 3 and a Table I chart; the tracking
+//! study's error curves), as SVG and PNG.
 //!
 //! Text is drawn with an embedded DejaVu Sans (assets/, Bitstream Vera licence), so no system font
 //! library is needed.
@@ -7,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Once;
 
 use anyhow::{Context, Result, anyhow};
-use handeye::experiment::{Experiment, ExperimentReport};
+use handeye::experiment::ExperimentReport;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -56,16 +57,19 @@ struct Curve<'a> {
     dotted: bool,
 }
 
-/// Writes the experiment's figure(s) into `dir` as SVG and PNG; returns the files written.
+/// Writes the experiment's figure(s) into `dir` as SVG and PNG; returns the files written (none
+/// for the advice study).
 pub fn write_figures(report: &ExperimentReport, dir: &Path) -> Result<Vec<PathBuf>> {
     REGISTER.call_once(|| {
         // A font that does not parse leaves text undrawn; the figures are still written.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
     });
-    let stem = match report.experiment {
-        Experiment::Accuracy => "fig2_accuracy",
-        Experiment::Adaptability => "fig3_adaptability",
-        Experiment::Realtime => "table1_realtime",
+    let stem = match report {
+        ExperimentReport::Accuracy(_) => "fig2_accuracy",
+        ExperimentReport::Adaptability(_) => "fig3_adaptability",
+        ExperimentReport::Realtime(_) => "table1_realtime",
+        ExperimentReport::Tracking(_) => "fig_tracking",
+        ExperimentReport::Advice(_) => return Ok(Vec::new()),
     };
     let svg = dir.join(format!("{stem}.svg"));
     let png = dir.join(format!("{stem}.png"));
@@ -80,14 +84,21 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
+    // The paper's experiments' summaries, one per method.
+    let methods = match report {
+        ExperimentReport::Accuracy(r)
+        | ExperimentReport::Adaptability(r)
+        | ExperimentReport::Realtime(r) => Some(r),
+        ExperimentReport::Tracking(_) | ExperimentReport::Advice(_) => None,
+    };
     let per = |name: &str, of: PerSeries| -> Vec<f64> {
         let value = |r: f64, t: f64, n: usize| match of {
             PerSeries::Rotation => r,
             PerSeries::Translation => t,
             PerSeries::Calibrations => n as f64,
         };
-        report
-            .method(name)
+        methods
+            .and_then(|r| r.method(name))
             .map(|m| {
                 (m.per_series.iter())
                     .map(|s| value(s.rot_fro, s.trans_rel, s.calibrations))
@@ -101,8 +112,8 @@ where
         color,
         dotted,
     };
-    match report.experiment {
-        Experiment::Accuracy => {
+    match report {
+        ExperimentReport::Accuracy(_) => {
             let (left, right) = root.split_horizontally(SIZE.0 / 2);
             let (rot, trans) = (PerSeries::Rotation, PerSeries::Translation);
             lines(
@@ -122,7 +133,7 @@ where
                 ],
             )?;
         }
-        Experiment::Adaptability => {
+        ExperimentReport::Adaptability(_) => {
             let n = PerSeries::Calibrations;
             lines(
                 &root,
@@ -133,7 +144,7 @@ where
                 ],
             )?;
         }
-        Experiment::Realtime => {
+        ExperimentReport::Realtime(report) => {
             let methods: Vec<_> = ["adaptive", "optimal"]
                 .iter()
                 .filter_map(|m| report.method(m))
@@ -158,6 +169,26 @@ where
                 bars(area, title, &bars_of)?;
             }
         }
+        ExperimentReport::Tracking(report) => {
+            let (left, right) = root.split_horizontally(SIZE.0 / 2);
+            for (area, title, rotation) in [
+                (&left, "mean ‖R_est − R‖_F vs poses seen", true),
+                (&right, "mean ‖t − t_est‖ / ‖t‖ vs poses seen", false),
+            ] {
+                let curves: Vec<(&str, Vec<(f64, f64)>)> = (report.curves.iter())
+                    .map(|c| {
+                        let values = if rotation { &c.rot_fro } else { &c.trans_rel };
+                        let points = (c.poses.iter().zip(values))
+                            .filter(|(_, v)| v.is_finite() && **v > 0.0)
+                            .map(|(p, v)| (*p as f64, *v))
+                            .collect();
+                        (c.method.as_str(), points)
+                    })
+                    .collect();
+                log_lines(area, title, report.config.poses as f64, &curves)?;
+            }
+        }
+        ExperimentReport::Advice(_) => {}
     }
     root.present().map_err(|e| anyhow!("{e}"))?;
     Ok(())
@@ -285,92 +316,52 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// The tracking experiment's figure: mean rotation and translation error against the poses seen,
-/// log scale, one curve per estimator.
-pub fn write_tracking_figures(
-    report: &handeye::experiment::TrackingReport,
-    dir: &Path,
-) -> Result<Vec<PathBuf>> {
-    REGISTER.call_once(|| {
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-    let svg = dir.join("fig_tracking.svg");
-    let png = dir.join("fig_tracking.png");
-    draw_tracking(report, SVGBackend::new(&svg, SIZE).into_drawing_area())?;
-    draw_tracking(report, BitMapBackend::new(&png, SIZE).into_drawing_area())?;
-    Ok(vec![svg, png])
-}
-
-fn draw_tracking<DB: DrawingBackend>(
-    report: &handeye::experiment::TrackingReport,
-    root: DrawingArea<DB, Shift>,
+/// A line chart on a log scale of points (poses seen, a positive error) per labelled curve, one
+/// colour each (the tracking figure's panels).
+fn log_lines<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    max_x: f64,
+    curves: &[(&str, Vec<(f64, f64)>)],
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE).map_err(|e| anyhow!("{e}"))?;
-    let (left, right) = root.split_horizontally(SIZE.0 / 2);
     let colors = [BLUE, RED, MAGENTA, BLACK];
-    for (area, title, pick) in [
-        (&left, "mean ‖R_est − R‖_F vs poses seen", 0usize),
-        (&right, "mean ‖t − t_est‖ / ‖t‖ vs poses seen", 1usize),
-    ] {
-        let values = |k: usize| {
-            let c = &report.curves[k];
-            if pick == 0 {
-                c.rot_fro.clone()
-            } else {
-                c.trans_rel.clone()
-            }
-        };
-        let all: Vec<f64> = (0..report.curves.len())
-            .flat_map(values)
-            .filter(|v| v.is_finite() && *v > 0.0)
-            .collect();
-        let (lo, hi) = all
-            .iter()
-            .fold((f64::INFINITY, 0.0_f64), |(a, b), v| (a.min(*v), b.max(*v)));
-        let (lo, hi) = if lo < hi {
-            (lo / 1.5, hi * 1.5)
-        } else {
-            (1e-4, 1.0)
-        };
-        let max_x = report.config.poses as f64;
-        let mut chart = ChartBuilder::on(area)
-            .caption(title, ("sans-serif", 16))
-            .margin(12)
-            .x_label_area_size(30)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0f64..max_x, (lo..hi).log_scale())
-            .map_err(|e| anyhow!("{e}"))?;
+    let (lo, hi) = (curves.iter())
+        .flat_map(|(_, points)| points.iter().map(|p| p.1))
+        .fold((f64::INFINITY, 0.0_f64), |(a, b), v| (a.min(v), b.max(v)));
+    let (lo, hi) = if lo < hi {
+        (lo / 1.5, hi * 1.5)
+    } else {
+        (1e-4, 1.0)
+    };
+    let mut chart = ChartBuilder::on(area)
+        .caption(title, ("sans-serif", 16))
+        .margin(12)
+        .x_label_area_size(30)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..max_x, (lo..hi).log_scale())
+        .map_err(|e| anyhow!("{e}"))?;
+    chart
+        .configure_mesh()
+        .x_desc("poses")
+        .label_style(("sans-serif", 12))
+        .draw()
+        .map_err(|e| anyhow!("{e}"))?;
+    for ((label, points), color) in curves.iter().zip(colors) {
         chart
-            .configure_mesh()
-            .x_desc("poses")
-            .label_style(("sans-serif", 12))
-            .draw()
-            .map_err(|e| anyhow!("{e}"))?;
-        for (k, (c, color)) in report.curves.iter().zip(colors).enumerate() {
-            let points: Vec<(f64, f64)> = c
-                .poses
-                .iter()
-                .zip(values(k))
-                .filter(|(_, v)| v.is_finite() && *v > 0.0)
-                .map(|(p, v)| (*p as f64, v))
-                .collect();
-            chart
-                .draw_series(LineSeries::new(points, color.stroke_width(2)))
-                .map_err(|e| anyhow!("{e}"))?
-                .label(c.method.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
-        }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 12))
-            .draw()
-            .map_err(|e| anyhow!("{e}"))?;
+            .draw_series(LineSeries::new(points.clone(), color.stroke_width(2)))
+            .map_err(|e| anyhow!("{e}"))?
+            .label(*label)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color));
     }
-    root.present().map_err(|e| anyhow!("{e}"))?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 12))
+        .draw()
+        .map_err(|e| anyhow!("{e}"))?;
     Ok(())
 }

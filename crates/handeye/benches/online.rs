@@ -5,13 +5,13 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use handeye::online::select::{AdaptiveParams, Selection};
 use handeye::online::{OnlineCalibrator, OnlineConfig};
-use handeye::sim::{SimConfig, SimSeries, simulate};
+use handeye::sim::{SimConfig, simulate};
 use handeye::solve::andreff;
 use handeye::{PosePair, Transform};
 use std::hint::black_box;
 
 /// The poses both benches run on: one simulated series of 1,000 poses (fixed seed).
-fn series() -> SimSeries {
+fn series() -> Vec<PosePair> {
     simulate(
         &SimConfig {
             poses: 1000,
@@ -20,10 +20,11 @@ fn series() -> SimSeries {
         42,
         0,
     )
+    .poses
 }
 
 fn push(c: &mut Criterion) {
-    let sim = series();
+    let poses = series();
     // Thresholds no motion can meet (β₀ above any rotation, no relaxation in reach): every push
     // searches and none calibrates.
     let params = AdaptiveParams {
@@ -48,12 +49,12 @@ fn push(c: &mut Criterion) {
         let mut cal = warm.clone();
         let mut k = 0;
         b.iter(|| {
-            k = (k + 1) % sim.poses.len();
-            black_box(cal.push(black_box(&sim.poses[k])).unwrap())
+            k = (k + 1) % poses.len();
+            black_box(cal.push(black_box(&poses[k])).unwrap())
         })
     });
     let pairs = handeye::motion_pairs(
-        &sim.poses[..3],
+        &poses[..3],
         handeye::Pairing::Consecutive,
         handeye::Setup::EyeInHand,
     );
@@ -68,8 +69,8 @@ fn push(c: &mut Criterion) {
         let mut cal = OnlineCalibrator::new(config).unwrap();
         let mut k = 0;
         b.iter(|| {
-            k = (k + 1) % sim.poses.len();
-            black_box(cal.push(black_box(&sim.poses[k])).unwrap())
+            k = (k + 1) % poses.len();
+            black_box(cal.push(black_box(&poses[k])).unwrap())
         })
     });
 }
@@ -78,17 +79,17 @@ criterion_group!(benches, push);
 
 fn accumulator(c: &mut Criterion) {
     use handeye::solve::accumulate::PoseAccumulator;
-    let sim = series();
+    let poses = series();
     c.bench_function("accumulate/add_pose", |b| {
         let mut acc = PoseAccumulator::new(handeye::Setup::EyeInHand);
         let mut k = 0;
         b.iter(|| {
-            k = (k + 1) % sim.poses.len();
-            acc.add(black_box(&sim.poses[k]));
+            k = (k + 1) % poses.len();
+            acc.add(black_box(&poses[k]));
         })
     });
     let mut acc = PoseAccumulator::new(handeye::Setup::EyeInHand);
-    for p in &sim.poses {
+    for p in &poses {
         acc.add(p);
     }
     c.bench_function("accumulate/estimate", |b| {

@@ -3,17 +3,26 @@
 //!
 //! `cargo run --release -p handeye --example experiment_quick`
 
-use handeye::experiment::{Experiment, ExperimentConfig, run_experiment};
+use handeye::experiment::{Experiment, ExperimentConfig, ExperimentReport, run_experiment};
 
 fn main() -> Result<(), handeye::Error> {
-    for experiment in Experiment::ALL {
+    for experiment in [
+        Experiment::Accuracy,
+        Experiment::Adaptability,
+        Experiment::Realtime,
+    ] {
         let mut config = ExperimentConfig::for_experiment(experiment);
         config.series = std::env::args()
             .nth(1)
             .and_then(|s| s.parse().ok())
             .unwrap_or(config.series);
         config.batch = std::env::var("NO_BATCH").is_err();
-        let report = run_experiment(experiment, &config, || {})?;
+        let (ExperimentReport::Accuracy(report)
+        | ExperimentReport::Adaptability(report)
+        | ExperimentReport::Realtime(report)) = run_experiment(experiment, &config, || {})?
+        else {
+            unreachable!("the paper's experiments report one summary per method")
+        };
         println!("{experiment} ({} series):", config.series);
         for m in &report.methods {
             println!(

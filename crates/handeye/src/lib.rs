@@ -48,8 +48,8 @@
 //! | 3 | `check/` | readings, outliers, the bootstrap uncertainty, held-out poses, the motions' quality |
 //! | 4 | `track/` | the accumulating estimator on a stream: gating, change detection, reports |
 //! | 5 | `calibrate/` | the batch jobs: poses and pixels, robot-world, verify and advice |
-//! | 6 | `online/` | the online calibrator both faces drive: the paper's selection, the accumulating estimator, the pixels on a doubling schedule; the experiments |
-//! | 7 | [`io`] | files, two streams and their clock, ROS 2 recordings, truth files |
+//! | 6 | `online/` | the online calibrator both faces drive: the paper's selection, the accumulating estimator, the pixels on a doubling schedule |
+//! | 7 | [`io`], [`experiment`] | files, two streams and their clock, ROS 2 recordings, truth files; the simulated studies (the paper's experiments, tracking, the advice's closed loop) |
 //!
 //! # The paper in the code
 //! Zhang, Shi, Liu, "Adaptive motion selection for online hand–eye calibration":
@@ -95,7 +95,7 @@ layers! {
     calibrate;
     /// Rank 3: the checks that judge an X.
     check;
-    /// Rank 6: the online calibrator (poses or pixels), the paper's selection and experiments.
+    /// Rank 6: the online calibrator (poses or pixels) and the paper's selection.
     online;
     /// Rank 2: the solvers.
     solve;
@@ -104,6 +104,7 @@ layers! {
 }
 // Written out rather than through `layers!`: a `macro_export` macro (`named_enum!`) inside a
 // macro-expanded module could not be named by its path.
+pub mod experiment;
 pub mod io;
 /// Rank 0: poses, motions, errors, warnings and findings.
 #[cfg(feature = "internals")]
@@ -111,28 +112,6 @@ pub mod model;
 #[cfg(not(feature = "internals"))]
 mod model;
 pub mod sim;
-
-pub mod experiment {
-    //! The experiments `handeye experiment` runs. The paper's (sec. 4.1), as SPEC sec. 6 fixes
-    //! them: Monte-Carlo over simulated series, in parallel, reproducible whatever the number of
-    //! threads.
-    //!
-    //! - [`Experiment::Accuracy`]: 20 series × 200 poses; mean error per series of conventional,
-    //!   fixed and adaptive (error source: truth), and every batch solver on all poses (Fig. 2).
-    //! - [`Experiment::Adaptability`]: 100 series × 500 poses; calibrations per series, adaptive
-    //!   vs fixed (Fig. 3).
-    //! - [`Experiment::Realtime`]: 50 series × 100 poses; time per calibration and errors,
-    //!   adaptive vs optimal (Table I).
-    //!
-    //! And the advice's closed loop ([`closed_loop`]): how many poses the paper's walk, random
-    //! turns and [`advise`](crate::advise)'s suggestions need to reach the same uncertainty.
-
-    pub use crate::calibrate::advice::{ClosedLoop, closed_loop};
-    pub use crate::online::experiment::{
-        Experiment, ExperimentConfig, ExperimentReport, TrackingConfig, TrackingReport,
-        run_experiment, run_tracking,
-    };
-}
 
 // # The public surface, layer by layer.
 // Model: poses, motions, the setup, errors, warnings and what they carry.

@@ -253,7 +253,7 @@ fn the_held_out_check_finds_a_mispaired_frame_and_nothing_on_clean_data() {
 
 #[test]
 fn following_the_advice_needs_at_least_twice_fewer_poses_than_the_papers_walk() {
-    let r = handeye::calibrate::advice::closed_loop(8, 3);
+    let r = handeye::calibrate::advice::closed_loop(8, 3, || {});
     println!(
         "poses to reach {:.4}° (the walk's sigma after {} poses): walk {:?}, random turns {:?}, advice {:?}",
         r.target_rotation_deg,

@@ -1,7 +1,7 @@
 //! The paper's experiments with few series: the report's fields and the direction of each claim
 //! of SPEC sec. 6 / issue 4.
 
-use handeye::online::experiment::{Experiment, ExperimentConfig, run_experiment};
+use handeye::experiment::{Experiment, ExperimentConfig, ExperimentReport, run_experiment};
 use serde_json::Value;
 
 fn run(experiment: Experiment, series: usize) -> Value {
@@ -114,12 +114,15 @@ fn results_do_not_depend_on_the_number_of_threads() {
 
 #[test]
 fn tracking_the_running_estimate_improves_and_jumps_are_caught() {
-    use handeye::online::experiment::{TrackingConfig, run_tracking};
-    let config = TrackingConfig {
+    let config = ExperimentConfig {
         series: 8,
-        ..TrackingConfig::default()
+        ..ExperimentConfig::for_experiment(Experiment::Tracking)
     };
-    let report = run_tracking(&config, || {}).unwrap();
+    let ExperimentReport::Tracking(report) =
+        run_experiment(Experiment::Tracking, &config, || {}).unwrap()
+    else {
+        panic!("a tracking report")
+    };
     let curve = |name: &str| report.curves.iter().find(|c| c.method == name).unwrap();
     let (acc, adaptive) = (curve("accumulate"), curve("adaptive"));
     let last = acc.rot_fro.len() - 1;

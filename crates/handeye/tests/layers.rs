@@ -17,6 +17,7 @@ const LAYERS: &[(&str, usize)] = &[
     ("calibrate", 5),
     ("online", 6),
     ("io", 7),
+    ("experiment", 7),
 ];
 
 fn rank(layer: &str) -> Option<usize> {

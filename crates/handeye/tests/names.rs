@@ -8,10 +8,10 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use handeye::calibrate::batch::Fix;
+use handeye::experiment::{Experiment, OnlineMethod};
 use handeye::io::Format;
 use handeye::model::findings::Reading;
 use handeye::model::names::Named;
-use handeye::online::experiment::{Experiment, OnlineMethod};
 use handeye::online::select::Selection;
 use handeye::online::{ErrorSource, Estimator, Unit};
 use handeye::solve::{Method, RobotWorldMethod};

@@ -542,8 +542,9 @@ pub struct ClosedLoop {
 /// The closed loop of [`ClosedLoop`] on the paper's simulation (millimetres): every series starts
 /// from the walk's first three poses; each new pose is recorded with the protocol's noise (uniform
 /// 1e-3 on the rotation matrix entries, 1% of each translation), and the uncertainty is the
-/// first-order one of the recorded data (the same measure for every way of moving).
-pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
+/// first-order one of the recorded data (the same measure for every way of moving). Calls
+/// `progress` after each finished series. Run as the advice study of `experiment::run_experiment`.
+pub fn closed_loop(series: usize, seed: u64, progress: impl Fn()) -> ClosedLoop {
     use crate::sim::{SimConfig, simulate};
     use rand::{RngExt, SeedableRng};
     const WALK: usize = 100;
@@ -632,6 +633,7 @@ pub fn closed_loop(series: usize, seed: u64) -> ClosedLoop {
             }
             needed[k].push(reached);
         }
+        progress();
     }
     let median = |v: &mut Vec<usize>| {
         v.sort_unstable();

@@ -16,7 +16,6 @@
 //! `step`, `finish`, `last_report`, `pending` and `unit` answer as on poses, so that the command
 //! line and Python print one calibrator's results. This layer sits above `calibrate/` for that.
 
-pub mod experiment;
 pub mod select;
 
 use std::collections::VecDeque;

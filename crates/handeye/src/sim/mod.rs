@@ -101,17 +101,28 @@ impl SimConfig {
     }
 }
 
-/// One simulated series.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct SimSeries {
-    /// The measured pose pairs, noise included.
-    pub poses: Vec<PosePair>,
-    /// The true X = `gripper_from_camera`.
-    pub gripper_from_camera: Transform,
-    /// The true target pose W = `base_from_target`.
-    pub base_from_target: Transform,
-    /// The true X after the jump, when the configuration has one.
-    pub gripper_from_camera_after: Option<Transform>,
+pub(crate) use series::SimSeries;
+
+// What `simulate` returns is read off (`simulate(..).poses`), not named: its type lives in a
+// private module.
+mod series {
+    use serde::{Deserialize, Serialize};
+
+    use crate::model::motion::PosePair;
+    use crate::model::pose::Transform;
+
+    /// One simulated series.
+    #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+    pub struct SimSeries {
+        /// The measured pose pairs, noise included.
+        pub poses: Vec<PosePair>,
+        /// The true X = `gripper_from_camera`.
+        pub gripper_from_camera: Transform,
+        /// The true target pose W = `base_from_target`.
+        pub base_from_target: Transform,
+        /// The true X after the jump, when the configuration has one.
+        pub gripper_from_camera_after: Option<Transform>,
+    }
 }
 
 /// The generator of series `series` of a run with seed `seed`.
@@ -123,7 +134,9 @@ pub(crate) fn series_rng(seed: u64, series: u64) -> Xoshiro256PlusPlus {
     Xoshiro256PlusPlus::seed_from_u64(z ^ (z >> 31))
 }
 
-/// Simulates series `series` of the run with seed `seed`.
+/// Simulates series `series` of the run with seed `seed`: the measured pose pairs (`poses`,
+/// noise included), the true X (`gripper_from_camera`; `gripper_from_camera_after`, after the
+/// configuration's jump if it has one) and the true target pose (`base_from_target`).
 ///
 /// # Example
 /// ```
