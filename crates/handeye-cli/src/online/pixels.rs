@@ -28,7 +28,7 @@ pub(super) fn run(args: &Args) -> Result<()> {
         args.child_frame.as_deref(),
         &args.name,
     )?;
-    let camera = handeye::io::read_intrinsics(intrinsics)?;
+    let camera = handeye::Intrinsics::read(intrinsics)?;
     let options = handeye::Options {
         method: handeye::Method::Reprojection,
         pairing: handeye::Pairing::All,
@@ -46,7 +46,7 @@ pub(super) fn run(args: &Args) -> Result<()> {
     // The robot translation of the first record, for the length unit.
     let mut first_robot: Option<handeye::Transform> = None;
     let mut read = |input: &mut dyn std::io::BufRead| -> Result<()> {
-        for record in handeye::io::frame_records(input, &source) {
+        for record in handeye::io::FrameRecording::records(input, &source) {
             let (line, frame) = match record {
                 Ok(r) => r,
                 Err(e) => {
