@@ -14,7 +14,7 @@ use clap::Args as ClapArgs;
 use handeye::AdaptiveParams;
 use handeye::TransformJson;
 use handeye::errors_against_truth;
-use handeye::io::{Format, PoseStream, Recording, RecordingOptions, Source, read_truth};
+use handeye::io::{Format, PoseStream, Recording, RecordingOptions, Source, Truth};
 use handeye::sim::{SimConfig, simulate};
 use handeye::{AllPairs, Method, Pairing, PosePair, Setup, Transform, motion_pairs, solve};
 use handeye::{OnlineCalibrator, OnlineConfig};
@@ -204,7 +204,10 @@ fn datasets(args: &Args) -> Result<Vec<Dataset>> {
                 .get(k)
                 .cloned()
                 .or_else(|| beside.exists().then_some(beside));
-            let truth = truth_path.map(|p| read_truth(&p)).transpose()?.map(|t| t.x);
+            let truth = truth_path
+                .map(|p| Truth::read(&p))
+                .transpose()?
+                .map(|t| t.x);
             let name = path
                 .file_stem()
                 .map_or("input".into(), |s| s.to_string_lossy().into_owned());

@@ -310,7 +310,7 @@ pub(crate) fn pixel_input(
     }
     if let Some(read) = crate::input::read_bag_pixels(input)? {
         let camera = match (intrinsics, read.intrinsics) {
-            (Some(file), _) => handeye::io::read_intrinsics(file)?,
+            (Some(file), _) => handeye::Intrinsics::read(file)?,
             (None, Some(camera)) => camera,
             (None, None) => {
                 return Err(refuse(
@@ -330,7 +330,7 @@ pub(crate) fn pixel_input(
             "reprojection needs a JSON Lines file with `detections`".into(),
         ));
     };
-    let camera = handeye::io::read_intrinsics(intrinsics)?;
+    let camera = handeye::Intrinsics::read(intrinsics)?;
     let source = handeye::io::Source::File {
         path: path.clone(),
         format: handeye::io::Format::Jsonl,
@@ -358,24 +358,26 @@ fn refused_on_pixels(e: Error, face: Face) -> anyhow::Error {
 }
 
 /// The records' robot poses as written with the camera poses the pixel solve started from under
-/// the result's reading (PnP poses for records with detections only), for the unit and the
-/// `--report` page.
+/// the result's reading (`ReprojectionSummary::start_poses`: PnP poses for records with
+/// detections only), for the unit and the `--report` page.
 pub(crate) fn frame_poses(
     series: &handeye::io::FrameSeries,
-    camera: &handeye::Intrinsics,
-    setup: handeye::Setup,
-    reading: handeye::Reading,
+    start_poses: &[handeye::Transform],
 ) -> Vec<PosePair> {
-    let cameras = handeye::pixel_camera_poses(&series.frames, camera, setup, reading);
     series
         .frames
         .iter()
-        .zip(cameras)
+        .zip(start_poses)
         .map(|(f, c)| PosePair {
             base_from_gripper: f.base_from_gripper,
-            camera_from_target: c,
+            camera_from_target: *c,
         })
         .collect()
+}
+
+/// The camera poses a solve on the pixels started from (a pixel report's `reprojection`).
+fn start_poses(reprojection: Option<&handeye::ReprojectionSummary>) -> &[handeye::Transform] {
+    reprojection.map_or(&[], |r| &r.start_poses)
 }
 
 /// `calibrate --method reprojection`: X on the pixels of the detections of a JSON Lines file.
@@ -385,9 +387,12 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
     let setup = args.input.setup();
     let frames = output_frames(args)?;
     let face = Face::chosen(args.output);
-    let report = match handeye::calibrate_on_pixels(
-        &series.frames,
-        &camera,
+    let input = handeye::Input::Pixels {
+        frames: &series.frames,
+        camera: &camera,
+    };
+    let report = match handeye::calibrate(
+        input,
         setup,
         &Options {
             pose_names: names.clone(),
@@ -398,7 +403,7 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         Ok(report) => report,
         Err(e) => return Err(refused_on_pixels(e, face)),
     };
-    let poses = frame_poses(&series, &camera, setup, report.reading.applied);
+    let poses = frame_poses(&series, start_poses(report.reprojection.as_ref()));
     let unit = length_unit(&poses);
     if face != Face::Text {
         for w in &report.warnings {
@@ -531,9 +536,12 @@ fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
     let setup = args.input.setup();
     output_frames(args)?;
     let face = Face::chosen(args.output);
-    let report = match handeye::calibrate_robot_world_on_pixels(
-        &series.frames,
-        &camera,
+    let input = handeye::Input::Pixels {
+        frames: &series.frames,
+        camera: &camera,
+    };
+    let report = match calibrate_robot_world(
+        input,
         setup,
         &RobotWorldOptions {
             method: RobotWorldMethod::Reprojection,
@@ -549,7 +557,7 @@ fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
         Ok(report) => report,
         Err(e) => return Err(refused_on_pixels(e, face)),
     };
-    let poses = frame_poses(&series, &camera, setup, report.reading.applied);
+    let poses = frame_poses(&series, start_poses(report.reprojection.as_ref()));
     print_robot_world(
         args,
         &report,

@@ -7,7 +7,7 @@ use std::rc::Rc;
 
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
-use handeye::io::read_truth;
+use handeye::io::Truth;
 use handeye::{AdaptiveParams, Selection, StreamReading};
 use handeye::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
 use handeye::{Step, TrackOptions, TrackReport as Report};
@@ -160,7 +160,7 @@ pub fn run(args: Args) -> Result<()> {
         // The flags that do not apply on the pixels are refused before anything is read.
         pixels::refuse_flags(&args)?;
     }
-    let truth = args.truth.as_ref().map(|p| read_truth(p)).transpose()?;
+    let truth = args.truth.as_ref().map(Truth::read).transpose()?;
     let setup = args.input.setup();
     if let Some(t) = &truth
         && t.frame != setup.x_frame()

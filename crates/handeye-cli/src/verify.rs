@@ -76,7 +76,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.report {
         crate::report::check_writable(path)?;
     }
-    let saved = handeye::io::read_saved_x(&args.saved)?;
+    let saved = handeye::SavedX::read(&args.saved)?;
     let fix = args.fix.unwrap_or_default();
     let method = match (args.method, &args.intrinsics) {
         (None | Some(Method::Reprojection), Some(_)) => Method::Reprojection,
@@ -158,14 +158,14 @@ fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
         priors: args.prior.clone(),
         ..Options::default()
     };
-    let v = handeye::verify_on_pixels(saved, &series.frames, &camera, setup, &options)?;
+    let input = handeye::Input::Pixels {
+        frames: &series.frames,
+        camera: &camera,
+    };
+    let v = handeye::verify(saved, input, setup, &options)?;
     show(&v, face)?;
     if let Some(report) = &args.report {
-        let reading = v
-            .recording
-            .as_ref()
-            .map_or(handeye::Reading::AsGiven, |r| r.reading.applied);
-        let poses = crate::calibrate::frame_poses(&series, &camera, setup, reading);
+        let poses = crate::calibrate::frame_poses(&series, &v.start_poses);
         let page = crate::report::RunPage {
             poses: &poses,
             names: &names,

@@ -119,8 +119,25 @@ fn solve_x<'py>(
     let options = calibration_options(method, pairs, tsai_opencv_filter)?;
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
+    // As `handeye::calibrate` solves X before its checks: by the method over the pairing's
+    // motions, Tsai's with the Tsai options (OpenCV's filter).
+    macro_rules! solved {
+        ($motions:expr) => {{
+            let motions = $motions;
+            if options.method == Method::Tsai {
+                options.tsai.solve(&motions)
+            } else {
+                handeye::solve(options.method, &motions)
+            }
+        }};
+    }
     let c = py
-        .allow_threads(|| handeye::solve_poses(&poses, setup, &options))
+        .allow_threads(|| match options.pairing {
+            Pairing::All => solved!(handeye::AllPairs::new(&poses, setup)),
+            Pairing::Consecutive => {
+                solved!(handeye::motion_pairs(&poses, Pairing::Consecutive, setup))
+            }
+        })
         .map_err(value_error)?;
     Ok(matrix(py, &c.x))
 }
@@ -585,7 +602,7 @@ fn pixel_recording(
     }
     let read = FrameRecording::read(&source, options).map_err(read_error)?;
     let camera = match (intrinsics, &read.intrinsics) {
-        (Some(file), _) => handeye::io::read_intrinsics(&file).map_err(value_error)?,
+        (Some(file), _) => handeye::Intrinsics::read(&file).map_err(value_error)?,
         (None, Some(camera)) => *camera,
         (None, None) => {
             return Err(value_error(match source {
@@ -602,8 +619,9 @@ fn pixel_recording(
 }
 
 /// The calibration on the pixels of a recording with detections ([`pixel_recording`]: a JSON
-/// Lines file, or a ROS 2 recording of a tag's detections) ([`handeye::calibrate_on_pixels`], with
-/// `robot_world` [`handeye::calibrate_robot_world_on_pixels`]): its report as JSON, the same
+/// Lines file, or a ROS 2 recording of a tag's detections) ([`handeye::calibrate`] on
+/// [`handeye::Input::Pixels`], with `robot_world` [`handeye::calibrate_robot_world`]): its report
+/// as JSON, the same
 /// object `handeye calibrate INPUT --method reprojection [--intrinsics I] [--robot-world]` prints;
 /// the records named as there.
 #[pyfunction]
@@ -657,7 +675,11 @@ fn pixels_report(
         };
         let report = py
             .allow_threads(|| {
-                handeye::calibrate_robot_world_on_pixels(&frames, &camera, setup, &options)
+                let input = handeye::Input::Pixels {
+                    frames: &frames,
+                    camera: &camera,
+                };
+                handeye::calibrate_robot_world(input, setup, &options)
             })
             .map_err(value_error)?;
         return serde_json::to_string(&report).map_err(value_error);
@@ -673,13 +695,19 @@ fn pixels_report(
         ..Default::default()
     };
     let report = py
-        .allow_threads(|| handeye::calibrate_on_pixels(&frames, &camera, setup, &options))
+        .allow_threads(|| {
+            let input = handeye::Input::Pixels {
+                frames: &frames,
+                camera: &camera,
+            };
+            handeye::calibrate(input, setup, &options)
+        })
         .map_err(value_error)?;
     serde_json::to_string(&report).map_err(value_error)
 }
 
 /// A saved X checked on the pixels of a JSON Lines file with `detections`
-/// ([`handeye::verify_on_pixels`]): its result as JSON, the same object `handeye verify --x SAVED
+/// ([`handeye::verify`] on [`handeye::Input::Pixels`]): its result as JSON, the same object `handeye verify --x SAVED
 /// FILE --intrinsics I` prints.
 #[pyfunction]
 #[pyo3(signature = (saved, path, intrinsics, setup="eye-in-hand", fix=None))]
@@ -693,7 +721,7 @@ fn verify_pixels_report(
 ) -> PyResult<String> {
     let setup = parse_setup(setup)?;
     let fix = parse_fix(fix)?;
-    let saved = handeye::io::read_saved_x(&saved).map_err(value_error)?;
+    let saved = handeye::SavedX::read(&saved).map_err(value_error)?;
     let bag = TagBag {
         frames: [None, None, None],
         target_topic: None,
@@ -712,7 +740,11 @@ fn verify_pixels_report(
     };
     let v = py
         .allow_threads(|| {
-            handeye::verify_on_pixels(&saved, &read.series.frames, &camera, setup, &options)
+            let input = handeye::Input::Pixels {
+                frames: &read.series.frames,
+                camera: &camera,
+            };
+            handeye::verify(&saved, input, setup, &options)
         })
         .map_err(value_error)?;
     serde_json::to_string(&v).map_err(value_error)
@@ -783,7 +815,7 @@ fn verify_report<'py>(
     prior: Option<Vec<String>>,
     fix: Option<&str>,
 ) -> PyResult<String> {
-    let saved = handeye::io::read_saved_x(std::path::Path::new(saved)).map_err(value_error)?;
+    let saved = handeye::SavedX::read(saved).map_err(value_error)?;
     let options = handeye::Options {
         joints: checked_joints(joints)?,
         priors: priors(prior)?,
@@ -1124,7 +1156,7 @@ impl PyOnline {
         let given = priors(prior)?;
         let inner = match intrinsics {
             Some(path) => {
-                let camera = handeye::io::read_intrinsics(&path).map_err(value_error)?;
+                let camera = handeye::Intrinsics::read(&path).map_err(value_error)?;
                 OnlineCalibrator::on_pixels(camera, config)
             }
             None => OnlineCalibrator::new(config),
@@ -1196,7 +1228,7 @@ impl PyOnline {
         }
         let number = self.inner.poses() + 1;
         let source = format!("record {number}");
-        let frame = match handeye::io::frame_records(text.as_bytes(), &source).next() {
+        let frame = match FrameRecording::records(text.as_bytes(), &source).next() {
             Some(Ok((_, frame))) => frame,
             Some(Err(handeye::Error::Parse { field, message, .. })) => {
                 return Err(value_error(format!("{source}: field `{field}`: {message}")));

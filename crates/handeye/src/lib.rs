@@ -22,7 +22,8 @@
 //! # Entry points
 //! - Batch: [`calibrate()`] (readings, outliers, uncertainty, held-out check: the
 //!   report every face prints) on top of [`solve()`] with a [`Method`] over
-//!   [`motion_pairs`].
+//!   [`motion_pairs`]; from pose pairs or, on the pixels, from the target's detections with the
+//!   camera's intrinsics ([`Input`]), as are [`calibrate_robot_world`] and [`verify()`].
 //! - Online: [`OnlineCalibrator`], the one online calibrator every face drives (the paper's
 //!   selection, with [`Estimator::Accumulate`] the `track::Tracker`, and on the pixels
 //!   ([`OnlineCalibrator::on_pixels`]) the batch calibration on a doubling schedule).
@@ -136,13 +137,11 @@ pub use check::quality::errors_against_truth;
 pub use check::stream::StreamReading;
 pub use check::uncertainty::Uncertainty;
 // The jobs: batch, robot-world, advice.
+pub use calibrate::Input;
 pub use calibrate::advice::{Advice, AdviseOptions, Pivot, advise};
-pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate, solve_poses};
+pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate};
 pub use calibrate::low_dof::LowDofReport;
-pub use calibrate::pixels::{
-    ReprojectionSummary, calibrate_on_pixels, calibrate_robot_world_on_pixels, pixel_camera_poses,
-    verify_on_pixels,
-};
+pub use calibrate::pixels::ReprojectionSummary;
 pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
 pub use calibrate::verify::{Consistency, SavedX, Verification, verify};
 // Online: the paper's calibrator and the accumulating estimator.

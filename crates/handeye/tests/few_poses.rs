@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use handeye::io::{Format, read_pose_file, read_truth};
+use handeye::io::{Format, Truth, read_pose_file};
 use handeye::{Options, Setup, calibrate, rotation_angle_between};
 use rand::seq::index::sample;
 use rand::{SeedableRng, rngs::StdRng};
@@ -21,7 +21,7 @@ fn beyond_three_sigma(n: usize, subsets: usize) -> (usize, usize) {
             for seed in 0..2 {
                 let file = dir.join(format!("{kind}_{tag}_s{seed}.jsonl"));
                 let poses = read_pose_file(&file, Format::Jsonl).unwrap().pairs;
-                let truth = read_truth(&file.with_extension("truth.json")).unwrap().x;
+                let truth = Truth::read(file.with_extension("truth.json")).unwrap().x;
                 for _ in 0..subsets {
                     let mut pick = sample(&mut rng, poses.len(), n).into_vec();
                     pick.sort_unstable();

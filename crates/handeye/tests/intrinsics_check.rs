@@ -45,8 +45,15 @@ fn run_with(
 ) -> Outcome {
     let sim = simulate_pixels(&config, seed);
     let camera = changed(&sim.intrinsics);
-    let r =
-        handeye::calibrate_on_pixels(&sim.frames, &camera, sim.setup, &Options::default()).ok()?;
+    let r = handeye::calibrate(
+        handeye::Input::Pixels {
+            frames: &sim.frames,
+            camera: &camera,
+        },
+        sim.setup,
+        &Options::default(),
+    )
+    .ok()?;
     let (deg, t) = gap(&r.transform, &sim.x);
     let sigmas = (deg / r.uncertainty.rotation_deg).max(t / r.uncertainty.translation);
     let warned = r.warnings.iter().any(|w| {
@@ -215,8 +222,16 @@ fn verify_does_not_blame_the_camera_for_wrong_intrinsics() {
             unit: None,
         };
         let verify = |camera: &Intrinsics| {
-            handeye::verify_on_pixels(&saved, &sim.frames, camera, setup, &Options::default())
-                .expect("verified")
+            handeye::verify(
+                &saved,
+                handeye::Input::Pixels {
+                    frames: &sim.frames,
+                    camera,
+                },
+                setup,
+                &Options::default(),
+            )
+            .expect("verified")
         };
         let right = verify(&sim.intrinsics);
         assert_eq!(
@@ -256,8 +271,16 @@ fn verify_does_not_blame_the_camera_for_a_wrong_distortion() {
             unit: None,
         };
         let verify = |camera: &Intrinsics| {
-            handeye::verify_on_pixels(&saved, &sim.frames, camera, setup, &Options::default())
-                .expect("verified")
+            handeye::verify(
+                &saved,
+                handeye::Input::Pixels {
+                    frames: &sim.frames,
+                    camera,
+                },
+                setup,
+                &Options::default(),
+            )
+            .expect("verified")
         };
         let right = verify(&sim.intrinsics);
         assert_eq!(

@@ -14,9 +14,7 @@ use std::collections::BTreeMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
-use handeye::io::{
-    Format, PoseReader, Truth, read_pose_file, read_stamped_poses, read_truth, write_truth,
-};
+use handeye::io::{Format, PoseReader, Truth, read_pose_file, read_stamped_poses, write_truth};
 use handeye::{
     Error, Method, Pairing, PosePair, Setup, Transform, TransformJson, motion_pairs, solve,
 };
@@ -433,7 +431,7 @@ fn read_and_check(
                     .collect()
             }
             Kind::Truth => {
-                let t = read_truth(path)?;
+                let t = Truth::read(path)?;
                 let target = t.target.map_or(t.x, |(_, t)| t);
                 vec![PosePair {
                     base_from_gripper: t.x,

@@ -41,7 +41,11 @@ fn batch(
     camera: &handeye::Intrinsics,
     setup: Setup,
 ) -> handeye::Result<handeye::Report> {
-    handeye::calibrate_on_pixels(frames, camera, setup, &Options::default())
+    handeye::calibrate(
+        handeye::Input::Pixels { frames, camera },
+        setup,
+        &Options::default(),
+    )
 }
 
 /// The largest difference of the entries of two transforms' matrices (the angle of R̂ᵀR from its
@@ -64,7 +68,7 @@ fn the_end_of_the_stream_is_the_batch_calibration_on_the_pixels_within_3_sigma_o
         ("tag_eih", Setup::EyeInHand, "gripper_from_camera"),
     ] {
         let camera =
-            handeye::io::read_intrinsics(&testdata(&format!("{name}.intrinsics.yml"))).unwrap();
+            handeye::Intrinsics::read(testdata(&format!("{name}.intrinsics.yml"))).unwrap();
         let series = handeye::io::read_frames(&testdata(&format!("{name}.jsonl"))).unwrap();
         let (on_the_way, end) = online(&series.frames, &camera, setup);
         let end = end.unwrap();
@@ -222,7 +226,8 @@ fn a_bad_record_costs_its_line_only() {
     lines[8] = lines[8].replacen("\"pixels\": [[", "\"pixels\": [[\"nan\", ", 1);
     lines[11] = lines[11].replace("\"pixels\"", "\"pixelz\"");
     let joined = lines.join("\n");
-    let records: Vec<_> = handeye::io::frame_records(joined.as_bytes(), "s.jsonl").collect();
+    let records: Vec<_> =
+        handeye::io::FrameRecording::records(joined.as_bytes(), "s.jsonl").collect();
     let bad: Vec<(usize, String)> = records
         .iter()
         .filter_map(|r| match r {

@@ -266,9 +266,11 @@ fn the_sigma_is_honest_over_many_recordings() {
 // The job (`calibrate --method reprojection`): bad input is refused or answered right.
 
 fn job(sim: &PixelSim, frames: &[Frame]) -> handeye::Result<handeye::Report> {
-    handeye::calibrate_on_pixels(
-        frames,
-        &sim.intrinsics,
+    handeye::calibrate(
+        handeye::Input::Pixels {
+            frames,
+            camera: &sim.intrinsics,
+        },
         sim.setup,
         &handeye::Options::default(),
     )
@@ -399,9 +401,11 @@ fn the_robot_world_job_on_the_pixels_gives_the_target_too() {
     for setup in SETUPS {
         for config in [PixelSimConfig::board(), PixelSimConfig::tag()] {
             let sim = simulate_pixels(&config.with_setup(setup), 21);
-            let r = handeye::calibrate_robot_world_on_pixels(
-                &sim.frames,
-                &sim.intrinsics,
+            let r = handeye::calibrate_robot_world(
+                handeye::Input::Pixels {
+                    frames: &sim.frames,
+                    camera: &sim.intrinsics,
+                },
                 setup,
                 &handeye::RobotWorldOptions::default(),
             )
@@ -435,9 +439,11 @@ fn the_robot_world_job_on_the_pixels_gives_the_target_too() {
     }
     // Leaving out poses is the solve's own on the pixels: asked for, it is refused.
     let sim = simulate_pixels(&PixelSimConfig::tag(), 21);
-    let e = handeye::calibrate_robot_world_on_pixels(
-        &sim.frames,
-        &sim.intrinsics,
+    let e = handeye::calibrate_robot_world(
+        handeye::Input::Pixels {
+            frames: &sim.frames,
+            camera: &sim.intrinsics,
+        },
         sim.setup,
         &handeye::RobotWorldOptions {
             reject_outliers: true,
@@ -448,7 +454,7 @@ fn the_robot_world_job_on_the_pixels_gives_the_target_too() {
     assert!(e.to_string().contains("left out"), "{e}");
 }
 
-/// `verify_on_pixels` over many simulated recordings: the true X consistent, one turned by 1° about
+/// `verify` on the pixels over many simulated recordings: the true X consistent, one turned by 1° about
 /// an axis of X's parent frame inconsistent; the largest distance of the truth printed
 /// (`--nocapture`).
 #[test]
@@ -479,10 +485,12 @@ fn verify_on_the_pixels_accepts_the_truth_and_rejects_a_degree() {
                         covariance: None,
                         unit: None,
                     };
-                    let v = handeye::verify_on_pixels(
+                    let v = handeye::verify(
                         &saved,
-                        &sim.frames,
-                        &sim.intrinsics,
+                        handeye::Input::Pixels {
+                            frames: &sim.frames,
+                            camera: &sim.intrinsics,
+                        },
                         setup,
                         &handeye::Options::default(),
                     )
@@ -538,9 +546,11 @@ fn frames_with_a_wrong_robot_pose_are_named_and_left_out() {
                 let names: Vec<String> = (0..frames.len())
                     .map(|i| format!("r.jsonl:{}", i + 1))
                     .collect();
-                let r = handeye::calibrate_on_pixels(
-                    &frames,
-                    &sim.intrinsics,
+                let r = handeye::calibrate(
+                    handeye::Input::Pixels {
+                        frames: &frames,
+                        camera: &sim.intrinsics,
+                    },
                     setup,
                     &handeye::Options {
                         pose_names: names,
@@ -586,9 +596,11 @@ fn frames_with_a_wrong_robot_pose_are_named_and_left_out() {
                     within += usize::from(ratio <= 3.0);
                 }
                 // The same recording without the corrupted frames: no outlier pose named.
-                let clean = handeye::calibrate_on_pixels(
-                    &sim.frames,
-                    &sim.intrinsics,
+                let clean = handeye::calibrate(
+                    handeye::Input::Pixels {
+                        frames: &sim.frames,
+                        camera: &sim.intrinsics,
+                    },
                     setup,
                     &handeye::Options::default(),
                 )

@@ -295,8 +295,16 @@ fn recordings_that_do_not_determine_the_intrinsics_are_refused() {
         covariance: None,
         unit: Some(handeye::LengthUnit::Metre),
     };
-    let e = handeye::verify_on_pixels(&saved, &sim.frames, &sim.intrinsics, sim.setup, &refine)
-        .unwrap_err();
+    let e = handeye::verify(
+        &saved,
+        handeye::Input::Pixels {
+            frames: &sim.frames,
+            camera: &sim.intrinsics,
+        },
+        sim.setup,
+        &refine,
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("not offered by verify"), "{e}");
 }
 
@@ -332,7 +340,7 @@ fn mis_detected_corners_are_left_out_with_the_intrinsics_free() {
     }
 }
 
-/// The jobs: `calibrate_on_pixels` and `calibrate_robot_world_on_pixels` with
+/// The jobs: `calibrate` and `calibrate_robot_world` on the pixels with
 /// `refine_intrinsics` report the intrinsics with their sigmas, one solve for both; the target
 /// within 3 sigma; robot poses inverted and a target in millimetres are refused as without the
 /// flag.
@@ -345,10 +353,20 @@ fn the_jobs_report_the_refined_intrinsics_and_refuse_bad_input() {
             refine_intrinsics: true,
             ..handeye::Options::default()
         };
-        let r = handeye::calibrate_on_pixels(&sim.frames, &given, setup, &options).unwrap();
-        let rw = handeye::calibrate_robot_world_on_pixels(
-            &sim.frames,
-            &given,
+        let r = handeye::calibrate(
+            handeye::Input::Pixels {
+                frames: &sim.frames,
+                camera: &given,
+            },
+            setup,
+            &options,
+        )
+        .unwrap();
+        let rw = handeye::calibrate_robot_world(
+            handeye::Input::Pixels {
+                frames: &sim.frames,
+                camera: &given,
+            },
             setup,
             &handeye::RobotWorldOptions {
                 refine_intrinsics: true,
@@ -379,9 +397,11 @@ fn the_jobs_report_the_refined_intrinsics_and_refuse_bad_input() {
         assert_eq!(k["distortion"].as_array().unwrap().len(), 5);
         assert!(k["sigma"]["distortion"][4].is_null(), "k3 held");
         // Without the flag, the report has no `intrinsics`.
-        let plain = handeye::calibrate_on_pixels(
-            &sim.frames,
-            &sim.intrinsics,
+        let plain = handeye::calibrate(
+            handeye::Input::Pixels {
+                frames: &sim.frames,
+                camera: &sim.intrinsics,
+            },
             setup,
             &handeye::Options::default(),
         )
@@ -409,7 +429,14 @@ fn the_jobs_report_the_refined_intrinsics_and_refuse_bad_input() {
                 ..f.clone()
             })
             .collect();
-        match handeye::calibrate_on_pixels(&inverted, &given, setup, &options) {
+        match handeye::calibrate(
+            handeye::Input::Pixels {
+                frames: &inverted,
+                camera: &given,
+            },
+            setup,
+            &options,
+        ) {
             Err(handeye::Error::Misread { .. }) => {}
             other => panic!("{setup:?} inverted: {:?}", other.map(|r| r.transform)),
         }
@@ -427,7 +454,14 @@ fn the_jobs_report_the_refined_intrinsics_and_refuse_bad_input() {
                 f
             })
             .collect();
-        match handeye::calibrate_on_pixels(&mm, &given, setup, &options) {
+        match handeye::calibrate(
+            handeye::Input::Pixels {
+                frames: &mm,
+                camera: &given,
+            },
+            setup,
+            &options,
+        ) {
             Err(e @ handeye::Error::PixelsUnfit { .. }) => {
                 assert!(e.to_string().contains("1000 times smaller"), "{e}")
             }

@@ -11,7 +11,7 @@
 use std::path::{Path, PathBuf};
 
 use handeye::calibrate::robot_world::{RobotWorldOptions, calibrate_robot_world};
-use handeye::io::{Format, read_pose_file, read_truth};
+use handeye::io::{Format, Truth, read_pose_file};
 use handeye::model::findings::Verdict;
 use handeye::model::pose::{exp_so3, transform_from_matrix4, transform_from_parts};
 use handeye::solve::{
@@ -224,7 +224,7 @@ fn kinhec(kinds: &[&str]) -> Vec<(PathBuf, Setup, Transform, Transform)> {
     files
         .into_iter()
         .map(|path| {
-            let truth = read_truth(&path.with_extension("truth.json")).unwrap();
+            let truth = Truth::read(path.with_extension("truth.json")).unwrap();
             let setup = if truth.frame == "gripper_from_camera" {
                 Setup::EyeInHand
             } else {

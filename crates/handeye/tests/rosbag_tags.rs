@@ -85,9 +85,13 @@ fn jsonl_frames(skip: &[usize]) -> Vec<Frame> {
 }
 
 fn x_of(frames: &[Frame], camera: &handeye::Intrinsics) -> Transform {
-    handeye::calibrate_on_pixels(frames, camera, Setup::EyeInHand, &Options::default())
-        .unwrap()
-        .transform
+    handeye::calibrate(
+        handeye::Input::Pixels { frames, camera },
+        Setup::EyeInHand,
+        &Options::default(),
+    )
+    .unwrap()
+    .transform
 }
 
 fn entry_gap(a: &Transform, b: &Transform) -> f64 {
@@ -96,7 +100,7 @@ fn entry_gap(a: &Transform, b: &Transform) -> f64 {
 
 #[test]
 fn both_storages_give_the_x_of_the_json_lines_recording() {
-    let intrinsics = handeye::io::read_intrinsics(&data("pixels/tag_eih.intrinsics.yml")).unwrap();
+    let intrinsics = handeye::Intrinsics::read(data("pixels/tag_eih.intrinsics.yml")).unwrap();
     let expected = x_of(&jsonl_frames(&[]), &intrinsics);
     for bag in ["rosbag/tag_eih_mcap", "rosbag/tag_eih_sqlite3"] {
         let read = read_bag_frames(&data(bag), &frames(), &tags(None), &options()).unwrap();
@@ -119,7 +123,7 @@ fn both_storages_give_the_x_of_the_json_lines_recording() {
 
 #[test]
 fn a_bad_message_costs_that_message() {
-    let intrinsics = handeye::io::read_intrinsics(&data("pixels/tag_eih.intrinsics.yml")).unwrap();
+    let intrinsics = handeye::Intrinsics::read(data("pixels/tag_eih.intrinsics.yml")).unwrap();
     let path = data("rosbag/tag_eih_hostile_mcap");
     let read = read_bag_frames(&path, &frames(), &tags(Some(3)), &options()).unwrap();
     // Image 3 truncated, image 6 with 5 corners, image 9 without tag 3: skipped and named.

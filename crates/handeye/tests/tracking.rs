@@ -227,7 +227,7 @@ fn the_kinhec_streams_raise_no_alarm_hold_out_the_outliers_and_beat_opencv() {
             handeye::Rotations::default(),
         )
         .unwrap();
-        let truth = handeye::io::read_truth(&file("truth")).unwrap().x;
+        let truth = handeye::io::Truth::read(file("truth")).unwrap().x;
         let run = track(&pairing, setup);
         let name = e["truth"]
             .as_str()
@@ -319,7 +319,7 @@ fn on_the_kinhec_pose_files_every_report_holds_and_bad_input_reports_nothing() {
             handeye::io::Format::Auto,
         )
         .unwrap();
-        let truth = handeye::io::read_truth(&kinhec.join(e["truth"].as_str().unwrap()))
+        let truth = handeye::io::Truth::read(kinhec.join(e["truth"].as_str().unwrap()))
             .unwrap()
             .x;
         let mut tracker = Tracker::new(setup, TrackOptions::default());

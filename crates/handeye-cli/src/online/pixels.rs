@@ -27,7 +27,7 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
         args.child_frame.as_deref(),
         &args.name,
     )?;
-    let camera = handeye::io::read_intrinsics(intrinsics)?;
+    let camera = handeye::Intrinsics::read(intrinsics)?;
     let mut calibrator = OnlineCalibrator::on_pixels(camera, config)?;
     let out = LineOut::stdout();
     let mut messages = Thinned {
@@ -37,7 +37,7 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
     };
     let source = path.display().to_string();
     let mut read = |input: &mut dyn std::io::BufRead| -> Result<()> {
-        for record in handeye::io::frame_records(input, &source) {
+        for record in handeye::io::FrameRecording::records(input, &source) {
             let (line, frame) = match record {
                 Ok(r) => r,
                 Err(e) => {

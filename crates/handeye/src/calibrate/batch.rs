@@ -16,6 +16,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use crate::calibrate::Input;
 use crate::check::holdout::{HeldOutCheck, leave_one_out};
 use crate::check::outliers::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::check::quality::{MotionQuality, QualityReport, ResidualSummary, quality_report};
@@ -369,11 +370,41 @@ pub(crate) fn plausible(x: &Transform, what: &str) -> Result<()> {
     Ok(())
 }
 
-/// Calibrates X from `poses` (see the module docs for the steps).
+/// Calibrates X from pose pairs (see the module docs for the steps), or on the pixels of the
+/// target's detections ([`Input::Pixels`]: see below).
 ///
 /// Errors: [`Error::Misread`] when another reading fits far better (and [`Fix::Refuse`]),
 /// [`Error::Degenerate`] when the motions do not determine X, [`Error::TooFewMotions`].
-pub fn calibrate(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
+///
+/// # On the pixels
+/// X and the target's pose are fitted to the detections, with the same report and its own
+/// checks: the reading of the robot poses is checked on the pixels (a planar target's PnP poses
+/// flip, which the readings check on poses would take for inverted poses), a fit whose pixels
+/// stay far above detection noise is refused ([`Error::PixelsUnfit`]), and the uncertainty is the
+/// solve's own. `options.method` is ignored (this is [`Method::Reprojection`]); `options.fix` may
+/// force `as-given` or `robot-inverted`; `options.point` places `at_point`;
+/// `options.pose_names` names the frames; `options.refine_intrinsics` refines the intrinsics with
+/// X. The report's `reprojection` says the fit on the pixels.
+///
+/// Errors on the pixels: [`Error::Misread`] when the robot poses inverted fit the pixels far
+/// better, [`Error::PixelsUnfit`], [`Error::Degenerate`] (motions or covariance that do not
+/// determine X), [`Error::TooFewMotions`] for fewer than 13 frames, [`Error::InvalidParameter`]
+/// for unusable detections or intrinsics, a prior or `reject_outliers` (not taken on the pixels).
+pub fn calibrate<'a>(
+    input: impl Into<Input<'a>>,
+    setup: Setup,
+    options: &Options,
+) -> Result<Report> {
+    match input.into() {
+        Input::Poses(poses) => calibrate_poses(poses, setup, options),
+        Input::Pixels { frames, camera } => {
+            crate::calibrate::pixels::calibrate_on_pixels(frames, camera, setup, options)
+        }
+    }
+}
+
+/// [`calibrate`] on pose pairs.
+fn calibrate_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Report> {
     not_without_pixels(options.refine_intrinsics)?;
     check_replicates(options.replicates)?;
     check_joints(&options.joints, poses.len())?;
@@ -632,7 +663,8 @@ fn held_out_of(
     }
 }
 
-/// Solves X from the poses with the options' method and pairing.
+/// Solves X from the poses with the options' method, pairing and Tsai options: what [`calibrate`]
+/// solves before its checks (public with `internals` only: [`solve`] is the one way to solve).
 pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Calibration> {
     match options.pairing {
         Pairing::All => solve_motions(&AllPairs::new(poses, setup), options),

@@ -1,6 +1,6 @@
 //! `calibrate --method reprojection`: hand–eye calibration on the pixels of the detections
-//! ([`crate::solve::reprojection`]), with the same report as the pose-based job and its own
-//! checks:
+//! ([`crate::solve::reprojection`]), the jobs' [`Input::Pixels`](crate::calibrate::Input::Pixels),
+//! with the same report as the pose-based job and its own checks:
 //! 1. the reading of the robot poses is checked on the pixels, not on PnP poses: a planar target's
 //!    PnP poses flip (the planar ambiguity), which the pose-based readings doctor takes for
 //!    inverted poses. The recording is solved as given and with the robot poses inverted; the
@@ -80,6 +80,14 @@ pub struct ReprojectionSummary {
     /// not in the JSON, whose size it would make grow with the detections.
     #[serde(skip)]
     pub corners: Vec<CornerResidual>,
+    /// The camera pose the solve started from for each frame of the input (the outlier frames
+    /// left out too), in input order, under the reading `reading.applied` says (the robot poses
+    /// inverted for [`Reading::RobotInverted`]): the PnP pose chosen by the robot's motion, or the
+    /// record's own `camera_from_target` where it fits the pixels better. The camera poses a
+    /// report page or a unit guess should use for records that carry detections only; a frame
+    /// that cannot be posed has its own `camera_from_target`, or the identity. Not in the JSON.
+    #[serde(skip)]
+    pub start_poses: Vec<Transform>,
 }
 
 /// One detection's reprojection residual.
@@ -107,15 +115,9 @@ pub struct FrameRms {
 /// The parameters of the fit on the pixels: X's and the target's rotation and translation.
 const PIXEL_PARAMETERS: usize = 12;
 
-/// Calibrates X on the pixels (see the module docs). `options.method` is ignored (this is
-/// `reprojection`); `options.fix` may force `as-given` or `robot-inverted`; `options.point`
-/// places `at_point`; `options.pose_names` names the frames.
-///
-/// Errors: [`Error::Misread`] when the robot poses inverted fit the pixels far better,
-/// [`Error::PixelsUnfit`], [`Error::Degenerate`] (motions or covariance that do not determine X),
-/// [`Error::TooFewMotions`] for fewer than 13 frames, [`Error::InvalidParameter`] for unusable
-/// detections or intrinsics, a prior or `reject_outliers` (not taken on the pixels).
-pub fn calibrate_on_pixels(
+/// [`calibrate`](crate::calibrate()) on the pixels (see the module docs and its section "On the
+/// pixels").
+pub(crate) fn calibrate_on_pixels(
     frames: &[Frame],
     camera: &Intrinsics,
     setup: Setup,
@@ -147,22 +149,10 @@ pub(crate) fn not_on_pixels(reject_outliers: bool, priors: &[crate::model::prior
     Ok(())
 }
 
-/// X and the target's pose on the pixels, with the same checks as [`calibrate_on_pixels`] (the
-/// reading of the robot poses on the pixels, a fit far above noise refused), in the result shape
-/// of the pose-based robot-world calibration
-/// ([`calibrate_robot_world`](crate::calibrate_robot_world)): one result for every face.
-///
-/// Both uncertainties are the pixel solve's own (X's and the target's blocks of one covariance,
-/// the larger of the Gauss–Newton and the per-frame sandwich one), judged by the same bounds;
-/// `residual` is Q_i X C_i = Y over the PnP poses the solve started from (their noise, not X's
-/// error: X and the target were fitted to the pixels), and `reprojection` the fit on the pixels.
-/// `options.method` is ignored (this is [`RobotWorldMethod::Reprojection`]), as are
-/// `replicates`, `written`, `outlier_deg` and `joints` (no bootstrap, no systematic-error test on
-/// the pixels); `fix` may force `as-given` or `robot-inverted`; `point` places `at_point`;
-/// `pose_names` names the frames.
-///
-/// Errors: those of [`calibrate_on_pixels`].
-pub fn calibrate_robot_world_on_pixels(
+/// X and the target's pose on the pixels, with the same checks as [`calibrate_on_pixels`]:
+/// [`calibrate_robot_world`](crate::calibrate_robot_world) on the pixels (see its section "On
+/// the pixels").
+pub(crate) fn calibrate_robot_world_on_pixels(
     frames: &[Frame],
     camera: &Intrinsics,
     setup: Setup,
@@ -237,11 +227,12 @@ pub fn calibrate_robot_world_on_pixels(
 /// one by the same test and words as [`verify`](crate::verify) (the covariance is the pixel
 /// solve's). `pixels` adds the reprojection error of the recording's detections with the saved X
 /// and with the recording's own, the target's pose fitted to each with X held fixed
-/// (`target_with_x`): how much worse the saved X explains the pixels, frame by frame.
+/// (`target_with_x`): how much worse the saved X explains the pixels, frame by frame;
+/// `start_poses` are the camera poses the solve started from (as given when it was refused).
 ///
 /// Errors: those of [`calibrate_on_pixels`] but a refusal for degenerate or too few motions, which
 /// is the verdict `undetermined`.
-pub fn verify_on_pixels(
+pub(crate) fn verify_on_pixels(
     saved: &SavedX,
     frames: &[Frame],
     camera: &Intrinsics,
@@ -259,8 +250,12 @@ pub fn verify_on_pixels(
     let (used, solution, applied, reading_check, choice) = match solved(frames, camera, setup, options.fix, false) {
         Ok(s) => s,
         Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
-            let poses = pose_pairs(frames, &start_camera_poses(frames, camera, setup));
-            return Ok(cannot_tell(saved, &poses, &e, notes));
+            let start_poses = start_camera_poses(frames, camera, setup);
+            let poses = pose_pairs(frames, &start_poses);
+            return Ok(Verification {
+                start_poses,
+                ..cannot_tell(saved, &poses, &e, notes)
+            });
         }
         Err(e) => return Err(e),
     };
@@ -273,7 +268,12 @@ pub fn verify_on_pixels(
     let with_own = target_with_x(&used, camera, setup, &own, &solution, &pixel_options);
     let report = match report(&used, setup, options, solution, (applied, reading_check), &choice) {
         Ok(r) => r,
-        Err(e @ Error::Degenerate { .. }) => return Ok(cannot_tell(saved, &poses, &e, notes)),
+        Err(e @ Error::Degenerate { .. }) => {
+            return Ok(Verification {
+                start_poses: pixel_camera_poses(frames, camera, setup, Reading::AsGiven),
+                ..cannot_tell(saved, &poses, &e, notes)
+            });
+        }
         Err(e) => return Err(e),
     };
     let names = report.reprojection.as_ref().map(|r| {
@@ -297,6 +297,7 @@ pub fn verify_on_pixels(
         })
         .collect();
     let mut v = compared(saved, &poses, report, notes);
+    v.start_poses = choice.start_poses;
     v.pixels = Some(PixelComparison {
         saved_rms_px: with_saved.rms_px,
         own_rms_px: with_own.rms_px,
@@ -306,12 +307,9 @@ pub fn verify_on_pixels(
 }
 
 /// The camera pose of each record that the solve on the pixels starts from, under `reading` (the
-/// robot poses inverted for [`Reading::RobotInverted`], as the result's `reading.applied` says):
-/// the PnP pose chosen by the robot's motion, or the record's own `camera_from_target` where it
-/// fits the pixels better. The poses a report page or a unit guess should use for records that
-/// carry detections only. Never fails: a frame that cannot be posed keeps its own
-/// `camera_from_target`, or the identity.
-pub fn pixel_camera_poses(
+/// robot poses inverted for [`Reading::RobotInverted`]): [`ReprojectionSummary::start_poses`].
+/// Never fails: a frame that cannot be posed keeps its own `camera_from_target`, or the identity.
+fn pixel_camera_poses(
     frames: &[Frame],
     camera: &Intrinsics,
     setup: Setup,
@@ -358,6 +356,9 @@ pub(crate) struct FrameChoice {
     pub focal: Option<CameraFit>,
     /// The same with the radial distortion k1 that fits best ([`k1_check`]).
     pub k1: Option<CameraFit>,
+    /// The camera pose the solve started from for each frame of the input
+    /// ([`ReprojectionSummary::start_poses`]).
+    pub start_poses: Vec<Transform>,
 }
 
 /// A solve of the frames used with one of the camera's parameters changed: the focal length's
@@ -742,6 +743,13 @@ fn solved(
         choice.focal = focal_check(&used, camera, setup, &pixel_options, &solution);
         choice.k1 = k1_check(&used, camera, setup, &pixel_options, &solution);
     }
+    // Over every frame the solve started from the input's own start poses (under the reading
+    // applied); with frames left out, those of the input are found anew.
+    choice.start_poses = if choice.rejected {
+        pixel_camera_poses(frames, camera, setup, applied)
+    } else {
+        solution.start_poses.clone()
+    };
     Ok((used, solution, applied, reading_check, choice))
 }
 
@@ -922,6 +930,7 @@ fn report(
                 kept: !left_out.contains(&(f, k)),
             })
             .collect(),
+        start_poses: choice.start_poses.clone(),
     };
     warnings.sort_by_key(|w| w.remedy().is_none());
     Ok(Report {
@@ -975,7 +984,52 @@ fn report(
 
 #[cfg(test)]
 mod tests {
-    use super::brent_minimum;
+    use super::{brent_minimum, pixel_camera_poses};
+    use crate::calibrate::batch::{Fix, Options};
+    use crate::model::findings::Reading;
+    use crate::model::motion::Setup;
+    use crate::model::pose::Transform;
+    use crate::sim::pixels::{PixelSimConfig, simulate_pixels};
+
+    #[test]
+    fn the_start_poses_are_every_input_frames_under_the_reading_applied() {
+        for setup in [Setup::EyeInHand, Setup::EyeToHand] {
+            let sim = simulate_pixels(&PixelSimConfig::tag().with_setup(setup), 7100);
+            let camera = &sim.intrinsics;
+            let start = |frames: &[crate::model::camera::Frame], fix: Fix| {
+                let options = Options {
+                    fix,
+                    ..Options::default()
+                };
+                let r = super::calibrate_on_pixels(frames, camera, setup, &options).unwrap();
+                let applied = r.reading.applied;
+                let rejected = r.outliers.rejected;
+                let poses = r.reprojection.unwrap().start_poses;
+                assert_eq!(poses.len(), frames.len());
+                assert_eq!(poses, pixel_camera_poses(frames, camera, setup, applied));
+                (applied, rejected)
+            };
+            assert_eq!(start(&sim.frames, Fix::Refuse), (Reading::AsGiven, false));
+            // Two frames left out: still every input frame's start pose.
+            let mut frames = sim.frames.clone();
+            frames[4].base_from_gripper *= Transform::new(
+                nalgebra::Vector3::new(0.02, -0.01, 0.0),
+                nalgebra::Vector3::new(0.0, 2f64.to_radians(), 0.0),
+            );
+            frames[19].base_from_gripper = frames[20].base_from_gripper;
+            assert_eq!(start(&frames, Fix::Refuse), (Reading::AsGiven, true));
+            // The robot poses read inverted.
+            let inverted: Vec<_> = sim
+                .frames
+                .iter()
+                .map(|f| crate::model::camera::Frame {
+                    base_from_gripper: f.base_from_gripper.inverse(),
+                    ..f.clone()
+                })
+                .collect();
+            assert_eq!(start(&inverted, Fix::Auto), (Reading::RobotInverted, false));
+        }
+    }
 
     /// Finds `f`'s minimum on the focal check's bracket from 0, counting evaluations.
     fn minimum(f: impl Fn(f64) -> f64) -> (f64, usize) {

@@ -33,6 +33,7 @@ use crate::calibrate::batch::{
     check_joints, outlier_warning, read_poses, systematic_test, widened_for_systematic, without,
     working_distance,
 };
+use crate::calibrate::Input;
 use crate::calibrate::low_dof::{self, LowDofReport, Plan};
 use crate::check::systematic::Systematic;
 use crate::check::outliers::translation_scale;
@@ -242,7 +243,7 @@ pub struct RobotWorldReport {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub systematic: Option<Systematic>,
     /// The fit on the pixels, when X and the target were solved on the detections
-    /// ([`crate::calibrate_robot_world_on_pixels`]).
+    /// ([`Input::Pixels`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reprojection: Option<crate::calibrate::pixels::ReprojectionSummary>,
     /// The components of X's translation that came from a prior, as in the hand–eye report
@@ -270,7 +271,35 @@ pub struct RobotWorldReport {
 /// assert!(report.uncertainty.rotation_deg < 1.0);
 /// # Ok::<(), handeye::Error>(())
 /// ```
-pub fn calibrate_robot_world(
+///
+/// # On the pixels
+/// With [`Input::Pixels`], X and the target's pose are fitted to the detections with the checks of
+/// [`calibrate`](crate::calibrate()) on the pixels (the reading of the robot poses on the pixels, a fit
+/// far above noise refused), in the same result shape: one result for every face. Both
+/// uncertainties are the pixel solve's own (X's and the target's blocks of one covariance, the
+/// larger of the Gauss–Newton and the per-frame sandwich one), judged by the same bounds;
+/// `residual` is Q_i X C_i = Y over the PnP poses the solve started from (their noise, not X's
+/// error: X and the target were fitted to the pixels), and `reprojection` the fit on the pixels.
+/// `options.method` is ignored (this is [`RobotWorldMethod::Reprojection`]), as are
+/// `replicates`, `written`, `outlier_deg` and `joints` (no bootstrap, no systematic-error test on
+/// the pixels); `fix` may force `as-given` or `robot-inverted`; `point` places `at_point`;
+/// `pose_names` names the frames. Errors: those of [`calibrate`](crate::calibrate()) on the
+/// pixels.
+pub fn calibrate_robot_world<'a>(
+    input: impl Into<Input<'a>>,
+    setup: Setup,
+    options: &RobotWorldOptions,
+) -> Result<RobotWorldReport> {
+    match input.into() {
+        Input::Poses(poses) => robot_world_on_poses(poses, setup, options),
+        Input::Pixels { frames, camera } => {
+            crate::calibrate::pixels::calibrate_robot_world_on_pixels(frames, camera, setup, options)
+        }
+    }
+}
+
+/// [`calibrate_robot_world`] on pose pairs.
+fn robot_world_on_poses(
     poses: &[PosePair],
     setup: Setup,
     options: &RobotWorldOptions,

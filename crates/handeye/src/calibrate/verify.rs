@@ -14,6 +14,7 @@ use nalgebra::{Matrix6, SymmetricEigen, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
+use crate::calibrate::Input;
 use crate::calibrate::batch::{Assessment, Options, Report, calibrate, working_distance};
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Sizes, Verdict};
@@ -99,6 +100,12 @@ pub struct Verification {
     /// detections with the saved X and with the recording's own, the target's pose fitted to each.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pixels: Option<PixelComparison>,
+    /// On the pixels: the camera pose each record's solve started from, in input order, under the
+    /// reading of `recording` (as given when it was refused), as
+    /// [`ReprojectionSummary::start_poses`](crate::ReprojectionSummary::start_poses) gives them;
+    /// empty on pose pairs. Not in the JSON.
+    #[serde(skip)]
+    pub start_poses: Vec<Transform>,
 }
 
 /// The saved X and the recording's own on the pixels: the target's pose fitted with each X held
@@ -124,11 +131,34 @@ pub struct FramePixels {
     pub own_px: f64,
 }
 
-/// Checks a saved X against a recording of poses (see the module docs).
+/// Checks a saved X against a recording (see the module docs): pose pairs, or the target's
+/// detections with the camera's intrinsics ([`Input::Pixels`]).
+///
+/// On the pixels the recording is calibrated as [`calibrate`] does it there, and its X compared
+/// with the saved one by the same test and words (the covariance is the pixel solve's);
+/// `pixels` adds the reprojection error of the recording's detections with the saved X and with
+/// the recording's own, the target's pose fitted to each with X held fixed: how much worse the
+/// saved X explains the pixels, frame by frame. `refine_intrinsics` is refused there (a saved X
+/// is checked with the intrinsics it was calibrated with).
 ///
 /// Errors: those of [`calibrate`] but a refusal for degenerate motions or too few motions, which
 /// is the verdict `undetermined`.
-pub fn verify(
+pub fn verify<'a>(
+    saved: &SavedX,
+    input: impl Into<Input<'a>>,
+    setup: Setup,
+    options: &Options,
+) -> Result<Verification> {
+    match input.into() {
+        Input::Poses(poses) => verify_poses(saved, poses, setup, options),
+        Input::Pixels { frames, camera } => {
+            crate::calibrate::pixels::verify_on_pixels(saved, frames, camera, setup, options)
+        }
+    }
+}
+
+/// [`verify`] on pose pairs.
+fn verify_poses(
     saved: &SavedX,
     poses: &[PosePair],
     setup: Setup,
@@ -320,6 +350,7 @@ pub(crate) fn compared(
         notes,
         recording: Some(report),
         pixels: None,
+        start_poses: Vec::new(),
     }
 }
 
@@ -420,6 +451,7 @@ pub(crate) fn cannot_tell(
         notes,
         recording: None,
         pixels: None,
+        start_poses: Vec::new(),
     }
 }
 

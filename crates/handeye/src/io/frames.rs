@@ -48,12 +48,9 @@ pub fn frames_of<R: BufRead>(input: R, source: &str) -> Result<FrameSeries> {
     Ok(series)
 }
 
-/// The records of a recording on the pixels one at a time, as they come (a stream: `handeye
-/// online --intrinsics`), each with its line number: the reader of
-/// [`FrameRecording::read`](crate::io::FrameRecording::read) record by record. A bad record is its own [`Error::Parse`] (file, line, field) and the reading goes on
-/// with the next line; blank lines and `#` comments are skipped; a failing input ends it after
-/// its error.
-pub fn frame_records<R: BufRead>(
+/// The records of a recording on the pixels one at a time:
+/// [`FrameRecording::records`](crate::io::FrameRecording::records).
+pub(crate) fn frame_records<R: BufRead>(
     input: R,
     source: &str,
 ) -> impl Iterator<Item = Result<(usize, Frame)>> + use<'_, R> {

@@ -15,14 +15,21 @@ use crate::io::yaml_tree::YamlTree;
 use crate::model::camera::Intrinsics;
 use crate::model::error::{Error, Result};
 
-/// Reads the intrinsics of a file (see the module docs).
-pub fn read_intrinsics(path: &Path) -> Result<Intrinsics> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        file: file.clone(),
-        source,
-    })?;
-    parse_intrinsics(&text, &file)
+impl Intrinsics {
+    /// Reads the intrinsics of a file: OpenCV's calibration YAML (`camera_matrix`,
+    /// `distortion_coefficients`, `image_width`, `image_height`), the same names as ROS's
+    /// `camera_calibration_parsers` writes them, or a ROS `camera_info` message (`k`/`K`,
+    /// `d`/`D`, `width`, `height`, `distortion_model`). Errors name the file, the line and the
+    /// field.
+    pub fn read(path: impl AsRef<Path>) -> Result<Intrinsics> {
+        let path = path.as_ref();
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            file: file.clone(),
+            source,
+        })?;
+        parse_intrinsics(&text, &file)
+    }
 }
 
 /// Parses intrinsics from the text of a file named `file` in messages.

@@ -44,18 +44,17 @@ use lines::{Line, Lines};
 // `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
 // two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
 // public with `internals` for this crate's tests.
+pub use frames::FrameSeries;
+pub(crate) use frames::frame_records;
 #[cfg(feature = "internals")]
 pub use frames::read_frames;
 #[cfg(not(feature = "internals"))]
 pub(crate) use frames::read_frames;
-pub use frames::{FrameSeries, frame_records};
-pub use intrinsics::read_intrinsics;
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
 #[cfg(feature = "rosbag")]
 pub(crate) use recording::MountFrame;
 pub use recording::{CameraMount, FrameRecording, Note, Recording, RecordingOptions, Source};
-pub use saved::read_saved_x;
 pub use stream::PoseStream;
 // The pose-file readers behind `PoseStream` and `Recording`: public with `internals` only.
 pub(crate) use pose_reader::{Conventions, at_least_two_pairs, open_poses_as, read_records};
@@ -70,7 +69,7 @@ pub use pose_reader::{
     open_pose_stream, open_poses, read_pose_file,
 };
 pub use sync::TimeOffset;
-pub use truth::{Truth, read_truth};
+pub use truth::Truth;
 // Each format's own reader, the io helpers, and the parsers of text behind the file readers
 // (`parse_intrinsics`, `parse_saved_x`, `frames_of`, the joints of a pose file): crate-internal;
 // public with `internals` for this crate's tests.

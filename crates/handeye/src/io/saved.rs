@@ -15,13 +15,17 @@ use crate::model::error::Result;
 use crate::model::motion::Setup;
 use crate::model::prior::LengthUnit;
 
-/// Reads a saved X from a file (JSON when its first character is `{`, YAML otherwise); errors name
-/// the file, the line and the field.
-pub fn read_saved_x(path: &Path) -> Result<SavedX> {
-    parse_saved_x(&read_text(path)?, &path.display().to_string())
+impl SavedX {
+    /// Reads a saved X from a file: `calibrate --output json` or `--output yaml` (JSON when its
+    /// first character is `{`, YAML otherwise; easy_handeye2's calibration file too). Errors name
+    /// the file, the line and the field.
+    pub fn read(path: impl AsRef<Path>) -> Result<SavedX> {
+        let path = path.as_ref();
+        parse_saved_x(&read_text(path)?, &path.display().to_string())
+    }
 }
 
-/// Parses the text of a saved X, named `file` in messages (see [`read_saved_x`]).
+/// Parses the text of a saved X, named `file` in messages (see [`SavedX::read`]).
 ///
 /// # Example
 /// ```

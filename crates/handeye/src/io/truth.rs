@@ -35,10 +35,13 @@ pub struct Truth {
     pub target: Option<(String, Transform)>,
 }
 
-/// Reads a truth file; errors name the file, the line of the offending value and the field. A key
-/// given twice in one object is refused.
-pub fn read_truth(path: &Path) -> Result<Truth> {
-    parse_truth(&read_text(path)?, &path.display().to_string())
+impl Truth {
+    /// Reads a truth file; errors name the file, the line of the offending value and the field. A
+    /// key given twice in one object is refused.
+    pub fn read(path: impl AsRef<Path>) -> Result<Truth> {
+        let path = path.as_ref();
+        parse_truth(&read_text(path)?, &path.display().to_string())
+    }
 }
 
 /// Parses the text of a truth file, named `file` in messages.
@@ -159,7 +162,7 @@ mod tests {
     fn reads_the_paper_fixture() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../testdata/paper/series_2007_000_200.truth.json");
-        let truth = read_truth(&path).unwrap();
+        let truth = Truth::read(&path).unwrap();
         assert_eq!(truth.frame, "gripper_from_camera");
         assert_eq!(truth.target.as_ref().unwrap().0, "base_from_target");
         assert!((truth.x.translation.vector.x - 20.04194804110198).abs() < 1e-12);
@@ -179,7 +182,7 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("truth.json");
         write_truth(&path, &truth).unwrap();
-        let back = read_truth(&path).unwrap();
+        let back = Truth::read(&path).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(back.frame, truth.frame);
         assert!(

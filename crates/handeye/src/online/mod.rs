@@ -386,7 +386,7 @@ impl OnlineCalibrator {
 
     /// A calibrator on the pixels of `camera`: each frame (a robot pose and the target's
     /// detections, [`OnlineCalibrator::push_frame`]) is kept, and X solved by the batch
-    /// calibration on the pixels ([`calibrate_on_pixels`](crate::calibrate_on_pixels), with its
+    /// calibration on the pixels ([`calibrate`](crate::calibrate()) with [`Input::Pixels`](crate::Input::Pixels), with its
     /// checks) at 16, 32, 64, … frames and at the end, in the accumulating estimator's report
     /// with the fit in `estimate.reprojection` (`handeye online --intrinsics`). `config` gives
     /// the setup, `tracking.point` and the unit; the paper's estimator, the optimal method and

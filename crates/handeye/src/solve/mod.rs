@@ -99,7 +99,8 @@ pub enum Method {
     /// Levenberg–Marquardt on all motions, started from `andreff`.
     Refine,
     /// Levenberg–Marquardt on the pixels of the detections, X and the target's pose together
-    /// ([`calibrate_on_pixels`](crate::calibrate_on_pixels)): not a solver of motions, so not in
+    /// ([`calibrate`](crate::calibrate()) on [`Input::Pixels`](crate::Input::Pixels)): not a
+    /// solver of motions, so not in
     /// [`Method::ALL`], and [`solve`] refuses it.
     Reprojection,
 }

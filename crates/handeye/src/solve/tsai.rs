@@ -25,6 +25,14 @@ pub struct TsaiOptions {
 }
 
 impl TsaiOptions {
+    /// Tsai and Lenz's solve of A X = X B with these options: OpenCV's motion
+    /// filter with [`TsaiOptions::opencv_filter`]. [`solve`](crate::solve())`(Method::Tsai, …)`
+    /// is this with the default options, and [`calibrate`](crate::calibrate()) solves Tsai with
+    /// `Options::tsai`.
+    pub fn solve(&self, motions: &(impl MotionSource + ?Sized)) -> Result<Calibration> {
+        tsai_with(motions, self)
+    }
+
     /// What OpenCV's motion filter did, in words, when it dropped motions (`None` when it kept all
     /// `of`): the drop-in applies it silently for OpenCV's Tsai constant, as OpenCV does, and its
     /// callers should know why X comes from fewer motions than they gave.

@@ -11,8 +11,6 @@ use crate::model::pose::rotation_angle_between;
 use crate::solve::pose_residuals;
 use crate::track::{PixelFit, Reason, Report as TrackReport, TrackEstimate};
 
-#[cfg(doc)]
-use super::calibrate_on_pixels;
 
 /// Frames at which [`OnlinePixels`] first solves on the pixels (then at each doubling).
 const FIRST_ONLINE_SOLVE: usize = 16;
@@ -122,7 +120,8 @@ impl Thinning {
 }
 
 /// The online calibrator on the pixels (`handeye online --intrinsics`): records with detections
-/// pushed one at a time, calibrated by [`calibrate_on_pixels`] itself, with its checks (the
+/// pushed one at a time, calibrated by [`calibrate`](crate::calibrate()) on the pixels itself
+/// ([`Input::Pixels`](crate::Input::Pixels)), with its checks (the
 /// reading of the robot poses on the pixels, a fit far above noise refused), never from PnP
 /// poses alone (a planar target's flipped PnP pose would give a wrong X). An estimate is reported
 /// at 16, 32, 64, 128, 256 records and then every 256 records (each solve over the frames kept) and
@@ -157,7 +156,8 @@ pub struct OnlinePixels {
 }
 
 impl OnlinePixels {
-    /// A calibrator on the pixels of `camera`: `options` as [`calibrate_on_pixels`] takes them
+    /// A calibrator on the pixels of `camera`: `options` as [`calibrate`](crate::calibrate())
+    /// takes them on the pixels
     /// (`point`, `fix`; `pose_names` is filled by [`OnlinePixels::push`]).
     ///
     /// Errors: [`Error::InvalidParameter`] for unusable intrinsics, a prior or
@@ -230,9 +230,10 @@ impl OnlinePixels {
     }
 
     /// The final estimate: the calibration on the pixels of every record pushed (the same solve,
-    /// and X, as [`calibrate_on_pixels`] on them), reported with `reason` `end`.
+    /// and X, as [`calibrate`](crate::calibrate()) on them), reported with `reason` `end`.
     ///
-    /// Errors: those of [`calibrate_on_pixels`] (too few frames, degenerate motions, robot poses
+    /// Errors: those of [`calibrate`](crate::calibrate()) on the pixels (too few frames,
+    /// degenerate motions, robot poses
     /// that fit the pixels far better inverted, a fit far above detection noise).
     pub fn finish(&mut self) -> Result<TrackReport> {
         if let Some((n, last)) = &self.last

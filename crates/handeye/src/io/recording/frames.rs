@@ -2,9 +2,11 @@
 //! `detections`, or the tag detections of a ROS 2 recording, through the [`Source`] that names
 //! a [`Recording`](super::Recording)'s input.
 
+use std::io::BufRead;
+
 use super::{CameraMount, Note, RecordingOptions, Source, check_options};
-use crate::io::{Format, FrameSeries, read_frames};
-use crate::model::camera::Intrinsics;
+use crate::io::{Format, FrameSeries, frame_records, read_frames};
+use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
 
 /// The frames of a calibration on the pixels (robot pose and detections), as
@@ -90,5 +92,17 @@ impl FrameRecording {
                 super::bag::read_bag_frames(path, frames, tags, options)
             }
         }
+    }
+
+    /// The records of a recording on the pixels one at a time, as they come (a stream: `handeye
+    /// online --intrinsics`), each with its line number, from `input` named `source` in
+    /// messages: the reader of [`FrameRecording::read`] record by record. A bad record is its
+    /// own [`Error::Parse`] (file, line, field) and the reading goes on with the next line;
+    /// blank lines and `#` comments are skipped; a failing input ends it after its error.
+    pub fn records<R: BufRead>(
+        input: R,
+        source: &str,
+    ) -> impl Iterator<Item = Result<(usize, Frame)>> + use<'_, R> {
+        frame_records(input, source)
     }
 }
