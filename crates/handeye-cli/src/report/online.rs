@@ -98,7 +98,7 @@ pub fn write_online(path: &Path, trace: &OnlineTrace, summary: &str) -> Result<(
         .zip(&gaps)
         .map(|((_, _, _, ut), g)| (g.0, g.2, *ut))
         .collect();
-    let figures = [
+    let mut figures = vec![
         (
             convergence_figure("rotation from the last estimate (°)", &rotation, trace)?,
             "How far each reported estimate is from the last one, degrees, with its one-sigma band (shaded); red lines: a confirmed change of X or the target (dashed where it began); ticks at the bottom: poses held out.".to_string(),
@@ -107,12 +107,14 @@ pub fn write_online(path: &Path, trace: &OnlineTrace, summary: &str) -> Result<(
             convergence_figure("translation from the last estimate (input unit)", &translation, trace)?,
             "The same for the translation, in the input's unit.".to_string(),
         ),
-        (
+    ];
+    // The paper's thresholds where its selection ran (the accumulating estimator runs alone).
+    if trace.reports.is_empty() {
+        figures.push((
             thresholds_figure(trace)?,
             "The paper's adaptive thresholds at each of its calibrations: β₀ (least rotation of a selected motion) and α₀ (least angle between the two motions' axes), degrees.".to_string(),
-        ),
-    ];
-    let mut figures = figures.to_vec();
+        ));
+    }
     if let Some((used, curve)) = &trace.offset {
         figures.push((
             offset_figure(*used, curve)?,

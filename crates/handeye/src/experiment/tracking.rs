@@ -126,6 +126,7 @@ pub(crate) fn run(config: &TrackingSettings, progress: impl Fn() + Sync) -> Resu
                 })
             };
             let mut acc = make(Selection::Adaptive, Estimator::Accumulate)?;
+            let mut adaptive = make(Selection::Adaptive, Estimator::Paper)?;
             let mut conventional = make(Selection::None, Estimator::Paper)?;
             let mut row: Row = vec![Vec::new(); names.len()];
             let (mut last_adaptive, mut last_conventional) = (None, None);
@@ -134,7 +135,8 @@ pub(crate) fn run(config: &TrackingSettings, progress: impl Fn() + Sync) -> Resu
                 (e.rot_fro, e.trans_rel)
             };
             for (k, p) in sim.poses.iter().enumerate() {
-                if let Some(e) = acc.push(p)?.last() {
+                acc.push(p)?;
+                if let Some(e) = adaptive.push(p)?.last() {
                     last_adaptive = Some(e.x);
                 }
                 if let Some(e) = conventional.push(p)?.last() {

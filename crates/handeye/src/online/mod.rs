@@ -4,9 +4,10 @@
 //! when a pair of motions is selected it solves X with Andreff's method on those two motions,
 //! measures rmsR and rmsT with the configured [`ErrorSource`], tells the adaptive policy, and
 //! returns an [`Event`]. With `optimal` set it also refines X over the last five selected motions
-//! (the paper's "optimal method", sec. 4.1.3). With [`Estimator::Accumulate`] every pose also goes
-//! to a [`Tracker`] (all pairs of poses, gated, watched for change, reported on its own schedule:
-//! [`OnlineCalibrator::step`], [`OnlineCalibrator::finish`]). The one length threshold, `d_max`,
+//! (the paper's "optimal method", sec. 4.1.3). With [`Estimator::Accumulate`] every pose goes
+//! to a [`Tracker`] instead (all pairs of poses, gated, watched for change, reported on its own
+//! schedule: [`OnlineCalibrator::step`], [`OnlineCalibrator::finish`]); the paper's selection
+//! does not run beside it (`push` returns no event). The one length threshold, `d_max`,
 //! follows the input's unit, inferred from the first pose unless given ([`Unit`]). The state is
 //! constant in size, and serialisable (serde) so that a run can be saved and resumed.
 //!
@@ -168,8 +169,8 @@ pub enum Estimator {
     #[default]
     Paper,
     /// Normal equations over every pair of poses since the last detected change of X, updated in
-    /// O(1) per pose and reported on their own schedule (`crate::tracking`); the paper's
-    /// calibrations still run beside it.
+    /// O(1) per pose and reported on their own schedule (`crate::track`); the paper's
+    /// selection does not run beside it.
     Accumulate,
 }
 
@@ -637,14 +638,17 @@ impl OnlineCalibrator {
             self.largest_step = self.largest_step.max(step);
         }
         self.previous = Some(hand);
+        // The accumulating estimator is its own entry: the paper's selection does not run
+        // beside it.
         if let Some(tracker) = &mut self.tracker {
             self.step = match joints {
                 Some(q) => tracker.push_with_joints(pose, q),
                 None => tracker.push(pose),
             };
-            if let Some(e) = tracker.refusal() {
-                return Err(e);
-            }
+            return match tracker.refusal() {
+                Some(e) => Err(e),
+                None => Ok(Vec::new()),
+            };
         }
         if let Some(found) = self.readings.as_mut().and_then(|r| r.push(pose)) {
             self.misread = Some(found);
