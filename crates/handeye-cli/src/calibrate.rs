@@ -287,7 +287,7 @@ pub(crate) fn pixel_input(
     input: &InputArgs,
     intrinsics: Option<&std::path::PathBuf>,
     report: Option<&std::path::PathBuf>,
-) -> Result<(handeye::Intrinsics, handeye::io::FrameSeries, Vec<String>)> {
+) -> Result<(handeye::Intrinsics, Vec<handeye::Frame>, Vec<String>)> {
     let refuse = |message: String| -> anyhow::Error {
         Error::InvalidParameter {
             name: "method",
@@ -318,7 +318,7 @@ pub(crate) fn pixel_input(
                 ));
             }
         };
-        return Ok((camera, read.series, read.names));
+        return Ok((camera, read.frames, read.names));
     }
     let Some(intrinsics) = intrinsics else {
         return Err(refuse(
@@ -337,7 +337,7 @@ pub(crate) fn pixel_input(
     };
     let read =
         handeye::io::FrameRecording::read(&source, &handeye::io::RecordingOptions::default())?;
-    Ok((camera, read.series, read.names))
+    Ok((camera, read.frames, read.names))
 }
 
 /// The refusals of a solve on the pixels, said in the text face too.
@@ -361,11 +361,10 @@ fn refused_on_pixels(e: Error, face: Face) -> anyhow::Error {
 /// the result's reading (`ReprojectionSummary::start_poses`: PnP poses for records with
 /// detections only), for the unit and the `--report` page.
 pub(crate) fn frame_poses(
-    series: &handeye::io::FrameSeries,
+    frames: &[handeye::Frame],
     start_poses: &[handeye::Transform],
 ) -> Vec<PosePair> {
-    series
-        .frames
+    frames
         .iter()
         .zip(start_poses)
         .map(|(f, c)| PosePair {
@@ -382,13 +381,13 @@ fn start_poses(reprojection: Option<&handeye::ReprojectionSummary>) -> &[handeye
 
 /// `calibrate --method reprojection`: X on the pixels of the detections of a JSON Lines file.
 fn run_pixels(args: &Args, options: Options) -> Result<()> {
-    let (camera, series, names) =
+    let (camera, frames_read, names) =
         pixel_input(&args.input, args.intrinsics.as_ref(), args.report.as_ref())?;
     let setup = args.input.setup();
     let frames = output_frames(args)?;
     let face = Face::chosen(args.output);
     let input = handeye::Input::Pixels {
-        frames: &series.frames,
+        frames: &frames_read,
         camera: &camera,
     };
     let report = match handeye::calibrate(
@@ -403,7 +402,7 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
         Ok(report) => report,
         Err(e) => return Err(refused_on_pixels(e, face)),
     };
-    let poses = frame_poses(&series, start_poses(report.reprojection.as_ref()));
+    let poses = frame_poses(&frames_read, start_poses(report.reprojection.as_ref()));
     let unit = length_unit(&poses);
     if face != Face::Text {
         for w in &report.warnings {
@@ -531,13 +530,13 @@ fn run_robot_world(args: &Args) -> Result<()> {
 /// `calibrate --robot-world --method reprojection`: X and the target's pose on the pixels of the
 /// detections, printed as the pose-based robot-world result.
 fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
-    let (camera, series, names) =
+    let (camera, frames_read, names) =
         pixel_input(&args.input, args.intrinsics.as_ref(), args.report.as_ref())?;
     let setup = args.input.setup();
     output_frames(args)?;
     let face = Face::chosen(args.output);
     let input = handeye::Input::Pixels {
-        frames: &series.frames,
+        frames: &frames_read,
         camera: &camera,
     };
     let report = match calibrate_robot_world(
@@ -557,7 +556,7 @@ fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
         Ok(report) => report,
         Err(e) => return Err(refused_on_pixels(e, face)),
     };
-    let poses = frame_poses(&series, start_poses(report.reprojection.as_ref()));
+    let poses = frame_poses(&frames_read, start_poses(report.reprojection.as_ref()));
     print_robot_world(
         args,
         &report,

@@ -146,7 +146,7 @@ fn invalid(name: &'static str, message: &str) -> anyhow::Error {
 
 /// `verify --intrinsics`: the saved X on the pixels of a JSON Lines file with `detections`.
 fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
-    let (camera, series, names) =
+    let (camera, frames_read, names) =
         crate::calibrate::pixel_input(&args.input, args.intrinsics.as_ref(), None)?;
     let setup = args.input.setup();
     let options = Options {
@@ -159,13 +159,13 @@ fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
         ..Options::default()
     };
     let input = handeye::Input::Pixels {
-        frames: &series.frames,
+        frames: &frames_read,
         camera: &camera,
     };
     let v = handeye::verify(saved, input, setup, &options)?;
     show(&v, face)?;
     if let Some(report) = &args.report {
-        let poses = crate::calibrate::frame_poses(&series, &v.start_poses);
+        let poses = crate::calibrate::frame_poses(&frames_read, &v.start_poses);
         let page = crate::report::RunPage {
             poses: &poses,
             names: &names,

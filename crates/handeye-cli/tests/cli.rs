@@ -118,7 +118,6 @@ fn calibrate_eye_to_hand_and_all_pairs_match_opencv() {
 /// The exact fixture rewritten as CSV with quaternions (and the camera direction inverted).
 fn fixture_as_csv(dir: &Path) -> PathBuf {
     use handeye::io::{Format, Recording, RecordingOptions, Source};
-    use handeye::quaternion_xyzw;
     let source = Source::File {
         path: testdata("opencv/opencv_eye-in-hand_exact_10_11.jsonl"),
         format: Format::Auto,
@@ -135,7 +134,7 @@ fn fixture_as_csv(dir: &Path) -> PathBuf {
         text += &format!("{k}");
         for t in [p.base_from_gripper, p.camera_from_target.inverse()] {
             let v = t.translation.vector;
-            let q = quaternion_xyzw(&t);
+            let q = handeye::TransformJson::from(&t).quaternion_xyzw;
             text += &format!(
                 ",{},{},{},{},{},{},{}",
                 v.x, v.y, v.z, q[0], q[1], q[2], q[3]

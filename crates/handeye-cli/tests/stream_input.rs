@@ -120,7 +120,7 @@ fn clean_streams() -> [(Vec<String>, &'static str); 2] {
         let mut v = Vec::new();
         for t in [p.base_from_gripper, p.camera_from_target] {
             v.extend(t.translation.vector.iter().copied());
-            v.extend(handeye::quaternion_xyzw(&t));
+            v.extend(handeye::TransformJson::from(&t).quaternion_xyzw);
         }
         csv.push(
             v.iter()

@@ -663,7 +663,7 @@ fn pixels_report(
         ..RecordingOptions::default()
     };
     let (camera, read) = py.allow_threads(|| pixel_recording(path, intrinsics, bag, &options))?;
-    let (frames, pose_names) = (read.series.frames, read.names);
+    let (frames, pose_names) = (read.frames, read.names);
     if robot_world {
         let options = handeye::RobotWorldOptions {
             method: handeye::RobotWorldMethod::Reprojection,
@@ -741,7 +741,7 @@ fn verify_pixels_report(
     let v = py
         .allow_threads(|| {
             let input = handeye::Input::Pixels {
-                frames: &read.series.frames,
+                frames: &read.frames,
                 camera: &camera,
             };
             handeye::verify(&saved, input, setup, &options)

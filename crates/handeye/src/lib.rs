@@ -121,9 +121,7 @@ pub use model::error::{Degeneracy, Error, LowDofMissing, Result, TransformProble
 pub use model::findings::{Part, Reading, Sizes, Verdict, Written, WrittenAs};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
 pub use model::names::Named;
-pub use model::pose::{
-    Transform, TransformJson, quaternion_xyzw, rotation_angle_between, transform_from_matrix4,
-};
+pub use model::pose::{Transform, TransformJson, transform_from_matrix4};
 pub use model::prior::{Component, LengthUnit, Prior, PriorValue};
 pub use model::rotation::{RotationConvention, Rotations};
 pub use model::warning::{Remedy, Warning};

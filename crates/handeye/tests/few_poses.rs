@@ -7,7 +7,8 @@
 use std::path::Path;
 
 use handeye::io::{Format, Truth, read_pose_file};
-use handeye::{Options, Setup, calibrate, rotation_angle_between};
+use handeye::model::pose::rotation_angle_between;
+use handeye::{Options, Setup, calibrate};
 use rand::seq::index::sample;
 use rand::{SeedableRng, rngs::StdRng};
 

@@ -4,10 +4,11 @@
 //!
 //! `cargo test --release -p handeye --test low_dof -- --nocapture` prints the measurements.
 
+use handeye::model::pose::rotation_angle_between;
 use handeye::sim::{LowDofConfig, simulate_low_dof};
 use handeye::{
     Component, Degeneracy, Error, LowDofMissing, Method, Options, Pairing, PosePair, Prior, Setup,
-    Transform, Warning, calibrate, rotation_angle_between,
+    Transform, Warning, calibrate,
 };
 use nalgebra::Vector3;
 

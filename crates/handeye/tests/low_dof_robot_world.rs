@@ -5,10 +5,11 @@
 //! `cargo test --release -p handeye --test low_dof_robot_world -- --nocapture` prints the
 //! measurements.
 
+use handeye::model::pose::rotation_angle_between;
 use handeye::sim::{LowDofConfig, simulate_low_dof};
 use handeye::{
     Component, Degeneracy, Error, Fix, LowDofMissing, Options, Pairing, PosePair, Prior,
-    RobotWorldOptions, Setup, Transform, calibrate, calibrate_robot_world, rotation_angle_between,
+    RobotWorldOptions, Setup, Transform, calibrate, calibrate_robot_world,
 };
 
 const SETUPS: [Setup; 2] = [Setup::EyeInHand, Setup::EyeToHand];

@@ -50,7 +50,10 @@ fn read_frames(path: &Path) -> handeye::Result<handeye::io::FrameSeries> {
         path: path.to_path_buf(),
         format: handeye::io::Format::Auto,
     };
-    FrameRecording::read(&source, &RecordingOptions::default()).map(|r| r.series)
+    FrameRecording::read(&source, &RecordingOptions::default()).map(|r| handeye::io::FrameSeries {
+        frames: r.frames,
+        lines: r.lines,
+    })
 }
 
 fn tags(id: Option<i32>) -> BagTags {
@@ -104,17 +107,17 @@ fn both_storages_give_the_x_of_the_json_lines_recording() {
     let expected = x_of(&jsonl_frames(&[]), &intrinsics);
     for bag in ["rosbag/tag_eih_mcap", "rosbag/tag_eih_sqlite3"] {
         let read = read_bag_frames(&data(bag), &frames(), &tags(None), &options()).unwrap();
-        assert_eq!(read.series.frames.len(), 30, "{bag}");
-        assert_eq!(read.series.lines, (1..=30).collect::<Vec<_>>(), "{bag}");
+        assert_eq!(read.frames.len(), 30, "{bag}");
+        assert_eq!(read.lines, (1..=30).collect::<Vec<_>>(), "{bag}");
         // The intrinsics of the recording's camera_info are the file's.
         assert_eq!(read.intrinsics, Some(intrinsics), "{bag}");
         // The corners are AprilTag's, scaled by the tag's side.
         assert_eq!(
-            read.series.frames[0].detections.target[1],
+            read.frames[0].detections.target[1],
             [0.5 * 0.06, 0.5 * 0.06, 0.0]
         );
         assert_eq!(TAG_CORNERS[3], [-0.5, -0.5, 0.0]);
-        let x = x_of(&read.series.frames, &intrinsics);
+        let x = x_of(&read.frames, &intrinsics);
         let gap = entry_gap(&x, &expected);
         assert!(gap < 1e-9, "{bag}: {gap:e}");
         assert!(read.names[0].starts_with("/apriltag/detections #1 (t = "));
@@ -127,7 +130,7 @@ fn a_bad_message_costs_that_message() {
     let path = data("rosbag/tag_eih_hostile_mcap");
     let read = read_bag_frames(&path, &frames(), &tags(Some(3)), &options()).unwrap();
     // Image 3 truncated, image 6 with 5 corners, image 9 without tag 3: skipped and named.
-    assert_eq!(read.series.frames.len(), 27);
+    assert_eq!(read.frames.len(), 27);
     let note = read
         .notes
         .iter()
@@ -145,7 +148,7 @@ fn a_bad_message_costs_that_message() {
     }
     // The other images are the recording's: the same X as the JSON Lines file without them.
     let expected = x_of(&jsonl_frames(&[3, 6, 9]), &intrinsics);
-    let gap = entry_gap(&x_of(&read.series.frames, &intrinsics), &expected);
+    let gap = entry_gap(&x_of(&read.frames, &intrinsics), &expected);
     assert!(gap < 1e-9, "{gap:e}");
     // Two tag ids and none chosen: refused, naming them.
     let e = read_bag_frames(&path, &frames(), &tags(None), &options())
@@ -168,7 +171,7 @@ fn refusals_name_what_is_missing() {
     // No camera_info: read, without intrinsics (the face asks for --intrinsics).
     let read = read_bag_frames(&path, &frames(), &tags(None), &options()).unwrap();
     assert_eq!(read.intrinsics, None);
-    assert_eq!(read.series.frames.len(), 30);
+    assert_eq!(read.frames.len(), 30);
     // A camera_info topic named but absent.
     let named = BagTags {
         camera_info_topic: Some("/camera/camera_info".into()),
@@ -267,7 +270,7 @@ fn each_entry_refuses_the_sources_of_the_other() {
         &RecordingOptions::default(),
     )
     .unwrap();
-    assert_eq!(read.names.len(), read.series.frames.len());
+    assert_eq!(read.names.len(), read.frames.len());
     assert!(
         read.names[0].ends_with("tag_eih.jsonl:1"),
         "{}",

@@ -257,7 +257,7 @@ fn x_of(recording: &Recording) -> Transform {
 /// The rotation between two X (radians) and their translations' difference over the first's
 /// length.
 fn difference(a: &Transform, b: &Transform) -> (f64, f64) {
-    let angle = handeye::rotation_angle_between(&a.rotation, &b.rotation);
+    let angle = handeye::model::pose::rotation_angle_between(&a.rotation, &b.rotation);
     let t = (a.translation.vector - b.translation.vector).norm() / a.translation.vector.norm();
     (angle, t)
 }

@@ -81,7 +81,7 @@ pub fn write_online(path: &Path, trace: &OnlineTrace, summary: &str) -> Result<(
         .map(|(p, x, _, _)| {
             let (dr, dt) = last.map_or((0.0, 0.0), |l| {
                 (
-                    handeye::rotation_angle_between(&x.rotation, &l.rotation).to_degrees(),
+                    handeye::errors_against_truth(x, &l).rot_deg,
                     (x.translation.vector - l.translation.vector).norm(),
                 )
             });

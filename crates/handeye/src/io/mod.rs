@@ -44,7 +44,10 @@ use lines::{Line, Lines};
 // `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
 // two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
 // public with `internals` for this crate's tests.
+#[cfg(feature = "internals")]
 pub use frames::FrameSeries;
+#[cfg(not(feature = "internals"))]
+pub(crate) use frames::FrameSeries;
 pub(crate) use frames::frame_records;
 #[cfg(feature = "internals")]
 pub use frames::read_frames;

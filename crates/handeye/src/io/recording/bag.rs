@@ -3,7 +3,6 @@
 use std::path::Path;
 
 use super::{BagFrames, FrameRecording, Note, Notes, Recording, RecordingOptions};
-use crate::io::FrameSeries;
 use crate::io::rosbag::{BagOptions, BagTags, read_bag_pairs, read_bag_tags};
 use crate::io::sync::{FoundOffset, StampedPose, TimeOffset, find_time_offset, read_as};
 use crate::model::error::{Error, Result};
@@ -190,10 +189,8 @@ pub(super) fn read_bag_frames(
         });
     }
     Ok(FrameRecording {
-        series: FrameSeries {
-            frames: read.frames,
-            lines: read.lines,
-        },
+        frames: read.frames,
+        lines: read.lines,
         names: read.names,
         intrinsics: read.intrinsics.map(|(_, k)| k),
         camera_mount: read.camera_mount,

@@ -14,9 +14,11 @@ use crate::model::error::{Error, Result};
 /// the pose pairs of one on the poses.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameRecording {
-    /// The frames with each one's line (a file) or message number in the detections topic (a
-    /// ROS 2 recording).
-    pub series: FrameSeries,
+    /// The frames, in the recording's order.
+    pub frames: Vec<Frame>,
+    /// Each frame's line (a file) or message number in the detections topic (a ROS 2
+    /// recording), from 1.
+    pub lines: Vec<usize>,
     /// A name for each frame: `file:line`, or topic, message number and stamp.
     pub names: Vec<String>,
     /// The intrinsics the recording carries (a ROS 2 recording's `sensor_msgs/msg/CameraInfo`
@@ -62,14 +64,14 @@ impl FrameRecording {
                         message: "a clock offset pairs a ROS 2 recording; a file of records gives each robot pose with its image's detections already".into(),
                     });
                 }
-                let series = read_frames(path)?;
-                let names = series
-                    .lines
+                let FrameSeries { frames, lines } = read_frames(path)?;
+                let names = lines
                     .iter()
                     .map(|l| format!("{}:{l}", path.display()))
                     .collect();
                 Ok(Self {
-                    series,
+                    frames,
+                    lines,
                     names,
                     intrinsics: None,
                     camera_mount: None,
