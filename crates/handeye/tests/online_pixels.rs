@@ -417,3 +417,92 @@ fn a_stream_that_tours_the_same_poses_keeps_every_view_and_counts_each_pose_once
         }
     }
 }
+
+/// The one online calibrator both faces drive (`OnlineCalibrator::on_pixels`, issue 31): the same
+/// reports as the pixel calibrator behind it, its step and last report, the unit the poses tell;
+/// poses refused on it, frames refused on a calibrator of poses, the settings that do not apply
+/// refused by name, and its state never saved as another calibrator's.
+#[test]
+fn the_online_calibrator_on_the_pixels_reports_what_the_pixel_calibrator_does() {
+    use handeye::{Estimator, OnlineCalibrator, OnlineConfig, PosePair, Unit};
+    let config = OnlineConfig {
+        estimator: Estimator::Accumulate,
+        ..OnlineConfig::default()
+    };
+    for (name, setup) in [
+        ("board_eth", Setup::EyeToHand),
+        ("tag_eih", Setup::EyeInHand),
+    ] {
+        let camera =
+            handeye::Intrinsics::read(testdata(&format!("{name}.intrinsics.yml"))).unwrap();
+        let series = handeye::io::read_frames(&testdata(&format!("{name}.jsonl"))).unwrap();
+        let (on_the_way, end) = online(&series.frames, &camera, setup);
+        let mut c = OnlineCalibrator::on_pixels(camera, OnlineConfig { setup, ..config }).unwrap();
+        assert!(c.on_the_pixels());
+        assert!(
+            c.pending().is_some(),
+            "{name}: nothing yet, and it says why"
+        );
+        let mut reports = Vec::new();
+        for (f, n) in series.frames.iter().zip(names(&series.frames)) {
+            let r = c.push_frame(f.clone(), n).unwrap();
+            // The step says what the push returned.
+            assert_eq!(c.step().and_then(|s| s.report.clone()), r, "{name}");
+            reports.extend(r);
+        }
+        assert_eq!(reports, on_the_way, "{name}");
+        assert_eq!(c.poses(), series.frames.len());
+        assert_eq!(c.last_report(), on_the_way.last().cloned());
+        let last = c.finish().unwrap().expect("the end's report");
+        assert_eq!(last, end.unwrap(), "{name}");
+        assert_eq!(c.last_report(), Some(last));
+        assert!(c.pending().is_none(), "{name}");
+        // The testdata are in metres: the first robot pose and the target's place tell.
+        assert_eq!(c.unit(), Unit::Metre, "{name}");
+        // Poses are not taken on the pixels; the state (the frames) is not saved.
+        let pose = PosePair {
+            base_from_gripper: Transform::identity(),
+            camera_from_target: Transform::identity(),
+        };
+        assert!(c.push(&pose).is_err());
+        let saved = serde_json::to_string(&c).unwrap_err().to_string();
+        assert!(saved.contains("not saved"), "{saved}");
+    }
+    // Frames are not taken on poses; the settings that do not apply on the pixels are named.
+    let camera = handeye::Intrinsics::read(testdata("tag_eih.intrinsics.yml")).unwrap();
+    let series = handeye::io::read_frames(&testdata("tag_eih.jsonl")).unwrap();
+    let mut poses = OnlineCalibrator::new(config).unwrap();
+    let e = poses
+        .push_frame(series.frames[0].clone(), "frame 1".into())
+        .unwrap_err();
+    assert!(e.to_string().contains("intrinsics"), "{e}");
+    for (what, bad) in [
+        (
+            "paper's estimator",
+            OnlineConfig {
+                estimator: Estimator::Paper,
+                ..config
+            },
+        ),
+        (
+            "optimal",
+            OnlineConfig {
+                optimal: true,
+                ..config
+            },
+        ),
+    ] {
+        let e = OnlineCalibrator::on_pixels(camera, bad).unwrap_err();
+        assert!(e.to_string().contains(what), "{what}: {e}");
+    }
+    let prior: handeye::Prior = "tz=0.1".parse().unwrap();
+    let e = OnlineCalibrator::on_pixels(camera, config)
+        .unwrap()
+        .with_priors(&[prior])
+        .unwrap_err();
+    assert!(e.to_string().contains("prior"), "{e}");
+    // A calibrator of poses still saves and resumes.
+    let state = serde_json::to_string(&poses).unwrap();
+    let resumed: OnlineCalibrator = serde_json::from_str(&state).unwrap();
+    assert!(!resumed.on_the_pixels());
+}

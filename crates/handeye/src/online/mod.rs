@@ -348,8 +348,14 @@ pub struct OnlineCalibrator {
     misread: Option<StreamReading>,
     /// On the pixels ([`OnlineCalibrator::on_pixels`]): the batch calibration on the pixels of
     /// the frames pushed, on a doubling schedule, in place of the paper's selection and the
-    /// tracker. Not part of the saved state ([`OnlineCalibrator::on_the_pixels`]).
-    #[serde(skip)]
+    /// tracker. Its frames are not saved: serialising a calibrator on the pixels is refused
+    /// with an error ([`OnlineCalibrator::on_the_pixels`]), rather than saving a state that would
+    /// resume as another calibrator.
+    #[serde(
+        skip_deserializing,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "refuse_to_save"
+    )]
     pixels: Option<OnlinePixels>,
     /// The robot pose of the first frame on the pixels: with a report's target pose, the length
     /// unit.
@@ -705,9 +711,10 @@ impl OnlineCalibrator {
     }
 
     /// What the accumulating estimator did with the last pose: held it out, confirmed a change,
-    /// reported an estimate. `None` with the paper's estimator.
+    /// reported an estimate (on the pixels: the estimate solved at the last frame, if one was).
+    /// `None` with the paper's estimator.
     pub fn step(&self) -> Option<&Step> {
-        self.tracker.as_ref().map(|_| &self.step)
+        (self.tracker.is_some() || self.pixels.is_some()).then_some(&self.step)
     }
 
     /// The accumulating estimator's report at the end of the stream (the current estimate, if it
@@ -855,6 +862,16 @@ impl OnlineCalibrator {
             seconds: started.elapsed().as_secs_f64(),
         })
     }
+}
+
+/// The serde form of a calibrator on the pixels: refused (its frames are not saved).
+fn refuse_to_save<S: serde::Serializer>(
+    _: &Option<OnlinePixels>,
+    _: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    Err(serde::ser::Error::custom(
+        "the state of a calibrator on the pixels is not saved (its frames are not): push the records again",
+    ))
 }
 
 /// Refuses a pose pair with a NaN or infinite entry.
