@@ -26,9 +26,16 @@ fn main() -> Result<(), handeye::Error> {
             ..OnlineConfig::default()
         };
         let mut calibrator = OnlineCalibrator::new(config)?;
+        // The paper's adaptive calibrator runs apart: its selection does not run beside the
+        // accumulating estimator.
+        let mut adaptive = OnlineCalibrator::new(OnlineConfig {
+            estimator: Estimator::Paper,
+            ..config
+        })?;
         let mut paper = (0.0_f64, 0.0_f64, 0.0_f64);
         for p in &sim.poses {
-            for e in calibrator.push(p)? {
+            calibrator.push(p)?;
+            for e in adaptive.push(p)? {
                 let err = errors_against_truth(&e.x, &sim.gripper_from_camera);
                 paper = (
                     paper.0 + err.rot_fro,

@@ -7,12 +7,18 @@ use handeye::sim::{Jump, SimConfig, simulate};
 use handeye::{Method, Pairing, Setup, motion_pairs, solve};
 
 fn calibrator() -> OnlineCalibrator {
+    calibrator_of(Estimator::Accumulate)
+}
+
+/// The paper's adaptive calibrator, or the accumulating estimator (its own entry: the paper's
+/// selection does not run beside it).
+fn calibrator_of(estimator: Estimator) -> OnlineCalibrator {
     let config = OnlineConfig {
         params: AdaptiveParams {
             d_max: 100.0,
             ..AdaptiveParams::default()
         },
-        estimator: Estimator::Accumulate,
+        estimator,
         ..OnlineConfig::default()
     };
     OnlineCalibrator::new(config).unwrap()
@@ -24,9 +30,14 @@ fn the_running_estimate_matches_the_best_batch_solve_and_beats_the_paper_tenfold
     for s in 0..10 {
         let sim = simulate(&SimConfig::default(), 21, s);
         let mut c = calibrator();
+        let mut adaptive = calibrator_of(Estimator::Paper);
         let (mut pr, mut pt, mut n) = (0.0, 0.0, 0.0);
         for p in &sim.poses {
-            for e in c.push(p).unwrap() {
+            assert!(
+                c.push(p).unwrap().is_empty(),
+                "no paper's calibration beside it"
+            );
+            for e in adaptive.push(p).unwrap() {
                 let err = errors_against_truth(&e.x, &sim.gripper_from_camera);
                 (pr, pt, n) = (pr + err.rot_fro, pt + err.trans_rel, n + 1.0);
             }
