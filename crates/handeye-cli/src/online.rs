@@ -151,9 +151,6 @@ pub struct Args {
 /// Default floor of a predicted α₀, degrees (the library's sin 15°).
 const ALPHA_MIN_DEG: f64 = 15.0;
 
-/// Bad lines shown one by one before `online` shows only every 2^k-th.
-const SHOWN_BAD_LINES: usize = 100;
-
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     if args.intrinsics.is_some() {
@@ -598,11 +595,11 @@ impl Thinned {
     /// endless bad stream cannot flood the terminal. The lines of `out` before it come first.
     fn show(count: &mut usize, what: &str, message: String, out: &LineOut) {
         *count += 1;
-        if *count <= SHOWN_BAD_LINES || count.is_power_of_two() {
+        if OnlineCalibrator::told(*count) {
             out.flush_quietly();
             crate::tell!("{message}");
         }
-        if *count == SHOWN_BAD_LINES {
+        if *count == OnlineCalibrator::TOLD_ONE_BY_ONE {
             crate::tell!(
                 "further {what} are counted and shown only at the 2^k-th (the count is given at the end)"
             );
@@ -701,12 +698,7 @@ fn print_step(
         Some((_, line, None)) => format!("{source}:{line}"),
         None => format!("{source}, pose {pose}"),
     };
-    let held = step
-        .held_out
-        .iter()
-        .map(|h| (step.pose, h))
-        .chain(step.earlier.iter().map(|(p, h)| (*p, h)));
-    for (pose, h) in held {
+    for (pose, h) in step.held_out_poses() {
         let message = format!("held out: {}: {h}", place(pose));
         Thinned::show(&mut messages.held_out, "held-out poses", message, &out);
     }

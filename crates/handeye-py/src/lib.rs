@@ -1079,8 +1079,12 @@ struct PyOnline {
     inner: OnlineCalibrator,
     /// What the calibrator found that every face tells (the readings check of the first poses
     /// and a stuck selection, with the paper's estimator; the cautions of the solve on the
-    /// pixels), until Python takes them as warnings.
+    /// pixels; the poses the accumulating estimator held out), until Python takes them as
+    /// warnings.
     found: Vec<String>,
+    /// Poses held out so far, for telling them as the command line does
+    /// (`OnlineCalibrator::told`).
+    held_out: usize,
 }
 
 #[pymethods]
@@ -1166,6 +1170,7 @@ impl PyOnline {
                 .and_then(|c| c.with_priors(&given))
                 .map_err(value_error)?,
             found: Vec::new(),
+            held_out: 0,
         })
     }
 
@@ -1199,8 +1204,19 @@ impl PyOnline {
         self.found.extend(self.inner.stuck());
         let setup = self.inner.config().setup;
         match self.inner.step() {
-            // The accumulating estimator's own lines: a change, a report.
+            // The accumulating estimator's own lines: a change, a report; the poses it held out
+            // told as the command line tells them.
             Some(step) => {
+                for (pose, why) in step.held_out_poses() {
+                    self.held_out += 1;
+                    if OnlineCalibrator::told(self.held_out) {
+                        self.found.push(format!("held out: pose {pose}: {why}"));
+                    }
+                    if self.held_out == OnlineCalibrator::TOLD_ONE_BY_ONE {
+                        self.found
+                            .push("further held-out poses are told only at the 2^k-th".into());
+                    }
+                }
                 let lines = step
                     .change
                     .map(|c| c.json())
@@ -1323,6 +1339,7 @@ impl PyOnline {
         Ok(Self {
             inner,
             found: Vec::new(),
+            held_out: 0,
         })
     }
 }

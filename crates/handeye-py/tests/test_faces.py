@@ -517,3 +517,25 @@ def test_verify_on_the_pixels_is_one_result_in_every_face(tmp_path, turn_deg):
     py["saved"]["matrix"] = py["saved"]["matrix"].tolist()
     py["recording"]["matrix"] = py["recording"]["matrix"].tolist()
     assert py == cli
+
+
+@pytest.mark.parametrize("name", ["outliers_gross_stations_eih_s0", "outliers_gross_stations_eih_s1"])
+def test_online_tells_the_poses_it_holds_out_as_the_command_line_does(name):
+    # Issue 31: Python's online calibrator tells what the command line tells; the accumulating
+    # estimator's held-out poses are named with the same reason (by pose number, the file's line
+    # here: these files have one record a line from the first).
+    path = TESTDATA / "kinhec" / "pairs" / f"{name}.jsonl"
+    out = subprocess.run([str(CLI), "online", str(path), "--output", "json"], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    prefix = f"held out: {path}:"
+    cli = [line[len(prefix):] for line in out.stderr.splitlines() if line.startswith(prefix)]
+    assert cli, out.stderr
+    r = handeye.read_recording(path)
+    cal = handeye.OnlineCalibrator()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for a, b in zip(r["base_from_gripper"], r["camera_from_target"]):
+            cal.push(a, b)
+        cal.finish()
+    said = [str(w.message)[len("held out: pose "):] for w in caught if str(w.message).startswith("held out: pose ")]
+    assert said == cli, (said, cli)

@@ -794,11 +794,14 @@ def test_online_defaults_to_the_accumulating_estimator_and_push_returns_a_list()
     moved[:3, 3] = [0.04, 0.0, 0.0]
     bumped = np.linalg.inv(moved) @ r_good["camera_from_target"]
     changes = []
-    for a, b in zip(r_good["base_from_gripper"], bumped):
-        events = cal.push(a, b)
-        if any("change" in e for e in events):
-            changes.append(cal.last_report())
-    cal.finish()
+    # The first poses after the move are held out before the change is confirmed, and told, as
+    # the command line tells them (issue 31).
+    with pytest.warns(UserWarning, match="held out: pose"):
+        for a, b in zip(r_good["base_from_gripper"], bumped):
+            events = cal.push(a, b)
+            if any("change" in e for e in events):
+                changes.append(cal.last_report())
+        cal.finish()
     assert len(changes) == 1 and changes[0] is None, changes
     after = cal.last_report()
     assert after is not None

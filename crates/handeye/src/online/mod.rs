@@ -441,6 +441,17 @@ impl OnlineCalibrator {
         })
     }
 
+    /// Messages of one kind on a stream (held-out poses, bad lines) told one by one before only
+    /// every 2^k-th is (the count told at the end), so that an endless bad stream cannot flood
+    /// what a face shows.
+    pub const TOLD_ONE_BY_ONE: usize = 100;
+
+    /// Whether the `count`-th message of one kind (from 1) is told: the first
+    /// [`OnlineCalibrator::TOLD_ONE_BY_ONE`], then the 2^k-th. Every face tells them by this rule.
+    pub fn told(count: usize) -> bool {
+        count <= Self::TOLD_ONE_BY_ONE || count.is_power_of_two()
+    }
+
     /// Whether this calibrator is on the pixels ([`OnlineCalibrator::on_pixels`]), whose state
     /// (the frames) is not saved with serde.
     pub fn on_the_pixels(&self) -> bool {

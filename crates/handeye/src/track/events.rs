@@ -223,6 +223,17 @@ pub struct Step {
     pub repeat: bool,
 }
 
+impl Step {
+    /// The poses this step held out, with why: this pose, and earlier ones judged now (the first
+    /// poses, judged together once the gate has learned), as (pose number, why).
+    pub fn held_out_poses(&self) -> impl Iterator<Item = (usize, &HeldOut)> {
+        self.held_out
+            .iter()
+            .map(|h| (self.pose, h))
+            .chain(self.earlier.iter().map(|(p, h)| (*p, h)))
+    }
+}
+
 /// Why there is no estimate to report.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case", tag = "why")]
