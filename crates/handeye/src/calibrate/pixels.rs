@@ -133,7 +133,7 @@ pub(crate) fn calibrate_on_pixels(
 /// (the pixel solve has no low-DOF form: X's free component would come from the data's noise,
 /// not from the prior the user gave) and `reject_outliers` (mis-detected corners are left out,
 /// and listed, by the solve itself).
-pub(crate) fn not_on_pixels(reject_outliers: bool, priors: &[crate::model::prior::Prior]) -> Result<()> {
+fn not_on_pixels(reject_outliers: bool, priors: &[crate::model::prior::Prior]) -> Result<()> {
     if reject_outliers {
         return Err(Error::InvalidParameter {
             name: "reject_outliers",
@@ -228,7 +228,8 @@ pub(crate) fn calibrate_robot_world_on_pixels(
 /// solve's). `pixels` adds the reprojection error of the recording's detections with the saved X
 /// and with the recording's own, the target's pose fitted to each with X held fixed
 /// (`target_with_x`): how much worse the saved X explains the pixels, frame by frame;
-/// `start_poses` are the camera poses the solve started from (as given when it was refused).
+/// `start_poses` are the camera poses the solve started from, under the reading applied (as given
+/// when the solve itself was refused).
 ///
 /// Errors: those of [`calibrate_on_pixels`] but a refusal for degenerate or too few motions, which
 /// is the verdict `undetermined`.
@@ -270,7 +271,7 @@ pub(crate) fn verify_on_pixels(
         Ok(r) => r,
         Err(e @ Error::Degenerate { .. }) => {
             return Ok(Verification {
-                start_poses: pixel_camera_poses(frames, camera, setup, Reading::AsGiven),
+                start_poses: choice.start_poses,
                 ..cannot_tell(saved, &poses, &e, notes)
             });
         }
@@ -304,28 +305,6 @@ pub(crate) fn verify_on_pixels(
         per_frame,
     });
     Ok(v)
-}
-
-/// The camera pose of each record that the solve on the pixels starts from, under `reading` (the
-/// robot poses inverted for [`Reading::RobotInverted`]): [`ReprojectionSummary::start_poses`].
-/// Never fails: a frame that cannot be posed keeps its own `camera_from_target`, or the identity.
-fn pixel_camera_poses(
-    frames: &[Frame],
-    camera: &Intrinsics,
-    setup: Setup,
-    reading: Reading,
-) -> Vec<Transform> {
-    if reading == Reading::RobotInverted {
-        let inverted: Vec<Frame> = frames
-            .iter()
-            .map(|f| Frame {
-                base_from_gripper: f.base_from_gripper.inverse(),
-                ..f.clone()
-            })
-            .collect();
-        return start_camera_poses(&inverted, camera, setup);
-    }
-    start_camera_poses(frames, camera, setup)
 }
 
 /// The robot poses with the camera poses the solve started from (the PnP pose of each frame
@@ -707,8 +686,11 @@ fn solved(
         frames.to_vec()
     };
     let mut solution = solution;
+    // The camera poses this first solve, over every input frame under the reading applied,
+    // started from: the report's `start_poses`, whatever frames are left out below.
     let mut choice = FrameChoice {
         kept: (0..frames.len()).collect(),
+        start_poses: solution.start_poses.clone(),
         ..FrameChoice::default()
     };
     let outliers = outlier_frames(&used, &solution);
@@ -743,13 +725,6 @@ fn solved(
         choice.focal = focal_check(&used, camera, setup, &pixel_options, &solution);
         choice.k1 = k1_check(&used, camera, setup, &pixel_options, &solution);
     }
-    // Over every frame the solve started from the input's own start poses (under the reading
-    // applied); with frames left out, those of the input are found anew.
-    choice.start_poses = if choice.rejected {
-        pixel_camera_poses(frames, camera, setup, applied)
-    } else {
-        solution.start_poses.clone()
-    };
     Ok((used, solution, applied, reading_check, choice))
 }
 
@@ -984,7 +959,7 @@ fn report(
 
 #[cfg(test)]
 mod tests {
-    use super::{brent_minimum, pixel_camera_poses};
+    use super::{brent_minimum, start_camera_poses};
     use crate::calibrate::batch::{Fix, Options};
     use crate::model::findings::Reading;
     use crate::model::motion::Setup;
@@ -1006,7 +981,18 @@ mod tests {
                 let rejected = r.outliers.rejected;
                 let poses = r.reprojection.unwrap().start_poses;
                 assert_eq!(poses.len(), frames.len());
-                assert_eq!(poses, pixel_camera_poses(frames, camera, setup, applied));
+                // PnP on each input frame, the robot poses as the reading applied reads them.
+                let read: Vec<_> = frames
+                    .iter()
+                    .map(|f| crate::model::camera::Frame {
+                        base_from_gripper: match applied {
+                            Reading::RobotInverted => f.base_from_gripper.inverse(),
+                            _ => f.base_from_gripper,
+                        },
+                        ..f.clone()
+                    })
+                    .collect();
+                assert_eq!(poses, start_camera_poses(&read, camera, setup));
                 (applied, rejected)
             };
             assert_eq!(start(&sim.frames, Fix::Refuse), (Reading::AsGiven, false));
