@@ -119,25 +119,9 @@ fn solve_x<'py>(
     let options = calibration_options(method, pairs, tsai_opencv_filter)?;
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
-    // As `handeye::calibrate` solves X before its checks: by the method over the pairing's
-    // motions, Tsai's with the Tsai options (OpenCV's filter).
-    macro_rules! solved {
-        ($motions:expr) => {{
-            let motions = $motions;
-            if options.method == Method::Tsai {
-                options.tsai.solve(&motions)
-            } else {
-                handeye::solve(options.method, &motions)
-            }
-        }};
-    }
+    // As `handeye::calibrate` solves X before its checks.
     let c = py
-        .allow_threads(|| match options.pairing {
-            Pairing::All => solved!(handeye::AllPairs::new(&poses, setup)),
-            Pairing::Consecutive => {
-                solved!(handeye::motion_pairs(&poses, Pairing::Consecutive, setup))
-            }
-        })
+        .allow_threads(|| options.solve(&poses, setup))
         .map_err(value_error)?;
     Ok(matrix(py, &c.x))
 }

@@ -7,7 +7,7 @@
 //! `cargo bench -p handeye --bench solvers`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use handeye::calibrate::batch::{Options, calibrate, solve_poses};
+use handeye::calibrate::batch::{Options, calibrate};
 use handeye::check::outliers::pose_outliers;
 use handeye::check::quality::OUTLIER_DEG;
 use handeye::check::readings::check_readings;
@@ -100,7 +100,7 @@ fn drop_in(c: &mut Criterion) {
     };
     for (name, poses) in drop_in_datasets() {
         group.bench_with_input(BenchmarkId::new("solve", name), &poses, |b, p| {
-            b.iter(|| solve_poses(black_box(p), Setup::EyeInHand, &options))
+            b.iter(|| options.solve(black_box(p), Setup::EyeInHand))
         });
         group.bench_with_input(BenchmarkId::new("calibrate", name), &poses, |b, p| {
             b.iter(|| calibrate(black_box(p), Setup::EyeInHand, &options))

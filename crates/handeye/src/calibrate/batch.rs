@@ -40,7 +40,7 @@ pub(crate) use crate::check::outliers::working_distance;
 use crate::solve::accumulate::PoseAccumulator;
 use crate::solve::motions::{AllPairs, MotionSource};
 use crate::solve::{
-    Calibration, Method, RefineOptions, TsaiOptions, refine_from, solve, tsai_with,
+    Calibration, Method, RefineOptions, TsaiOptions, refine_from, solve,
 };
 
 /// Per-motion details (`quality.per_motion`) are kept up to this many motions. With every pair of
@@ -435,7 +435,7 @@ fn calibrate_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
     };
     let calibration = match &plan {
         Some(plan) => low_dof::solve(plan, &used, setup, options.pairing, options.method)?,
-        None => solve_poses(&used, setup, options)?,
+        None => options.solve(&used, setup)?,
     };
     plausible(&calibration.x, "X")?;
     let solve_x = |p: &[PosePair]| match &plan {
@@ -663,18 +663,21 @@ fn held_out_of(
     }
 }
 
-/// Solves X from the poses with the options' method, pairing and Tsai options: what [`calibrate`]
-/// solves before its checks (public with `internals` only: [`solve`] is the one way to solve).
-pub fn solve_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Result<Calibration> {
-    match options.pairing {
-        Pairing::All => solve_motions(&AllPairs::new(poses, setup), options),
-        Pairing::Consecutive => {
-            solve_motions(&motion_pairs(poses, Pairing::Consecutive, setup), options)
+impl Options {
+    /// X from the poses by these options' method, pairing and Tsai options: what [`calibrate`]
+    /// solves before its checks (the readings, outliers, uncertainty and held-out poses), and what
+    /// the OpenCV drop-in returns. [`solve`] is the solve of motions a caller made.
+    pub fn solve(&self, poses: &[PosePair], setup: Setup) -> Result<Calibration> {
+        match self.pairing {
+            Pairing::All => solve_motions(&AllPairs::new(poses, setup), self),
+            Pairing::Consecutive => {
+                solve_motions(&motion_pairs(poses, Pairing::Consecutive, setup), self)
+            }
         }
     }
 }
 
-/// Bootstrap replicates: the same method and pairing as [`solve_poses`], made cheaper where the
+/// Bootstrap replicates: the same method and pairing as [`Options::solve`], made cheaper where the
 /// answer is the same or bounds it. All-pairs Andreff comes from the O(n) accumulated normal
 /// equations ([`PoseAccumulator`], equal to the batch solve to ~1e-12). Refine, Tsai, Park and
 /// Horaud over all pairs are bootstrapped by the same O(n) Andreff: their errors over all pairs are
@@ -701,7 +704,7 @@ fn solve_replicate(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
             let start = crate::solve::andreff(&motions)?.x;
             refine_briefly(&motions, &start)
         }
-        _ => solve_poses(poses, setup, options).map(|c| c.x),
+        _ => options.solve(poses, setup).map(|c| c.x),
     }
 }
 
@@ -729,7 +732,7 @@ fn accumulated_andreff(poses: &[PosePair], setup: Setup) -> Result<Transform> {
 
 fn solve_motions(motions: &(impl MotionSource + ?Sized), options: &Options) -> Result<Calibration> {
     if options.method == Method::Tsai {
-        tsai_with(motions, &options.tsai)
+        options.tsai.solve(motions)
     } else {
         solve(options.method, motions)
     }
@@ -853,7 +856,7 @@ fn andreff_uncertainty(
         method: Method::Andreff,
         ..options.clone()
     };
-    let x = solve_poses(poses, setup, &andreff_options).ok()?.x;
+    let x = andreff_options.solve(poses, setup).ok()?.x;
     let solve_x = |p: &[PosePair]| solve_replicate(p, setup, &andreff_options);
     Some(bootstrap(poses, setup, &x, &solve_x, options.replicates, scene))
 }

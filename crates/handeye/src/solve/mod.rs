@@ -52,7 +52,9 @@ pub use robot_world::{
 pub(crate) use rotation_system::{RotationSolution, RotationSystem};
 #[cfg(test)]
 pub(crate) use scale::Scaled;
-pub use tsai::{TsaiOptions, tsai, tsai_with};
+pub use tsai::{TsaiOptions, tsai};
+#[cfg(feature = "internals")]
+pub use tsai::tsai_with;
 
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::pose::{Transform, rotation_matrix};
