@@ -6,7 +6,7 @@
 use anyhow::{Result, bail};
 use std::path::Path;
 
-use handeye::{Error, Estimator, OnlineCalibrator, OnlineConfig, Unit};
+use handeye::{Error, OnlineCalibrator, OnlineConfig, Unit};
 
 use super::{Args, Thinned, bad_line, print_report, publish_report};
 use crate::faces::{self, Face};
@@ -28,7 +28,7 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
         &args.name,
     )?;
     let camera = handeye::Intrinsics::read(intrinsics)?;
-    let mut calibrator = OnlineCalibrator::on_pixels(camera, config)?;
+    let mut calibrator = OnlineCalibrator::on_pixels(camera, config)?.with_priors(&args.prior)?;
     let out = LineOut::stdout();
     let mut messages = Thinned {
         bad_lines: 0,
@@ -117,18 +117,12 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
     Ok(())
 }
 
-/// The flags that do not apply on the pixels, refused before the input is read (exit 2) rather
-/// than ignored.
+/// The inputs and pages of this command that do not apply on the pixels, refused before the input
+/// is read (exit 2) rather than ignored. The calibrator's own settings (the paper's estimator, the
+/// optimal method, the truth, a prior) are refused by the library
+/// (`OnlineCalibrator::on_pixels`, `with_priors`), in the words every face prints.
 pub(super) fn refuse_flags(args: &Args) -> Result<()> {
     let given = [
-        ("--estimator paper", args.estimator == Estimator::Paper),
-        ("--prior", !args.prior.is_empty()),
-        ("--optimal", args.optimal),
-        (
-            "--error-source truth",
-            args.error_source == handeye::ErrorSource::Truth,
-        ),
-        ("--truth", args.truth.is_some()),
         ("--report", args.report.is_some()),
         ("--robot/--camera streams", args.input.robot.is_some()),
         ("a ROS 2 recording", args.input.is_bag()),

@@ -72,7 +72,7 @@ pub struct OnlineConfig {
     pub truth: Option<Transform>,
     /// Also run the optimal method (sec. 4.5). Default false.
     pub optimal: bool,
-    /// Whether the accumulating estimator runs beside the paper's calibrations. Default `Paper`.
+    /// The paper's calibrations, or the accumulating estimator in their place. Default `Paper`.
     pub estimator: Estimator,
     /// The accumulating estimator's gates, change test and schedule. Default:
     /// [`TrackOptions::default`].
@@ -403,17 +403,26 @@ impl OnlineCalibrator {
     /// out of range.
     pub fn on_pixels(camera: Intrinsics, config: OnlineConfig) -> Result<Self> {
         let given = [
-            ("the paper's estimator", config.estimator == Estimator::Paper),
-            ("the optimal method", config.optimal),
+            (
+                "the paper's estimator",
+                config.estimator == Estimator::Paper,
+                "the estimate on the pixels is the accumulating estimator's (the default)",
+            ),
+            (
+                "the optimal method",
+                config.optimal,
+                "it refines the paper's calibrations, which do not run on the pixels",
+            ),
             (
                 "errors against the truth",
                 config.error_source == ErrorSource::Truth || config.truth.is_some(),
+                "each report's uncertainty is its own measure",
             ),
         ];
-        if let Some((what, _)) = given.iter().find(|(_, given)| *given) {
+        if let Some((what, _, why)) = given.iter().find(|(_, given, _)| *given) {
             return Err(Error::InvalidParameter {
                 name: "intrinsics",
-                message: format!("{what} is not offered on the pixels (yet)"),
+                message: format!("{what} is not offered on the pixels (yet): {why}"),
             });
         }
         let options = Options {
@@ -775,7 +784,10 @@ impl OnlineCalibrator {
             return Ok(self);
         }
         if self.pixels.is_some() {
-            crate::calibrate::pixels::not_on_pixels(false, priors)?;
+            return Err(Error::InvalidParameter {
+                name: "prior",
+                message: "a prior is not offered on the pixels (yet)".into(),
+            });
         }
         let Some(tracker) = self.tracker.take() else {
             return Err(Error::InvalidParameter {
