@@ -599,14 +599,18 @@ class OnlineCalibrator:
         """The accumulating estimator's final report (a dict), or None: call it at the end of the
         stream (with either estimator: a short stream's readings are checked then). A report whose
         uncertainty is above the reporting bounds carries ``weak``."""
-        text = self._inner.finish()
-        self._warn_readings()
+        try:
+            text = self._inner.finish()
+        finally:
+            # What the end found is told even when finish raises (a refusal at the end).
+            self._warn_readings()
         return None if text is None else _with_arrays(json.loads(text))
 
     def _warn_readings(self):
         # What the command line tells: the check of the first 64 poses (of a shorter stream of 16
         # or more, at finish()), data read wrongly, implausible sizes, or rotations about one
-        # axis; the paper's selection stuck (no calibration in 200, 400, ... poses, or at all).
+        # axis; the paper's selection stuck (no calibration in 200, 400, ... poses); the poses the
+        # accumulating estimator held out; on the pixels, the solve's cautions.
         for found in self._inner.take_warnings():
             warnings.warn(found, UserWarning, stacklevel=3)
 
