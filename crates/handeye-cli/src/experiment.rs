@@ -19,7 +19,7 @@ pub struct Args {
     /// Which experiment: one of the paper's, the tracking or the advice study, or all of them.
     #[arg(value_parser = which())]
     which: String,
-    /// Number of series (default: the paper's, 20 / 100 / 50).
+    /// Number of series (default: the paper's, 20 / 100 / 50; 20 for tracking and advice).
     #[arg(long, value_parser = values::count(1, values::MAX_SERIES))]
     series: Option<usize>,
     /// Seed of the run.

@@ -1,5 +1,5 @@
-//! The paper's experiments with few series: the report's fields and the direction of each claim
-//! of SPEC sec. 6 / issue 4.
+//! The experiments with few series: the paper's (the report's fields and the direction of each
+//! claim of SPEC sec. 6 / issue 4), the tracking study, and the settings no study runs with.
 
 use handeye::experiment::{Experiment, ExperimentConfig, ExperimentReport, run_experiment};
 use serde_json::Value;
@@ -137,4 +137,34 @@ fn tracking_the_running_estimate_improves_and_jumps_are_caught() {
         .unwrap();
     assert!(one_degree.detected_within_30 >= 0.95);
     assert!(report.detection.iter().all(|d| d.false_alarms == 0));
+}
+
+#[test]
+fn settings_no_study_can_run_with_are_refused_by_name() {
+    for (name, config) in [
+        (
+            "series",
+            ExperimentConfig {
+                series: 0,
+                ..ExperimentConfig::for_experiment(Experiment::Tracking)
+            },
+        ),
+        (
+            "every",
+            ExperimentConfig {
+                every: 0,
+                ..ExperimentConfig::for_experiment(Experiment::Tracking)
+            },
+        ),
+        (
+            "jump_poses",
+            ExperimentConfig {
+                jump_poses: 1,
+                ..ExperimentConfig::for_experiment(Experiment::Tracking)
+            },
+        ),
+    ] {
+        let e = run_experiment(Experiment::Tracking, &config, || {}).unwrap_err();
+        assert!(e.to_string().contains(name), "{name}: {e}");
+    }
 }

@@ -15,7 +15,7 @@
 //! Beyond the paper:
 //! - [`Experiment::Tracking`]: 20 series × 200 poses; the accumulating estimator's errors as the
 //!   poses come, against the paper's selection and a batch solve so far, and how fast a change of
-//!   X is noticed (one 300-pose series a jump size).
+//!   X is noticed (`series` series of `jump_poses` poses for each jump size, the jump halfway).
 //! - [`Experiment::Advice`]: 20 series; how many poses the paper's walk, random turns and
 //!   [`advise`](crate::advise)'s suggestions need to reach the same uncertainty (the advice's
 //!   closed loop).
@@ -88,6 +88,27 @@ pub struct ExperimentConfig {
 }
 
 impl ExperimentConfig {
+    /// Refuses counts no study can run with: no series, a tracking checkpoint every 0 poses, a
+    /// jump series too short to jump halfway.
+    pub fn validate(&self) -> Result<()> {
+        let refuse = |name, message: &str| {
+            Err(crate::model::error::Error::InvalidParameter {
+                name,
+                message: message.into(),
+            })
+        };
+        if self.series == 0 {
+            return refuse("series", "at least one series");
+        }
+        if self.every == 0 {
+            return refuse("every", "a checkpoint every 1 pose or more");
+        }
+        if self.jump_poses < 2 {
+            return refuse("jump_poses", "at least 2 poses, the jump halfway");
+        }
+        Ok(())
+    }
+
     /// The settings of `experiment` (the paper's, for its three), with seed 1.
     pub fn for_experiment(experiment: Experiment) -> Self {
         let (series, poses) = match experiment {
@@ -124,9 +145,8 @@ impl ExperimentConfig {
 /// The outcome of [`run_experiment`]: one variant per [`Experiment`], its rows read off the
 /// variant's fields (with the settings the run read, `config`, but for advice). Serialised as the
 /// variant's contents (the JSON `handeye experiment` writes).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
-#[serde(try_from = "StoredReport")]
 pub enum ExperimentReport {
     /// One summary per method (`methods`, each with `per_series` results): conventional, fixed,
     /// adaptive, then the batch solvers; `method(name)` finds one.
@@ -142,33 +162,6 @@ pub enum ExperimentReport {
     Advice(ClosedLoop),
 }
 
-/// What a report's JSON holds: which experiment a methods report comes from is in its
-/// `experiment` field.
-#[derive(Deserialize)]
-#[serde(untagged)]
-enum StoredReport {
-    Methods(MethodsReport),
-    Tracking(TrackingReport),
-    Advice(ClosedLoop),
-}
-
-impl TryFrom<StoredReport> for ExperimentReport {
-    type Error = String;
-
-    fn try_from(stored: StoredReport) -> std::result::Result<Self, String> {
-        Ok(match stored {
-            StoredReport::Methods(r) => match r.experiment {
-                Experiment::Accuracy => Self::Accuracy(r),
-                Experiment::Adaptability => Self::Adaptability(r),
-                Experiment::Realtime => Self::Realtime(r),
-                other => return Err(format!("the {other} experiment has no method summaries")),
-            },
-            StoredReport::Tracking(r) => Self::Tracking(r),
-            StoredReport::Advice(r) => Self::Advice(r),
-        })
-    }
-}
-
 /// Runs `experiment` with `config`, calling `progress` after each finished series (from any
 /// thread).
 pub fn run_experiment(
@@ -176,6 +169,7 @@ pub fn run_experiment(
     config: &ExperimentConfig,
     progress: impl Fn() + Sync,
 ) -> Result<ExperimentReport> {
+    config.validate()?;
     let methods = || paper::run(experiment, &MethodsSettings::from(config), &progress);
     Ok(match experiment {
         Experiment::Accuracy => ExperimentReport::Accuracy(methods()?),

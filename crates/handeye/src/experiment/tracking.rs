@@ -93,7 +93,7 @@ pub struct TrackingReport {
 pub(crate) fn run(config: &TrackingSettings, progress: impl Fn() + Sync) -> Result<TrackingReport> {
     use crate::online::{Estimator, OnlineCalibrator};
     config.params.validate()?;
-    let every = config.every.max(1);
+    let every = config.every;
     let checkpoints: Vec<usize> = (1..=config.poses / every).map(|k| k * every).collect();
     let names = [
         Estimator::Accumulate.name(),
@@ -115,19 +115,24 @@ pub(crate) fn run(config: &TrackingSettings, progress: impl Fn() + Sync) -> Resu
                 s as u64,
             );
             let truth = sim.gripper_from_camera;
-            let make = |selection, estimator| {
+            // The paper's calibrators (their errors against the truth), and the accumulating
+            // estimator, its own entry (the selection's settings do not apply to it).
+            let paper = |selection| {
                 OnlineCalibrator::new(OnlineConfig {
                     selection,
                     params: config.params,
-                    estimator,
+                    estimator: Estimator::Paper,
                     error_source: ErrorSource::Truth,
                     truth: Some(truth),
                     ..OnlineConfig::default()
                 })
             };
-            let mut acc = make(Selection::Adaptive, Estimator::Accumulate)?;
-            let mut adaptive = make(Selection::Adaptive, Estimator::Paper)?;
-            let mut conventional = make(Selection::None, Estimator::Paper)?;
+            let mut acc = OnlineCalibrator::new(OnlineConfig {
+                estimator: Estimator::Accumulate,
+                ..OnlineConfig::default()
+            })?;
+            let mut adaptive = paper(Selection::Adaptive)?;
+            let mut conventional = paper(Selection::None)?;
             let mut row: Row = vec![Vec::new(); names.len()];
             let (mut last_adaptive, mut last_conventional) = (None, None);
             let err = |x: &crate::model::pose::Transform| {
@@ -221,7 +226,6 @@ fn detect(
                 s as u64,
             );
             let mut c = OnlineCalibrator::new(OnlineConfig {
-                params: config.params,
                 estimator: Estimator::Accumulate,
                 ..OnlineConfig::default()
             })?;
