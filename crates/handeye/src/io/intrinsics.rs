@@ -13,7 +13,7 @@ use std::path::Path;
 use crate::io::parse_error;
 use crate::io::yaml_tree::YamlTree;
 use crate::model::camera::Intrinsics;
-use crate::model::error::{Error, Result};
+use crate::model::error::Result;
 
 impl Intrinsics {
     /// Reads the intrinsics of a file: OpenCV's calibration YAML (`camera_matrix`,
@@ -23,12 +23,9 @@ impl Intrinsics {
     /// field.
     pub fn read(path: impl AsRef<Path>) -> Result<Intrinsics> {
         let path = path.as_ref();
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-            file: file.clone(),
-            source,
-        })?;
-        parse_intrinsics(&text, &file)
+        // Read as every whole-file format is: a file or a pipe, of bounded size.
+        let text = crate::io::read_text(path)?;
+        parse_intrinsics(&text, &path.display().to_string())
     }
 }
 
@@ -243,6 +240,23 @@ fn distortion(d: &[f64]) -> std::result::Result<[f64; 5], String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::error::Error;
+
+    /// Read as every whole-file format is: a device or a directory is refused by name, never read
+    /// (an endless `/dev/zero` was read into memory before).
+    #[cfg(unix)]
+    #[test]
+    fn a_device_or_a_directory_is_refused_not_read() {
+        for path in ["/dev/zero", "/"] {
+            match Intrinsics::read(path) {
+                Err(Error::Parse { file, message, .. }) => {
+                    assert_eq!(file, path);
+                    assert!(message.contains("not a file"), "{message}");
+                }
+                other => panic!("{path}: {other:?}"),
+            }
+        }
+    }
 
     const OPENCV: &str = "%YAML:1.0\n---\ncalibration_time: \"x\"\nimage_width: 1280\nimage_height: 720\ncamera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   data: [ 9.0500000000000000e+02, 0., 6.412e+02, 0.,\n       9.0350000000000000e+02, 3.587e+02, 0., 0., 1. ]\ndistortion_coefficients: !!opencv-matrix\n   rows: 1\n   cols: 5\n   dt: d\n   data: [ -2.1e-01, 9.0e-02, 7.0e-04, -4.0e-04, -1.5e-02 ]\n";
 
