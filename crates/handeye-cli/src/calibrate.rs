@@ -109,6 +109,22 @@ pub struct Args {
     /// over more than 20 frames.
     #[arg(long)]
     refine_intrinsics: bool,
+    /// The robot's DH table, the one its poses are reported through (JSON: `convention`
+    /// standard|modified, `a`, `d`, `alpha`, `theta_offset`, optional `sign` and `tool`; the poses'
+    /// unit and radians). With every pose's joint angles, the systematic-error test also asks
+    /// whether the residuals follow an error of the table's parameters: an uncalibrated robot is
+    /// then seen at 1 mm. Refused (exit 2) when it does not turn the hand as the poses do.
+    #[arg(long, value_name = "FILE")]
+    robot_model: Option<std::path::PathBuf>,
+}
+
+/// The robot's DH table of `--robot-model`, read.
+fn robot_model(args: &Args) -> Result<Option<handeye::Kinematics>> {
+    Ok(args
+        .robot_model
+        .as_ref()
+        .map(handeye::Kinematics::read)
+        .transpose()?)
 }
 
 /// Refuses the flags of the calibration on the pixels without `--method reprojection` (exit 2).
@@ -176,6 +192,7 @@ pub fn run(args: Args) -> Result<()> {
             pose_names: recording.names.clone(),
             written,
             joints: recording.joints,
+            robot_model: robot_model(&args)?,
             ..options
         },
     ) {
@@ -497,6 +514,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             written,
             point: args.point,
             joints: recording.joints,
+            robot_model: robot_model(args)?,
             priors: args.prior.clone(),
             refine_intrinsics: false,
         },

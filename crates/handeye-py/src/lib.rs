@@ -459,7 +459,7 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
 /// The whole batch calibration ([`handeye::calibrate`]): its report as JSON, the same
 /// object `handeye calibrate` prints (the Python layer parses it).
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::Options::default().replicates, point=None, joints=None, prior=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::Options::default().replicates, point=None, joints=None, prior=None, robot_model=None))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,
@@ -475,9 +475,11 @@ fn calibrate_report<'py>(
     point: Option<[f64; 3]>,
     joints: Option<Vec<Vec<f64>>>,
     prior: Option<Vec<String>>,
+    robot_model: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
     let options = handeye::Options {
         joints: checked_joints(joints)?,
+        robot_model: read_robot_model(robot_model)?,
         priors: priors(prior)?,
         reject_outliers,
         fix: parse_fix(fix)?,
@@ -496,7 +498,7 @@ fn calibrate_report<'py>(
 /// The robot-world calibration ([`handeye::calibrate_robot_world`]): its report as
 /// JSON, the same object `handeye calibrate --robot-world` prints.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::Options::default().replicates, reject_outliers=false, point=None, joints=None, prior=None))]
+#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::Options::default().replicates, reject_outliers=false, point=None, joints=None, prior=None, robot_model=None))]
 #[allow(clippy::too_many_arguments)]
 fn robot_world_report<'py>(
     py: Python<'py>,
@@ -510,9 +512,11 @@ fn robot_world_report<'py>(
     point: Option<[f64; 3]>,
     joints: Option<Vec<Vec<f64>>>,
     prior: Option<Vec<String>>,
+    robot_model: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
     let options = handeye::RobotWorldOptions {
         joints: checked_joints(joints)?,
+        robot_model: read_robot_model(robot_model)?,
         priors: priors(prior)?,
         method: method.parse().map_err(value_error)?,
         fix: parse_fix(fix)?,
@@ -757,6 +761,13 @@ fn count(name: &str, value: Option<i64>) -> PyResult<Option<usize>> {
 }
 
 /// Joint angles given to a calibration: every pose's, finite, one count (as JSON Lines gives them).
+/// The robot's DH table at `path` (`robot_model=`, as `--robot-model`), read.
+fn read_robot_model(path: Option<std::path::PathBuf>) -> PyResult<Option<handeye::Kinematics>> {
+    path.map(handeye::Kinematics::read)
+        .transpose()
+        .map_err(value_error)
+}
+
 fn checked_joints(joints: Option<Vec<Vec<f64>>>) -> PyResult<Vec<Vec<f64>>> {
     let joints = joints.unwrap_or_default();
     let count = joints.first().map_or(0, Vec::len);

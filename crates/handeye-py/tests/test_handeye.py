@@ -893,6 +893,28 @@ def test_joint_angles_reach_the_systematic_test_in_python_as_on_the_command_line
         handeye.calibrate(r["base_from_gripper"], r["camera_from_target"], setup=setup, joints=r["joints"][:-1])
 
 
+def test_the_robots_table_reaches_the_systematic_test_in_python_as_on_the_command_line():
+    # Issue 29: robot_model= is --robot-model. A 1 mm DH error of a UR10 seen from outside is
+    # flagged with its table, by the table's statistic, as the command line flags it; another
+    # robot's table is refused with the command line's words.
+    path = TESTDATA / "kinhec" / "systematic" / "dh1_ur10_eth_s0.jsonl"
+    table = TESTDATA / "kinhec" / "robots" / "ur10.json"
+    r = handeye.read_recording(path, setup="eye-to-hand")
+    g, c = r["base_from_gripper"], r["camera_from_target"]
+    py = handeye.calibrate(g, c, setup="eye-to-hand", joints=r["joints"], robot_model=table)
+    cli = _cli_json("calibrate", path, "--setup", "eye-to-hand", "--robot-model", table)
+    assert py["systematic"]["flagged"] and cli["systematic"]["flagged"]
+    assert py["systematic"]["kinematic"] == cli["systematic"]["kinematic"]
+    assert py["systematic"]["kinematic"]["z"] < -5
+    assert py["verdict"] == cli["verdict"] == "questionable"
+    rw = handeye.calibrate(g, c, setup="eye-to-hand", joints=r["joints"], robot_model=str(table), robot_world=True)
+    assert rw["systematic"]["kinematic"]["parameters"] > 0
+    with pytest.raises(ValueError, match="does not turn the hand"):
+        handeye.calibrate(g, c, setup="eye-to-hand", joints=r["joints"], robot_model=table.with_name("irb120.json"))
+    with pytest.raises(ValueError, match="joint angles of every pose"):
+        handeye.calibrate(g, c, setup="eye-to-hand", robot_model=table)
+
+
 def test_the_online_estimator_flags_a_systematic_error_as_calibrate_and_the_command_line():
     # Issue 29 in Python's OnlineCalibrator: the joints pushed with each pose order the poses for
     # the systematic-error test; the final report is questionable with the warning, its joint

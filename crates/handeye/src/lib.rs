@@ -119,6 +119,7 @@ pub mod sim;
 pub use model::camera::{Detections, Frame, Intrinsics};
 pub use model::error::{Degeneracy, Error, LowDofMissing, Result, TransformProblem};
 pub use model::findings::{Part, Reading, Sizes, Verdict, Written, WrittenAs};
+pub use model::kinematics::{DhConvention, Kinematics};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
 pub use model::names::Named;
 pub use model::pose::{Transform, TransformJson, transform_from_matrix4};

@@ -12,7 +12,7 @@ use handeye::calibrate::batch::{Options, Report, calibrate};
 use handeye::check::quality::errors_against_truth;
 use handeye::io::{Format, read_joints, read_pose_file, transform_from_json};
 use handeye::sim::{SimConfig, simulate};
-use handeye::{Method, Pairing, Setup, Transform, Warning};
+use handeye::{Kinematics, Method, Pairing, Setup, Transform, Warning};
 use serde_json::Value;
 
 /// The repository's kinhec suite, or for the systematic streams the directory
@@ -120,7 +120,15 @@ fn nominal_model_x(e: &Value) -> Option<Transform> {
         .map(|x| transform_from_json(&x[frame]).unwrap())
 }
 
-fn rows(kinds: &[&str]) -> Vec<Row> {
+/// The DH table the recording's robot reports its poses through (`testdata/kinhec/robots`, made
+/// by `robot_models.py` from kinhec's nominal models).
+fn robot_model(e: &Value) -> Kinematics {
+    let robot = e["robot"].as_str().unwrap();
+    Kinematics::read(suite().join("robots").join(format!("{robot}.json"))).unwrap()
+}
+
+/// Each run of `kinds`, by both methods; with `--robot-model` where `with_model`.
+fn rows(kinds: &[&str], with_model: bool) -> Vec<Row> {
     let mut out = Vec::new();
     for e in manifest("systematic/manifest.json") {
         let kind = e["kind"].as_str().unwrap();
@@ -128,6 +136,10 @@ fn rows(kinds: &[&str]) -> Vec<Row> {
             continue;
         }
         for (method, options) in methods() {
+            let options = Options {
+                robot_model: with_model.then(|| robot_model(&e)),
+                ..options
+            };
             let r = run(&e, &options).unwrap_or_else(|err| {
                 panic!("{} {method}: refused: {err}", e["file"]);
             });
@@ -159,7 +171,7 @@ fn share(rows: &[Row], f: impl Fn(&Row) -> bool) -> f64 {
 
 #[test]
 fn an_uncalibrated_robot_is_flagged_and_covered() {
-    let rows = rows(&["dh05", "dh1", "dh2"]);
+    let rows = rows(&["dh05", "dh1", "dh2"], false);
     assert!(rows.len() >= 48, "{} runs", rows.len());
     let large: Vec<&Row> = rows.iter().filter(|r| r.level != "dh05").collect();
     let large_flagged = large.iter().filter(|r| r.flagged).count() as f64 / large.len() as f64;
@@ -198,9 +210,50 @@ fn an_uncalibrated_robot_is_flagged_and_covered() {
     assert!(within >= 0.75, "{summary}");
 }
 
+/// With the robot's DH table (`--robot-model`) the test asks whether the residuals lie along what
+/// an error of its parameters does (`check::identification`): the bars, on the same runs.
+#[test]
+fn an_uncalibrated_robot_is_flagged_and_covered_with_its_model() {
+    let rows = rows(&["dh05", "dh1", "dh2"], true);
+    assert!(rows.len() >= 48, "{} runs", rows.len());
+    let large: Vec<&Row> = rows.iter().filter(|r| r.level != "dh05").collect();
+    let large_flagged = large.iter().filter(|r| r.flagged).count() as f64 / large.len() as f64;
+    let silent = share(&rows, |r| !r.flagged && r.ratio > 3.0);
+    let within = share(&rows, |r| r.ratio <= 3.0);
+    let summary = format!(
+        "DH errors, with the robot's model: {} runs; 1 and 2 mm flagged {:.0}%; all levels flagged {:.0}%; silently beyond 3 sigma {:.1}%; within 3 sigma {:.0}%",
+        rows.len(),
+        100.0 * large_flagged,
+        100.0 * share(&rows, |r| r.flagged),
+        100.0 * silent,
+        100.0 * within
+    );
+    println!("{summary}");
+    assert!(large_flagged >= 0.9, "{summary}");
+    assert!(silent <= 1.0 / 12.0, "{summary}");
+    assert!(within >= 0.75, "{summary}");
+}
+
+/// Random errors with the robot's model: the fifth statistic must not make noise a finding.
+#[test]
+fn random_errors_with_the_robots_model_are_not_flagged() {
+    let rows = rows(&["ctl_robot", "ctl_encoder", "ctl_pnp"], true);
+    let flagged = share(&rows, |r| r.flagged);
+    let within = share(&rows, |r| r.ratio <= 3.0);
+    let summary = format!(
+        "controls, with the robot's model: {} runs; flagged {:.1}%; within 3 sigma {:.0}%",
+        rows.len(),
+        100.0 * flagged,
+        100.0 * within
+    );
+    println!("{summary}");
+    assert!(flagged <= 0.1, "{summary}");
+    assert!(within >= 0.9, "{summary}");
+}
+
 #[test]
 fn random_errors_are_not_flagged_and_stay_covered() {
-    let mut rows = rows(&["ctl_robot", "ctl_encoder", "ctl_pnp"]);
+    let mut rows = rows(&["ctl_robot", "ctl_encoder", "ctl_pnp"], false);
     // The project's simulator (eye-in-hand): independent noise on both sides.
     for seed in 0..12 {
         {

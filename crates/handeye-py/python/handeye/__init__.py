@@ -15,6 +15,7 @@ Two faces:
 from __future__ import annotations
 
 import json
+import os
 import math
 import warnings
 from collections.abc import Mapping
@@ -148,6 +149,7 @@ def calibrate(
     point=None,
     joints=None,
     prior=None,
+    robot_model=None,
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
@@ -173,6 +175,10 @@ def calibrate(
     determine, as ``--prior`` does: ``"tz=0.12+-0.002"`` (or ``"tz=0.12"``, exact), a list of
     such, or a dict ``{"tz": 0.12}`` / ``{"tz": (0.12, 0.002)}``; ``tx``, ``ty``, ``tz`` in X's
     parent frame and the input's length unit. The report then has ``prior`` and ``low_dof``.
+    ``robot_model`` (a path to the robot's DH table, JSON, as ``--robot-model``; with ``joints``)
+    lets the systematic-error test ask whether the residuals follow an error of the table's
+    parameters (``systematic["kinematic"]``): an uncalibrated robot is then seen at 1 mm. A table
+    that does not turn the hand as the poses do, or in another unit, raises a ValueError.
 
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
     (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
@@ -196,6 +202,7 @@ def calibrate(
                 point=_point(point),
                 joints=joints,
                 prior=_priors(prior),
+                robot_model=_path(robot_model),
             )
         )
         result["matrix"] = np.array(result["matrix"], dtype=np.float64)
@@ -216,10 +223,16 @@ def calibrate(
             point=_point(point),
             joints=joints,
             prior=_priors(prior),
+            robot_model=_path(robot_model),
         )
     )
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)
     return result
+
+
+def _path(path):
+    """A path as a string (``os.PathLike`` accepted), or None."""
+    return None if path is None else os.fspath(path)
 
 
 def _priors(prior):

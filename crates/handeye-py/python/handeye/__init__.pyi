@@ -39,6 +39,7 @@ def calibrate(
     point: Optional[npt.ArrayLike] = None,
     joints: Optional[Sequence[Sequence[float]]] = None,
     prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
+    robot_model: Optional[Union[str, "os.PathLike[str]"]] = None,
 ) -> dict[str, Any]: ...
 
 def advise(

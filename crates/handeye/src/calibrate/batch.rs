@@ -156,6 +156,10 @@ pub struct Options {
     /// input gives them: the configuration the systematic-error test orders the poses by, and
     /// the joint it names. Empty: the hand poses order them.
     pub joints: Vec<Vec<f64>>,
+    /// The robot's DH table (`--robot-model`), where given with the joint angles: the
+    /// systematic-error test then also asks whether the residuals lie along what an error of its
+    /// parameters does (`check::identification`). Default none.
+    pub robot_model: Option<crate::model::kinematics::Kinematics>,
     /// Priors on components of X's translation (SPEC sec. 9, `--prior`): a low-DOF recording's
     /// free component comes from its prior; a prior on a component the motions determine is
     /// checked against the data (the data's value is kept). Default none.
@@ -187,6 +191,7 @@ impl Default for Options {
             written: Written::NAMED,
             point: None,
             joints: Vec::new(),
+            robot_model: None,
             priors: Vec::new(),
             refine_intrinsics: false,
         }
@@ -421,6 +426,7 @@ fn calibrate_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
         options.outlier_deg,
         &mut warnings,
     )?;
+    check_robot_model(options.robot_model.as_ref(), &read, &options.joints)?;
     let read_len = read.len();
     let used: Vec<PosePair> = if options.reject_outliers {
         without(&read, &found)
@@ -472,6 +478,7 @@ fn calibrate_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
     let systematic = systematic_test(
         (&used, setup, &calibration.x),
         (&options.joints, &kept, read_len),
+        options.robot_model.as_ref(),
         !options.reject_outliers && !found.poses.is_empty(),
         &solve_x,
         scene,
@@ -580,6 +587,20 @@ fn calibrate_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
         low_dof: plan.map(|p| p.report(calibration.conditioning)),
         reprojection: None,
     })
+}
+
+/// Refuses a robot model (`--robot-model`) that is not the one the poses were reported through,
+/// or without every pose's joint angles (`check::identification::check_model`).
+pub(crate) fn check_robot_model(
+    model: Option<&crate::model::kinematics::Kinematics>,
+    poses: &[PosePair],
+    joints: &[Vec<f64>],
+) -> Result<()> {
+    let Some(model) = model else {
+        return Ok(());
+    };
+    crate::check::identification::check_model(model, poses, joints)
+        .map_err(|message| Error::InvalidParameter { name: "robot-model", message })
 }
 
 /// Joint angles given are every pose's: one list a pose (or none at all).

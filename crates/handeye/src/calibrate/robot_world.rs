@@ -79,6 +79,10 @@ pub struct RobotWorldOptions {
     pub point: Option<[f64; 3]>,
     /// The joint angles of each pose by input index (radians), as in the hand–eye options.
     pub joints: Vec<Vec<f64>>,
+    /// The robot's DH table (`--robot-model`), where given with the joint angles: the
+    /// systematic-error test then also asks whether the residuals lie along what an error of its
+    /// parameters does (`check::identification`). Default none.
+    pub robot_model: Option<crate::model::kinematics::Kinematics>,
     /// Priors on components of X's translation, as in the hand–eye options (`--prior`): a
     /// low-DOF recording's free component of X comes from its prior, and the target's coupled
     /// component follows from it. Default empty.
@@ -100,6 +104,7 @@ impl Default for RobotWorldOptions {
             written: Written::NAMED,
             point: None,
             joints: Vec::new(),
+            robot_model: None,
             priors: Vec::new(),
             refine_intrinsics: false,
         }
@@ -317,6 +322,7 @@ fn robot_world_on_poses(
         options.outlier_deg,
         &mut warnings,
     )?;
+    crate::calibrate::batch::check_robot_model(options.robot_model.as_ref(), &read, &options.joints)?;
     let outliers = outlier_report(
         &found,
         &Options {
@@ -408,6 +414,7 @@ fn robot_world_on_poses(
     let systematic = systematic_test(
         (&used, setup, &solved.x),
         (&options.joints, &kept, poses.len()),
+        options.robot_model.as_ref(),
         !options.reject_outliers && !found.poses.is_empty(),
         &solve_x,
         scene,

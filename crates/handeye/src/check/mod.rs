@@ -2,6 +2,7 @@
 //! determined (bootstrap), how well held-out poses are predicted, and the motions' quality.
 
 pub mod holdout;
+pub mod identification;
 pub mod outliers;
 pub mod precision;
 pub mod quality;

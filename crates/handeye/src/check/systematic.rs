@@ -39,6 +39,8 @@ use crate::model::pose::{Transform, log_so3};
 use crate::check::uncertainty::{Uncertainty, bootstrap_by_region, per_station, stations_of};
 use crate::model::error::Result;
 use crate::model::warning::Warning;
+use crate::check::identification::{KinematicFit, Station, kinematic_fit};
+use crate::model::kinematics::Kinematics;
 use crate::solve::residual::PoseResidual;
 
 /// Random orders drawn for the null distribution of the neighbour ratio.
@@ -89,6 +91,10 @@ pub struct Systematic {
     /// The joint whose angle the residual follows most, where joint angles are given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint: Option<JointFollow>,
+    /// The residuals along the robot's DH table's directions (`check::identification`), where the
+    /// table and the joint angles are given: a fifth statistic, the Bonferroni factor then five.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinematic: Option<KinematicFit>,
     /// The neighbour order (indices into the poses tested); not serialised.
     #[serde(skip)]
     pub order: Vec<usize>,
@@ -116,6 +122,14 @@ pub const MATERIAL_ROTATION_DEG: f64 = 1e-6;
 pub const MATERIAL_TRANSLATION_REL: f64 = 1e-9;
 
 impl Systematic {
+    /// Adds the DH table's statistic: the smallest of five z-scores, its p-value times five.
+    pub fn with_kinematic(&mut self, fit: KinematicFit) {
+        self.kinematic = Some(fit);
+        self.z = self.z.min(fit.z);
+        self.p_value = (5.0 * Normal::standard().cdf(self.z)).min(1.0);
+        self.flagged = self.p_value < self.threshold;
+    }
+
     /// Keeps the flag only where the halves of the workspace disagree about X by more than
     /// rounding ([`MATERIAL_ROTATION_DEG`], [`MATERIAL_TRANSLATION_REL`] of `scene`): a pattern in
     /// the residuals of exact data is the rounding of the printed digits, of no weight on X.
@@ -403,6 +417,7 @@ pub fn test(residuals: &[PoseResidual], configurations: &Configurations) -> Opti
         configuration: configurations.kind.into(),
         halves: None,
         joint: (configurations.kind == "joints").then(|| joint_followed(&rot, &trans, configurations)).flatten(),
+        kinematic: None,
         order,
     })
 }
@@ -483,7 +498,7 @@ pub fn systematic_error(
     poses: &[PosePair],
     setup: Setup,
     x: &Transform,
-    joints: Option<&[Vec<f64>]>,
+    (joints, model, scene): (Option<&[Vec<f64>]>, Option<&Kinematics>, f64),
     solve: &dyn Fn(&[PosePair]) -> crate::model::error::Result<Transform>,
 ) -> Option<Systematic> {
     // Images at one robot pose share its error: the test is on the stations, each its first
@@ -500,7 +515,19 @@ pub fn systematic_error(
         .filter(|j| j.len() == poses.len())
         .and_then(|j| Configurations::of_joints(&first.iter().map(|&i| j[i].clone()).collect::<Vec<_>>()))
         .unwrap_or_else(|| Configurations::of_hand_poses(&representatives));
-    let mut found = test(&per_station(&stations, &residuals.residuals), &configurations)?;
+    let station_residuals = per_station(&stations, &residuals.residuals);
+    let mut found = test(&station_residuals, &configurations)?;
+    if let (Some(model), Some(joints)) = (model, joints.filter(|j| j.len() == poses.len())) {
+        let tested: Vec<Station<'_>> = first
+            .iter()
+            .zip(&station_residuals)
+            .map(|(&i, residual)| Station { pose: &poses[i], joints: &joints[i], residual })
+            .collect();
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(SEED ^ 0x1D);
+        if let Some(fit) = kinematic_fit(&tested, (setup, x, &residuals.y), model, scene, &mut rng) {
+            found.with_kinematic(fit);
+        }
+    }
     // The order of the poses, each station's together: the halves and regions keep a station whole.
     found.order = stations.expand(&found.order);
     found.halves = halves_disagree(poses, &found.order, solve);
@@ -560,6 +587,7 @@ const DENSE_SHARE: f64 = 0.35;
 pub(crate) fn systematic_test(
     (used, setup, x): (&[PosePair], Setup, &Transform),
     (joints, kept, read_len): (&[Vec<f64>], &[usize], usize),
+    model: Option<&Kinematics>,
     outliers_kept: bool,
     solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
     scene: f64,
@@ -569,7 +597,7 @@ pub(crate) fn systematic_test(
     }
     let joints: Option<Vec<Vec<f64>>> =
         (joints.len() == read_len).then(|| kept.iter().map(|&i| joints[i].clone()).collect());
-    let mut found = systematic_error(used, setup, x, joints.as_deref(), solve_x)?;
+    let mut found = systematic_error(used, setup, x, (joints.as_deref(), model, scene), solve_x)?;
     found.weigh(scene);
     // The halves count only where each determines X; checked where they would widen the answer.
     if found.flagged
@@ -626,6 +654,7 @@ pub(crate) fn systematic_warning(found: &Systematic, regions: &Uncertainty) -> W
         rotation_sigma_deg: regions.rotation_deg,
         translation_sigma: regions.translation,
         joint: found.joint.map(|j| j.joint),
+        kinematic_z: found.kinematic.map(|k| k.z),
     }
 }
 

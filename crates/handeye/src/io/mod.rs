@@ -11,6 +11,7 @@ mod intrinsics;
 mod json_text;
 mod jsonl;
 mod jsonl_fast;
+mod kinematics;
 mod lines;
 mod peer;
 mod pose_reader;

@@ -4,6 +4,7 @@
 pub mod camera;
 pub mod error;
 pub mod findings;
+pub mod kinematics;
 pub mod motion;
 pub mod names;
 pub mod pose;

@@ -139,6 +139,11 @@ pub enum Warning {
         translation_sigma: f64,
         /// The joint (1-based) whose angle the residual follows most, where joint angles are given.
         joint: Option<usize>,
+        /// The z-score of the residuals along the robot's DH table's directions, where the table
+        /// is given (`--robot-model`; `check::identification`): at most −3, the robot's
+        /// kinematics; above, more likely the camera.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        kinematic_z: Option<f64>,
     },
     /// On the pixels: the detections fit significantly better with the camera's focal length
     /// scaled, and X moves beyond its uncertainty between the two fits: intrinsics that are not
@@ -467,16 +472,21 @@ impl fmt::Display for Warning {
                 rotation_sigma_deg,
                 translation_sigma,
                 joint,
+                kinematic_z,
             } => systematic_words(
                 f,
                 *p_value,
                 (*halves_rotation_deg, *halves_translation),
                 (*rotation_sigma_deg, *translation_sigma),
-                *joint,
+                (*joint, *kinematic_z),
             ),
         }
     }
 }
+
+/// The z-score of the residuals along the robot's DH table at or below which the warning names the
+/// robot's kinematics (`check::identification`).
+pub const KINEMATIC_Z: f64 = -3.0;
 
 /// The words of [`Warning::SystematicError`].
 fn systematic_words(
@@ -484,7 +494,7 @@ fn systematic_words(
     p_value: f64,
     halves: (Option<f64>, Option<f64>),
     sigma: (f64, f64),
-    joint: Option<usize>,
+    (joint, kinematic_z): (Option<usize>, Option<f64>),
 ) -> fmt::Result {
     write!(
         f,
@@ -503,6 +513,19 @@ fn systematic_words(
     )?;
     if let Some(k) = joint {
         write!(f, "; the residual follows joint {k}'s angle most")?;
+    }
+    match kinematic_z {
+        Some(z) if z <= KINEMATIC_Z => {
+            return write!(
+                f,
+                "; it lies along what errors of the robot's DH table do (z = {z:.1}): the robot's kinematics, most likely; calibrate the robot (or use its calibrated model), then calibrate X again"
+            );
+        }
+        Some(z) => write!(
+            f,
+            "; it does not lie along what errors of the robot's DH table do (z = {z:.1}): look first at the camera's intrinsics and the target's detection"
+        )?,
+        None => {}
     }
     f.write_str(
         ": calibrate the robot's kinematics (or use its calibrated model), check the TCP/flange offset and the camera's intrinsics, and spread the poses over the workspace you will use X in",
@@ -645,6 +668,7 @@ mod tests {
                 rotation_sigma_deg: 0.2,
                 translation_sigma: 0.003,
                 joint: Some(2),
+                kinematic_z: Some(-7.5),
             },
             Warning::IntrinsicsDisagree {
                 focal_scale: 0.98,

@@ -239,6 +239,7 @@ impl Watch {
         let found = systematic_test(
             (poses, setup, x),
             (&joints, &kept, if joints.is_empty() { usize::MAX } else { n }),
+            None,
             false,
             &solve,
             scene,
