@@ -63,6 +63,12 @@ pub struct Args {
     /// uncertainty.
     #[arg(long, value_name = "NAME=VALUE[+-SIGMA]", value_parser = values::prior)]
     prior: Vec<handeye::Prior>,
+    /// The robot's DH table, as `calibrate --robot-model` (JSON; the records' `joints` needed):
+    /// the systematic-error test also asks whether the residuals follow an error of the table's
+    /// parameters. Refused (exit 2) at the first test when it does not turn the hand as the poses
+    /// do, or when the records carry no joint angles.
+    #[arg(long, value_name = "FILE")]
+    robot_model: Option<std::path::PathBuf>,
     /// Also refine over the last five selected motions (the paper's optimal method).
     #[arg(long)]
     optimal: bool,
@@ -244,7 +250,14 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.report {
         crate::report::check_writable(path)?;
     }
-    let mut calibrator = OnlineCalibrator::new(config)?.with_priors(&args.prior)?;
+    let robot_model = args
+        .robot_model
+        .as_ref()
+        .map(handeye::Kinematics::read)
+        .transpose()?;
+    let mut calibrator = OnlineCalibrator::new(config)?
+        .with_priors(&args.prior)?
+        .with_robot_model(robot_model)?;
     // Event lines are buffered, and written out before the input is waited for.
     let out = LineOut::stdout();
     let (records, opened) = read_ahead(&args.input, {

@@ -1085,7 +1085,7 @@ struct PyOnline {
 #[pymethods]
 impl PyOnline {
     #[new]
-    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None, prior=None, intrinsics=None))]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None, prior=None, intrinsics=None, robot_model=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         selection: &str,
@@ -1111,6 +1111,7 @@ impl PyOnline {
         point: Option<[f64; 3]>,
         prior: Option<Vec<String>>,
         intrinsics: Option<PathBuf>,
+        robot_model: Option<PathBuf>,
     ) -> PyResult<Self> {
         let tracking = TrackOptions::default();
         // A parameter left out takes the library's default.
@@ -1153,6 +1154,7 @@ impl PyOnline {
             written: handeye::Written::NAMED,
         };
         let given = priors(prior)?;
+        let model = read_robot_model(robot_model)?;
         let inner = match intrinsics {
             Some(path) => {
                 let camera = handeye::Intrinsics::read(&path).map_err(value_error)?;
@@ -1163,6 +1165,7 @@ impl PyOnline {
         Ok(Self {
             inner: inner
                 .and_then(|c| c.with_priors(&given))
+                .and_then(|c| c.with_robot_model(model))
                 .map_err(value_error)?,
             found: Vec::new(),
             held_out: 0,

@@ -913,6 +913,18 @@ def test_the_robots_table_reaches_the_systematic_test_in_python_as_on_the_comman
         handeye.calibrate(g, c, setup="eye-to-hand", joints=r["joints"], robot_model=table.with_name("irb120.json"))
     with pytest.raises(ValueError, match="joint angles of every pose"):
         handeye.calibrate(g, c, setup="eye-to-hand", robot_model=table)
+    # Online, the same table: the accumulating estimator's test flags as the batch does; another
+    # robot's table raises at the first test.
+    online = handeye.OnlineCalibrator(setup="eye-to-hand", robot_model=table)
+    for k in range(len(g)):
+        online.push(g[k], c[k], joints=r["joints"][k])
+    end = online.finish()
+    assert end["verdict"] == "questionable" and end["systematic"]["kinematic"]["z"] < -5
+    wrong = handeye.OnlineCalibrator(setup="eye-to-hand", robot_model=table.with_name("irb120.json"))
+    with pytest.raises(ValueError, match="does not turn the hand"):
+        for k in range(len(g)):
+            wrong.push(g[k], c[k], joints=r["joints"][k])
+        wrong.finish()
 
 
 def test_the_online_estimator_flags_a_systematic_error_as_calibrate_and_the_command_line():

@@ -540,6 +540,10 @@ class OnlineCalibrator:
     ``ValueError`` from ``push`` once the first 16 poses tell the unit, or from ``finish``). With the paper's estimator, the first 64 poses (a shorter stream's, at
     ``finish()``) are checked as ``handeye online`` checks them: a ``UserWarning`` when they fit far
     better read another way, have sizes the setup makes unlikely, or turn about one axis.
+    ``robot_model`` (a path to the robot's DH table, as ``calibrate(robot_model=...)``; push the
+    poses with their ``joints``) gives the accumulating estimator's systematic-error test the
+    table's statistic; a table that is not the robot's raises ``ValueError`` from ``push`` at the
+    first test (12 poses) or from ``finish``.
     With ``estimator="accumulate"``, ``push`` returns the estimator's own
     reports (``estimate``, X as ``matrix``, ``uncertainty``, ``target``, ...) and changes
     (``change``), the same fields as ``handeye online --estimator accumulate`` prints.

@@ -117,6 +117,7 @@ class OnlineCalibrator:
         self,
         *,
         prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
+        robot_model: Optional[Union[str, "os.PathLike[str]"]] = None,
         **params: Any,
     ) -> None: ...
     def push(self, base_from_gripper: npt.ArrayLike, camera_from_target: npt.ArrayLike) -> list[dict[str, Any]]: ...

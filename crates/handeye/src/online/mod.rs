@@ -799,6 +799,31 @@ impl OnlineCalibrator {
         Ok(self)
     }
 
+    /// The same calibrator with the robot's DH table (`--robot-model`): the accumulating
+    /// estimator's systematic-error test gains the table's statistic, as `calibrate`'s
+    /// (`track::Tracker::with_robot_model`; push the poses with their joint angles). Refused with the
+    /// paper's estimator, which has no systematic-error test, and on the pixels. Before the first
+    /// pose.
+    pub fn with_robot_model(mut self, model: Option<crate::model::kinematics::Kinematics>) -> Result<Self> {
+        let Some(model) = model else {
+            return Ok(self);
+        };
+        let refuse = |message: &str| Error::InvalidParameter {
+            name: "robot-model",
+            message: message.into(),
+        };
+        if self.pixels.is_some() {
+            return Err(refuse("a robot model is not offered on the pixels (yet)"));
+        }
+        let Some(tracker) = self.tracker.take() else {
+            return Err(refuse(
+                "the robot's table needs the accumulating estimator (`--estimator accumulate`, the default): the paper's estimator has no systematic-error test",
+            ));
+        };
+        self.tracker = Some(tracker.with_robot_model(Some(model)));
+        Ok(self)
+    }
+
     /// The accumulating estimator's current estimate, determined or not; `None` before it has
     /// one or with the paper's estimator.
     pub fn accumulated(&self) -> Option<TrackEstimate> {

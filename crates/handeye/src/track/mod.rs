@@ -255,6 +255,12 @@ pub struct Tracker {
     /// The joint angles of the recent poses, where they were given ([`Tracker::push_with_joints`]).
     #[serde(default)]
     joints: JointRing,
+    /// The robot's DH table ([`Tracker::with_robot_model`]), and why it was refused once the
+    /// poses showed it is not the robot's.
+    #[serde(default)]
+    robot_model: Option<crate::model::kinematics::Kinematics>,
+    #[serde(default)]
+    robot_model_refused: Option<String>,
     /// The robot pose of the last pose pushed: a pose at it is one more image of that pose.
     #[serde(default)]
     previous: Option<Transform>,
@@ -304,6 +310,8 @@ impl Tracker {
             priors: None,
             watch: Watch::default(),
             joints: JointRing::default(),
+            robot_model: None,
+            robot_model_refused: None,
             previous: None,
             repeats: 0,
         }
@@ -334,11 +342,27 @@ impl Tracker {
     /// Why the priors were refused (a prior in another length unit than the poses): the tracker
     /// then gives no low-DOF estimate, and a face stops with this error.
     pub fn refusal(&self) -> Option<crate::model::error::Error> {
-        let message = self.priors.as_ref()?.refused.clone()?;
+        if let Some(message) = self.priors.as_ref().and_then(|p| p.refused.clone()) {
+            return Some(crate::model::error::Error::InvalidParameter {
+                name: "prior",
+                message,
+            });
+        }
+        let message = self.robot_model_refused.clone()?;
         Some(crate::model::error::Error::InvalidParameter {
-            name: "prior",
+            name: "robot-model",
             message,
         })
+    }
+
+    /// The robot's DH table (`online --robot-model`): the systematic-error test then has the
+    /// table's statistic as `calibrate --robot-model` (`check::identification`), with the joint
+    /// angles of [`Tracker::push_with_joints`]. Its first test (at 12 accepted poses, or the end)
+    /// checks that the table is the robot's on the poses so far; a table that is not, or poses
+    /// without joint angles, make [`Tracker::refusal`] the error that says why.
+    pub fn with_robot_model(mut self, model: Option<crate::model::kinematics::Kinematics>) -> Self {
+        self.robot_model = model;
+        self
     }
 
     /// What a new segment keeps of the priors (see [`Segment::new`]).
@@ -896,7 +920,9 @@ impl Tracker {
         ));
         // The systematic-error test, when due (module `systematic`), and its widening.
         if self.watch.due(reason == Reason::End) {
-            self.watch.test(self.setup, &estimate.x, reason == Reason::End);
+            let model = self.robot_model.as_ref().filter(|_| self.robot_model_refused.is_none());
+            let refused = self.watch.test(self.setup, &estimate.x, reason == Reason::End, model);
+            self.robot_model_refused = self.robot_model_refused.take().or(refused);
         }
         // A low-DOF robot solved with its prior: the general solve of the bootstrap cannot
         // determine X (one rotation axis), as the readings' check cannot judge it.

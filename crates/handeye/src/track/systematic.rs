@@ -38,7 +38,9 @@ use crate::check::systematic::{
 use crate::check::uncertainty::{
     REPLICATES, Uncertainty, bootstrap, bootstrap_by_region, point_sigma, stations_of, summarise,
 };
+use crate::check::identification::check_model;
 use crate::model::error::{Degeneracy, Error, Result};
+use crate::model::kinematics::Kinematics;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::Transform;
 use crate::model::warning::Warning;
@@ -216,14 +218,24 @@ impl Watch {
     /// Runs the test on the sample under `x` (the segment's estimate), as the batch does
     /// (`calibrate::batch`): X of each half and of each region replicate solved by all pairs of
     /// their poses, as the tracker solves the whole.
-    pub(super) fn test(&mut self, setup: Setup, x: &Transform, at_end: bool) {
+    ///
+    /// With the robot's DH table (`model`), the test has the table's statistic as the batch's
+    /// `--robot-model`, where the table is the robot's (`check::identification::check_model` on
+    /// the sample): otherwise the test runs without it and the reason is returned.
+    pub(super) fn test(
+        &mut self,
+        setup: Setup,
+        x: &Transform,
+        at_end: bool,
+        model: Option<&Kinematics>,
+    ) -> Option<String> {
         self.tested = self.seen;
         self.next = 2 * self.seen.max(1);
         // A dense stream is not tested, as the batch does not test it (judged at full resolution).
         if self.stride > 1 && self.dense == Some(true) {
             self.found = None;
             self.below = false;
-            return;
+            return None;
         }
         let poses = &self.poses;
         let n = poses.len();
@@ -236,10 +248,11 @@ impl Watch {
         let kept: Vec<usize> = (0..n).collect();
         let scene = translation_scale(poses, setup).max(working_distance(poses));
         let solve = |p: &[PosePair]| all_pairs(p, setup);
+        let refused = model.and_then(|m| check_model(m, poses, &joints).err());
         let found = systematic_test(
             (poses, setup, x),
             (&joints, &kept, if joints.is_empty() { usize::MAX } else { n }),
-            None,
+            model.filter(|_| refused.is_none()),
             false,
             &solve,
             scene,
@@ -269,6 +282,7 @@ impl Watch {
                 scene,
             }
         });
+        refused
     }
 
     /// The estimate widened as the batch widens a flagged test's uncertainty
@@ -346,7 +360,7 @@ impl Watch {
 pub fn test_step(poses: &[PosePair], setup: Setup, x: &Transform) -> Option<Systematic> {
     let mut watch = Watch::default();
     poses.iter().for_each(|p| watch.add(p, None));
-    watch.test(setup, x, true);
+    watch.test(setup, x, true, None);
     watch.found.map(|f| f.systematic)
 }
 
