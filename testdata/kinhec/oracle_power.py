@@ -181,14 +181,19 @@ def oracle(eye_in_hand, robot, a, b, q, x, y):
     e = whiten(w, r0.ravel())
     jxy = whiten(w, xy_jacobian(eye_in_hand, a, x, y, b, r0))
     jdh = whiten(w, dh_jacobian(eye_in_hand, robot, q, x, y, b, r0))
-    # the DH directions X and the target's pose do not absorb
+    drop, k = free_drop(e, jxy, jdh)
+    return drop, k, float(e @ e), len(e) - rank_of(jxy)
+
+
+def free_drop(e, jxy, extra):
+    """The drop in e's sum of squares along the columns of ``extra`` that ``jxy`` (X's and the
+    target's pose) does not absorb, and how many such directions."""
     basis, _ = np.linalg.qr(jxy)
-    free = jdh - basis @ (basis.T @ jdh)
+    free = extra - basis @ (basis.T @ extra)
     u, s, _ = np.linalg.svd(free, full_matrices=False)
     k = int(np.sum(s > 1e-6 * s[0]))
     u = u[:, :k]
-    drop = float(np.sum((u.T @ e) ** 2))
-    return drop, k, float(e @ e), len(e) - rank_of(jxy)
+    return float(np.sum((u.T @ e) ** 2)), k
 
 
 def null_recording(eye_in_hand, robot, q, x, y, rng):
@@ -230,12 +235,7 @@ def trig_design(q, n):
 
 
 def f_test(e, jxy, extra):
-    basis, _ = np.linalg.qr(jxy)
-    free = extra - basis @ (basis.T @ extra)
-    u, s, _ = np.linalg.svd(free, full_matrices=False)
-    k = int(np.sum(s > 1e-6 * s[0]))
-    u = u[:, :k]
-    drop = float(np.sum((u.T @ e) ** 2))
+    drop, k = free_drop(e, jxy, extra)
     dof = len(e) - rank_of(jxy) - k
     return f_dist.sf((drop / k) / ((e @ e - drop) / dof), k, dof)
 

@@ -169,19 +169,20 @@ fn share(rows: &[Row], f: impl Fn(&Row) -> bool) -> f64 {
     rows.iter().filter(|r| f(r)).count() as f64 / rows.len().max(1) as f64
 }
 
-#[test]
-fn an_uncalibrated_robot_is_flagged_and_covered() {
-    let rows = rows(&["dh05", "dh1", "dh2"], false);
+/// The bars on DH-error runs: the 1 and 2 mm levels at least 90 % flagged, at most one
+/// run in twelve silently beyond 3 sigma of the truth, at least 75 % within 3 sigma. Prints the
+/// summary (headed `label`) and returns it.
+fn assert_dh_bars(rows: &[Row], label: &str) -> String {
     assert!(rows.len() >= 48, "{} runs", rows.len());
     let large: Vec<&Row> = rows.iter().filter(|r| r.level != "dh05").collect();
     let large_flagged = large.iter().filter(|r| r.flagged).count() as f64 / large.len() as f64;
-    let silent = share(&rows, |r| !r.flagged && r.ratio > 3.0);
-    let within = share(&rows, |r| r.ratio <= 3.0);
+    let silent = share(rows, |r| !r.flagged && r.ratio > 3.0);
+    let within = share(rows, |r| r.ratio <= 3.0);
     let summary = format!(
-        "DH errors: {} runs; 1 and 2 mm flagged {:.0}%; all levels flagged {:.0}%; silently beyond 3 sigma {:.1}%; within 3 sigma {:.0}%",
+        "{label}: {} runs; 1 and 2 mm flagged {:.0}%; all levels flagged {:.0}%; silently beyond 3 sigma {:.1}%; within 3 sigma {:.0}%",
         rows.len(),
         100.0 * large_flagged,
-        100.0 * share(&rows, |r| r.flagged),
+        100.0 * share(rows, |r| r.flagged),
         100.0 * silent,
         100.0 * within
     );
@@ -197,51 +198,48 @@ fn an_uncalibrated_robot_is_flagged_and_covered() {
         rows.len(),
         "nominal_model_x.py has not run on the suite"
     );
-    let silent_nominal = share(&rows, |r| !r.flagged && r.nominal_ratio.unwrap() > 3.0);
-    let within_nominal = share(&rows, |r| r.nominal_ratio.unwrap() <= 3.0);
-    let summary_nominal = format!(
+    println!(
         "against the nominal model's X: silently beyond 3 sigma {:.1}%; within 3 sigma {:.0}%",
-        100.0 * silent_nominal,
-        100.0 * within_nominal
+        100.0 * share(rows, |r| !r.flagged && r.nominal_ratio.unwrap() > 3.0),
+        100.0 * share(rows, |r| r.nominal_ratio.unwrap() <= 3.0)
     );
-    println!("{summary_nominal}");
     assert!(large_flagged >= 0.9, "{summary}");
     assert!(silent <= 1.0 / 12.0, "{summary}");
     assert!(within >= 0.75, "{summary}");
+    summary
+}
+
+#[test]
+fn an_uncalibrated_robot_is_flagged_and_covered() {
+    assert_dh_bars(&rows(&["dh05", "dh1", "dh2"], false), "DH errors");
 }
 
 /// With the robot's DH table (`--robot-model`) the test asks whether the residuals lie along what
 /// an error of its parameters does (`check::identification`): the bars, on the same runs.
 #[test]
 fn an_uncalibrated_robot_is_flagged_and_covered_with_its_model() {
-    let rows = rows(&["dh05", "dh1", "dh2"], true);
-    assert!(rows.len() >= 48, "{} runs", rows.len());
-    let large: Vec<&Row> = rows.iter().filter(|r| r.level != "dh05").collect();
-    let large_flagged = large.iter().filter(|r| r.flagged).count() as f64 / large.len() as f64;
-    let silent = share(&rows, |r| !r.flagged && r.ratio > 3.0);
-    let within = share(&rows, |r| r.ratio <= 3.0);
-    let summary = format!(
-        "DH errors, with the robot's model: {} runs; 1 and 2 mm flagged {:.0}%; all levels flagged {:.0}%; silently beyond 3 sigma {:.1}%; within 3 sigma {:.0}%",
-        rows.len(),
-        100.0 * large_flagged,
-        100.0 * share(&rows, |r| r.flagged),
-        100.0 * silent,
-        100.0 * within
+    assert_dh_bars(
+        &rows(&["dh05", "dh1", "dh2"], true),
+        "DH errors, with the robot's model",
     );
-    println!("{summary}");
-    assert!(large_flagged >= 0.9, "{summary}");
-    assert!(silent <= 1.0 / 12.0, "{summary}");
-    assert!(within >= 0.75, "{summary}");
 }
 
 /// Random errors with the robot's model: the fifth statistic must not make noise a finding.
 #[test]
 fn random_errors_with_the_robots_model_are_not_flagged() {
-    let rows = rows(&["ctl_robot", "ctl_encoder", "ctl_pnp"], true);
-    let flagged = share(&rows, |r| r.flagged);
-    let within = share(&rows, |r| r.ratio <= 3.0);
+    assert_control_bars(
+        &rows(&["ctl_robot", "ctl_encoder", "ctl_pnp"], true),
+        "controls, with the robot's model",
+    );
+}
+
+/// The bars on control runs: at most 10 % flagged, at least 90 % within 3 sigma of the
+/// truth. Prints the summary (headed `label`).
+fn assert_control_bars(rows: &[Row], label: &str) {
+    let flagged = share(rows, |r| r.flagged);
+    let within = share(rows, |r| r.ratio <= 3.0);
     let summary = format!(
-        "controls, with the robot's model: {} runs; flagged {:.1}%; within 3 sigma {:.0}%",
+        "{label}: {} runs; flagged {:.1}%; within 3 sigma {:.0}%",
         rows.len(),
         100.0 * flagged,
         100.0 * within
@@ -281,17 +279,7 @@ fn random_errors_are_not_flagged_and_stay_covered() {
             }
         }
     }
-    let flagged = share(&rows, |r| r.flagged);
-    let within = share(&rows, |r| r.ratio <= 3.0);
-    let summary = format!(
-        "controls: {} runs; flagged {:.1}%; within 3 sigma {:.0}%",
-        rows.len(),
-        100.0 * flagged,
-        100.0 * within
-    );
-    println!("{summary}");
-    assert!(flagged <= 0.1, "{summary}");
-    assert!(within >= 0.9, "{summary}");
+    assert_control_bars(&rows, "controls");
 }
 
 #[test]

@@ -16,7 +16,6 @@
 //! (`testdata/kinhec/oracle_power.py`): the table alone is what gives the power at 32 poses.
 
 use nalgebra::{DMatrix, DVector, Vector3, Vector6};
-use rand::seq::SliceRandom;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use serde::{Deserialize, Serialize};
 
@@ -128,21 +127,13 @@ pub fn kinematic_fit(
         }
         b.norm_squared() / total
     };
+    // A large share is the finding: negative z, as the other statistics.
     let identity: Vec<usize> = (0..m).collect();
-    let explained = share(&identity);
-    let mut order = identity;
-    let null: Vec<f64> = (0..crate::check::systematic::PERMUTATIONS)
-        .map(|_| {
-            order.shuffle(rng);
-            share(&order)
-        })
-        .collect();
-    let mean = null.iter().sum::<f64>() / null.len() as f64;
-    let sd = (null.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / (null.len() - 1) as f64).sqrt();
+    let (explained, z) = crate::check::systematic::permutation_z(&identity, rng, share);
     Some(KinematicFit {
         explained,
         parameters: k,
-        z: if sd > 0.0 { (mean - explained) / sd } else { 0.0 },
+        z: 0.0 - z, // 0 − z: a z of 0 stays +0
     })
 }
 

@@ -271,18 +271,27 @@ pub fn neighbour_ratio(v: &[Vector3<f64>], order: &[usize]) -> f64 {
 
 /// The z-score of the ratio along `order` against the ratios along random orders.
 fn z_score(v: &[Vector3<f64>], order: &[usize], rng: &mut Xoshiro256PlusPlus) -> (f64, f64) {
-    let ratio = neighbour_ratio(v, order);
+    permutation_z(order, rng, |o| neighbour_ratio(v, o))
+}
+
+/// `statistic` at `order`, and its z-score against the statistic at [`PERMUTATIONS`] random
+/// shuffles of it (positive above the shuffles' mean): the null of every statistic of the test.
+pub(crate) fn permutation_z(
+    order: &[usize],
+    rng: &mut Xoshiro256PlusPlus,
+    statistic: impl Fn(&[usize]) -> f64,
+) -> (f64, f64) {
+    let observed = statistic(order);
     let mut shuffled = order.to_vec();
     let null: Vec<f64> = (0..PERMUTATIONS)
         .map(|_| {
             shuffled.shuffle(rng);
-            neighbour_ratio(v, &shuffled)
+            statistic(&shuffled)
         })
         .collect();
     let m = null.iter().sum::<f64>() / null.len() as f64;
     let sd = (null.iter().map(|r| (r - m).powi(2)).sum::<f64>() / (null.len() - 1) as f64).sqrt();
-    let z = if sd > 0.0 { (ratio - m) / sd } else { 0.0 };
-    (ratio, z)
+    (observed, if sd > 0.0 { (observed - m) / sd } else { 0.0 })
 }
 
 /// The share of the residuals' variance a linear function of the configuration explains,
@@ -320,19 +329,10 @@ fn explained_z(
         (b.transpose() * &inverse * &b).trace() / total
     };
     let identity: Vec<usize> = (0..n).collect();
-    let r2 = share(&identity);
-    let mut perm = identity.clone();
-    let null: Vec<f64> = (0..PERMUTATIONS)
-        .map(|_| {
-            perm.shuffle(rng);
-            share(&perm)
-        })
-        .collect();
-    let m = null.iter().sum::<f64>() / null.len() as f64;
-    let sd = (null.iter().map(|r| (r - m).powi(2)).sum::<f64>() / (null.len() - 1) as f64).sqrt();
     // Large R² is the finding: the sign is turned so that, as for the neighbour ratio, a
     // systematic error gives a negative z.
-    (r2, if sd > 0.0 { (m - r2) / sd } else { 0.0 })
+    let (r2, z) = permutation_z(&identity, rng, share);
+    (r2, 0.0 - z) // 0 − z: a z of 0 stays +0
 }
 
 /// A coordinate whose spread is below this (relative to its size plus one: radians, or the
