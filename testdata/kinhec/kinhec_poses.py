@@ -17,3 +17,11 @@ def matrix4(v):
                  [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
     m[:3, 3] = v["translation"]
     return m
+
+
+def inverse(m):
+    """The inverse of a rigid 4x4 transform."""
+    out = np.eye(4)
+    out[:3, :3] = m[:3, :3].T
+    out[:3, 3] = -m[:3, :3].T @ m[:3, 3]
+    return out

@@ -34,6 +34,7 @@ from scipy.spatial.transform import Rotation
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import generate as g  # noqa: E402
 import kinhec.kinematics as kinematics  # noqa: E402
+from kinhec_poses import inverse, matrix4  # noqa: E402
 import kinhec.robots as robots  # noqa: E402
 
 DECIMETRES = 10.0
@@ -50,22 +51,6 @@ def twist(m):
     return np.concatenate([Rotation.from_matrix(m[:3, :3]).as_rotvec(), DECIMETRES * m[:3, 3]])
 
 
-def inverse(m):
-    out = np.eye(4)
-    out[:3, :3] = m[:3, :3].T
-    out[:3, 3] = -m[:3, :3].T @ m[:3, 3]
-    return out
-
-
-def matrix_of(entry):
-    if "matrix" in entry:
-        return np.array(entry["matrix"], dtype=float)
-    m = np.eye(4)
-    m[:3, :3] = Rotation.from_quat(entry["quaternion_xyzw"]).as_matrix()
-    m[:3, 3] = entry["translation"]
-    return m
-
-
 def nominal_model_x(root, entry):
     records = [json.loads(line) for line in (root / entry["file"]).read_text().splitlines() if line.strip()]
     nominal = robots.get_robot(entry["robot"])
@@ -73,7 +58,7 @@ def nominal_model_x(root, entry):
     joints = [np.asarray(r["joints"], dtype=float) for r in records]
     f_nominal = [kinematics.forward_kinematics(nominal, q) for q in joints]
     f_true = [kinematics.forward_kinematics(true, q) for q in joints]
-    reported = matrix_of(records[0]["base_from_gripper"])
+    reported = matrix4(records[0]["base_from_gripper"])
     if not np.allclose(reported, f_nominal[0], atol=1e-6):
         raise SystemExit(f"{entry['file']}: the reported pose is not the nominal model's at the recorded joints")
 
@@ -86,9 +71,9 @@ def nominal_model_x(root, entry):
     rest = fit.fun.reshape(-1, 6)[:, 3:] / DECIMETRES
     truth = json.loads((root / entry["truth"]).read_text())
     if entry["setup"] == "eye-in-hand":
-        frame, x = "gripper_from_camera", flange @ matrix_of(truth["gripper_from_camera"])
+        frame, x = "gripper_from_camera", flange @ matrix4(truth["gripper_from_camera"])
     else:
-        frame, x = "base_from_camera", inverse(base) @ matrix_of(truth["base_from_camera"])
+        frame, x = "base_from_camera", inverse(base) @ matrix4(truth["base_from_camera"])
     return frame, x, float(np.sqrt(np.mean(np.sum(rest**2, axis=1))))
 
 

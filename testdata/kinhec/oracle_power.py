@@ -40,6 +40,7 @@ from scipy.stats import f as f_dist
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import kinhec.kinematics as kinematics  # noqa: E402
+from kinhec_poses import inverse, matrix4  # noqa: E402
 import kinhec.robots as robots  # noqa: E402
 
 LEVEL = 0.01
@@ -57,13 +58,6 @@ def se3(rotvec, t):
     return m
 
 
-def inverse(m):
-    out = np.eye(4)
-    out[:3, :3] = m[:3, :3].T
-    out[:3, 3] = -m[:3, :3].T @ m[:3, 3]
-    return out
-
-
 def log(m):
     return np.concatenate([Rotation.from_matrix(m[:3, :3]).as_rotvec(), m[:3, 3]])
 
@@ -72,17 +66,10 @@ def exp(v):
     return se3(v[:3], v[3:])
 
 
-def pose(entry):
-    m = np.eye(4)
-    m[:3, :3] = Rotation.from_quat(entry["quaternion_xyzw"]).as_matrix()
-    m[:3, 3] = entry["translation"]
-    return m
-
-
 def read(path):
     records = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
-    a = np.stack([pose(r["base_from_gripper"]) for r in records])
-    b = np.stack([pose(r["camera_from_target"]) for r in records])
+    a = np.stack([matrix4(r["base_from_gripper"]) for r in records])
+    b = np.stack([matrix4(r["camera_from_target"]) for r in records])
     q = np.array([r["joints"] for r in records], dtype=float)
     return a, b, q
 

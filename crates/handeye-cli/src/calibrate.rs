@@ -118,15 +118,6 @@ pub struct Args {
     robot_model: Option<std::path::PathBuf>,
 }
 
-/// The robot's DH table of `--robot-model`, read.
-fn robot_model(args: &Args) -> Result<Option<handeye::Kinematics>> {
-    Ok(args
-        .robot_model
-        .as_ref()
-        .map(handeye::Kinematics::read)
-        .transpose()?)
-}
-
 /// Refuses the flags of the calibration on the pixels without `--method reprojection` (exit 2).
 fn pixels_only(args: &Args) -> Result<()> {
     for (flag, given, words) in [
@@ -192,7 +183,7 @@ pub fn run(args: Args) -> Result<()> {
             pose_names: recording.names.clone(),
             written,
             joints: recording.joints,
-            robot_model: robot_model(&args)?,
+            robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
             ..options
         },
     ) {
@@ -514,7 +505,7 @@ fn run_robot_world(args: &Args) -> Result<()> {
             written,
             point: args.point,
             joints: recording.joints,
-            robot_model: robot_model(args)?,
+            robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
             priors: args.prior.clone(),
             refine_intrinsics: false,
         },

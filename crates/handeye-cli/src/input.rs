@@ -604,3 +604,8 @@ impl Iterator for ReadAhead {
         self.batch.next()
     }
 }
+
+/// The robot's DH table of `--robot-model` (`calibrate` and `online`), read.
+pub fn robot_model(path: Option<&std::path::Path>) -> anyhow::Result<Option<handeye::Kinematics>> {
+    Ok(path.map(handeye::Kinematics::read).transpose()?)
+}

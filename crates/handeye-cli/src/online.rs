@@ -250,14 +250,9 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.report {
         crate::report::check_writable(path)?;
     }
-    let robot_model = args
-        .robot_model
-        .as_ref()
-        .map(handeye::Kinematics::read)
-        .transpose()?;
     let mut calibrator = OnlineCalibrator::new(config)?
         .with_priors(&args.prior)?
-        .with_robot_model(robot_model)?;
+        .with_robot_model(crate::input::robot_model(args.robot_model.as_deref())?)?;
     // Event lines are buffered, and written out before the input is waited for.
     let out = LineOut::stdout();
     let (records, opened) = read_ahead(&args.input, {

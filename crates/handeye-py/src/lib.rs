@@ -760,7 +760,6 @@ fn count(name: &str, value: Option<i64>) -> PyResult<Option<usize>> {
         .transpose()
 }
 
-/// Joint angles given to a calibration: every pose's, finite, one count (as JSON Lines gives them).
 /// The robot's DH table at `path` (`robot_model=`, as `--robot-model`), read.
 fn read_robot_model(path: Option<std::path::PathBuf>) -> PyResult<Option<handeye::Kinematics>> {
     path.map(handeye::Kinematics::read)
@@ -768,6 +767,7 @@ fn read_robot_model(path: Option<std::path::PathBuf>) -> PyResult<Option<handeye
         .map_err(value_error)
 }
 
+/// Joint angles given to a calibration: every pose's, finite, one count (as JSON Lines gives them).
 fn checked_joints(joints: Option<Vec<Vec<f64>>>) -> PyResult<Vec<Vec<f64>>> {
     let joints = joints.unwrap_or_default();
     let count = joints.first().map_or(0, Vec::len);

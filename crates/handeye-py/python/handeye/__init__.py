@@ -15,7 +15,6 @@ Two faces:
 from __future__ import annotations
 
 import json
-import os
 import math
 import warnings
 from collections.abc import Mapping
@@ -202,7 +201,7 @@ def calibrate(
                 point=_point(point),
                 joints=joints,
                 prior=_priors(prior),
-                robot_model=_path(robot_model),
+                robot_model=robot_model,
             )
         )
         result["matrix"] = np.array(result["matrix"], dtype=np.float64)
@@ -223,16 +222,11 @@ def calibrate(
             point=_point(point),
             joints=joints,
             prior=_priors(prior),
-            robot_model=_path(robot_model),
+            robot_model=robot_model,
         )
     )
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)
     return result
-
-
-def _path(path):
-    """A path as a string (``os.PathLike`` accepted), or None."""
-    return None if path is None else os.fspath(path)
 
 
 def _priors(prior):

@@ -66,7 +66,12 @@ pub fn kinematic_fit(
     let stride = stations.len().div_ceil(MAX_STATIONS).max(1);
     let picked: Vec<&Station<'_>> = stations.iter().step_by(stride).collect();
     let m = picked.len();
-    if m == 0 || picked.iter().any(|s| s.joints.len() != model.dof()) || scene.is_nan() || scene <= 0.0 {
+    if m == 0
+        || model.validate().is_err()
+        || picked.iter().any(|s| s.joints.len() != model.dof())
+        || scene.is_nan()
+        || scene <= 0.0
+    {
         return None;
     }
     let y_inv = y.inverse();
@@ -83,13 +88,16 @@ pub fn kinematic_fit(
         };
         scale((at(1.0) - at(-1.0)) / (2.0 * h))
     });
-    let flange: Vec<Transform> = picked.iter().map(|s| model.forward(s.joints)).collect();
+    // The reported pose with the table's error: A_i F(q_i)⁻¹ F(p + δp, q_i).
+    let unflanged: Vec<Transform> = picked
+        .iter()
+        .map(|s| s.pose.base_from_gripper * model.forward(s.joints).inverse())
+        .collect();
     let params = design(m, model.parameter_count(), |row, k| {
         let s = picked[row];
         let h = if k / model.dof() < 2 { STEP * scene } else { STEP };
         let at = |step: f64| {
-            let moved = model.perturbed(k, step).forward(s.joints);
-            let reported = s.pose.base_from_gripper * flange[row].inverse() * moved;
+            let reported = unflanged[row] * model.forward_moved(s.joints, Some((k, step)));
             residual6(&y_inv, setup, s.pose, &reported, x)
         };
         scale((at(h) - at(-h)) / (2.0 * h))
@@ -216,6 +224,7 @@ pub fn check_model(
     poses: &[PosePair],
     joints: &[Vec<f64>],
 ) -> Result<(), String> {
+    model.validate().map_err(|problem| format!("the table is not whole: {problem}"))?;
     if joints.len() != poses.len() {
         return Err(format!(
             "the table needs the joint angles of every pose (`joints` in JSON Lines, /joint_states in a ROS 2 recording); {} of {} poses carry them",
@@ -269,4 +278,40 @@ pub fn check_model(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::kinematics::DhConvention;
+
+    /// A table built in code, never read from a file, is checked before it is used: a short
+    /// column is refused by name instead of indexing past its end.
+    #[test]
+    fn a_table_built_in_code_is_checked_before_use() {
+        let table = Kinematics {
+            convention: DhConvention::Standard,
+            a: vec![0.5, 0.3],
+            d: vec![0.0],
+            alpha: vec![0.0, 0.0],
+            theta_offset: vec![0.0, 0.0],
+            sign: None,
+            tool: None,
+        };
+        let pose = PosePair {
+            base_from_gripper: Transform::identity(),
+            camera_from_target: Transform::identity(),
+        };
+        let message = check_model(&table, &[pose, pose], &[vec![0.0, 0.1], vec![0.2, 0.3]]).unwrap_err();
+        assert!(message.contains("`d` has 1 values"), "{message}");
+        let residual = PoseResidual {
+            rotation: Vector3::new(0.01, 0.0, 0.0),
+            angle: 0.01,
+            translation: Vector3::zeros(),
+        };
+        let station = Station { pose: &pose, joints: &[0.0, 0.1], residual: &residual };
+        let mut rng = <Xoshiro256PlusPlus as rand::SeedableRng>::seed_from_u64(1);
+        let fit = kinematic_fit(&[station], (Setup::EyeInHand, &pose.base_from_gripper, &pose.base_from_gripper), &table, 1.0, &mut rng);
+        assert!(fit.is_none());
+    }
 }

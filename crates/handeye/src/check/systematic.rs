@@ -122,11 +122,12 @@ pub const MATERIAL_ROTATION_DEG: f64 = 1e-6;
 pub const MATERIAL_TRANSLATION_REL: f64 = 1e-9;
 
 impl Systematic {
-    /// Adds the DH table's statistic: the smallest of five z-scores, its p-value times five.
+    /// Adds the DH table's statistic: the smallest of five z-scores, its p-value times five
+    /// ([`bonferroni`]).
     pub fn with_kinematic(&mut self, fit: KinematicFit) {
         self.kinematic = Some(fit);
         self.z = self.z.min(fit.z);
-        self.p_value = (5.0 * Normal::standard().cdf(self.z)).min(1.0);
+        self.p_value = bonferroni(self.z, STATISTICS + 1);
         self.flagged = self.p_value < self.threshold;
     }
 
@@ -269,6 +270,16 @@ pub fn neighbour_ratio(v: &[Vector3<f64>], order: &[usize]) -> f64 {
     steps / (2.0 * total)
 }
 
+/// The statistics of [`test`]: the neighbour ratio and the explained share, each of the
+/// rotation and of the translation.
+const STATISTICS: usize = 4;
+
+/// The p-value of the smallest of `statistics` z-scores (each standard normal under the null):
+/// Bonferroni's, `statistics` · Φ(z), at most 1.
+fn bonferroni(z: f64, statistics: usize) -> f64 {
+    (statistics as f64 * Normal::standard().cdf(z)).min(1.0)
+}
+
 /// The z-score of the ratio along `order` against the ratios along random orders.
 fn z_score(v: &[Vector3<f64>], order: &[usize], rng: &mut Xoshiro256PlusPlus) -> (f64, f64) {
     permutation_z(order, rng, |o| neighbour_ratio(v, o))
@@ -400,7 +411,7 @@ pub fn test(residuals: &[PoseResidual], configurations: &Configurations) -> Opti
     let (rotation_explained, x_rot) = explained_z(&rot, &f, &mut rng);
     let (translation_explained, x_trans) = explained_z(&trans, &f, &mut rng);
     let z = z_rot.min(z_trans).min(x_rot).min(x_trans);
-    let p_value = (4.0 * Normal::standard().cdf(z)).min(1.0);
+    let p_value = bonferroni(z, STATISTICS);
     Some(Systematic {
         flagged: p_value < P_FLAG,
         material: true,
@@ -511,13 +522,13 @@ pub fn systematic_error(
         return None;
     }
     let residuals = PoseResiduals::at(poses, setup, x);
+    let joints = joints.filter(|j| j.len() == poses.len());
     let configurations = joints
-        .filter(|j| j.len() == poses.len())
         .and_then(|j| Configurations::of_joints(&first.iter().map(|&i| j[i].clone()).collect::<Vec<_>>()))
         .unwrap_or_else(|| Configurations::of_hand_poses(&representatives));
     let station_residuals = per_station(&stations, &residuals.residuals);
     let mut found = test(&station_residuals, &configurations)?;
-    if let (Some(model), Some(joints)) = (model, joints.filter(|j| j.len() == poses.len())) {
+    if let (Some(model), Some(joints)) = (model, joints) {
         let tested: Vec<Station<'_>> = first
             .iter()
             .zip(&station_residuals)

@@ -94,6 +94,12 @@ pub(crate) fn line_of(text: &str, path: &[Step]) -> Option<usize> {
     found.or(deepest.map(|(_, line)| line))
 }
 
+/// The line (from 1) where the value of `field` (a path such as `gripper_from_camera.matrix[1]`)
+/// starts in `text`; 1 when not even its first step is there.
+pub(crate) fn line_of_field(text: &str, field: &str) -> usize {
+    line_of(text, &steps(field)).unwrap_or(1)
+}
+
 /// The steps of a field path as the readers write it (`a.b[1][2]`, `[0][1]`); a part that cannot
 /// be read ends the path there.
 pub(crate) fn steps(field: &str) -> Vec<Step> {

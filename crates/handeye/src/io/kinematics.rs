@@ -1,9 +1,10 @@
 //! A robot's DH table (`--robot-model FILE`): JSON, `{"convention": "standard" | "modified", "a":
-//! [...], "d": [...], "alpha": [...], "theta_offset": [...], "sign": [...]}` (lengths in the
-//! poses' unit, angles in radians, `sign` optional).
+//! [...], "d": [...], "alpha": [...], "theta_offset": [...], "sign": [...], "tool": 4×4}` (lengths
+//! in the poses' unit, angles in radians, `sign` and `tool` optional).
 
 use std::path::Path;
 
+use crate::io::json_text::line_of_field;
 use crate::io::parse_error;
 use crate::model::error::Result;
 use crate::model::kinematics::Kinematics;
@@ -21,14 +22,9 @@ impl Kinematics {
 pub(crate) fn parse_kinematics(text: &str, file: &str) -> Result<Kinematics> {
     let table: Kinematics = serde_json::from_str(text)
         .map_err(|e| parse_error(file, e.line(), "robot model", e.to_string()))?;
-    table.validate().map_err(|message| {
-        let field = message
-            .split('`')
-            .nth(1)
-            .unwrap_or("robot model")
-            .to_string();
-        parse_error(file, 1, field, message)
-    })?;
+    table
+        .validate()
+        .map_err(|p| parse_error(file, line_of_field(text, &p.field), p.field, p.message))?;
     Ok(table)
 }
 
@@ -50,5 +46,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("ur.json:2"), "{e}");
+        // A value found wrong after parsing is named at its own line.
+        let multi = "{\n\"convention\": \"standard\",\n\"a\": [0, 0.4],\n\"d\": [0.1, 0],\n\"alpha\": [0, 0],\n\"theta_offset\": [0, 0],\n\"sign\": [1, 2]\n}";
+        let e = parse_kinematics(multi, "ur.json").unwrap_err().to_string();
+        assert!(e.contains("ur.json:7: field `sign[1]`"), "{e}");
     }
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 use nalgebra::{Matrix4, Vector3};
 use serde_json::Value;
 
-use crate::io::json_text::{Step, line_of, path_name, repeated_key, steps};
+use crate::io::json_text::{Step, line_of_field, path_name, repeated_key, steps};
 use crate::io::yaml_tree::YamlTree;
 use crate::io::{
     DeclaredSetup, FieldProblem, PoseSeries, Projections, parse_error, read_text,
@@ -254,7 +254,7 @@ fn moveit_matrix(
     file: &str,
 ) -> Result<ReadTransform> {
     let error = |field: String, message: String| {
-        let line = line_of(text, &steps(&field)).unwrap_or(1);
+        let line = line_of_field(text, &field);
         parse_error(file, line, field, message)
     };
     let pair = &value[k];

@@ -7,7 +7,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use crate::calibrate::verify::SavedX;
-use crate::io::json_text::{line_of, steps};
+use crate::io::json_text::line_of_field;
 use crate::io::peer::{declared_setup, yaml_transform};
 use crate::io::yaml_tree::YamlTree;
 use crate::io::{parse_error, read_text, transform_from_json};
@@ -46,7 +46,7 @@ pub fn parse_saved_x(text: &str, file: &str) -> Result<SavedX> {
 fn parse_json(text: &str, file: &str) -> Result<SavedX> {
     let value: Value = serde_json::from_str(text)
         .map_err(|e| parse_error(file, e.line(), "-", format!("malformed JSON: {e}")))?;
-    let line = |field: &str| line_of(text, &steps(field)).unwrap_or(1);
+    let line = |field: &str| line_of_field(text, field);
     let x = transform_from_json(&value).map_err(|p| {
         let field = if p.field.is_empty() {
             "matrix".to_string()

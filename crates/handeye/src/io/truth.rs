@@ -13,7 +13,7 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
-use crate::io::json_text::{line_of, repeated_key, steps};
+use crate::io::json_text::{line_of_field, repeated_key};
 use crate::io::{parse_error, read_text, transform_from_json};
 use crate::model::error::Result;
 use crate::model::pose::Transform;
@@ -108,12 +108,6 @@ pub fn parse_truth(text: &str, file: &str) -> Result<Truth> {
     })?;
     let target = one_of(TARGET_FRAMES)?;
     Ok(Truth { x, frame, target })
-}
-
-/// The line (from 1) where the value of `field` (a path such as `gripper_from_camera.matrix[1]`)
-/// starts in `text`.
-fn line_of_field(text: &str, field: &str) -> usize {
-    line_of(text, &steps(field)).unwrap_or(1)
 }
 
 impl Truth {

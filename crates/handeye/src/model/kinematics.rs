@@ -54,20 +54,24 @@ impl Kinematics {
         self.a.len()
     }
 
-    /// The parameters [`Kinematics::perturbed`] can move: four per joint.
+    /// The parameters [`Kinematics::forward_moved`] can move: four per joint.
     pub fn parameter_count(&self) -> usize {
         4 * self.dof()
     }
 
-    /// Whether the table is whole: every column as long as `a`, at least one joint, every number
-    /// finite and every sign ±1. The message names the column.
-    pub fn validate(&self) -> Result<(), String> {
+    /// Whether the table is whole: every column as long as `a`, at least one joint (at most 64),
+    /// every number finite, every sign ±1 and the tool rigid. The problem names the field.
+    pub fn validate(&self) -> Result<(), TableProblem> {
+        let problem = |field: String, message: String| Err(TableProblem { field, message });
         let n = self.dof();
         if n == 0 {
-            return Err("`a` is empty: a table needs at least one joint".into());
+            return problem(
+                "a".into(),
+                "`a` is empty: a table needs at least one joint".into(),
+            );
         }
         if n > 64 {
-            return Err(format!("{n} joints: at most 64"));
+            return problem("a".into(), format!("{n} joints: at most 64"));
         }
         let columns = [
             ("d", &self.d),
@@ -76,55 +80,90 @@ impl Kinematics {
         ];
         for (name, column) in columns {
             if column.len() != n {
-                return Err(format!("`{name}` has {} values, `a` has {n}", column.len()));
+                return problem(
+                    name.into(),
+                    format!("`{name}` has {} values, `a` has {n}", column.len()),
+                );
             }
         }
         for (name, column) in [("a", &self.a)].into_iter().chain(columns) {
             if let Some(i) = column.iter().position(|v| !v.is_finite()) {
-                return Err(format!("`{name}`[{i}] is not a finite number"));
+                return problem(
+                    format!("{name}[{i}]"),
+                    format!("`{name}`[{i}] is not a finite number"),
+                );
             }
         }
-        if let Some(tool) = &self.tool {
-            tool_transform(tool).map_err(|problem| format!("`tool`: {problem}"))?;
+        if let Some(Err(e)) = self.tool.as_ref().map(tool_transform) {
+            return problem("tool".into(), format!("`tool`: {e}"));
         }
         if let Some(sign) = &self.sign {
             if sign.len() != n {
-                return Err(format!("`sign` has {} values, `a` has {n}", sign.len()));
+                return problem(
+                    "sign".into(),
+                    format!("`sign` has {} values, `a` has {n}", sign.len()),
+                );
             }
             if let Some(i) = sign.iter().position(|s| s.abs() != 1.0) {
-                return Err(format!("`sign`[{i}] is {}: each sign is 1 or -1", sign[i]));
+                return problem(
+                    format!("sign[{i}]"),
+                    format!("`sign`[{i}] is {}: each sign is 1 or -1", sign[i]),
+                );
             }
         }
         Ok(())
     }
 
-    /// `base_from_flange` at the joint angles `q` (radians; `q.len()` must be [`Kinematics::dof`]).
+    /// `base_from_flange` at the joint angles `q` (radians; `q.len()` must be [`Kinematics::dof`];
+    /// the table validated).
     pub fn forward(&self, q: &[f64]) -> Transform {
+        self.forward_moved(q, None)
+    }
+
+    /// [`Kinematics::forward`] with parameter `k` moved by `step` (`k / dof` the column: `a`,
+    /// `d`, `alpha`, `theta_offset`; `k % dof` the joint), where given: the identification
+    /// Jacobian's finite differences, without a copy of the table.
+    pub fn forward_moved(&self, q: &[f64], moved: Option<(usize, f64)>) -> Transform {
+        let n = self.dof();
+        let by = |column: usize, joint: usize| match moved {
+            Some((k, step)) if k / n == column && k % n == joint => step,
+            _ => 0.0,
+        };
         let mut pose = Transform::identity();
-        for (i, &qi) in q.iter().enumerate().take(self.dof()) {
+        for (i, &qi) in q.iter().enumerate().take(n) {
             let sign = self.sign.as_ref().map_or(1.0, |s| s[i]);
-            let theta = sign * qi + self.theta_offset[i];
-            pose *= link(self.convention, theta, self.d[i], self.a[i], self.alpha[i]);
+            let theta = sign * qi + self.theta_offset[i] + by(3, i);
+            pose *= link(
+                self.convention,
+                theta,
+                self.d[i] + by(1, i),
+                self.a[i] + by(0, i),
+                self.alpha[i] + by(2, i),
+            );
         }
-        match &self.tool {
-            Some(tool) => pose * tool_transform(tool).unwrap_or_else(|_| Transform::identity()),
+        match self
+            .tool
+            .as_ref()
+            .and_then(|tool| tool_transform(tool).ok())
+        {
+            Some(tool) => pose * tool,
             None => pose,
         }
     }
+}
 
-    /// The table with parameter `k` moved by `step` (`k / dof` the column: `a`, `d`, `alpha`,
-    /// `theta_offset`; `k % dof` the joint).
-    pub fn perturbed(&self, k: usize, step: f64) -> Self {
-        let mut out = self.clone();
-        let n = self.dof();
-        let column = match k / n {
-            0 => &mut out.a,
-            1 => &mut out.d,
-            2 => &mut out.alpha,
-            _ => &mut out.theta_offset,
-        };
-        column[k % n] += step;
-        out
+/// What is wrong with a DH table: the field (`d`, `sign[1]`) and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableProblem {
+    /// The field, with its index where one value is wrong.
+    pub field: String,
+    /// Why, in words.
+    pub message: String,
+}
+
+impl std::fmt::Display for TableProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
     }
 }
 
@@ -189,15 +228,46 @@ mod tests {
     }
 
     #[test]
+    fn a_moved_parameter_is_the_table_with_it_edited() {
+        let k = Kinematics {
+            sign: Some(vec![1.0, -1.0]),
+            ..planar()
+        };
+        let q = [0.4, -1.1];
+        for (column, joint) in [(0, 1), (1, 0), (2, 1), (3, 0)] {
+            let mut edited = k.clone();
+            [
+                &mut edited.a,
+                &mut edited.d,
+                &mut edited.alpha,
+                &mut edited.theta_offset,
+            ][column][joint] += 0.01;
+            let moved = k.forward_moved(&q, Some((column * k.dof() + joint, 0.01)));
+            let want = edited.forward(&q);
+            assert_relative_eq!(
+                moved.to_homogeneous(),
+                want.to_homogeneous(),
+                epsilon = 1e-15
+            );
+            assert!((moved.to_homogeneous() - k.forward(&q).to_homogeneous()).norm() > 1e-4);
+        }
+    }
+
+    #[test]
     fn a_broken_table_is_named() {
         let mut k = planar();
         k.d.pop();
-        assert!(k.validate().unwrap_err().contains("`d` has 1 values"));
+        assert!(
+            k.validate()
+                .unwrap_err()
+                .message
+                .contains("`d` has 1 values")
+        );
         let mut k = planar();
         k.sign = Some(vec![1.0, 2.0]);
-        assert!(k.validate().unwrap_err().contains("`sign`[1]"));
+        assert_eq!(k.validate().unwrap_err().field, "sign[1]");
         let mut k = planar();
         k.alpha[0] = f64::NAN;
-        assert!(k.validate().unwrap_err().contains("`alpha`[0]"));
+        assert_eq!(k.validate().unwrap_err().field, "alpha[0]");
     }
 }
