@@ -30,15 +30,16 @@
 //! - Robot-world (X and the target pose together, A X = Z B):
 //!   [`calibrate_robot_world`] on top of `solve::shah`, `solve::li`,
 //!   `solve::refine_robot_world`; online, the sums of
-//!   `solve::accumulate::RobotWorldAccumulator` in every `track::Tracker` report.
+//!   `solve::robot_world_accumulate::RobotWorldAccumulator` in every `track::Tracker` report.
 //! - What to record next: [`advise`]. Reading any input (a pose file, two stamped streams, a
 //!   ROS 2 recording): [`io::Recording`]; the readers of each format: [`io`].
 //!
 //! # Layers
-//! The folders are the layers (private modules but [`io`], [`sim`] and [`experiment`]: the
-//! items a user needs are re-exported here); each uses only itself and the layers above it in this table
-//! (unit tests included; `tests/layers.rs` fails on an import that climbs or crosses to a
-//! sibling). Errors and warnings carry plain data of the bottom layer, so no layer needs the
+//! The folders are the layers, each a public module: the toolbox, where a solver, a check or a
+//! simulator is reached by its path (`handeye::solve::park`); the jobs and every type they return
+//! are re-exported here, the facade a newcomer reads first. Each layer uses only itself and the
+//! layers above it in this table (unit tests included; `tests/layers.rs` fails on an import that
+//! climbs or crosses to a sibling). Errors and warnings carry plain data of the bottom layer, so no layer needs the
 //! types of the one that raised them.
 //!
 //! | rank | layer | what it holds |
@@ -78,51 +79,28 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
-/// Declares the layer modules: private, with the root's re-exports below as the public surface;
-/// public with the `internals` feature (this crate's own tests, benches and examples).
-macro_rules! layers {
-    ($($(#[$doc:meta])* $layer:ident;)*) => {$(
-        $(#[$doc])*
-        #[cfg(feature = "internals")]
-        pub mod $layer;
-        $(#[$doc])*
-        #[cfg(not(feature = "internals"))]
-        mod $layer;
-    )*};
-}
-
-layers! {
-    /// Rank 5: the batch jobs.
-    calibrate;
-    /// Rank 3: the checks that judge an X.
-    check;
-    /// Rank 6: the online calibrator (poses or pixels) and the paper's selection.
-    online;
-    /// Rank 2: the solvers.
-    solve;
-    /// Rank 4: the accumulating estimator on a stream.
-    track;
-}
-// Written out rather than through `layers!`: a `macro_export` macro (`named_enum!`) inside a
-// macro-expanded module could not be named by its path.
+// The layers (see "# Layers" above), each a public module: the toolbox a user reaches into for a
+// solver, a check or a simulator by its path (`handeye::solve::park`); the root re-exports below
+// are the jobs and the types every face receives.
+pub mod calibrate;
+pub mod check;
 pub mod experiment;
 pub mod io;
-/// Rank 0: poses, motions, errors, warnings and findings.
-#[cfg(feature = "internals")]
 pub mod model;
-#[cfg(not(feature = "internals"))]
-mod model;
+pub mod online;
 pub mod sim;
+pub mod solve;
+pub mod track;
 
 // # The public surface, layer by layer.
 // Model: poses, motions, the setup, errors, warnings and what they carry.
 pub use model::camera::{Detections, Frame, Intrinsics};
-pub use model::error::{Degeneracy, Error, LowDofMissing, Result, TransformProblem};
+pub use model::error::{Degeneracy, Error, LowDofMissing, Result};
 pub use model::findings::{Part, Reading, Sizes, Verdict, Written, WrittenAs};
 pub use model::kinematics::{DhConvention, Kinematics};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
 pub use model::names::Named;
-pub use model::pose::{Transform, TransformJson, transform_from_matrix4};
+pub use model::pose::{Transform, TransformJson, TransformProblem, transform_from_matrix4};
 pub use model::prior::{Component, LengthUnit, Prior, PriorValue};
 pub use model::rotation::{RotationConvention, Rotations};
 pub use model::warning::{Remedy, Warning};

@@ -16,7 +16,8 @@
 mod common;
 
 use common::{any_transform, errors, recording, robot_pose, transform};
-use handeye::solve::accumulate::{PoseAccumulator, RobotWorldAccumulator};
+use handeye::solve::accumulate::PoseAccumulator;
+use handeye::solve::robot_world_accumulate::RobotWorldAccumulator;
 use handeye::solve::{
     RefineOptions, RobotWorld, RobotWorldMethod, Termination, check_motions, li,
     refine_robot_world, refine_robot_world_from, robot_world, shah,

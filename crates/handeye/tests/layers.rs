@@ -153,12 +153,13 @@ fn no_import_climbs_a_layer() {
     );
 }
 
-/// The layers a user's code may not name: private without the `internals` feature.
+/// The layers whose paths a newcomer's first read does not need: the root re-exports every job
+/// and every type the jobs return.
 const PRIVATE_LAYERS: &[&str] = &["model", "solve", "check", "track", "calibrate", "online"];
 
-/// What a user reads first uses only the public surface (the root's re-exports, `io`, `sim`,
-/// `experiment`): the examples and the README's Rust. This crate's tests are built with
-/// `internals` and would compile either way, so the scan is what keeps them honest.
+/// What a user reads first uses only the facade (the root's re-exports, `io`, `sim`,
+/// `experiment`): the examples and the README's Rust. The layers are public modules (the
+/// toolbox), so the code would compile either way: the scan is what keeps the first read simple.
 #[test]
 fn examples_and_the_readme_use_only_the_public_surface() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -185,7 +186,7 @@ fn examples_and_the_readme_use_only_the_public_surface() {
     assert!(texts.len() >= 3, "no examples found");
     assert!(
         private.is_empty(),
-        "{} line(s) name a private layer (use the root's re-export):\n{}",
+        "{} line(s) name a layer's path (use the root's re-export):\n{}",
         private.len(),
         private.join("\n")
     );

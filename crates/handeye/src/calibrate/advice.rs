@@ -177,7 +177,14 @@ pub fn advise(
     };
     let (x, low_dof, candidates): (_, _, Vec<Turn>) = match &plan {
         Some(plan) => {
-            let x = crate::calibrate::low_dof::solve(plan, poses, setup, Pairing::All, Method::Andreff)?.x;
+            let x = crate::calibrate::low_dof::solve(
+                plan,
+                poses,
+                setup,
+                Pairing::All,
+                Method::Andreff,
+            )?
+            .x;
             let axis = match setup {
                 Setup::EyeInHand => plan.axis.hand,
                 Setup::EyeToHand => last.rotation.inverse() * plan.axis.hand,
@@ -226,7 +233,12 @@ pub fn advise(
             ..undetermined(poses, setup, count)
         });
     };
-    let model = Model { x, y, noise, priors };
+    let model = Model {
+        x,
+        y,
+        noise,
+        priors,
+    };
     let current = model.predicted(&acc);
     let weakest = current.map(|_| model.weakest(&acc)).unwrap_or_default();
     let done = options
@@ -608,9 +620,17 @@ pub fn closed_loop(series: usize, seed: u64, progress: impl Fn()) -> ClosedLoop 
             let mut reached = usize::MAX;
             while poses.len() < MOST {
                 let (axis, angle) = if advised {
-                    match advise(&poses, Setup::EyeInHand, Written::NAMED, &AdviseOptions { count: 1, ..AdviseOptions::default() })
-                        .ok()
-                        .and_then(|a| a.suggestions.first().copied())
+                    match advise(
+                        &poses,
+                        Setup::EyeInHand,
+                        Written::NAMED,
+                        &AdviseOptions {
+                            count: 1,
+                            ..AdviseOptions::default()
+                        },
+                    )
+                    .ok()
+                    .and_then(|a| a.suggestions.first().copied())
                     {
                         Some(s) => (Vector3::from(s.axis_gripper), s.angle_deg),
                         None => break,

@@ -2,12 +2,12 @@
 //!
 //! [`calibrate`] is what `handeye calibrate` and the Python `calibrate` run, and [`Report`] is what
 //! both print:
-//! 1. the readings a user may have meant are tried ([`crate::conventions`]): a reading that fits
+//! 1. the readings a user may have meant are tried ([`crate::check::readings`]): a reading that fits
 //!    far better refuses the as-given one ([`Error::Misread`]) unless [`Fix`] says otherwise;
 //! 2. poses that break the screw invariants are found ([`crate::check::outliers::pose_outliers`]) and,
 //!    with `reject_outliers`, left out;
 //! 3. the method solves X from the pairing's motions;
-//! 4. the bootstrap over the poses' own errors gives the uncertainty ([`crate::uncertainty`]); a
+//! 4. the bootstrap over the poses' own errors gives the uncertainty ([`crate::check::uncertainty`]); a
 //!    direction of X it leaves undetermined refuses the result ([`Degeneracy::Undetermined`]), a
 //!    weakly determined one is a warning naming it;
 //! 5. the residuals and the spread of the motions ([`crate::check::quality::quality_report`]).
@@ -17,7 +17,9 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::Input;
+use crate::calibrate::low_dof::{self, LowDofReport};
 use crate::check::holdout::{HeldOutCheck, leave_one_out};
+pub(crate) use crate::check::outliers::working_distance;
 use crate::check::outliers::{PoseOutliers, PoseResiduals, pose_outliers, translation_scale};
 use crate::check::quality::{MotionQuality, QualityReport, ResidualSummary, quality_report};
 use crate::check::readings::{ReadingCheck, check_readings};
@@ -28,20 +30,16 @@ use crate::check::uncertainty::{
 };
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::OutlierPose;
-use crate::model::findings::{Reading, Written};
 use crate::model::findings::{Part, Verdict};
+use crate::model::findings::{Reading, Written};
 use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
-use crate::model::pose::{MAX_TRANSLATION, Transform, check_translation};
 use crate::model::pose::TransformJson;
+use crate::model::pose::{MAX_TRANSLATION, Transform, check_translation};
 use crate::model::prior::{Prior, PriorValue, PriorsUsed, check_priors};
-use crate::calibrate::low_dof::{self, LowDofReport};
 use crate::model::warning::{SHOWN, Warning};
-pub(crate) use crate::check::outliers::working_distance;
 use crate::solve::accumulate::PoseAccumulator;
 use crate::solve::motions::{AllPairs, MotionSource};
-use crate::solve::{
-    Calibration, Method, RefineOptions, TsaiOptions, refine_from, solve,
-};
+use crate::solve::{Calibration, Method, RefineOptions, TsaiOptions, refine_from, solve};
 
 /// Per-motion details (`quality.per_motion`) are kept up to this many motions. With every pair of
 /// poses the default, 10,000 made a 40-pose report list 780 motions (a 150-pose one 11,175 would
@@ -493,7 +491,9 @@ fn calibrate_poses(poses: &[PosePair], setup: Setup, options: &Options) -> Resul
             .map_err(|_| low_dof::undetermined(plan, setup))
             .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?,
         None => refuse_if_undetermined(&uncertainty, setup, calibration.conditioning)
-            .and_then(|()| motions_determine(&used, setup, options, scene, calibration.conditioning))
+            .and_then(|()| {
+                motions_determine(&used, setup, options, scene, calibration.conditioning)
+            })
             .map_err(|e| method_at_fault(e, &used, setup, options, scene))
             .map_err(|e| explained(e, &warnings, kept_outliers.as_ref()))?,
     }
@@ -599,8 +599,12 @@ pub(crate) fn check_robot_model(
     let Some(model) = model else {
         return Ok(());
     };
-    crate::check::identification::check_model(model, poses, joints)
-        .map_err(|message| Error::InvalidParameter { name: "robot-model", message })
+    crate::check::identification::check_model(model, poses, joints).map_err(|message| {
+        Error::InvalidParameter {
+            name: "robot-model",
+            message,
+        }
+    })
 }
 
 /// Joint angles given are every pose's: one list a pose (or none at all).
@@ -879,7 +883,14 @@ fn andreff_uncertainty(
     };
     let x = andreff_options.solve(poses, setup).ok()?.x;
     let solve_x = |p: &[PosePair]| solve_replicate(p, setup, &andreff_options);
-    Some(bootstrap(poses, setup, &x, &solve_x, options.replicates, scene))
+    Some(bootstrap(
+        poses,
+        setup,
+        &x,
+        &solve_x,
+        options.replicates,
+        scene,
+    ))
 }
 
 /// Refuses X when the motions leave a direction of it undetermined although the method's own
@@ -935,7 +946,11 @@ fn method_at_fault(
 }
 
 /// Refuses a result whose uncertainty leaves a direction of X undetermined.
-pub(crate) fn refuse_if_undetermined(u: &Uncertainty, setup: Setup, conditioning: f64) -> Result<()> {
+pub(crate) fn refuse_if_undetermined(
+    u: &Uncertainty,
+    setup: Setup,
+    conditioning: f64,
+) -> Result<()> {
     if u.verdict() != Verdict::Undetermined {
         return Ok(());
     }

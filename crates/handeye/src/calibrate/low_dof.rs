@@ -2,7 +2,7 @@
 //! motion rotates about the same axis, so the motions determine X's rotation and its translation
 //! across that axis ([`crate::solve::low_dof`]) and a prior (`--prior tz=…`) gives the rest.
 //!
-//! [`plan`] recognises the case from the data (every motion that rotates at least
+//! `plan` recognises the case from the data (every motion that rotates at least
 //! [`LOW_DOF_MIN_ANGLE_DEG`](crate::solve::low_dof::LOW_DOF_MIN_ANGLE_DEG) rotates about one axis
 //! within [`LOW_DOF_SPREAD_DEG`](crate::solve::low_dof::LOW_DOF_SPREAD_DEG)) and refuses it,
 //! naming the prior to give, when no prior covers the free direction
@@ -95,12 +95,10 @@ pub(crate) fn plan(
         return Err(refusal(&axis, setup, LowDofMissing::NotStatable));
     };
     match priors.iter().find(|p| p.component == free) {
-        Some(prior) => {
-            Ok(Some(Plan {
-                axis,
-                prior: *prior,
-            }))
-        }
+        Some(prior) => Ok(Some(Plan {
+            axis,
+            prior: *prior,
+        })),
         None => Err(refusal(&axis, setup, LowDofMissing::Prior(free))),
     }
 }
@@ -223,8 +221,12 @@ pub(crate) fn solve(
         });
     }
     on_motions(poses, setup, pairing, |motions| {
-        let linear = solve_low_dof(motions, &plan.axis, (plan.prior.component, plan.prior.value))
-            .map_err(|e| lacking(e, plan, setup))?;
+        let linear = solve_low_dof(
+            motions,
+            &plan.axis,
+            (plan.prior.component, plan.prior.value),
+        )
+        .map_err(|e| lacking(e, plan, setup))?;
         let x = match method {
             Method::Refine => {
                 let refined = refine_unchecked(
@@ -360,10 +362,7 @@ pub(crate) fn undetermined(plan: &Plan, setup: Setup) -> Error {
 
 /// The uncertainty with the prior's sigma along the free direction, and the report's `prior`.
 pub(crate) fn with_prior(plan: &Plan, u: &Uncertainty, scene: f64) -> (Uncertainty, PriorsUsed) {
-    let used = PriorsUsed::from([(
-        plan.prior.component.name().to_string(),
-        plan.prior.value(),
-    )]);
+    let used = PriorsUsed::from([(plan.prior.component.name().to_string(), plan.prior.value())]);
     (u.with_prior(&plan.gain(), plan.prior.sigma, scene), used)
 }
 
@@ -376,7 +375,10 @@ pub(crate) fn check_determined(
     u: &Uncertainty,
     warnings: &mut Vec<Warning>,
 ) {
-    for p in priors.iter().filter(|p| !used.contains_key(p.component.name())) {
+    for p in priors
+        .iter()
+        .filter(|p| !used.contains_key(p.component.name()))
+    {
         let i = p.component.index();
         let data = x.translation.vector[i];
         let sigma = (u.covariance[3 + i][3 + i].max(0.0) + p.sigma * p.sigma).sqrt();

@@ -5,9 +5,9 @@
 pub mod advice;
 pub mod batch;
 pub mod low_dof;
+pub mod pixels;
 pub mod robot_world;
 pub mod verify;
-pub mod pixels;
 
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::motion::PosePair;

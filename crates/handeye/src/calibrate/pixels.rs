@@ -12,12 +12,16 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::calibrate::batch::{
+    Assessment, Fix, Options, Outliers, ReadingReport, Report, Spread, Units,
+    refuse_if_undetermined, working_distance,
+};
 use crate::calibrate::robot_world::{
     PoseResidualSummary, RobotWorldOptions, RobotWorldReport, TargetReport,
 };
-use crate::calibrate::batch::{
-    Assessment, Options, Outliers, ReadingReport, Report, Spread, Units, Fix, refuse_if_undetermined,
-    working_distance,
+use crate::calibrate::verify::{
+    FramePixels, PixelComparison, SavedX, Verification, cannot_tell, compared, setup_notes,
+    unit_scale,
 };
 use crate::check::outliers::{PoseResiduals, translation_scale};
 use crate::check::quality::quality_report;
@@ -25,18 +29,13 @@ use crate::check::uncertainty::{median_target, summarise, warn_weak};
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::{OutlierPose, Reading};
-use crate::model::warning::Warning;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson, rotation_angle_between};
+use crate::model::warning::Warning;
 use crate::solve::motions::AllPairs;
-use crate::calibrate::verify::{
-    FramePixels, PixelComparison, SavedX, Verification, cannot_tell, compared, setup_notes,
-    unit_scale,
-};
 use crate::solve::reprojection::{
     PixelOptions, PixelSolution, RefinedIntrinsics, check_determined, reprojection,
-    reprojection_leaving_out, start_camera_poses,
-    target_with_x,
+    reprojection_leaving_out, start_camera_poses, target_with_x,
 };
 use crate::solve::{Method, RobotWorldMethod, pose_residuals, target_frame};
 
@@ -124,9 +123,21 @@ pub(crate) fn calibrate_on_pixels(
     options: &Options,
 ) -> Result<Report> {
     not_on_pixels(options.reject_outliers, &options.priors)?;
-    let (used, solution, applied, reading_check, choice) =
-        solved(frames, camera, setup, options.fix, options.refine_intrinsics)?;
-    report(&used, setup, options, solution, (applied, reading_check), &choice)
+    let (used, solution, applied, reading_check, choice) = solved(
+        frames,
+        camera,
+        setup,
+        options.fix,
+        options.refine_intrinsics,
+    )?;
+    report(
+        &used,
+        setup,
+        options,
+        solution,
+        (applied, reading_check),
+        &choice,
+    )
 }
 
 /// Refuses the options the pixel solve does not take, rather than answer without them: a prior
@@ -159,8 +170,13 @@ pub(crate) fn calibrate_robot_world_on_pixels(
     options: &RobotWorldOptions,
 ) -> Result<RobotWorldReport> {
     not_on_pixels(options.reject_outliers, &options.priors)?;
-    let (used, solution, applied, reading_check, choice) =
-        solved(frames, camera, setup, options.fix, options.refine_intrinsics)?;
+    let (used, solution, applied, reading_check, choice) = solved(
+        frames,
+        camera,
+        setup,
+        options.fix,
+        options.refine_intrinsics,
+    )?;
     let hand_eye = Options {
         fix: options.fix,
         point: options.point,
@@ -182,7 +198,14 @@ pub(crate) fn calibrate_robot_world_on_pixels(
         transform,
         reprojection,
         ..
-    } = report(&used, setup, &hand_eye, solution, (applied, reading_check), &choice)?;
+    } = report(
+        &used,
+        setup,
+        &hand_eye,
+        solution,
+        (applied, reading_check),
+        &choice,
+    )?;
     let scene = translation_scale(&poses, setup).max(working_distance(&poses));
     let Some(target_covariance) = target_covariance else {
         return Err(Error::Degenerate {
@@ -248,18 +271,19 @@ pub(crate) fn verify_on_pixels(
         });
     }
     let notes = setup_notes(saved, setup);
-    let (used, solution, applied, reading_check, choice) = match solved(frames, camera, setup, options.fix, false) {
-        Ok(s) => s,
-        Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
-            let start_poses = start_camera_poses(frames, camera, setup);
-            let poses = pose_pairs(frames, &start_poses);
-            return Ok(Verification {
-                start_poses,
-                ..cannot_tell(saved, &poses, &e, notes)
-            });
-        }
-        Err(e) => return Err(e),
-    };
+    let (used, solution, applied, reading_check, choice) =
+        match solved(frames, camera, setup, options.fix, false) {
+            Ok(s) => s,
+            Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
+                let start_poses = start_camera_poses(frames, camera, setup);
+                let poses = pose_pairs(frames, &start_poses);
+                return Ok(Verification {
+                    start_poses,
+                    ..cannot_tell(saved, &poses, &e, notes)
+                });
+            }
+            Err(e) => return Err(e),
+        };
     let poses = pose_pairs(&used, &solution.start_poses);
     let own = solution.calibration.x;
     let mut x = saved.x;
@@ -267,7 +291,14 @@ pub(crate) fn verify_on_pixels(
     let pixel_options = PixelOptions::default();
     let with_saved = target_with_x(&used, camera, setup, &x, &solution, &pixel_options);
     let with_own = target_with_x(&used, camera, setup, &own, &solution, &pixel_options);
-    let report = match report(&used, setup, options, solution, (applied, reading_check), &choice) {
+    let report = match report(
+        &used,
+        setup,
+        options,
+        solution,
+        (applied, reading_check),
+        &choice,
+    ) {
         Ok(r) => r,
         Err(e @ Error::Degenerate { .. }) => {
             return Ok(Verification {
@@ -385,7 +416,12 @@ fn focal_check(
         (scale, scaled)
     };
     let bracket = (FOCAL_RANGE.0.ln(), FOCAL_RANGE.1.ln());
-    refit((frames, setup, options, solved), at, (bracket, 0.0, 2.5e-4), 1.0)
+    refit(
+        (frames, setup, options, solved),
+        at,
+        (bracket, 0.0, 2.5e-4),
+        1.0,
+    )
 }
 
 /// The best fit over one camera parameter: `at` gives, at a point of the search, the parameter's
@@ -443,7 +479,12 @@ fn k1_check(
         (value, changed)
     };
     let bracket = (k1 - K1_RANGE, k1 + K1_RANGE);
-    refit((frames, setup, options, solved), at, (bracket, k1, 1e-4), k1)
+    refit(
+        (frames, setup, options, solved),
+        at,
+        (bracket, k1, 1e-4),
+        k1,
+    )
 }
 
 /// The minimum of `f` on `(a, b)` by Brent's method (R. P. Brent, *Algorithms for Minimization
@@ -564,8 +605,12 @@ fn intrinsics_warning(
         let translation = (fit.x.translation.vector - x.translation.vector).norm();
         let sigmas = (rotation_deg / uncertainty.rotation_deg.max(1e-300))
             .max(translation / uncertainty.translation.max(1e-300));
-        (chi2 > FOCAL_CHI2 && material && sigmas > MOVED_SIGMAS)
-            .then_some((chi2, rotation_deg, translation, sigmas))
+        (chi2 > FOCAL_CHI2 && material && sigmas > MOVED_SIGMAS).then_some((
+            chi2,
+            rotation_deg,
+            translation,
+            sigmas,
+        ))
     };
     let focal = choice.focal.as_ref().and_then(|fit| {
         let material = fit.value.ln().abs() > FOCAL_MATERIAL.ln_1p();
@@ -631,10 +676,12 @@ fn solved(
     fix: Fix,
     refine_intrinsics: bool,
 ) -> Result<(Vec<Frame>, PixelSolution, Reading, String, FrameChoice)> {
-    camera.check().map_err(|(field, message)| Error::InvalidParameter {
-        name: "intrinsics",
-        message: format!("{field}: {message}"),
-    })?;
+    camera
+        .check()
+        .map_err(|(field, message)| Error::InvalidParameter {
+            name: "intrinsics",
+            message: format!("{field}: {message}"),
+        })?;
     // X's covariance takes the sandwich over the robot's stations with the factor S/(S − 12) (12
     // parameters): fewer than 13 frames have no honest uncertainty, and are refused here, by
     // count, rather than after the solve as if the motions were degenerate (and fewer than 13
@@ -697,7 +744,16 @@ fn solved(
     if !outliers.is_empty() {
         choice.outliers = outliers
             .iter()
-            .map(|&i| (i, solution.per_frame_rms_px.get(i).copied().unwrap_or(f64::NAN)))
+            .map(|&i| {
+                (
+                    i,
+                    solution
+                        .per_frame_rms_px
+                        .get(i)
+                        .copied()
+                        .unwrap_or(f64::NAN),
+                )
+            })
             .collect();
         // Left out, and solved again on the others, when enough frames remain for an honest
         // uncertainty; else named only.
@@ -751,7 +807,8 @@ fn checked_reading(
     };
     match flipped {
         Some(f)
-            if f.sigma_px <= REFUSE_SIGMA_PX && as_given_sigma > BETTER_READING * f.sigma_px.max(0.05) =>
+            if f.sigma_px <= REFUSE_SIGMA_PX
+                && as_given_sigma > BETTER_READING * f.sigma_px.max(0.05) =>
         {
             let text = words(Some(f.sigma_px));
             if fix == Fix::Auto {
@@ -838,10 +895,8 @@ fn report(
         });
     };
     let mut uncertainty = summarise(covariance, 0, 0, scene);
-    uncertainty.at_point = Some(uncertainty.place(
-        &x,
-        options.point.unwrap_or_else(|| median_target(&poses)),
-    ));
+    uncertainty.at_point =
+        Some(uncertainty.place(&x, options.point.unwrap_or_else(|| median_target(&poses))));
     refuse_if_undetermined(&uncertainty, setup, conditioning)?;
     let mut warnings = solution.calibration.warnings.clone();
     warn_weak(&uncertainty, setup, None, &mut warnings);
@@ -1045,7 +1100,13 @@ mod tests {
     #[test]
     fn failed_solves_are_worse_never_interpolated() {
         // Solves fail beyond 0.4: the minimum at 0.5 is out of reach, the best is at the edge.
-        let f = |x: f64| if x > 0.4 { f64::INFINITY } else { (x - 0.5).powi(2) };
+        let f = |x: f64| {
+            if x > 0.4 {
+                f64::INFINITY
+            } else {
+                (x - 0.5).powi(2)
+            }
+        };
         let (x, _) = minimum(f);
         assert!((x - 0.4).abs() < 2e-3, "{x}");
         // All fail but the start: the start is kept.

@@ -27,26 +27,25 @@ use std::collections::BTreeMap;
 use nalgebra::{Matrix3, Matrix6};
 use serde::{Deserialize, Serialize};
 
-use crate::calibrate::batch::{
-    first_what_motions_lack, plausible,
-    Fix, Options, Outliers, ReadingReport, Units, explained, outlier_report,
-    check_joints, outlier_warning, read_poses, systematic_test, widened_for_systematic, without,
-    working_distance,
-};
 use crate::calibrate::Input;
+use crate::calibrate::batch::{
+    Fix, Options, Outliers, ReadingReport, Units, check_joints, explained, first_what_motions_lack,
+    outlier_report, outlier_warning, plausible, read_poses, systematic_test,
+    widened_for_systematic, without, working_distance,
+};
 use crate::calibrate::low_dof::{self, LowDofReport, Plan};
-use crate::check::systematic::Systematic;
 use crate::check::outliers::translation_scale;
 use crate::check::quality::OUTLIER_DEG;
+use crate::check::systematic::Systematic;
 use crate::check::uncertainty::{
     Uncertainty, bootstrap, check_replicates, median_target, summarise, warn_weak,
 };
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::{Assessment, Part, Verdict, Written};
 use crate::model::motion::{Pairing, PosePair, Setup};
-use crate::model::prior::{Prior, PriorsUsed, check_priors};
 use crate::model::pose::TransformJson;
 use crate::model::pose::{Transform, rotation_matrix};
+use crate::model::prior::{Prior, PriorsUsed, check_priors};
 use crate::solve::{
     JointCovariance, PoseResidual, RobotWorldMethod, joint_covariance, joint_covariance_given,
     pose_residuals, robot_world, target_frame,
@@ -61,13 +60,13 @@ pub struct RobotWorldOptions {
     pub fix: Fix,
     /// Bootstrap replicates for X's uncertainty, within
     /// [`Options::REPLICATES_RANGE`](crate::Options::REPLICATES_RANGE). Default 40, as
-    /// [`Options`](crate::Options)'.
+    /// [`Options`]'.
     pub replicates: usize,
     /// Leave out the outlier poses (found as in the hand–eye report, by the screw invariants of
     /// their motions). Default false: they are kept and named in a warning.
     pub reject_outliers: bool,
     /// A pose whose median rotation-angle gap is above this (degrees) is an outlier. Default 3,
-    /// as [`Options`](crate::Options)'.
+    /// as [`Options`]'.
     pub outlier_deg: f64,
     /// How each pose is named in messages (e.g. `file:line`), by input index. Default empty
     /// (`pose i`).
@@ -298,7 +297,9 @@ pub fn calibrate_robot_world<'a>(
     match input.into() {
         Input::Poses(poses) => robot_world_on_poses(poses, setup, options),
         Input::Pixels { frames, camera } => {
-            crate::calibrate::pixels::calibrate_robot_world_on_pixels(frames, camera, setup, options)
+            crate::calibrate::pixels::calibrate_robot_world_on_pixels(
+                frames, camera, setup, options,
+            )
         }
     }
 }
@@ -322,7 +323,11 @@ fn robot_world_on_poses(
         options.outlier_deg,
         &mut warnings,
     )?;
-    crate::calibrate::batch::check_robot_model(options.robot_model.as_ref(), &read, &options.joints)?;
+    crate::calibrate::batch::check_robot_model(
+        options.robot_model.as_ref(),
+        &read,
+        &options.joints,
+    )?;
     let outliers = outlier_report(
         &found,
         &Options {
@@ -365,8 +370,7 @@ fn robot_world_on_poses(
     let solved = match &plan {
         Some(plan) => {
             let (x, target, conditioning) =
-                low_dof::solve_robot_world(plan, &used, setup, options.method)
-                    .map_err(explain)?;
+                low_dof::solve_robot_world(plan, &used, setup, options.method).map_err(explain)?;
             crate::solve::RobotWorld {
                 x,
                 target,
@@ -446,8 +450,7 @@ fn robot_world_on_poses(
     };
     low_dof::check_determined(&priors, &prior, &solved.x, &x_unc, &mut warnings);
     warnings.extend(kept_outliers);
-    let residual =
-        PoseResidualSummary::of(pose_residuals(&used, setup, &solved.x, &solved.target));
+    let residual = PoseResidualSummary::of(pose_residuals(&used, setup, &solved.x, &solved.target));
     Ok(RobotWorldReport {
         verdict: Assessment::of(&warnings),
         method: options.method,

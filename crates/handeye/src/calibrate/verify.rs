@@ -20,7 +20,7 @@ use crate::model::error::{Error, Result};
 use crate::model::findings::{Sizes, Verdict};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson, log_so3};
-use crate::model::prior::{Component, Prior, LengthUnit};
+use crate::model::prior::{Component, LengthUnit, Prior};
 use crate::model::warning::Warning;
 
 /// The probability of the χ² test's acceptance region for a saved X of the same rig: one
@@ -213,9 +213,8 @@ pub(crate) fn compared(
             let factor = |i: usize| if i < 3 { 1.0 } else { scale };
             cov += Matrix6::from_fn(|i, j| c[i][j] * factor(i) * factor(j));
         }
-        None => notes.push(
-            "the saved X carries no uncertainty: the recording's alone counts".to_string(),
-        ),
+        None => notes
+            .push("the saved X carries no uncertainty: the recording's alone counts".to_string()),
     }
     let length = x
         .translation
@@ -503,7 +502,12 @@ pub fn limit_sigmas() -> f64 {
 
 /// The factor bringing the saved translation into the recording's unit, with a note when it is
 /// not 1.
-pub(crate) fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, notes: &mut Vec<String>) -> f64 {
+pub(crate) fn unit_scale(
+    saved: &SavedX,
+    poses: &[PosePair],
+    new: &Transform,
+    notes: &mut Vec<String>,
+) -> f64 {
     let (scale, words) = match (told_scale(saved, poses), saved.unit) {
         (Some(told), _) => told,
         (None, None) => {
@@ -568,7 +572,11 @@ fn difference(a: &Transform, b: &Transform) -> Vector6<f64> {
 fn mahalanobis(e: &Vector6<f64>, cov: &Matrix6<f64>, length: f64) -> f64 {
     let mut c = *cov;
     for i in 0..6 {
-        let floor = if i < 3 { 1e-9 } else { 1e-9 * length.max(f64::MIN_POSITIVE) };
+        let floor = if i < 3 {
+            1e-9
+        } else {
+            1e-9 * length.max(f64::MIN_POSITIVE)
+        };
         c[(i, i)] += floor * floor;
     }
     let eigen = SymmetricEigen::new(c);

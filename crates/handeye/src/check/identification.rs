@@ -75,9 +75,8 @@ pub fn kinematic_fit(
         return None;
     }
     let y_inv = y.inverse();
-    let scale = |v: Vector6<f64>| {
-        Vector6::new(v[0], v[1], v[2], v[3] / scene, v[4] / scene, v[5] / scene)
-    };
+    let scale =
+        |v: Vector6<f64>| Vector6::new(v[0], v[1], v[2], v[3] / scene, v[4] / scene, v[5] / scene);
     let absorbed = design(m, 12, |row, j| {
         let s = picked[row];
         let h = STEP;
@@ -95,7 +94,11 @@ pub fn kinematic_fit(
         .collect();
     let params = design(m, model.parameter_count(), |row, k| {
         let s = picked[row];
-        let h = if k / model.dof() < 2 { STEP * scene } else { STEP };
+        let h = if k / model.dof() < 2 {
+            STEP * scene
+        } else {
+            STEP
+        };
         let at = |step: f64| {
             let reported = unflanged[row] * model.forward_moved(s.joints, Some((k, step)));
             residual6(&y_inv, setup, s.pose, &reported, x)
@@ -110,14 +113,16 @@ pub fn kinematic_fit(
     }
     let e: Vec<Vector6<f64>> = picked
         .iter()
-        .map(|s| scale(Vector6::new(
-            s.residual.rotation.x,
-            s.residual.rotation.y,
-            s.residual.rotation.z,
-            s.residual.translation.x,
-            s.residual.translation.y,
-            s.residual.translation.z,
-        )))
+        .map(|s| {
+            scale(Vector6::new(
+                s.residual.rotation.x,
+                s.residual.rotation.y,
+                s.residual.rotation.z,
+                s.residual.translation.x,
+                s.residual.translation.y,
+                s.residual.translation.z,
+            ))
+        })
         .collect();
     let total: f64 = e.iter().map(|v| v.norm_squared()).sum();
     if total.is_nan() || total <= 0.0 {
@@ -150,7 +155,8 @@ fn design(m: usize, cols: usize, f: impl Fn(usize, usize) -> Vector6<f64>) -> DM
     let mut out = DMatrix::zeros(6 * m, cols);
     for row in 0..m {
         for col in 0..cols {
-            out.fixed_view_mut::<6, 1>(6 * row, col).copy_from(&f(row, col));
+            out.fixed_view_mut::<6, 1>(6 * row, col)
+                .copy_from(&f(row, col));
         }
     }
     out
@@ -224,7 +230,9 @@ pub fn check_model(
     poses: &[PosePair],
     joints: &[Vec<f64>],
 ) -> Result<(), String> {
-    model.validate().map_err(|problem| format!("the table is not whole: {problem}"))?;
+    model
+        .validate()
+        .map_err(|problem| format!("the table is not whole: {problem}"))?;
     if joints.len() != poses.len() {
         return Err(format!(
             "the table needs the joint angles of every pose (`joints` in JSON Lines, /joint_states in a ROS 2 recording); {} of {} poses carry them",
@@ -302,16 +310,31 @@ mod tests {
             base_from_gripper: Transform::identity(),
             camera_from_target: Transform::identity(),
         };
-        let message = check_model(&table, &[pose, pose], &[vec![0.0, 0.1], vec![0.2, 0.3]]).unwrap_err();
+        let message =
+            check_model(&table, &[pose, pose], &[vec![0.0, 0.1], vec![0.2, 0.3]]).unwrap_err();
         assert!(message.contains("`d` has 1 values"), "{message}");
         let residual = PoseResidual {
             rotation: Vector3::new(0.01, 0.0, 0.0),
             angle: 0.01,
             translation: Vector3::zeros(),
         };
-        let station = Station { pose: &pose, joints: &[0.0, 0.1], residual: &residual };
+        let station = Station {
+            pose: &pose,
+            joints: &[0.0, 0.1],
+            residual: &residual,
+        };
         let mut rng = <Xoshiro256PlusPlus as rand::SeedableRng>::seed_from_u64(1);
-        let fit = kinematic_fit(&[station], (Setup::EyeInHand, &pose.base_from_gripper, &pose.base_from_gripper), &table, 1.0, &mut rng);
+        let fit = kinematic_fit(
+            &[station],
+            (
+                Setup::EyeInHand,
+                &pose.base_from_gripper,
+                &pose.base_from_gripper,
+            ),
+            &table,
+            1.0,
+            &mut rng,
+        );
         assert!(fit.is_none());
     }
 }

@@ -75,7 +75,6 @@ pub struct ResidualSummary {
 }
 
 /// Summarises the A X − X B residuals of `motions` under `x`.
-#[cfg(any(test, feature = "internals"))]
 pub fn residual_summary(motions: &(impl MotionSource + ?Sized), x: &Transform) -> ResidualSummary {
     let mut s = ResidualSummary::default();
     motions.for_each_motion(|m| {
@@ -117,7 +116,7 @@ pub struct MotionQuality {
 }
 
 /// How good a calibration is, and why: residuals and the spread of the data (the uncertainty is
-/// [`crate::uncertainty`]'s).
+/// [`crate::check::uncertainty`]'s).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct QualityReport {
     /// RMS and worst of the residuals.

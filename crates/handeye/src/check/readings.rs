@@ -131,8 +131,8 @@ pub struct ReadingCheck {
     pub better: Option<ReadingFit>,
     /// Other readings that fit about as well as `better` (its mirror image, typically).
     pub also: Vec<ReadingFit>,
-    /// When the as-given reading fits (not [`ReadingFit::poor`]) and no reading fits far better:
-    /// the other readings that fit about as well ([`ReadingFit::as_well_as`]), but for its mirror
+    /// When the as-given reading fits (not `ReadingFit::poor`) and no reading fits far better:
+    /// the other readings that fit about as well (`ReadingFit::as_well_as`), but for its mirror
     /// image (both poses inverted, which always fits as well: [`Self::size_warning`]) and the
     /// millimetre readings (judged by sizes). The motions are too small, or too alike, to tell
     /// whether the input is read right, and the X of each reading is a different one.
@@ -276,7 +276,7 @@ impl ReadingCheck {
 /// `written` is the directions in which the input wrote its poses (where a quaternion-order
 /// reading undoes the mix-up, [`Reading::apply`]); a reading that cannot apply to them is not tried.
 ///
-/// Every reading is tried, even when the as-given one fits well (not [`ReadingFit::poor`]) and no
+/// Every reading is tried, even when the as-given one fits well (not `ReadingFit::poor`) and no
 /// other can be far better by the rule itself: one that fits about as well says the motions cannot
 /// tell the readings apart ([`ReadingCheck::alike`]), and an X that fits the poses is then not
 /// known to be the right one.

@@ -20,7 +20,7 @@
 //!    smaller of the two blocks' one-sided p-values, doubled (Bonferroni), is the p-value.
 //!    O(n · PERMUTATIONS).
 //!
-//! The residuals are winsorised at [`WINSOR`] times their median size first, so a few gross
+//! The residuals are winsorised at `WINSOR` times their median size first, so a few gross
 //! outliers (their own check) neither make nor hide the pattern. What the error does to X is
 //! measured by the halves of the workspace (the first k-d split): each half solves X on its own
 //! and their disagreement is the error's size.
@@ -32,15 +32,15 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
+use crate::check::identification::{KinematicFit, Station, kinematic_fit};
 use crate::check::outliers::{PoseResiduals, median};
-use crate::model::pose::rotation_angle_between;
-use crate::model::motion::{PosePair, Setup};
-use crate::model::pose::{Transform, log_so3};
 use crate::check::uncertainty::{Uncertainty, bootstrap_by_region, per_station, stations_of};
 use crate::model::error::Result;
-use crate::model::warning::Warning;
-use crate::check::identification::{KinematicFit, Station, kinematic_fit};
 use crate::model::kinematics::Kinematics;
+use crate::model::motion::{PosePair, Setup};
+use crate::model::pose::rotation_angle_between;
+use crate::model::pose::{Transform, log_so3};
+use crate::model::warning::Warning;
 use crate::solve::residual::PoseResidual;
 
 /// Random orders drawn for the null distribution of the neighbour ratio.
@@ -123,7 +123,7 @@ pub const MATERIAL_TRANSLATION_REL: f64 = 1e-9;
 
 impl Systematic {
     /// Adds the DH table's statistic: the smallest of five z-scores, its p-value times five
-    /// ([`bonferroni`]).
+    /// (`bonferroni`).
     pub fn with_kinematic(&mut self, fit: KinematicFit) {
         self.kinematic = Some(fit);
         self.z = self.z.min(fit.z);
@@ -241,9 +241,11 @@ fn split(c: &Configurations, idx: &mut [usize]) {
     }
     let widest = (0..c.dim)
         .map(|k| {
-            let (lo, hi) = idx.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
-                (lo.min(c.at(i, k)), hi.max(c.at(i, k)))
-            });
+            let (lo, hi) = idx
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &i| {
+                    (lo.min(c.at(i, k)), hi.max(c.at(i, k)))
+                });
             (k, hi - lo)
         })
         .max_by(|a, b| a.1.total_cmp(&b.1))
@@ -427,7 +429,9 @@ pub fn test(residuals: &[PoseResidual], configurations: &Configurations) -> Opti
         permutations: PERMUTATIONS,
         configuration: configurations.kind.into(),
         halves: None,
-        joint: (configurations.kind == "joints").then(|| joint_followed(&rot, &trans, configurations)).flatten(),
+        joint: (configurations.kind == "joints")
+            .then(|| joint_followed(&rot, &trans, configurations))
+            .flatten(),
         kinematic: None,
         order,
     })
@@ -452,7 +456,10 @@ fn joint_followed(
             let mut order: Vec<usize> = (0..n).collect();
             order.sort_by(|&a, &b| c.at(a, k).total_cmp(&c.at(b, k)));
             let ratio = 0.5 * (neighbour_ratio(rot, &order) + neighbour_ratio(trans, &order));
-            JointFollow { joint: k + 1, ratio }
+            JointFollow {
+                joint: k + 1,
+                ratio,
+            }
         })
         .min_by(|a, b| a.ratio.total_cmp(&b.ratio))
 }
@@ -498,7 +505,14 @@ pub fn halves_determine(
 ) -> bool {
     halves(poses, order).iter().all(|half| {
         solve(half).is_ok_and(|x| {
-            let u = crate::check::uncertainty::bootstrap(half, setup, &x, solve, HALF_REPLICATES, scene);
+            let u = crate::check::uncertainty::bootstrap(
+                half,
+                setup,
+                &x,
+                solve,
+                HALF_REPLICATES,
+                scene,
+            );
             u.verdict() != crate::model::findings::Verdict::Undetermined
         })
     })
@@ -524,7 +538,9 @@ pub fn systematic_error(
     let residuals = PoseResiduals::at(poses, setup, x);
     let joints = joints.filter(|j| j.len() == poses.len());
     let configurations = joints
-        .and_then(|j| Configurations::of_joints(&first.iter().map(|&i| j[i].clone()).collect::<Vec<_>>()))
+        .and_then(|j| {
+            Configurations::of_joints(&first.iter().map(|&i| j[i].clone()).collect::<Vec<_>>())
+        })
         .unwrap_or_else(|| Configurations::of_hand_poses(&representatives));
     let station_residuals = per_station(&stations, &residuals.residuals);
     let mut found = test(&station_residuals, &configurations)?;
@@ -532,10 +548,15 @@ pub fn systematic_error(
         let tested: Vec<Station<'_>> = first
             .iter()
             .zip(&station_residuals)
-            .map(|(&i, residual)| Station { pose: &poses[i], joints: &joints[i], residual })
+            .map(|(&i, residual)| Station {
+                pose: &poses[i],
+                joints: &joints[i],
+                residual,
+            })
             .collect();
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(SEED ^ 0x1D);
-        if let Some(fit) = kinematic_fit(&tested, (setup, x, &residuals.y), model, scene, &mut rng) {
+        if let Some(fit) = kinematic_fit(&tested, (setup, x, &residuals.y), model, scene, &mut rng)
+        {
             found.with_kinematic(fit);
         }
     }
@@ -559,8 +580,7 @@ pub(crate) fn dense_stream(poses: &[PosePair]) -> bool {
     if stations.distinct() {
         return dense_motion(poses);
     }
-    let representatives: Vec<PosePair> =
-        stations.first_poses().iter().map(|&i| poses[i]).collect();
+    let representatives: Vec<PosePair> = stations.first_poses().iter().map(|&i| poses[i]).collect();
     dense_motion(&representatives)
 }
 
@@ -581,7 +601,11 @@ fn dense_motion(poses: &[PosePair]) -> bool {
         v[v.len() / 2]
     };
     let near = median((1..n).map(|i| turn(i - 1, i)).collect());
-    let far = median((DENSE_STRIDE..n).map(|i| turn(i - DENSE_STRIDE, i)).collect());
+    let far = median(
+        (DENSE_STRIDE..n)
+            .map(|i| turn(i - DENSE_STRIDE, i))
+            .collect(),
+    );
     near < DENSE_SHARE * far
 }
 
@@ -674,7 +698,11 @@ pub(crate) fn systematic_warning(found: &Systematic, regions: &Uncertainty) -> W
 /// one-sigma an honest answer reports (`check::systematic::Halves`).
 pub(crate) fn covering(u: Uncertainty, found: &Systematic, scene: f64) -> Uncertainty {
     match found.halves {
-        Some(h) => u.at_least(HALVES_SHARE * h.rotation_deg, HALVES_SHARE * h.translation, scene),
+        Some(h) => u.at_least(
+            HALVES_SHARE * h.rotation_deg,
+            HALVES_SHARE * h.translation,
+            scene,
+        ),
         None => u,
     }
 }
@@ -708,7 +736,8 @@ mod tests {
         let joints: Vec<Vec<f64>> = (0..n)
             .map(|_| vec![rng.random_range(-1.5..1.5), rng.random_range(-1.5..1.5)])
             .collect();
-        let mut noise = || Vector3::new(rng.random::<f64>(), rng.random(), rng.random()) - Vector3::repeat(0.5);
+        let mut noise =
+            || Vector3::new(rng.random::<f64>(), rng.random(), rng.random()) - Vector3::repeat(0.5);
         let residuals = joints
             .iter()
             .map(|q| {
@@ -734,7 +763,11 @@ mod tests {
     #[test]
     fn independent_residuals_are_not_flagged_and_smooth_ones_are() {
         let quiet = (0..20)
-            .filter(|&s| test(&case(40, 0.0, s).0, &case(40, 0.0, s).1).unwrap().flagged)
+            .filter(|&s| {
+                test(&case(40, 0.0, s).0, &case(40, 0.0, s).1)
+                    .unwrap()
+                    .flagged
+            })
             .count();
         assert!(quiet <= 1, "{quiet} of 20 noise-only cases flagged");
         for seed in 0..5 {
@@ -747,19 +780,50 @@ mod tests {
 
     /// X by the accumulated all-pairs solution, as the batch's bootstrap re-solves it.
     fn all_pairs(poses: &[PosePair]) -> crate::model::error::Result<Transform> {
-        let motions = crate::model::motion::motion_pairs(poses, crate::model::motion::Pairing::All, Setup::EyeInHand);
+        let motions = crate::model::motion::motion_pairs(
+            poses,
+            crate::model::motion::Pairing::All,
+            Setup::EyeInHand,
+        );
         crate::solve::andreff(&motions).map(|c| c.x)
     }
 
     #[test]
     fn a_half_that_leaves_a_direction_free_does_not_determine_x() {
         use crate::sim::{LowDofConfig, SimConfig, simulate, simulate_low_dof};
-        let spread = simulate(&SimConfig { poses: 24, ..SimConfig::default() }, 7, 0).poses;
+        let spread = simulate(
+            &SimConfig {
+                poses: 24,
+                ..SimConfig::default()
+            },
+            7,
+            0,
+        )
+        .poses;
         let order: Vec<usize> = (0..24).collect();
-        assert!(halves_determine(&spread, Setup::EyeInHand, &order, &all_pairs, 300.0));
+        assert!(halves_determine(
+            &spread,
+            Setup::EyeInHand,
+            &order,
+            &all_pairs,
+            300.0
+        ));
         // A SCARA rotates about one axis only: X's translation along it is free in each half.
-        let scara = simulate_low_dof(&LowDofConfig { poses: 24, ..LowDofConfig::default() }, 7, 0);
-        assert!(!halves_determine(&scara.poses, Setup::EyeInHand, &order, &all_pairs, 0.3));
+        let scara = simulate_low_dof(
+            &LowDofConfig {
+                poses: 24,
+                ..LowDofConfig::default()
+            },
+            7,
+            0,
+        );
+        assert!(!halves_determine(
+            &scara.poses,
+            Setup::EyeInHand,
+            &order,
+            &all_pairs,
+            0.3
+        ));
     }
 
     #[test]
@@ -767,7 +831,11 @@ mod tests {
         for seed in 0..5 {
             let (r, c) = case(40, 2.0, seed);
             let with_still = Configurations {
-                values: c.values.chunks(2).flat_map(|q| [q[0], 0.04, q[1]]).collect(),
+                values: c
+                    .values
+                    .chunks(2)
+                    .flat_map(|q| [q[0], 0.04, q[1]])
+                    .collect(),
                 dim: 3,
                 kind: "joints",
             };

@@ -22,10 +22,10 @@ use statrs::distribution::{ContinuousCDF, Normal, StudentsT};
 use crate::check::outliers::{PoseResiduals, translation_scale};
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Direction, Part, Verdict};
-use crate::model::warning::Warning;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, log_so3};
 use crate::model::station::Stations;
+use crate::model::warning::Warning;
 use crate::solve::residual::PoseResidual;
 
 /// Default number of bootstrap replicates: the one-sigma is known to about ±1/√(2·40) ≈ 11%.
@@ -241,13 +241,20 @@ pub fn bootstrap(
     let stations = stations_of(poses);
     let block = block_length(&per_station(&stations, &residuals.residuals));
     let groups: Vec<usize> = stations.of.iter().map(|&s| s / block).collect();
-    resample(poses, setup, x, solve, (replicates, scene), (&residuals, &groups))
+    resample(
+        poses,
+        setup,
+        x,
+        solve,
+        (replicates, scene),
+        (&residuals, &groups),
+    )
 }
 
 /// The bootstrap of [`bootstrap`] with the signs shared by regions of the workspace instead of
 /// runs of consecutive poses: `order` is a neighbour order of the poses' configurations
 /// ([`crate::check::systematic::neighbour_order`]); the residuals along it are cut into blocks
-/// as long as their correlation along it ([`block_length`]), each block a region of the workspace
+/// as long as their correlation along it (`block_length`), each block a region of the workspace
 /// whose poses share one sign.
 ///
 /// An error that follows the configuration is alike within a region and adds up there, as it
@@ -273,7 +280,14 @@ pub fn bootstrap_by_region(
         rank_of[s] = rank;
     }
     let groups: Vec<usize> = stations.of.iter().map(|&s| rank_of[s] / block).collect();
-    resample(poses, setup, x, solve, (replicates, scene), (&residuals, &groups))
+    resample(
+        poses,
+        setup,
+        x,
+        solve,
+        (replicates, scene),
+        (&residuals, &groups),
+    )
 }
 
 /// The stations of `poses` ([`Stations`]): robot poses within [`crate::model::station::SAME_STATION`]

@@ -5,7 +5,7 @@
 use crate::check::outliers::{median, working_distance};
 use crate::model::error::{Error, Result};
 use crate::model::motion::PosePair;
-use crate::model::prior::{Prior, LengthUnit};
+use crate::model::prior::{LengthUnit, Prior};
 
 /// A prior larger than this many times the poses' size (the larger of the median robot and camera
 /// translation) is in another length unit: a millimetre prior on a recording in metres is 1000

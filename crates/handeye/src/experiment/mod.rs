@@ -184,12 +184,8 @@ pub fn run_experiment(
     })
 }
 
-// The online methods a report names (as strings); the enum is crate-internal, public with
-// `internals` for this crate's tests.
-#[cfg(feature = "internals")]
+// The online methods a report names (as strings).
 pub use methods::OnlineMethod;
-#[cfg(not(feature = "internals"))]
-use methods::OnlineMethod;
 
 mod methods {
     use serde::{Deserialize, Serialize};

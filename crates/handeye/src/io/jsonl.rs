@@ -157,7 +157,6 @@ fn fast_record(text: &str, line: usize, projections: &mut Projections) -> Option
 /// numeric `stamp` in seconds. The pair is returned in our directions (Q = `base_from_gripper`,
 /// `camera_from_target`), inverting what the file gives in the other direction. Other keys are
 /// ignored; a key repeated in one object is refused (a JSON parser keeps only one of the two).
-#[cfg(feature = "internals")]
 pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedPosePair> {
     let mut projections = Projections::default();
     match fast_record(text, line, &mut projections) {

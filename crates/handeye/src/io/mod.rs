@@ -6,6 +6,7 @@
 //! (`base_from_gripper`, `camera_from_target`) whichever direction the file gives.
 
 mod csv_pairs;
+mod format;
 mod frames;
 mod intrinsics;
 mod json_text;
@@ -19,12 +20,10 @@ mod recording;
 #[cfg(feature = "rosbag")]
 pub mod rosbag;
 mod saved;
+mod series;
 mod stamped;
 mod stream;
-#[cfg(feature = "internals")]
 pub mod sync;
-#[cfg(not(feature = "internals"))]
-mod sync;
 mod transform;
 mod truth;
 mod yaml_tree;
@@ -35,52 +34,38 @@ use std::path::Path;
 
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Written, WrittenAs};
-use crate::model::motion::{PosePair, Setup};
-use crate::model::pose::ReadTransform;
+use crate::model::motion::PosePair;
 use crate::model::rotation::Rotations;
 use lines::{Line, Lines};
 
-// What the faces use: one entry for every input (`Recording`: a pose file, two streams, a ROS 2
-// recording; `FrameRecording` for the pixels of the same sources), one reader for every pose-file format (`read_pose_file`, `open_poses`,
-// `PoseReader`) for streaming, the truth files, and `rosbag`'s `is_bag` and `inspect_bag`. The
-// two-stream pairing (`sync`) and the recordings' pose pairs are Recording's, crate-internal;
-// public with `internals` for this crate's tests.
-#[cfg(feature = "internals")]
+// One entry for every input (`Recording`: a pose file, two streams, a ROS 2 recording;
+// `FrameRecording` for the pixels of the same sources), one reader for every pose-file format
+// (`read_pose_file`, `open_poses`, `PoseReader`) for streaming, the truth files, and `rosbag`'s
+// `is_bag` and `inspect_bag`; the two-stream pairing (`sync`).
 pub use frames::FrameSeries;
-#[cfg(not(feature = "internals"))]
-pub(crate) use frames::FrameSeries;
 pub(crate) use frames::frame_records;
-#[cfg(feature = "internals")]
 pub use frames::read_frames;
-#[cfg(not(feature = "internals"))]
-pub(crate) use frames::read_frames;
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
 #[cfg(feature = "rosbag")]
 pub(crate) use recording::MountFrame;
 pub use recording::{CameraMount, FrameRecording, Note, Recording, RecordingOptions, Source};
 pub use stream::PoseStream;
-// The pose-file readers behind `PoseStream` and `Recording`: public with `internals` only.
-pub(crate) use pose_reader::{Conventions, at_least_two_pairs, open_poses_as, read_records};
-#[cfg(not(feature = "internals"))]
-pub(crate) use pose_reader::{
-    DeclaredSetup, DegreeAngles, PoseInput, PoseReader, PoseSeries, Preamble, Projections,
-    open_pose_stream, open_poses,
-};
-#[cfg(feature = "internals")]
+// The pose-file readers behind `PoseStream` and `Recording`.
+pub use format::Format;
 pub use pose_reader::{
-    DeclaredSetup, DegreeAngles, PoseInput, PoseReader, PoseSeries, Preamble, Projections,
-    open_pose_stream, open_poses, read_pose_file,
+    DegreeAngles, PoseInput, PoseReader, Preamble, open_pose_stream, open_poses, read_pose_file,
 };
+pub(crate) use pose_reader::{at_least_two_pairs, open_poses_as, read_records};
+pub use series::{DeclaredSetup, PoseSeries, Projections};
 pub use sync::TimeOffset;
+pub(crate) use transform::Conventions;
 pub use truth::Truth;
-// Each format's own reader, the io helpers, and the parsers of text behind the file readers
-// (`parse_intrinsics`, `parse_saved_x`, `frames_of`, the joints of a pose file): crate-internal;
-// public with `internals` for this crate's tests.
+// The parsers of text behind the file readers (`parse_intrinsics`, `parse_saved_x`, `frames_of`,
+// the joints of a pose file); each format's own reader and the io helpers are crate-internal.
 use csv_pairs::CsvPairs;
 use jsonl::JsonlPairs;
 pub(crate) use transform::{FieldProblem, read_transform_json};
-#[cfg(feature = "internals")]
 pub use {
     frames::frames_of,
     intrinsics::parse_intrinsics,
@@ -91,13 +76,6 @@ pub use {
     stamped::{read_camera_stream, read_stamped_poses},
     transform::transform_from_json,
     truth::{parse_truth, write_truth},
-};
-#[cfg(not(feature = "internals"))]
-use {
-    jsonl::read_joints,
-    lines::MAX_LINE,
-    stamped::{read_camera_stream, read_stamped_poses},
-    transform::transform_from_json,
 };
 
 /// The names a pose may have in a file, and whether the file's transform is the inverse of ours.
@@ -115,39 +93,6 @@ pub(crate) fn written_as(inverted: bool) -> WrittenAs {
         WrittenAs::Named
     }
 }
-
-/// Pose-pair file formats.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Format {
-    /// By extension (`.jsonl`/`.json`, `.csv`), else by content (`{` first: JSON Lines).
-    #[default]
-    Auto,
-    /// One JSON object per line.
-    Jsonl,
-    /// CSV with a header naming `<frame>_x … <frame>_qw` columns.
-    Csv,
-    /// OpenCV-YAML pairs `T1_i` / `T2_i` (camodocal).
-    OpencvYaml,
-    /// moveit_calibration's sample JSON (a list of matrix pairs).
-    Moveit,
-    /// A directory of ViSP `pose_fPe_*.yaml` / `pose_cPo_*.yaml` files.
-    Visp,
-    /// moveit_calibration's "Save samples" YAML (`effector_wrt_world` / `object_wrt_sensor`).
-    MoveitYaml,
-    /// easy_handeye2's saved samples (`NAME.samples`: `parameters` and `samples`).
-    EasyHandeye,
-}
-
-crate::named_enum!(Format, "format", "format" {
-    Auto => "auto",
-    Jsonl => "jsonl" | "json",
-    Csv => "csv",
-    OpencvYaml => "opencv-yaml" | "yaml",
-    Moveit => "moveit",
-    Visp => "visp",
-    MoveitYaml => "moveit-yaml",
-    EasyHandeye => "easy-handeye",
-});
 
 /// One pose pair read from a file, with its place.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -408,28 +353,10 @@ pub(crate) fn sniff_format<R: BufRead>(mut input: R, source: &str) -> Result<(Fo
     }
     let text = String::from_utf8_lossy(&head);
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
-    let format = if trimmed.starts_with("%YAML") || text.contains("!!opencv-matrix") {
-        Format::OpencvYaml
-    } else if trimmed.strip_prefix('[').is_some_and(|rest| {
-        matches!(
-            rest.trim_start().chars().next(),
-            None | Some('[' | '{' | ']')
-        )
-    }) {
-        // A JSON list (not a log line such as `[INFO] driver started`).
-        Format::Moveit
-    } else if text.contains("effector_wrt_world:") || text.contains("object_wrt_sensor:") {
-        Format::MoveitYaml
-    } else if text
-        .lines()
-        .map(|l| l.trim_start_matches('\u{feff}').trim_end())
-        .find(|l| !l.trim_start().is_empty() && !l.trim_start().starts_with('#') && *l != "---")
-        .is_some_and(|l| l == "parameters:" || l == "samples:")
-    {
-        Format::EasyHandeye
-    } else {
-        Format::Auto
-    };
+    let format = Format::sniffed(&format::Head {
+        text: &text,
+        trimmed,
+    });
     Ok((format, Cursor::new(head).chain(input)))
 }
 

@@ -2,142 +2,8 @@
 //! ([`PoseReader`]), the formats read whole, and what reading them noticed. Crate-internal: the
 //! faces read through [`super::PoseStream`] and [`super::Recording`].
 
+use super::format::Reading;
 use super::*;
-
-/// A whole pose file.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PoseSeries {
-    /// The pose pairs in file order.
-    pub pairs: Vec<PosePair>,
-    /// Their stamps, where the file gives them.
-    pub stamps: Vec<Option<f64>>,
-    /// Their line numbers.
-    pub lines: Vec<usize>,
-    /// The rotation matrices that were orthonormal only to the precision they were printed with
-    /// and were projected onto the nearest rotation.
-    pub projections: Projections,
-    /// The directions in which the file wrote its poses (for `Options::written`).
-    pub written: Written,
-    /// The setup the file declares, if it declares one (easy_handeye2's samples do).
-    pub setup: Option<DeclaredSetup>,
-}
-
-/// The setup a pose file declares, and the line where it does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct DeclaredSetup {
-    /// The setup.
-    pub setup: Setup,
-    /// Its line, from 1.
-    pub line: usize,
-}
-
-/// A setup as a sample file's reader says it.
-fn setup_words(setup: Setup) -> &'static str {
-    match setup {
-        Setup::EyeInHand => "eye-in-hand (a camera on the gripper)",
-        Setup::EyeToHand => "eye-to-hand (a fixed camera)",
-    }
-}
-
-impl PoseSeries {
-    /// Refuses to read the file `source` for `setup` when it declares the other one: its robot
-    /// poses were written for that one, and an X solved the other way would be meaningless.
-    pub fn check_setup(&self, setup: Setup, source: &str) -> Result<()> {
-        match self.setup {
-            Some(declared) if declared.setup != setup => Err(parse_error(
-                source,
-                declared.line,
-                "parameters.calibration_type",
-                format!(
-                    "the file declares {}, and this run asks for {}: calibrate it with the setup it declares",
-                    setup_words(declared.setup),
-                    setup_words(setup)
-                ),
-            )),
-            _ => Ok(()),
-        }
-    }
-}
-
-/// The rotation matrices of one input that were orthonormal only to the precision they were
-/// printed with (between `KEEP_AS_GIVEN_TOL` and
-/// `ORTHONORMAL_TOL`) and were projected onto the nearest rotation.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Projections {
-    /// How many matrices were projected.
-    pub count: usize,
-    /// The largest deviation `max |RᵀR − I|` among them.
-    pub largest_deviation: f64,
-}
-
-impl Projections {
-    /// Counts `read` when its rotation was projected.
-    pub(crate) fn add(&mut self, read: &ReadTransform) {
-        if read.projected() {
-            self.count += 1;
-            self.largest_deviation = self.largest_deviation.max(read.deviation);
-        }
-    }
-
-    /// The note to show for an input, or `None` when nothing was projected.
-    ///
-    /// # Example
-    /// ```
-    /// let p = handeye::io::Projections { count: 40, largest_deviation: 3.2e-6 };
-    /// assert_eq!(
-    ///     p.note().unwrap(),
-    ///     "40 rotation matrices orthonormal only to 3e-6 (rounded when printed): projected onto the nearest rotation"
-    /// );
-    /// ```
-    pub fn note(&self) -> Option<String> {
-        (self.count > 0).then(|| {
-            format!(
-                "{} rotation {} orthonormal only to {:.0e} (rounded when printed): projected onto the nearest rotation",
-                self.count,
-                if self.count == 1 { "matrix" } else { "matrices" },
-                self.largest_deviation
-            )
-        })
-    }
-}
-
-/// How a reader finds and reads each side's rotations: `named` finds them (the CSV columns, the
-/// JSON field allowed) and reads them, unless `read_as` names for that side another convention
-/// of as many numbers: the numbers found are then read as that one. The check of a named
-/// convention ([`Recording`]'s) tries the others on the same numbers so.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub(crate) struct Conventions {
-    /// The conventions named for the input.
-    pub named: Rotations,
-    /// The conventions to read the numbers as instead, per side.
-    pub read_as: Rotations,
-}
-
-impl Conventions {
-    /// The input's named conventions, read as named.
-    pub fn named(named: Rotations) -> Self {
-        Self {
-            named,
-            read_as: Rotations::default(),
-        }
-    }
-
-    /// The convention to read a side's numbers as, found in the convention `found` (the robot's
-    /// side when `robot`).
-    pub fn read_as(
-        self,
-        robot: bool,
-        found: crate::model::rotation::RotationConvention,
-    ) -> crate::model::rotation::RotationConvention {
-        let side = if robot {
-            self.read_as.robot
-        } else {
-            self.read_as.camera
-        };
-        side.filter(|c| c.components().len() == found.components().len())
-            .unwrap_or(found)
-    }
-}
 
 /// The largest angle (in size) each side of an input gave in a convention in degrees (a vendor's
 /// Euler angles, `rpy-deg`), where one did: every angle within a turn's 2π of a whole recording
@@ -273,7 +139,6 @@ fn kind_of(line: &Line<'_>) -> Kind {
 }
 
 impl<R: BufRead> PoseReader<R> {
-    #[cfg(feature = "internals")]
     /// A reader of `input`, named `source` in messages. With [`Format::Auto`] the format is taken
     /// from the extension of `source`, else from the first line that looks like a record: `{` for
     /// JSON Lines, a CSV header (names separated by commas) for CSV. A UTF-8 byte order mark and
@@ -299,7 +164,6 @@ impl<R: BufRead> PoseReader<R> {
         Self::with_rotations(input, source, format, Rotations::default())
     }
 
-    #[cfg(feature = "internals")]
     /// As [`PoseReader::new`], each side's rotations read in the convention `rotations` names
     /// (CSV columns of that convention; in JSON Lines a rotation field of another convention is
     /// refused). Unnamed sides are read as their columns or fields say (`_qx … _qw` in CSV).
@@ -319,17 +183,9 @@ impl<R: BufRead> PoseReader<R> {
         format: Format,
         conventions: Conventions,
     ) -> Result<Self> {
-        let lower = source.to_ascii_lowercase();
         let format = match format {
-            Format::Auto
-                if lower.ends_with(".jsonl")
-                    || lower.ends_with(".json")
-                    || lower.ends_with(".ndjson") =>
-            {
-                Format::Jsonl
-            }
-            Format::Auto if lower.ends_with(".csv") => Format::Csv,
-            Format::Auto | Format::Jsonl | Format::Csv => format,
+            Format::Auto => Format::by_extension(source),
+            f if f.is_streamed() => f,
             other => {
                 return Err(Error::InvalidParameter {
                     name: "format",
@@ -493,19 +349,11 @@ pub(crate) fn open_poses_as(
     conventions: Conventions,
 ) -> Result<PoseInput<BufReader<File>>> {
     let source = path.display().to_string();
-    if format == Format::Visp || (format == Format::Auto && path.is_dir()) {
-        no_rotations(
-            conventions.named,
-            &source,
-            "a directory of ViSP pose files (θu rotation vectors)",
-        )?;
-        return peer::read_visp_dir(path).map(PoseInput::Whole);
+    if let Some((read, what)) = format.directory(path) {
+        no_rotations(conventions.named, &source, what)?;
+        return read(path).map(PoseInput::Whole);
     }
-    let whole = matches!(
-        format,
-        Format::OpencvYaml | Format::Moveit | Format::MoveitYaml | Format::EasyHandeye
-    );
-    if whole {
+    if matches!(format.reading(), Reading::Whole(_)) {
         let meta = std::fs::metadata(path).map_err(|e| Error::Io {
             file: source.clone(),
             source: e,
@@ -553,24 +401,19 @@ fn open_pose_stream_as<R: BufRead>(
         Format::Auto => sniffed,
         f => f,
     };
-    let text = |input: Sniffed<R>| read_whole(input, source);
-    let own = match format {
-        Format::OpencvYaml => Some("an OpenCV YAML file of matrices"),
-        Format::Moveit | Format::MoveitYaml => Some("a moveit_calibration sample file of matrices"),
-        Format::EasyHandeye => Some("an easy_handeye2 sample file (x, y, z, w quaternions)"),
-        _ => None,
-    };
-    if let Some(what) = own {
-        no_rotations(rotations, source, what)?;
-    }
-    Ok(match format {
-        Format::OpencvYaml => PoseInput::Whole(peer::read_opencv_yaml(&text(input)?, source)?),
-        Format::Moveit => PoseInput::Whole(peer::read_moveit_json(&text(input)?, source)?),
-        Format::MoveitYaml => PoseInput::Whole(peer::read_moveit_yaml(&text(input)?, source)?),
-        Format::EasyHandeye => {
-            PoseInput::Whole(peer::read_easy_handeye_samples(&text(input)?, source)?)
+    Ok(match format.reading() {
+        Reading::Whole(read) => {
+            if let Some(what) = format.row().and_then(|r| r.own_rotations) {
+                no_rotations(rotations, source, what)?;
+            }
+            PoseInput::Whole(read(&read_whole(input, source)?, source)?)
         }
-        f => PoseInput::Stream(PoseReader::with_conventions(input, source, f, conventions)?),
+        _ => PoseInput::Stream(PoseReader::with_conventions(
+            input,
+            source,
+            format,
+            conventions,
+        )?),
     })
 }
 
@@ -612,7 +455,6 @@ pub(crate) fn at_least_two_pairs(pairs: usize, source: String) -> Result<()> {
     ))
 }
 
-#[cfg(feature = "internals")]
 /// Reads a whole pose-pair file; errors on the first bad record, or with fewer than 2 poses.
 pub fn read_pose_file(path: &Path, format: Format) -> Result<PoseSeries> {
     let source = path.display().to_string();

@@ -3,13 +3,12 @@
 use nalgebra::{Matrix4, Vector3};
 use serde_json::{Map, Value};
 
-use crate::io::Conventions;
-use crate::model::error::TransformProblem;
+use crate::model::pose::TransformProblem;
 use crate::model::pose::{
     ReadTransform, Transform, check_translation, read_matrix4, transform_from_parts,
     transform_from_xyz_quat_xyzw,
 };
-use crate::model::rotation::RotationConvention;
+use crate::model::rotation::{RotationConvention, Rotations};
 
 /// Largest entry difference accepted between `matrix` and `translation`/`quaternion_xyzw` when both
 /// are given.
@@ -56,7 +55,7 @@ impl From<TransformProblem> for FieldProblem {
 /// numbers row by row), or an object with `matrix` and/or `translation` and one rotation field
 /// (`quaternion_xyzw`, `rvec` in radians, or another [`RotationConvention::json_field`]:
 /// `quaternion_wxyz`, `kuka_abc_deg`, …) (both forms must then agree within
-/// [`CONSISTENCY_TOL`], or within the matrix's deviation from orthonormality when it was printed
+/// `CONSISTENCY_TOL`, or within the matrix's deviation from orthonormality when it was printed
 /// more coarsely).
 pub fn transform_from_json(v: &Value) -> Result<Transform, FieldProblem> {
     read_transform_json(v).map(|r| r.transform)
@@ -311,6 +310,44 @@ fn number(v: &Value, field: &str) -> Result<f64, FieldProblem> {
         Ok(x)
     } else {
         Err(FieldProblem::new(field, "not a finite number"))
+    }
+}
+
+/// How a reader finds and reads each side's rotations: `named` finds them (the CSV columns, the
+/// JSON field allowed) and reads them, unless `read_as` names for that side another convention
+/// of as many numbers: the numbers found are then read as that one. The check of a named
+/// convention ([`Recording`]'s) tries the others on the same numbers so.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct Conventions {
+    /// The conventions named for the input.
+    pub named: Rotations,
+    /// The conventions to read the numbers as instead, per side.
+    pub read_as: Rotations,
+}
+
+impl Conventions {
+    /// The input's named conventions, read as named.
+    pub fn named(named: Rotations) -> Self {
+        Self {
+            named,
+            read_as: Rotations::default(),
+        }
+    }
+
+    /// The convention to read a side's numbers as, found in the convention `found` (the robot's
+    /// side when `robot`).
+    pub fn read_as(
+        self,
+        robot: bool,
+        found: crate::model::rotation::RotationConvention,
+    ) -> crate::model::rotation::RotationConvention {
+        let side = if robot {
+            self.read_as.robot
+        } else {
+            self.read_as.camera
+        };
+        side.filter(|c| c.components().len() == found.components().len())
+            .unwrap_or(found)
     }
 }
 

@@ -123,7 +123,6 @@ impl Truth {
 }
 
 /// Writes a truth file (pretty JSON, see [`Truth::json`]).
-#[cfg(any(test, feature = "internals"))]
 pub fn write_truth(path: &Path, truth: &Truth) -> Result<()> {
     let io_error = |e: std::io::Error| crate::model::error::Error::Io {
         file: path.display().to_string(),

@@ -6,67 +6,7 @@ use crate::model::findings::Reading;
 use crate::model::motion::Setup;
 use crate::model::warning::{Remedy, Warning};
 
-/// What is wrong with a transform read from data.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[non_exhaustive]
-pub enum TransformProblem {
-    /// A NaN or infinite entry.
-    NotFinite,
-    /// `RᵀR` differs from the identity by more than
-    /// `ORTHONORMAL_TOL` (the largest entry deviation is given).
-    NotOrthonormal {
-        /// Largest absolute entry of `RᵀR − I`.
-        deviation: f64,
-    },
-    /// The rotation part has a negative determinant (a reflection).
-    Reflection,
-    /// The last row of a homogeneous matrix is not `0 0 0 1`.
-    BadLastRow,
-    /// A quaternion whose norm is not within 1e-3 of 1.
-    QuaternionNorm {
-        /// The norm found.
-        norm: f64,
-    },
-    /// Both a matrix and translation + quaternion were given and they differ by more than 1e-6 and
-    /// more than the matrix's deviation from orthonormality (the precision it was printed with).
-    Inconsistent {
-        /// Largest entry difference between the two.
-        difference: f64,
-    },
-    /// A translation component beyond `MAX_TRANSLATION` in size:
-    /// not a length in any unit (a corrupt field), and one whose products could overflow.
-    ImplausibleTranslation {
-        /// The value found.
-        value: f64,
-    },
-}
-
-impl fmt::Display for TransformProblem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::NotFinite => write!(f, "contains a NaN or infinite value"),
-            Self::NotOrthonormal { deviation } => write!(
-                f,
-                "rotation is not orthonormal (|RᵀR − I| reaches {deviation:.3e}, more than {:e}: beyond rounding when printed)",
-                crate::model::pose::ORTHONORMAL_TOL
-            ),
-            Self::Reflection => write!(f, "rotation has det < 0 (a reflection, not a rotation)"),
-            Self::BadLastRow => write!(f, "last row of the 4×4 matrix is not [0, 0, 0, 1]"),
-            Self::QuaternionNorm { norm } => {
-                write!(f, "quaternion norm is {norm:.6}, not within 1e-3 of 1")
-            }
-            Self::Inconsistent { difference } => write!(
-                f,
-                "`matrix` and `translation`/`quaternion_xyzw` disagree (by {difference:.3e}, more than 1e-6 and more than the matrix's own rounding)"
-            ),
-            Self::ImplausibleTranslation { value } => write!(
-                f,
-                "translation {value:e} is not a plausible length in any unit (more than {:e} in size)",
-                crate::model::pose::MAX_TRANSLATION
-            ),
-        }
-    }
-}
+pub use crate::model::pose::TransformProblem;
 
 /// Why a set of motions cannot determine X.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -11,7 +11,7 @@
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::model::error::TransformProblem;
+use crate::model::pose::TransformProblem;
 use crate::model::pose::{Transform, transform_from_matrix4, transform_from_parts};
 
 /// The Denavit–Hartenberg convention of a table.

@@ -11,8 +11,6 @@ use nalgebra::{
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::error::TransformProblem;
-
 /// A rigid transform `a_from_b` (rotation then translation): `p_a = R p_b + t`.
 ///
 /// The rotation is stored as a matrix: the solvers work on matrices, and inverse and products are
@@ -51,6 +49,68 @@ pub fn transform_from_parts(rotation: &Matrix3<f64>, translation: &Vector3<f64>)
 /// The rotation matrix of a transform.
 pub fn rotation_matrix(a_from_b: &Transform) -> Matrix3<f64> {
     *a_from_b.rotation.matrix()
+}
+
+/// What is wrong with a transform read from data.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum TransformProblem {
+    /// A NaN or infinite entry.
+    NotFinite,
+    /// `RᵀR` differs from the identity by more than
+    /// `ORTHONORMAL_TOL` (the largest entry deviation is given).
+    NotOrthonormal {
+        /// Largest absolute entry of `RᵀR − I`.
+        deviation: f64,
+    },
+    /// The rotation part has a negative determinant (a reflection).
+    Reflection,
+    /// The last row of a homogeneous matrix is not `0 0 0 1`.
+    BadLastRow,
+    /// A quaternion whose norm is not within 1e-3 of 1.
+    QuaternionNorm {
+        /// The norm found.
+        norm: f64,
+    },
+    /// Both a matrix and translation + quaternion were given and they differ by more than 1e-6 and
+    /// more than the matrix's deviation from orthonormality (the precision it was printed with).
+    Inconsistent {
+        /// Largest entry difference between the two.
+        difference: f64,
+    },
+    /// A translation component beyond `MAX_TRANSLATION` in size:
+    /// not a length in any unit (a corrupt field), and one whose products could overflow.
+    ImplausibleTranslation {
+        /// The value found.
+        value: f64,
+    },
+}
+
+impl std::fmt::Display for TransformProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NotFinite => write!(f, "contains a NaN or infinite value"),
+            Self::NotOrthonormal { deviation } => write!(
+                f,
+                "rotation is not orthonormal (|RᵀR − I| reaches {deviation:.3e}, more than {:e}: beyond rounding when printed)",
+                ORTHONORMAL_TOL
+            ),
+            Self::Reflection => write!(f, "rotation has det < 0 (a reflection, not a rotation)"),
+            Self::BadLastRow => write!(f, "last row of the 4×4 matrix is not [0, 0, 0, 1]"),
+            Self::QuaternionNorm { norm } => {
+                write!(f, "quaternion norm is {norm:.6}, not within 1e-3 of 1")
+            }
+            Self::Inconsistent { difference } => write!(
+                f,
+                "`matrix` and `translation`/`quaternion_xyzw` disagree (by {difference:.3e}, more than 1e-6 and more than the matrix's own rounding)"
+            ),
+            Self::ImplausibleTranslation { value } => write!(
+                f,
+                "translation {value:e} is not a plausible length in any unit (more than {:e} in size)",
+                MAX_TRANSLATION
+            ),
+        }
+    }
 }
 
 /// Checks that `m` is a rotation: orthonormal within [`ORTHONORMAL_TOL`], det > 0, all finite;

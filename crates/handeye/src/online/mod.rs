@@ -1,6 +1,6 @@
 //! The online calibrator: pose pairs in, one at a time; calibration events out as they happen.
 //!
-//! [`OnlineCalibrator::push`] offers each pose pair to the selection policy ([`crate::select`]);
+//! [`OnlineCalibrator::push`] offers each pose pair to the selection policy ([`select`]);
 //! when a pair of motions is selected it solves X with Andreff's method on those two motions,
 //! measures rmsR and rmsT with the configured [`ErrorSource`], tells the adaptive policy, and
 //! returns an [`Event`]. With `optimal` set it also refines X over the last five selected motions
@@ -30,8 +30,8 @@ use crate::check::quality::{errors_against_truth, residual_rms};
 use crate::check::stream::{StreamReading, StreamReadings};
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
-use crate::model::motion::{MotionPair, PosePair, Setup};
 use crate::model::findings::Written;
+use crate::model::motion::{MotionPair, PosePair, Setup};
 use crate::model::pose::Transform;
 use crate::model::pose::TransformJson;
 use crate::online::select::{AdaptiveParams, Selected, Selection, Selector, Thresholds};
@@ -253,7 +253,10 @@ impl Event {
 }
 
 impl Serialize for Event {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+    fn serialize<S: serde::Serializer>(
+        &self,
+        serializer: S,
+    ) -> std::result::Result<S::Ok, S::Error> {
         EventLine {
             calibration: self.calibration,
             poses: self.poses,
@@ -587,7 +590,11 @@ impl OnlineCalibrator {
         if self.tracker.is_some() || self.pixels.is_some() {
             return None;
         }
-        self.quiet(if self.calibrations == 0 { 1 } else { QUIET_POSES })
+        self.quiet(if self.calibrations == 0 {
+            1
+        } else {
+            QUIET_POSES
+        })
     }
 
     /// Why the paper's selection has made no calibration for a while, in words: `None` when a
@@ -804,7 +811,10 @@ impl OnlineCalibrator {
     /// (`track::Tracker::with_robot_model`; push the poses with their joint angles). Refused with the
     /// paper's estimator, which has no systematic-error test, and on the pixels. Before the first
     /// pose.
-    pub fn with_robot_model(mut self, model: Option<crate::model::kinematics::Kinematics>) -> Result<Self> {
+    pub fn with_robot_model(
+        mut self,
+        model: Option<crate::model::kinematics::Kinematics>,
+    ) -> Result<Self> {
         let Some(model) = model else {
             return Ok(self);
         };

@@ -4,12 +4,9 @@
 //! Lengths are millimetres. Series `s` of a run with seed `S` draws from its own generator seeded
 //! from `(S, s)`, so a run is reproducible and independent of how many threads share it.
 
-// The low-DOF and pixel simulators serve this crate's tests: public with `internals` only.
-#[cfg(feature = "internals")]
+// The low-DOF and pixel simulators.
 mod low_dof;
-#[cfg(feature = "internals")]
 pub mod pixels;
-#[cfg(feature = "internals")]
 pub use low_dof::{LowDofConfig, LowDofSeries, simulate_low_dof};
 
 use nalgebra::{Matrix3, Translation3, Vector3};

@@ -7,7 +7,7 @@ use crate::model::motion::MotionPair;
 use crate::model::pose::{proj_so3, rotation_matrix};
 use crate::solve::least_squares::least_squares_12;
 use crate::solve::motions::MotionSource;
-use crate::solve::residual::Quadratic;
+use crate::solve::quadratic::Quadratic;
 use crate::solve::scale::{Scaled, length_scale, weighting_unit};
 use crate::solve::{Calibration, Method, REFUSE_CONDITIONING, check_motions, finish, singular};
 

@@ -37,7 +37,6 @@ pub const LOW_DOF_MIN_ANGLE_DEG: f64 = 5.0;
 /// rotation noise on a 5° motion moves its axis by ≈0.1°.
 pub const LOW_DOF_SPREAD_DEG: f64 = 2.0;
 
-
 /// The conditioning of the scaled translation system below which θ or t_X⊥ is not determined.
 pub(crate) const REFUSE_SYSTEM: f64 = 1e-10;
 
@@ -174,7 +173,12 @@ pub fn solve_low_dof(
         [e1, e2].map(|e| {
             let ra_minus_i = ra.transpose() * e - e; // (R_A − I)ᵀ e
             (
-                Vector4::new(ra_minus_i.dot(&e1), ra_minus_i.dot(&e2), -e.dot(&u), -e.dot(&ku)),
+                Vector4::new(
+                    ra_minus_i.dot(&e1),
+                    ra_minus_i.dot(&e2),
+                    -e.dot(&u),
+                    -e.dot(&ku),
+                ),
                 -e.dot(&ta),
             )
         })
@@ -252,7 +256,9 @@ pub(crate) fn across(k: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
 /// Smallest over largest eigenvalue of D N D, D = diag(N_ii^−½) (the conditioning whatever the
 /// length unit).
 pub(crate) fn scaled_conditioning(normal: &Matrix4<f64>) -> f64 {
-    let d = normal.diagonal().map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 });
+    let d = normal
+        .diagonal()
+        .map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 });
     let scaled = Matrix4::from_fn(|i, j| normal[(i, j)] * d[i] * d[j]);
     let eigen = scaled.symmetric_eigen().eigenvalues;
     let max = eigen.max();

@@ -11,13 +11,13 @@
 //! **One axis.** When every hand rotation is about one axis, R_Qk k_x = k_y for every k (k_x the
 //! axis in X's parent frame, k_y in Y's). Projected across k_y, P = I − k_y k_yᵀ, the residual loses
 //! t_X's component along k_x (the free one) and t_Y's along k_y. Σ_k ‖P r_k‖² =
-//! Σ_ab P_ab Σ_k r_k[a] r_k[b] needs only the row products Σ_k L_k[a]ᵀ L_k[b] (six 15×15 sums),
-//! Σ_k L_k[a]ᵀ p_k[b] (nine 15-vectors) and Σ_k p_k p_kᵀ, none of which depends on the axis: they
+//! Σ_ab P_ab Σ_k r_k\[a\] r_k\[b\] needs only the row products Σ_k L_k\[a\]ᵀ L_k\[b\] (six 15×15 sums),
+//! Σ_k L_k\[a\]ᵀ p_k\[b\] (nine 15-vectors) and Σ_k p_k p_kᵀ, none of which depends on the axis: they
 //! are accumulated before it is known. Minimising over t_Y is the all-pairs motion form
 //! (Σ_{i<j} ‖r_i − r_j‖² = n Σ_i ‖r_i − r̄‖²), so the solution is [`solve_low_dof`]'s over every
 //! pair of the same poses (equal on exact data; the unit test checks it to 1e-9).
 //!
-//! **Unknowns.** R_X = Rot(k_x, θ) R₀ = c (I − k kᵀ) R₀ + s [k]× R₀ + k kᵀ R₀ (R₀ takes the
+//! **Unknowns.** R_X = Rot(k_x, θ) R₀ = c (I − k kᵀ) R₀ + s \[k\]× R₀ + k kᵀ R₀ (R₀ takes the
 //! camera-frame axis k_c to k_x), t_X = a e₁' + b e₂' + k_x v / k_x,i (e₁, e₂ across k_x, each
 //! moved along k_x to keep the prior's component i at its value v), t_Y = y₁ f₁ + y₂ f₂ (across
 //! k_y): w is affine in z = (a, b, c, s, y₁, y₂). The 6×6 normal equations are solved, (c, s) put
@@ -45,10 +45,12 @@ use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{rotation_matrix, skew, transform_from_parts};
 use crate::model::prior::Component;
-#[cfg(doc)]
-use crate::solve::low_dof::{LOW_DOF_MIN_ANGLE_DEG, LOW_DOF_SPREAD_DEG, common_axis, solve_low_dof};
 use crate::solve::low_dof::{
     CommonAxis, LowDofSolution, REFUSE_SYSTEM, across, align, scaled_conditioning,
+};
+#[cfg(doc)]
+use crate::solve::low_dof::{
+    LOW_DOF_MIN_ANGLE_DEG, LOW_DOF_SPREAD_DEG, common_axis, solve_low_dof,
 };
 
 type Matrix15 = SMatrix<f64, 15, 15>;
@@ -307,10 +309,7 @@ impl LowDofAccumulator {
         if conditioning.is_nan() || conditioning < REFUSE_SYSTEM {
             return Err(ill(conditioning));
         }
-        let first = normal
-            .cholesky()
-            .ok_or(ill(conditioning))?
-            .solve(&rhs);
+        let first = normal.cholesky().ok_or(ill(conditioning))?.solve(&rhs);
         let cs = Vector2::new(first[2], first[3])
             .try_normalize(f64::MIN_POSITIVE)
             .ok_or(ill(conditioning))?;
@@ -402,7 +401,10 @@ mod tests {
 
     #[test]
     fn equals_the_batch_low_dof_solve_over_all_pairs_on_exact_scara_poses() {
-        let x = Transform::new(Vector3::new(0.03, -0.02, 0.12), Vector3::new(0.2, -0.1, 0.7));
+        let x = Transform::new(
+            Vector3::new(0.03, -0.02, 0.12),
+            Vector3::new(0.2, -0.1, 0.7),
+        );
         for setup in [Setup::EyeInHand, Setup::EyeToHand] {
             compare(setup, &x, &Vector3::z(), &SCARA);
         }
@@ -410,10 +412,16 @@ mod tests {
 
     #[test]
     fn refuses_poses_that_do_not_turn() {
-        let x = Transform::new(Vector3::new(0.03, -0.02, 0.12), Vector3::new(0.2, -0.1, 0.7));
+        let x = Transform::new(
+            Vector3::new(0.03, -0.02, 0.12),
+            Vector3::new(0.2, -0.1, 0.7),
+        );
         let y = Transform::identity();
         let still: Vec<(f64, [f64; 3])> = SCARA.iter().map(|(_, t)| (0.3, *t)).collect();
-        let sums = LowDofAccumulator::of(&poses(Setup::EyeInHand, &x, &y, &Vector3::z(), &still), Setup::EyeInHand);
+        let sums = LowDofAccumulator::of(
+            &poses(Setup::EyeInHand, &x, &y, &Vector3::z(), &still),
+            Setup::EyeInHand,
+        );
         assert!(sums.axis().is_none_or(|a| !a.is_low_dof()));
         assert!(sums.solve((Component::Tz, 0.12)).is_err());
     }

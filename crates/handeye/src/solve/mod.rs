@@ -17,11 +17,13 @@ pub mod low_dof;
 pub mod low_dof_accumulate;
 pub mod motions;
 mod park;
+mod quadratic;
 mod quaternion;
 mod refine;
 pub mod reprojection;
 pub mod residual;
 pub(crate) mod robot_world;
+pub mod robot_world_accumulate;
 mod rotation_system;
 mod scale;
 mod symmetric;
@@ -36,25 +38,21 @@ pub use daniilidis::daniilidis;
 pub use horaud::horaud;
 pub use lm::{RefineOptions, Termination};
 pub use park::park;
-pub use refine::{refine, refine_from, refine_unchecked};
-#[cfg(feature = "internals")]
 pub use refine::{Refinement, covariance_at};
+pub use refine::{refine, refine_from, refine_unchecked};
 pub use residual::PoseResidual;
 pub use robot_world::{
     JointCovariance, RobotWorld, RobotWorldMethod, joint_covariance, joint_covariance_given,
-    pose_residuals, robot_world, target_given,
-    target_frame,
+    pose_residuals, robot_world, target_frame, target_given,
 };
-#[cfg(feature = "internals")]
 pub use robot_world::{
     RobotWorldRefinement, li, refine_robot_world, refine_robot_world_from, shah,
 };
 pub(crate) use rotation_system::{RotationSolution, RotationSystem};
 #[cfg(test)]
 pub(crate) use scale::Scaled;
-pub use tsai::{TsaiOptions, tsai};
-#[cfg(feature = "internals")]
 pub use tsai::tsai_with;
+pub use tsai::{TsaiOptions, tsai};
 
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::pose::{Transform, rotation_matrix};
@@ -129,6 +127,54 @@ impl Method {
         }
         all
     };
+
+    /// What the method can do beyond solving motions: its row of the capability table, the one
+    /// place a job asks (how its bootstrap replicates are made, whether it solves a low-DOF
+    /// recording, whether it solves on the pixels). A new method is a variant, its solver file,
+    /// and a row here.
+    pub const fn capabilities(self) -> Capabilities {
+        use Replicates::{AndreffSums, Own, SumsOrBriefRefine};
+        let (replicates, low_dof, pixels) = match self {
+            Method::Andreff => (AndreffSums, true, false),
+            Method::AndreffJoint => (Own, false, false),
+            Method::Tsai | Method::Park | Method::Horaud => (AndreffSums, false, false),
+            Method::Daniilidis => (Own, false, false),
+            Method::Refine => (SumsOrBriefRefine, true, false),
+            Method::Reprojection => (Own, false, true),
+        };
+        Capabilities {
+            replicates,
+            low_dof,
+            pixels,
+        }
+    }
+}
+
+/// A method's row of the capability table ([`Method::capabilities`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Capabilities {
+    /// How its bootstrap replicates are solved.
+    pub replicates: Replicates,
+    /// Whether it solves a recording whose motions all rotate about one axis (a low-DOF robot,
+    /// with a prior on the free component).
+    pub low_dof: bool,
+    /// Whether it solves on the pixels of the detections rather than on motions.
+    pub pixels: bool,
+}
+
+/// How a method's bootstrap replicates are solved (the batch job's uncertainty).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Replicates {
+    /// Over every pair, by Andreff's O(n) accumulated sums: the method's errors over all pairs
+    /// are Andreff's size (measured, docs/DECISIONS.md), and re-solving n² motions per replicate
+    /// was most of a `calibrate`; over consecutive pairs, by the method itself.
+    AndreffSums,
+    /// As [`Replicates::AndreffSums`] over every pair; over consecutive pairs, a few refinement
+    /// steps from the replicate's own Andreff start.
+    SumsOrBriefRefine,
+    /// By the method itself: its errors are larger than Andreff's (andreff-joint, daniilidis),
+    /// or it has its own uncertainty (the pixels).
+    Own,
 }
 
 /// The result of a batch solve.

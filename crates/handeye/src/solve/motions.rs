@@ -4,11 +4,12 @@
 
 use std::sync::OnceLock;
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, SVector, Vector3};
 
 use crate::model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup};
-use crate::model::pose::Transform;
+use crate::model::pose::{Transform, rotation_matrix};
 use crate::solve::accumulate::PairSums;
+use crate::solve::rotation_system::StackedRows;
 
 /// A set of motion pairs that the solvers can go through as often as they need, without
 /// necessarily storing them: a slice of [`MotionPair`]s, or [`AllPairs`], which makes the
@@ -55,6 +56,40 @@ impl<const N: usize> MotionSource for [MotionPair; N] {
 
     fn for_each_motion(&self, f: impl FnMut(&MotionPair)) {
         self.iter().for_each(f);
+    }
+}
+
+/// `Σ_k K_kᵀ K_k v` evaluated row block by row block: with V the 3×3 matrix of v (row-major),
+/// `K v = vec(V − R_a V R_bᵀ)` and `Kᵀ w = vec(W − R_aᵀ W R_b)`.
+impl<M: MotionSource + ?Sized> StackedRows for M {
+    fn stacked_gradient(&self, v: &SVector<f64, 9>) -> SVector<f64, 9> {
+        let motions = self;
+        let v_m = Matrix3::new(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
+        let g = match motions.all_pairs() {
+            // Over all pairs of poses, from per-pose deviations in O(n).
+            Some(pairs) => pairs.rotation_gradient(&v_m),
+            None => {
+                let mut g = Matrix3::zeros();
+                motions.for_each_motion(|m| {
+                    let r_a = rotation_matrix(&m.a);
+                    let r_b = rotation_matrix(&m.b);
+                    let w = v_m - r_a * v_m * r_b.transpose();
+                    g += w - r_a.transpose() * w * r_b;
+                });
+                g
+            }
+        };
+        SVector::<f64, 9>::from_row_slice(&[
+            g[(0, 0)],
+            g[(0, 1)],
+            g[(0, 2)],
+            g[(1, 0)],
+            g[(1, 1)],
+            g[(1, 2)],
+            g[(2, 0)],
+            g[(2, 1)],
+            g[(2, 2)],
+        ])
     }
 }
 
@@ -107,6 +142,14 @@ impl AllPairs {
             let camera: Vec<Transform> = self.camera.iter().map(|c| c.0).collect();
             PairSums::new(&hand, &camera)
         })
+    }
+}
+
+impl AllPairs {
+    /// `Σ_{i<j} K_ijᵀ K_ij v` of Andreff's rotation system over every pair, in O(n)
+    /// (`solve::residual::pairs_rotation_gradient`): the Newton step of the rotation solve.
+    pub(crate) fn rotation_gradient(&self, v: &Matrix3<f64>) -> Matrix3<f64> {
+        crate::solve::residual::pairs_rotation_gradient(self, v)
     }
 }
 

@@ -99,7 +99,7 @@ pub fn refine_unchecked(
 
 /// The motions' residuals as the refinement sees them, lengths in units of `unit`: over all
 /// pairs of a pose sequence the quadratic form of the per-pose sums
-/// ([`crate::solve::residual::Quadratic`], O(1) per evaluation), else motion by motion.
+/// ([`crate::solve::quadratic::Quadratic`], O(1) per evaluation), else motion by motion.
 fn with_residuals<T>(
     motions: &(impl MotionSource + ?Sized),
     unit: f64,
@@ -200,7 +200,6 @@ fn refine_in_unit(
 /// Covariance of X's parameters (rotation increment of `R_x exp([δ]×)` in radians, then t_x) at a
 /// given X, as [`Refinement::covariance`]: the uncertainty of a solution from its residuals
 /// (Gauss–Newton, each residual block's noise estimated from its own residuals).
-#[cfg(any(test, feature = "internals"))]
 pub fn covariance_at(
     motions: &(impl MotionSource + ?Sized),
     x: &Transform,

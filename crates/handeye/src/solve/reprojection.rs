@@ -9,7 +9,7 @@
 //! `base_from_target`; eye-to-hand, X = `base_from_camera`, M_i = Q_i = `base_from_gripper`, Y =
 //! `gripper_from_target`. A target point P projects to π(X⁻¹ M_i Y P) (the camera model of
 //! [`Intrinsics`]); the residual is that pixel minus its detection. Levenberg–Marquardt
-//! ([`levenberg_marquardt`]) over the 12 parameters of X and Y minimises a robust (Cauchy) cost of
+//! (`levenberg_marquardt`) over the 12 parameters of X and Y minimises a robust (Cauchy) cost of
 //! the residuals, then plain least squares over the detections it kept (those within
 //! [`INLIER_SIGMAS`] of the robust noise level), whose Jacobian gives the covariance.
 //!
@@ -27,9 +27,9 @@
 use nalgebra::{Matrix3, Matrix6, SMatrix, SVector, SymmetricEigen, Vector2, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
-use crate::model::camera::{Frame, Intrinsics, MIN_DETECTIONS};
 #[cfg(test)]
 use crate::model::camera::Detections;
+use crate::model::camera::{Frame, Intrinsics, MIN_DETECTIONS};
 use crate::model::error::{Error, Result};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, exp_so3, log_so3, proj_so3, transform_from_parts};
@@ -41,10 +41,9 @@ use crate::solve::motions::AllPairs;
 use crate::solve::{Calibration, Method, solve};
 
 mod intrinsics;
-pub(crate) use intrinsics::check_determined;
-pub use intrinsics::RefinedIntrinsics;
-#[cfg(feature = "internals")]
 pub use intrinsics::IntrinsicsSigma;
+pub use intrinsics::RefinedIntrinsics;
+pub(crate) use intrinsics::check_determined;
 
 /// Settings of [`reprojection`]; `Default` gives the values documented on each field.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -364,10 +363,7 @@ pub fn target_with_x(
             loss: Loss::Squared,
             keep: Some(&keep),
         },
-        x: (
-            *x.rotation.matrix(),
-            x.translation.vector / unit,
-        ),
+        x: (*x.rotation.matrix(), x.translation.vector / unit),
     };
     let y0 = scaled(&solved.target, 1.0 / unit);
     let end = levenberg_marquardt(
@@ -412,7 +408,13 @@ fn check_frames(frames: &[Frame]) -> Result<()> {
                 "{} detections, at least {MIN_DETECTIONS} needed",
                 d.target.len()
             ))
-        } else if d.target.iter().flatten().chain(d.pixels.iter().flatten()).any(|v| !v.is_finite()) {
+        } else if d
+            .target
+            .iter()
+            .flatten()
+            .chain(d.pixels.iter().flatten())
+            .any(|v| !v.is_finite())
+        {
             Some("a number that is not finite".into())
         } else {
             None
@@ -601,9 +603,8 @@ fn solve_start(
     let mut r = Matrix3::zeros();
     let mut t = Vector3::zeros();
     for (f, p) in frames.iter().zip(&poses) {
-        let y = motion_of(setup, &f.base_from_gripper).inverse()
-            * calibration.x
-            * p.camera_from_target;
+        let y =
+            motion_of(setup, &f.base_from_gripper).inverse() * calibration.x * p.camera_from_target;
         r += y.rotation.matrix();
         t += y.translation.vector;
     }
@@ -613,7 +614,10 @@ fn solve_start(
 
 /// The camera poses a frame may have: the recording's own, and the two poses of a planar target
 /// that fit its pixels, each with its pixel cost ½Σ|r|².
-fn candidates(frame: &Frame, camera: &Intrinsics) -> std::result::Result<Vec<(Transform, f64)>, String> {
+fn candidates(
+    frame: &Frame,
+    camera: &Intrinsics,
+) -> std::result::Result<Vec<(Transform, f64)>, String> {
     let d = &frame.detections;
     let points: Vec<Vector3<f64>> = d.target.iter().map(|p| Vector3::from(*p)).collect();
     let pixels: Vec<Vector2<f64>> = d.pixels.iter().map(|p| Vector2::from(*p)).collect();
@@ -630,7 +634,12 @@ fn candidates(frame: &Frame, camera: &Intrinsics) -> std::result::Result<Vec<(Tr
 }
 
 /// ½Σ|π(C P) − u|² of a camera pose.
-fn pose_cost(c: &Transform, points: &[Vector3<f64>], pixels: &[Vector2<f64>], camera: &Intrinsics) -> f64 {
+fn pose_cost(
+    c: &Transform,
+    points: &[Vector3<f64>],
+    pixels: &[Vector2<f64>],
+    camera: &Intrinsics,
+) -> f64 {
     points
         .iter()
         .zip(pixels)
@@ -746,7 +755,10 @@ fn homography(from: &[Vector2<f64>], to: &[Vector2<f64>]) -> Option<Matrix3<f64>
         }
     }
     let eigen = SymmetricEigen::new(ata);
-    let h = eigen.eigenvectors.column(eigen.eigenvalues.imin()).into_owned();
+    let h = eigen
+        .eigenvectors
+        .column(eigen.eigenvalues.imin())
+        .into_owned();
     let hn = Matrix3::new(h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8]);
     let h = nt.try_inverse()? * hn * nf;
     h.iter().all(|v| v.is_finite()).then_some(h)
@@ -888,7 +900,9 @@ pub(super) fn station_meat<const N: usize>(
     for (g, &s) in per_frame.iter().zip(&stations.of) {
         sums[s] += g;
     }
-    let meat = sums.iter().fold(SMatrix::<f64, N, N>::zeros(), |m, g| m + g * g.transpose());
+    let meat = sums
+        .iter()
+        .fold(SMatrix::<f64, N, N>::zeros(), |m, g| m + g * g.transpose());
     (meat, count)
 }
 
@@ -905,14 +919,23 @@ impl<'a> Data<'a> {
             points: Vec::with_capacity(total),
             pixels: Vec::with_capacity(total),
             index: Vec::with_capacity(total),
-            stations: Stations { of: Vec::new(), count: 0 },
+            stations: Stations {
+                of: Vec::new(),
+                count: 0,
+            },
         };
         for (i, f) in frames.iter().enumerate() {
             let m = motion_of(setup, &f.base_from_gripper);
             data.motions
                 .push((*m.rotation.matrix(), m.translation.vector / unit));
             data.starts.push(data.points.len());
-            for (k, (p, u)) in f.detections.target.iter().zip(&f.detections.pixels).enumerate() {
+            for (k, (p, u)) in f
+                .detections
+                .target
+                .iter()
+                .zip(&f.detections.pixels)
+                .enumerate()
+            {
                 data.points.push(Vector3::from(*p) / unit);
                 data.pixels.push(Vector2::from(*u));
                 data.index.push((i, k));
@@ -1199,8 +1222,14 @@ mod tests {
             width: 1280,
             height: 720,
         };
-        let x = transform_from_parts(&exp_so3(&Vector3::new(0.1, -0.2, 0.3)), &Vector3::new(0.05, 0.02, 0.1));
-        let y = transform_from_parts(&exp_so3(&Vector3::new(2.9, 0.1, 0.0)), &Vector3::new(0.1, 0.05, 0.6));
+        let x = transform_from_parts(
+            &exp_so3(&Vector3::new(0.1, -0.2, 0.3)),
+            &Vector3::new(0.05, 0.02, 0.1),
+        );
+        let y = transform_from_parts(
+            &exp_so3(&Vector3::new(2.9, 0.1, 0.0)),
+            &Vector3::new(0.1, 0.05, 0.6),
+        );
         let frame = Frame {
             base_from_gripper: transform_from_parts(
                 &exp_so3(&Vector3::new(-0.1, 0.05, 0.2)),
@@ -1208,13 +1237,27 @@ mod tests {
             ),
             camera_from_target: None,
             detections: Detections {
-                target: vec![[0.0, 0.0, 0.0], [0.05, 0.0, 0.0], [0.0, 0.04, 0.0], [0.05, 0.04, 0.01]],
+                target: vec![
+                    [0.0, 0.0, 0.0],
+                    [0.05, 0.0, 0.0],
+                    [0.0, 0.04, 0.0],
+                    [0.05, 0.04, 0.01],
+                ],
                 pixels: vec![[0.0, 0.0]; 4],
             },
         };
         let data = Data::new(std::slice::from_ref(&frame), &camera, Setup::EyeInHand, 1.0);
-        let s: State = (*x.rotation.matrix(), x.translation.vector, *y.rotation.matrix(), y.translation.vector);
-        let bundle = Bundle { data: &data, loss: Loss::Squared, keep: None };
+        let s: State = (
+            *x.rotation.matrix(),
+            x.translation.vector,
+            *y.rotation.matrix(),
+            y.translation.vector,
+        );
+        let bundle = Bundle {
+            data: &data,
+            loss: Loss::Squared,
+            keep: None,
+        };
         let pixels_at = |s: &State| {
             let mut out = Vec::new();
             data.each(s, false, |_, _, p, _| out.push(camera.pixel(p)));
@@ -1235,7 +1278,12 @@ mod tests {
                 let numeric = (plus[k] - minus[k]) / (2.0 * h);
                 for r in 0..2 {
                     let scale = a[(r, d)].abs().max(1.0);
-                    assert!((numeric[r] - a[(r, d)]).abs() < 1e-4 * scale, "param {d} point {k}: {} vs {}", numeric[r], a[(r, d)]);
+                    assert!(
+                        (numeric[r] - a[(r, d)]).abs() < 1e-4 * scale,
+                        "param {d} point {k}: {} vs {}",
+                        numeric[r],
+                        a[(r, d)]
+                    );
                 }
             }
         }
@@ -1244,11 +1292,19 @@ mod tests {
     #[test]
     fn a_planar_pose_is_recovered_with_its_mirror() {
         let camera = Intrinsics::pinhole(900.0, 900.0, 640.0, 360.0);
-        let truth = transform_from_parts(&exp_so3(&Vector3::new(2.8, 0.3, 0.1)), &Vector3::new(0.02, -0.01, 0.7));
-        let points: Vec<Vector3<f64>> = [[-0.03, -0.03, 0.0], [0.03, -0.03, 0.0], [0.03, 0.03, 0.0], [-0.03, 0.03, 0.0]]
-            .iter()
-            .map(|p| Vector3::from(*p))
-            .collect();
+        let truth = transform_from_parts(
+            &exp_so3(&Vector3::new(2.8, 0.3, 0.1)),
+            &Vector3::new(0.02, -0.01, 0.7),
+        );
+        let points: Vec<Vector3<f64>> = [
+            [-0.03, -0.03, 0.0],
+            [0.03, -0.03, 0.0],
+            [0.03, 0.03, 0.0],
+            [-0.03, 0.03, 0.0],
+        ]
+        .iter()
+        .map(|p| Vector3::from(*p))
+        .collect();
         let pixels: Vec<Vector2<f64>> = points
             .iter()
             .map(|p| camera.pixel(&(truth * nalgebra::Point3::from(*p)).coords))
@@ -1256,8 +1312,15 @@ mod tests {
         let poses = planar_poses(&points, &pixels, &camera).unwrap();
         let best = poses.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
         assert!(best.1 < 1e-16, "{}", best.1);
-        assert!(pose_gap(&best.0, &truth) < 1e-9, "{}", pose_gap(&best.0, &truth));
+        assert!(
+            pose_gap(&best.0, &truth) < 1e-9,
+            "{}",
+            pose_gap(&best.0, &truth)
+        );
         let other = poses.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
-        assert!(pose_gap(&other.0, &truth) > 1e-3, "the mirror is another pose");
+        assert!(
+            pose_gap(&other.0, &truth) > 1e-3,
+            "the mirror is another pose"
+        );
     }
 }

@@ -483,7 +483,6 @@ pub fn refine_robot_world(poses: &[PosePair], setup: Setup) -> Result<RobotWorld
 }
 
 /// Refines X and the target pose from a given start (its conditioning and warnings are kept).
-#[cfg(any(test, feature = "internals"))]
 pub fn refine_robot_world_from(
     poses: &[PosePair],
     setup: Setup,

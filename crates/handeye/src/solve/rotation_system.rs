@@ -3,8 +3,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
-use crate::model::pose::{proj_so3, rotation_matrix};
-use crate::solve::motions::MotionSource;
+use crate::model::pose::proj_so3;
 use crate::solve::symmetric::{SmallestEigen, smallest_eigen};
 
 /// A 9×9 matrix.
@@ -99,8 +98,8 @@ impl RotationSystem {
     /// residual `g = Σ K_kᵀ K_k v` is evaluated motion by motion, and the correction δ ⊥ v solves
     /// `(M − λ₁I) δ = −(I − v vᵀ) g` (a Newton step for the null vector). This brings the error
     /// down to the ε·κ of an SVD of the stacked 9m×9 matrix, at O(m) cost and no extra memory.
-    pub fn solve_refined(&self, motions: &(impl MotionSource + ?Sized)) -> RotationSolution {
-        self.solve_with(|v| Some(stacked_gradient(motions, v)))
+    pub fn solve_refined(&self, motions: &(impl StackedRows + ?Sized)) -> RotationSolution {
+        self.solve_with(|v| Some(motions.stacked_gradient(v)))
     }
 
     /// The solve, with an optional residual `Σ K_kᵀ K_k v` for the refinement step.
@@ -131,38 +130,12 @@ impl RotationSystem {
     }
 }
 
-/// `Σ_k K_kᵀ K_k v` evaluated row block by row block: with V the 3×3 matrix of v (row-major),
-/// `K v = vec(V − R_a V R_bᵀ)` and `Kᵀ w = vec(W − R_aᵀ W R_b)`.
-fn stacked_gradient(
-    motions: &(impl MotionSource + ?Sized),
-    v: &SVector<f64, 9>,
-) -> SVector<f64, 9> {
-    let v_m = Matrix3::new(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
-    let g = match motions.all_pairs() {
-        // Over all pairs of poses, from per-pose deviations in O(n).
-        Some(pairs) => crate::solve::residual::pairs_rotation_gradient(pairs, &v_m),
-        None => {
-            let mut g = Matrix3::zeros();
-            motions.for_each_motion(|m| {
-                let r_a = rotation_matrix(&m.a);
-                let r_b = rotation_matrix(&m.b);
-                let w = v_m - r_a * v_m * r_b.transpose();
-                g += w - r_a.transpose() * w * r_b;
-            });
-            g
-        }
-    };
-    SVector::<f64, 9>::from_row_slice(&[
-        g[(0, 0)],
-        g[(0, 1)],
-        g[(0, 2)],
-        g[(1, 0)],
-        g[(1, 1)],
-        g[(1, 2)],
-        g[(2, 0)],
-        g[(2, 1)],
-        g[(2, 2)],
-    ])
+/// Motions whose stacked rows `K_k v = vec(V − R_a V R_bᵀ)` give the residual
+/// `Σ_k K_kᵀ K_k v` of [`RotationSystem::solve_refined`]'s step: every motion source
+/// (`solve::motions`).
+pub trait StackedRows {
+    /// `Σ_k K_kᵀ K_k v`, V the 3×3 matrix of v (row-major).
+    fn stacked_gradient(&self, v: &SVector<f64, 9>) -> SVector<f64, 9>;
 }
 
 /// √(λ₂ / λ_max) from the eigenvalues of the normal matrix, λ₂ the second smallest.
@@ -178,7 +151,7 @@ fn conditioning_of(eigen: &SmallestEigen<9>) -> f64 {
 mod tests {
     use super::*;
     use crate::model::motion::MotionPair;
-    use crate::model::pose::Transform;
+    use crate::model::pose::{Transform, rotation_matrix};
     use nalgebra::{Rotation3, SymmetricEigen, Vector3};
     use proptest::prelude::*;
 

@@ -48,7 +48,7 @@ pub struct TrackEstimate {
     #[serde(default)]
     pub at_point: Option<([f64; 3], f64)>,
     /// The robot-world solution (Shah's A X = Z B over the same accepted poses of the segment,
-    /// [`crate::solve::accumulate::RobotWorldAccumulator`]): X and the target solved together rather than
+    /// [`crate::solve::robot_world_accumulate::RobotWorldAccumulator`]): X and the target solved together rather than
     /// the target as the mean fixed frame under the hand–eye X. `None` while its system is
     /// degenerate.
     pub robot_world: Option<RobotWorldPair>,

@@ -33,7 +33,6 @@
 mod events;
 mod segment;
 mod systematic;
-#[cfg(feature = "internals")]
 pub use systematic::test_step;
 
 use std::collections::VecDeque;
@@ -52,12 +51,11 @@ use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, axis_angle, rotation_angle_between};
 use crate::model::station::{self, SAME_STATION};
 
+pub use events::target_frame;
 pub use events::{
     Change, HeldOut, Pending, PixelFit, Reason, Report, RobotWorldPair, Step, TrackEstimate,
     TrackPrior,
 };
-#[cfg(feature = "internals")]
-pub use events::target_frame;
 use segment::{Segment, Snapshot};
 use systematic::{JointRing, Watch};
 
@@ -325,7 +323,10 @@ impl Tracker {
     /// (`tz=0.12m`) is converted, and one without a unit refused when it is of another unit than
     /// the poses, as the batch does, on the first 16 poses ([`Tracker::refusal`]). Before the first
     /// pose; refuses two priors on one component and bad numbers.
-    pub fn with_priors(mut self, priors: &[crate::model::prior::Prior]) -> crate::model::error::Result<Self> {
+    pub fn with_priors(
+        mut self,
+        priors: &[crate::model::prior::Prior],
+    ) -> crate::model::error::Result<Self> {
         crate::model::prior::check_priors(priors)?;
         if priors.is_empty() {
             return Ok(self);
@@ -377,7 +378,10 @@ impl Tracker {
             return;
         };
         let n = self.sample.poses.len();
-        if p.resolved.is_some() || p.refused.is_some() || n < if at_end { 3 } else { PRIOR_UNIT_POSES } {
+        if p.resolved.is_some()
+            || p.refused.is_some()
+            || n < if at_end { 3 } else { PRIOR_UNIT_POSES }
+        {
             return;
         }
         match crate::check::units::in_poses_unit(&p.given, &self.sample.poses) {
@@ -386,7 +390,11 @@ impl Tracker {
                 if let Some(low) = &mut self.incumbent.low {
                     low.priors = Some(resolved.clone());
                 }
-                if let Some(low) = self.challenger.as_mut().and_then(|c| c.segment.low.as_mut()) {
+                if let Some(low) = self
+                    .challenger
+                    .as_mut()
+                    .and_then(|c| c.segment.low.as_mut())
+                {
                     low.priors = Some(resolved);
                 }
             }
@@ -729,7 +737,10 @@ impl Tracker {
         let y_k = self.setup.hand_pose(&pose.base_from_gripper) * e.x * pose.camera_from_target;
         let d = scatter.y.inverse() * y_k;
         // The angle from atan2 (accurate to ε near the identity, where an arccosine is not).
-        Some([axis_angle(d.rotation.matrix()).0, d.translation.vector.norm()])
+        Some([
+            axis_angle(d.rotation.matrix()).0,
+            d.translation.vector.norm(),
+        ])
     }
 
     /// The typical residual: the RMS scatter of the accepted poses under the current estimate
@@ -920,8 +931,13 @@ impl Tracker {
         ));
         // The systematic-error test, when due (module `systematic`), and its widening.
         if self.watch.due(reason == Reason::End) {
-            let model = self.robot_model.as_ref().filter(|_| self.robot_model_refused.is_none());
-            let refused = self.watch.test(self.setup, &estimate.x, reason == Reason::End, model);
+            let model = self
+                .robot_model
+                .as_ref()
+                .filter(|_| self.robot_model_refused.is_none());
+            let refused = self
+                .watch
+                .test(self.setup, &estimate.x, reason == Reason::End, model);
             self.robot_model_refused = self.robot_model_refused.take().or(refused);
         }
         // A low-DOF robot solved with its prior: the general solve of the bootstrap cannot
@@ -965,4 +981,3 @@ fn same_station(a: &Transform, b: &Transform) -> bool {
         SAME_STATION * reach,
     )
 }
-

@@ -10,8 +10,9 @@ use crate::check::uncertainty::point_sigma;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, rotation_angle_between};
 use crate::model::prior::Prior;
-use crate::solve::accumulate::{PoseAccumulator, RobotWorldAccumulator, Scatter};
+use crate::solve::accumulate::{PoseAccumulator, Scatter};
 use crate::solve::low_dof_accumulate::{LowDofAccumulator, OneAxis};
+use crate::solve::robot_world_accumulate::RobotWorldAccumulator;
 
 /// The low-DOF sums of a segment, kept when the tracker was given priors: the pose-form sums of
 /// all poses and of the two halves ([`LowDofAccumulator`]).
@@ -128,12 +129,15 @@ impl Segment {
         let (axis, None) = self.low_dof()? else {
             return None;
         };
-        self.low.as_ref().is_none_or(|l| l.priors.is_some()).then(|| Pending::LowDof {
-            axis: axis.common().upward(),
-            spread_deg: axis.spread.to_degrees(),
-            setup: self.all.setup(),
-            prior: axis.common().free_component(),
-        })
+        self.low
+            .as_ref()
+            .is_none_or(|l| l.priors.is_some())
+            .then(|| Pending::LowDof {
+                axis: axis.common().upward(),
+                spread_deg: axis.spread.to_degrees(),
+                setup: self.all.setup(),
+                prior: axis.common().free_component(),
+            })
     }
 
     /// Whether the segment is solved by the low-DOF solve (a prior covers its free component).
@@ -248,7 +252,10 @@ impl Segment {
         // At the noise unit: on exact data the scatter is rounding, or 0, which would make the
         // information matrix infinite and leave the estimate without an uncertainty.
         let [noise_rotation, noise_translation] = self.noise_unit(&scatter, &e.x);
-        let (noise_r, noise_t) = (noise_rotation / 3f64.sqrt(), noise_translation / 3f64.sqrt());
+        let (noise_r, noise_t) = (
+            noise_rotation / 3f64.sqrt(),
+            noise_translation / 3f64.sqrt(),
+        );
         // A low-DOF X: the data's part, the prior taken as exact (its sigma is added below).
         let linear_covariance = match plan {
             Some((_, _, prior)) => self.all.covariance_given(
@@ -319,7 +326,8 @@ impl Segment {
                 noise_translation: scatter.translation,
                 uncertainty_rotation_deg: ur,
                 uncertainty_translation: ut,
-                covariance: covariance.map(|c| std::array::from_fn(|i| std::array::from_fn(|j| c[(i, j)]))),
+                covariance: covariance
+                    .map(|c| std::array::from_fn(|i| std::array::from_fn(|j| c[(i, j)]))),
                 at_point,
                 robot_world: self.robot_world.estimate().map(|r| RobotWorldPair {
                     x: r.x,

@@ -31,6 +31,7 @@
 use nalgebra::Matrix6;
 use serde::{Deserialize, Serialize};
 
+use crate::check::identification::check_model;
 use crate::check::outliers::{translation_scale, working_distance};
 use crate::check::systematic::{
     Systematic, dense_stream, systematic_test, systematic_warning, widen_by,
@@ -38,7 +39,6 @@ use crate::check::systematic::{
 use crate::check::uncertainty::{
     REPLICATES, Uncertainty, bootstrap, bootstrap_by_region, point_sigma, stations_of, summarise,
 };
-use crate::check::identification::check_model;
 use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::kinematics::Kinematics;
 use crate::model::motion::{PosePair, Setup};
@@ -189,7 +189,9 @@ impl Watch {
 
     /// Keeps the sampled poses `kept` (increasing indices) and their joint angles, in place.
     fn keep(&mut self, kept: &[usize]) {
-        let joints = self.dim.filter(|d| *d > 0 && self.joints.len() == d * self.poses.len());
+        let joints = self
+            .dim
+            .filter(|d| *d > 0 && self.joints.len() == d * self.poses.len());
         for (to, &from) in kept.iter().enumerate() {
             self.poses[to] = self.poses[from];
             if let Some(d) = joints {
@@ -251,7 +253,11 @@ impl Watch {
         let refused = model.and_then(|m| check_model(m, poses, &joints).err());
         let found = systematic_test(
             (poses, setup, x),
-            (&joints, &kept, if joints.is_empty() { usize::MAX } else { n }),
+            (
+                &joints,
+                &kept,
+                if joints.is_empty() { usize::MAX } else { n },
+            ),
             model.filter(|_| refused.is_none()),
             false,
             &solve,
@@ -291,10 +297,19 @@ impl Watch {
     /// otherwise.
     pub(super) fn widen(&self, estimate: &mut TrackEstimate) -> Option<Warning> {
         let found = self.found.as_ref()?;
-        let regions = found.regions.as_ref().filter(|_| found.systematic.flagged)?;
+        let regions = found
+            .regions
+            .as_ref()
+            .filter(|_| found.systematic.flagged)?;
         let c = estimate.covariance?;
         let ordinary = summarise(Matrix6::from_fn(|i, j| c[i][j]), 0, 0, found.scene);
-        let wide = widen_by(ordinary, regions, &found.systematic, &estimate.x, found.scene);
+        let wide = widen_by(
+            ordinary,
+            regions,
+            &found.systematic,
+            &estimate.x,
+            found.scene,
+        );
         estimate.uncertainty_rotation_deg = Some(wide.rotation_deg);
         estimate.uncertainty_translation = Some(wide.translation);
         estimate.covariance = Some(wide.covariance);
@@ -327,8 +342,17 @@ impl Watch {
         let poses = &self.poses;
         let solve = |p: &[PosePair]| all_pairs(p, setup);
         let batch = bootstrap(poses, setup, &estimate.x, &solve, REPLICATES, scene);
-        let at_least = |a: f64, b: f64| if b > 0.0 && a > b && a.is_finite() { a / b } else { 1.0 };
-        let (sr, st) = (at_least(batch.rotation_deg, ur), at_least(batch.translation, ut));
+        let at_least = |a: f64, b: f64| {
+            if b > 0.0 && a > b && a.is_finite() {
+                a / b
+            } else {
+                1.0
+            }
+        };
+        let (sr, st) = (
+            at_least(batch.rotation_deg, ur),
+            at_least(batch.translation, ut),
+        );
         if sr == 1.0 && st == 1.0 {
             return;
         }
@@ -336,7 +360,9 @@ impl Watch {
         // the batch's (D C D, D = diag(sr, sr, sr, st, st, st): the correlations kept).
         let d = |i: usize| if i < 3 { sr } else { st };
         let wide = Matrix6::from_fn(|i, j| c[i][j] * d(i) * d(j));
-        estimate.covariance = Some(std::array::from_fn(|i| std::array::from_fn(|j| wide[(i, j)])));
+        estimate.covariance = Some(std::array::from_fn(|i| {
+            std::array::from_fn(|j| wide[(i, j)])
+        }));
         estimate.uncertainty_rotation_deg = Some(ur * sr);
         estimate.uncertainty_translation = Some(ut * st);
         if let Some((point, _)) = estimate.at_point {
@@ -353,10 +379,9 @@ impl Watch {
     }
 }
 
-/// One online test step on `poses` (at most [`SAMPLE`] are kept, as the tracker keeps them) under
+/// One online test step on `poses` (at most `SAMPLE` are kept, as the tracker keeps them) under
 /// `x`: the systematic-error test with the halves' solves and, flagged, the region bootstrap, as
-/// at the end of a stream. For the crate's benches (`internals`).
-#[cfg(feature = "internals")]
+/// at the end of a stream (the crate's benches time it).
 pub fn test_step(poses: &[PosePair], setup: Setup, x: &Transform) -> Option<Systematic> {
     let mut watch = Watch::default();
     poses.iter().for_each(|p| watch.add(p, None));
@@ -406,7 +431,10 @@ mod tests {
         // Every kept pose's angles are of one pose, every stride-th offered.
         let stride = w.stride as f64;
         assert!(w.joints.chunks(2).all(|q| q[0] == -q[1]));
-        assert!(w.joints.chunks(2).all(|q| (q[0] / stride).fract() == 0.0), "{stride}");
+        assert!(
+            w.joints.chunks(2).all(|q| (q[0] / stride).fract() == 0.0),
+            "{stride}"
+        );
         // A sampled pose without angles: the test orders by the hand pose (one the sample skips
         // changes nothing).
         for _ in 0..w.stride {

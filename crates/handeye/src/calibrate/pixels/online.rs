@@ -11,7 +11,6 @@ use crate::model::pose::rotation_angle_between;
 use crate::solve::pose_residuals;
 use crate::track::{PixelFit, Reason, Report as TrackReport, TrackEstimate};
 
-
 /// Frames at which [`OnlinePixels`] first solves on the pixels (then at each doubling).
 const FIRST_ONLINE_SOLVE: usize = 16;
 
@@ -48,7 +47,10 @@ impl Thinning {
             .enumerate()
             .filter(|(j, _)| *j != i)
             .map(|(j, f)| (self.distance(&frames[i], f), j))
-            .fold((f64::INFINITY, i), |best, c| if c.0 < best.0 { c } else { best })
+            .fold(
+                (f64::INFINITY, i),
+                |best, c| if c.0 < best.0 { c } else { best },
+            )
     }
 
     /// Starts on the frames held.
@@ -98,9 +100,12 @@ impl Thinning {
         self.nearest
             .iter()
             .enumerate()
-            .fold((f64::INFINITY, 0), |best, (i, (d, _))| {
-                if *d < best.0 { (*d, i) } else { best }
-            })
+            .fold(
+                (f64::INFINITY, 0),
+                |best, (i, (d, _))| {
+                    if *d < best.0 { (*d, i) } else { best }
+                },
+            )
             .1
     }
 
@@ -164,10 +169,12 @@ impl OnlinePixels {
     /// `reject_outliers`.
     pub fn new(camera: Intrinsics, setup: Setup, options: Options) -> Result<Self> {
         not_on_pixels(options.reject_outliers, &options.priors)?;
-        camera.check().map_err(|(field, message)| Error::InvalidParameter {
-            name: "intrinsics",
-            message: format!("{field}: {message}"),
-        })?;
+        camera
+            .check()
+            .map_err(|(field, message)| Error::InvalidParameter {
+                name: "intrinsics",
+                message: format!("{field}: {message}"),
+            })?;
         Ok(Self {
             camera,
             setup,
@@ -260,7 +267,6 @@ impl OnlinePixels {
     /// cost of a solve stay bounded on an endless stream and the views kept stay spread.
     ///
     /// Errors: [`Error::InvalidParameter`] below 16.
-    #[cfg(feature = "internals")]
     pub fn with_max_frames(mut self, max_frames: usize) -> Result<Self> {
         // More than the 12 parameters of the pixel solve, and the first solve's frames.
         if max_frames < FIRST_ONLINE_SOLVE {
@@ -274,7 +280,6 @@ impl OnlinePixels {
     }
 
     /// Frames kept (at most `max_frames`).
-    #[cfg(feature = "internals")]
     pub fn kept_frames(&self) -> usize {
         self.frames.len()
     }
@@ -297,8 +302,7 @@ impl OnlinePixels {
     /// Solves on every frame so far and reports it.
     fn estimate(&mut self, reason: Reason) -> Result<TrackReport> {
         let setup = self.setup;
-        let (used, solution, applied, reading_check, choice) =
-            solved(
+        let (used, solution, applied, reading_check, choice) = solved(
             &self.frames,
             &self.camera,
             setup,
@@ -315,12 +319,8 @@ impl OnlinePixels {
             (applied, reading_check),
             &choice,
         )?;
-        let residual = PoseResidualSummary::of(pose_residuals(
-            &poses,
-            setup,
-            &batch.transform,
-            &target,
-        ));
+        let residual =
+            PoseResidualSummary::of(pose_residuals(&poses, setup, &batch.transform, &target));
         let u = &batch.uncertainty;
         let reprojection = batch.reprojection.as_ref().map(|r| PixelFit {
             rms_px: r.rms_px,

@@ -34,16 +34,12 @@ use crate::model::error::{Error, Result};
 use crate::model::pose::{Transform, transform_from_xyz_quat_xyzw};
 
 pub(crate) use msg::{POSE_STAMPED, TF_MESSAGE, TRANSFORM_STAMPED};
-// Read through `io::Recording`: crate-internal; public with `internals` for this crate's tests.
-#[cfg(feature = "internals")]
+// Read through `io::Recording`, and on their own.
 pub use pairs::{BagOptions, BagPairs, read_bag_pairs};
-#[cfg(not(feature = "internals"))]
-pub(crate) use pairs::{BagOptions, read_bag_pairs};
 pub use storage::Storage;
 pub(crate) use tags::read_bag_tags;
 pub use tags::{BagTags, TAG_CORNERS};
 pub use tf::TfEdge;
-#[cfg(feature = "internals")]
 pub use tf::tree_steps;
 
 use msg::RawPose;

@@ -28,7 +28,6 @@ fn step(n: usize) {
 
 /// Steps the tf tree's searches have taken on this thread so far: every parent link followed,
 /// every frame compared or listed. For tests that show the searches linear in the tree's size.
-#[cfg_attr(not(feature = "internals"), allow(dead_code))]
 pub fn tree_steps() -> u64 {
     STEPS.with(Cell::get)
 }

@@ -15,11 +15,9 @@ mod regression;
 use serde::{Deserialize, Serialize};
 
 pub(crate) use adaptive::AdaptiveSelector;
-#[cfg(feature = "internals")]
 pub use adaptive::{Record, predict};
 pub(crate) use conventional::ConventionalSelector;
 pub(crate) use fixed::FixedSelector;
-#[cfg(feature = "internals")]
 pub use regression::{fit, fit_condition};
 
 use crate::model::error::{Error, Result};

@@ -24,7 +24,6 @@ pub(crate) const MAX_CONDITION: f64 = 1e14;
 /// let at = fit(&x, &y, 0.5).unwrap();
 /// assert!((at - (1.0 + 1.0 - 0.125)).abs() < 1e-9);
 /// ```
-#[cfg(any(test, feature = "internals"))]
 pub fn fit(x: &[f64; 4], y: &[f64; 4], x_new: f64) -> Option<f64> {
     Cubic::of(x)?.at(y, x_new)
 }
@@ -87,7 +86,6 @@ impl Cubic {
 
 /// The 2-norm condition number of Eq. (3)'s matrix L for these x values (after scaling by
 /// max|x|): how much the fit can amplify rounding. Infinite when L is singular.
-#[cfg(any(test, feature = "internals"))]
 pub fn fit_condition(x: &[f64; 4]) -> f64 {
     if !x.iter().all(|v| v.is_finite()) {
         return f64::INFINITY;

@@ -28,7 +28,9 @@ use super::{
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
 use crate::model::pose::{Transform, exp_so3, proj_so3};
-use crate::solve::lm::{LeastSquares, Linearisation, RefineOptions, Termination, levenberg_marquardt};
+use crate::solve::lm::{
+    LeastSquares, Linearisation, RefineOptions, Termination, levenberg_marquardt,
+};
 
 /// The intrinsic parameters refined: fx, fy, cx, cy, k1, k2, p1, p2.
 const FREE: usize = 8;
@@ -110,7 +112,11 @@ fn image_size(camera: &Intrinsics) -> (f64, f64) {
 
 /// The frames determine the intrinsics only when they reach the image's corners and tilt the
 /// target about two axes; refuses otherwise, saying what is missing and what to do.
-pub(super) fn check_span(frames: &[Frame], camera: &Intrinsics, poses: &[Transform]) -> Result<Span> {
+pub(super) fn check_span(
+    frames: &[Frame],
+    camera: &Intrinsics,
+    poses: &[Transform],
+) -> Result<Span> {
     if frames.len() <= ALL {
         return Err(refuse(format!(
             "{} frames: refining the intrinsics needs more than {ALL} (X's and the target's 12 parameters and {FREE} intrinsic ones); record more frames",
@@ -192,11 +198,16 @@ pub(crate) fn check_determined(k: &RefinedIntrinsics, given: &Intrinsics) -> Res
     ];
     if let Some((name, v, most)) = spreads
         .iter()
-        .find(|(_, v, most)| v.is_nan() || v.abs() > *most) {
+        .find(|(_, v, most)| v.is_nan() || v.abs() > *most)
+    {
         return Err(refuse(format!(
             "the pixels do not determine the intrinsics: {name}'s sigma is {:.2} % of {}, at most {:.0} % taken: tilt the target more, cover the corners of the image, record more frames; or calibrate with the given intrinsics (without --refine-intrinsics)",
             100.0 * v,
-            if name.starts_with('f') { "itself" } else { "the image" },
+            if name.starts_with('f') {
+                "itself"
+            } else {
+                "the image"
+            },
             100.0 * most
         )));
     }
@@ -257,7 +268,9 @@ pub(super) fn refine(
     let sigma = |k: usize| {
         intrinsic
             .as_ref()
-            .map_or(f64::INFINITY, |c: &SMatrix<f64, FREE, FREE>| c[(k, k)].max(0.0).sqrt())
+            .map_or(f64::INFINITY, |c: &SMatrix<f64, FREE, FREE>| {
+                c[(k, k)].max(0.0).sqrt()
+            })
     };
     let intrinsics = RefinedIntrinsics {
         fx: fitted.fx,
@@ -270,7 +283,13 @@ pub(super) fn refine(
             fy: sigma(1) * scale,
             cx: sigma(2) * scale,
             cy: sigma(3) * scale,
-            distortion: [Some(sigma(4)), Some(sigma(5)), Some(sigma(6)), Some(sigma(7)), None],
+            distortion: [
+                Some(sigma(4)),
+                Some(sigma(5)),
+                Some(sigma(6)),
+                Some(sigma(7)),
+                None,
+            ],
         },
         held: vec!["k3".into()],
         corner_cells: span.corner_cells,
@@ -343,7 +362,8 @@ impl Free<'_> {
                 behind += self.loss.of(BEHIND_PX * BEHIND_PX).0;
                 return;
             };
-            row.fixed_view_mut::<2, 12>(0, 0).copy_from(&(pr.jacobian * j));
+            row.fixed_view_mut::<2, 12>(0, 0)
+                .copy_from(&(pr.jacobian * j));
             let ji = camera.intrinsic_jacobian(p);
             for c in 0..FREE {
                 let s = if c < 4 { self.scale } else { 1.0 };
@@ -374,7 +394,10 @@ impl Free<'_> {
     /// The covariances of X, Y (6 each) and the intrinsics (8, in the
     /// solve's scaled units): each block the larger of the Gauss–Newton one and the sandwich over
     /// the robot's stations (as [`super::Bundle::covariance`]); `None` when singular or with too few frames.
-    fn covariance(&self, s: &Full) -> Option<(Matrix6<f64>, Matrix6<f64>, SMatrix<f64, FREE, FREE>)> {
+    fn covariance(
+        &self,
+        s: &Full,
+    ) -> Option<(Matrix6<f64>, Matrix6<f64>, SMatrix<f64, FREE, FREE>)> {
         let frames = self.data.motions.len();
         let mut per_frame = vec![SVector::<f64, ALL>::zeros(); frames];
         let mut jtj = SMatrix::<f64, ALL, ALL>::zeros();
@@ -392,12 +415,17 @@ impl Free<'_> {
         let inv = jtj.try_inverse()?;
         let classic = inv * (2.0 * cost / (count - ALL) as f64);
         let sandwich = inv * meat * inv * (stations as f64 / (stations - ALL) as f64);
-        let pose_scale =
-            |c: &Matrix6<f64>| c.fixed_view::<3, 3>(0, 0).trace() * 1e4 + c.fixed_view::<3, 3>(3, 3).trace();
+        let pose_scale = |c: &Matrix6<f64>| {
+            c.fixed_view::<3, 3>(0, 0).trace() * 1e4 + c.fixed_view::<3, 3>(3, 3).trace()
+        };
         let pose = |at: usize| {
             let a: Matrix6<f64> = classic.fixed_view::<6, 6>(at, at).into_owned();
             let b: Matrix6<f64> = sandwich.fixed_view::<6, 6>(at, at).into_owned();
-            let c = if pose_scale(&b) > pose_scale(&a) { b } else { a };
+            let c = if pose_scale(&b) > pose_scale(&a) {
+                b
+            } else {
+                a
+            };
             c.iter().all(|v| v.is_finite()).then_some(c)
         };
         let a: SMatrix<f64, FREE, FREE> = classic.fixed_view::<FREE, FREE>(12, 12).into_owned();
@@ -482,8 +510,14 @@ mod tests {
             width: 1280,
             height: 720,
         };
-        let x = transform_from_parts(&exp_so3(&Vector3::new(0.1, -0.2, 0.3)), &Vector3::new(0.05, 0.02, 0.1));
-        let y = transform_from_parts(&exp_so3(&Vector3::new(2.9, 0.1, 0.0)), &Vector3::new(0.1, 0.05, 0.6));
+        let x = transform_from_parts(
+            &exp_so3(&Vector3::new(0.1, -0.2, 0.3)),
+            &Vector3::new(0.05, 0.02, 0.1),
+        );
+        let y = transform_from_parts(
+            &exp_so3(&Vector3::new(2.9, 0.1, 0.0)),
+            &Vector3::new(0.1, 0.05, 0.6),
+        );
         let frame = Frame {
             base_from_gripper: transform_from_parts(
                 &exp_so3(&Vector3::new(-0.1, 0.05, 0.2)),
@@ -491,16 +525,31 @@ mod tests {
             ),
             camera_from_target: None,
             detections: Detections {
-                target: vec![[0.0, 0.0, 0.0], [0.15, 0.0, 0.0], [0.0, 0.12, 0.0], [0.15, 0.12, 0.01]],
+                target: vec![
+                    [0.0, 0.0, 0.0],
+                    [0.15, 0.0, 0.0],
+                    [0.0, 0.12, 0.0],
+                    [0.15, 0.12, 0.01],
+                ],
                 pixels: vec![[0.0, 0.0]; 4],
             },
         };
         let data = Data::new(std::slice::from_ref(&frame), &camera, Setup::EyeInHand, 1.0);
         let s: Full = (
-            (*x.rotation.matrix(), x.translation.vector, *y.rotation.matrix(), y.translation.vector),
+            (
+                *x.rotation.matrix(),
+                x.translation.vector,
+                *y.rotation.matrix(),
+                y.translation.vector,
+            ),
             camera,
         );
-        let free = Free { data: &data, loss: Loss::Squared, keep: None, scale: camera.fx };
+        let free = Free {
+            data: &data,
+            loss: Loss::Squared,
+            keep: None,
+            scale: camera.fx,
+        };
         let pixels_at = |s: &Full| {
             let mut out = Vec::new();
             data.each(&s.0, false, |_, _, p, _| out.push(s.1.pixel(p)));
@@ -544,7 +593,12 @@ mod tests {
             let camera = sim.intrinsics;
             let data = Data::new(&sim.frames, &camera, setup, 1.0);
             let (x, y) = (sim.x, sim.y);
-            let s: State = (*x.rotation.matrix(), x.translation.vector, *y.rotation.matrix(), y.translation.vector);
+            let s: State = (
+                *x.rotation.matrix(),
+                x.translation.vector,
+                *y.rotation.matrix(),
+                y.translation.vector,
+            );
             let mut jtj = DMatrix::<f64>::zeros(21, 21);
             data.each(&s, true, |_, _, p, j| {
                 let mut row = DMatrix::<f64>::zeros(2, 21);
@@ -562,7 +616,12 @@ mod tests {
             });
             let s2 = sim.pixel_sigma * sim.pixel_sigma;
             let with_k3 = jtj.clone().try_inverse().unwrap() * s2;
-            let without = jtj.view((0, 0), (20, 20)).into_owned().try_inverse().unwrap() * s2;
+            let without = jtj
+                .view((0, 0), (20, 20))
+                .into_owned()
+                .try_inverse()
+                .unwrap()
+                * s2;
             let sigma_k3 = with_k3[(20, 20)].sqrt();
             let correlation = with_k3[(17, 20)] / (with_k3[(17, 17)] * with_k3[(20, 20)]).sqrt();
             let k2_growth = (with_k3[(17, 17)] / without[(17, 17)]).sqrt();
@@ -590,7 +649,13 @@ mod tests {
             cx: 640.0,
             cy: 360.0,
             distortion: [0.0; 5],
-            sigma: IntrinsicsSigma { fx, fy: 2.0, cx: 5.0, cy, distortion: [Some(0.01), Some(0.01), Some(0.01), Some(0.01), None] },
+            sigma: IntrinsicsSigma {
+                fx,
+                fy: 2.0,
+                cx: 5.0,
+                cy,
+                distortion: [Some(0.01), Some(0.01), Some(0.01), Some(0.01), None],
+            },
             held: vec!["k3".into()],
             corner_cells: 4,
             tilt_deg: 20.0,
@@ -599,7 +664,10 @@ mod tests {
         let e = check_determined(&refined(20.0, 5.0), &given).unwrap_err();
         assert!(e.to_string().contains("fx's sigma is 2.22 %"), "{e}");
         let e = check_determined(&refined(2.0, 40.0), &given).unwrap_err();
-        assert!(e.to_string().contains("cy's sigma is 5.56 % of the image"), "{e}");
+        assert!(
+            e.to_string().contains("cy's sigma is 5.56 % of the image"),
+            "{e}"
+        );
         let e = check_determined(&refined(f64::NAN, 5.0), &given).unwrap_err();
         assert!(e.to_string().contains("fx's sigma"), "{e}");
     }
