@@ -192,6 +192,9 @@ fn solve_opencv_poses<'py>(
     let report = py
         .allow_threads(|| handeye::calibrate(&poses, setup, &options))
         .map_err(|e| value_error(opencv_words::error(&e, said, opencv_words::HAND_EYE)))?;
+    let Some(report) = report.hand_eye() else {
+        unreachable!("the hand–eye problem's report")
+    };
     let (r, t) = (
         report.transform.rotation.matrix(),
         report.transform.translation.vector,
@@ -245,14 +248,17 @@ fn solve_opencv_robot_world<'py>(
             camera_from_target,
         })
         .collect();
-    let options = handeye::RobotWorldOptions {
-        method: method.parse().map_err(value_error)?,
+    let options = handeye::Options {
+        problem: handeye::Problem::RobotWorld(method.parse().map_err(value_error)?),
         ..Default::default()
     };
     let said = Some(Setup::EyeInHand);
     let report = py
-        .allow_threads(|| handeye::calibrate_robot_world(&poses, Setup::EyeInHand, &options))
+        .allow_threads(|| handeye::calibrate(&poses, Setup::EyeInHand, &options))
         .map_err(|e| value_error(opencv_words::error(&e, said, opencv_words::ROBOT_WORLD)))?;
+    let Some(report) = report.robot_world() else {
+        unreachable!("the robot-world problem's report")
+    };
     let parts = |t: &Transform| {
         let (r, v) = (t.rotation.matrix(), t.translation.vector);
         (
@@ -514,11 +520,11 @@ fn robot_world_report<'py>(
     prior: Option<Vec<String>>,
     robot_model: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
-    let options = handeye::RobotWorldOptions {
+    let options = handeye::Options {
         joints: checked_joints(joints)?,
         robot_model: read_robot_model(robot_model)?,
         priors: priors(prior)?,
-        method: method.parse().map_err(value_error)?,
+        problem: handeye::Problem::RobotWorld(method.parse().map_err(value_error)?),
         fix: parse_fix(fix)?,
         replicates: bootstrap,
         reject_outliers,
@@ -528,7 +534,7 @@ fn robot_world_report<'py>(
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let report = py
-        .allow_threads(|| handeye::calibrate_robot_world(&poses, setup, &options))
+        .allow_threads(|| handeye::calibrate(&poses, setup, &options))
         .map_err(value_error)?;
     serde_json::to_string(&report).map_err(value_error)
 }
@@ -653,8 +659,8 @@ fn pixels_report(
     let (camera, read) = py.allow_threads(|| pixel_recording(path, intrinsics, bag, &options))?;
     let (frames, pose_names) = (read.frames, read.names);
     if robot_world {
-        let options = handeye::RobotWorldOptions {
-            method: handeye::RobotWorldMethod::Reprojection,
+        let options = handeye::Options {
+            problem: handeye::Problem::RobotWorld(handeye::RobotWorldMethod::Reprojection),
             fix,
             point,
             pose_names,
@@ -667,13 +673,13 @@ fn pixels_report(
                     frames: &frames,
                     camera: &camera,
                 };
-                handeye::calibrate_robot_world(input, setup, &options)
+                handeye::calibrate(input, setup, &options)
             })
             .map_err(value_error)?;
         return serde_json::to_string(&report).map_err(value_error);
     }
     let options = handeye::Options {
-        method: handeye::Method::Reprojection,
+        problem: handeye::Problem::HandEye(handeye::Method::Reprojection),
         // As the command line's report says it (every face prints one object).
         pairing: handeye::Pairing::All,
         fix,
@@ -720,7 +726,7 @@ fn verify_pixels_report(
     let (camera, read) =
         pixel_recording(path, Some(intrinsics), bag, &RecordingOptions::default())?;
     let options = handeye::Options {
-        method: handeye::Method::Reprojection,
+        problem: handeye::Problem::HandEye(handeye::Method::Reprojection),
         pairing: handeye::Pairing::All,
         fix,
         pose_names: read.names,
@@ -1047,7 +1053,7 @@ fn calibration_options(
     tsai_opencv_filter: bool,
 ) -> PyResult<handeye::Options> {
     Ok(handeye::Options {
-        method: method.parse::<Method>().map_err(value_error)?,
+        problem: handeye::Problem::HandEye(method.parse::<Method>().map_err(value_error)?),
         pairing: pairs.parse::<Pairing>().map_err(value_error)?,
         tsai: handeye::TsaiOptions {
             opencv_filter: tsai_opencv_filter,
