@@ -363,6 +363,39 @@ fn compared(
     }
 }
 
+/// What the recording's detections prefer to the intrinsics given, in words (the focal length's
+/// scale or k1), and how far that moves its own X (degrees, length, sigmas), when its report warns
+/// of it.
+fn preferred_intrinsics(report: &HandEyeReport) -> Option<(String, f64, f64, f64)> {
+    report.warnings.iter().find_map(|w| match w {
+        Warning::IntrinsicsDisagree {
+            focal_scale,
+            rotation_deg,
+            translation,
+            sigmas,
+            ..
+        } => Some((
+            format!("the focal length scaled by {focal_scale:.3}"),
+            *rotation_deg,
+            *translation,
+            *sigmas,
+        )),
+        Warning::DistortionDisagrees {
+            k1_best,
+            rotation_deg,
+            translation,
+            sigmas,
+            ..
+        } => Some((
+            format!("the radial distortion k1 = {k1_best:.4}"),
+            *rotation_deg,
+            *translation,
+            *sigmas,
+        )),
+        _ => None,
+    })
+}
+
 /// What the χ² test's numbers say about the saved X: the verdict and its words.
 struct Judged<'a> {
     /// The saved X minus the recording's, and its one sigma.
@@ -399,33 +432,7 @@ fn judged(report: &HandEyeReport, j: Judged<'_>, unit: Option<LengthUnit>) -> (C
         .max(difference.translation / sigma.translation);
     let shape_reliable = j.poses >= SHAPE_POSES;
     // What the recording's detections prefer (in words), and how far that moves its own X.
-    let intrinsics = report.warnings.iter().find_map(|w| match w {
-        Warning::IntrinsicsDisagree {
-            focal_scale,
-            rotation_deg,
-            translation,
-            sigmas,
-            ..
-        } => Some((
-            format!("the focal length scaled by {focal_scale:.3}"),
-            *rotation_deg,
-            *translation,
-            *sigmas,
-        )),
-        Warning::DistortionDisagrees {
-            k1_best,
-            rotation_deg,
-            translation,
-            sigmas,
-            ..
-        } => Some((
-            format!("the radial distortion k1 = {k1_best:.4}"),
-            *rotation_deg,
-            *translation,
-            *sigmas,
-        )),
-        _ => None,
-    });
+    let intrinsics = preferred_intrinsics(report);
     if distance > limit
         && (shape_reliable || sizes > SIZE_LIMIT)
         && let Some((preferred, rotation_deg, translation, sigmas)) = intrinsics
