@@ -887,7 +887,7 @@ mod tests {
                     fix,
                     ..Options::default()
                 };
-                let r = super::calibrate(Input::Pixels { frames, camera }, setup, &options)
+                let r = crate::calibrate::pipeline::calibrate(Input::Pixels { frames, camera }, setup, &options)
                     .unwrap()
                     .into_hand_eye()
                     .unwrap();

@@ -76,7 +76,8 @@ mod printed {
     use nalgebra::Vector3;
     use serde::{Deserialize, Deserializer, Serializer};
 
-    use super::{PoseResidual, Printed};
+    use crate::calibrate::report::robot_world::Printed;
+    use crate::solve::PoseResidual;
 
     pub(super) fn serialize<S: Serializer>(
         rows: &[PoseResidual],

@@ -191,7 +191,7 @@ fn brent_minimum(
 
 #[cfg(test)]
 mod tests {
-    use super::brent_minimum;
+    use crate::calibrate::problem::pixels::camera::brent_minimum;
 
     /// Finds `f`'s minimum on the focal check's bracket from 0, counting evaluations.
     fn minimum(f: impl Fn(f64) -> f64) -> (f64, usize) {
