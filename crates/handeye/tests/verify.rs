@@ -651,3 +651,38 @@ fn a_low_dof_recording_checks_what_it_determines_and_takes_tz_from_the_saved_x()
     .unwrap();
     assert_eq!(v.verdict, Consistency::Undetermined, "{}", v.message);
 }
+
+/// `verify` checks an X calibrated as hand–eye: the one `Options` naming the robot-world problem is
+/// refused, naming the field, rather than verified as if it were hand–eye.
+#[test]
+fn the_robot_world_problem_is_refused_by_name() {
+    let series = handeye::sim::simulate(
+        &handeye::sim::SimConfig {
+            poses: 20,
+            ..handeye::sim::SimConfig::default()
+        },
+        7,
+        0,
+    );
+    let saved = SavedX {
+        x: series.gripper_from_camera,
+        setup: Some(Setup::EyeInHand),
+        covariance: None,
+        unit: None,
+    };
+    let options = Options {
+        problem: handeye::Problem::ROBOT_WORLD,
+        ..options()
+    };
+    let e = verify(&saved, &series.poses, Setup::EyeInHand, &options).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            handeye::Error::InvalidParameter {
+                name: "problem",
+                ..
+            }
+        ),
+        "{e}"
+    );
+}
