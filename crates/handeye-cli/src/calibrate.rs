@@ -153,6 +153,7 @@ fn any_method() -> PossibleValuesParser {
     names.extend(robot_world.filter(|m| m.parse::<Method>().is_err()));
     PossibleValuesParser::new(names)
 }
+
 /// Runs the command: one path for every problem and input kind. The input is read (pose pairs,
 /// or the target's detections with the camera's intrinsics for `--method reprojection`), one
 /// [`Options`] built, one [`calibrate`] called, and its report printed in the face asked.
