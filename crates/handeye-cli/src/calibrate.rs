@@ -4,8 +4,8 @@
 use anyhow::Result;
 use clap::Args as ClapArgs;
 use clap::builder::PossibleValuesParser;
-use handeye::{Assessment, Fix, Options, calibrate};
-use handeye::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
+use handeye::{Assessment, Fix, Options, Problem, Report, calibrate};
+use handeye::{Frame, HandEyeReport, Intrinsics, RobotWorldReport};
 
 use handeye::TsaiOptions;
 use handeye::{Error, Method, Pairing, PosePair, Setup};
@@ -17,6 +17,7 @@ use crate::output::{Questionable, print_json, print_text};
 use crate::publish::Publication;
 use crate::values;
 use handeye::io::CameraMount;
+use handeye::io::Recording;
 
 /// Options of `handeye calibrate`.
 #[derive(ClapArgs, Debug)]
@@ -153,52 +154,126 @@ fn any_method() -> PossibleValuesParser {
     PossibleValuesParser::new(names)
 }
 
-/// Runs the command.
+/// Runs the command: one path for every problem and input kind. The input is read (pose pairs,
+/// or the target's detections with the camera's intrinsics for `--method reprojection`), one
+/// [`Options`] built, one [`calibrate`] called, and its report printed in the face asked.
 pub fn run(args: Args) -> Result<()> {
-    if args.robot_world {
-        return run_robot_world(&args);
-    }
     let options = options(&args)?;
-    if options.method == Method::Reprojection {
-        return run_pixels(&args, options);
-    }
-    pixels_only(&args)?;
     let setup = args.input.setup();
+    let recorded = read(&args, &options)?;
+    let face = Face::chosen(args.output);
+    let tsai = options.tsai;
+    let report = match &recorded {
+        Recorded::Poses(recording) => {
+            let options = Options {
+                pose_names: recording.names.clone(),
+                written: recording.written,
+                joints: recording.joints.clone(),
+                robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
+                ..options
+            };
+            calibrate(&recording.poses, setup, &options)
+                .map_err(|e| refused(&args, e, face, &recording.poses, setup))?
+        }
+        Recorded::Pixels {
+            camera,
+            frames,
+            names,
+        } => {
+            let options = Options {
+                pose_names: names.clone(),
+                refine_intrinsics: args.refine_intrinsics,
+                ..options
+            };
+            let input = handeye::Input::Pixels { frames, camera };
+            calibrate(input, setup, &options).map_err(|e| refused_on_pixels(e, face))?
+        }
+    };
+    match report {
+        Report::HandEye(report) => match &recorded {
+            Recorded::Poses(recording) => print_hand_eye(&args, &report, recording, (face, tsai)),
+            Recorded::Pixels {
+                camera,
+                frames,
+                names,
+            } => print_on_pixels(&args, &report, (camera, frames, names), face),
+        },
+        Report::RobotWorld(report) => print_robot_world(&args, &report, &recorded, face),
+    }
+}
+
+/// What `calibrate` calibrates from: a recording of pose pairs, or the target's detections with
+/// the camera's intrinsics (`--method reprojection`). One per run: not worth a box.
+#[allow(clippy::large_enum_variant)]
+enum Recorded {
+    /// A recording of pose pairs (names, written directions, joints, clock, the camera's mount).
+    Poses(Recording),
+    /// The records with detections, each named `file:line`, and the camera.
+    Pixels {
+        camera: Intrinsics,
+        frames: Vec<Frame>,
+        names: Vec<String>,
+    },
+}
+
+/// Whether the options ask for the fit on the pixels (`--method reprojection`).
+fn on_pixels(options: &Options) -> bool {
+    matches!(
+        options.problem,
+        Problem::HandEye(Method::Reprojection)
+            | Problem::RobotWorld(RobotWorldMethod::Reprojection)
+    )
+}
+
+/// Reads the input the options ask for, after the checks that need no input (the flags of the
+/// pixels, the frame names, `--report`'s path): pose pairs (enough of them for the problem), or
+/// the records with detections and the intrinsics.
+fn read(args: &Args, options: &Options) -> Result<Recorded> {
+    if on_pixels(options) {
+        let (camera, frames, names) =
+            pixel_input(&args.input, args.intrinsics.as_ref(), args.report.as_ref())?;
+        output_frames(args)?;
+        return Ok(Recorded::Pixels {
+            camera,
+            frames,
+            names,
+        });
+    }
+    pixels_only(args)?;
     // The frame names and the name are checked before the input is read, and so is the report's
     // path.
-    let frames = output_frames(&args)?;
+    output_frames(args)?;
     if let Some(path) = &args.report {
         crate::report::check_writable(path)?;
     }
     let recording = read_all(&args.input, options.fix.reading())?;
-    let (poses, written) = (recording.poses, recording.written);
-    let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
-    enough(&args.input, poses.len(), 2, "to make a motion")?;
-    let face = Face::chosen(args.output);
-    let tsai = options.tsai;
-    let report = match calibrate(
-        &poses,
-        setup,
-        &Options {
-            pose_names: recording.names.clone(),
-            written,
-            joints: recording.joints,
-            robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
-            ..options
-        },
-    ) {
-        Ok(report) => report,
-        Err(e) => return Err(refused(&args, e, face, &poses, setup)),
+    let (need, what) = match options.problem {
+        Problem::HandEye(_) => (2, "to make a motion"),
+        Problem::RobotWorld(_) => (3, "to determine X and the target's pose"),
     };
+    enough(&args.input, recording.poses.len(), need, what)?;
+    Ok(Recorded::Poses(recording))
+}
+
+/// Prints a hand–eye result on pose pairs in the face asked for, writes `--report`, and sets the
+/// exit code (`--strict`).
+fn print_hand_eye(
+    args: &Args,
+    report: &HandEyeReport,
+    recording: &Recording,
+    (face, tsai): (Face, TsaiOptions),
+) -> Result<()> {
+    let (poses, written) = (&recording.poses, recording.written);
+    let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
+    let setup = report.setup;
+    let frames = output_frames(args)?;
     // The unit of the poses as solved: a `--fix robot-mm` (or `auto`) reading has made them metres.
-    let unit = length_unit(&report.reading.applied.apply(&poses, written));
-    if report.outliers.rejected && !report.outliers.poses.is_empty() {
-        crate::tell!(
-            "rejected {} outlier pose(s) of {}",
-            report.outliers.poses.len(),
-            report.outliers.poses.len() + report.poses
-        );
-    }
+    let unit = length_unit(&report.reading.applied.apply(poses, written));
+    tell_rejected(
+        report.outliers.rejected,
+        report.outliers.poses.len(),
+        report.poses,
+    );
     if args.pairs.is_none() && (args.input.robot.is_some() || args.input.is_bag()) {
         crate::tell!(
             "pairs: every pair of the {} stream samples (consecutive frames barely move; `--pairs consecutive` for the paper's pairing)",
@@ -211,46 +286,58 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     // The text face lists the warnings itself.
-    if face != Face::Text {
-        for w in &report.warnings {
-            crate::tell!("warning: {}", faces::warning(w));
-        }
-    }
+    tell_warnings(&report.warnings, face);
     let source = format!("calibrate, method {}", report.method);
     // The ROS outputs are in metres whatever the input (the text and JSON keep its unit).
     let ros = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf) || args.input.is_bag();
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
     let mount = recording.camera_mount.as_ref();
-    let publication = publication(&args, &report.transform, &frames, mount);
-    let published = publication.of(Published::of(&report, &source, ros_unit));
+    let publication = publication(args, &report.transform, &frames, mount);
+    let published = publication.of(Published::of(report, &source, ros_unit));
     let to = &publication.frames;
     if args.input.is_bag() {
         publication.tell(published, face != Face::Ros2);
     }
-    let summary = faces::text(&report, &frames, unit);
+    let summary = faces::text(report, &frames, unit);
     match face {
         Face::Text => print_text(&summary)?,
-        Face::Yaml => print_text(&faces::yaml(published, to, Some(&report)))?,
+        Face::Yaml => print_text(&faces::yaml(published, to, Some(report)))?,
         Face::Ros2 => print_text(&faces::ros2(published, to))?,
         Face::Urdf => print_text(&faces::urdf(published, to))?,
         Face::Json => print_json(&WithTimeOffset {
-            report: &report,
+            report,
             time_offset_s: time_offset,
             time_offset_sigma_s: time_offset_sigma,
             publish: publication.json(),
         })?,
     }
     let page = crate::report::RunPage {
-        poses: &poses,
+        poses,
         names: &recording.names,
         written,
         setup,
         unit,
         summary,
     };
-    after_result(&args, report.verdict, |path| {
-        crate::report::write_calibrate(path, &page, &report)
+    after_result(args, report.verdict, |path| {
+        crate::report::write_calibrate(path, &page, report)
     })
+}
+
+/// Says how many outlier poses `--reject-outliers` left out, when it left any.
+fn tell_rejected(rejected: bool, outliers: usize, used: usize) {
+    if rejected && outliers > 0 {
+        crate::tell!("rejected {outliers} outlier pose(s) of {}", outliers + used);
+    }
+}
+
+/// The warnings on stderr, but in the text face, which lists them itself.
+fn tell_warnings(warnings: &[handeye::Warning], face: Face) {
+    if face != Face::Text {
+        for w in warnings {
+            crate::tell!("warning: {}", faces::warning(w));
+        }
+    }
 }
 
 /// After the result is printed: the report page (last, so that a path that cannot be written
@@ -387,51 +474,34 @@ fn start_poses(reprojection: Option<&handeye::ReprojectionSummary>) -> &[handeye
     reprojection.map_or(&[], |r| &r.start_poses)
 }
 
-/// `calibrate --method reprojection`: X on the pixels of the detections of a JSON Lines file.
-fn run_pixels(args: &Args, options: Options) -> Result<()> {
-    let (camera, frames_read, names) =
-        pixel_input(&args.input, args.intrinsics.as_ref(), args.report.as_ref())?;
-    let setup = args.input.setup();
+/// Prints a hand–eye result on the pixels in the face asked for, writes `--report` (with the
+/// image's detections), and sets the exit code (`--strict`).
+fn print_on_pixels(
+    args: &Args,
+    report: &HandEyeReport,
+    (camera, frames_read, names): (&Intrinsics, &[Frame], &[String]),
+    face: Face,
+) -> Result<()> {
+    let setup = report.setup;
     let frames = output_frames(args)?;
-    let face = Face::chosen(args.output);
-    let input = handeye::Input::Pixels {
-        frames: &frames_read,
-        camera: &camera,
-    };
-    let report = match handeye::calibrate(
-        input,
-        setup,
-        &Options {
-            pose_names: names.clone(),
-            refine_intrinsics: args.refine_intrinsics,
-            ..options
-        },
-    ) {
-        Ok(report) => report,
-        Err(e) => return Err(refused_on_pixels(e, face)),
-    };
-    let poses = frame_poses(&frames_read, start_poses(report.reprojection.as_ref()));
+    let poses = frame_poses(frames_read, start_poses(report.reprojection.as_ref()));
     let unit = length_unit(&poses);
-    if face != Face::Text {
-        for w in &report.warnings {
-            crate::tell!("warning: {}", faces::warning(w));
-        }
-    }
+    tell_warnings(&report.warnings, face);
     let source = format!("calibrate, method {}", report.method);
     let ros = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
-    let published = Published::of(&report, &source, ros_unit);
-    let summary = faces::text(&report, &frames, unit);
+    let published = Published::of(report, &source, ros_unit);
+    let summary = faces::text(report, &frames, unit);
     match face {
         Face::Text => print_text(&summary)?,
-        Face::Yaml => print_text(&faces::yaml(published, &frames, Some(&report)))?,
+        Face::Yaml => print_text(&faces::yaml(published, &frames, Some(report)))?,
         Face::Ros2 => print_text(&faces::ros2(published, &frames))?,
         Face::Urdf => print_text(&faces::urdf(published, &frames))?,
-        Face::Json => print_json(&report)?,
+        Face::Json => print_json(report)?,
     }
     let page = crate::report::RunPage {
         poses: &poses,
-        names: &names,
+        names,
         written: handeye::Written::NAMED,
         setup,
         unit,
@@ -440,145 +510,8 @@ fn run_pixels(args: &Args, options: Options) -> Result<()> {
     after_result(args, report.verdict, |path| {
         let image = (camera.width > 0 && camera.height > 0)
             .then(|| (f64::from(camera.width), f64::from(camera.height)));
-        crate::report::write_pixels(path, &page, &report, image)
+        crate::report::write_pixels(path, &page, report, image)
     })
-}
-
-/// `calibrate --robot-world`: X and the target's pose together.
-fn run_robot_world(args: &Args) -> Result<()> {
-    for (flag, given) in [
-        ("--pairs", args.pairs.is_some()),
-        ("--tsai-opencv-filter", args.tsai_opencv_filter),
-    ] {
-        if given {
-            return Err(Error::InvalidParameter {
-                name: "robot-world",
-                message: format!("{flag} is not offered with --robot-world (yet)"),
-            }
-            .into());
-        }
-    }
-    let method = match args.method.as_deref() {
-        None => RobotWorldMethod::Refine,
-        Some(name) => name
-            .parse::<RobotWorldMethod>()
-            .map_err(|_| Error::InvalidParameter {
-                name: "method",
-                message: format!(
-                    "`{name}` is a hand–eye method; with --robot-world use one of {}",
-                    RobotWorldMethod::list_names()
-                ),
-            })?,
-    };
-    if method == RobotWorldMethod::Reprojection {
-        return run_robot_world_on_pixels(args);
-    }
-    pixels_only(args)?;
-    let (fix, replicates) = (args.fix.unwrap_or_default(), args.bootstrap);
-    let setup = args.input.setup();
-    // The frame names are checked before the input is read.
-    output_frames(args)?;
-    if let Some(path) = &args.report {
-        crate::report::check_writable(path)?;
-    }
-    let recording = read_all(&args.input, fix.reading())?;
-    let poses = recording.poses;
-    let written = recording.written;
-    let (time_offset, time_offset_sigma) = (recording.time_offset, recording.time_offset_sigma);
-    enough(
-        &args.input,
-        poses.len(),
-        3,
-        "to determine X and the target's pose",
-    )?;
-    let face = Face::chosen(args.output);
-    let report = match calibrate_robot_world(
-        &poses,
-        setup,
-        &RobotWorldOptions {
-            method,
-            fix,
-            replicates,
-            reject_outliers: args.reject_outliers,
-            outlier_deg: args.outlier_deg,
-            pose_names: recording.names.clone(),
-            written,
-            point: args.point,
-            joints: recording.joints,
-            robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
-            priors: args.prior.clone(),
-            refine_intrinsics: false,
-        },
-    ) {
-        Ok(report) => report,
-        Err(e) => return Err(refused(args, e, face, &poses, setup)),
-    };
-    let unit = length_unit(&report.reading.applied.apply(&poses, written));
-    if report.outliers.rejected && !report.outliers.poses.is_empty() {
-        crate::tell!(
-            "rejected {} outlier pose(s) of {}",
-            report.outliers.poses.len(),
-            report.outliers.poses.len() + report.poses
-        );
-    }
-    print_robot_world(
-        args,
-        &report,
-        RobotWorldInput {
-            poses: &poses,
-            names: &recording.names,
-            written,
-            unit,
-            mount: recording.camera_mount.as_ref(),
-            time_offset: (time_offset, time_offset_sigma),
-        },
-        face,
-    )
-}
-
-/// `calibrate --robot-world --method reprojection`: X and the target's pose on the pixels of the
-/// detections, printed as the pose-based robot-world result.
-fn run_robot_world_on_pixels(args: &Args) -> Result<()> {
-    let (camera, frames_read, names) =
-        pixel_input(&args.input, args.intrinsics.as_ref(), args.report.as_ref())?;
-    let setup = args.input.setup();
-    output_frames(args)?;
-    let face = Face::chosen(args.output);
-    let input = handeye::Input::Pixels {
-        frames: &frames_read,
-        camera: &camera,
-    };
-    let report = match calibrate_robot_world(
-        input,
-        setup,
-        &RobotWorldOptions {
-            method: RobotWorldMethod::Reprojection,
-            fix: args.fix.unwrap_or_default(),
-            point: args.point,
-            pose_names: names.clone(),
-            priors: args.prior.clone(),
-            reject_outliers: args.reject_outliers,
-            refine_intrinsics: args.refine_intrinsics,
-            ..RobotWorldOptions::default()
-        },
-    ) {
-        Ok(report) => report,
-        Err(e) => return Err(refused_on_pixels(e, face)),
-    };
-    let poses = frame_poses(&frames_read, start_poses(report.reprojection.as_ref()));
-    print_robot_world(
-        args,
-        &report,
-        RobotWorldInput {
-            poses: &poses,
-            names: &names,
-            written: handeye::Written::NAMED,
-            unit: length_unit(&poses),
-            mount: None,
-            time_offset: (None, None),
-        },
-        face,
-    )
 }
 
 /// What a robot-world result is printed with, besides the report.
@@ -597,17 +530,44 @@ struct RobotWorldInput<'a> {
 fn print_robot_world(
     args: &Args,
     report: &RobotWorldReport,
-    input: RobotWorldInput,
+    recorded: &Recorded,
     face: Face,
 ) -> Result<()> {
+    let pixel_poses;
+    let input = match recorded {
+        Recorded::Poses(recording) => {
+            let (poses, written) = (&recording.poses, recording.written);
+            let unit = length_unit(&report.reading.applied.apply(poses, written));
+            tell_rejected(
+                report.outliers.rejected,
+                report.outliers.poses.len(),
+                report.poses,
+            );
+            RobotWorldInput {
+                poses,
+                names: &recording.names,
+                written,
+                unit,
+                mount: recording.camera_mount.as_ref(),
+                time_offset: (recording.time_offset, recording.time_offset_sigma),
+            }
+        }
+        Recorded::Pixels { frames, names, .. } => {
+            pixel_poses = frame_poses(frames, start_poses(report.reprojection.as_ref()));
+            RobotWorldInput {
+                poses: &pixel_poses,
+                names,
+                written: handeye::Written::NAMED,
+                unit: length_unit(&pixel_poses),
+                mount: None,
+                time_offset: (None, None),
+            }
+        }
+    };
     let setup = report.setup;
     let frames = output_frames(args)?;
     let unit = input.unit;
-    if face != Face::Text {
-        for w in &report.warnings {
-            crate::tell!("warning: {}", faces::warning(w));
-        }
-    }
+    tell_warnings(&report.warnings, face);
     let source = format!("calibrate, robot-world method {}", report.method);
     let ros = matches!(face, Face::Ros2 | Face::Urdf);
     let ros_unit = if ros { faces::ros_unit(unit) } else { unit };
@@ -728,10 +688,37 @@ fn robot_world_yaml(r: &RobotWorldReport) -> String {
     )
 }
 
-/// The library's options from the command line.
+/// The library's options from the command line: the problem (`--robot-world`) with its method
+/// (`--method`), and the flags every problem shares.
 fn options(args: &Args) -> Result<Options> {
-    let replicates = args.bootstrap;
-    let method = match args.method.as_deref() {
+    let problem = if args.robot_world {
+        Problem::RobotWorld(robot_world_method(args)?)
+    } else {
+        Problem::HandEye(hand_eye_method(args)?)
+    };
+    Ok(Options {
+        problem,
+        // Every pair by default: on pose files it is the more accurate (docs/DECISIONS.md, "all
+        // pairs by default"); on streams consecutive samples are a camera period apart, tiny
+        // motions whose noise dominates.
+        pairing: args.pairs.unwrap_or(Pairing::All),
+        tsai: TsaiOptions {
+            opencv_filter: args.tsai_opencv_filter,
+        },
+        reject_outliers: args.reject_outliers,
+        outlier_deg: args.outlier_deg,
+        fix: args.fix.unwrap_or_default(),
+        replicates: args.bootstrap,
+        point: args.point,
+        priors: args.prior.clone(),
+        ..Options::default()
+    })
+}
+
+/// The hand–eye method of `--method` (default andreff); a robot-world one asks for
+/// `--robot-world`.
+fn hand_eye_method(args: &Args) -> Result<Method> {
+    Ok(match args.method.as_deref() {
         None => Method::Andreff,
         Some(name) => name.parse::<Method>().map_err(|e| {
             if name.parse::<RobotWorldMethod>().is_ok() {
@@ -743,23 +730,35 @@ fn options(args: &Args) -> Result<Options> {
                 e
             }
         })?,
-    };
-    Ok(Options {
-        method,
-        // Every pair by default: on pose files it is the more accurate (docs/DECISIONS.md, "all
-        // pairs by default"); on streams consecutive samples are a camera period apart, tiny
-        // motions whose noise dominates.
-        pairing: args.pairs.unwrap_or(Pairing::All),
-        tsai: TsaiOptions {
-            opencv_filter: args.tsai_opencv_filter,
-        },
-        reject_outliers: args.reject_outliers,
-        outlier_deg: args.outlier_deg,
-        fix: args.fix.unwrap_or_default(),
-        replicates,
-        point: args.point,
-        priors: args.prior.clone(),
-        ..Options::default()
+    })
+}
+
+/// The robot-world method of `--method` (default refine), after refusing the hand–eye flags
+/// `--robot-world` does not take.
+fn robot_world_method(args: &Args) -> Result<RobotWorldMethod> {
+    for (flag, given) in [
+        ("--pairs", args.pairs.is_some()),
+        ("--tsai-opencv-filter", args.tsai_opencv_filter),
+    ] {
+        if given {
+            return Err(Error::InvalidParameter {
+                name: "robot-world",
+                message: format!("{flag} is not offered with --robot-world (yet)"),
+            }
+            .into());
+        }
+    }
+    Ok(match args.method.as_deref() {
+        None => RobotWorldMethod::Refine,
+        Some(name) => name
+            .parse::<RobotWorldMethod>()
+            .map_err(|_| Error::InvalidParameter {
+                name: "method",
+                message: format!(
+                    "`{name}` is a hand–eye method; with --robot-world use one of {}",
+                    RobotWorldMethod::list_names()
+                ),
+            })?,
     })
 }
 

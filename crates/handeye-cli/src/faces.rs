@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use handeye::Unit;
 use handeye::{Error, Setup};
-use handeye::{Report, RobotWorldReport};
+use handeye::{HandEyeReport, RobotWorldReport};
 use quick_xml::events::{BytesText, Event};
 use yaml_rust2::{Yaml, YamlEmitter};
 
@@ -88,7 +88,7 @@ pub struct Published<'a> {
 
 impl<'a> Published<'a> {
     /// A batch result; `unit` from [`ros_unit`].
-    pub fn of(r: &'a Report, source: &'a str, unit: Option<Unit>) -> Self {
+    pub fn of(r: &'a HandEyeReport, source: &'a str, unit: Option<Unit>) -> Self {
         Self {
             x: &r.transform,
             frame: &r.frame,
@@ -298,7 +298,7 @@ fn yaml_map<const N: usize>(entries: [(&str, Yaml); N]) -> Yaml {
 /// metres, written by a YAML emitter (each frame name quoted where YAML would read it otherwise).
 /// handeye's own fields (X's frame name, the parent and child frames, and for a batch result its
 /// uncertainty, residuals and motions) are comments above it.
-pub fn yaml(p: Published<'_>, f: &Frames, batch: Option<&Report>) -> String {
+pub fn yaml(p: Published<'_>, f: &Frames, batch: Option<&HandEyeReport>) -> String {
     let [tx, ty, tz] = p.translation();
     let [qx, qy, qz, qw] = p.quaternion_xyzw();
     let kind = match p.setup {
@@ -541,7 +541,7 @@ pub fn at_point(point: [f64; 3], sigma: f64, unit: Option<Unit>) -> String {
 
 /// The summary for a person: X, the verdict and its reasons, the uncertainty, the residuals, and
 /// what to do next.
-pub fn text(r: &Report, f: &Frames, unit: Option<Unit>) -> String {
+pub fn text(r: &HandEyeReport, f: &Frames, unit: Option<Unit>) -> String {
     let u = unit_name(unit);
     let mut s = String::new();
     let _ = writeln!(

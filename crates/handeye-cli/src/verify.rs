@@ -101,7 +101,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let recording = read_all(&args.input, fix.reading())?;
     let options = Options {
-        method,
+        problem: handeye::Problem::HandEye(method),
         pairing: args.pairs,
         reject_outliers: args.reject_outliers,
         fix,
@@ -150,7 +150,7 @@ fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
         crate::calibrate::pixel_input(&args.input, args.intrinsics.as_ref(), None)?;
     let setup = args.input.setup();
     let options = Options {
-        method: Method::Reprojection,
+        problem: handeye::Problem::HandEye(Method::Reprojection),
         pairing: args.pairs,
         fix: args.fix.unwrap_or_default(),
         pose_names: names.clone(),

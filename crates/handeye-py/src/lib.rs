@@ -192,6 +192,9 @@ fn solve_opencv_poses<'py>(
     let report = py
         .allow_threads(|| handeye::calibrate(&poses, setup, &options))
         .map_err(|e| value_error(opencv_words::error(&e, said, opencv_words::HAND_EYE)))?;
+    let Some(report) = report.hand_eye() else {
+        unreachable!("the hand–eye problem's report")
+    };
     let (r, t) = (
         report.transform.rotation.matrix(),
         report.transform.translation.vector,
@@ -245,14 +248,17 @@ fn solve_opencv_robot_world<'py>(
             camera_from_target,
         })
         .collect();
-    let options = handeye::RobotWorldOptions {
-        method: method.parse().map_err(value_error)?,
+    let options = handeye::Options {
+        problem: handeye::Problem::RobotWorld(method.parse().map_err(value_error)?),
         ..Default::default()
     };
     let said = Some(Setup::EyeInHand);
     let report = py
-        .allow_threads(|| handeye::calibrate_robot_world(&poses, Setup::EyeInHand, &options))
+        .allow_threads(|| handeye::calibrate(&poses, Setup::EyeInHand, &options))
         .map_err(|e| value_error(opencv_words::error(&e, said, opencv_words::ROBOT_WORLD)))?;
+    let Some(report) = report.robot_world() else {
+        unreachable!("the robot-world problem's report")
+    };
     let parts = |t: &Transform| {
         let (r, v) = (t.rotation.matrix(), t.translation.vector);
         (
@@ -456,17 +462,24 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::identity() + kx * theta.sin() + kx * kx * (1.0 - theta.cos())
 }
 
-/// The whole batch calibration ([`handeye::calibrate`]): its report as JSON, the same
-/// object `handeye calibrate` prints (the Python layer parses it).
+/// The one batch calibration ([`handeye::calibrate`]) for every problem and input kind: pose
+/// pairs (`base_from_gripper`, `camera_from_target`) or, with `path`, a recording with detections
+/// and the camera's `intrinsics` (the calibration on the pixels, [`pixel_recording`]); X alone
+/// (hand–eye) or, with `robot_world`, X and the target's pose together. Its report as JSON, the
+/// same object `handeye calibrate` prints for the same input and flags (the Python layer parses
+/// it); on the pixels the records are named as there.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="andreff", setup="eye-in-hand", pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::Options::default().replicates, point=None, joints=None, prior=None, robot_model=None))]
+#[pyo3(signature = (base_from_gripper=None, camera_from_target=None, path=None, intrinsics=None, method=None, setup="eye-in-hand", robot_world=false, pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::Options::default().replicates, point=None, joints=None, prior=None, robot_model=None, refine_intrinsics=false, base_frame=None, gripper_frame=None, camera_frame=None, target_topic=None, tag_size=None, tag_id=None, camera_info_topic=None, time_offset=None, max_gap=0.1))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,
-    base_from_gripper: PyReadonlyArray3<'py, f64>,
-    camera_from_target: PyReadonlyArray3<'py, f64>,
-    method: &str,
+    base_from_gripper: Option<PyReadonlyArray3<'py, f64>>,
+    camera_from_target: Option<PyReadonlyArray3<'py, f64>>,
+    path: Option<PathBuf>,
+    intrinsics: Option<PathBuf>,
+    method: Option<&str>,
     setup: &str,
+    robot_world: bool,
     pairs: &str,
     tsai_opencv_filter: bool,
     reject_outliers: bool,
@@ -476,16 +489,94 @@ fn calibrate_report<'py>(
     joints: Option<Vec<Vec<f64>>>,
     prior: Option<Vec<String>>,
     robot_model: Option<std::path::PathBuf>,
+    refine_intrinsics: bool,
+    base_frame: Option<String>,
+    gripper_frame: Option<String>,
+    camera_frame: Option<String>,
+    target_topic: Option<String>,
+    tag_size: Option<f64>,
+    tag_id: Option<i32>,
+    camera_info_topic: Option<String>,
+    time_offset: Option<&Bound<'_, PyAny>>,
+    max_gap: f64,
 ) -> PyResult<String> {
-    let options = handeye::Options {
-        joints: checked_joints(joints)?,
-        robot_model: read_robot_model(robot_model)?,
-        priors: priors(prior)?,
-        reject_outliers,
-        fix: parse_fix(fix)?,
-        replicates: bootstrap,
-        point: checked_point(point)?,
-        ..calibration_options(method, pairs, tsai_opencv_filter)?
+    if let Some(path) = path {
+        let bag = TagBag {
+            frames: [base_frame, gripper_frame, camera_frame],
+            target_topic,
+            tag_size,
+            tag_id,
+            camera_info_topic,
+        };
+        let setup = parse_setup(setup)?;
+        let options = handeye::Options {
+            problem: if robot_world {
+                handeye::Problem::RobotWorld(handeye::RobotWorldMethod::Reprojection)
+            } else {
+                handeye::Problem::HandEye(handeye::Method::Reprojection)
+            },
+            // As the command line's report says it (every face prints one object).
+            pairing: handeye::Pairing::All,
+            fix: parse_fix(fix)?,
+            point: checked_point(point)?,
+            refine_intrinsics,
+            reject_outliers,
+            priors: priors(prior)?,
+            ..Default::default()
+        };
+        let reading = RecordingOptions {
+            setup,
+            time_offset: self::time_offset(time_offset)?,
+            max_gap,
+            ..RecordingOptions::default()
+        };
+        let (camera, read) =
+            py.allow_threads(|| pixel_recording(path, intrinsics, bag, &reading))?;
+        let options = handeye::Options {
+            pose_names: read.names,
+            ..options
+        };
+        let input = handeye::Input::Pixels {
+            frames: &read.frames,
+            camera: &camera,
+        };
+        let report = py
+            .allow_threads(|| handeye::calibrate(input, setup, &options))
+            .map_err(value_error)?;
+        return serde_json::to_string(&report).map_err(value_error);
+    }
+    let (Some(base_from_gripper), Some(camera_from_target)) =
+        (base_from_gripper, camera_from_target)
+    else {
+        return Err(value_error(
+            "give the poses (base_from_gripper and camera_from_target) or a recording with detections (path)",
+        ));
+    };
+    let options = if robot_world {
+        handeye::Options {
+            joints: checked_joints(joints)?,
+            robot_model: read_robot_model(robot_model)?,
+            priors: priors(prior)?,
+            problem: handeye::Problem::RobotWorld(
+                method.unwrap_or("refine").parse().map_err(value_error)?,
+            ),
+            fix: parse_fix(fix)?,
+            replicates: bootstrap,
+            reject_outliers,
+            point: checked_point(point)?,
+            ..Default::default()
+        }
+    } else {
+        handeye::Options {
+            joints: checked_joints(joints)?,
+            robot_model: read_robot_model(robot_model)?,
+            priors: priors(prior)?,
+            reject_outliers,
+            fix: parse_fix(fix)?,
+            replicates: bootstrap,
+            point: checked_point(point)?,
+            ..calibration_options(method.unwrap_or("andreff"), pairs, tsai_opencv_filter)?
+        }
     };
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
@@ -495,45 +586,7 @@ fn calibrate_report<'py>(
     serde_json::to_string(&report).map_err(value_error)
 }
 
-/// The robot-world calibration ([`handeye::calibrate_robot_world`]): its report as
-/// JSON, the same object `handeye calibrate --robot-world` prints.
-#[pyfunction]
-#[pyo3(signature = (base_from_gripper, camera_from_target, method="refine", setup="eye-in-hand", fix=None, bootstrap=handeye::Options::default().replicates, reject_outliers=false, point=None, joints=None, prior=None, robot_model=None))]
-#[allow(clippy::too_many_arguments)]
-fn robot_world_report<'py>(
-    py: Python<'py>,
-    base_from_gripper: PyReadonlyArray3<'py, f64>,
-    camera_from_target: PyReadonlyArray3<'py, f64>,
-    method: &str,
-    setup: &str,
-    fix: Option<&str>,
-    bootstrap: usize,
-    reject_outliers: bool,
-    point: Option<[f64; 3]>,
-    joints: Option<Vec<Vec<f64>>>,
-    prior: Option<Vec<String>>,
-    robot_model: Option<std::path::PathBuf>,
-) -> PyResult<String> {
-    let options = handeye::RobotWorldOptions {
-        joints: checked_joints(joints)?,
-        robot_model: read_robot_model(robot_model)?,
-        priors: priors(prior)?,
-        method: method.parse().map_err(value_error)?,
-        fix: parse_fix(fix)?,
-        replicates: bootstrap,
-        reject_outliers,
-        point: checked_point(point)?,
-        ..Default::default()
-    };
-    let setup = parse_setup(setup)?;
-    let poses = poses(&base_from_gripper, &camera_from_target)?;
-    let report = py
-        .allow_threads(|| handeye::calibrate_robot_world(&poses, setup, &options))
-        .map_err(value_error)?;
-    serde_json::to_string(&report).map_err(value_error)
-}
-
-/// A ROS 2 recording of a tag's detections, as the keywords of `calibrate_on_pixels` name it
+/// A ROS 2 recording of a tag's detections, as the keywords of `calibrate` on a path name it
 /// (the command line's `--base-frame … --target-topic … --tag-size …`).
 struct TagBag {
     frames: [Option<String>; 3],
@@ -606,94 +659,6 @@ fn pixel_recording(
     Ok((camera, read))
 }
 
-/// The calibration on the pixels of a recording with detections ([`pixel_recording`]: a JSON
-/// Lines file, or a ROS 2 recording of a tag's detections) ([`handeye::calibrate`] on
-/// [`handeye::Input::Pixels`], with `robot_world` [`handeye::calibrate_robot_world`]): its report
-/// as JSON, the same
-/// object `handeye calibrate INPUT --method reprojection [--intrinsics I] [--robot-world]` prints;
-/// the records named as there.
-#[pyfunction]
-#[pyo3(signature = (path, intrinsics=None, setup="eye-in-hand", robot_world=false, fix=None, point=None, refine_intrinsics=false, base_frame=None, gripper_frame=None, camera_frame=None, target_topic=None, tag_size=None, tag_id=None, camera_info_topic=None, time_offset=None, max_gap=0.1))]
-#[allow(clippy::too_many_arguments)]
-fn pixels_report(
-    py: Python<'_>,
-    path: PathBuf,
-    intrinsics: Option<PathBuf>,
-    setup: &str,
-    robot_world: bool,
-    fix: Option<&str>,
-    point: Option<[f64; 3]>,
-    refine_intrinsics: bool,
-    base_frame: Option<String>,
-    gripper_frame: Option<String>,
-    camera_frame: Option<String>,
-    target_topic: Option<String>,
-    tag_size: Option<f64>,
-    tag_id: Option<i32>,
-    camera_info_topic: Option<String>,
-    time_offset: Option<&Bound<'_, PyAny>>,
-    max_gap: f64,
-) -> PyResult<String> {
-    let setup = parse_setup(setup)?;
-    let fix = parse_fix(fix)?;
-    let point = checked_point(point)?;
-    let bag = TagBag {
-        frames: [base_frame, gripper_frame, camera_frame],
-        target_topic,
-        tag_size,
-        tag_id,
-        camera_info_topic,
-    };
-    let options = RecordingOptions {
-        setup,
-        time_offset: self::time_offset(time_offset)?,
-        max_gap,
-        ..RecordingOptions::default()
-    };
-    let (camera, read) = py.allow_threads(|| pixel_recording(path, intrinsics, bag, &options))?;
-    let (frames, pose_names) = (read.frames, read.names);
-    if robot_world {
-        let options = handeye::RobotWorldOptions {
-            method: handeye::RobotWorldMethod::Reprojection,
-            fix,
-            point,
-            pose_names,
-            refine_intrinsics,
-            ..Default::default()
-        };
-        let report = py
-            .allow_threads(|| {
-                let input = handeye::Input::Pixels {
-                    frames: &frames,
-                    camera: &camera,
-                };
-                handeye::calibrate_robot_world(input, setup, &options)
-            })
-            .map_err(value_error)?;
-        return serde_json::to_string(&report).map_err(value_error);
-    }
-    let options = handeye::Options {
-        method: handeye::Method::Reprojection,
-        // As the command line's report says it (every face prints one object).
-        pairing: handeye::Pairing::All,
-        fix,
-        point,
-        pose_names,
-        refine_intrinsics,
-        ..Default::default()
-    };
-    let report = py
-        .allow_threads(|| {
-            let input = handeye::Input::Pixels {
-                frames: &frames,
-                camera: &camera,
-            };
-            handeye::calibrate(input, setup, &options)
-        })
-        .map_err(value_error)?;
-    serde_json::to_string(&report).map_err(value_error)
-}
-
 /// A saved X checked on the pixels of a JSON Lines file with `detections`
 /// ([`handeye::verify`] on [`handeye::Input::Pixels`]): its result as JSON, the same object `handeye verify --x SAVED
 /// FILE --intrinsics I` prints.
@@ -720,7 +685,7 @@ fn verify_pixels_report(
     let (camera, read) =
         pixel_recording(path, Some(intrinsics), bag, &RecordingOptions::default())?;
     let options = handeye::Options {
-        method: handeye::Method::Reprojection,
+        problem: handeye::Problem::HandEye(handeye::Method::Reprojection),
         pairing: handeye::Pairing::All,
         fix,
         pose_names: read.names,
@@ -1047,7 +1012,7 @@ fn calibration_options(
     tsai_opencv_filter: bool,
 ) -> PyResult<handeye::Options> {
     Ok(handeye::Options {
-        method: method.parse::<Method>().map_err(value_error)?,
+        problem: handeye::Problem::HandEye(method.parse::<Method>().map_err(value_error)?),
         pairing: pairs.parse::<Pairing>().map_err(value_error)?,
         tsai: handeye::TsaiOptions {
             opencv_filter: tsai_opencv_filter,
@@ -1373,8 +1338,6 @@ fn _handeye(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(solve_opencv_sequences, m)?)?;
     m.add_function(wrap_pyfunction!(solve_opencv_robot_world, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate_report, m)?)?;
-    m.add_function(wrap_pyfunction!(robot_world_report, m)?)?;
-    m.add_function(wrap_pyfunction!(pixels_report, m)?)?;
     m.add_function(wrap_pyfunction!(verify_pixels_report, m)?)?;
     m.add_function(wrap_pyfunction!(advise_report, m)?)?;
     m.add_function(wrap_pyfunction!(verify_report, m)?)?;

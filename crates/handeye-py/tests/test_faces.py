@@ -539,3 +539,23 @@ def test_online_tells_the_poses_it_holds_out_as_the_command_line_does(name):
         cal.finish()
     said = [str(w.message)[len("held out: pose "):] for w in caught if str(w.message).startswith("held out: pose ")]
     assert said == cli, (said, cli)
+
+
+@pytest.mark.parametrize("robot_world", [False, True], ids=["hand-eye", "robot-world"])
+def test_calibrate_takes_the_pixels_as_calibrate_on_pixels_does(robot_world):
+    """One `calibrate` for every problem and input kind: a path (positional or `path=`) with its
+    intrinsics is the calibration on the pixels, `calibrate_on_pixels`' result field for field; a
+    method other than the fit to the pixels, or poses beside the path, is refused."""
+    name, setup = PIXEL_SETS[0]
+    path = TESTDATA / "pixels" / f"{name}.jsonl"
+    intrinsics = TESTDATA / "pixels" / f"{name}.intrinsics.yml"
+    alias = handeye.calibrate_on_pixels(path, intrinsics, setup=setup, robot_world=robot_world)
+    for one in (
+        handeye.calibrate(path, intrinsics=intrinsics, setup=setup, robot_world=robot_world),
+        handeye.calibrate(path=str(path), intrinsics=intrinsics, setup=setup, robot_world=robot_world),
+    ):
+        assert json.dumps(one, default=np.ndarray.tolist) == json.dumps(alias, default=np.ndarray.tolist)
+    with pytest.raises(ValueError, match="reprojection"):
+        handeye.calibrate(path, intrinsics=intrinsics, method="andreff")
+    with pytest.raises(ValueError, match="not both"):
+        handeye.calibrate(np.eye(4)[None], np.eye(4)[None], path=path, intrinsics=intrinsics)

@@ -7,7 +7,6 @@
 //! `cargo bench -p handeye --bench solvers`
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use handeye::calibrate::batch::{Options, calibrate};
 use handeye::check::outliers::pose_outliers;
 use handeye::check::quality::OUTLIER_DEG;
 use handeye::check::readings::check_readings;
@@ -15,6 +14,7 @@ use handeye::io::{Format, read_pose_file};
 use handeye::sim::{SimConfig, simulate};
 use handeye::solve::{RobotWorldMethod, robot_world};
 use handeye::{Method, Pairing, PosePair, Setup, motion_pairs, solve};
+use handeye::{Options, Problem, calibrate};
 use std::hint::black_box;
 
 fn solvers(c: &mut Criterion) {
@@ -94,7 +94,7 @@ fn drop_in_datasets() -> Vec<(&'static str, Vec<PosePair>)> {
 fn drop_in(c: &mut Criterion) {
     let mut group = c.benchmark_group("drop_in");
     let options = Options {
-        method: Method::Tsai,
+        problem: Problem::HandEye(Method::Tsai),
         pairing: Pairing::All,
         ..Options::default()
     };
@@ -103,7 +103,10 @@ fn drop_in(c: &mut Criterion) {
             b.iter(|| options.solve(black_box(p), Setup::EyeInHand))
         });
         group.bench_with_input(BenchmarkId::new("calibrate", name), &poses, |b, p| {
-            b.iter(|| calibrate(black_box(p), Setup::EyeInHand, &options))
+            b.iter(|| {
+                calibrate(black_box(p), Setup::EyeInHand, &options)
+                    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            })
         });
         group.bench_with_input(BenchmarkId::new("readings", name), &poses, |b, p| {
             b.iter(|| check_readings(black_box(p), Setup::EyeInHand, handeye::Written::NAMED))

@@ -6,7 +6,7 @@
 
 use handeye::errors_against_truth;
 use handeye::sim::{SimConfig, simulate};
-use handeye::{Method, Pairing, Setup};
+use handeye::{Method, Pairing, Problem, Setup};
 use handeye::{Options, calibrate};
 
 fn main() -> Result<(), handeye::Error> {
@@ -24,11 +24,12 @@ fn main() -> Result<(), handeye::Error> {
             for s in 0..40 {
                 let sim = simulate(&SimConfig::default(), 5, s);
                 let options = Options {
-                    method,
+                    problem: Problem::HandEye(method),
                     pairing,
                     ..Options::default()
                 };
-                let r = calibrate(&sim.poses, Setup::EyeInHand, &options)?;
+                let r = calibrate(&sim.poses, Setup::EyeInHand, &options)
+                    .map(|r| r.into_hand_eye().expect("the hand–eye report"))?;
                 let truth = sim.gripper_from_camera;
                 let e = errors_against_truth(&r.transform, &truth);
                 let t_err = e.trans_rel * truth.translation.vector.norm();

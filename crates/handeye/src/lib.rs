@@ -20,15 +20,16 @@
 //!   `‖t − t̂‖ / ‖t‖`; rmsR = `‖R̂ − R‖_F / 3`. Without truth, the A X − X B residuals.
 //!
 //! # Entry points
-//! - Batch: [`calibrate()`] (readings, outliers, uncertainty, held-out check: the
-//!   report every face prints) on top of [`solve()`] with a [`Method`] over
-//!   [`motion_pairs`]; from pose pairs or, on the pixels, from the target's detections with the
-//!   camera's intrinsics ([`Input`]), as are [`calibrate_robot_world`] and [`verify()`].
+//! - Batch: [`calibrate()`], the one job (readings, outliers, the problem's solve, uncertainty,
+//!   checks: the [`Report`] every face prints) for every [`Problem`] of [`Options`]: hand–eye on
+//!   top of [`solve()`] with a [`Method`] over [`motion_pairs`], or robot-world; from pose pairs
+//!   or, on the pixels, from the target's detections with the camera's intrinsics ([`Input`]), as
+//!   is [`verify()`].
 //! - Online: [`OnlineCalibrator`], the one online calibrator every face drives (the paper's
 //!   selection, with [`Estimator::Accumulate`] the `track::Tracker`, and on the pixels
 //!   ([`OnlineCalibrator::on_pixels`]) the batch calibration on a doubling schedule).
 //! - Robot-world (X and the target pose together, A X = Z B):
-//!   [`calibrate_robot_world`] on top of `solve::shah`, `solve::li`,
+//!   [`calibrate()`] with [`Problem::RobotWorld`] on top of `solve::shah`, `solve::li`,
 //!   `solve::refine_robot_world`; online, the sums of
 //!   `solve::robot_world_accumulate::RobotWorldAccumulator` in every `track::Tracker` report.
 //! - What to record next: [`advise`]. Reading any input (a pose file, two stamped streams, a
@@ -114,13 +115,14 @@ pub use check::quality::errors_against_truth;
 pub use check::stream::StreamReading;
 pub use check::uncertainty::Uncertainty;
 // The jobs: batch, robot-world, advice.
-pub use calibrate::Input;
 pub use calibrate::advice::{Advice, AdviseOptions, Pivot, advise};
-pub use calibrate::batch::{Assessment, Fix, Options, Report, calibrate};
+pub use calibrate::input::Input;
 pub use calibrate::low_dof::LowDofReport;
-pub use calibrate::pixels::ReprojectionSummary;
-pub use calibrate::robot_world::{RobotWorldOptions, RobotWorldReport, calibrate_robot_world};
+pub use calibrate::options::{Fix, Options, Problem};
+pub use calibrate::pipeline::calibrate;
+pub use calibrate::report::{HandEyeReport, Report, ReprojectionSummary, RobotWorldReport};
 pub use calibrate::verify::{Consistency, SavedX, Verification, verify};
+pub use model::findings::Assessment;
 // Online: the paper's calibrator and the accumulating estimator.
 pub use online::select::{AdaptiveParams, Selection};
 pub use online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};

@@ -200,7 +200,7 @@ fn following_the_advice_shrinks_the_error_as_predicted() {
 
 #[test]
 fn the_held_out_check_finds_a_mispaired_frame_and_nothing_on_clean_data() {
-    use handeye::calibrate::batch::{Options, calibrate};
+    use handeye::{Options, calibrate};
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/kinhec/pairs");
     for name in [
         "nominal_stations_eih_s0",
@@ -220,7 +220,9 @@ fn the_held_out_check_finds_a_mispaired_frame_and_nothing_on_clean_data() {
             pose_names: (0..poses.len()).map(|i| format!("pose {i}")).collect(),
             ..Options::default()
         };
-        let clean = calibrate(&poses, setup, &options).unwrap();
+        let clean = calibrate(&poses, setup, &options)
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            .unwrap();
         let h = clean.held_out.as_ref().unwrap();
         println!(
             "{name}: median held-out gap {:.3}° / {:.2} mm, {} disagree",
@@ -231,7 +233,8 @@ fn the_held_out_check_finds_a_mispaired_frame_and_nothing_on_clean_data() {
         assert!(h.exact && h.disagree.len() <= 1, "{name}: {:?}", h.disagree);
         // The camera frame of pose 7 paired with the robot pose of pose 20: a frame mispaired.
         poses[7].camera_from_target = poses[20].camera_from_target;
-        let report = calibrate(&poses, setup, &options);
+        let report = calibrate(&poses, setup, &options)
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"));
         let names: Vec<String> = match &report {
             Ok(r) => r
                 .held_out
@@ -414,6 +417,7 @@ fn a_goal_says_when_you_are_done_and_after_which_motion_you_will_be() {
             "{name}"
         );
         let bootstrap = calibrate(&poses, setup, &Options::default())
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
             .unwrap()
             .uncertainty;
         for (ours, theirs) in [

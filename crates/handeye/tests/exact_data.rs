@@ -106,7 +106,9 @@ fn the_batch_flags_no_outlier_on_exact_data() {
     for (name, setup, poses, truth) in exact_streams() {
         let found = pose_outliers(&poses, setup, 3.0);
         assert!(found.poses.is_empty(), "{name}: {:?}", found.poses);
-        let report = calibrate(&poses, setup, &Options::default()).unwrap();
+        let report = calibrate(&poses, setup, &Options::default())
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            .unwrap();
         assert!(
             report.outliers.poses.is_empty(),
             "{name}: {:?}",

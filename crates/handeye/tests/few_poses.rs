@@ -27,7 +27,9 @@ fn beyond_three_sigma(n: usize, subsets: usize) -> (usize, usize) {
                     let mut pick = sample(&mut rng, poses.len(), n).into_vec();
                     pick.sort_unstable();
                     let subset: Vec<_> = pick.iter().map(|&i| poses[i]).collect();
-                    let Ok(report) = calibrate(&subset, setup, &Options::default()) else {
+                    let Ok(report) = calibrate(&subset, setup, &Options::default())
+                        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                    else {
                         continue; // a refusal is an honest answer
                     };
                     answered += 1;

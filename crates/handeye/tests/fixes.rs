@@ -114,7 +114,7 @@ fn read(path: &Path) -> Recording {
     Recording::read(&source, &RecordingOptions::default()).unwrap()
 }
 
-fn solve(r: &Recording, setup: Setup, fix: Fix) -> handeye::Result<handeye::Report> {
+fn solve(r: &Recording, setup: Setup, fix: Fix) -> handeye::Result<handeye::HandEyeReport> {
     calibrate(
         &r.poses,
         setup,
@@ -126,6 +126,7 @@ fn solve(r: &Recording, setup: Setup, fix: Fix) -> handeye::Result<handeye::Repo
             ..Options::default()
         },
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
 }
 
 #[test]

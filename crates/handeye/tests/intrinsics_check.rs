@@ -53,6 +53,7 @@ fn run_with(
         sim.setup,
         &Options::default(),
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     .ok()?;
     let (deg, t) = gap(&r.transform, &sim.x);
     let sigmas = (deg / r.uncertainty.rotation_deg).max(t / r.uncertainty.translation);

@@ -7,8 +7,8 @@
 use handeye::model::pose::rotation_angle_between;
 use handeye::sim::{LowDofConfig, simulate_low_dof};
 use handeye::{
-    Component, Degeneracy, Error, LowDofMissing, Method, Options, Pairing, PosePair, Prior, Setup,
-    Transform, Warning, calibrate,
+    Component, Degeneracy, Error, LowDofMissing, Method, Options, Pairing, PosePair, Prior,
+    Problem, Setup, Transform, Warning, calibrate,
 };
 use nalgebra::Vector3;
 
@@ -74,11 +74,13 @@ fn noise_free_scara_is_exact_with_the_true_height() {
                 (Method::Refine, Pairing::Consecutive),
             ] {
                 let o = Options {
-                    method,
+                    problem: Problem::HandEye(method),
                     pairing,
                     ..options(vec![prior(Component::Tz, tz, 0.0)])
                 };
-                let r = calibrate(&s.poses, setup, &o).unwrap();
+                let r = calibrate(&s.poses, setup, &o)
+                    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                    .unwrap();
                 let (er, et) = errors(&r.transform, &s.x);
                 assert!(
                     er.to_radians() < 1e-9 && et < 1e-9,
@@ -95,7 +97,9 @@ fn scara_without_a_prior_is_refused_naming_it() {
     for setup in SETUPS {
         for seed in 0..SEEDS {
             let s = simulate_low_dof(&scara(setup), seed, 0);
-            let e = calibrate(&s.poses, setup, &options(vec![])).unwrap_err();
+            let e = calibrate(&s.poses, setup, &options(vec![]))
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                .unwrap_err();
             let (missing, axis) =
                 low_dof_reason(&e).unwrap_or_else(|| panic!("{setup} {seed}: {e}"));
             assert_eq!(missing, LowDofMissing::Prior(Component::Tz));
@@ -110,6 +114,7 @@ fn scara_without_a_prior_is_refused_naming_it() {
                 setup,
                 &options(vec![prior(Component::Tx, 0.0, 0.0)]),
             )
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
             .unwrap_err();
             assert_eq!(
                 low_dof_reason(&e).map(|r| r.0),
@@ -133,11 +138,12 @@ fn scara_with_the_true_height_is_within_three_sigma() {
                 Method::Refine
             };
             let o = Options {
-                method,
+                problem: Problem::HandEye(method),
                 ..options(vec![prior(Component::Tz, tz, 0.0)])
             };
-            let r =
-                calibrate(&s.poses, setup, &o).unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
+            let r = calibrate(&s.poses, setup, &o)
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
             assert_eq!(r.transform.translation.vector.z, tz, "tz is the prior's");
             assert_eq!(r.prior["tz"].value, tz);
             assert_eq!(r.prior["tz"].sigma, 0.0);
@@ -172,6 +178,7 @@ fn a_prior_with_a_sigma_is_the_reported_sigma_of_its_component() {
                 setup,
                 &options(vec![prior(Component::Tz, tz, 0.0)]),
             )
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
             .unwrap();
             let sigma = 0.002;
             let r = calibrate(
@@ -179,6 +186,7 @@ fn a_prior_with_a_sigma_is_the_reported_sigma_of_its_component() {
                 setup,
                 &options(vec![prior(Component::Tz, tz + 0.001, sigma)]),
             )
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
             .unwrap();
             let data = exact.uncertainty.covariance[5][5].sqrt();
             let reported = r.uncertainty.covariance[5][5].sqrt();
@@ -188,7 +196,7 @@ fn a_prior_with_a_sigma_is_the_reported_sigma_of_its_component() {
             assert!(reported >= sigma && reported <= (sigma * sigma + data * data).sqrt() + 1e-12);
             assert_eq!(r.prior["tz"].sigma, sigma);
             assert_eq!(r.transform.translation.vector.z, tz + 0.001);
-            let at = |r: &handeye::Report| r.uncertainty.at_point.as_ref().unwrap().sigma;
+            let at = |r: &handeye::HandEyeReport| r.uncertainty.at_point.as_ref().unwrap().sigma;
             assert!(at(&r) >= sigma && at(&r) > at(&exact));
         }
     }
@@ -207,6 +215,7 @@ fn a_prior_on_a_determined_component_keeps_the_data_and_warns() {
             prior(Component::Tx, t.x + 0.05, 0.001),
         ]),
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     .unwrap();
     assert!(!r.prior.contains_key("tx"));
     assert!((r.transform.translation.vector.x - t.x).abs() < 0.01);
@@ -226,6 +235,7 @@ fn a_prior_on_a_determined_component_keeps_the_data_and_warns() {
             prior(Component::Tx, t.x, 0.001),
         ]),
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     .unwrap();
     assert!(
         !r.warnings
@@ -247,6 +257,7 @@ fn five_axis_arm_is_determined_without_a_prior() {
             };
             let s = simulate_low_dof(&config, seed, 0);
             let r = calibrate(&s.poses, setup, &options(vec![]))
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
                 .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
             assert!(r.low_dof.is_none() && r.prior.is_empty());
             let (er, et) = errors(&r.transform, &s.x);
@@ -269,7 +280,9 @@ fn gantry_with_a_wrist_about_x_needs_tx() {
                 ..scara(setup)
             };
             let s = simulate_low_dof(&config, seed, 0);
-            let e = calibrate(&s.poses, setup, &options(vec![])).unwrap_err();
+            let e = calibrate(&s.poses, setup, &options(vec![]))
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                .unwrap_err();
             assert_eq!(
                 low_dof_reason(&e).map(|r| r.0),
                 Some(LowDofMissing::Prior(Component::Tx)),
@@ -282,6 +295,7 @@ fn gantry_with_a_wrist_about_x_needs_tx() {
                 setup,
                 &options(vec![prior(Component::Tx, tx, 0.0)]),
             )
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
             .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
             assert_eq!(r.transform.translation.vector.x, tx);
             let (er, et) = errors(&r.transform, &s.x);
@@ -306,7 +320,9 @@ fn a_free_direction_off_the_axes_is_refused_naming_it() {
                 vec![],
                 vec![prior(Component::Tz, s.x.translation.vector.z, 0.0)],
             ] {
-                let e = calibrate(&s.poses, setup, &options(priors)).unwrap_err();
+                let e = calibrate(&s.poses, setup, &options(priors))
+                    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                    .unwrap_err();
                 let (missing, axis) = low_dof_reason(&e).unwrap_or_else(|| panic!("{e}"));
                 assert_eq!(missing, LowDofMissing::NotStatable);
                 let off = Vector3::from(axis).dot(&Vector3::from(tilted)).abs();
@@ -333,6 +349,7 @@ fn a_prior_in_another_unit_is_refused_naming_the_unit() {
             setup,
             &options(vec![prior(Component::Tz, tz * 1e3, 1.0)]),
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
         .unwrap_err();
         assert!(
             matches!(e, Error::InvalidParameter { name: "prior", .. }),
@@ -345,6 +362,7 @@ fn a_prior_in_another_unit_is_refused_naming_the_unit() {
             setup,
             &options(vec![prior(Component::Tz, tz, 0.001)]),
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
         .unwrap();
         // Metres on a recording in millimetres: refused too, with the value in millimetres
         // offered (nothing in the data tells: the motions leave tz free, and the answer was
@@ -359,7 +377,9 @@ fn a_prior_in_another_unit_is_refused_naming_the_unit() {
                 p
             })
             .collect();
-        let e = calibrate(&mm, setup, &options(vec![prior(Component::Tz, tz, 0.001)])).unwrap_err();
+        let e = calibrate(&mm, setup, &options(vec![prior(Component::Tz, tz, 0.001)]))
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            .unwrap_err();
         let words = e.to_string();
         assert!(
             matches!(e, Error::InvalidParameter { name: "prior", .. }),
@@ -373,18 +393,25 @@ fn a_prior_in_another_unit_is_refused_naming_the_unit() {
             setup,
             &options(vec![prior(Component::Tz, tz * 1e3, 1.0)]),
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
         .unwrap();
         assert_eq!(r.transform.translation.vector[2], tz * 1e3);
         let metres: Prior = format!("tz={tz}+-0.001m").parse().unwrap();
-        let told = calibrate(&mm, setup, &options(vec![metres])).unwrap();
+        let told = calibrate(&mm, setup, &options(vec![metres]))
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            .unwrap();
         let d = told.transform.translation.vector - r.transform.translation.vector;
         assert!(d.norm() < 1e-9 * 1e3, "{d}");
         // Millimetres named on a recording in metres: converted.
         let named: Prior = format!("tz={}mm", tz * 1e3).parse().unwrap();
-        let r = calibrate(&s.poses, setup, &options(vec![named])).unwrap();
+        let r = calibrate(&s.poses, setup, &options(vec![named]))
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            .unwrap();
         assert!((r.transform.translation.vector[2] - tz).abs() < 1e-12);
         // A camera at the flange's height: 0 is a value in any unit.
-        calibrate(&mm, setup, &options(vec![prior(Component::Tz, 0.0, 1.0)])).unwrap();
+        calibrate(&mm, setup, &options(vec![prior(Component::Tz, 0.0, 1.0)]))
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            .unwrap();
     }
 }
 
@@ -401,7 +428,8 @@ fn a_weak_direction_of_a_low_dof_x_advises_what_the_robot_can_record() {
             few,
             Setup::EyeInHand,
             &options(vec![prior(Component::Tz, tz, 0.001)]),
-        ) else {
+        )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report")) else {
             continue;
         };
         for w in &r.warnings {
@@ -456,7 +484,9 @@ fn advice_with_the_prior_turns_about_the_robots_axis_with_the_calibrations_sigma
             let words = advice.low_dof.as_deref().unwrap();
             assert!(words.contains("X's tz is the prior's"), "{words}");
             let current = advice.current.unwrap();
-            let r = calibrate(&s.poses, setup, &options(vec![given])).unwrap();
+            let r = calibrate(&s.poses, setup, &options(vec![given]))
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                .unwrap();
             ratios.push(current.translation / r.uncertainty.translation);
             rotation_ratios.push(current.rotation_deg / r.uncertainty.rotation_deg);
             // Every turn suggested is about the robot's one axis, as the gripper sees it.

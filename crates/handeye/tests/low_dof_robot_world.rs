@@ -8,8 +8,8 @@
 use handeye::model::pose::rotation_angle_between;
 use handeye::sim::{LowDofConfig, simulate_low_dof};
 use handeye::{
-    Component, Degeneracy, Error, Fix, LowDofMissing, Options, Pairing, PosePair, Prior,
-    RobotWorldOptions, Setup, Transform, calibrate, calibrate_robot_world,
+    Component, Degeneracy, Error, Fix, LowDofMissing, Options, Pairing, PosePair, Prior, Problem,
+    Setup, Transform, calibrate,
 };
 
 const SETUPS: [Setup; 2] = [Setup::EyeInHand, Setup::EyeToHand];
@@ -24,10 +24,11 @@ fn prior(value: f64, sigma: f64) -> Prior {
     }
 }
 
-fn options(priors: Vec<Prior>) -> RobotWorldOptions {
-    RobotWorldOptions {
+fn options(priors: Vec<Prior>) -> Options {
+    Options {
+        problem: Problem::ROBOT_WORLD,
         priors,
-        ..RobotWorldOptions::default()
+        ..Options::default()
     }
 }
 
@@ -66,7 +67,8 @@ fn noise_free_scara_gives_x_and_the_target_exactly() {
         for seed in 0..5 {
             let s = simulate_low_dof(&scara(setup).noise_free(), seed, 0);
             let tz = s.x.translation.vector.z;
-            let r = calibrate_robot_world(&s.poses, setup, &options(vec![prior(tz, 0.0)]))
+            let r = calibrate(&s.poses, setup, &options(vec![prior(tz, 0.0)]))
+                .map(|r| r.into_robot_world().expect("the robot-world report"))
                 .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
             let (xr, xt) = errors(&r.transform, &s.x);
             let (yr, yt) = errors(&r.target_transform, &s.fixed);
@@ -91,7 +93,8 @@ fn a_wrong_height_moves_x_and_the_target_together_along_the_axis() {
         for seed in 0..5 {
             let s = simulate_low_dof(&scara(setup).noise_free(), seed, 0);
             let tz = s.x.translation.vector.z;
-            let r = calibrate_robot_world(&s.poses, setup, &options(vec![prior(tz + d, 0.0)]))
+            let r = calibrate(&s.poses, setup, &options(vec![prior(tz + d, 0.0)]))
+                .map(|r| r.into_robot_world().expect("the robot-world report"))
                 .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
             assert!(
                 r.residual.translation_max < 1e-9 && r.residual.rotation_deg_max < 1e-7,
@@ -130,7 +133,8 @@ fn scara_with_the_true_height_is_within_three_sigma() {
         for seed in 0..SEEDS {
             let s = simulate_low_dof(&scara(setup), seed, 0);
             let tz = s.x.translation.vector.z;
-            let r = calibrate_robot_world(&s.poses, setup, &options(vec![prior(tz, 0.0)]))
+            let r = calibrate(&s.poses, setup, &options(vec![prior(tz, 0.0)]))
+                .map(|r| r.into_robot_world().expect("the robot-world report"))
                 .unwrap_or_else(|e| panic!("{setup} {seed}: {e}"));
             assert_eq!(r.transform.translation.vector.z, tz, "tz is the prior's");
             assert_eq!(r.prior["tz"].sigma, 0.0);
@@ -168,11 +172,12 @@ fn a_prior_with_a_sigma_widens_x_and_the_target_along_the_axis() {
             let s = simulate_low_dof(&scara(setup), seed, 0);
             let tz = s.x.translation.vector.z;
             let sigma = 0.002;
-            let exact =
-                calibrate_robot_world(&s.poses, setup, &options(vec![prior(tz, 0.0)])).unwrap();
-            let r =
-                calibrate_robot_world(&s.poses, setup, &options(vec![prior(tz + 0.001, sigma)]))
-                    .unwrap();
+            let exact = calibrate(&s.poses, setup, &options(vec![prior(tz, 0.0)]))
+                .map(|r| r.into_robot_world().expect("the robot-world report"))
+                .unwrap();
+            let r = calibrate(&s.poses, setup, &options(vec![prior(tz + 0.001, sigma)]))
+                .map(|r| r.into_robot_world().expect("the robot-world report"))
+                .unwrap();
             assert_eq!(r.transform.translation.vector.z, tz + 0.001);
             assert_eq!(r.prior["tz"].sigma, sigma);
             let reported = r.uncertainty.covariance[5][5].sqrt();
@@ -199,7 +204,9 @@ fn scara_without_a_prior_is_refused_in_the_hand_eye_words() {
     for setup in SETUPS {
         for seed in 0..SEEDS {
             let s = simulate_low_dof(&scara(setup), seed, 0);
-            let e = calibrate_robot_world(&s.poses, setup, &options(vec![])).unwrap_err();
+            let e = calibrate(&s.poses, setup, &options(vec![]))
+                .map(|r| r.into_robot_world().expect("the robot-world report"))
+                .unwrap_err();
             assert_eq!(
                 low_dof_missing(&e),
                 Some(LowDofMissing::Prior(Component::Tz)),
@@ -213,6 +220,7 @@ fn scara_without_a_prior_is_refused_in_the_hand_eye_words() {
                     ..Options::default()
                 },
             )
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
             .unwrap_err();
             assert_eq!(e.to_string(), hand_eye.to_string());
             assert!(e.to_string().contains("--prior tz="), "{e}");
@@ -225,7 +233,8 @@ fn a_prior_in_another_unit_is_refused_as_for_hand_eye() {
     for setup in SETUPS {
         let s = simulate_low_dof(&scara(setup), 3, 0);
         let tz = s.x.translation.vector.z;
-        let e = calibrate_robot_world(&s.poses, setup, &options(vec![prior(tz * 1e3, 1.0)]))
+        let e = calibrate(&s.poses, setup, &options(vec![prior(tz * 1e3, 1.0)]))
+            .map(|r| r.into_robot_world().expect("the robot-world report"))
             .unwrap_err();
         assert!(
             matches!(e, Error::InvalidParameter { name: "prior", .. }),
@@ -234,7 +243,9 @@ fn a_prior_in_another_unit_is_refused_as_for_hand_eye() {
         assert!(e.to_string().contains("another length unit"), "{e}");
         // Named in millimetres: converted.
         let named: Prior = format!("tz={}mm", tz * 1e3).parse().unwrap();
-        let r = calibrate_robot_world(&s.poses, setup, &options(vec![named])).unwrap();
+        let r = calibrate(&s.poses, setup, &options(vec![named]))
+            .map(|r| r.into_robot_world().expect("the robot-world report"))
+            .unwrap();
         assert!((r.transform.translation.vector.z - tz).abs() < 1e-12);
     }
 }
@@ -246,7 +257,9 @@ fn an_outlier_is_named_and_left_out_on_request() {
         let tz = s.x.translation.vector.z;
         let mut poses = s.poses.clone();
         poses[7].camera_from_target = poses[19].camera_from_target;
-        match calibrate_robot_world(&poses, setup, &options(vec![prior(tz, 0.0)])) {
+        match calibrate(&poses, setup, &options(vec![prior(tz, 0.0)]))
+            .map(|r| r.into_robot_world().expect("the robot-world report"))
+        {
             Ok(r) => {
                 assert!(!r.warnings.is_empty(), "{setup}: a silent answer");
                 assert!(
@@ -257,14 +270,16 @@ fn an_outlier_is_named_and_left_out_on_request() {
             }
             Err(e) => assert!(e.to_string().contains("pose 7"), "{setup}: {e}"),
         }
-        let r = calibrate_robot_world(
+        let r = calibrate(
             &poses,
             setup,
-            &RobotWorldOptions {
+            &Options {
+                problem: Problem::ROBOT_WORLD,
                 reject_outliers: true,
                 ..options(vec![prior(tz, 0.0)])
             },
         )
+        .map(|r| r.into_robot_world().expect("the robot-world report"))
         .unwrap_or_else(|e| panic!("{setup}: {e}"));
         let (xr, xt) = errors(&r.transform, &s.x);
         let (yr, yt) = errors(&r.target_transform, &s.fixed);
@@ -292,11 +307,14 @@ fn an_inverted_recording_is_refused_or_read_right() {
             })
             .collect();
         for fix in [Fix::Refuse, Fix::Auto] {
-            let o = RobotWorldOptions {
+            let o = Options {
+                problem: Problem::ROBOT_WORLD,
                 fix,
                 ..options(vec![prior(tz, 0.0)])
             };
-            match calibrate_robot_world(&inverted, setup, &o) {
+            match calibrate(&inverted, setup, &o)
+                .map(|r| r.into_robot_world().expect("the robot-world report"))
+            {
                 // Refused: for the reading, or for motions that do not fix X with the reading
                 // named as the thing to check.
                 Err(e) => {

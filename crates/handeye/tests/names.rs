@@ -7,7 +7,7 @@ use std::str::FromStr;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
-use handeye::calibrate::batch::Fix;
+use handeye::Fix;
 use handeye::experiment::{Experiment, OnlineMethod};
 use handeye::io::Format;
 use handeye::model::findings::Reading;

@@ -42,6 +42,7 @@ fn online_and_batch_give_one_answer_on_the_ethz_simulation() {
             ..Options::default()
         },
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     .unwrap();
     // The batch counts the robot's held poses once (1,050 images at 410 robot poses): X's
     // translation, 1.7 cm long, has a one-sigma of 2.4 cm and is weakly determined along the

@@ -40,12 +40,13 @@ fn batch(
     frames: &[Frame],
     camera: &handeye::Intrinsics,
     setup: Setup,
-) -> handeye::Result<handeye::Report> {
+) -> handeye::Result<handeye::HandEyeReport> {
     handeye::calibrate(
         handeye::Input::Pixels { frames, camera },
         setup,
         &Options::default(),
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
 }
 
 /// The largest difference of the entries of two transforms' matrices (the angle of R̂ᵀR from its

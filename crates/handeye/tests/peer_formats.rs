@@ -49,6 +49,7 @@ fn x_of(r: &Recording, setup: Setup) -> [[f64; 4]; 4] {
             ..Options::default()
         },
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     .unwrap()
     .x
     .matrix

@@ -10,12 +10,12 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::calibrate::batch::{Options, calibrate};
 use handeye::check::readings::check_readings;
 use handeye::io::{BagFrames, Format, Recording, RecordingOptions, Source};
 use handeye::model::pose::rotation_angle_between;
 use handeye::track::{TrackOptions, Tracker};
 use handeye::{Assessment, Error, Pairing, PosePair, Reading, Setup, Transform, Warning, Written};
+use handeye::{Options, calibrate};
 
 fn testdata() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata")
@@ -64,7 +64,9 @@ fn swapped_frames_on_small_first_motions_are_questionable_not_good() {
     assert!(check.better.is_none(), "{check:?}");
     let alike: Vec<Reading> = check.alike.iter().map(|f| f.reading).collect();
     assert!(alike.contains(&Reading::CameraInverted), "{check:?}");
-    let report = calibrate(first, Setup::EyeInHand, &options(r.written)).unwrap();
+    let report = calibrate(first, Setup::EyeInHand, &options(r.written))
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        .unwrap();
     assert_eq!(report.verdict, Assessment::Questionable);
     let warning = report
         .warnings
@@ -78,7 +80,9 @@ fn swapped_frames_on_small_first_motions_are_questionable_not_good() {
     );
     assert!(words.contains("too small or too alike"), "{words}");
     // The whole recording tells: refused as misread.
-    match calibrate(&r.poses, Setup::EyeInHand, &options(r.written)) {
+    match calibrate(&r.poses, Setup::EyeInHand, &options(r.written))
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+    {
         Err(Error::Misread { readings, .. }) => {
             assert!(readings.contains(&Reading::CameraInverted), "{readings:?}")
         }
@@ -96,7 +100,9 @@ fn the_right_frames_on_the_same_motions_raise_nothing() {
         for n in [16, 32, r.poses.len()] {
             let check = check_readings(&r.poses[..n], setup, r.written);
             assert!(check.alike.is_empty(), "{name} n={n}: {check:?}");
-            let report = calibrate(&r.poses[..n], setup, &options(r.written)).unwrap();
+            let report = calibrate(&r.poses[..n], setup, &options(r.written))
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                .unwrap();
             assert_eq!(report.verdict, Assessment::Good, "{name} n={n}: {report:?}");
         }
     }

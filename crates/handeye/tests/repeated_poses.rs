@@ -15,9 +15,9 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::calibrate::batch::{Options, Report, calibrate};
 use handeye::check::quality::errors_against_truth;
 use handeye::io::{Format, read_pose_file, transform_from_json};
+use handeye::{HandEyeReport as Report, Options, calibrate};
 use handeye::{Pairing, PosePair, Setup, Transform, Warning};
 use nalgebra::{Rotation3, Translation3, Vector3};
 use rand::{RngExt, SeedableRng};
@@ -111,7 +111,9 @@ fn outcome(poses: &[PosePair], setup: Setup, truth: &Transform, pairing: Pairing
         pairing,
         ..Options::default()
     };
-    let r = calibrate(poses, setup, &options).unwrap();
+    let r = calibrate(poses, setup, &options)
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        .unwrap();
     Outcome {
         flagged: flagged(&r),
         ratio: error_over_sigma(&r, truth),

@@ -265,7 +265,7 @@ fn the_sigma_is_honest_over_many_recordings() {
 
 // The job (`calibrate --method reprojection`): bad input is refused or answered right.
 
-fn job(sim: &PixelSim, frames: &[Frame]) -> handeye::Result<handeye::Report> {
+fn job(sim: &PixelSim, frames: &[Frame]) -> handeye::Result<handeye::HandEyeReport> {
     handeye::calibrate(
         handeye::Input::Pixels {
             frames,
@@ -274,6 +274,7 @@ fn job(sim: &PixelSim, frames: &[Frame]) -> handeye::Result<handeye::Report> {
         sim.setup,
         &handeye::Options::default(),
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
 }
 
 #[test]
@@ -401,14 +402,18 @@ fn the_robot_world_job_on_the_pixels_gives_the_target_too() {
     for setup in SETUPS {
         for config in [PixelSimConfig::board(), PixelSimConfig::tag()] {
             let sim = simulate_pixels(&config.with_setup(setup), 21);
-            let r = handeye::calibrate_robot_world(
+            let r = handeye::calibrate(
                 handeye::Input::Pixels {
                     frames: &sim.frames,
                     camera: &sim.intrinsics,
                 },
                 setup,
-                &handeye::RobotWorldOptions::default(),
+                &handeye::Options {
+                    problem: handeye::Problem::ROBOT_WORLD,
+                    ..handeye::Options::default()
+                },
             )
+            .map(|r| r.into_robot_world().expect("the robot-world report"))
             .expect("solved");
             let hand_eye = job(&sim, &sim.frames).expect("solved");
             assert_eq!(r.method, handeye::RobotWorldMethod::Reprojection);
@@ -439,17 +444,19 @@ fn the_robot_world_job_on_the_pixels_gives_the_target_too() {
     }
     // Leaving out poses is the solve's own on the pixels: asked for, it is refused.
     let sim = simulate_pixels(&PixelSimConfig::tag(), 21);
-    let e = handeye::calibrate_robot_world(
+    let e = handeye::calibrate(
         handeye::Input::Pixels {
             frames: &sim.frames,
             camera: &sim.intrinsics,
         },
         sim.setup,
-        &handeye::RobotWorldOptions {
+        &handeye::Options {
+            problem: handeye::Problem::ROBOT_WORLD,
             reject_outliers: true,
             ..Default::default()
         },
     )
+    .map(|r| r.into_robot_world().expect("the robot-world report"))
     .unwrap_err();
     assert!(e.to_string().contains("left out"), "{e}");
 }
@@ -557,6 +564,7 @@ fn frames_with_a_wrong_robot_pose_are_named_and_left_out() {
                         ..handeye::Options::default()
                     },
                 )
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
                 .unwrap();
                 let named: Vec<(usize, &str)> = r
                     .outliers
@@ -604,6 +612,7 @@ fn frames_with_a_wrong_robot_pose_are_named_and_left_out() {
                     setup,
                     &handeye::Options::default(),
                 )
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
                 .unwrap();
                 assert!(
                     clean.outliers.poses.is_empty(),

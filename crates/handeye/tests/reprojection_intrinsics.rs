@@ -277,16 +277,20 @@ fn recordings_that_do_not_determine_the_intrinsics_are_refused() {
             camera_from_target: Transform::identity(),
         })
         .collect();
-    let e = handeye::calibrate(&poses, sim.setup, &refine).unwrap_err();
+    let e = handeye::calibrate(&poses, sim.setup, &refine)
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        .unwrap_err();
     assert!(e.to_string().contains("on the pixels only"), "{e}");
-    let e = handeye::calibrate_robot_world(
+    let e = handeye::calibrate(
         &poses,
         sim.setup,
-        &handeye::RobotWorldOptions {
+        &handeye::Options {
+            problem: handeye::Problem::ROBOT_WORLD,
             refine_intrinsics: true,
             ..Default::default()
         },
     )
+    .map(|r| r.into_robot_world().expect("the robot-world report"))
     .unwrap_err();
     assert!(e.to_string().contains("on the pixels only"), "{e}");
     let saved = handeye::SavedX {
@@ -361,18 +365,21 @@ fn the_jobs_report_the_refined_intrinsics_and_refuse_bad_input() {
             setup,
             &options,
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
         .unwrap();
-        let rw = handeye::calibrate_robot_world(
+        let rw = handeye::calibrate(
             handeye::Input::Pixels {
                 frames: &sim.frames,
                 camera: &given,
             },
             setup,
-            &handeye::RobotWorldOptions {
+            &handeye::Options {
+                problem: handeye::Problem::ROBOT_WORLD,
                 refine_intrinsics: true,
                 ..Default::default()
             },
         )
+        .map(|r| r.into_robot_world().expect("the robot-world report"))
         .unwrap();
         assert_eq!(r.x, rw.x, "one solve, one X");
         assert_eq!(r.reprojection, rw.reprojection);
@@ -405,6 +412,7 @@ fn the_jobs_report_the_refined_intrinsics_and_refuse_bad_input() {
             setup,
             &handeye::Options::default(),
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
         .unwrap();
         assert!(
             serde_json::to_value(&plain).unwrap()["reprojection"]
@@ -436,7 +444,9 @@ fn the_jobs_report_the_refined_intrinsics_and_refuse_bad_input() {
             },
             setup,
             &options,
-        ) {
+        )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        {
             Err(handeye::Error::Misread { .. }) => {}
             other => panic!("{setup:?} inverted: {:?}", other.map(|r| r.transform)),
         }
@@ -461,7 +471,9 @@ fn the_jobs_report_the_refined_intrinsics_and_refuse_bad_input() {
             },
             setup,
             &options,
-        ) {
+        )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        {
             Err(e @ handeye::Error::PixelsUnfit { .. }) => {
                 assert!(e.to_string().contains("1000 times smaller"), "{e}")
             }

@@ -10,7 +10,6 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::calibrate::robot_world::{RobotWorldOptions, calibrate_robot_world};
 use handeye::io::{Format, Truth, read_pose_file};
 use handeye::model::findings::Verdict;
 use handeye::model::pose::{exp_so3, transform_from_matrix4, transform_from_parts};
@@ -18,6 +17,7 @@ use handeye::solve::{
     RobotWorldMethod, joint_covariance, li, pose_residuals, refine_robot_world, robot_world, shah,
 };
 use handeye::{Degeneracy, Error, PosePair, Setup, Transform};
+use handeye::{Options, Problem, calibrate};
 use nalgebra::{Matrix4, Vector3};
 use proptest::prelude::*;
 use serde_json::Value;
@@ -393,11 +393,13 @@ fn the_report_refuses_undetermined_data_and_reports_the_rest() {
         let poses = read_pose_file(&path, Format::Auto).unwrap().pairs;
         let parallel = path.to_string_lossy().contains("parallel");
         for method in RobotWorldMethod::ALL {
-            let options = RobotWorldOptions {
-                method,
-                ..RobotWorldOptions::default()
+            let options = Options {
+                problem: Problem::RobotWorld(method),
+                ..Options::default()
             };
-            match calibrate_robot_world(&poses, setup, &options) {
+            match calibrate(&poses, setup, &options)
+                .map(|r| r.into_robot_world().expect("the robot-world report"))
+            {
                 Err(Error::Degenerate { .. }) => {}
                 // With parallel axes the translation along the axis is the one free direction
                 // (rotations about it are fixed by the hand's translations): refused, or at least
@@ -416,7 +418,16 @@ fn the_report_refuses_undetermined_data_and_reports_the_rest() {
     }
     for (path, setup, x, target) in kinhec(&["nominal"]) {
         let poses = read_pose_file(&path, Format::Auto).unwrap().pairs;
-        let r = calibrate_robot_world(&poses, setup, &RobotWorldOptions::default()).unwrap();
+        let r = calibrate(
+            &poses,
+            setup,
+            &Options {
+                problem: Problem::ROBOT_WORLD,
+                ..Options::default()
+            },
+        )
+        .map(|r| r.into_robot_world().expect("the robot-world report"))
+        .unwrap();
         assert_eq!(r.frame, setup.x_frame());
         assert_eq!(
             r.target.frame,
@@ -559,7 +570,16 @@ fn outliers_are_named_or_left_out() {
     let mut worst = [0.0_f64; 4];
     for (path, setup, x, target) in files {
         let poses = read_pose_file(&path, Format::Auto).unwrap().pairs;
-        if let Ok(kept) = calibrate_robot_world(&poses, setup, &RobotWorldOptions::default()) {
+        if let Ok(kept) = calibrate(
+            &poses,
+            setup,
+            &Options {
+                problem: Problem::ROBOT_WORLD,
+                ..Options::default()
+            },
+        )
+        .map(|r| r.into_robot_world().expect("the robot-world report"))
+        {
             assert!(!kept.outliers.poses.is_empty(), "{}", path.display());
             assert!(
                 kept.warnings
@@ -567,11 +587,14 @@ fn outliers_are_named_or_left_out() {
                     .any(|w| matches!(w, handeye::Warning::Outliers { .. }))
             );
         }
-        let options = RobotWorldOptions {
+        let options = Options {
+            problem: Problem::ROBOT_WORLD,
             reject_outliers: true,
-            ..RobotWorldOptions::default()
+            ..Options::default()
         };
-        let r = calibrate_robot_world(&poses, setup, &options).unwrap();
+        let r = calibrate(&poses, setup, &options)
+            .map(|r| r.into_robot_world().expect("the robot-world report"))
+            .unwrap();
         assert!(r.outliers.rejected && !r.outliers.poses.is_empty());
         let (xr, xt) = error(&r.transform, &x);
         let (yr, yt) = error(&r.target_transform, &target);

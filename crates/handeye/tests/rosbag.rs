@@ -223,14 +223,15 @@ fn noisy_bags_give_x_to_the_noise_level() {
         }
         let t = truth(name);
         let pairs = read_bag_pairs(&bag(name), &options("camera_link", topic)).unwrap();
-        let report = handeye::calibrate::batch::calibrate(
+        let report = handeye::calibrate(
             &pairs.poses(),
             setup,
-            &handeye::calibrate::batch::Options {
+            &handeye::Options {
                 pairing: Pairing::All,
-                ..handeye::calibrate::batch::Options::default()
+                ..handeye::Options::default()
             },
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
         .unwrap();
         let x = Transform::from_parts(
             nalgebra::Translation3::from(nalgebra::Vector3::from(report.x.translation)),
@@ -581,6 +582,7 @@ fn swapped_frame_names_are_named_as_such_not_as_inverted_poses() {
                 ..Options::default()
             },
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     };
     let camera = "camera_color_optical_frame";
     assert!(run("base_link", "tool0", camera, "board").is_ok());
@@ -626,7 +628,7 @@ fn swapped_frame_names_are_named_as_such_not_as_inverted_poses() {
 /// angles, in shuffled joint orders with a gripper joint among them, and two bad messages.
 #[test]
 fn joint_states_give_each_pair_its_angles_and_the_systematic_test_orders_by_them() {
-    use handeye::calibrate::batch::{Options, calibrate};
+    use handeye::{Options, calibrate};
     let stream = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../testdata/kinhec/systematic/dh2_iiwa14_eih_s1.jsonl");
     let text = std::fs::read_to_string(&stream).unwrap();
@@ -642,6 +644,7 @@ fn joint_states_give_each_pair_its_angles_and_the_systematic_test_orders_by_them
                 ..Options::default()
             },
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
         .unwrap()
     };
     let from_stream = batch(&series.pairs, joints.clone());

@@ -348,7 +348,9 @@ fn an_x_beyond_the_bound_of_its_inputs_is_refused() {
     println!("largest robot translation {largest:e}");
     assert!(largest < 1e9, "{largest:e}");
     let pairs = read_bag_pairs(&path, &options(None)).unwrap();
-    let e = calibrate(&pairs.poses(), Setup::EyeInHand, &Options::default()).unwrap_err();
+    let e = calibrate(&pairs.poses(), Setup::EyeInHand, &Options::default())
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        .unwrap_err();
     let text = e.to_string();
     assert!(matches!(e, Error::InvalidTransform { .. }), "{e:?}");
     assert!(text.starts_with("X as solved"), "{text}");

@@ -93,6 +93,7 @@ fn x_of(frames: &[Frame], camera: &handeye::Intrinsics) -> Transform {
         Setup::EyeInHand,
         &Options::default(),
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     .unwrap()
     .transform
 }

@@ -250,7 +250,9 @@ fn x_of(recording: &Recording) -> Transform {
         replicates: 8,
         ..Options::default()
     };
-    let report = calibrate(&recording.poses, Setup::EyeInHand, &options).unwrap();
+    let report = calibrate(&recording.poses, Setup::EyeInHand, &options)
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        .unwrap();
     transform_from_json(&serde_json::to_value(&report.x).unwrap()).unwrap()
 }
 

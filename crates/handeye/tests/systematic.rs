@@ -8,11 +8,11 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::calibrate::batch::{Options, Report, calibrate};
 use handeye::check::quality::errors_against_truth;
 use handeye::io::{Format, read_joints, read_pose_file, transform_from_json};
 use handeye::sim::{SimConfig, simulate};
-use handeye::{Kinematics, Method, Pairing, Setup, Transform, Warning};
+use handeye::{HandEyeReport as Report, Options, calibrate};
+use handeye::{Kinematics, Method, Pairing, Problem, Setup, Transform, Warning};
 use serde_json::Value;
 
 /// The repository's kinhec suite, or for the systematic streams the directory
@@ -69,6 +69,7 @@ fn run(e: &Value, options: &Options) -> handeye::Result<Report> {
             ..options.clone()
         },
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
 }
 
 fn methods() -> [(&'static str, Options); 2] {
@@ -77,7 +78,7 @@ fn methods() -> [(&'static str, Options); 2] {
         (
             "all-refine",
             Options {
-                method: Method::Refine,
+                problem: Problem::HandEye(Method::Refine),
                 pairing: Pairing::All,
                 ..Options::default()
             },
@@ -262,7 +263,9 @@ fn random_errors_are_not_flagged_and_stay_covered() {
             };
             let s = simulate(&config, seed, 0);
             for (method, options) in methods() {
-                let r = calibrate(&s.poses, setup, &options).unwrap();
+                let r = calibrate(&s.poses, setup, &options)
+                    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                    .unwrap();
                 let row = Row {
                     file: format!("sim {setup} seed {seed}"),
                     level: "sim".into(),
@@ -499,7 +502,11 @@ fn the_online_estimator_flags_and_covers_as_the_batch() {
         };
         let s = simulate(&config, seed, 0);
         let r = online(&s.poses, None, Setup::EyeInHand);
-        let batch = flagged(&calibrate(&s.poses, Setup::EyeInHand, &all_pairs).unwrap());
+        let batch = flagged(
+            &calibrate(&s.poses, Setup::EyeInHand, &all_pairs)
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+                .unwrap(),
+        );
         row(
             format!("sim eye-in-hand seed {seed}"),
             "sim".into(),

@@ -16,8 +16,8 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::calibrate::batch::{Options, calibrate};
 use handeye::io::{Format, read_joints, read_pose_file};
+use handeye::{Options, calibrate};
 use handeye::{Setup, Warning};
 use serde_json::Value;
 
@@ -51,6 +51,7 @@ fn the_joint_named_against_the_one_made_wrong() {
                 ..Options::default()
             },
         )
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
         .unwrap_or_else(|err| panic!("{file}: refused: {err}"));
         let s = r.systematic.as_ref().expect("tested");
         assert_eq!(s.configuration, "joints", "{file}");

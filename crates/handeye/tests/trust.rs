@@ -8,12 +8,14 @@
 
 use std::path::{Path, PathBuf};
 
-use handeye::calibrate::batch::{Fix, Options, Report, calibrate};
 use handeye::check::quality::errors_against_truth;
 use handeye::io::{Format, read_pose_file, transform_from_json};
 use handeye::model::findings::Reading;
 use handeye::model::warning::Remedy;
-use handeye::{Degeneracy, Error, LowDofMissing, Method, Pairing, Setup, Transform, Warning};
+use handeye::{
+    Degeneracy, Error, LowDofMissing, Method, Pairing, Problem, Setup, Transform, Warning,
+};
+use handeye::{Fix, HandEyeReport as Report, Options, calibrate};
 use serde_json::Value;
 
 fn suite() -> PathBuf {
@@ -57,6 +59,7 @@ fn run(e: &Value, options: &Options) -> handeye::Result<Report> {
             ..options.clone()
         },
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
 }
 
 /// Actual error over reported one-sigma, rotation and translation.
@@ -83,7 +86,7 @@ fn pairings() -> [Options; 2] {
     [
         Options::default(),
         Options {
-            method: Method::Refine,
+            problem: Problem::HandEye(Method::Refine),
             pairing: Pairing::All,
             ..Options::default()
         },
@@ -106,7 +109,7 @@ fn the_uncertainty_holds_on_realistic_data() {
         let summary = format!(
             "{:?} {}: {} results; error/sigma rotation median {:.2}, {:.0}% within 3σ; translation median {:.2}, {:.0}% within 3σ",
             options.pairing,
-            options.method,
+            options.problem,
             rot.len(),
             median(&rot),
             100.0 * within_three(&rot),

@@ -7,10 +7,10 @@
 use std::path::{Path, PathBuf};
 
 use handeye::LengthUnit;
-use handeye::calibrate::batch::{Options, calibrate};
-use handeye::calibrate::verify::{Consistency, SavedX, Verification, verify};
 use handeye::io::{Format, read_pose_file, transform_from_json};
 use handeye::model::pose::{exp_so3, transform_from_parts};
+use handeye::{Consistency, SavedX, Verification, verify};
+use handeye::{Options, calibrate};
 use handeye::{Pairing, PosePair, Setup, Transform};
 use nalgebra::Vector3;
 use serde_json::Value;
@@ -61,7 +61,9 @@ fn options() -> Options {
 
 /// The X calibrated from `poses` as `calibrate --output json` saves it (with its covariance).
 fn saved(poses: &[PosePair], setup: Setup) -> SavedX {
-    let r = calibrate(poses, setup, &options()).unwrap();
+    let r = calibrate(poses, setup, &options())
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        .unwrap();
     SavedX {
         x: r.transform,
         setup: Some(setup),
@@ -314,7 +316,9 @@ fn the_error_at_the_working_distance_is_as_large_as_it_says() {
     for kind in ["nominal", "student_t", "pnp", "robot_error", "high_noise"] {
         for e in entries(kind) {
             let p = poses(&e);
-            let r = match calibrate(&p, setup(&e), &options()) {
+            let r = match calibrate(&p, setup(&e), &options())
+                .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            {
                 Ok(r) => r,
                 Err(err) => {
                     println!("{}: refused ({err})", e["file"]);
@@ -408,6 +412,7 @@ fn the_point_can_be_chosen_and_its_sigma_grows_with_its_distance() {
             ..options()
         },
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     .unwrap();
     let far = calibrate(
         &p,
@@ -417,6 +422,7 @@ fn the_point_can_be_chosen_and_its_sigma_grows_with_its_distance() {
             ..options()
         },
     )
+    .map(|r| r.into_hand_eye().expect("the hand–eye report"))
     .unwrap();
     let (a, b) = (
         near.uncertainty.at_point.clone().unwrap(),
@@ -424,7 +430,9 @@ fn the_point_can_be_chosen_and_its_sigma_grows_with_its_distance() {
     );
     assert_eq!(a.point, [0.0, 0.0, 0.1]);
     // Beyond the working distance the rotation's error adds to the translation's.
-    let working = calibrate(&p, setup(e), &options()).unwrap();
+    let working = calibrate(&p, setup(e), &options())
+        .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+        .unwrap();
     let w = working.uncertainty.at_point.unwrap();
     assert!(b.sigma > w.sigma && a.sigma > 0.0, "{a:?} {w:?} {b:?}");
     // The first-order image of the covariance agrees with the replicates' own.
@@ -533,7 +541,9 @@ fn a_low_dof_recording_checks_what_it_determines_and_takes_tz_from_the_saved_x()
             priors: vec![format!("tz={tz}+-0.001").parse().unwrap()],
             ..options()
         };
-        let r = calibrate(first, setup, &with_prior).unwrap();
+        let r = calibrate(first, setup, &with_prior)
+            .map(|r| r.into_hand_eye().expect("the hand–eye report"))
+            .unwrap();
         let saved = SavedX {
             x: r.transform,
             setup: Some(setup),
@@ -640,4 +650,39 @@ fn a_low_dof_recording_checks_what_it_determines_and_takes_tz_from_the_saved_x()
     )
     .unwrap();
     assert_eq!(v.verdict, Consistency::Undetermined, "{}", v.message);
+}
+
+/// `verify` checks an X calibrated as hand–eye: the one `Options` naming the robot-world problem is
+/// refused, naming the field, rather than verified as if it were hand–eye.
+#[test]
+fn the_robot_world_problem_is_refused_by_name() {
+    let series = handeye::sim::simulate(
+        &handeye::sim::SimConfig {
+            poses: 20,
+            ..handeye::sim::SimConfig::default()
+        },
+        7,
+        0,
+    );
+    let saved = SavedX {
+        x: series.gripper_from_camera,
+        setup: Some(Setup::EyeInHand),
+        covariance: None,
+        unit: None,
+    };
+    let options = Options {
+        problem: handeye::Problem::ROBOT_WORLD,
+        ..options()
+    };
+    let e = verify(&saved, &series.poses, Setup::EyeInHand, &options).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            handeye::Error::InvalidParameter {
+                name: "problem",
+                ..
+            }
+        ),
+        "{e}"
+    );
 }

@@ -13,8 +13,8 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use handeye::{
-    Pairing, PosePair, PoseResiduals, Reading, Report, RobotWorldReport, Setup, Transform, Unit,
-    Verification, Written, leave_one_out, transform_from_matrix4,
+    HandEyeReport, Pairing, PosePair, PoseResiduals, Reading, RobotWorldReport, Setup, Transform,
+    Unit, Verification, Written, leave_one_out, transform_from_matrix4,
 };
 use plotters::style::RGBColor;
 use serde_json::{Value, json};
@@ -80,7 +80,7 @@ pub fn check_writable(path: &Path) -> Result<()> {
 }
 
 /// Writes the page of a batch calibration.
-pub fn write_calibrate(path: &Path, run: &RunPage<'_>, r: &Report) -> Result<()> {
+pub fn write_calibrate(path: &Path, run: &RunPage<'_>, r: &HandEyeReport) -> Result<()> {
     register_font();
     let mut page = Page::new("handeye calibrate", Some(r.verdict.name()));
     page.text("Summary", &run.summary);
@@ -148,7 +148,7 @@ pub fn write_robot_world(path: &Path, run: &RunPage<'_>, r: &RobotWorldReport) -
 pub fn write_pixels(
     path: &Path,
     run: &RunPage<'_>,
-    r: &Report,
+    r: &HandEyeReport,
     image: Option<(f64, f64)>,
 ) -> Result<()> {
     register_font();

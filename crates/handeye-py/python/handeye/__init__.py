@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import warnings
 from collections.abc import Mapping
 
@@ -24,9 +25,7 @@ import numpy as np
 from ._handeye import _OnlineCalibrator
 from ._handeye import advise_report as _advise_report
 from ._handeye import calibrate_report as _calibrate_report
-from ._handeye import pixels_report as _pixels_report
 from ._handeye import read_recording as _read_recording
-from ._handeye import robot_world_report as _robot_world_report
 from ._handeye import solve_opencv as _solve_opencv
 from ._handeye import solve_opencv_robot_world as _solve_opencv_robot_world
 from ._handeye import solve_opencv_sequences as _solve_opencv_sequences
@@ -135,8 +134,8 @@ def _arrays(rotations, translations, name: str):
 
 
 def calibrate(
-    base_from_gripper,
-    camera_from_target,
+    base_from_gripper=None,
+    camera_from_target=None,
     method=None,
     setup="eye-in-hand",
     pairs=None,
@@ -149,6 +148,19 @@ def calibrate(
     joints=None,
     prior=None,
     robot_model=None,
+    *,
+    path=None,
+    intrinsics=None,
+    refine_intrinsics=False,
+    base_frame=None,
+    gripper_frame=None,
+    camera_frame=None,
+    target_topic=None,
+    tag_size=None,
+    tag_id=None,
+    camera_info_topic=None,
+    time_offset=None,
+    max_gap=0.1,
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
@@ -184,36 +196,52 @@ def calibrate(
     with ``target`` (``frame`` "base_from_target" or "gripper_from_target", ``matrix`` as a (4,4)
     array, ``translation``, ``quaternion_xyzw``, ``uncertainty``) and ``residual`` per pose. On a
     low-DOF robot ``prior`` gives X's free component as above; the target's coupled component
-    follows from it (``calibrate --robot-world --prior``)."""
-    g, c = _transforms(base_from_gripper, camera_from_target)
-    if robot_world:
-        if pairs is not None:
+    follows from it (``calibrate --robot-world --prior``).
+
+    On the pixels: ``calibrate(path, intrinsics=...)`` (or ``path=``) calibrates a recording whose
+    records carry the target's detections, as ``calibrate_on_pixels`` describes (its keywords:
+    ``intrinsics``, ``refine_intrinsics``, ``base_frame`` … ``max_gap``); ``method`` is then the fit
+    to the pixels ("reprojection"), for either problem. One function for every problem and input
+    kind: the same object ``handeye calibrate`` prints for the same input and flags."""
+    if path is None and camera_from_target is None and isinstance(base_from_gripper, (str, os.PathLike)):
+        path, base_from_gripper = base_from_gripper, None
+    if path is not None:
+        if robot_world and pairs is not None:
             raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
-        result = json.loads(
-            _robot_world_report(
-                g,
-                c,
-                method=method or "refine",
-                setup=setup,
-                fix=fix,
-                bootstrap=bootstrap,
-                reject_outliers=reject_outliers,
-                point=_point(point),
-                joints=joints,
-                prior=_priors(prior),
-                robot_model=robot_model,
-            )
+        if base_from_gripper is not None or camera_from_target is not None:
+            raise ValueError("give either the poses (base_from_gripper, camera_from_target) or a path, not both")
+        if method not in (None, "reprojection"):
+            raise ValueError(f"method={method!r}: a recording with detections is calibrated on its pixels (method \"reprojection\")")
+        report = _calibrate_report(
+            path=str(path),
+            intrinsics=None if intrinsics is None else str(intrinsics),
+            setup=setup,
+            robot_world=robot_world,
+            reject_outliers=reject_outliers,
+            fix=fix,
+            point=_point(point),
+            prior=_priors(prior),
+            refine_intrinsics=bool(refine_intrinsics),
+            base_frame=base_frame,
+            gripper_frame=gripper_frame,
+            camera_frame=camera_frame,
+            target_topic=target_topic,
+            tag_size=None if tag_size is None else float(tag_size),
+            tag_id=None if tag_id is None else int(tag_id),
+            camera_info_topic=camera_info_topic,
+            time_offset=time_offset,
+            max_gap=float(max_gap),
         )
-        result["matrix"] = np.array(result["matrix"], dtype=np.float64)
-        result["target"]["matrix"] = np.array(result["target"]["matrix"], dtype=np.float64)
-        return result
-    method = method or "andreff"
-    result = json.loads(
-        _calibrate_report(
+    else:
+        g, c = _transforms(base_from_gripper, camera_from_target)
+        if robot_world and pairs is not None:
+            raise ValueError("pairs does not apply to robot_world=True, which uses every pose once")
+        report = _calibrate_report(
             g,
             c,
-            method=method,
+            method=method or None,
             setup=setup,
+            robot_world=robot_world,
             pairs=pairs or "all",
             tsai_opencv_filter=tsai_opencv_filter,
             reject_outliers=reject_outliers,
@@ -224,8 +252,10 @@ def calibrate(
             prior=_priors(prior),
             robot_model=robot_model,
         )
-    )
+    result = json.loads(report)
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)
+    if robot_world:
+        result["target"]["matrix"] = np.array(result["target"]["matrix"], dtype=np.float64)
     return result
 
 
@@ -375,7 +405,8 @@ def calibrate_on_pixels(
     time_offset=None,
     max_gap=0.1,
 ) -> dict:
-    """Calibration on the pixels of the detections: a JSON Lines file whose records carry
+    """Calibration on the pixels of the detections, ``calibrate(path, ...)`` under the name it had
+    before ``calibrate`` took every input kind: a JSON Lines file whose records carry
     ``detections`` (``target`` points and their ``pixels``) and the camera's ``intrinsics`` (OpenCV
     FileStorage YAML or a ROS ``camera_info`` YAML). Returns the same object ``handeye calibrate
     PATH --method reprojection --intrinsics INTRINSICS`` prints, as a dict (``matrix`` a (4,4)
@@ -398,30 +429,24 @@ def calibrate_on_pixels(
     intrinsics from ``intrinsics`` or else the recording's ``CameraInfo`` topic
     (``camera_info_topic`` when it has several), ``time_offset`` (seconds; 0 by default) and
     ``max_gap`` as in ``read_recording``."""
-    result = json.loads(
-        _pixels_report(
-            str(path),
-            None if intrinsics is None else str(intrinsics),
-            setup=setup,
-            robot_world=robot_world,
-            fix=fix,
-            point=_point(point),
-            refine_intrinsics=bool(refine_intrinsics),
-            base_frame=base_frame,
-            gripper_frame=gripper_frame,
-            camera_frame=camera_frame,
-            target_topic=target_topic,
-            tag_size=None if tag_size is None else float(tag_size),
-            tag_id=None if tag_id is None else int(tag_id),
-            camera_info_topic=camera_info_topic,
-            time_offset=time_offset,
-            max_gap=float(max_gap),
-        )
+    return calibrate(
+        path=path,
+        intrinsics=intrinsics,
+        setup=setup,
+        robot_world=robot_world,
+        fix=fix,
+        point=point,
+        refine_intrinsics=refine_intrinsics,
+        base_frame=base_frame,
+        gripper_frame=gripper_frame,
+        camera_frame=camera_frame,
+        target_topic=target_topic,
+        tag_size=tag_size,
+        tag_id=tag_id,
+        camera_info_topic=camera_info_topic,
+        time_offset=time_offset,
+        max_gap=max_gap,
     )
-    result["matrix"] = np.array(result["matrix"], dtype=np.float64)
-    if robot_world:
-        result["target"]["matrix"] = np.array(result["target"]["matrix"], dtype=np.float64)
-    return result
 
 
 def read_recording(

@@ -26,8 +26,8 @@ def calibrate_robot_world_hand_eye(
     method: Union[int, str] = 0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
 def calibrate(
-    base_from_gripper: npt.ArrayLike,
-    camera_from_target: npt.ArrayLike,
+    base_from_gripper: Optional[Union[npt.ArrayLike, str, "os.PathLike[str]"]] = None,
+    camera_from_target: Optional[npt.ArrayLike] = None,
     method: Optional[str] = None,
     setup: str = "eye-in-hand",
     pairs: Optional[str] = None,
@@ -40,6 +40,19 @@ def calibrate(
     joints: Optional[Sequence[Sequence[float]]] = None,
     prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
     robot_model: Optional[Union[str, "os.PathLike[str]"]] = None,
+    *,
+    path: Optional[Union[str, "os.PathLike[str]"]] = None,
+    intrinsics: Optional[Union[str, "os.PathLike[str]"]] = None,
+    refine_intrinsics: bool = False,
+    base_frame: Optional[str] = None,
+    gripper_frame: Optional[str] = None,
+    camera_frame: Optional[str] = None,
+    target_topic: Optional[str] = None,
+    tag_size: Optional[float] = None,
+    tag_id: Optional[int] = None,
+    camera_info_topic: Optional[str] = None,
+    time_offset: Optional[Union[float, str]] = None,
+    max_gap: float = 0.1,
 ) -> dict[str, Any]: ...
 
 def advise(

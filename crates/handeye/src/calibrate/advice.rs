@@ -14,6 +14,7 @@
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::calibrate::low_dof::Plan;
 use crate::check::outliers::pose_outliers;
 use crate::check::quality::OUTLIER_DEG;
 use crate::check::readings::check_readings;
@@ -175,52 +176,7 @@ pub fn advise(
         Err(e) if crate::calibrate::low_dof::missing(&e).is_some() => None,
         Err(e) => return Err(e),
     };
-    let (x, low_dof, candidates): (_, _, Vec<Turn>) = match &plan {
-        Some(plan) => {
-            let x = crate::calibrate::low_dof::solve(
-                plan,
-                poses,
-                setup,
-                Pairing::All,
-                Method::Andreff,
-            )?
-            .x;
-            let axis = match setup {
-                Setup::EyeInHand => plan.axis.hand,
-                Setup::EyeToHand => last.rotation.inverse() * plan.axis.hand,
-            };
-            let words = format!(
-                "every motion rotates about one axis (a low-DOF robot): X's {} is the prior's ({}), the motions determine the rest; the next motions turn about the robot's axis ({:.2}, {:.2}, {:.2}) in the gripper frame, the only one it turns about",
-                plan.prior.component.name(),
-                plan.prior,
-                axis.x,
-                axis.y,
-                axis.z
-            );
-            let turns = ANGLES_DEG
-                .iter()
-                .flat_map(|&a| [a, -a])
-                .flat_map(|angle_deg| Turn::about(axis, angle_deg, &[Pivot::Flange, Pivot::Target]))
-                .collect();
-            (Some(x), Some(words), turns)
-        }
-        None => {
-            let words = low_dof_words(poses, setup);
-            // A low-DOF recording without its prior leaves X's translation along the axis free,
-            // and with it where the target is in the gripper frame: turns about the flange only.
-            let pivots: &[Pivot] = if words.is_some() {
-                &[Pivot::Flange]
-            } else {
-                &[Pivot::Flange, Pivot::Target]
-            };
-            let turns = candidate_axes()
-                .into_iter()
-                .flat_map(|axis| ANGLES_DEG.map(|a| (axis, a)))
-                .flat_map(|(axis, angle_deg)| Turn::about(axis, angle_deg, pivots))
-                .collect();
-            (acc.estimate().map(|e| e.x), words, turns)
-        }
-    };
+    let (x, low_dof, candidates) = turns(plan.as_ref(), poses, setup, (&acc, &last))?;
     let Some((x, (y, noise))) = x.and_then(|x| Some((x, noise_of(&acc, &x)?))) else {
         return Ok(Advice {
             outliers: outliers.len(),
@@ -281,6 +237,64 @@ pub fn advise(
         suggestions,
         low_dof,
         goal,
+    })
+}
+
+/// The turns a suggestion may take, and X to predict with: on a low-DOF recording with its prior,
+/// X in the low-DOF form and turns about the robot's one axis (with the words saying so);
+/// otherwise all-pairs Andreff's X (from `acc`) and turns about the candidate axes, about the
+/// flange only when a low-DOF recording lacks its prior. `last` is the last robot pose.
+fn turns(
+    plan: Option<&Plan>,
+    poses: &[PosePair],
+    setup: Setup,
+    (acc, last): (&PoseAccumulator, &Transform),
+) -> Result<(Option<Transform>, Option<String>, Vec<Turn>)> {
+    Ok(match plan {
+        Some(plan) => {
+            let x = crate::calibrate::low_dof::solve(
+                plan,
+                poses,
+                setup,
+                Pairing::All,
+                Method::Andreff,
+            )?
+            .x;
+            let axis = match setup {
+                Setup::EyeInHand => plan.axis.hand,
+                Setup::EyeToHand => last.rotation.inverse() * plan.axis.hand,
+            };
+            let words = format!(
+                "every motion rotates about one axis (a low-DOF robot): X's {} is the prior's ({}), the motions determine the rest; the next motions turn about the robot's axis ({:.2}, {:.2}, {:.2}) in the gripper frame, the only one it turns about",
+                plan.prior.component.name(),
+                plan.prior,
+                axis.x,
+                axis.y,
+                axis.z
+            );
+            let turns = ANGLES_DEG
+                .iter()
+                .flat_map(|&a| [a, -a])
+                .flat_map(|angle_deg| Turn::about(axis, angle_deg, &[Pivot::Flange, Pivot::Target]))
+                .collect();
+            (Some(x), Some(words), turns)
+        }
+        None => {
+            let words = low_dof_words(poses, setup);
+            // A low-DOF recording without its prior leaves X's translation along the axis free,
+            // and with it where the target is in the gripper frame: turns about the flange only.
+            let pivots: &[Pivot] = if words.is_some() {
+                &[Pivot::Flange]
+            } else {
+                &[Pivot::Flange, Pivot::Target]
+            };
+            let turns = candidate_axes()
+                .into_iter()
+                .flat_map(|axis| ANGLES_DEG.map(|a| (axis, a)))
+                .flat_map(|(axis, angle_deg)| Turn::about(axis, angle_deg, pivots))
+                .collect();
+            (acc.estimate().map(|e| e.x), words, turns)
+        }
     })
 }
 
@@ -551,6 +565,39 @@ pub struct ClosedLoop {
     pub most: usize,
 }
 
+/// The first-order rotation one-sigma of X from `poses` (eye-in-hand, no priors): the closed
+/// loop's one measure for every way of moving.
+fn rotation_sigma(poses: &[PosePair]) -> Option<f64> {
+    let mut acc = PoseAccumulator::new(Setup::EyeInHand);
+    poses.iter().for_each(|p| acc.add(p));
+    let x = acc.estimate()?.x;
+    let (y, noise) = noise_of(&acc, &x)?;
+    let model = Model {
+        x,
+        y,
+        noise,
+        priors: &[],
+    };
+    model.predicted(&acc).map(|p| p.rotation_deg)
+}
+
+/// A pose recorded with the protocol's noise: uniform 1e-3 on the rotation matrix entries
+/// (projected back onto SO(3)), 1% of each translation.
+fn noisy(p: &PosePair, rng: &mut rand_xoshiro::Xoshiro256PlusPlus) -> PosePair {
+    use rand::RngExt;
+    let mut jitter = |t: &Transform| {
+        let n = Matrix3::from_fn(|_, _| rng.random_range(-1e-3..1e-3));
+        let r = crate::model::pose::proj_so3(&(t.rotation.matrix() + n));
+        let v = t.translation.vector;
+        let d = Vector3::from_fn(|_, _| rng.random_range(-0.01..0.01)) * v.norm();
+        transform_from_parts(&r, &(v + d))
+    };
+    PosePair {
+        base_from_gripper: jitter(&p.base_from_gripper),
+        camera_from_target: jitter(&p.camera_from_target),
+    }
+}
+
 /// The closed loop of [`ClosedLoop`] on the paper's simulation (millimetres): every series starts
 /// from the walk's first three poses; each new pose is recorded with the protocol's noise (uniform
 /// 1e-3 on the rotation matrix entries, 1% of each translation), and the uncertainty is the
@@ -562,32 +609,6 @@ pub fn closed_loop(series: usize, seed: u64, progress: impl Fn()) -> ClosedLoop 
     const WALK: usize = 100;
     const MOST: usize = 300;
     const START: usize = 3;
-    let sigma = |poses: &[PosePair]| -> Option<f64> {
-        let mut acc = PoseAccumulator::new(Setup::EyeInHand);
-        poses.iter().for_each(|p| acc.add(p));
-        let x = acc.estimate()?.x;
-        let (y, noise) = noise_of(&acc, &x)?;
-        let model = Model {
-            x,
-            y,
-            noise,
-            priors: &[],
-        };
-        model.predicted(&acc).map(|p| p.rotation_deg)
-    };
-    let noisy = |p: &PosePair, rng: &mut rand_xoshiro::Xoshiro256PlusPlus| {
-        let mut jitter = |t: &Transform| {
-            let n = Matrix3::from_fn(|_, _| rng.random_range(-1e-3..1e-3));
-            let r = crate::model::pose::proj_so3(&(t.rotation.matrix() + n));
-            let v = t.translation.vector;
-            let d = Vector3::from_fn(|_, _| rng.random_range(-0.01..0.01)) * v.norm();
-            transform_from_parts(&r, &(v + d))
-        };
-        PosePair {
-            base_from_gripper: jitter(&p.base_from_gripper),
-            camera_from_target: jitter(&p.camera_from_target),
-        }
-    };
     let sims: Vec<_> = (0..series as u64)
         .map(|s| {
             simulate(
@@ -602,14 +623,15 @@ pub fn closed_loop(series: usize, seed: u64, progress: impl Fn()) -> ClosedLoop 
         .collect();
     let mut at_walk: Vec<f64> = sims
         .iter()
-        .filter_map(|sim| sigma(&sim.poses[..WALK]))
+        .filter_map(|sim| rotation_sigma(&sim.poses[..WALK]))
         .collect();
     at_walk.sort_by(f64::total_cmp);
     let target = at_walk.get(at_walk.len() / 2).copied().unwrap_or(f64::NAN);
     let mut needed: [Vec<usize>; 3] = [Vec::new(), Vec::new(), Vec::new()];
     for (s, sim) in sims.iter().enumerate() {
         // The paper's walk.
-        let walk = (START..=MOST).find(|&n| sigma(&sim.poses[..n]).is_some_and(|v| v <= target));
+        let walk =
+            (START..=MOST).find(|&n| rotation_sigma(&sim.poses[..n]).is_some_and(|v| v <= target));
         needed[0].push(walk.unwrap_or(usize::MAX));
         // Random turns and the advice, recorded through the true camera.
         let (x, y) = (sim.gripper_from_camera, sim.base_from_target);
@@ -646,7 +668,7 @@ pub fn closed_loop(series: usize, seed: u64, progress: impl Fn()) -> ClosedLoop 
                 let exact = consistent_pose(Setup::EyeInHand, &x, &y, &q);
                 poses.push(noisy(&exact, &mut rng));
                 from = q;
-                if sigma(&poses).is_some_and(|v| v <= target) {
+                if rotation_sigma(&poses).is_some_and(|v| v <= target) {
                     reached = poses.len();
                     break;
                 }

@@ -211,7 +211,7 @@ pub(crate) fn solve(
     pairing: Pairing,
     method: Method,
 ) -> Result<Calibration> {
-    if !matches!(method, Method::Andreff | Method::Refine) {
+    if !method.capabilities().low_dof {
         return Err(Error::InvalidParameter {
             name: "method",
             message: format!(

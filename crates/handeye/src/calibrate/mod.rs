@@ -1,53 +1,22 @@
-//! The batch jobs: hand–eye calibration ([`batch`]), robot-world calibration ([`robot_world`]),
-//! and what to record next ([`advice`]). Each strings a solver and the checks together and
-//! returns a typed report.
+//! The calibration job: [`calibrate`](crate::calibrate()) runs one pipeline ([`pipeline`]) for
+//! every problem ([`Problem`](crate::Problem): hand–eye, robot-world) and input kind
+//! ([`Input`](crate::Input): pose pairs, the target's detections), the problems' solves in
+//! `problem/` returning solutions, the one [`Report`](crate::Report) worded by the pipeline;
+//! [`verify`] (the pipeline plus the comparison with a saved X) and what to record next
+//! ([`advice`]).
+//!
+//! Each file imports only the files below it here: `input`, `options` and `low_dof` use none of
+//! this folder; `report` uses `low_dof`; `reading` uses `options` and `report`; `problem/` uses
+//! `options` and `low_dof`; `pipeline` uses all of those; `verify` and `pixels` (the online
+//! engine on the pixels) use `pipeline`; `advice` uses `low_dof`.
 
 pub mod advice;
-pub mod batch;
+pub mod input;
 pub mod low_dof;
+pub mod options;
+pub mod pipeline;
 pub mod pixels;
-pub mod robot_world;
+pub mod problem;
+pub mod reading;
+pub mod report;
 pub mod verify;
-
-use crate::model::camera::{Frame, Intrinsics};
-use crate::model::motion::PosePair;
-
-/// What [`calibrate`](crate::calibrate()), [`calibrate_robot_world`](crate::calibrate_robot_world)
-/// and [`verify`](crate::verify) calibrate from: the pose pairs, or the target's detections with
-/// the camera's intrinsics (the solve on the pixels, [`Method::Reprojection`]).
-///
-/// A slice or a `Vec` of pose pairs is an input as it is (`calibrate(&poses, …)`).
-///
-/// [`Method::Reprojection`]: crate::Method::Reprojection
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Input<'a> {
-    /// Pose pairs: the robot's pose and the camera's pose of the target, by any PnP.
-    Poses(&'a [PosePair]),
-    /// The robot's pose and the target's detections of each image, and the camera that made them:
-    /// X and the target's pose fitted to the pixels, with the checks of the pixels (each job's
-    /// section "On the pixels"; SPEC sec. 3, `reprojection`, and sec. 9 for the records).
-    Pixels {
-        /// The records: robot pose and detections (and a PnP pose where the recording gives one).
-        frames: &'a [Frame],
-        /// The camera's intrinsics.
-        camera: &'a Intrinsics,
-    },
-}
-
-impl<'a> From<&'a [PosePair]> for Input<'a> {
-    fn from(poses: &'a [PosePair]) -> Self {
-        Input::Poses(poses)
-    }
-}
-
-impl<'a> From<&'a Vec<PosePair>> for Input<'a> {
-    fn from(poses: &'a Vec<PosePair>) -> Self {
-        Input::Poses(poses)
-    }
-}
-
-impl<'a, const N: usize> From<&'a [PosePair; N]> for Input<'a> {
-    fn from(poses: &'a [PosePair; N]) -> Self {
-        Input::Poses(poses)
-    }
-}

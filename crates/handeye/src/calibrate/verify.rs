@@ -1,6 +1,6 @@
 //! Does a saved X still fit? `handeye verify`: a new recording against the X a calibration wrote.
 //!
-//! The recording is calibrated as [`calibrate`] does it (same method and pairing), and the two X
+//! The recording is calibrated as [`calibrate`](crate::calibrate()) does it (same method and pairing), and the two X
 //! are compared with the covariance of their difference: the recording's bootstrap covariance plus
 //! the saved X's own when the file has one. The squared Mahalanobis distance d² = eᵀ C⁻¹ e of the
 //! difference e = (log(R_saved R_newᵀ), t_saved − t_new) follows χ² with 6 degrees of freedom when
@@ -14,14 +14,22 @@ use nalgebra::{Matrix6, SymmetricEigen, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
-use crate::calibrate::Input;
-use crate::calibrate::batch::{Assessment, Options, Report, calibrate, working_distance};
+use crate::calibrate::input::Input;
+use crate::calibrate::low_dof;
+use crate::calibrate::options::{Options, Problem};
+use crate::calibrate::pipeline::{hand_eye_on_pixels, hand_eye_on_poses};
+use crate::calibrate::problem::pixels::{not_on_pixels, pose_pairs, solved};
+use crate::calibrate::report::HandEyeReport;
+use crate::check::outliers::working_distance;
+use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
+use crate::model::findings::Assessment;
 use crate::model::findings::{Sizes, Verdict};
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{Transform, TransformJson, log_so3};
 use crate::model::prior::{Component, LengthUnit, Prior};
 use crate::model::warning::Warning;
+use crate::solve::reprojection::{PixelOptions, start_camera_poses, target_with_x};
 
 /// The probability of the χ² test's acceptance region for a saved X of the same rig: one
 /// same-rig recording in a thousand is refused.
@@ -95,7 +103,7 @@ pub struct Verification {
     /// Notes on how the comparison was made (a unit conversion, a saved X without uncertainty).
     pub notes: Vec<String>,
     /// The recording's own calibration (absent when it was refused).
-    pub recording: Option<Report>,
+    pub recording: Option<HandEyeReport>,
     /// On the pixels (`verify --intrinsics`): the reprojection error of the recording's
     /// detections with the saved X and with the recording's own, the target's pose fitted to each.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -134,26 +142,30 @@ pub struct FramePixels {
 /// Checks a saved X against a recording (see the module docs): pose pairs, or the target's
 /// detections with the camera's intrinsics ([`Input::Pixels`]).
 ///
-/// On the pixels the recording is calibrated as [`calibrate`] does it there, and its X compared
-/// with the saved one by the same test and words (the covariance is the pixel solve's);
-/// `pixels` adds the reprojection error of the recording's detections with the saved X and with
-/// the recording's own, the target's pose fitted to each with X held fixed: how much worse the
-/// saved X explains the pixels, frame by frame. `refine_intrinsics` is refused there (a saved X
+/// On the pixels the recording is calibrated as [`calibrate`](crate::calibrate()) does it there,
+/// and its X compared with the saved one by the same test and words (the covariance is the pixel
+/// solve's); `pixels` adds the reprojection error of the recording's detections with the saved X
+/// and with the recording's own, the target's pose fitted to each with X held fixed: how much worse
+/// the saved X explains the pixels, frame by frame. `refine_intrinsics` is refused there (a saved X
 /// is checked with the intrinsics it was calibrated with).
 ///
-/// Errors: those of [`calibrate`] but a refusal for degenerate motions or too few motions, which
-/// is the verdict `undetermined`.
+/// Errors: those of [`calibrate`](crate::calibrate()) but a refusal for degenerate motions or too
+/// few motions, which is the verdict `undetermined`.
 pub fn verify<'a>(
     saved: &SavedX,
     input: impl Into<Input<'a>>,
     setup: Setup,
     options: &Options,
 ) -> Result<Verification> {
+    if let Problem::RobotWorld(_) = options.problem {
+        return Err(Error::InvalidParameter {
+            name: "problem",
+            message: "verify checks an X calibrated as hand–eye (A X = X B): the robot-world problem is not offered".into(),
+        });
+    }
     match input.into() {
         Input::Poses(poses) => verify_poses(saved, poses, setup, options),
-        Input::Pixels { frames, camera } => {
-            crate::calibrate::pixels::verify_on_pixels(saved, frames, camera, setup, options)
-        }
+        Input::Pixels { frames, camera } => verify_on_pixels(saved, frames, camera, setup, options),
     }
 }
 
@@ -165,8 +177,8 @@ fn verify_poses(
     options: &Options,
 ) -> Result<Verification> {
     let mut notes = setup_notes(saved, setup);
-    let report = match calibrate(poses, setup, options) {
-        Err(e) => match crate::calibrate::low_dof::wants_prior(&e) {
+    let report = match hand_eye_on_poses(poses, setup, options) {
+        Err(e) => match low_dof::wants_prior(&e) {
             Some(free) => with_saved_prior(saved, poses, setup, options, free, &mut notes),
             None => Err(e),
         },
@@ -182,8 +194,101 @@ fn verify_poses(
     Ok(compared(saved, poses, report, notes))
 }
 
+/// Checks a saved X against a recording with detections (`verify --intrinsics`): the recording is
+/// calibrated on the pixels as [`calibrate`](crate::calibrate()) does it, and its X compared with
+/// the saved one by the same test and words as [`verify`](crate::verify) (the covariance is the
+/// pixel solve's). `pixels` adds the reprojection error of the recording's detections with the
+/// saved X and with the recording's own, the target's pose fitted to each with X held fixed
+/// (`target_with_x`): how much worse the saved X explains the pixels, frame by frame; `start_poses`
+/// are the camera poses the solve started from, under the reading applied (as given when the solve
+/// itself was refused).
+///
+/// Errors: those of [`calibrate`](crate::calibrate()) on the pixels but a refusal for degenerate or
+/// too few motions, which is the verdict `undetermined`.
+fn verify_on_pixels(
+    saved: &SavedX,
+    frames: &[Frame],
+    camera: &Intrinsics,
+    setup: Setup,
+    options: &Options,
+) -> Result<Verification> {
+    not_on_pixels(options.reject_outliers, &options.priors)?;
+    if options.refine_intrinsics {
+        return Err(Error::InvalidParameter {
+            name: "refine_intrinsics",
+            message: "not offered by verify: a saved X is checked with the intrinsics it was calibrated with (give the refined ones with --intrinsics)".into(),
+        });
+    }
+    let notes = setup_notes(saved, setup);
+    let (used, solution, applied, reading_check, choice) =
+        match solved(frames, camera, setup, options.fix, false) {
+            Ok(s) => s,
+            Err(e @ (Error::Degenerate { .. } | Error::TooFewMotions { .. })) => {
+                let start_poses = start_camera_poses(frames, camera, setup);
+                let poses = pose_pairs(frames, &start_poses);
+                return Ok(Verification {
+                    start_poses,
+                    ..cannot_tell(saved, &poses, &e, notes)
+                });
+            }
+            Err(e) => return Err(e),
+        };
+    let poses = pose_pairs(&used, &solution.start_poses);
+    let own = solution.calibration.x;
+    let mut x = saved.x;
+    x.translation.vector *= unit_scale(saved, &poses, &own, &mut Vec::new());
+    let pixel_options = PixelOptions::default();
+    let with_saved = target_with_x(&used, camera, setup, &x, &solution, &pixel_options);
+    let with_own = target_with_x(&used, camera, setup, &own, &solution, &pixel_options);
+    let report = match hand_eye_on_pixels(
+        &used,
+        setup,
+        options,
+        solution,
+        (applied, reading_check),
+        &choice,
+    ) {
+        Ok(r) => r,
+        Err(e @ Error::Degenerate { .. }) => {
+            return Ok(Verification {
+                start_poses: choice.start_poses,
+                ..cannot_tell(saved, &poses, &e, notes)
+            });
+        }
+        Err(e) => return Err(e),
+    };
+    let names = report.reprojection.as_ref().map(|r| {
+        r.per_frame
+            .iter()
+            .map(|f| f.name.clone())
+            .collect::<Vec<_>>()
+    });
+    let per_frame = with_saved
+        .per_frame_rms_px
+        .iter()
+        .zip(&with_own.per_frame_rms_px)
+        .enumerate()
+        .map(|(i, (s, o))| FramePixels {
+            name: names
+                .as_ref()
+                .and_then(|n| n.get(i).cloned())
+                .unwrap_or_else(|| format!("frame {i}")),
+            saved_px: *s,
+            own_px: *o,
+        })
+        .collect();
+    let mut v = compared(saved, &poses, report, notes);
+    v.start_poses = choice.start_poses;
+    v.pixels = Some(PixelComparison {
+        saved_rms_px: with_saved.rms_px,
+        own_rms_px: with_own.rms_px,
+        per_frame,
+    });
+    Ok(v)
+}
+
 /// A note when the saved X's setup is not the recording's.
-pub(crate) fn setup_notes(saved: &SavedX, setup: Setup) -> Vec<String> {
+fn setup_notes(saved: &SavedX, setup: Setup) -> Vec<String> {
     match saved.setup {
         Some(s) if s != setup => vec![format!(
             "the saved X is for {}, the recording is read as {}",
@@ -196,10 +301,10 @@ pub(crate) fn setup_notes(saved: &SavedX, setup: Setup) -> Vec<String> {
 
 /// The saved X against the recording's own calibration `report` (the poses give the recording's
 /// unit and working distance): the χ² test of the module docs, its verdict and words.
-pub(crate) fn compared(
+fn compared(
     saved: &SavedX,
     poses: &[PosePair],
-    report: Report,
+    report: HandEyeReport,
     mut notes: Vec<String>,
 ) -> Verification {
     let new = report.transform;
@@ -232,18 +337,43 @@ pub(crate) fn compared(
         rotation_deg: trace3(&cov, 0).sqrt().to_degrees(),
         translation: trace3(&cov, 3).sqrt(),
     };
-    let weak = report.uncertainty.verdict() != Verdict::Determined;
+    let (verdict, message) = judged(
+        &report,
+        Judged {
+            difference: &difference,
+            sigma: &sigma,
+            distance,
+            limit,
+            length,
+            poses: poses.len(),
+        },
+        recording_unit(poses),
+    );
     let unit = recording_unit(poses);
-    let len = |v: f64| length_words(v, unit);
-    // The sizes' test, which holds whatever the covariance's shape: a bootstrap over a few poses
-    // gives a covariance of unreliable shape, thin in some direction, and the distance alone
-    // then calls the same rig inconsistent (at 4–6 poses, up to 18 sigmas for a difference of
-    // a fifth of the sizes).
-    let sizes = (difference.rotation_deg / sigma.rotation_deg)
-        .max(difference.translation / sigma.translation);
-    let shape_reliable = poses.len() >= SHAPE_POSES;
-    // What the recording's detections prefer (in words), and how far that moves its own X.
-    let intrinsics = report.warnings.iter().find_map(|w| match w {
+    Verification {
+        verdict,
+        difference,
+        sigma,
+        distance_sigmas: distance,
+        limit_sigmas: limit,
+        saved_uncertainty: saved.covariance.is_some(),
+        saved: TransformJson::from(&x),
+        length_unit: unit_name(unit).into(),
+        unit_scale: scale,
+        quality: report.verdict,
+        message,
+        notes,
+        recording: Some(report),
+        pixels: None,
+        start_poses: Vec::new(),
+    }
+}
+
+/// What the recording's detections prefer to the intrinsics given, in words (the focal length's
+/// scale or k1), and how far that moves its own X (degrees, length, sigmas), when its report warns
+/// of it.
+fn preferred_intrinsics(report: &HandEyeReport) -> Option<(String, f64, f64, f64)> {
+    report.warnings.iter().find_map(|w| match w {
         Warning::IntrinsicsDisagree {
             focal_scale,
             rotation_deg,
@@ -269,8 +399,51 @@ pub(crate) fn compared(
             *sigmas,
         )),
         _ => None,
-    });
-    let (verdict, message) = if distance > limit
+    })
+}
+
+/// What the χ² test's numbers say about the saved X: the verdict and its words.
+struct Judged<'a> {
+    /// The saved X minus the recording's, and its one sigma.
+    difference: &'a Sizes,
+    sigma: &'a Sizes,
+    /// The Mahalanobis distance and its limit, sigmas.
+    distance: f64,
+    limit: f64,
+    /// The largest length of the comparison (translations, working distance).
+    length: f64,
+    /// The recording's poses.
+    poses: usize,
+}
+
+/// The verdict of the comparison [`compared`] measured, and its words: inconsistent beyond the
+/// limit (with a reliable shape or sizes beyond [`SIZE_LIMIT`]) unless the recording's own
+/// detections disagree with the intrinsics; undetermined when the recording determines X weakly.
+fn judged(
+    report: &HandEyeReport,
+    j: Judged<'_>,
+    unit: Option<LengthUnit>,
+) -> (Consistency, String) {
+    let Judged {
+        difference,
+        sigma,
+        distance,
+        limit,
+        length,
+        ..
+    } = j;
+    let weak = report.uncertainty.verdict() != Verdict::Determined;
+    let len = |v: f64| length_words(v, unit);
+    // The sizes' test, which holds whatever the covariance's shape: a bootstrap over a few poses
+    // gives a covariance of unreliable shape, thin in some direction, and the distance alone
+    // then calls the same rig inconsistent (at 4–6 poses, up to 18 sigmas for a difference of
+    // a fifth of the sizes).
+    let sizes = (difference.rotation_deg / sigma.rotation_deg)
+        .max(difference.translation / sigma.translation);
+    let shape_reliable = j.poses >= SHAPE_POSES;
+    // What the recording's detections prefer (in words), and how far that moves its own X.
+    let intrinsics = preferred_intrinsics(report);
+    if distance > limit
         && (shape_reliable || sizes > SIZE_LIMIT)
         && let Some((preferred, rotation_deg, translation, sigmas)) = intrinsics
     {
@@ -288,7 +461,7 @@ pub(crate) fn compared(
     } else if distance > limit && (shape_reliable || sizes > SIZE_LIMIT) {
         (
             Consistency::Inconsistent,
-            inconsistent_words(&difference, distance, length, unit),
+            inconsistent_words(difference, distance, length, unit),
         )
     } else if distance > limit {
         (
@@ -298,7 +471,7 @@ pub(crate) fn compared(
                 difference.rotation_deg,
                 len(difference.translation),
                 sizes,
-                poses.len()
+                j.poses
             ),
         )
     } else if weak && !report.outliers.poses.is_empty() && !report.outliers.rejected {
@@ -333,23 +506,6 @@ pub(crate) fn compared(
                 len(difference.translation)
             ),
         )
-    };
-    Verification {
-        verdict,
-        difference,
-        sigma,
-        distance_sigmas: distance,
-        limit_sigmas: limit,
-        saved_uncertainty: saved.covariance.is_some(),
-        saved: TransformJson::from(&x),
-        length_unit: unit_name(unit).into(),
-        unit_scale: scale,
-        quality: report.verdict,
-        message,
-        notes,
-        recording: Some(report),
-        pixels: None,
-        start_poses: Vec::new(),
     }
 }
 
@@ -377,7 +533,7 @@ fn with_saved_prior(
     options: &Options,
     free: Component,
     notes: &mut Vec<String>,
-) -> Result<Report> {
+) -> Result<HandEyeReport> {
     let solve = |scale: f64| {
         let mut with_prior = options.clone();
         with_prior.priors.push(Prior {
@@ -388,7 +544,7 @@ fn with_saved_prior(
             // height is no unit mix-up).
             unit: crate::check::units::length_unit(poses),
         });
-        calibrate(poses, setup, &with_prior)
+        hand_eye_on_poses(poses, setup, &with_prior)
     };
     // The saved X's unit: told by the file, else guessed by its size, then judged on the
     // components the recording determines (the free one is the saved X's, whatever its unit).
@@ -414,7 +570,7 @@ fn with_saved_prior(
     Ok(report)
 }
 
-pub(crate) fn cannot_tell(
+fn cannot_tell(
     saved: &SavedX,
     poses: &[PosePair],
     refusal: &Error,
@@ -439,7 +595,7 @@ pub(crate) fn cannot_tell(
         quality: Assessment::Questionable,
         message: format!(
             "this recording cannot tell whether the saved X fits: it does not determine X ({refusal}){}",
-            if crate::calibrate::low_dof::missing(refusal).is_some() {
+            if low_dof::missing(refusal).is_some() {
                 // The refusal says what a low-DOF robot can record; a 6-DOF robot that turned one
                 // joint can do more.
                 "; if the robot can turn about other axes, record motions that rotate the hand about several different axes (20° or more each)"
@@ -502,12 +658,7 @@ pub fn limit_sigmas() -> f64 {
 
 /// The factor bringing the saved translation into the recording's unit, with a note when it is
 /// not 1.
-pub(crate) fn unit_scale(
-    saved: &SavedX,
-    poses: &[PosePair],
-    new: &Transform,
-    notes: &mut Vec<String>,
-) -> f64 {
+fn unit_scale(saved: &SavedX, poses: &[PosePair], new: &Transform, notes: &mut Vec<String>) -> f64 {
     let (scale, words) = match (told_scale(saved, poses), saved.unit) {
         (Some(told), _) => told,
         (None, None) => {

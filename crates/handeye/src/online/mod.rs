@@ -24,7 +24,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::calibrate::batch::Options;
+use crate::calibrate::options::{Options, Problem};
 use crate::calibrate::pixels::OnlinePixels;
 use crate::check::quality::{errors_against_truth, residual_rms};
 use crate::check::stream::{StreamReading, StreamReadings};
@@ -429,7 +429,7 @@ impl OnlineCalibrator {
             });
         }
         let options = Options {
-            method: crate::solve::Method::Reprojection,
+            problem: Problem::HandEye(crate::solve::Method::Reprojection),
             pairing: crate::model::motion::Pairing::All,
             point: config.tracking.point,
             ..Options::default()

@@ -61,7 +61,7 @@ pub enum RobotWorldMethod {
     /// Joint Levenberg–Marquardt over X and the target pose, started from Shah.
     Refine,
     /// X and the target pose on the pixels of the detections
-    /// ([`calibrate_robot_world`](crate::calibrate_robot_world) on
+    /// ([`calibrate`](crate::calibrate()) with [`Problem::RobotWorld`](crate::Problem::RobotWorld) on
     /// [`Input::Pixels`](crate::Input::Pixels)): not a
     /// solver of poses, so not in [`RobotWorldMethod::ALL`], and the pose solver `robot_world` refuses it.
     Reprojection,

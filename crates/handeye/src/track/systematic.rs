@@ -218,7 +218,7 @@ impl Watch {
     }
 
     /// Runs the test on the sample under `x` (the segment's estimate), as the batch does
-    /// (`calibrate::batch`): X of each half and of each region replicate solved by all pairs of
+    /// (`calibrate::pipeline`): X of each half and of each region replicate solved by all pairs of
     /// their poses, as the tracker solves the whole.
     ///
     /// With the robot's DH table (`model`), the test has the table's statistic as the batch's

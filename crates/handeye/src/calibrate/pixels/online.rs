@@ -1,9 +1,10 @@
 //! The online calibrator on the pixels (`handeye online --intrinsics`): the records of a stream
 //! calibrated by the batch pixel calibration of the parent module, on a doubling schedule.
 
-use super::{not_on_pixels, pose_pairs, report, solved};
-use crate::calibrate::batch::Options;
-use crate::calibrate::robot_world::PoseResidualSummary;
+use crate::calibrate::options::Options;
+use crate::calibrate::pipeline::hand_eye_on_pixels as report;
+use crate::calibrate::problem::pixels::{not_on_pixels, pose_pairs, solved};
+use crate::calibrate::report::robot_world::PoseResidualSummary;
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
 use crate::model::motion::Setup;
