@@ -1,23 +1,33 @@
-//! The online calibrator: pose pairs in, one at a time; calibration events out as they happen.
+//! The online calibrator: one record in at a time ([`Record`]: a pose pair, or on the pixels a
+//! frame with detections, named as its input names it); everything it made happen out
+//! ([`Outputs`]). One engine per calibrator, an internal choice of its configuration:
 //!
-//! [`OnlineCalibrator::push`] offers each pose pair to the selection policy ([`crate::select`]);
-//! when a pair of motions is selected it solves X with Andreff's method on those two motions,
-//! measures rmsR and rmsT with the configured [`ErrorSource`], tells the adaptive policy, and
-//! returns an [`Event`]. With `optimal` set it also refines X over the last five selected motions
-//! (the paper's "optimal method", sec. 4.1.3). With [`Estimator::Accumulate`] every pose goes
-//! to a [`Tracker`] instead (all pairs of poses, gated, watched for change, reported on its own
-//! schedule: [`OnlineCalibrator::step`], [`OnlineCalibrator::finish`]); the paper's selection
-//! does not run beside it (`push` returns no event). The one length threshold, `d_max`,
-//! follows the input's unit, inferred from the first pose unless given ([`Unit`]). The state is
-//! constant in size, and serialisable (serde) so that a run can be saved and resumed.
+//! - **The paper's** ([`Estimator::Paper`]): [`OnlineCalibrator::push`] offers each pose pair to
+//!   the selection policy ([`select`]); when a pair of motions is selected it solves X with
+//!   Andreff's method on those two motions, measures rmsR and rmsT with the configured
+//!   [`ErrorSource`], tells the adaptive policy, and returns an [`Event`]. With `optimal` set it
+//!   also refines X over the last five selected motions (the paper's "optimal method", sec.
+//!   4.1.3). Its readings are checked on the first poses ([`Outputs::misread`]), and a selection
+//!   that makes no calibration for a while is told ([`Outputs::stuck`]).
+//! - **Accumulate** ([`Estimator::Accumulate`]): every pose goes to the accumulating estimator
+//!   (all pairs of poses, gated, watched for change, reported on its own schedule:
+//!   [`Outputs::held_out`], [`Outputs::change`], [`Outputs::report`]); the paper's selection does
+//!   not run beside it.
+//! - **On the pixels** (`intrinsics` in [`OnlineSettings`], [`OnlineCalibrator::on_pixels`],
+//!   `handeye online --intrinsics`): frames with detections, and the batch calibration on their
+//!   pixels on a doubling schedule, in the same report type.
 //!
-//! On the pixels ([`OnlineCalibrator::on_pixels`], `handeye online --intrinsics`), the same
-//! calibrator takes frames with detections ([`OnlineCalibrator::push_frame`]) and reports the
-//! batch calibration on their pixels on a doubling schedule, in the same report type; its
-//! `step`, `finish`, `last_report`, `pending` and `unit` answer as on poses, so that the command
-//! line and Python print one calibrator's results. This layer sits above `calibrate/` for that.
+//! The one length threshold, `d_max`, follows the input's unit, inferred from the first pose
+//! unless given ([`Unit`], told once: [`Outputs::unit`]). The configuration rules (what a
+//! setting left out defaults to, α₀ in degrees or as a sine, an explicit `d_max` as given) are
+//! [`OnlineSettings`]'s, so that every face only gathers and prints. The state is constant in
+//! size (the names of the last 300 records kept to name the poses held out), and serialisable
+//! (serde) so that a run can be saved and resumed. This layer sits above `calibrate/` for the
+//! pixels.
 
+mod record;
 pub mod select;
+mod settings;
 
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -38,11 +48,17 @@ use crate::online::select::{AdaptiveParams, Selected, Selection, Selector, Thres
 use crate::solve::{RefineOptions, andreff, refine_from};
 use crate::track::{Pending, Report, Step, TrackEstimate, TrackOptions, Tracker};
 
+pub use record::{
+    ChangeFound, HeldOutPose, Name, Observed, Outputs, Record, Tell, Thinning, UnitTold,
+};
+pub use settings::{AlphaMin, OnlineSettings};
+use record::Names;
+
 /// Number of selected motions the optimal method refines over (sec. 4.1.3).
 pub const OPTIMAL_WINDOW: usize = 5;
 
 /// Poses without a calibration after which the paper's estimator says why
-/// ([`OnlineCalibrator::stuck`]), and again at each doubling of it.
+/// ([`Outputs::stuck`]), and again at each doubling of it.
 const QUIET_POSES: usize = 200;
 
 /// Where rmsR and rmsT come from (SPEC sec. 2).
@@ -361,6 +377,18 @@ pub struct OnlineCalibrator {
     /// unit.
     #[serde(skip)]
     first_robot: Option<Transform>,
+    /// The names of the recent records, for naming the poses held out and the changes.
+    #[serde(default)]
+    names: Names,
+    /// Held-out poses counted, for telling them by [`Thinning`]'s rule.
+    #[serde(default)]
+    held_out_told: Thinning,
+    /// Whether the length unit was told ([`Outputs::unit`]).
+    #[serde(default)]
+    unit_told: bool,
+    /// The unit the first pose that fits one tells, whatever the unit in force.
+    #[serde(default)]
+    pose_unit: Option<Unit>,
 }
 
 impl OnlineCalibrator {
@@ -388,11 +416,15 @@ impl OnlineCalibrator {
             misread: None,
             pixels: None,
             first_robot: None,
+            names: Names::default(),
+            held_out_told: Thinning::default(),
+            unit_told: false,
+            pose_unit: None,
         })
     }
 
     /// A calibrator on the pixels of `camera`: each frame (a robot pose and the target's
-    /// detections, [`OnlineCalibrator::push_frame`]) is kept, and X solved by the batch
+    /// detections, pushed as a [`Record`]) is kept, and X solved by the batch
     /// calibration on the pixels ([`calibrate`](crate::calibrate()) with [`Input::Pixels`](crate::Input::Pixels), with its
     /// checks) at 16, 32, 64, … frames and at the end, in the accumulating estimator's report
     /// with the fit in `estimate.reprojection` (`handeye online --intrinsics`). `config` gives
@@ -450,17 +482,6 @@ impl OnlineCalibrator {
         })
     }
 
-    /// Messages of one kind on a stream (held-out poses, bad lines) told one by one before only
-    /// every 2^k-th is (the count told at the end), so that an endless bad stream cannot flood
-    /// what a face shows.
-    pub const TOLD_ONE_BY_ONE: usize = 100;
-
-    /// Whether the `count`-th message of one kind (from 1) is told: the first
-    /// [`OnlineCalibrator::TOLD_ONE_BY_ONE`], then the 2^k-th. Every face tells them by this rule.
-    pub fn told(count: usize) -> bool {
-        count <= Self::TOLD_ONE_BY_ONE || count.is_power_of_two()
-    }
-
     /// Whether this calibrator is on the pixels ([`OnlineCalibrator::on_pixels`]), whose state
     /// (the frames) is not saved with serde.
     pub fn on_the_pixels(&self) -> bool {
@@ -469,10 +490,10 @@ impl OnlineCalibrator {
 
     /// Pushes one frame on the pixels, named `name` (`file:line`, for the report's figures and
     /// outlier lists); returns the estimate when one is solved at this frame (16, 32, 64, …
-    /// frames), also as [`OnlineCalibrator::step`]'s report.
+    /// frames), also as the step's report.
     ///
     /// Errors: [`Error::InvalidParameter`] on a calibrator of pose pairs.
-    pub fn push_frame(&mut self, frame: Frame, name: String) -> Result<Option<Report>> {
+    fn push_frame(&mut self, frame: Frame, name: String) -> Result<Option<Report>> {
         let Some(pixels) = self.pixels.as_mut() else {
             return Err(Error::InvalidParameter {
                 name: "intrinsics",
@@ -508,7 +529,7 @@ impl OnlineCalibrator {
 
     /// The cautions of the last estimate on the pixels (its verdict `questionable` when any);
     /// on pose pairs the reports carry their own (`Report::warnings`).
-    pub fn warnings(&self) -> &[crate::model::warning::Warning] {
+    fn warnings(&self) -> &[crate::model::warning::Warning] {
         self.pixels.as_ref().map_or(&[], |p| p.warnings())
     }
 
@@ -529,7 +550,7 @@ impl OnlineCalibrator {
     }
 
     /// `d_max` in force, in the input's unit.
-    pub fn d_max(&self) -> f64 {
+    fn d_max(&self) -> f64 {
         self.unit.d_max().unwrap_or(self.config.params.d_max)
     }
 
@@ -548,23 +569,33 @@ impl OnlineCalibrator {
         self.calibrations
     }
 
-    /// Selected pairs that Andreff refused as degenerate (no event was emitted for them).
-    pub fn refused(&self) -> usize {
-        self.refused
-    }
-
-    /// The latest X, if any calibration happened.
-    pub fn last_x(&self) -> Option<Transform> {
-        self.last_x
-    }
-
-    /// The adaptive thresholds in force now.
-    pub fn thresholds(&self) -> Option<Thresholds> {
-        self.selector.thresholds()
+    /// What the run did, for a face's summary at the end (or at any point): counts, the
+    /// paper's last X and thresholds, why its selection made no calibration lately, the
+    /// accumulating estimator's counts, the length unit.
+    pub fn summary(&self) -> Summary {
+        Summary {
+            poses: self.poses,
+            calibrations: self.calibrations,
+            refused: self.refused,
+            last_x: self.last_x,
+            thresholds: self.selector.thresholds(),
+            stuck: self.stuck_at_end(),
+            tracked: self.tracker.as_ref().map(|t| Tracked {
+                repeats: t.repeats(),
+                held_out: t.held_out(),
+                changes: t.changes(),
+            }),
+            unit: self.unit,
+            d_max: self.d_max(),
+            length_unit: match self.unit {
+                Unit::Metre | Unit::Millimetre => Some(self.unit),
+                Unit::Auto | Unit::AsGiven => self.pose_unit,
+            },
+        }
     }
 
     /// Poses pushed since the last calibration (all of them before the first).
-    pub fn poses_since_calibration(&self) -> usize {
+    fn poses_since_calibration(&self) -> usize {
         self.poses - self.last_calibration
     }
 
@@ -572,7 +603,7 @@ impl OnlineCalibrator {
     /// at 200, 400, 800, … poses without one (a stuck stream is told so at growing intervals, not
     /// every 200 poses): the words when the last push reached such a count, else `None`. Every
     /// face tells them then.
-    pub fn stuck(&self) -> Option<String> {
+    fn stuck(&self) -> Option<String> {
         if self.tracker.is_some() || self.pixels.is_some() {
             return None;
         }
@@ -583,7 +614,7 @@ impl OnlineCalibrator {
 
     /// At the end of a stream, with the paper's estimator: why no calibration came (at all, or
     /// in the last 200 poses), in words; `None` otherwise.
-    pub fn stuck_at_end(&self) -> Option<String> {
+    fn stuck_at_end(&self) -> Option<String> {
         if self.tracker.is_some() || self.pixels.is_some() {
             return None;
         }
@@ -616,23 +647,111 @@ impl OnlineCalibrator {
         })
     }
 
-    /// Pushes the next pose pair; returns the calibrations it completes (usually none, at most one
-    /// except at the end of the fixed method's initial window). A pose with a non-finite entry is
-    /// refused with an error and leaves the state untouched.
+    /// Pushes the next record (a pose pair, or on the pixels a frame with detections); returns
+    /// everything it made happen ([`Outputs`]): the paper's calibrations (usually none, at most
+    /// one except at the end of the fixed method's initial window), or the accumulating
+    /// estimator's held-out poses, change and report, or on the pixels an estimate at 16, 32, 64,
+    /// … frames; the length unit once known; a misread or a stuck selection found. The poses
+    /// cited are named as the record's input names them ([`Name`]).
     ///
     /// With `Unit::Auto`, the first pose whose size fits a unit fixes it ([`Unit::infer`]);
-    /// until then `params.d_max` is in force ([`OnlineCalibrator::unit`] tells which).
-    pub fn push(&mut self, pose: &PosePair) -> Result<Vec<Event>> {
-        self.push_joints(pose, None)
+    /// until then `params.d_max` is in force ([`OnlineCalibrator::unit`] tells which). The
+    /// record's joint angles (radians, every pose the same joints) order the accumulating
+    /// estimator's systematic-error test, which names the joint whose angle the residual follows;
+    /// the paper's estimator does not use them.
+    ///
+    /// Errors, the state left untouched: a pose with a non-finite entry
+    /// ([`Error::InvalidTransform`]; a parse error at its line when the record is named by one);
+    /// a joint angle that is not finite; a pose on a calibrator on the pixels, a frame on one of
+    /// pose pairs ([`Error::InvalidParameter`]). And the accumulating estimator's refusal of its
+    /// priors or of the robot's table, told when its data show it.
+    pub fn push<'a>(&mut self, record: impl Into<Record<'a>>) -> Result<Outputs> {
+        let Record {
+            observed,
+            name,
+            joints,
+        } = record.into();
+        let mut out = Outputs::default();
+        let pose = match observed {
+            Observed::Frame(frame) => {
+                let number = self.poses + 1;
+                out.report = self.push_frame(*frame, Names::now(name, number, "record"))?;
+                return Ok(out);
+            }
+            Observed::Pose(pose) => pose,
+        };
+        let events = match self.push_pose(pose, joints) {
+            Err(e @ Error::InvalidTransform { .. }) => {
+                return Err(match name {
+                    Name::Line { source, line } | Name::Stamp { source, line, .. } => {
+                        Error::Parse {
+                            file: source.to_string(),
+                            line,
+                            field: "-".to_string(),
+                            message: e.to_string(),
+                            remedy: None,
+                        }
+                    }
+                    Name::Numbered | Name::Text(_) => e,
+                });
+            }
+            result => result?,
+        };
+        self.names.keep(self.poses, name);
+        if !self.unit_told {
+            out.unit = self.unit_told(pose);
+        }
+        out.misread = self.misread();
+        if self.tracker.is_some() {
+            let step = &self.step;
+            for (pose, why) in step.held_out_poses() {
+                out.held_out.push(HeldOutPose {
+                    pose,
+                    name: self.names.of(pose, "pose"),
+                    why: *why,
+                    tell: self.held_out_told.tell(),
+                });
+            }
+            out.change = step.change.map(|change| ChangeFound {
+                change,
+                from: self.names.of(change.at, "pose"),
+                confirmed: self.names.of(change.confirmed, "pose"),
+            });
+            out.report = step.report.clone();
+        }
+        out.events = events;
+        out.stuck = self.stuck();
+        Ok(out)
     }
 
-    /// [`OnlineCalibrator::push`] with the robot's joint angles at the pose (radians, every pose
-    /// the same joints): the accumulating estimator's systematic-error test orders the poses by
-    /// them and names the joint whose angle the residual follows
-    /// (`track::Tracker::push_with_joints`); the paper's estimator does not use them. A
-    /// joint angle that is not finite is refused with an error and leaves the state untouched.
-    pub fn push_with_joints(&mut self, pose: &PosePair, joints: &[f64]) -> Result<Vec<Event>> {
-        if let Some(k) = joints.iter().position(|q| !q.is_finite()) {
+    /// The length unit, the first time it is known (or, at the first pose, not told by it).
+    fn unit_told(&mut self, pose: &PosePair) -> Option<UnitTold> {
+        let d_max = self.d_max();
+        match self.unit {
+            Unit::Auto => (self.poses == 1).then(|| UnitTold::Unknown {
+                sizes: [
+                    pose.base_from_gripper.translation.vector.norm(),
+                    pose.camera_from_target.translation.vector.norm(),
+                ],
+                d_max,
+            }),
+            unit => {
+                self.unit_told = true;
+                Some(UnitTold::Known {
+                    unit,
+                    inferred_at: (self.config.unit == Unit::Auto).then_some(self.poses),
+                    d_max,
+                })
+            }
+        }
+    }
+
+    /// Pushes a pose pair, with the joint angles at it if given: the paper's calibrations it
+    /// completes, or the accumulating estimator's step (`OnlineCalibrator::step`).
+    fn push_pose(&mut self, pose: &PosePair, joints: Option<&[f64]>) -> Result<Vec<Event>> {
+        if let Some(joints) = joints
+            && let Some(k) = joints.iter().position(|q| !q.is_finite())
+        {
             return Err(Error::InvalidParameter {
                 name: "joints",
                 message: format!(
@@ -642,10 +761,6 @@ impl OnlineCalibrator {
                 ),
             });
         }
-        self.push_joints(pose, Some(joints))
-    }
-
-    fn push_joints(&mut self, pose: &PosePair, joints: Option<&[f64]>) -> Result<Vec<Event>> {
         if self.pixels.is_some() {
             return Err(Error::InvalidParameter {
                 name: "intrinsics",
@@ -657,6 +772,9 @@ impl OnlineCalibrator {
             self.fix_unit(pose);
         }
         self.poses += 1;
+        if self.pose_unit.is_none() {
+            self.pose_unit = Unit::infer(pose);
+        }
         let hand = self.config.setup.hand_pose(&pose.base_from_gripper);
         if let Some(previous) = self.previous {
             let step =
@@ -733,7 +851,7 @@ impl OnlineCalibrator {
     /// What the accumulating estimator did with the last pose: held it out, confirmed a change,
     /// reported an estimate (on the pixels: the estimate solved at the last frame, if one was).
     /// `None` with the paper's estimator.
-    pub fn step(&self) -> Option<&Step> {
+    pub(crate) fn step(&self) -> Option<&Step> {
         (self.tracker.is_some() || self.pixels.is_some()).then_some(&self.step)
     }
 
@@ -741,16 +859,30 @@ impl OnlineCalibrator {
     /// is determined and was not just reported); on the pixels, the calibration on the pixels of
     /// every frame pushed (or of the frames kept, beyond 256), reported with `reason` `end`. With
     /// the paper's estimator, the readings check runs now on a stream shorter than its sample
-    /// ([`OnlineCalibrator::misread`]) and there is no report.
+    /// ([`Outputs::misread`]) and there is no report.
     ///
     /// Errors: the priors refused (a prior in another length unit than the poses, told only now
     /// on a short stream); on the pixels, the calibration's refusal (too few frames, degenerate
     /// motions, robot poses that fit the pixels far better inverted, a fit far above detection
     /// noise).
-    pub fn finish(&mut self) -> Result<Option<Report>> {
+    ///
+    /// The outputs carry the report, what the readings check found, and on the pixels the
+    /// cautions of the end's estimate.
+    pub fn finish(&mut self) -> Result<Outputs> {
         if let Some(found) = self.readings.as_mut().and_then(StreamReadings::finish) {
             self.misread = Some(found);
         }
+        let report = self.final_report()?;
+        Ok(Outputs {
+            misread: self.misread(),
+            report,
+            warnings: self.warnings().to_vec(),
+            ..Outputs::default()
+        })
+    }
+
+    /// The report of [`OnlineCalibrator::finish`].
+    fn final_report(&mut self) -> Result<Option<Report>> {
         if let Some(pixels) = self.pixels.as_mut() {
             let report = pixels.finish()?;
             self.unit_from(&report);
@@ -771,7 +903,7 @@ impl OnlineCalibrator {
     /// on the first 64 poses (or at [`OnlineCalibrator::finish`] on a stream of 16 to 63);
     /// its calibrations are then from poses read wrongly, or about one axis. The
     /// accumulating estimator checks its readings itself and refuses.
-    pub fn misread(&mut self) -> Option<StreamReading> {
+    fn misread(&mut self) -> Option<StreamReading> {
         self.misread.take()
     }
 
@@ -853,16 +985,6 @@ impl OnlineCalibrator {
         } else {
             why
         })
-    }
-
-    /// The accumulating estimator itself (its counts), if it runs.
-    pub fn tracker(&self) -> Option<&Tracker> {
-        self.tracker.as_ref()
-    }
-
-    /// The pose number where a change of X began, when the last `push` confirmed one.
-    pub fn change_detected(&self) -> Option<usize> {
-        self.step()?.change.map(|c| c.at)
     }
 
     /// rmsR and rmsT of `x` from the configured source.
@@ -950,7 +1072,44 @@ pub fn run_series(config: OnlineConfig, poses: &[PosePair]) -> Result<Vec<Event>
     let mut calibrator = OnlineCalibrator::new(config)?;
     let mut events = Vec::new();
     for p in poses {
-        events.extend(calibrator.push(p)?);
+        events.extend(calibrator.push_pose(p, None)?);
     }
     Ok(events)
+}
+
+/// What an online run did ([`OnlineCalibrator::summary`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// Records pushed.
+    pub poses: usize,
+    /// The paper's calibrations made.
+    pub calibrations: usize,
+    /// The paper's selections that Andreff refused as degenerate (no event for them).
+    pub refused: usize,
+    /// The paper's latest X.
+    pub last_x: Option<Transform>,
+    /// The paper's adaptive thresholds in force now.
+    pub thresholds: Option<Thresholds>,
+    /// With the paper's estimator: why no calibration came (at all, or in the last 200 poses).
+    pub stuck: Option<String>,
+    /// The accumulating estimator's counts, when it runs.
+    pub tracked: Option<Tracked>,
+    /// The length unit in force (`Auto` while no pose told it).
+    pub unit: Unit,
+    /// `d_max` in force, in the input's unit.
+    pub d_max: f64,
+    /// The input's length unit when known: the one in force, or the one the poses tell (an
+    /// explicit `d_max` sets no unit); for publishing X in metres.
+    pub length_unit: Option<Unit>,
+}
+
+/// The accumulating estimator's counts ([`Summary::tracked`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tracked {
+    /// Poses at the robot pose of the pose before, each counted with it.
+    pub repeats: usize,
+    /// Poses held out.
+    pub held_out: usize,
+    /// Changes of X confirmed.
+    pub changes: usize,
 }

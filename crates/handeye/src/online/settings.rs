@@ -1,0 +1,167 @@
+//! An online run's settings as a user gives them ([`OnlineSettings`]), and the one set of rules
+//! that turns them into an [`OnlineConfig`] and a calibrator: what a setting left out defaults
+//! to, the floor of α₀ as a sine or in degrees, β₀'s floor in degrees, an explicit `d_max` in the
+//! input's unit whatever it is. Every face gathers its user's settings here and checks none of
+//! them itself.
+
+use crate::model::camera::Intrinsics;
+use crate::model::error::{Error, Result};
+use crate::model::findings::Written;
+use crate::model::kinematics::Kinematics;
+use crate::model::motion::Setup;
+use crate::model::pose::Transform;
+use crate::model::prior::Prior;
+use crate::online::select::{AdaptiveParams, Selection};
+use crate::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
+use crate::track::TrackOptions;
+
+/// The floor of a predicted α₀ (the angle between the axes of A′ and A″), as a user gives it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AlphaMin {
+    /// In degrees, in (0, 90].
+    Degrees(f64),
+    /// As its sine, in (0, 1] (the older form).
+    Sine(f64),
+}
+
+/// An online run's settings as a user gives them: each left out (`None`) takes the library's
+/// default. [`OnlineSettings::config`] applies the rules; [`OnlineSettings::calibrator`] builds
+/// the calibrator (on the pixels with `intrinsics`, with the priors and the robot's table).
+#[derive(Debug, Clone, Default)]
+pub struct OnlineSettings {
+    /// Mounting of the camera. Default eye-in-hand.
+    pub setup: Setup,
+    /// Selection policy. Default adaptive.
+    pub selection: Selection,
+    /// The estimator. Default: the library's ([`Estimator::Paper`]); the faces default to
+    /// [`Estimator::Accumulate`].
+    pub estimator: Estimator,
+    /// Source of rmsR and rmsT. Default residual.
+    pub error_source: ErrorSource,
+    /// The true X, for [`ErrorSource::Truth`]. Default none.
+    pub truth: Option<Transform>,
+    /// Also run the optimal method. Default false.
+    pub optimal: bool,
+    /// N of Eq. (1). Default [`AdaptiveParams::default`]'s.
+    pub n_init: Option<usize>,
+    /// Candidates tried before the thresholds are relaxed. Default the paper's.
+    pub interval: Option<usize>,
+    /// Relaxation factor of sin α₀ and β₀. Default the paper's.
+    pub relax_down: Option<f64>,
+    /// Relaxation factor of d₀. Default the paper's.
+    pub relax_up: Option<f64>,
+    /// Exploration factor after calibrations 1–3. Default the paper's.
+    pub explore: Option<f64>,
+    /// Required rotation accuracy rmsRMax. Default the paper's.
+    pub rms_r_max: Option<f64>,
+    /// Required translation accuracy rmsTMax. Default the paper's.
+    pub rms_t_max: Option<f64>,
+    /// Floor of a predicted α₀. Default sin 15°.
+    pub alpha_min: Option<AlphaMin>,
+    /// Floor of a predicted β₀, degrees, in (0, 180]. Default 3°.
+    pub beta_min_deg: Option<f64>,
+    /// Ceiling of a predicted d₀ in the input's length unit, whatever it is (the unit is then
+    /// [`Unit::AsGiven`]). Default: 0.1 m in the `unit`.
+    pub d_max: Option<f64>,
+    /// Opt-in remedy for thresholds that lock. Default false.
+    pub unfreeze: bool,
+    /// The input's length unit. Default `Auto`: inferred from the first pose.
+    pub unit: Unit,
+    /// The accumulating estimator reports at least every N poses. Default
+    /// [`TrackOptions::default`]'s.
+    pub every: Option<usize>,
+    /// It also reports when both uncertainties have shrunk to this fraction. Default
+    /// [`TrackOptions::default`]'s.
+    pub shrink: Option<f64>,
+    /// Least rotation-angle gap (degrees) that marks a pose as an outlier. Default
+    /// [`TrackOptions::default`]'s.
+    pub outlier_deg: Option<f64>,
+    /// The point whose error through X each report gives. Default the mean target position.
+    pub point: Option<[f64; 3]>,
+    /// The directions in which the input writes its poses. Default: as handeye names them.
+    pub written: Written,
+    /// The camera's intrinsics: the calibrator is then on the pixels. Default none.
+    pub intrinsics: Option<Intrinsics>,
+    /// Priors on X's translation for a low-DOF robot. Default none.
+    pub priors: Vec<Prior>,
+    /// The robot's DH table, for the systematic-error test. Default none.
+    pub robot_model: Option<Kinematics>,
+}
+
+impl OnlineSettings {
+    /// The configuration these settings give: the defaults of what is left out, α₀'s floor as a
+    /// sine, β₀'s in radians, an explicit `d_max` as given ([`Unit::AsGiven`]), every range
+    /// checked ([`OnlineConfig::validate`]).
+    ///
+    /// Errors: [`Error::InvalidParameter`] naming the setting out of range.
+    pub fn config(&self) -> Result<OnlineConfig> {
+        let d = AdaptiveParams::default();
+        let tracking = TrackOptions::default();
+        let alpha_min = match self.alpha_min {
+            None => d.alpha_min,
+            Some(AlphaMin::Sine(sine)) => sine,
+            Some(AlphaMin::Degrees(degrees)) => {
+                if !(degrees > 0.0 && degrees <= 90.0) {
+                    return Err(Error::InvalidParameter {
+                        name: "alpha_min_deg",
+                        message: format!("must be in (0, 90] degrees, got {degrees}"),
+                    });
+                }
+                degrees.to_radians().sin()
+            }
+        };
+        let config = OnlineConfig {
+            setup: self.setup,
+            selection: self.selection,
+            params: AdaptiveParams {
+                n_init: self.n_init.unwrap_or(d.n_init),
+                interval: self.interval.unwrap_or(d.interval),
+                relax_down: self.relax_down.unwrap_or(d.relax_down),
+                relax_up: self.relax_up.unwrap_or(d.relax_up),
+                explore: self.explore.unwrap_or(d.explore),
+                rms_r_max: self.rms_r_max.unwrap_or(d.rms_r_max),
+                rms_t_max: self.rms_t_max.unwrap_or(d.rms_t_max),
+                alpha_min,
+                beta_min: self.beta_min_deg.map_or(d.beta_min, f64::to_radians),
+                d_max: self.d_max.unwrap_or(d.d_max),
+                unfreeze: self.unfreeze,
+            },
+            error_source: self.error_source,
+            truth: self.truth,
+            optimal: self.optimal,
+            estimator: self.estimator,
+            tracking: TrackOptions {
+                every: self.every.unwrap_or(tracking.every),
+                shrink: self.shrink.unwrap_or(tracking.shrink),
+                outlier_deg: self.outlier_deg.unwrap_or(tracking.outlier_deg),
+                point: self.point,
+                ..tracking
+            },
+            // An explicit d_max is in the input's unit whatever it is.
+            unit: match self.d_max {
+                Some(_) => Unit::AsGiven,
+                None => self.unit,
+            },
+            written: self.written,
+        };
+        Ok(config)
+    }
+
+    /// The calibrator these settings give: on the pixels when `intrinsics` are given, with the
+    /// priors and the robot's table.
+    ///
+    /// Errors: [`OnlineSettings::config`]'s; [`OnlineCalibrator::new`]'s and
+    /// [`OnlineCalibrator::on_pixels`]'s (settings that do not apply); a prior or a table the
+    /// estimator does not take ([`OnlineCalibrator::with_priors`],
+    /// [`OnlineCalibrator::with_robot_model`]).
+    pub fn calibrator(self) -> Result<OnlineCalibrator> {
+        let config = self.config()?;
+        let calibrator = match self.intrinsics {
+            Some(camera) => OnlineCalibrator::on_pixels(camera, config)?,
+            None => OnlineCalibrator::new(config)?,
+        };
+        calibrator
+            .with_priors(&self.priors)?
+            .with_robot_model(self.robot_model)
+    }
+}
