@@ -328,7 +328,7 @@ struct OptimalLine {
 /// let still = PosePair { base_from_gripper: Transform::identity(), camera_from_target: Transform::identity() };
 /// // A robot that never moves gives no calibration.
 /// for _ in 0..20 {
-///     assert!(calibrator.push(&still)?.is_empty());
+///     assert!(calibrator.push(&still)?.events.is_empty());
 /// }
 /// assert_eq!(calibrator.poses(), 20);
 /// # Ok::<(), handeye::Error>(())

@@ -27,6 +27,32 @@ pub enum AlphaMin {
 /// An online run's settings as a user gives them: each left out (`None`) takes the library's
 /// default. [`OnlineSettings::config`] applies the rules; [`OnlineSettings::calibrator`] builds
 /// the calibrator (on the pixels with `intrinsics`, with the priors and the robot's table).
+///
+/// # Example
+/// ```
+/// use handeye::sim::{SimConfig, simulate};
+/// use handeye::{AlphaMin, Estimator, Name, OnlineSettings, Record};
+/// let settings = OnlineSettings {
+///     estimator: Estimator::Accumulate,
+///     alpha_min: Some(AlphaMin::Degrees(15.0)),
+///     ..OnlineSettings::default()
+/// };
+/// let mut calibrator = settings.calibrator()?;
+/// let series = simulate(&SimConfig::default(), 1, 0); // 200 noisy poses, millimetres
+/// let mut reports = 0;
+/// for (k, pose) in series.poses.iter().enumerate() {
+///     // Named as the input names it, so that a pose held out is told by its line.
+///     let name = Name::Line { source: "poses.jsonl", line: k + 1 };
+///     let outputs = calibrator.push(Record::pose(pose).named(name))?;
+///     for h in &outputs.held_out {
+///         println!("held out: {}: {}", h.name, h.why);
+///     }
+///     reports += usize::from(outputs.report.is_some());
+/// }
+/// reports += usize::from(calibrator.finish()?.report.is_some());
+/// assert!(reports > 0);
+/// # Ok::<(), handeye::Error>(())
+/// ```
 #[derive(Debug, Clone, Default)]
 pub struct OnlineSettings {
     /// Mounting of the camera. Default eye-in-hand.
