@@ -25,6 +25,7 @@
 //! (serde) so that a run can be saved and resumed. This layer sits above `calibrate/` for the
 //! pixels.
 
+mod event;
 mod record;
 pub mod select;
 mod settings;
@@ -40,18 +41,18 @@ use crate::check::quality::{errors_against_truth, residual_rms};
 use crate::check::stream::{StreamReading, StreamReadings};
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
-use crate::model::motion::{MotionPair, PosePair, Setup};
-use crate::model::findings::Written;
+use crate::model::motion::{MotionPair, PosePair};
 use crate::model::pose::Transform;
-use crate::model::pose::TransformJson;
-use crate::online::select::{AdaptiveParams, Selected, Selection, Selector, Thresholds};
+use crate::online::select::{Selected, Selector};
 use crate::solve::{RefineOptions, andreff, refine_from};
-use crate::track::{Pending, Report, Step, TrackEstimate, TrackOptions, Tracker};
+use crate::track::{Pending, Report, Step, TrackEstimate, Tracker};
 
 pub use record::{
     ChangeFound, HeldOutPose, Name, Observed, Outputs, Record, Tell, Thinning, UnitTold,
 };
-pub use settings::{AlphaMin, OnlineSettings};
+pub use event::{Event, OptimalEstimate, Rms};
+pub use record::{Summary, Tracked};
+pub use settings::{AlphaMin, ErrorSource, Estimator, OnlineConfig, OnlineSettings, Unit};
 use record::Names;
 
 /// Number of selected motions the optimal method refines over (sec. 4.1.3).
@@ -61,262 +62,6 @@ pub const OPTIMAL_WINDOW: usize = 5;
 /// ([`Outputs::stuck`]), and again at each doubling of it.
 const QUIET_POSES: usize = 200;
 
-/// Where rmsR and rmsT come from (SPEC sec. 2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ErrorSource {
-    /// Against the true X (simulation): rmsR = ‖R̂ − R‖_F / 3, rmsT = ‖t − t̂‖ / ‖t‖.
-    Truth,
-    /// The A X − X B residuals of the two motions used (real data; the paper's sec. 4.2).
-    #[default]
-    Residual,
-}
-
-/// Settings of an online run; `Default` is eye-in-hand, adaptive, residual errors, no optimal.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct OnlineConfig {
-    /// Mounting of the camera. Default eye-in-hand.
-    pub setup: Setup,
-    /// Selection policy. Default adaptive.
-    pub selection: Selection,
-    /// Parameters of the adaptive (and, for `n_init`, the fixed) policy. Default: the paper's.
-    pub params: AdaptiveParams,
-    /// Source of rmsR and rmsT. Default residual.
-    pub error_source: ErrorSource,
-    /// The true X (`gripper_from_camera`, or `base_from_camera` for eye-to-hand); required by
-    /// [`ErrorSource::Truth`]. Default none.
-    pub truth: Option<Transform>,
-    /// Also run the optimal method (sec. 4.5). Default false.
-    pub optimal: bool,
-    /// The paper's calibrations, or the accumulating estimator in their place. Default `Paper`.
-    pub estimator: Estimator,
-    /// The accumulating estimator's gates, change test and schedule. Default:
-    /// [`TrackOptions::default`].
-    pub tracking: TrackOptions,
-    /// The input's length unit, which sets `params.d_max` (0.1 m in that unit). Default `Auto`:
-    /// inferred from the first pose.
-    pub unit: Unit,
-    /// The directions in which the input writes its poses (`io::Recording::written`): a
-    /// recording's, looked up between named frames, has a misread worded as frame names swapped.
-    /// Default: both as handeye names them.
-    #[serde(default)]
-    pub written: Written,
-}
-
-impl OnlineConfig {
-    /// Checks every setting's range (the adaptive parameters', the accumulating estimator's), and
-    /// that `truth` is given when it is the error source: what [`OnlineCalibrator::new`] checks,
-    /// for a calibrator restored from its saved state too.
-    pub fn validate(&self) -> Result<()> {
-        if self.error_source == ErrorSource::Truth && self.truth.is_none() {
-            return Err(Error::InvalidParameter {
-                name: "error_source",
-                message: "`truth` needs the true X (give a truth file)".to_string(),
-            });
-        }
-        self.params.validate()?;
-        self.tracking.validate()
-    }
-}
-
-/// The length unit of the input, for the one threshold that has a unit (`d_max`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Unit {
-    /// Inferred from the first pose whose translations fit a unit: metres when they are 0.05–10,
-    /// millimetres when they are 50–10,000 ([`Unit::infer`]).
-    #[default]
-    Auto,
-    /// Metres: `d_max` = 0.1.
-    Metre,
-    /// Millimetres: `d_max` = 100.
-    Millimetre,
-    /// `params.d_max` as given, in the input's unit.
-    AsGiven,
-}
-
-impl Unit {
-    /// Metres or millimetres from the size of a pose's translations (the robot's reach and the
-    /// camera's distance to the target), or `None` when the size fits neither.
-    pub fn infer(pose: &PosePair) -> Option<Self> {
-        let size = pose
-            .base_from_gripper
-            .translation
-            .vector
-            .norm()
-            .max(pose.camera_from_target.translation.vector.norm());
-        if (0.05..=10.0).contains(&size) {
-            Some(Self::Metre)
-        } else if (50.0..=10_000.0).contains(&size) {
-            Some(Self::Millimetre)
-        } else {
-            None
-        }
-    }
-
-    /// `d_max` in this unit, or `None` for `Auto` and `AsGiven`.
-    pub fn d_max(self) -> Option<f64> {
-        match self {
-            Self::Metre => Some(0.1),
-            Self::Millimetre => Some(100.0),
-            Self::Auto | Self::AsGiven => None,
-        }
-    }
-}
-
-// The serde names (`metre`, `millimetre`) are older than these and stay, for saved states; they
-// parse as aliases.
-crate::named_enum!(Unit, "unit", "unit" {
-    Auto => "auto",
-    Metre => "m" | "metre" | "meter" | "metres" | "meters",
-    Millimetre => "mm" | "millimetre" | "millimeter" | "millimetres" | "millimeters",
-    AsGiven => "as-given",
-});
-
-/// The estimator behind the selection.
-///
-/// The library's default stays the paper's (its reproduction, `experiment` and `demo` build on
-/// it); the command line's `online` defaults to [`Estimator::Accumulate`], the one whose X carries
-/// an uncertainty and has passed the readings checks (docs/DECISIONS.md measures both).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Estimator {
-    /// The paper: Andreff on the two selected motions of each calibration.
-    #[default]
-    Paper,
-    /// Normal equations over every pair of poses since the last detected change of X, updated in
-    /// O(1) per pose and reported on their own schedule (`crate::track`); the paper's
-    /// selection does not run beside it.
-    Accumulate,
-}
-
-crate::named_enum!(ErrorSource, "error source", "error_source" {
-    Residual => "residual",
-    Truth => "truth",
-});
-
-crate::named_enum!(Estimator, "estimator", "estimator" {
-    Paper => "paper",
-    Accumulate => "accumulate",
-});
-
-impl Estimator {
-    /// Whether this estimator's X may be published as a transform for others to use (a ROS
-    /// file, a publisher line): only an X with an uncertainty, from poses whose readings were
-    /// checked. The paper's calibrations have neither (each solves two motions, and their error
-    /// measured on the realistic streams is 30–100 times the accumulating estimator's); the
-    /// refusal says which estimator gives one.
-    pub fn publishable(self) -> Result<()> {
-        match self {
-            Self::Accumulate => Ok(()),
-            Self::Paper => Err(Error::InvalidParameter {
-                name: "estimator",
-                message: "the paper's estimator gives X without an uncertainty (two motions per calibration, no check of the readings), so it is not published: the accumulating estimator's X carries one (`--estimator accumulate`, the default; `estimator=\"accumulate\"` in Python)".to_string(),
-            }),
-        }
-    }
-}
-
-/// rmsR and rmsT of a calibration, from the configured [`ErrorSource`]: against the truth, or
-/// the residual form ([`crate::check::quality::ResidualRms`], the same type).
-pub type Rms = crate::check::quality::ResidualRms;
-
-/// The optimal method's estimate at one calibration (SPEC sec. 4.5).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OptimalEstimate {
-    /// Number of this optimal result (1 at the first calibration with five selected motions).
-    pub number: usize,
-    /// X refined over the last five selected motions.
-    pub x: Transform,
-    /// The five motions as pose-number pairs, oldest first.
-    pub motions: [[usize; 2]; OPTIMAL_WINDOW],
-    /// Wall time of the refinement, including its Andreff start, seconds (not in the line).
-    pub seconds: f64,
-}
-
-/// One calibration of an online run; serialised (serde) as its JSON line (SPEC sec. 7), the one
-/// output of every face: `calibration`, `poses`, `thresholds` (adaptive and fixed selection),
-/// `rms_r`, `rms_t`, X (`translation`, `quaternion_xyzw`, `matrix`), `conditioning`, `optimal`
-/// (X, `number`, `motions`) when enabled, `seconds`; and `time_offset_s` when set.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Event {
-    /// Number of this calibration (1, 2, …).
-    pub calibration: usize,
-    /// Pose numbers (a, i, j) of A' = Q_a⁻¹ Q_i and A'' = Q_i⁻¹ Q_j.
-    pub poses: [usize; 3],
-    /// Thresholds in force when the pair was accepted (adaptive only).
-    pub thresholds: Option<Thresholds>,
-    /// X from Andreff's method on (A', A'').
-    pub x: Transform,
-    /// rmsR and rmsT of X from the error source.
-    pub rms: Rms,
-    /// Conditioning of the two-motion rotation system.
-    pub conditioning: f64,
-    /// Wall time of the calibration (solve, errors, threshold update), seconds.
-    pub seconds: f64,
-    /// The optimal method's X, when enabled and five motions have been selected.
-    pub optimal: Option<OptimalEstimate>,
-    /// The clock offset applied to a second stream (camera − robot), seconds: set by the face
-    /// that paired two streams; `None` from the calibrator.
-    pub time_offset_s: Option<f64>,
-}
-
-impl Event {
-    /// The event's JSON line as a value (its serde form).
-    pub fn json(&self) -> serde_json::Value {
-        serde_json::to_value(self).unwrap_or_default()
-    }
-}
-
-impl Serialize for Event {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
-        EventLine {
-            calibration: self.calibration,
-            poses: self.poses,
-            thresholds: self.thresholds,
-            rms_r: self.rms.rms_r,
-            rms_t: self.rms.rms_t,
-            x: TransformJson::from(&self.x),
-            conditioning: self.conditioning,
-            optimal: self.optimal.as_ref().map(|o| OptimalLine {
-                x: TransformJson::from(&o.x),
-                number: o.number,
-                motions: o.motions,
-            }),
-            seconds: self.seconds,
-            time_offset_s: self.time_offset_s,
-        }
-        .serialize(serializer)
-    }
-}
-
-/// The field order and names of an [`Event`]'s line (its serde form), not a second model.
-#[derive(Serialize)]
-struct EventLine {
-    calibration: usize,
-    poses: [usize; 3],
-    #[serde(skip_serializing_if = "Option::is_none")]
-    thresholds: Option<Thresholds>,
-    rms_r: f64,
-    rms_t: f64,
-    #[serde(flatten)]
-    x: TransformJson,
-    conditioning: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    optimal: Option<OptimalLine>,
-    seconds: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    time_offset_s: Option<f64>,
-}
-
-/// The optimal method's part of an [`Event`]'s line.
-#[derive(Serialize)]
-struct OptimalLine {
-    #[serde(flatten)]
-    x: TransformJson,
-    number: usize,
-    motions: [[usize; 2]; OPTIMAL_WINDOW],
-}
 
 /// The online calibrator (see the module documentation).
 ///
@@ -1075,41 +820,4 @@ pub fn run_series(config: OnlineConfig, poses: &[PosePair]) -> Result<Vec<Event>
         events.extend(calibrator.push_pose(p, None)?);
     }
     Ok(events)
-}
-
-/// What an online run did ([`OnlineCalibrator::summary`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Summary {
-    /// Records pushed.
-    pub poses: usize,
-    /// The paper's calibrations made.
-    pub calibrations: usize,
-    /// The paper's selections that Andreff refused as degenerate (no event for them).
-    pub refused: usize,
-    /// The paper's latest X.
-    pub last_x: Option<Transform>,
-    /// The paper's adaptive thresholds in force now.
-    pub thresholds: Option<Thresholds>,
-    /// With the paper's estimator: why no calibration came (at all, or in the last 200 poses).
-    pub stuck: Option<String>,
-    /// The accumulating estimator's counts, when it runs.
-    pub tracked: Option<Tracked>,
-    /// The length unit in force (`Auto` while no pose told it).
-    pub unit: Unit,
-    /// `d_max` in force, in the input's unit.
-    pub d_max: f64,
-    /// The input's length unit when known: the one in force, or the one the poses tell (an
-    /// explicit `d_max` sets no unit); for publishing X in metres.
-    pub length_unit: Option<Unit>,
-}
-
-/// The accumulating estimator's counts ([`Summary::tracked`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Tracked {
-    /// Poses at the robot pose of the pose before, each counted with it.
-    pub repeats: usize,
-    /// Poses held out.
-    pub held_out: usize,
-    /// Changes of X confirmed.
-    pub changes: usize,
 }

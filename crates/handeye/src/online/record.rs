@@ -8,7 +8,9 @@ use serde::{Deserialize, Serialize};
 use crate::check::stream::StreamReading;
 use crate::model::camera::Frame;
 use crate::model::motion::PosePair;
+use crate::model::pose::Transform;
 use crate::model::warning::Warning;
+use crate::online::select::Thresholds;
 use crate::online::{Event, Unit};
 use crate::track::{Change, HeldOut, Report};
 
@@ -308,4 +310,41 @@ impl Names {
             Name::Text(text) => text.to_string(),
         }
     }
+}
+
+/// What an online run did ([`OnlineCalibrator::summary`](crate::OnlineCalibrator::summary)).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// Records pushed.
+    pub poses: usize,
+    /// The paper's calibrations made.
+    pub calibrations: usize,
+    /// The paper's selections that Andreff refused as degenerate (no event for them).
+    pub refused: usize,
+    /// The paper's latest X.
+    pub last_x: Option<Transform>,
+    /// The paper's adaptive thresholds in force now.
+    pub thresholds: Option<Thresholds>,
+    /// With the paper's estimator: why no calibration came (at all, or in the last 200 poses).
+    pub stuck: Option<String>,
+    /// The accumulating estimator's counts, when it runs.
+    pub tracked: Option<Tracked>,
+    /// The length unit in force (`Auto` while no pose told it).
+    pub unit: Unit,
+    /// `d_max` in force, in the input's unit.
+    pub d_max: f64,
+    /// The input's length unit when known: the one in force, or the one the poses tell (an
+    /// explicit `d_max` sets no unit); for publishing X in metres.
+    pub length_unit: Option<Unit>,
+}
+
+/// The accumulating estimator's counts ([`Summary::tracked`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tracked {
+    /// Poses at the robot pose of the pose before, each counted with it.
+    pub repeats: usize,
+    /// Poses held out.
+    pub held_out: usize,
+    /// Changes of X confirmed.
+    pub changes: usize,
 }

@@ -4,15 +4,17 @@
 //! input's unit whatever it is. Every face gathers its user's settings here and checks none of
 //! them itself.
 
+use serde::{Deserialize, Serialize};
+
 use crate::model::camera::Intrinsics;
 use crate::model::error::{Error, Result};
 use crate::model::findings::Written;
 use crate::model::kinematics::Kinematics;
-use crate::model::motion::Setup;
+use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::Transform;
 use crate::model::prior::Prior;
+use crate::online::OnlineCalibrator;
 use crate::online::select::{AdaptiveParams, Selection};
-use crate::online::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
 use crate::track::TrackOptions;
 
 /// The floor of a predicted α₀ (the angle between the axes of A′ and A″), as a user gives it.
@@ -189,5 +191,161 @@ impl OnlineSettings {
         calibrator
             .with_priors(&self.priors)?
             .with_robot_model(self.robot_model)
+    }
+}
+
+/// Where rmsR and rmsT come from (SPEC sec. 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ErrorSource {
+    /// Against the true X (simulation): rmsR = ‖R̂ − R‖_F / 3, rmsT = ‖t − t̂‖ / ‖t‖.
+    Truth,
+    /// The A X − X B residuals of the two motions used (real data; the paper's sec. 4.2).
+    #[default]
+    Residual,
+}
+
+/// Settings of an online run; `Default` is eye-in-hand, adaptive, residual errors, no optimal.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct OnlineConfig {
+    /// Mounting of the camera. Default eye-in-hand.
+    pub setup: Setup,
+    /// Selection policy. Default adaptive.
+    pub selection: Selection,
+    /// Parameters of the adaptive (and, for `n_init`, the fixed) policy. Default: the paper's.
+    pub params: AdaptiveParams,
+    /// Source of rmsR and rmsT. Default residual.
+    pub error_source: ErrorSource,
+    /// The true X (`gripper_from_camera`, or `base_from_camera` for eye-to-hand); required by
+    /// [`ErrorSource::Truth`]. Default none.
+    pub truth: Option<Transform>,
+    /// Also run the optimal method (sec. 4.5). Default false.
+    pub optimal: bool,
+    /// The paper's calibrations, or the accumulating estimator in their place. Default `Paper`.
+    pub estimator: Estimator,
+    /// The accumulating estimator's gates, change test and schedule. Default:
+    /// [`TrackOptions::default`].
+    pub tracking: TrackOptions,
+    /// The input's length unit, which sets `params.d_max` (0.1 m in that unit). Default `Auto`:
+    /// inferred from the first pose.
+    pub unit: Unit,
+    /// The directions in which the input writes its poses (`io::Recording::written`): a
+    /// recording's, looked up between named frames, has a misread worded as frame names swapped.
+    /// Default: both as handeye names them.
+    #[serde(default)]
+    pub written: Written,
+}
+
+impl OnlineConfig {
+    /// Checks every setting's range (the adaptive parameters', the accumulating estimator's), and
+    /// that `truth` is given when it is the error source: what [`OnlineCalibrator::new`] checks,
+    /// for a calibrator restored from its saved state too.
+    pub fn validate(&self) -> Result<()> {
+        if self.error_source == ErrorSource::Truth && self.truth.is_none() {
+            return Err(Error::InvalidParameter {
+                name: "error_source",
+                message: "`truth` needs the true X (give a truth file)".to_string(),
+            });
+        }
+        self.params.validate()?;
+        self.tracking.validate()
+    }
+}
+
+/// The length unit of the input, for the one threshold that has a unit (`d_max`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Unit {
+    /// Inferred from the first pose whose translations fit a unit: metres when they are 0.05–10,
+    /// millimetres when they are 50–10,000 ([`Unit::infer`]).
+    #[default]
+    Auto,
+    /// Metres: `d_max` = 0.1.
+    Metre,
+    /// Millimetres: `d_max` = 100.
+    Millimetre,
+    /// `params.d_max` as given, in the input's unit.
+    AsGiven,
+}
+
+impl Unit {
+    /// Metres or millimetres from the size of a pose's translations (the robot's reach and the
+    /// camera's distance to the target), or `None` when the size fits neither.
+    pub fn infer(pose: &PosePair) -> Option<Self> {
+        let size = pose
+            .base_from_gripper
+            .translation
+            .vector
+            .norm()
+            .max(pose.camera_from_target.translation.vector.norm());
+        if (0.05..=10.0).contains(&size) {
+            Some(Self::Metre)
+        } else if (50.0..=10_000.0).contains(&size) {
+            Some(Self::Millimetre)
+        } else {
+            None
+        }
+    }
+
+    /// `d_max` in this unit, or `None` for `Auto` and `AsGiven`.
+    pub fn d_max(self) -> Option<f64> {
+        match self {
+            Self::Metre => Some(0.1),
+            Self::Millimetre => Some(100.0),
+            Self::Auto | Self::AsGiven => None,
+        }
+    }
+}
+
+// The serde names (`metre`, `millimetre`) are older than these and stay, for saved states; they
+// parse as aliases.
+crate::named_enum!(Unit, "unit", "unit" {
+    Auto => "auto",
+    Metre => "m" | "metre" | "meter" | "metres" | "meters",
+    Millimetre => "mm" | "millimetre" | "millimeter" | "millimetres" | "millimeters",
+    AsGiven => "as-given",
+});
+
+/// The estimator behind the selection.
+///
+/// The library's default stays the paper's (its reproduction, `experiment` and `demo` build on
+/// it); the command line's `online` defaults to [`Estimator::Accumulate`], the one whose X carries
+/// an uncertainty and has passed the readings checks (docs/DECISIONS.md measures both).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Estimator {
+    /// The paper: Andreff on the two selected motions of each calibration.
+    #[default]
+    Paper,
+    /// Normal equations over every pair of poses since the last detected change of X, updated in
+    /// O(1) per pose and reported on their own schedule (`crate::track`); the paper's
+    /// selection does not run beside it.
+    Accumulate,
+}
+
+crate::named_enum!(ErrorSource, "error source", "error_source" {
+    Residual => "residual",
+    Truth => "truth",
+});
+
+crate::named_enum!(Estimator, "estimator", "estimator" {
+    Paper => "paper",
+    Accumulate => "accumulate",
+});
+
+impl Estimator {
+    /// Whether this estimator's X may be published as a transform for others to use (a ROS
+    /// file, a publisher line): only an X with an uncertainty, from poses whose readings were
+    /// checked. The paper's calibrations have neither (each solves two motions, and their error
+    /// measured on the realistic streams is 30–100 times the accumulating estimator's); the
+    /// refusal says which estimator gives one.
+    pub fn publishable(self) -> Result<()> {
+        match self {
+            Self::Accumulate => Ok(()),
+            Self::Paper => Err(Error::InvalidParameter {
+                name: "estimator",
+                message: "the paper's estimator gives X without an uncertainty (two motions per calibration, no check of the readings), so it is not published: the accumulating estimator's X carries one (`--estimator accumulate`, the default; `estimator=\"accumulate\"` in Python)".to_string(),
+            }),
+        }
     }
 }
