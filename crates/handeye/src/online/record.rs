@@ -348,3 +348,42 @@ pub struct Tracked {
     /// Changes of X confirmed.
     pub changes: usize,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The first 100 messages are told, the 100th says the rest are thinned, then only the
+    /// 2^k-th.
+    #[test]
+    fn thinning_tells_the_first_hundred_then_the_powers_of_two() {
+        let mut thinning = Thinning::default();
+        let tells: Vec<Tell> = (0..600).map(|_| thinning.tell()).collect();
+        assert!(tells[..99].iter().all(|t| *t == Tell::Now));
+        assert_eq!(tells[99], Tell::NowThenThinned);
+        let told: Vec<usize> = (101..=600).filter(|n| tells[n - 1].told()).collect();
+        assert_eq!(told, [128, 256, 512]);
+        assert_eq!(thinning.count(), 600);
+    }
+
+    /// A record is named by its line, its stamp, its own name or its number; only the last 300
+    /// named are kept, and one named by its number costs nothing.
+    #[test]
+    fn names_are_the_input_s_and_bounded() {
+        let mut names = Names::default();
+        assert_eq!(names.of(3, "pose"), "pose 3");
+        for n in 1..=400 {
+            names.keep(n, Name::Line { source: "poses.jsonl", line: n + 1 });
+        }
+        assert_eq!(names.recent.len(), NAMES_KEPT);
+        assert_eq!(names.of(400, "pose"), "poses.jsonl:401");
+        assert_eq!(names.of(50, "pose"), "poses.jsonl, pose 50");
+        names.keep(401, Name::Stamp { source: "robot.csv", line: 7, seconds: 1.25 });
+        assert_eq!(names.of(401, "pose"), "robot.csv at t = 1.250 s");
+        names.keep(402, Name::Text("frame 2"));
+        assert_eq!(names.of(402, "pose"), "frame 2");
+        names.keep(403, Name::Numbered);
+        assert_eq!(names.recent.len(), NAMES_KEPT);
+        assert_eq!(Names::now(Name::Numbered, 5, "record"), "record 5");
+    }
+}
