@@ -281,7 +281,7 @@ fn online_throughput(budget: Duration, progress: &Progress) -> Result<Value> {
     let (push, _) = time(
         || {
             k = (k + 1) % s.poses.len();
-            quiet.push(&s.poses[k]).is_ok_and(|e| e.is_empty())
+            quiet.push(&s.poses[k]).is_ok_and(|o| o.events.is_empty())
         },
         budget,
     );

@@ -89,7 +89,7 @@ pub fn run(args: Args) -> Result<()> {
         let mut calibrator = OnlineCalibrator::new(config)?;
         let (mut n, mut rot, mut trans, mut seconds) = (0usize, 0.0, 0.0, 0.0);
         for p in &sim.poses {
-            for e in calibrator.push(p)? {
+            for e in calibrator.push(p)?.events {
                 let err = errors_against_truth(&e.x, &truth);
                 n += 1;
                 rot += err.rot_deg;
@@ -98,7 +98,8 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
         let last = calibrator
-            .last_x()
+            .summary()
+            .last_x
             .map(|x| errors_against_truth(&x, &truth));
         let d = n.max(1) as f64;
         outln!(
@@ -134,10 +135,9 @@ pub fn run(args: Args) -> Result<()> {
     let (mut reports, mut rot, mut trans) = (Vec::new(), 0.0, 0.0);
     let started = Instant::now();
     for p in &sim.poses {
-        calibrator.push(p)?;
-        reports.extend(calibrator.step().and_then(|s| s.report.clone()));
+        reports.extend(calibrator.push(p)?.report);
     }
-    reports.extend(calibrator.finish()?);
+    reports.extend(calibrator.finish()?.report);
     let per_pose = started.elapsed().as_secs_f64() / sim.poses.len() as f64;
     for r in &reports {
         let err = errors_against_truth(&r.estimate.x, &truth);

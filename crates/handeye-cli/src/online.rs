@@ -1,16 +1,16 @@
 //! `handeye online`: the online calibrator on a stream, one JSON line per reported estimate and
 //! change (the accumulating estimator, the default) or per calibration (`--estimator paper`).
 
-use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::rc::Rc;
 
 use anyhow::{Result, bail};
 use clap::Args as ClapArgs;
 use handeye::io::Truth;
-use handeye::{AdaptiveParams, Selection, StreamReading};
-use handeye::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
-use handeye::{Step, TrackOptions, TrackReport as Report};
+use handeye::{AdaptiveParams, AlphaMin, Selection, StreamReading};
+use handeye::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineSettings, Unit};
+use handeye::{Name, Outputs, Record, Tell, Thinning, UnitTold};
+use handeye::{TrackOptions, TrackReport as Report};
 
 use crate::faces::{self, Face, Published};
 use crate::input::{InputArgs, read_ahead};
@@ -155,14 +155,144 @@ pub struct Args {
 }
 
 /// Default floor of a predicted α₀, degrees (the library's sin 15°).
+/// Default floor of a predicted α₀, degrees (the library's sin 15°).
 const ALPHA_MIN_DEG: f64 = 15.0;
 
-/// Runs the command.
+/// Runs the command: each record pushed to the library's online calibrator, what it returns
+/// printed.
 pub fn run(args: Args) -> Result<()> {
     if args.intrinsics.is_some() {
         // The flags that do not apply on the pixels are refused before anything is read.
         pixels::refuse_flags(&args)?;
     }
+    let settings = settings(&args)?;
+    if let Some(intrinsics) = &args.intrinsics {
+        return pixels::run(&args, settings, intrinsics);
+    }
+    let face = Face::chosen(args.output);
+    let publish = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
+    // Only an X with an uncertainty, from checked readings, is published.
+    if publish {
+        settings.estimator.publishable()?;
+    }
+    // The frame names and the name are checked before the input is read.
+    let frames = faces::frames(
+        &args.input,
+        args.parent_frame.as_deref(),
+        args.child_frame.as_deref(),
+        &args.name,
+    )?;
+    if let Some(path) = &args.report {
+        crate::report::check_writable(path)?;
+    }
+    let robot_model = crate::input::robot_model(args.robot_model.as_deref())?;
+    let mut calibrator = OnlineSettings {
+        robot_model,
+        ..settings
+    }
+    .calibrator()?;
+    // Event lines are buffered, and written out before the input is waited for.
+    let out = LineOut::stdout();
+    let (records, opened) = read_ahead(&args.input, {
+        let out = out.clone();
+        Rc::new(move || out.flush_quietly())
+    })?;
+    let source = opened.source.clone();
+    let mut print = Printer::new(
+        &args,
+        out.clone(),
+        opened.offset.as_ref().map(|o| o.seconds),
+    );
+    for record in records {
+        let record = match record {
+            Ok(r) => r,
+            Err(e) => {
+                print.bad_line(e)?;
+                continue;
+            }
+        };
+        // A pose the calibrator refuses (not finite) is a bad line too, named by its place.
+        match calibrator.push(pose_record(&args, &source, &record)) {
+            Ok(o) => print.outputs(&o, record.line, calibrator.unit())?,
+            Err(e @ handeye::Error::Parse { .. }) => print.bad_line(e)?,
+            Err(e) => return Err(e.into()),
+        }
+    }
+    let finished = calibrator.finish().or_else(|e| {
+        out.flush()?;
+        Err(anyhow::Error::from(e))
+    })?;
+    print.outputs(&finished, 0, calibrator.unit())?;
+    // Every line is out before the summary, the report and the other faces.
+    out.flush()?;
+    let mount = opened.camera_mount.as_ref();
+    let offset = opened.offset.and_then(|o| o.curve.map(|c| (o.seconds, c)));
+    let published = publish.then_some((&frames, mount, face));
+    end(&args, &calibrator, print, offset, source, published)
+}
+
+/// The end of a run on poses: the summary, the report page, the refusal of an input without a
+/// pose pair, and X published as `--output yaml|ros2|urdf` says.
+fn end(
+    args: &Args,
+    calibrator: &OnlineCalibrator,
+    print: Printer,
+    offset: Option<(f64, Vec<[f64; 2]>)>,
+    source: String,
+    published: Option<(&faces::Frames, Option<&handeye::io::CameraMount>, Face)>,
+) -> Result<()> {
+    // The estimate to use: the last report since the last change, from readings not found
+    // misread since.
+    let last = calibrator.last_report();
+    let summary = summary(calibrator, last.as_ref(), print.bad_lines.count());
+    crate::tell!("{summary}");
+    if let (Some(path), Some(mut trace)) = (&args.report, print.trace) {
+        trace.poses = calibrator.poses();
+        trace.offset = offset;
+        crate::report::write_online(path, &trace, &summary)?;
+        crate::tell!("wrote {}", path.display());
+    }
+    if calibrator.poses() == 0 {
+        return Err(no_pose(source, print.bad_lines.count(), print.on_pixels).into());
+    }
+    if let Some((frames, mount, face)) = published {
+        let Some(report) = &last else {
+            let (poses, why) = (calibrator.poses(), no_estimate(calibrator));
+            return Err(handeye::Error::NoEstimate { poses, why }.into());
+        };
+        // In metres whatever the input.
+        let unit = calibrator.summary().length_unit;
+        publish_report(report, args, frames, mount, face, unit)?;
+    }
+    Ok(())
+}
+
+/// A record of the input as the calibrator takes it: paired streams named by the camera stamp,
+/// files by their line; with its joint angles when it has them.
+fn pose_record<'a>(
+    args: &Args,
+    source: &'a str,
+    record: &'a handeye::io::StampedPosePair,
+) -> Record<'a> {
+    let line = record.line;
+    let name = match args.input.robot.as_ref().and(record.stamp) {
+        Some(seconds) => Name::Stamp {
+            source,
+            line,
+            seconds,
+        },
+        None => Name::Line { source, line },
+    };
+    let pose = Record::pose(&record.pose).named(name);
+    match record.joint_count {
+        0 => pose,
+        n => pose.with_joints(&record.joints[..n]),
+    }
+}
+
+/// The settings of the command line, as the library's online calibrator takes them (the library
+/// applies their rules: defaults, α₀ in degrees or as a sine, an explicit `--d-max` as given).
+fn settings(args: &Args) -> Result<OnlineSettings> {
     let truth = args.truth.as_ref().map(Truth::read).transpose()?;
     let setup = args.input.setup();
     if let Some(t) = &truth
@@ -175,272 +305,66 @@ pub fn run(args: Args) -> Result<()> {
             setup.x_frame()
         );
     }
-    let config = OnlineConfig {
+    let alpha_min = match args.alpha_min {
+        Some(sine) => {
+            crate::tell!(
+                "warning: --alpha-min (a sine) is deprecated: use --alpha-min-deg {:.4}",
+                sine.asin().to_degrees()
+            );
+            AlphaMin::Sine(sine)
+        }
+        None => AlphaMin::Degrees(args.alpha_min_deg),
+    };
+    Ok(OnlineSettings {
         setup,
         selection: args.selection,
-        params: AdaptiveParams {
-            n_init: args.n_init,
-            interval: args.interval,
-            relax_down: args.relax_down,
-            relax_up: args.relax_up,
-            explore: args.explore,
-            rms_r_max: args.rms_r_max,
-            rms_t_max: args.rms_t_max,
-            alpha_min: match args.alpha_min {
-                Some(sine) => {
-                    crate::tell!(
-                        "warning: --alpha-min (a sine) is deprecated: use --alpha-min-deg {:.4}",
-                        sine.asin().to_degrees()
-                    );
-                    sine
-                }
-                None => args.alpha_min_deg.to_radians().sin(),
-            },
-            beta_min: args
-                .beta_min_deg
-                .map_or(AdaptiveParams::default().beta_min, f64::to_radians),
-            d_max: args.d_max.unwrap_or(AdaptiveParams::default().d_max),
-            unfreeze: args.unfreeze,
-        },
+        estimator: args.estimator,
         error_source: args.error_source,
         truth: truth.map(|t| t.x),
         optimal: args.optimal,
-        estimator: args.estimator,
-        tracking: TrackOptions {
-            every: args.every,
-            shrink: args.shrink,
-            outlier_deg: args.outlier_deg,
-            point: args.point,
-            ..TrackOptions::default()
-        },
-        // An explicit --d-max is in the input's unit whatever it is.
-        unit: match args.d_max {
-            Some(_) => Unit::AsGiven,
-            None => args.unit,
-        },
+        n_init: Some(args.n_init),
+        interval: Some(args.interval),
+        relax_down: Some(args.relax_down),
+        relax_up: Some(args.relax_up),
+        explore: Some(args.explore),
+        rms_r_max: Some(args.rms_r_max),
+        rms_t_max: Some(args.rms_t_max),
+        alpha_min: Some(alpha_min),
+        beta_min_deg: args.beta_min_deg,
+        d_max: args.d_max,
+        unfreeze: args.unfreeze,
+        unit: args.unit,
+        every: Some(args.every),
+        shrink: Some(args.shrink),
+        outlier_deg: Some(args.outlier_deg),
+        point: args.point,
         // A recording's poses are looked up between the frames named.
         written: if args.input.is_bag() {
             handeye::Written::FRAMES
         } else {
             handeye::Written::NAMED
         },
-    };
-    for (name, value) in [("--every", args.every as f64), ("--shrink", args.shrink)] {
-        if !(value.is_finite() && value > 0.0) {
-            bail!("{name} must be a positive number, found {value}");
-        }
+        priors: args.prior.clone(),
+        ..OnlineSettings::default()
+    })
+}
+
+/// As `calibrate` refuses an input without a pose pair: how many lines were bad, and how many of
+/// them records with detections alone.
+fn no_pose(source: String, bad_lines: usize, on_pixels: usize) -> handeye::Error {
+    handeye::Error::Parse {
+        file: source,
+        line: 0,
+        field: "-".into(),
+        message: match (bad_lines, on_pixels) {
+            (0, _) => "no pose pair in the input".into(),
+            (n, 0) => format!("no pose pair in the input: all {n} record line(s) were bad"),
+            (n, p) => format!(
+                "no pose pair in the input: all {n} record line(s) were bad, {p} of them records with `detections` and no camera pose: calibrate them on the pixels with `handeye online --intrinsics FILE` (the camera's intrinsics: OpenCV YAML or ROS camera_info)"
+            ),
+        },
+        remedy: None,
     }
-    if let Some(intrinsics) = &args.intrinsics {
-        return pixels::run(&args, config, intrinsics);
-    }
-    let accumulate = config.estimator == Estimator::Accumulate;
-    let face = Face::chosen(args.output);
-    let publish = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
-    // Only an X with an uncertainty, from checked readings, is published.
-    if publish {
-        config.estimator.publishable()?;
-    }
-    // The frame names and the name are checked before the input is read.
-    let frames = faces::frames(
-        &args.input,
-        args.parent_frame.as_deref(),
-        args.child_frame.as_deref(),
-        &args.name,
-    )?;
-    if let Some(path) = &args.report {
-        crate::report::check_writable(path)?;
-    }
-    let mut calibrator = OnlineCalibrator::new(config)?
-        .with_priors(&args.prior)?
-        .with_robot_model(crate::input::robot_model(args.robot_model.as_deref())?)?;
-    // Event lines are buffered, and written out before the input is waited for.
-    let out = LineOut::stdout();
-    let (records, opened) = read_ahead(&args.input, {
-        let out = out.clone();
-        Rc::new(move || out.flush_quietly())
-    })?;
-    let (source, offset) = (opened.source, opened.offset);
-    let time_offset = offset.as_ref().map(|o| o.seconds);
-    let mut messages = Thinned {
-        bad_lines: 0,
-        held_out: 0,
-        out: out.clone(),
-    };
-    // Kept only for --report: a few numbers per event.
-    let mut trace = args
-        .report
-        .as_ref()
-        .map(|_| crate::report::OnlineTrace::default());
-    let mut told_unit = false;
-    // Bad lines that are records with detections alone, for the refusal's words.
-    let mut on_pixels = 0usize;
-    // The input's length unit as the first poses tell, for the ROS outputs (in metres).
-    let mut pose_unit: Option<Unit> = None;
-    // Input lines of the recent poses, for naming the ones held out (the tracker may hold out a
-    // pose up to 256 poses after it came, when it judges its first poses together).
-    let mut lines: VecDeque<(usize, usize, Option<f64>)> = VecDeque::with_capacity(LINES_KEPT);
-    for record in records {
-        let record = match record {
-            Ok(r) => r,
-            Err(e) => {
-                on_pixels += usize::from(detections_only(&e));
-                bad_line(e, args.on_bad_line, &mut messages)?;
-                continue;
-            }
-        };
-        // A pose the calibrator refuses (not finite, overflowing) is a bad line too, named by its
-        // place; a unit it cannot tell stops the run.
-        // The joint angles, where the record gives them (the systematic-error test's order).
-        let pushed = match record.joint_count {
-            0 => calibrator.push(&record.pose),
-            n => calibrator.push_with_joints(&record.pose, &record.joints[..n]),
-        };
-        let events = match pushed {
-            Ok(events) => events,
-            Err(e @ handeye::Error::InvalidTransform { .. }) => {
-                let e = handeye::Error::Parse {
-                    file: source.clone(),
-                    line: record.line,
-                    field: "-".to_string(),
-                    message: e.to_string(),
-                    remedy: None,
-                };
-                bad_line(e, args.on_bad_line, &mut messages)?;
-                continue;
-            }
-            Err(e) => return Err(e.into()),
-        };
-        if !told_unit {
-            told_unit = tell_unit(&calibrator, &record);
-        }
-        if pose_unit.is_none() {
-            pose_unit = Unit::infer(&record.pose);
-        }
-        // The paper's estimator has no checks of its own: the calibrator runs the batch's check
-        // of the readings on the first poses (the accumulating estimator runs it itself).
-        if let Some(found) = calibrator.misread() {
-            out.flush_quietly();
-            warn_misread(found);
-        }
-        if lines.len() == LINES_KEPT {
-            lines.pop_front();
-        }
-        // Paired streams are named by the camera stamp, files by their line.
-        let stamp = args.input.robot.as_ref().and(record.stamp);
-        lines.push_back((calibrator.poses(), record.line, stamp));
-        if let Some(step) = calibrator.step() {
-            if let Some(t) = &mut trace {
-                t.step(step);
-            }
-            print_step(
-                step,
-                setup,
-                calibrator.unit(),
-                &lines,
-                &source,
-                time_offset,
-                face,
-                &mut messages,
-            )?;
-        }
-        if let Some(t) = &mut trace {
-            events.iter().for_each(|e| t.calibration(e));
-        }
-        if !accumulate {
-            for event in events {
-                match face {
-                    Face::Json => out.json(&Event {
-                        time_offset_s: time_offset,
-                        ..event
-                    })?,
-                    Face::Text => {
-                        out.text(&format!("{}\n", event_text(&event, calibrator.unit())))?
-                    }
-                    _ => {}
-                }
-            }
-            // Said at 200, 400, 800, … poses without a calibration.
-            if let Some(why) = calibrator.stuck() {
-                out.flush_quietly();
-                crate::tell!("{why}");
-            }
-        }
-    }
-    let finished = calibrator.finish();
-    if let Some(found) = calibrator.misread() {
-        warn_misread(found);
-    }
-    let finished = match finished {
-        Ok(report) => report,
-        Err(e) => {
-            out.flush()?;
-            return Err(e.into());
-        }
-    };
-    if let Some(report) = finished {
-        print_report(&report, setup, time_offset, face, &out, calibrator.unit())?;
-        if let Some(t) = &mut trace {
-            t.step(&Step {
-                pose: report.pose,
-                report: Some(report),
-                ..Step::default()
-            });
-        }
-    }
-    // Every line is out before the summary, the report and the other faces.
-    out.flush()?;
-    // The estimate to use: the last report since the last change, from readings not found
-    // misread since.
-    let last = calibrator.last_report();
-    let summary = summary(&calibrator, last.as_ref(), messages.bad_lines);
-    crate::tell!("{summary}");
-    if let (Some(path), Some(mut trace)) = (&args.report, trace) {
-        trace.poses = calibrator.poses();
-        trace.offset = offset.and_then(|o| o.curve.map(|c| (o.seconds, c)));
-        crate::report::write_online(path, &trace, &summary)?;
-        crate::tell!("wrote {}", path.display());
-    }
-    if calibrator.poses() == 0 {
-        // As `calibrate` refuses an input without a pose pair.
-        return Err(handeye::Error::Parse {
-            file: source,
-            line: 0,
-            field: "-".into(),
-            message: match (messages.bad_lines, on_pixels) {
-                (0, _) => "no pose pair in the input".into(),
-                (n, 0) => format!("no pose pair in the input: all {n} record line(s) were bad"),
-                (n, p) => format!(
-                    "no pose pair in the input: all {n} record line(s) were bad, {p} of them records with `detections` and no camera pose: calibrate them on the pixels with `handeye online --intrinsics FILE` (the camera's intrinsics: OpenCV YAML or ROS camera_info)"
-                ),
-            },
-            remedy: None,
-        }
-        .into());
-    }
-    if publish {
-        let Some(report) = &last else {
-            return Err(handeye::Error::NoEstimate {
-                poses: calibrator.poses(),
-                why: no_estimate(&calibrator),
-            }
-            .into());
-        };
-        // In metres whatever the input.
-        let unit = match calibrator.unit() {
-            Unit::Millimetre => Some(Unit::Millimetre),
-            Unit::Metre => Some(Unit::Metre),
-            Unit::Auto | Unit::AsGiven => pose_unit,
-        };
-        publish_report(
-            report,
-            &args,
-            &frames,
-            opened.camera_mount.as_ref(),
-            face,
-            unit,
-        )?;
-    }
-    Ok(())
 }
 
 /// Publishes a report's X as `--output yaml|ros2|urdf` says (in metres whatever the input's
@@ -581,37 +505,121 @@ fn warn_misread(found: StreamReading) {
     }
 }
 
-/// Input lines kept for naming held-out poses.
-const LINES_KEPT: usize = 300;
-
-/// Counts and thins the messages of bad lines and held-out poses, shown after the lines of `out`
-/// before them.
-struct Thinned {
-    bad_lines: usize,
-    held_out: usize,
+/// Prints what the calibrator returns, in the face chosen: JSON lines or text on stdout,
+/// messages on stderr (bad lines and held-out poses thinned by the library's rule).
+struct Printer {
     out: LineOut,
+    face: Face,
+    setup: handeye::Setup,
+    /// The clock offset applied to a second stream, for the lines.
+    time_offset: Option<f64>,
+    on_bad_line: OnBadLine,
+    bad_lines: Thinning,
+    /// Bad lines that are records with detections alone, for the refusal's words.
+    on_pixels: usize,
+    /// Kept only for --report: a few numbers per event.
+    trace: Option<crate::report::OnlineTrace>,
 }
 
-/// Whether a bad line is a record with `detections` and no camera pose (the pose reader's
-/// remedy for it): one for `online --intrinsics`.
-fn detections_only(e: &handeye::Error) -> bool {
-    e.remedy() == Some(handeye::Remedy::Pixels)
-}
+impl Printer {
+    fn new(args: &Args, out: LineOut, time_offset: Option<f64>) -> Self {
+        Self {
+            out,
+            face: Face::chosen(args.output),
+            setup: args.input.setup(),
+            time_offset,
+            on_bad_line: args.on_bad_line,
+            bad_lines: Thinning::default(),
+            on_pixels: 0,
+            trace: args.report.as_ref().map(|_| Default::default()),
+        }
+    }
 
-impl Thinned {
-    /// Every message is counted; the first ones are shown, later ones sparsely, so that an
-    /// endless bad stream cannot flood the terminal. The lines of `out` before it come first.
-    fn show(count: &mut usize, what: &str, message: String, out: &LineOut) {
-        *count += 1;
-        if OnlineCalibrator::told(*count) {
+    /// Prints what a record (at input line `line`), or the end, made happen.
+    fn outputs(&mut self, o: &Outputs, line: usize, unit: Unit) -> Result<()> {
+        let out = self.out.clone();
+        if let Some(told) = o.unit {
+            tell_unit(told, line);
+        }
+        // The paper's estimator has no checks of its own: the calibrator runs the batch's check
+        // of the readings on the first poses (the accumulating estimator runs it itself).
+        if let Some(found) = o.misread.clone() {
+            if line > 0 {
+                out.flush_quietly();
+            }
+            warn_misread(found);
+        }
+        if let Some(t) = &mut self.trace {
+            t.outputs(o);
+        }
+        for h in &o.held_out {
+            let message = format!("held out: {}: {}", h.name, h.why);
+            show(h.tell, "held-out poses", message, &out);
+        }
+        if let Some(c) = &o.change {
             out.flush_quietly();
-            crate::tell!("{message}");
-        }
-        if *count == OnlineCalibrator::TOLD_ONE_BY_ONE {
             crate::tell!(
-                "further {what} are counted and shown only at the 2^k-th (the count is given at the end)"
+                "change of X or of the target from {} on (confirmed at {}): X moved by {:.3}° and {:.4}; accumulation restarted there",
+                c.from,
+                c.confirmed,
+                c.change.x_rotation_deg,
+                c.change.x_translation
             );
+            if self.face == Face::Json {
+                out.json(&c.change.json())?;
+            }
         }
+        if let Some(r) = &o.report {
+            print_report(r, self.setup, self.time_offset, self.face, &out, unit)?;
+        }
+        for event in &o.events {
+            match self.face {
+                Face::Json => out.json(&Event {
+                    time_offset_s: self.time_offset,
+                    ..*event
+                })?,
+                Face::Text => out.text(&format!("{}\n", event_text(event, unit)))?,
+                _ => {}
+            }
+        }
+        // Said at 200, 400, 800, … poses without a calibration.
+        if let Some(why) = &o.stuck {
+            out.flush_quietly();
+            crate::tell!("{why}");
+        }
+        Ok(())
+    }
+
+    /// Skips a bad line with its message, or stops with it (`--on-bad-line stop`).
+    fn bad_line(&mut self, e: handeye::Error) -> Result<()> {
+        if self.on_bad_line == OnBadLine::Skip && matches!(e, handeye::Error::Parse { .. }) {
+            // A record with `detections` and no camera pose (the pose reader's remedy for it):
+            // one for `online --intrinsics`.
+            self.on_pixels += usize::from(e.remedy() == Some(handeye::Remedy::Pixels));
+            let message = match e.remedy() {
+                Some(r) => format!("skipped: {e}; {}", crate::faces::remedy(r, "online")),
+                None => format!("skipped: {e}"),
+            };
+            show(self.bad_lines.tell(), "bad lines", message, &self.out);
+            Ok(())
+        } else {
+            self.out.flush_quietly();
+            Err(e.into())
+        }
+    }
+}
+
+/// Shows a message of one kind as the library's thinning says, after the lines of `out` before
+/// it.
+fn show(tell: Tell, what: &str, message: String, out: &LineOut) {
+    if tell.told() {
+        out.flush_quietly();
+        crate::tell!("{message}");
+    }
+    if tell == Tell::NowThenThinned {
+        crate::tell!(
+            "further {what} are counted and shown only at the 2^k-th (the count is given at the end)"
+        );
     }
 }
 
@@ -629,171 +637,97 @@ handeye::named_enum!(OnBadLine, "on-bad-line", "on_bad_line" {
     Stop => "stop",
 });
 
-/// Skips a bad line with its message, or stops with it (`--on-bad-line stop`).
-fn bad_line(e: handeye::Error, on_bad_line: OnBadLine, messages: &mut Thinned) -> Result<()> {
-    if on_bad_line == OnBadLine::Skip && matches!(e, handeye::Error::Parse { .. }) {
-        Thinned::show(
-            &mut messages.bad_lines,
-            "bad lines",
-            match e.remedy() {
-                Some(r) => format!("skipped: {e}; {}", crate::faces::remedy(r, "online")),
-                None => format!("skipped: {e}"),
-            },
-            &messages.out,
-        );
-        Ok(())
-    } else {
-        messages.out.flush_quietly();
-        Err(e.into())
-    }
-}
-
-/// Tells on stderr which length unit the run uses once it is known (true), and that it is not
-/// yet when the first pose's size fits neither unit.
-fn tell_unit(calibrator: &OnlineCalibrator, record: &handeye::io::StampedPosePair) -> bool {
-    let unit = match calibrator.unit() {
-        Unit::Metre => "metres",
-        Unit::Millimetre => "millimetres",
-        Unit::AsGiven => {
-            crate::tell!("length unit: as given (d_max = {})", calibrator.d_max());
-            return true;
+/// Tells on stderr which length unit the run uses once it is known, and that it is not yet
+/// when the first pose's size (at input line `line`) fits neither unit.
+fn tell_unit(told: UnitTold, line: usize) {
+    match told {
+        UnitTold::Known {
+            unit: Unit::AsGiven,
+            d_max,
+            ..
+        } => crate::tell!("length unit: as given (d_max = {d_max})"),
+        UnitTold::Known {
+            unit,
+            inferred_at,
+            d_max,
+        } => {
+            let unit = match unit {
+                Unit::Millimetre => "millimetres",
+                _ => "metres",
+            };
+            let how = match inferred_at {
+                Some(pose) => format!("inferred from pose {pose}; --unit m|mm to set it"),
+                None => "--unit".to_string(),
+            };
+            crate::tell!("length unit: {unit} ({how}); d_max = {d_max}");
         }
-        Unit::Auto => {
-            if calibrator.poses() == 1 {
-                let p = &record.pose;
-                crate::tell!(
-                    "warning: cannot tell the length unit from the first pose (line {}: translations of {:.4} and {:.4} fit neither metres nor millimetres); d_max stays {} until a pose tells: pass --unit m or --unit mm, or --d-max in your unit",
-                    record.line,
-                    p.base_from_gripper.translation.vector.norm(),
-                    p.camera_from_target.translation.vector.norm(),
-                    calibrator.d_max()
-                );
-            }
-            return false;
-        }
-    };
-    let how = if calibrator.config().unit == Unit::Auto {
-        format!(
-            "inferred from pose {}; --unit m|mm to set it",
-            calibrator.poses()
-        )
-    } else {
-        "--unit".to_string()
-    };
-    crate::tell!(
-        "length unit: {unit} ({how}); d_max = {}",
-        calibrator.d_max()
-    );
-    true
-}
-
-/// Prints what the accumulating estimator did with a pose: held-out poses on stderr (by their
-/// input line), a change and a report as JSON lines.
-#[allow(clippy::too_many_arguments)]
-fn print_step(
-    step: &Step,
-    setup: handeye::Setup,
-    unit: Unit,
-    lines: &VecDeque<(usize, usize, Option<f64>)>,
-    source: &str,
-    time_offset: Option<f64>,
-    face: Face,
-    messages: &mut Thinned,
-) -> Result<()> {
-    let out = messages.out.clone();
-    let place = |pose: usize| match lines.iter().find(|(p, _, _)| *p == pose) {
-        Some((_, _, Some(stamp))) => format!("{source} at t = {stamp:.3} s"),
-        Some((_, line, None)) => format!("{source}:{line}"),
-        None => format!("{source}, pose {pose}"),
-    };
-    for (pose, h) in step.held_out_poses() {
-        let message = format!("held out: {}: {h}", place(pose));
-        Thinned::show(&mut messages.held_out, "held-out poses", message, &out);
+        UnitTold::Unknown { sizes, d_max } => crate::tell!(
+            "warning: cannot tell the length unit from the first pose (line {line}: translations of {:.4} and {:.4} fit neither metres nor millimetres); d_max stays {d_max} until a pose tells: pass --unit m or --unit mm, or --d-max in your unit",
+            sizes[0],
+            sizes[1],
+        ),
     }
-    if let Some(c) = &step.change {
-        out.flush_quietly();
-        crate::tell!(
-            "change of X or of the target from {} on (confirmed at {}): X moved by {:.3}° and {:.4}; accumulation restarted there",
-            place(c.at),
-            place(c.confirmed),
-            c.x_rotation_deg,
-            c.x_translation
-        );
-        if face == Face::Json {
-            out.json(&c.json())?;
-        }
-    }
-    if let Some(r) = &step.report {
-        print_report(r, setup, time_offset, face, &out, unit)?;
-    }
-    Ok(())
 }
 
 /// The stderr summary: what the events showed, or why there was none.
 fn summary(calibrator: &OnlineCalibrator, last: Option<&Report>, bad_lines: usize) -> String {
+    let s = calibrator.summary();
     let bad = if bad_lines > 0 {
         format!(", {bad_lines} bad line(s) skipped")
     } else {
         String::new()
     };
-    let bad = if calibrator.unit() == Unit::Auto && calibrator.poses() > 0 {
+    let bad = if s.unit == Unit::Auto && s.poses > 0 {
         format!(
             "{bad}; the length unit was never told by the data (d_max {} was used: pass --unit)",
-            calibrator.d_max()
+            s.d_max
         )
     } else {
         bad
     };
-    let Some(tracker) = calibrator.tracker() else {
-        let last = calibrator
-            .last_x()
-            .map_or("none".to_string(), |x| describe(&x, calibrator.unit()));
-        let quiet = calibrator
-            .stuck_at_end()
-            .map_or(String::new(), |why| format!("\n{why}"));
+    let Some(tracked) = s.tracked else {
+        let last = s
+            .last_x
+            .map_or("none".to_string(), |x| describe(&x, s.unit));
+        let quiet = s.stuck.map_or(String::new(), |why| format!("\n{why}"));
         return format!(
             "{} calibration(s) from {} pose(s){bad}; last X: {last}{quiet}",
-            calibrator.calibrations(),
-            calibrator.poses()
+            s.calibrations, s.poses
         );
     };
-    let repeats = match tracker.repeats() {
+    let repeats = match tracked.repeats {
         0 => String::new(),
         n => format!(" ({n} at the robot pose of the pose before, each counted with it)"),
     };
     let counts = format!(
         "{} pose(s){repeats}{bad}, {} held out, {} change(s)",
-        calibrator.poses(),
-        tracker.held_out(),
-        tracker.changes()
+        s.poses, tracked.held_out, tracked.changes
     );
-    match (last, tracker.pending()) {
-        (Some(r), _) => {
-            let e = &r.estimate;
-            let weak = r
-                .weak
-                .as_ref()
-                .map_or(String::new(), |w| format!(" (weak: {w})"));
-            let implausible = if r.implausible {
-                " (warning: X and the target pose have sizes the setup makes unlikely: if both inputs give the inverse of the transform they name, the data fit as well with the two swapped)"
-            } else {
-                ""
-            };
-            // The library's own cautions (a systematic error), in its words.
-            let warnings: String = r
-                .warnings
-                .iter()
-                .map(|w| format!("\nwarning: {w}"))
-                .collect();
-            format!(
-                "last estimate ({}) from {} of {counts}: {}{weak}{implausible}{warnings}",
-                r.number,
-                e.poses,
-                estimate_words(r, calibrator.unit())
-            )
-        }
-        (None, _) => format!("no estimate from {counts}: {}", no_estimate(calibrator)),
-    }
+    let Some(r) = last else {
+        return format!("no estimate from {counts}: {}", no_estimate(calibrator));
+    };
+    let e = &r.estimate;
+    let weak = r
+        .weak
+        .as_ref()
+        .map_or(String::new(), |w| format!(" (weak: {w})"));
+    let implausible = if r.implausible {
+        " (warning: X and the target pose have sizes the setup makes unlikely: if both inputs give the inverse of the transform they name, the data fit as well with the two swapped)"
+    } else {
+        ""
+    };
+    // The library's own cautions (a systematic error), in its words.
+    let warnings: String = r
+        .warnings
+        .iter()
+        .map(|w| format!("\nwarning: {w}"))
+        .collect();
+    format!(
+        "last estimate ({}) from {} of {counts}: {}{weak}{implausible}{warnings}",
+        r.number,
+        e.poses,
+        estimate_words(r, s.unit)
+    )
 }
 
 /// Why the accumulating estimator reported no estimate.

@@ -6,14 +6,12 @@
 
 use std::path::PathBuf;
 
-use handeye::TrackOptions;
 use handeye::io::rosbag::BagTags;
 use handeye::io::{
     BagFrames, CameraMount, Format, FrameRecording, Recording, RecordingOptions, Source, TimeOffset,
 };
 use handeye::transform_from_matrix4;
-use handeye::{AdaptiveParams, Selection};
-use handeye::{ErrorSource, Estimator, OnlineCalibrator, OnlineConfig, Unit};
+use handeye::{AlphaMin, OnlineCalibrator, OnlineSettings, Outputs, Record, Tell, Unit};
 use handeye::{Method, Pairing, PosePair, Setup, Transform};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use numpy::{
@@ -1033,7 +1031,8 @@ fn parse_setup(setup: &str) -> PyResult<Setup> {
     setup.parse::<Setup>().map_err(value_error)
 }
 
-/// The online calibrator (see `handeye.OnlineCalibrator`).
+/// The online calibrator (see `handeye.OnlineCalibrator`): the library's, built from its
+/// settings; each push's outputs converted.
 #[pyclass(name = "_OnlineCalibrator")]
 struct PyOnline {
     inner: OnlineCalibrator,
@@ -1042,15 +1041,12 @@ struct PyOnline {
     /// pixels; the poses the accumulating estimator held out), until Python takes them as
     /// warnings.
     found: Vec<String>,
-    /// Poses held out so far, for telling them as the command line does
-    /// (`OnlineCalibrator::told`).
-    held_out: usize,
 }
 
 #[pymethods]
 impl PyOnline {
     #[new]
-    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None, prior=None, intrinsics=None, robot_model=None))]
+    #[pyo3(signature = (selection="adaptive", setup="eye-in-hand", estimator="accumulate", error_source="residual", truth=None, optimal=false, n_init=None, interval=None, relax_down=None, relax_up=None, explore=None, rms_r_max=None, rms_t_max=None, alpha_min=None, alpha_min_deg=None, beta_min_deg=None, d_max=None, unfreeze=false, unit="auto", every=None, shrink=None, point=None, prior=None, intrinsics=None, robot_model=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         selection: &str,
@@ -1067,6 +1063,7 @@ impl PyOnline {
         rms_r_max: Option<f64>,
         rms_t_max: Option<f64>,
         alpha_min: Option<f64>,
+        alpha_min_deg: Option<f64>,
         beta_min_deg: Option<f64>,
         d_max: Option<f64>,
         unfreeze: bool,
@@ -1078,67 +1075,57 @@ impl PyOnline {
         intrinsics: Option<PathBuf>,
         robot_model: Option<PathBuf>,
     ) -> PyResult<Self> {
-        let tracking = TrackOptions::default();
-        // A parameter left out takes the library's default.
-        let d = AdaptiveParams::default();
         let truth = truth
             .map(|t| transform(t.as_array(), "truth"))
             .transpose()?;
-        let config = OnlineConfig {
+        // Converted in the order Python's arguments were checked; the library applies the rules.
+        let settings = OnlineSettings {
             setup: parse_setup(setup)?,
-            selection: selection.parse::<Selection>().map_err(value_error)?,
-            params: AdaptiveParams {
-                n_init: count("n_init", n_init)?.unwrap_or(d.n_init),
-                interval: count("interval", interval)?.unwrap_or(d.interval),
-                relax_down: relax_down.unwrap_or(d.relax_down),
-                relax_up: relax_up.unwrap_or(d.relax_up),
-                explore: explore.unwrap_or(d.explore),
-                rms_r_max: rms_r_max.unwrap_or(d.rms_r_max),
-                rms_t_max: rms_t_max.unwrap_or(d.rms_t_max),
-                alpha_min: alpha_min.unwrap_or(d.alpha_min),
-                beta_min: beta_min_deg.map_or(d.beta_min, f64::to_radians),
-                d_max: d_max.unwrap_or(d.d_max),
-                unfreeze,
+            selection: selection.parse().map_err(value_error)?,
+            n_init: count("n_init", n_init)?,
+            interval: count("interval", interval)?,
+            error_source: error_source.parse().map_err(value_error)?,
+            estimator: estimator.parse().map_err(value_error)?,
+            every: count("every", every)?,
+            point: checked_point(point)?,
+            // The unit is not read when an explicit d_max sets it (as given).
+            unit: match d_max {
+                Some(_) => Unit::Auto,
+                None => unit.parse().map_err(value_error)?,
             },
-            error_source: error_source.parse::<ErrorSource>().map_err(value_error)?,
             truth,
             optimal,
-            estimator: estimator.parse::<Estimator>().map_err(value_error)?,
-            tracking: TrackOptions {
-                every: count("every", every)?.unwrap_or(tracking.every),
-                shrink: shrink.unwrap_or(tracking.shrink),
-                point: checked_point(point)?,
-                ..tracking
-            },
-            // An explicit d_max is in the input's unit whatever it is.
-            unit: match d_max {
-                Some(_) => Unit::AsGiven,
-                None => unit.parse::<Unit>().map_err(value_error)?,
-            },
+            relax_down,
+            relax_up,
+            explore,
+            rms_r_max,
+            rms_t_max,
+            alpha_min: alpha_min_deg
+                .map(AlphaMin::Degrees)
+                .or(alpha_min.map(AlphaMin::Sine)),
+            beta_min_deg,
+            d_max,
+            unfreeze,
+            shrink,
+            outlier_deg: None,
             // Arrays as handeye names them.
             written: handeye::Written::NAMED,
-        };
-        let given = priors(prior)?;
-        let model = read_robot_model(robot_model)?;
-        let inner = match intrinsics {
-            Some(path) => {
-                let camera = handeye::Intrinsics::read(&path).map_err(value_error)?;
-                OnlineCalibrator::on_pixels(camera, config)
-            }
-            None => OnlineCalibrator::new(config),
+            priors: priors(prior)?,
+            robot_model: read_robot_model(robot_model)?,
+            intrinsics: intrinsics
+                .map(|path| handeye::Intrinsics::read(&path))
+                .transpose()
+                .map_err(value_error)?,
         };
         Ok(Self {
-            inner: inner
-                .and_then(|c| c.with_priors(&given))
-                .and_then(|c| c.with_robot_model(model))
-                .map_err(value_error)?,
+            inner: settings.calibrator().map_err(value_error)?,
             found: Vec::new(),
-            held_out: 0,
         })
     }
 
     /// Pushes one pose pair (4×4 arrays), with the joint angles at it if given; returns the list
-    /// of events it completes (usually empty).
+    /// of what it made happen (usually empty): the accumulating estimator's change and report,
+    /// or the paper's calibrations.
     #[pyo3(signature = (base_from_gripper, camera_from_target, joints=None))]
     fn push<'py>(
         &mut self,
@@ -1156,39 +1143,20 @@ impl PyOnline {
             base_from_gripper: transform(base_from_gripper.as_array(), "base_from_gripper")?,
             camera_from_target: transform(camera_from_target.as_array(), "camera_from_target")?,
         };
-        let events = match &joints {
-            Some(q) => self.inner.push_with_joints(&pose, q),
-            None => self.inner.push(&pose),
-        }
-        .map_err(value_error)?;
-        self.found
-            .extend(self.inner.misread().map(|f| f.to_string()));
-        // A selection stuck for 200, 400, 800, … poses, as the command line tells it.
-        self.found.extend(self.inner.stuck());
+        let record = match &joints {
+            Some(q) => Record::pose(&pose).with_joints(q),
+            None => Record::pose(&pose),
+        };
+        let outputs = self.inner.push(record).map_err(value_error)?;
+        self.tell(&outputs);
         let setup = self.inner.config().setup;
-        match self.inner.step() {
-            // The accumulating estimator's own lines: a change, a report; the poses it held out
-            // told as the command line tells them.
-            Some(step) => {
-                for (pose, why) in step.held_out_poses() {
-                    self.held_out += 1;
-                    if OnlineCalibrator::told(self.held_out) {
-                        self.found.push(format!("held out: pose {pose}: {why}"));
-                    }
-                    if self.held_out == OnlineCalibrator::TOLD_ONE_BY_ONE {
-                        self.found
-                            .push("further held-out poses are told only at the 2^k-th".into());
-                    }
-                }
-                let lines = step
-                    .change
-                    .map(|c| c.json())
-                    .into_iter()
-                    .chain(step.report.as_ref().map(|r| r.json(setup, None)));
-                lines.map(|v| json_dict(py, &v)).collect()
-            }
-            None => events.iter().map(|e| json_dict(py, &e.json())).collect(),
-        }
+        let lines = outputs
+            .change
+            .map(|c| c.change.json())
+            .into_iter()
+            .chain(outputs.report.map(|r| r.json(setup, None)))
+            .chain(outputs.events.iter().map(|e| e.json()));
+        lines.map(|v| json_dict(py, &v)).collect()
     }
 
     /// Pushes one record with `detections` (its JSON text, a line of a JSON Lines recording,
@@ -1217,10 +1185,12 @@ impl PyOnline {
         };
         let setup = self.inner.config().setup;
         let inner = &mut self.inner;
-        let report = py
-            .allow_threads(|| inner.push_frame(frame, source))
+        // Named by its number, as `record N`.
+        let outputs = py
+            .allow_threads(|| inner.push(Record::frame(frame)))
             .map_err(value_error)?;
-        report
+        outputs
+            .report
             .map(|r| json_dict(py, &r.json(setup, None)))
             .into_iter()
             .collect()
@@ -1236,24 +1206,11 @@ impl PyOnline {
     fn finish(&mut self, py: Python<'_>) -> PyResult<Option<String>> {
         let setup = self.inner.config().setup;
         let inner = &mut self.inner;
-        let report = py.allow_threads(|| inner.finish());
-        self.found
-            .extend(self.inner.misread().map(|f| f.to_string()));
         // A prior in another length unit than the poses, told only now on a short stream; on
         // the pixels, the calibration's refusal.
-        let report = report.map_err(value_error)?;
-        // The cautions of the solve on the pixels, as the command line tells them.
-        let words: Vec<String> = self
-            .inner
-            .warnings()
-            .iter()
-            .map(|w| w.to_string())
-            .collect();
-        if !words.is_empty() {
-            self.found.push(words.join("; "));
-        }
-
-        Ok(report.map(|r| r.json(setup, None).to_string()))
+        let outputs = py.allow_threads(|| inner.finish()).map_err(value_error)?;
+        self.tell(&outputs);
+        Ok(outputs.report.map(|r| r.json(setup, None).to_string()))
     }
 
     /// The estimate to use now (JSON text): the accumulating estimator's last report since the
@@ -1302,8 +1259,31 @@ impl PyOnline {
         Ok(Self {
             inner,
             found: Vec::new(),
-            held_out: 0,
         })
+    }
+}
+
+impl PyOnline {
+    /// Keeps what the outputs tell, in the words the command line tells it: a misread, a stuck
+    /// selection, the poses held out (thinned by the library's rule), the cautions of the end's
+    /// estimate on the pixels.
+    fn tell(&mut self, outputs: &Outputs) {
+        self.found
+            .extend(outputs.misread.as_ref().map(|f| f.to_string()));
+        self.found.extend(outputs.stuck.clone());
+        for h in &outputs.held_out {
+            if h.tell.told() {
+                self.found.push(format!("held out: {}: {}", h.name, h.why));
+            }
+            if h.tell == Tell::NowThenThinned {
+                self.found
+                    .push("further held-out poses are told only at the 2^k-th".into());
+            }
+        }
+        let words: Vec<String> = outputs.warnings.iter().map(|w| w.to_string()).collect();
+        if !words.is_empty() {
+            self.found.push(words.join("; "));
+        }
     }
 }
 

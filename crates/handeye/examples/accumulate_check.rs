@@ -34,8 +34,8 @@ fn main() -> Result<(), handeye::Error> {
         })?;
         let mut paper = (0.0_f64, 0.0_f64, 0.0_f64);
         for p in &sim.poses {
-            calibrator.push(p)?;
-            for e in adaptive.push(p)? {
+            let pushed = calibrator.push(p)?;
+            for e in adaptive.push(p)?.events {
                 let err = errors_against_truth(&e.x, &sim.gripper_from_camera);
                 paper = (
                     paper.0 + err.rot_fro,
@@ -43,7 +43,7 @@ fn main() -> Result<(), handeye::Error> {
                     paper.2 + 1.0,
                 );
             }
-            changes += usize::from(calibrator.change_detected().is_some());
+            changes += usize::from(pushed.change.is_some());
         }
         let truth = sim.gripper_from_camera;
         let mut add = |k: usize, x: &handeye::Transform| {

@@ -124,9 +124,12 @@ pub use calibrate::report::{HandEyeReport, Report, ReprojectionSummary, RobotWor
 pub use calibrate::verify::{Consistency, SavedX, Verification, verify};
 pub use model::findings::Assessment;
 // Online: the paper's calibrator and the accumulating estimator.
-pub use online::select::{AdaptiveParams, Selection};
-pub use online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit};
-pub use track::{Report as TrackReport, Step, TrackOptions};
+pub use online::select::{AdaptiveParams, Selection, Thresholds};
+pub use online::{AlphaMin, OnlineSettings};
+pub use online::{ChangeFound, HeldOutPose, Name, Observed, Outputs, Record, Tell, Thinning};
+pub use online::{ErrorSource, Estimator, Event, OnlineCalibrator, OnlineConfig, Unit, UnitTold};
+pub use online::{Summary, Tracked};
+pub use track::{Change, HeldOut, Pending, Report as TrackReport, Step, TrackOptions};
 
 /// The README's Rust examples, compiled and run as doctests.
 #[cfg(doctest)]

@@ -34,10 +34,10 @@ fn the_running_estimate_matches_the_best_batch_solve_and_beats_the_paper_tenfold
         let (mut pr, mut pt, mut n) = (0.0, 0.0, 0.0);
         for p in &sim.poses {
             assert!(
-                c.push(p).unwrap().is_empty(),
+                c.push(p).unwrap().events.is_empty(),
                 "no paper's calibration beside it"
             );
-            for e in adaptive.push(p).unwrap() {
+            for e in adaptive.push(p).unwrap().events {
                 let err = errors_against_truth(&e.x, &sim.gripper_from_camera);
                 (pr, pt, n) = (pr + err.rot_fro, pt + err.trans_rel, n + 1.0);
             }
@@ -100,8 +100,8 @@ fn jump_detected(rotation_deg: f64, translation: f64) {
         let mut c = calibrator();
         let mut first = None;
         for p in &sim.poses {
-            c.push(p).unwrap();
-            if let Some(change) = c.step().and_then(|s| s.change) {
+            let pushed = c.push(p).unwrap();
+            if let Some(change) = pushed.change.map(|c| c.change) {
                 assert!(
                     change.confirmed >= jump.at
                         && change.at + 10 >= jump.at
@@ -153,8 +153,7 @@ fn stationary_data_gives_fewer_than_one_false_alarm_per_100000_poses() {
         );
         let mut c = calibrator();
         for p in &sim.poses {
-            c.push(p).unwrap();
-            alarms += usize::from(c.change_detected().is_some());
+            alarms += usize::from(c.push(p).unwrap().change.is_some());
         }
         poses += sim.poses.len();
     }
@@ -175,10 +174,9 @@ fn the_reported_uncertainty_holds_and_is_not_wildly_conservative() {
         let truth = sim.gripper_from_camera;
         let mut reports = Vec::new();
         for p in &sim.poses {
-            c.push(p).unwrap();
-            reports.extend(c.step().and_then(|s| s.report.clone()));
+            reports.extend(c.push(p).unwrap().report);
         }
-        reports.extend(c.finish().unwrap());
+        reports.extend(c.finish().unwrap().report);
         assert!(!reports.is_empty(), "series {s}: no report");
         for r in reports {
             let e = errors_against_truth(&r.estimate.x, &truth);

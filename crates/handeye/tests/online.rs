@@ -55,13 +55,13 @@ fn a_restored_calibrator_continues_exactly() {
             let mut first = OnlineCalibrator::new(cfg).unwrap();
             let mut events = Vec::new();
             for p in &s.poses[..k] {
-                events.extend(first.push(p).unwrap());
+                events.extend(first.push(p).unwrap().events);
             }
             let snapshot = serde_json::to_string(&first).unwrap();
             let mut restored: OnlineCalibrator = serde_json::from_str(&snapshot).unwrap();
             assert_eq!(restored, first);
             for p in &s.poses[k..] {
-                events.extend(restored.push(p).unwrap());
+                events.extend(restored.push(p).unwrap().events);
             }
             assert_eq!(
                 timeless(&events),
@@ -202,7 +202,7 @@ fn thresholds_relax_after_interval_failed_candidates() {
     let mut trace = Vec::new();
     for _ in 0..4 * params.interval {
         c.push(&pose(Vector3::zeros(), 4.0)).unwrap();
-        trace.push(c.thresholds().unwrap());
+        trace.push(c.summary().thresholds.unwrap());
     }
     let beta0 = trace[0].beta
         / if params.interval == 1 {
@@ -400,11 +400,11 @@ fn the_paper_estimator_checks_the_readings_of_its_first_poses() {
         let mut calibrator = OnlineCalibrator::new(config).unwrap();
         let mut found = Vec::new();
         for (k, pose) in poses.iter().enumerate() {
-            calibrator.push(pose).unwrap();
-            found.extend(calibrator.misread().map(|f| (k + 1, f)));
+            let pushed = calibrator.push(pose).unwrap();
+            found.extend(pushed.misread.map(|f| (k + 1, f)));
         }
-        calibrator.finish().unwrap();
-        found.extend(calibrator.misread().map(|f| (0, f)));
+        let finished = calibrator.finish().unwrap();
+        found.extend(finished.misread.map(|f| (0, f)));
         found
     };
     let found = run(&inverted, Estimator::Paper);

@@ -425,7 +425,7 @@ fn a_stream_that_tours_the_same_poses_keeps_every_view_and_counts_each_pose_once
 /// refused by name, and its state never saved as another calibrator's.
 #[test]
 fn the_online_calibrator_on_the_pixels_reports_what_the_pixel_calibrator_does() {
-    use handeye::{Estimator, OnlineCalibrator, OnlineConfig, PosePair, Unit};
+    use handeye::{Estimator, Name, OnlineCalibrator, OnlineConfig, PosePair, Record, Unit};
     let config = OnlineConfig {
         estimator: Estimator::Accumulate,
         ..OnlineConfig::default()
@@ -446,15 +446,20 @@ fn the_online_calibrator_on_the_pixels_reports_what_the_pixel_calibrator_does() 
         );
         let mut reports = Vec::new();
         for (f, n) in series.frames.iter().zip(names(&series.frames)) {
-            let r = c.push_frame(f.clone(), n).unwrap();
-            // The step says what the push returned.
-            assert_eq!(c.step().and_then(|s| s.report.clone()), r, "{name}");
+            let r = c
+                .push(Record::frame(f.clone()).named(Name::Text(&n)))
+                .unwrap()
+                .report;
+            // The estimate to use is what the push returned, or, when it returned none, the
+            // one before it (a push without a report changes nothing a face would print).
+            let before = reports.last().cloned();
+            assert_eq!(c.last_report(), r.clone().or(before), "{name}");
             reports.extend(r);
         }
         assert_eq!(reports, on_the_way, "{name}");
         assert_eq!(c.poses(), series.frames.len());
         assert_eq!(c.last_report(), on_the_way.last().cloned());
-        let last = c.finish().unwrap().expect("the end's report");
+        let last = c.finish().unwrap().report.expect("the end's report");
         assert_eq!(last, end.unwrap(), "{name}");
         assert_eq!(c.last_report(), Some(last));
         assert!(c.pending().is_none(), "{name}");
@@ -473,9 +478,8 @@ fn the_online_calibrator_on_the_pixels_reports_what_the_pixel_calibrator_does() 
     let camera = handeye::Intrinsics::read(testdata("tag_eih.intrinsics.yml")).unwrap();
     let series = handeye::io::read_frames(&testdata("tag_eih.jsonl")).unwrap();
     let mut poses = OnlineCalibrator::new(config).unwrap();
-    let e = poses
-        .push_frame(series.frames[0].clone(), "frame 1".into())
-        .unwrap_err();
+    let frame = Record::frame(series.frames[0].clone()).named(Name::Text("frame 1"));
+    let e = poses.push(frame).unwrap_err();
     assert!(e.to_string().contains("intrinsics"), "{e}");
     for (what, bad) in [
         (

@@ -208,6 +208,7 @@ fn online(poses: &[PosePair], setup: Setup, truth: &Transform) -> Outcome {
     let r = calibrator
         .finish()
         .unwrap()
+        .report
         .or_else(|| calibrator.last_report())
         .expect("an online estimate");
     let e = &r.estimate;

@@ -389,13 +389,16 @@ fn online_with(
     .unwrap();
     for (i, pose) in poses.iter().enumerate() {
         match joints {
-            Some(q) => calibrator.push_with_joints(pose, &q[i]).unwrap(),
+            Some(q) => calibrator
+                .push(handeye::Record::pose(pose).with_joints(&q[i]))
+                .unwrap(),
             None => calibrator.push(pose).unwrap(),
         };
     }
     calibrator
         .finish()
         .unwrap()
+        .report
         .or_else(|| calibrator.last_report())
 }
 
@@ -646,10 +649,9 @@ fn the_online_estimator_does_not_cry_systematic_on_mistakes_and_outliers() {
         .unwrap();
         let mut reports = Vec::new();
         for pose in &series.pairs {
-            calibrator.push(pose).unwrap();
-            reports.extend(calibrator.step().and_then(|s| s.report.clone()));
+            reports.extend(calibrator.push(pose).unwrap().report);
         }
-        reports.extend(calibrator.finish().unwrap());
+        reports.extend(calibrator.finish().unwrap().report);
         streams += 1;
         for r in &reports {
             assert!(!online_flagged(r), "{file}: report {} flagged", r.number);
@@ -686,8 +688,10 @@ fn the_end_of_stream_test_runs_when_the_last_pose_was_reported() {
         .unwrap();
         let mut last = None;
         for (pose, q) in series.pairs.iter().zip(&joints) {
-            calibrator.push_with_joints(pose, q).unwrap();
-            if let Some(r) = calibrator.step().and_then(|s| s.report.clone()) {
+            let pushed = calibrator
+                .push(handeye::Record::pose(pose).with_joints(q))
+                .unwrap();
+            if let Some(r) = pushed.report {
                 last = Some(r);
             }
         }
@@ -699,7 +703,7 @@ fn the_end_of_stream_test_runs_when_the_last_pose_was_reported() {
         );
         let tested = |r: &handeye::TrackReport| r.systematic.as_ref().map_or(0, |s| s.poses);
         // The last word: the end's report, or the last pose's when its test was on every pose.
-        let end = calibrator.finish().unwrap();
+        let end = calibrator.finish().unwrap().report;
         let word = end.as_ref().unwrap_or(&last);
         println!(
             "{file}: last pose's report tested {} of {} poses, the end's {:?} (p {:.1e})",
@@ -710,7 +714,10 @@ fn the_end_of_stream_test_runs_when_the_last_pose_was_reported() {
         );
         assert_eq!(tested(word), word.estimate.poses, "{file}");
         assert_eq!(end.is_some(), tested(&last) < last.estimate.poses, "{file}");
-        assert!(calibrator.finish().unwrap().is_none(), "{file}: one end");
+        assert!(
+            calibrator.finish().unwrap().report.is_none(),
+            "{file}: one end"
+        );
         ends += usize::from(end.is_some());
     }
     assert!(

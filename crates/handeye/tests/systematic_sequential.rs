@@ -29,10 +29,9 @@ fn reports(poses: usize, seed: u64) -> Vec<TrackReport> {
     .unwrap();
     let mut out = Vec::new();
     for pose in &sim.poses {
-        calibrator.push(pose).unwrap();
-        out.extend(calibrator.step().and_then(|s| s.report.clone()));
+        out.extend(calibrator.push(pose).unwrap().report);
     }
-    out.extend(calibrator.finish().unwrap());
+    out.extend(calibrator.finish().unwrap().report);
     out
 }
 

@@ -1,23 +1,23 @@
 //! `handeye online --intrinsics FILE`: the online calibrator on a stream of records with
 //! `detections` (SPEC sec. 9), calibrated on their pixels by the library's online calibrator
-//! ([`handeye::OnlineCalibrator::on_pixels`]): each record read by the library's one reader of
+//! ([`handeye::OnlineSettings::intrinsics`]): each record read by the library's one reader of
 //! such records, a bad one costing its line.
 
 use anyhow::{Result, bail};
 use std::path::Path;
 
-use handeye::{Error, OnlineCalibrator, OnlineConfig, Unit};
+use handeye::{Error, Name, OnlineSettings, Record};
 
-use super::{Args, Thinned, bad_line, print_report, publish_report};
+use super::{Args, Printer, print_report, publish_report};
 use crate::faces::{self, Face};
 use crate::output::LineOut;
 
 /// Runs `online --intrinsics`: the library's online calibrator on the pixels, printed.
-pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Result<()> {
+pub(super) fn run(args: &Args, settings: OnlineSettings, intrinsics: &Path) -> Result<()> {
     let Some(path) = &args.input.input else {
         bail!("online --intrinsics reads a JSON Lines file with `detections` (or - for stdin)");
     };
-    let setup = config.setup;
+    let setup = settings.setup;
     let face = Face::chosen(args.output);
     let publish_x = matches!(face, Face::Yaml | Face::Ros2 | Face::Urdf);
     // The frame names and the name are checked before the input is read.
@@ -28,24 +28,28 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
         &args.name,
     )?;
     let camera = handeye::Intrinsics::read(intrinsics)?;
-    let mut calibrator = OnlineCalibrator::on_pixels(camera, config)?.with_priors(&args.prior)?;
+    let mut calibrator = OnlineSettings {
+        intrinsics: Some(camera),
+        ..settings
+    }
+    .calibrator()?;
     let out = LineOut::stdout();
-    let mut messages = Thinned {
-        bad_lines: 0,
-        held_out: 0,
-        out: out.clone(),
-    };
+    let mut messages = Printer::new(args, out.clone(), None);
     let source = path.display().to_string();
     let mut read = |input: &mut dyn std::io::BufRead| -> Result<()> {
         for record in handeye::io::FrameRecording::records(input, &source) {
             let (line, frame) = match record {
                 Ok(r) => r,
                 Err(e) => {
-                    bad_line(e, args.on_bad_line, &mut messages)?;
+                    messages.bad_line(e)?;
                     continue;
                 }
             };
-            if let Some(report) = calibrator.push_frame(frame, format!("{source}:{line}"))? {
+            let name = Name::Line {
+                source: &source,
+                line,
+            };
+            if let Some(report) = calibrator.push(Record::frame(frame).named(name))?.report {
                 print_report(&report, setup, None, face, &out, calibrator.unit())?;
                 out.flush_quietly();
             }
@@ -67,7 +71,7 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
             file: source,
             line: 0,
             field: "-".into(),
-            message: match messages.bad_lines {
+            message: match messages.bad_lines.count() {
                 0 => "no record with `detections` in the input".into(),
                 n => format!(
                     "no record with `detections` in the input: all {n} record line(s) were bad"
@@ -77,13 +81,17 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
         }
         .into());
     }
-    let bad = match messages.bad_lines {
+    let bad = match messages.bad_lines.count() {
         0 => String::new(),
         n => format!(", {n} bad line(s) skipped"),
     };
-    let report = match calibrator.finish() {
-        Ok(Some(report)) => report,
-        Ok(None) => bail!("no estimate on the pixels"),
+    let (report, warnings) = match calibrator.finish() {
+        Ok(handeye::Outputs {
+            report: Some(report),
+            warnings,
+            ..
+        }) => (report, warnings),
+        Ok(_) => bail!("no estimate on the pixels"),
         Err(e) => {
             out.flush()?;
             crate::tell!(
@@ -96,7 +104,7 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
     let unit = calibrator.unit();
     print_report(&report, setup, None, face, &out, unit)?;
     out.flush()?;
-    for w in calibrator.warnings() {
+    for w in &warnings {
         crate::tell!("warning: {}", faces::warning(w));
     }
     // Beyond 256 records the calibrator keeps a spread of views (and leaves outlier poses out).
@@ -111,7 +119,7 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
         super::estimate_words(&report, unit)
     );
     if publish_x {
-        let known = matches!(unit, Unit::Metre | Unit::Millimetre).then_some(unit);
+        let known = calibrator.summary().length_unit;
         publish_report(&report, args, &frames, None, face, known)?;
     }
     Ok(())
@@ -120,7 +128,7 @@ pub(super) fn run(args: &Args, config: OnlineConfig, intrinsics: &Path) -> Resul
 /// The inputs and pages of this command that do not apply on the pixels, refused before the input
 /// is read (exit 2) rather than ignored. The calibrator's own settings (the paper's estimator, the
 /// optimal method, the truth, a prior) are refused by the library
-/// (`OnlineCalibrator::on_pixels`, `with_priors`), in the words every face prints.
+/// (`OnlineSettings::calibrator`), in the words every face prints.
 pub(super) fn refuse_flags(args: &Args) -> Result<()> {
     let given = [
         ("--report", args.report.is_some()),

@@ -31,20 +31,19 @@ pub struct OnlineTrace {
 }
 
 impl OnlineTrace {
-    /// Keeps what a paper's calibration says.
-    pub fn calibration(&mut self, e: &handeye::Event) {
-        let thresholds = e.thresholds.map(|t| {
-            (
-                t.beta.to_degrees(),
-                t.sin_alpha.clamp(-1.0, 1.0).asin().to_degrees(),
-            )
-        });
-        self.calibrations.push((e.poses[2], e.x, thresholds));
-    }
-
-    /// Keeps what the tracker did with a pose.
-    pub fn step(&mut self, step: &handeye::Step) {
-        if let Some(r) = &step.report {
+    /// Keeps what a record (or the end) made happen: the paper's calibrations, the tracker's
+    /// reports, changes and held-out poses.
+    pub fn outputs(&mut self, o: &handeye::Outputs) {
+        for e in &o.events {
+            let thresholds = e.thresholds.map(|t| {
+                (
+                    t.beta.to_degrees(),
+                    t.sin_alpha.clamp(-1.0, 1.0).asin().to_degrees(),
+                )
+            });
+            self.calibrations.push((e.poses[2], e.x, thresholds));
+        }
+        if let Some(r) = &o.report {
             let e = &r.estimate;
             self.reports.push((
                 r.pose,
@@ -53,11 +52,10 @@ impl OnlineTrace {
                 e.uncertainty_translation.unwrap_or(f64::NAN),
             ));
         }
-        if let Some(c) = &step.change {
-            self.changes.push((c.confirmed, c.at));
+        if let Some(c) = &o.change {
+            self.changes.push((c.change.confirmed, c.change.at));
         }
-        self.held_out.extend(step.held_out.map(|_| step.pose));
-        self.held_out.extend(step.earlier.iter().map(|(p, _)| *p));
+        self.held_out.extend(o.held_out.iter().map(|h| h.pose));
     }
 }
 

@@ -576,13 +576,10 @@ class OnlineCalibrator:
     ``point`` applies; ``estimator="paper"``, ``optimal``, ``truth`` and ``prior`` are refused."""
 
     def __init__(self, **params):
+        # The library applies the settings' rules (defaults, degrees, d_max as given).
         if "alpha_min_deg" in params:
             if "alpha_min" in params:
                 raise ValueError("alpha_min_deg and alpha_min (deprecated) name one parameter: give one")
-            degrees = float(params.pop("alpha_min_deg"))
-            if not 0.0 < degrees <= 90.0:
-                raise ValueError(f"alpha_min_deg must be in (0, 90] degrees, got {degrees}")
-            params["alpha_min"] = math.sin(math.radians(degrees))
         elif "alpha_min" in params:
             warnings.warn(
                 "alpha_min (a sine) is deprecated: use alpha_min_deg (degrees)",

@@ -141,10 +141,10 @@ pub(crate) fn run(config: &TrackingSettings, progress: impl Fn() + Sync) -> Resu
             };
             for (k, p) in sim.poses.iter().enumerate() {
                 acc.push(p)?;
-                if let Some(e) = adaptive.push(p)?.last() {
+                if let Some(e) = adaptive.push(p)?.events.last() {
                     last_adaptive = Some(e.x);
                 }
-                if let Some(e) = conventional.push(p)?.last() {
+                if let Some(e) = conventional.push(p)?.events.last() {
                     last_conventional = Some(e.x);
                 }
                 if (k + 1) % every == 0 {

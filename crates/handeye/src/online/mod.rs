@@ -1,23 +1,34 @@
-//! The online calibrator: pose pairs in, one at a time; calibration events out as they happen.
+//! The online calibrator: one record in at a time ([`Record`]: a pose pair, or on the pixels a
+//! frame with detections, named as its input names it); everything it made happen out
+//! ([`Outputs`]). One engine per calibrator, an internal choice of its configuration:
 //!
-//! [`OnlineCalibrator::push`] offers each pose pair to the selection policy ([`select`]);
-//! when a pair of motions is selected it solves X with Andreff's method on those two motions,
-//! measures rmsR and rmsT with the configured [`ErrorSource`], tells the adaptive policy, and
-//! returns an [`Event`]. With `optimal` set it also refines X over the last five selected motions
-//! (the paper's "optimal method", sec. 4.1.3). With [`Estimator::Accumulate`] every pose goes
-//! to a [`Tracker`] instead (all pairs of poses, gated, watched for change, reported on its own
-//! schedule: [`OnlineCalibrator::step`], [`OnlineCalibrator::finish`]); the paper's selection
-//! does not run beside it (`push` returns no event). The one length threshold, `d_max`,
-//! follows the input's unit, inferred from the first pose unless given ([`Unit`]). The state is
-//! constant in size, and serialisable (serde) so that a run can be saved and resumed.
+//! - **The paper's** ([`Estimator::Paper`]): [`OnlineCalibrator::push`] offers each pose pair to
+//!   the selection policy ([`select`]); when a pair of motions is selected it solves X with
+//!   Andreff's method on those two motions, measures rmsR and rmsT with the configured
+//!   [`ErrorSource`], tells the adaptive policy, and returns an [`Event`]. With `optimal` set it
+//!   also refines X over the last five selected motions (the paper's "optimal method", sec.
+//!   4.1.3). Its readings are checked on the first poses ([`Outputs::misread`]), and a selection
+//!   that makes no calibration for a while is told ([`Outputs::stuck`]).
+//! - **Accumulate** ([`Estimator::Accumulate`]): every pose goes to the accumulating estimator
+//!   (all pairs of poses, gated, watched for change, reported on its own schedule:
+//!   [`Outputs::held_out`], [`Outputs::change`], [`Outputs::report`]); the paper's selection does
+//!   not run beside it.
+//! - **On the pixels** (`intrinsics` in [`OnlineSettings`], [`OnlineCalibrator::on_pixels`],
+//!   `handeye online --intrinsics`): frames with detections, and the batch calibration on their
+//!   pixels on a doubling schedule, in the same report type.
 //!
-//! On the pixels ([`OnlineCalibrator::on_pixels`], `handeye online --intrinsics`), the same
-//! calibrator takes frames with detections ([`OnlineCalibrator::push_frame`]) and reports the
-//! batch calibration on their pixels on a doubling schedule, in the same report type; its
-//! `step`, `finish`, `last_report`, `pending` and `unit` answer as on poses, so that the command
-//! line and Python print one calibrator's results. This layer sits above `calibrate/` for that.
+//! The one length threshold, `d_max`, follows the input's unit, inferred from the first pose
+//! unless given ([`Unit`], told once: [`Outputs::unit`]). The configuration rules (what a
+//! setting left out defaults to, α₀ in degrees or as a sine, an explicit `d_max` as given) are
+//! [`OnlineSettings`]'s, so that every face only gathers and prints. The state is constant in
+//! size (the names of the last 300 records kept to name the poses held out), and serialisable
+//! (serde) so that a run can be saved and resumed. This layer sits above `calibrate/` for the
+//! pixels.
 
+mod event;
+mod record;
 pub mod select;
+mod settings;
 
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -30,280 +41,26 @@ use crate::check::quality::{errors_against_truth, residual_rms};
 use crate::check::stream::{StreamReading, StreamReadings};
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
-use crate::model::findings::Written;
-use crate::model::motion::{MotionPair, PosePair, Setup};
+use crate::model::motion::{MotionPair, PosePair};
 use crate::model::pose::Transform;
-use crate::model::pose::TransformJson;
-use crate::online::select::{AdaptiveParams, Selected, Selection, Selector, Thresholds};
+use crate::online::select::{Selected, Selector};
 use crate::solve::{RefineOptions, andreff, refine_from};
-use crate::track::{Pending, Report, Step, TrackEstimate, TrackOptions, Tracker};
+use crate::track::{Pending, Report, Step, TrackEstimate, Tracker};
+
+pub use event::{Event, OptimalEstimate, Rms};
+use record::Names;
+pub use record::{
+    ChangeFound, HeldOutPose, Name, Observed, Outputs, Record, Tell, Thinning, UnitTold,
+};
+pub use record::{Summary, Tracked};
+pub use settings::{AlphaMin, ErrorSource, Estimator, OnlineConfig, OnlineSettings, Unit};
 
 /// Number of selected motions the optimal method refines over (sec. 4.1.3).
 pub const OPTIMAL_WINDOW: usize = 5;
 
 /// Poses without a calibration after which the paper's estimator says why
-/// ([`OnlineCalibrator::stuck`]), and again at each doubling of it.
+/// ([`Outputs::stuck`]), and again at each doubling of it.
 const QUIET_POSES: usize = 200;
-
-/// Where rmsR and rmsT come from (SPEC sec. 2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ErrorSource {
-    /// Against the true X (simulation): rmsR = ‖R̂ − R‖_F / 3, rmsT = ‖t − t̂‖ / ‖t‖.
-    Truth,
-    /// The A X − X B residuals of the two motions used (real data; the paper's sec. 4.2).
-    #[default]
-    Residual,
-}
-
-/// Settings of an online run; `Default` is eye-in-hand, adaptive, residual errors, no optimal.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
-pub struct OnlineConfig {
-    /// Mounting of the camera. Default eye-in-hand.
-    pub setup: Setup,
-    /// Selection policy. Default adaptive.
-    pub selection: Selection,
-    /// Parameters of the adaptive (and, for `n_init`, the fixed) policy. Default: the paper's.
-    pub params: AdaptiveParams,
-    /// Source of rmsR and rmsT. Default residual.
-    pub error_source: ErrorSource,
-    /// The true X (`gripper_from_camera`, or `base_from_camera` for eye-to-hand); required by
-    /// [`ErrorSource::Truth`]. Default none.
-    pub truth: Option<Transform>,
-    /// Also run the optimal method (sec. 4.5). Default false.
-    pub optimal: bool,
-    /// The paper's calibrations, or the accumulating estimator in their place. Default `Paper`.
-    pub estimator: Estimator,
-    /// The accumulating estimator's gates, change test and schedule. Default:
-    /// [`TrackOptions::default`].
-    pub tracking: TrackOptions,
-    /// The input's length unit, which sets `params.d_max` (0.1 m in that unit). Default `Auto`:
-    /// inferred from the first pose.
-    pub unit: Unit,
-    /// The directions in which the input writes its poses (`io::Recording::written`): a
-    /// recording's, looked up between named frames, has a misread worded as frame names swapped.
-    /// Default: both as handeye names them.
-    #[serde(default)]
-    pub written: Written,
-}
-
-impl OnlineConfig {
-    /// Checks every setting's range (the adaptive parameters', the accumulating estimator's), and
-    /// that `truth` is given when it is the error source: what [`OnlineCalibrator::new`] checks,
-    /// for a calibrator restored from its saved state too.
-    pub fn validate(&self) -> Result<()> {
-        if self.error_source == ErrorSource::Truth && self.truth.is_none() {
-            return Err(Error::InvalidParameter {
-                name: "error_source",
-                message: "`truth` needs the true X (give a truth file)".to_string(),
-            });
-        }
-        self.params.validate()?;
-        self.tracking.validate()
-    }
-}
-
-/// The length unit of the input, for the one threshold that has a unit (`d_max`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Unit {
-    /// Inferred from the first pose whose translations fit a unit: metres when they are 0.05–10,
-    /// millimetres when they are 50–10,000 ([`Unit::infer`]).
-    #[default]
-    Auto,
-    /// Metres: `d_max` = 0.1.
-    Metre,
-    /// Millimetres: `d_max` = 100.
-    Millimetre,
-    /// `params.d_max` as given, in the input's unit.
-    AsGiven,
-}
-
-impl Unit {
-    /// Metres or millimetres from the size of a pose's translations (the robot's reach and the
-    /// camera's distance to the target), or `None` when the size fits neither.
-    pub fn infer(pose: &PosePair) -> Option<Self> {
-        let size = pose
-            .base_from_gripper
-            .translation
-            .vector
-            .norm()
-            .max(pose.camera_from_target.translation.vector.norm());
-        if (0.05..=10.0).contains(&size) {
-            Some(Self::Metre)
-        } else if (50.0..=10_000.0).contains(&size) {
-            Some(Self::Millimetre)
-        } else {
-            None
-        }
-    }
-
-    /// `d_max` in this unit, or `None` for `Auto` and `AsGiven`.
-    pub fn d_max(self) -> Option<f64> {
-        match self {
-            Self::Metre => Some(0.1),
-            Self::Millimetre => Some(100.0),
-            Self::Auto | Self::AsGiven => None,
-        }
-    }
-}
-
-// The serde names (`metre`, `millimetre`) are older than these and stay, for saved states; they
-// parse as aliases.
-crate::named_enum!(Unit, "unit", "unit" {
-    Auto => "auto",
-    Metre => "m" | "metre" | "meter" | "metres" | "meters",
-    Millimetre => "mm" | "millimetre" | "millimeter" | "millimetres" | "millimeters",
-    AsGiven => "as-given",
-});
-
-/// The estimator behind the selection.
-///
-/// The library's default stays the paper's (its reproduction, `experiment` and `demo` build on
-/// it); the command line's `online` defaults to [`Estimator::Accumulate`], the one whose X carries
-/// an uncertainty and has passed the readings checks (docs/DECISIONS.md measures both).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Estimator {
-    /// The paper: Andreff on the two selected motions of each calibration.
-    #[default]
-    Paper,
-    /// Normal equations over every pair of poses since the last detected change of X, updated in
-    /// O(1) per pose and reported on their own schedule (`crate::track`); the paper's
-    /// selection does not run beside it.
-    Accumulate,
-}
-
-crate::named_enum!(ErrorSource, "error source", "error_source" {
-    Residual => "residual",
-    Truth => "truth",
-});
-
-crate::named_enum!(Estimator, "estimator", "estimator" {
-    Paper => "paper",
-    Accumulate => "accumulate",
-});
-
-impl Estimator {
-    /// Whether this estimator's X may be published as a transform for others to use (a ROS
-    /// file, a publisher line): only an X with an uncertainty, from poses whose readings were
-    /// checked. The paper's calibrations have neither (each solves two motions, and their error
-    /// measured on the realistic streams is 30–100 times the accumulating estimator's); the
-    /// refusal says which estimator gives one.
-    pub fn publishable(self) -> Result<()> {
-        match self {
-            Self::Accumulate => Ok(()),
-            Self::Paper => Err(Error::InvalidParameter {
-                name: "estimator",
-                message: "the paper's estimator gives X without an uncertainty (two motions per calibration, no check of the readings), so it is not published: the accumulating estimator's X carries one (`--estimator accumulate`, the default; `estimator=\"accumulate\"` in Python)".to_string(),
-            }),
-        }
-    }
-}
-
-/// rmsR and rmsT of a calibration, from the configured [`ErrorSource`]: against the truth, or
-/// the residual form ([`crate::check::quality::ResidualRms`], the same type).
-pub type Rms = crate::check::quality::ResidualRms;
-
-/// The optimal method's estimate at one calibration (SPEC sec. 4.5).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OptimalEstimate {
-    /// Number of this optimal result (1 at the first calibration with five selected motions).
-    pub number: usize,
-    /// X refined over the last five selected motions.
-    pub x: Transform,
-    /// The five motions as pose-number pairs, oldest first.
-    pub motions: [[usize; 2]; OPTIMAL_WINDOW],
-    /// Wall time of the refinement, including its Andreff start, seconds (not in the line).
-    pub seconds: f64,
-}
-
-/// One calibration of an online run; serialised (serde) as its JSON line (SPEC sec. 7), the one
-/// output of every face: `calibration`, `poses`, `thresholds` (adaptive and fixed selection),
-/// `rms_r`, `rms_t`, X (`translation`, `quaternion_xyzw`, `matrix`), `conditioning`, `optimal`
-/// (X, `number`, `motions`) when enabled, `seconds`; and `time_offset_s` when set.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Event {
-    /// Number of this calibration (1, 2, …).
-    pub calibration: usize,
-    /// Pose numbers (a, i, j) of A' = Q_a⁻¹ Q_i and A'' = Q_i⁻¹ Q_j.
-    pub poses: [usize; 3],
-    /// Thresholds in force when the pair was accepted (adaptive only).
-    pub thresholds: Option<Thresholds>,
-    /// X from Andreff's method on (A', A'').
-    pub x: Transform,
-    /// rmsR and rmsT of X from the error source.
-    pub rms: Rms,
-    /// Conditioning of the two-motion rotation system.
-    pub conditioning: f64,
-    /// Wall time of the calibration (solve, errors, threshold update), seconds.
-    pub seconds: f64,
-    /// The optimal method's X, when enabled and five motions have been selected.
-    pub optimal: Option<OptimalEstimate>,
-    /// The clock offset applied to a second stream (camera − robot), seconds: set by the face
-    /// that paired two streams; `None` from the calibrator.
-    pub time_offset_s: Option<f64>,
-}
-
-impl Event {
-    /// The event's JSON line as a value (its serde form).
-    pub fn json(&self) -> serde_json::Value {
-        serde_json::to_value(self).unwrap_or_default()
-    }
-}
-
-impl Serialize for Event {
-    fn serialize<S: serde::Serializer>(
-        &self,
-        serializer: S,
-    ) -> std::result::Result<S::Ok, S::Error> {
-        EventLine {
-            calibration: self.calibration,
-            poses: self.poses,
-            thresholds: self.thresholds,
-            rms_r: self.rms.rms_r,
-            rms_t: self.rms.rms_t,
-            x: TransformJson::from(&self.x),
-            conditioning: self.conditioning,
-            optimal: self.optimal.as_ref().map(|o| OptimalLine {
-                x: TransformJson::from(&o.x),
-                number: o.number,
-                motions: o.motions,
-            }),
-            seconds: self.seconds,
-            time_offset_s: self.time_offset_s,
-        }
-        .serialize(serializer)
-    }
-}
-
-/// The field order and names of an [`Event`]'s line (its serde form), not a second model.
-#[derive(Serialize)]
-struct EventLine {
-    calibration: usize,
-    poses: [usize; 3],
-    #[serde(skip_serializing_if = "Option::is_none")]
-    thresholds: Option<Thresholds>,
-    rms_r: f64,
-    rms_t: f64,
-    #[serde(flatten)]
-    x: TransformJson,
-    conditioning: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    optimal: Option<OptimalLine>,
-    seconds: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    time_offset_s: Option<f64>,
-}
-
-/// The optimal method's part of an [`Event`]'s line.
-#[derive(Serialize)]
-struct OptimalLine {
-    #[serde(flatten)]
-    x: TransformJson,
-    number: usize,
-    motions: [[usize; 2]; OPTIMAL_WINDOW],
-}
 
 /// The online calibrator (see the module documentation).
 ///
@@ -315,7 +72,7 @@ struct OptimalLine {
 /// let still = PosePair { base_from_gripper: Transform::identity(), camera_from_target: Transform::identity() };
 /// // A robot that never moves gives no calibration.
 /// for _ in 0..20 {
-///     assert!(calibrator.push(&still)?.is_empty());
+///     assert!(calibrator.push(&still)?.events.is_empty());
 /// }
 /// assert_eq!(calibrator.poses(), 20);
 /// # Ok::<(), handeye::Error>(())
@@ -364,6 +121,18 @@ pub struct OnlineCalibrator {
     /// unit.
     #[serde(skip)]
     first_robot: Option<Transform>,
+    /// The names of the recent records, for naming the poses held out and the changes.
+    #[serde(default)]
+    names: Names,
+    /// Held-out poses counted, for telling them by [`Thinning`]'s rule.
+    #[serde(default)]
+    held_out_told: Thinning,
+    /// Whether the length unit was told ([`Outputs::unit`]).
+    #[serde(default)]
+    unit_told: bool,
+    /// The unit the first pose that fits one tells, whatever the unit in force.
+    #[serde(default)]
+    pose_unit: Option<Unit>,
 }
 
 impl OnlineCalibrator {
@@ -391,11 +160,15 @@ impl OnlineCalibrator {
             misread: None,
             pixels: None,
             first_robot: None,
+            names: Names::default(),
+            held_out_told: Thinning::default(),
+            unit_told: false,
+            pose_unit: None,
         })
     }
 
     /// A calibrator on the pixels of `camera`: each frame (a robot pose and the target's
-    /// detections, [`OnlineCalibrator::push_frame`]) is kept, and X solved by the batch
+    /// detections, pushed as a [`Record`]) is kept, and X solved by the batch
     /// calibration on the pixels ([`calibrate`](crate::calibrate()) with [`Input::Pixels`](crate::Input::Pixels), with its
     /// checks) at 16, 32, 64, … frames and at the end, in the accumulating estimator's report
     /// with the fit in `estimate.reprojection` (`handeye online --intrinsics`). `config` gives
@@ -453,17 +226,6 @@ impl OnlineCalibrator {
         })
     }
 
-    /// Messages of one kind on a stream (held-out poses, bad lines) told one by one before only
-    /// every 2^k-th is (the count told at the end), so that an endless bad stream cannot flood
-    /// what a face shows.
-    pub const TOLD_ONE_BY_ONE: usize = 100;
-
-    /// Whether the `count`-th message of one kind (from 1) is told: the first
-    /// [`OnlineCalibrator::TOLD_ONE_BY_ONE`], then the 2^k-th. Every face tells them by this rule.
-    pub fn told(count: usize) -> bool {
-        count <= Self::TOLD_ONE_BY_ONE || count.is_power_of_two()
-    }
-
     /// Whether this calibrator is on the pixels ([`OnlineCalibrator::on_pixels`]), whose state
     /// (the frames) is not saved with serde.
     pub fn on_the_pixels(&self) -> bool {
@@ -472,10 +234,10 @@ impl OnlineCalibrator {
 
     /// Pushes one frame on the pixels, named `name` (`file:line`, for the report's figures and
     /// outlier lists); returns the estimate when one is solved at this frame (16, 32, 64, …
-    /// frames), also as [`OnlineCalibrator::step`]'s report.
+    /// frames), also as the step's report.
     ///
     /// Errors: [`Error::InvalidParameter`] on a calibrator of pose pairs.
-    pub fn push_frame(&mut self, frame: Frame, name: String) -> Result<Option<Report>> {
+    fn push_frame(&mut self, frame: Frame, name: String) -> Result<Option<Report>> {
         let Some(pixels) = self.pixels.as_mut() else {
             return Err(Error::InvalidParameter {
                 name: "intrinsics",
@@ -511,7 +273,7 @@ impl OnlineCalibrator {
 
     /// The cautions of the last estimate on the pixels (its verdict `questionable` when any);
     /// on pose pairs the reports carry their own (`Report::warnings`).
-    pub fn warnings(&self) -> &[crate::model::warning::Warning] {
+    fn warnings(&self) -> &[crate::model::warning::Warning] {
         self.pixels.as_ref().map_or(&[], |p| p.warnings())
     }
 
@@ -532,7 +294,7 @@ impl OnlineCalibrator {
     }
 
     /// `d_max` in force, in the input's unit.
-    pub fn d_max(&self) -> f64 {
+    fn d_max(&self) -> f64 {
         self.unit.d_max().unwrap_or(self.config.params.d_max)
     }
 
@@ -551,23 +313,33 @@ impl OnlineCalibrator {
         self.calibrations
     }
 
-    /// Selected pairs that Andreff refused as degenerate (no event was emitted for them).
-    pub fn refused(&self) -> usize {
-        self.refused
-    }
-
-    /// The latest X, if any calibration happened.
-    pub fn last_x(&self) -> Option<Transform> {
-        self.last_x
-    }
-
-    /// The adaptive thresholds in force now.
-    pub fn thresholds(&self) -> Option<Thresholds> {
-        self.selector.thresholds()
+    /// What the run did, for a face's summary at the end (or at any point): counts, the
+    /// paper's last X and thresholds, why its selection made no calibration lately, the
+    /// accumulating estimator's counts, the length unit.
+    pub fn summary(&self) -> Summary {
+        Summary {
+            poses: self.poses,
+            calibrations: self.calibrations,
+            refused: self.refused,
+            last_x: self.last_x,
+            thresholds: self.selector.thresholds(),
+            stuck: self.stuck_at_end(),
+            tracked: self.tracker.as_ref().map(|t| Tracked {
+                repeats: t.repeats(),
+                held_out: t.held_out(),
+                changes: t.changes(),
+            }),
+            unit: self.unit,
+            d_max: self.d_max(),
+            length_unit: match self.unit {
+                Unit::Metre | Unit::Millimetre => Some(self.unit),
+                Unit::Auto | Unit::AsGiven => self.pose_unit,
+            },
+        }
     }
 
     /// Poses pushed since the last calibration (all of them before the first).
-    pub fn poses_since_calibration(&self) -> usize {
+    fn poses_since_calibration(&self) -> usize {
         self.poses - self.last_calibration
     }
 
@@ -575,7 +347,7 @@ impl OnlineCalibrator {
     /// at 200, 400, 800, … poses without one (a stuck stream is told so at growing intervals, not
     /// every 200 poses): the words when the last push reached such a count, else `None`. Every
     /// face tells them then.
-    pub fn stuck(&self) -> Option<String> {
+    fn stuck(&self) -> Option<String> {
         if self.tracker.is_some() || self.pixels.is_some() {
             return None;
         }
@@ -586,7 +358,7 @@ impl OnlineCalibrator {
 
     /// At the end of a stream, with the paper's estimator: why no calibration came (at all, or
     /// in the last 200 poses), in words; `None` otherwise.
-    pub fn stuck_at_end(&self) -> Option<String> {
+    fn stuck_at_end(&self) -> Option<String> {
         if self.tracker.is_some() || self.pixels.is_some() {
             return None;
         }
@@ -623,23 +395,111 @@ impl OnlineCalibrator {
         })
     }
 
-    /// Pushes the next pose pair; returns the calibrations it completes (usually none, at most one
-    /// except at the end of the fixed method's initial window). A pose with a non-finite entry is
-    /// refused with an error and leaves the state untouched.
+    /// Pushes the next record (a pose pair, or on the pixels a frame with detections); returns
+    /// everything it made happen ([`Outputs`]): the paper's calibrations (usually none, at most
+    /// one except at the end of the fixed method's initial window), or the accumulating
+    /// estimator's held-out poses, change and report, or on the pixels an estimate at 16, 32, 64,
+    /// … frames; the length unit once known; a misread or a stuck selection found. The poses
+    /// cited are named as the record's input names them ([`Name`]).
     ///
     /// With `Unit::Auto`, the first pose whose size fits a unit fixes it ([`Unit::infer`]);
-    /// until then `params.d_max` is in force ([`OnlineCalibrator::unit`] tells which).
-    pub fn push(&mut self, pose: &PosePair) -> Result<Vec<Event>> {
-        self.push_joints(pose, None)
+    /// until then `params.d_max` is in force ([`OnlineCalibrator::unit`] tells which). The
+    /// record's joint angles (radians, every pose the same joints) order the accumulating
+    /// estimator's systematic-error test, which names the joint whose angle the residual follows;
+    /// the paper's estimator does not use them.
+    ///
+    /// Errors, the state left untouched: a pose with a non-finite entry
+    /// ([`Error::InvalidTransform`]; a parse error at its line when the record is named by one);
+    /// a joint angle that is not finite; a pose on a calibrator on the pixels, a frame on one of
+    /// pose pairs ([`Error::InvalidParameter`]). And the accumulating estimator's refusal of its
+    /// priors or of the robot's table, told when its data show it.
+    pub fn push<'a>(&mut self, record: impl Into<Record<'a>>) -> Result<Outputs> {
+        let Record {
+            observed,
+            name,
+            joints,
+        } = record.into();
+        let mut out = Outputs::default();
+        let pose = match observed {
+            Observed::Frame(frame) => {
+                let number = self.poses + 1;
+                out.report = self.push_frame(*frame, Names::now(name, number, "record"))?;
+                return Ok(out);
+            }
+            Observed::Pose(pose) => pose,
+        };
+        let events = match self.push_pose(pose, joints) {
+            Err(e @ Error::InvalidTransform { .. }) => {
+                return Err(match name {
+                    Name::Line { source, line } | Name::Stamp { source, line, .. } => {
+                        Error::Parse {
+                            file: source.to_string(),
+                            line,
+                            field: "-".to_string(),
+                            message: e.to_string(),
+                            remedy: None,
+                        }
+                    }
+                    Name::Numbered | Name::Text(_) => e,
+                });
+            }
+            result => result?,
+        };
+        self.names.keep(self.poses, name);
+        if !self.unit_told {
+            out.unit = self.unit_told(pose);
+        }
+        out.misread = self.misread();
+        if self.tracker.is_some() {
+            let step = &self.step;
+            for (pose, why) in step.held_out_poses() {
+                out.held_out.push(HeldOutPose {
+                    pose,
+                    name: self.names.of(pose, "pose"),
+                    why: *why,
+                    tell: self.held_out_told.tell(),
+                });
+            }
+            out.change = step.change.map(|change| ChangeFound {
+                change,
+                from: self.names.of(change.at, "pose"),
+                confirmed: self.names.of(change.confirmed, "pose"),
+            });
+            out.report = step.report.clone();
+        }
+        out.events = events;
+        out.stuck = self.stuck();
+        Ok(out)
     }
 
-    /// [`OnlineCalibrator::push`] with the robot's joint angles at the pose (radians, every pose
-    /// the same joints): the accumulating estimator's systematic-error test orders the poses by
-    /// them and names the joint whose angle the residual follows
-    /// (`track::Tracker::push_with_joints`); the paper's estimator does not use them. A
-    /// joint angle that is not finite is refused with an error and leaves the state untouched.
-    pub fn push_with_joints(&mut self, pose: &PosePair, joints: &[f64]) -> Result<Vec<Event>> {
-        if let Some(k) = joints.iter().position(|q| !q.is_finite()) {
+    /// The length unit, the first time it is known (or, at the first pose, not told by it).
+    fn unit_told(&mut self, pose: &PosePair) -> Option<UnitTold> {
+        let d_max = self.d_max();
+        match self.unit {
+            Unit::Auto => (self.poses == 1).then(|| UnitTold::Unknown {
+                sizes: [
+                    pose.base_from_gripper.translation.vector.norm(),
+                    pose.camera_from_target.translation.vector.norm(),
+                ],
+                d_max,
+            }),
+            unit => {
+                self.unit_told = true;
+                Some(UnitTold::Known {
+                    unit,
+                    inferred_at: (self.config.unit == Unit::Auto).then_some(self.poses),
+                    d_max,
+                })
+            }
+        }
+    }
+
+    /// Pushes a pose pair, with the joint angles at it if given: the paper's calibrations it
+    /// completes, or the accumulating estimator's step (`OnlineCalibrator::step`).
+    fn push_pose(&mut self, pose: &PosePair, joints: Option<&[f64]>) -> Result<Vec<Event>> {
+        if let Some(joints) = joints
+            && let Some(k) = joints.iter().position(|q| !q.is_finite())
+        {
             return Err(Error::InvalidParameter {
                 name: "joints",
                 message: format!(
@@ -649,10 +509,6 @@ impl OnlineCalibrator {
                 ),
             });
         }
-        self.push_joints(pose, Some(joints))
-    }
-
-    fn push_joints(&mut self, pose: &PosePair, joints: Option<&[f64]>) -> Result<Vec<Event>> {
         if self.pixels.is_some() {
             return Err(Error::InvalidParameter {
                 name: "intrinsics",
@@ -664,6 +520,9 @@ impl OnlineCalibrator {
             self.fix_unit(pose);
         }
         self.poses += 1;
+        if self.pose_unit.is_none() {
+            self.pose_unit = Unit::infer(pose);
+        }
         let hand = self.config.setup.hand_pose(&pose.base_from_gripper);
         if let Some(previous) = self.previous {
             let step =
@@ -740,7 +599,7 @@ impl OnlineCalibrator {
     /// What the accumulating estimator did with the last pose: held it out, confirmed a change,
     /// reported an estimate (on the pixels: the estimate solved at the last frame, if one was).
     /// `None` with the paper's estimator.
-    pub fn step(&self) -> Option<&Step> {
+    pub(crate) fn step(&self) -> Option<&Step> {
         (self.tracker.is_some() || self.pixels.is_some()).then_some(&self.step)
     }
 
@@ -748,16 +607,30 @@ impl OnlineCalibrator {
     /// is determined and was not just reported); on the pixels, the calibration on the pixels of
     /// every frame pushed (or of the frames kept, beyond 256), reported with `reason` `end`. With
     /// the paper's estimator, the readings check runs now on a stream shorter than its sample
-    /// ([`OnlineCalibrator::misread`]) and there is no report.
+    /// ([`Outputs::misread`]) and there is no report.
     ///
     /// Errors: the priors refused (a prior in another length unit than the poses, told only now
     /// on a short stream); on the pixels, the calibration's refusal (too few frames, degenerate
     /// motions, robot poses that fit the pixels far better inverted, a fit far above detection
     /// noise).
-    pub fn finish(&mut self) -> Result<Option<Report>> {
+    ///
+    /// The outputs carry the report, what the readings check found, and on the pixels the
+    /// cautions of the end's estimate.
+    pub fn finish(&mut self) -> Result<Outputs> {
         if let Some(found) = self.readings.as_mut().and_then(StreamReadings::finish) {
             self.misread = Some(found);
         }
+        let report = self.final_report()?;
+        Ok(Outputs {
+            misread: self.misread(),
+            report,
+            warnings: self.warnings().to_vec(),
+            ..Outputs::default()
+        })
+    }
+
+    /// The report of [`OnlineCalibrator::finish`].
+    fn final_report(&mut self) -> Result<Option<Report>> {
         if let Some(pixels) = self.pixels.as_mut() {
             let report = pixels.finish()?;
             self.unit_from(&report);
@@ -778,7 +651,7 @@ impl OnlineCalibrator {
     /// on the first 64 poses (or at [`OnlineCalibrator::finish`] on a stream of 16 to 63);
     /// its calibrations are then from poses read wrongly, or about one axis. The
     /// accumulating estimator checks its readings itself and refuses.
-    pub fn misread(&mut self) -> Option<StreamReading> {
+    fn misread(&mut self) -> Option<StreamReading> {
         self.misread.take()
     }
 
@@ -863,16 +736,6 @@ impl OnlineCalibrator {
         } else {
             why
         })
-    }
-
-    /// The accumulating estimator itself (its counts), if it runs.
-    pub fn tracker(&self) -> Option<&Tracker> {
-        self.tracker.as_ref()
-    }
-
-    /// The pose number where a change of X began, when the last `push` confirmed one.
-    pub fn change_detected(&self) -> Option<usize> {
-        self.step()?.change.map(|c| c.at)
     }
 
     /// rmsR and rmsT of `x` from the configured source.
@@ -960,7 +823,7 @@ pub fn run_series(config: OnlineConfig, poses: &[PosePair]) -> Result<Vec<Event>
     let mut calibrator = OnlineCalibrator::new(config)?;
     let mut events = Vec::new();
     for p in poses {
-        events.extend(calibrator.push(p)?);
+        events.extend(calibrator.push_pose(p, None)?);
     }
     Ok(events)
 }

@@ -251,7 +251,7 @@ pub enum Pending {
     /// Every rotation so far is about one axis: X's rotation about it is not determined.
     ParallelAxes,
     /// The poses fit far better read another way (the batch's check of the readings,
-    /// [`crate::check::readings::check_readings`], on the first poses): an inverted pose, `w, x, y, z` quaternions, or
+    /// `check::readings::check_readings`, on the first poses): an inverted pose, `w, x, y, z` quaternions, or
     /// millimetres on one side. Nothing is reported from data read wrongly.
     Misread {
         /// The reading that fits.

@@ -428,11 +428,6 @@ impl Tracker {
         self.last.clone().filter(|_| self.misread.is_none())
     }
 
-    /// Poses pushed so far.
-    pub fn poses(&self) -> usize {
-        self.poses
-    }
-
     /// Poses held out so far.
     pub fn held_out(&self) -> usize {
         self.held_out
@@ -452,11 +447,6 @@ impl Tracker {
     /// The current segment's estimate, reportable or not.
     pub fn estimate(&self) -> Option<TrackEstimate> {
         self.current.map(|c| c.estimate)
-    }
-
-    /// The current estimate if it is determined (what a report would carry).
-    pub fn determined(&self) -> Option<TrackEstimate> {
-        self.estimate().filter(|_| self.pending().is_none())
     }
 
     /// Why there is no estimate to report now; `None` when there is one.
