@@ -30,8 +30,8 @@ use crate::model::error::Result;
 use crate::online::select::AdaptiveParams;
 use crate::sim::SimConfig;
 
-use paper::{MethodsReport, MethodsSettings};
-use tracking::{TrackingReport, TrackingSettings};
+pub use paper::{MethodSummary, MethodsReport, MethodsSettings, SeriesResult};
+pub use tracking::{DetectionResult, TrackingCurve, TrackingReport, TrackingSettings};
 
 /// One of the studies: the paper's three experiments, then two beyond it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

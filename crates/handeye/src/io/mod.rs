@@ -47,9 +47,9 @@ pub(crate) use frames::frame_records;
 pub use frames::read_frames;
 #[cfg(feature = "rosbag")]
 pub use recording::BagFrames;
-#[cfg(feature = "rosbag")]
-pub(crate) use recording::MountFrame;
-pub use recording::{CameraMount, FrameRecording, Note, Recording, RecordingOptions, Source};
+pub use recording::{
+    CameraMount, FrameRecording, MountFrame, Note, Recording, RecordingOptions, Source,
+};
 pub use stream::PoseStream;
 // The pose-file readers behind `PoseStream` and `Recording`.
 pub use format::Format;
@@ -65,7 +65,8 @@ pub use truth::Truth;
 // the joints of a pose file); each format's own reader and the io helpers are crate-internal.
 use csv_pairs::CsvPairs;
 use jsonl::JsonlPairs;
-pub(crate) use transform::{FieldProblem, read_transform_json};
+pub use transform::FieldProblem;
+pub(crate) use transform::read_transform_json;
 pub use {
     frames::frames_of,
     intrinsics::parse_intrinsics,
@@ -73,7 +74,7 @@ pub use {
     jsonl::read_joints,
     lines::MAX_LINE,
     saved::parse_saved_x,
-    stamped::{read_camera_stream, read_stamped_poses},
+    stamped::{StampedStream, read_camera_stream, read_stamped_poses},
     transform::transform_from_json,
     truth::{parse_truth, write_truth},
 };

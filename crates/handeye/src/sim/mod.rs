@@ -98,10 +98,8 @@ impl SimConfig {
     }
 }
 
-pub(crate) use series::SimSeries;
+pub use series::SimSeries;
 
-// What `simulate` returns is read off (`simulate(..).poses`), not named: its type lives in a
-// private module.
 mod series {
     use serde::{Deserialize, Serialize};
 

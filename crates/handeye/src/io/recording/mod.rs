@@ -26,9 +26,7 @@ mod mount;
 mod note;
 
 pub use frames::FrameRecording;
-pub use mount::CameraMount;
-#[cfg(feature = "rosbag")]
-pub use mount::MountFrame;
+pub use mount::{CameraMount, MountFrame};
 pub use note::Note;
 
 /// Where a [`Recording`] is read from.
