@@ -104,6 +104,7 @@ pub use model::names::Named;
 pub use model::pose::{Transform, TransformJson, TransformProblem, transform_from_matrix4};
 pub use model::prior::{Component, LengthUnit, Prior, PriorValue};
 pub use model::rotation::{RotationConvention, Rotations};
+pub use model::saved::SavedX;
 pub use model::warning::{Remedy, Warning};
 // Solve: one entry, `solve(Method, motions)`.
 pub use solve::motions::AllPairs;
@@ -121,7 +122,7 @@ pub use calibrate::low_dof::LowDofReport;
 pub use calibrate::options::{Fix, Options, Problem};
 pub use calibrate::pipeline::calibrate;
 pub use calibrate::report::{HandEyeReport, Report, ReprojectionSummary, RobotWorldReport};
-pub use calibrate::verify::{Consistency, SavedX, Verification, verify};
+pub use calibrate::verify::{Consistency, Verification, verify};
 pub use model::findings::Assessment;
 // Online: the paper's calibrator and the accumulating estimator.
 pub use online::select::{AdaptiveParams, Selection, Thresholds};

@@ -35,23 +35,7 @@ use crate::solve::reprojection::{PixelOptions, start_camera_poses, target_with_x
 /// same-rig recording in a thousand is refused.
 pub const LEVEL: f64 = 0.999;
 
-/// An X that a calibration saved: `calibrate --output json` or `--output yaml`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SavedX {
-    /// X.
-    pub x: Transform,
-    /// The setup it was calibrated for, when the file says.
-    pub setup: Option<Setup>,
-    /// Its covariance, (rotation vector in radians, translation) in [`Uncertainty`]'s convention
-    /// and in the file's unit, when the file carries one.
-    ///
-    /// [`Uncertainty`]: crate::check::uncertainty::Uncertainty
-    pub covariance: Option<[[f64; 6]; 6]>,
-    /// The unit of its translation, when the file tells it (a ROS file: easy_handeye2's YAML is
-    /// in metres); `None` for the unit of the recording it came from, not told (`calibrate`'s
-    /// JSON).
-    pub unit: Option<LengthUnit>,
-}
+pub use crate::model::saved::SavedX;
 
 /// The verdict of [`verify`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

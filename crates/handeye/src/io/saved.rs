@@ -6,7 +6,6 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::calibrate::verify::SavedX;
 use crate::io::json_text::line_of_field;
 use crate::io::peer::{declared_setup, yaml_transform};
 use crate::io::yaml_tree::YamlTree;
@@ -14,6 +13,7 @@ use crate::io::{parse_error, read_text, transform_from_json};
 use crate::model::error::Result;
 use crate::model::motion::Setup;
 use crate::model::prior::LengthUnit;
+use crate::model::saved::SavedX;
 
 impl SavedX {
     /// Reads a saved X from a file: `calibrate --output json` or `--output yaml` (JSON when its

@@ -10,5 +10,6 @@ pub mod names;
 pub mod pose;
 pub mod prior;
 pub mod rotation;
+pub mod saved;
 pub(crate) mod station;
 pub mod warning;
