@@ -452,23 +452,6 @@ fn refused_on_pixels(e: Error, face: Face) -> anyhow::Error {
     e.into()
 }
 
-/// The records' robot poses as written with the camera poses the pixel solve started from under
-/// the result's reading (`ReprojectionSummary::start_poses`: PnP poses for records with
-/// detections only), for the unit and the `--report` page.
-pub(crate) fn frame_poses(
-    frames: &[handeye::Frame],
-    start_poses: &[handeye::Transform],
-) -> Vec<PosePair> {
-    frames
-        .iter()
-        .zip(start_poses)
-        .map(|(f, c)| PosePair {
-            base_from_gripper: f.base_from_gripper,
-            camera_from_target: *c,
-        })
-        .collect()
-}
-
 /// The camera poses a solve on the pixels started from (a pixel report's `reprojection`).
 fn start_poses(reprojection: Option<&handeye::ReprojectionSummary>) -> &[handeye::Transform] {
     reprojection.map_or(&[], |r| &r.start_poses)
@@ -484,7 +467,10 @@ fn print_on_pixels(
 ) -> Result<()> {
     let setup = report.setup;
     let frames = output_frames(args)?;
-    let poses = frame_poses(frames_read, start_poses(report.reprojection.as_ref()));
+    let poses = handeye::calibrate::problem::pixels::pose_pairs(
+        frames_read,
+        start_poses(report.reprojection.as_ref()),
+    );
     let unit = length_unit(&poses);
     tell_warnings(&report.warnings, face);
     let source = format!("calibrate, method {}", report.method);
@@ -553,7 +539,10 @@ fn print_robot_world(
             }
         }
         Recorded::Pixels { frames, names, .. } => {
-            pixel_poses = frame_poses(frames, start_poses(report.reprojection.as_ref()));
+            pixel_poses = handeye::calibrate::problem::pixels::pose_pairs(
+                frames,
+                start_poses(report.reprojection.as_ref()),
+            );
             RobotWorldInput {
                 poses: &pixel_poses,
                 names,

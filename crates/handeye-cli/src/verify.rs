@@ -165,7 +165,7 @@ fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
     let v = handeye::verify(saved, input, setup, &options)?;
     show(&v, face)?;
     if let Some(report) = &args.report {
-        let poses = crate::calibrate::frame_poses(&frames_read, &v.start_poses);
+        let poses = handeye::calibrate::problem::pixels::pose_pairs(&frames_read, &v.start_poses);
         let page = crate::report::RunPage {
             poses: &poses,
             names: &names,

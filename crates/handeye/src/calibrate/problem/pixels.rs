@@ -63,7 +63,7 @@ pub(crate) fn not_on_pixels(
 
 /// The robot poses with the camera poses the solve started from (the PnP pose of each frame
 /// chosen by the robot's motion).
-pub(crate) fn pose_pairs(frames: &[Frame], start_poses: &[Transform]) -> Vec<PosePair> {
+pub fn pose_pairs(frames: &[Frame], start_poses: &[Transform]) -> Vec<PosePair> {
     frames
         .iter()
         .zip(start_poses)
