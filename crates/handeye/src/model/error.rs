@@ -499,11 +499,23 @@ fn untrusted_advice(refusal: &Option<Box<Error>>, why: &[Warning]) -> String {
             .collect::<Vec<_>>()
             .join("; ");
     };
-    let mut parts = vec![refusal.to_string()];
-    parts.extend(why.iter().map(|w| match w.remedy() {
-        Some(remedy) => format!("{w}; {}", remedy.in_words()),
-        None => w.to_string(),
-    }));
+    // What the input shows that one option fixes (poses that disagree, by their lines; a reading
+    // that fits far better) or a pairing off by a record is the likelier cause, and comes first: a ×1000 typo on one line
+    // leaves X undetermined too, and "add larger rotations" would send the user the wrong way.
+    let (first, others): (Vec<&Warning>, Vec<&Warning>) = why.iter().partition(|w| w.leads());
+    let mut parts: Vec<String> = first
+        .iter()
+        .map(|w| match w.remedy() {
+            Some(remedy) => format!("{w}; {}", remedy.in_words()),
+            None => w.to_string(),
+        })
+        .collect();
+    parts.push(if parts.is_empty() {
+        refusal.to_string()
+    } else {
+        format!("as the input is: {refusal}")
+    });
+    parts.extend(others.iter().map(|w| w.to_string()));
     parts.join("; ")
 }
 
@@ -572,13 +584,13 @@ mod tests {
         assert_eq!(
             explained.to_string(),
             format!(
-                "X cannot be trusted: 1 motion(s) given, at least 2 needed: record more poses \
-                 (each motion joins two poses); {}; {}; pass `--reject-outliers` \
-                 (`reject_outliers=True` in Python) to leave them out",
+                "X cannot be trusted: {}; pass `--reject-outliers` (`reject_outliers=True` in \
+                 Python) to leave them out; as the input is: 1 motion(s) given, at least 2 \
+                 needed: record more poses (each motion joins two poses); {}",
+                outliers(),
                 Warning::OneAxis {
                     axis_spread_deg: 1.0
-                },
-                outliers()
+                }
             )
         );
         assert_eq!(explained.remedy(), Some(Remedy::RejectOutliers));
