@@ -225,6 +225,20 @@ pub fn goal(s: &str) -> Result<handeye::Sizes, String> {
     })
 }
 
+/// `--tolerance DEGREES,LENGTH`: two positive sizes, the change of X that matters.
+pub fn tolerance(s: &str) -> Result<handeye::Sizes, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 2 {
+        return Err(format!(
+            "expected DEGREES,LENGTH (the change of X that matters: a rotation and a translation in the recording's unit), got `{s}`"
+        ));
+    }
+    Ok(handeye::Sizes {
+        rotation_deg: positive(parts[0])?,
+        translation: positive(parts[1])?,
+    })
+}
+
 /// `--prior NAME=VALUE[+-SIGMA]` (the library's parser and words).
 pub fn prior(s: &str) -> Result<handeye::Prior, String> {
     s.parse::<handeye::Prior>().map_err(|e| match e {

@@ -34,6 +34,21 @@ struct Quote {
 
 const QUOTES: &[Quote] = &[
     Quote {
+        readme: "\"no change larger than 0.15° / 3.80 mm; smaller ones cannot be seen in this recording\"",
+        parts: &[
+            "no change larger than 0.15° / 3.80 mm; smaller ones cannot be seen in this recording",
+        ],
+        args: &[
+            "verify",
+            "--x",
+            "golden/saved_nominal_stations_eih_s0.calib",
+            "kinhec/pairs/nominal_stations_eih_s0.jsonl",
+            "--output",
+            "json",
+        ],
+        exit: 0,
+    },
+    Quote {
         readme: "\"you are done\" when X's one-sigma is within 0.1° and 1 mm",
         parts: &["you are done: X is within your goal"],
         args: &[
