@@ -16,8 +16,7 @@
 use std::path::PathBuf;
 
 use handeye::io::{Format, Truth, read_pose_file};
-use handeye::model::pose::{Transform, exp_so3, log_so3};
-use handeye::{Consistency, Options, PosePair, SavedX, Setup, calibrate, verify};
+use handeye::{Consistency, Options, PosePair, SavedX, Setup, Transform, calibrate, verify};
 use nalgebra::{Matrix3, Matrix6, Rotation3, SymmetricEigen, Translation3, Vector3, Vector6};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -60,7 +59,6 @@ fn measure(
         ..Options::default()
     };
     let mut distances = Vec::new();
-    let mut mixed = (Vec::new(), Vec::new(), Vec::new());
     let mut refused = (0, 0);
     let mut errors = Vec::new();
     let mut covariances = Vec::new();
@@ -90,15 +88,6 @@ fn measure(
         let err = error_of(&report.transform, truth);
         errors.push(err);
         covariances.push(cov);
-        if let Some(a) = first_order(&noisy, setup, &report.transform) {
-            let both = envelope(&cov, &a);
-            let d = |c: &Matrix6<f64>| {
-                (err.transpose() * c.try_inverse().unwrap() * err)[(0, 0)].sqrt()
-            };
-            mixed.0.push(d(&cov));
-            mixed.1.push(d(&a));
-            mixed.2.push(d(&both));
-        }
         let d = at_truth.detectable;
         detectable.0.push(d.rotation_deg);
         detectable.1.push(d.translation);
@@ -145,19 +134,6 @@ fn measure(
         median(&detectable.0),
         median(&detectable.1) * 1e3
     );
-    let over = |v: &[f64]| v.iter().filter(|d| **d > 4.74).count();
-    println!(
-        "  the truth's distance: bootstrap median {:.2}, 90% {:.2}, beyond 4.74 {}; first-order {:.2}, {:.2}, {}; the larger of both {:.2}, {:.2}, {}",
-        median(&mixed.0),
-        quantile(&mixed.0, 0.9),
-        over(&mixed.0),
-        median(&mixed.1),
-        quantile(&mixed.1, 0.9),
-        over(&mixed.1),
-        median(&mixed.2),
-        quantile(&mixed.2, 0.9),
-        over(&mixed.2)
-    );
     honesty(&errors, &covariances);
     let labels = [
         "rotation, weakest",
@@ -174,37 +150,6 @@ fn measure(
         println!("  detected, {label}: {}", shares.join(", "));
     }
     Ok(())
-}
-
-/// X's first-order covariance (the joint per-pose problem at X and the target robot-world finds),
-/// in the bootstrap's convention (left rotation vector).
-fn first_order(poses: &[PosePair], setup: Setup, x: &Transform) -> Option<Matrix6<f64>> {
-    let target =
-        handeye::solve::robot_world(handeye::solve::RobotWorldMethod::Refine, poses, setup)
-            .ok()?
-            .target;
-    let cov = handeye::solve::joint_covariance(poses, setup, x, &target)?;
-    let block: Matrix6<f64> = cov.fixed_view::<6, 6>(0, 0).into_owned();
-    let mut m = Matrix6::identity();
-    m.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(x.rotation.matrix());
-    Some(m * block * m.transpose())
-}
-
-/// The smallest covariance at least as large as both along every direction of the first's
-/// whitening: b + (a − b)₊ in b's whitened frame.
-fn envelope(b: &Matrix6<f64>, a: &Matrix6<f64>) -> Matrix6<f64> {
-    let eb = SymmetricEigen::new(*b);
-    let half = eb.eigenvectors
-        * Matrix6::from_diagonal(&eb.eigenvalues.map(|l| l.max(1e-30).sqrt()))
-        * eb.eigenvectors.transpose();
-    let inv = half.try_inverse().unwrap();
-    let w = inv * a * inv.transpose();
-    let ew = SymmetricEigen::new(w);
-    let lifted = ew.eigenvectors
-        * Matrix6::from_diagonal(&ew.eigenvalues.map(|l| l.max(1.0)))
-        * ew.eigenvectors.transpose();
-    half * lifted * half.transpose()
 }
 
 /// The reported sigma over the copies' spread, per eigen-direction of the spread.
@@ -286,6 +231,14 @@ fn with_noise(clean: &[PosePair], seed: u64) -> Vec<PosePair> {
             }
         })
         .collect()
+}
+
+fn exp_so3(w: &Vector3<f64>) -> Matrix3<f64> {
+    *Rotation3::from_scaled_axis(*w).matrix()
+}
+
+fn log_so3(r: &Matrix3<f64>) -> Vector3<f64> {
+    Rotation3::from_matrix_unchecked(*r).scaled_axis()
 }
 
 fn rotation_of(m: &Matrix3<f64>) -> Rotation3<f64> {
