@@ -2,7 +2,8 @@
 //! slip on sees camera_from_target ← D⁻¹ · camera_from_target. The slipped recordings are made
 //! here from the kinhec station recordings (`testdata/kinhec/pairs/*_stations_*`), D of 0.5°/2 mm
 //! to 3°/10 mm at 35–65 % of the poses, both setups; the clean ones are every pose-pair recording
-//! of `testdata/kinhec` (pairs, systematic, joint).
+//! of `testdata/kinhec` (pairs, systematic, joint, and the mistakes: inverted, in millimetres, a
+//! ×1000 typo).
 //!
 //! `cargo test --release -p handeye --test order_change -- --nocapture` prints the counts;
 //! `-- --ignored --nocapture` runs the whole grid (every method, every seed).
@@ -36,7 +37,11 @@ fn entries(dir: &str) -> Vec<(String, Setup)> {
         .unwrap()
         .iter()
         .filter(|e| e["file"].as_str().is_some_and(|f| f.ends_with(".jsonl")))
-        .filter(|e| e["type"].as_str().is_none_or(|t| t == "pose_pairs"))
+        .filter(|e| {
+            e["type"]
+                .as_str()
+                .is_none_or(|t| t == "pose_pairs" || t == "mistake")
+        })
         .map(|e| {
             let file = e["file"].as_str().unwrap();
             let file = if dir == "pairs" || file.starts_with(dir) {
@@ -132,6 +137,7 @@ fn methods() -> Vec<(&'static str, Problem)> {
 fn stations() -> Vec<(String, Setup)> {
     entries("pairs")
         .into_iter()
+        .filter(|(f, _)| f.starts_with("pairs/"))
         .filter(|(f, _)| f.contains("nominal_stations") || f.contains("pnp_stations"))
         .collect()
 }
@@ -144,7 +150,7 @@ fn grid(sizes: &[(f64, f64)], problem: &Problem, seed: u64, noise: &str) -> [usi
     for (file, setup) in stations().into_iter().filter(|(f, _)| f.contains(noise)) {
         let (poses, options) = recording(&file);
         let options = Options {
-            problem: problem.clone(),
+            problem: *problem,
             ..options
         };
         for share in [0.35, 0.5, 0.65] {
@@ -218,6 +224,11 @@ fn clean_recordings_raise_no_change() {
     let mut alarms = Vec::new();
     let recordings = clean();
     for (file, setup) in &recordings {
+        // A mistake that cannot be read (a value of 1e308) is refused before any test.
+        let readable = read_pose_file(&suite().join(file), Format::Auto).is_ok();
+        if !readable {
+            continue;
+        }
         let (poses, options) = recording(file);
         for (name, problem) in methods()
             .into_iter()

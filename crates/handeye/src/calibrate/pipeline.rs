@@ -313,8 +313,8 @@ fn order_change_of(
     Some(Warning::OrderChange {
         first: pose_name(&read.options, *read.kept.get(found.at)?),
         poses: [found.at, read.used.len() - found.at],
-        before: (&found.before?).into(),
-        after: (&found.after?).into(),
+        before: Box::new((&found.before?).into()),
+        after: Box::new((&found.after?).into()),
         rotation_deg: found.rotation_deg,
         translation: found.translation,
         rotation_sigma_deg: found.sigma_rotation_deg,

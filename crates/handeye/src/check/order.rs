@@ -22,7 +22,7 @@
 //!    times the one-sigma of the difference (each side's bootstrap, the wider of the ordinary one
 //!    and the one resampled by workspace region, in quadrature), in rotation or in translation.
 //!
-//! Measured (`crates/handeye/tests/order_change.rs`): no change found on any of the 193 clean
+//! Measured (`crates/handeye/tests/order_change.rs`): no change found on any of the 215 clean
 //! kinhec pose-pair recordings tested (the largest z 3.66, an uncalibrated robot's recording that
 //! sweeps its workspace in order); slips of 0.5°/2 mm found at z 4.9–5.9 in the station
 //! recordings with the robot's noise.

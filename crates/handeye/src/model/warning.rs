@@ -144,9 +144,9 @@ pub enum Warning {
         /// Poses before it and from it on.
         poses: [usize; 2],
         /// X of the poses before the change.
-        before: crate::model::pose::TransformJson,
+        before: Box<crate::model::pose::TransformJson>,
         /// X of the poses from the change on.
-        after: crate::model::pose::TransformJson,
+        after: Box<crate::model::pose::TransformJson>,
         /// The angle between the two, degrees.
         rotation_deg: f64,
         /// The distance between their translations, input units.
@@ -753,8 +753,8 @@ mod tests {
             Warning::OrderChange {
                 first: "a.jsonl:22".into(),
                 poses: [21, 19],
-                before: (&crate::model::pose::Transform::identity()).into(),
-                after: (&crate::model::pose::Transform::identity()).into(),
+                before: Box::new((&crate::model::pose::Transform::identity()).into()),
+                after: Box::new((&crate::model::pose::Transform::identity()).into()),
                 rotation_deg: 1.0,
                 translation: 0.004,
                 rotation_sigma_deg: 0.1,
