@@ -265,7 +265,9 @@ fn plan_of(
     (pairing, lacking): (Pairing, &Options),
     name_outliers: bool,
 ) -> Result<Option<Plan>> {
-    match low_dof::plan(&read.used, setup, pairing, &read.options.priors) {
+    let plan = low_dof::plan(&read.used, setup, pairing, &read.options.priors)
+        .map_err(|e| low_dof::with_joints(e, &read.options.joints));
+    match plan {
         Err(e) if low_dof::wants_prior(&e).is_some() => {
             Err(first_what_motions_lack(poses, setup, lacking, e))
         }
@@ -515,7 +517,7 @@ fn hand_eye_report(
         held_out,
         systematic,
         prior,
-        low_dof: plan.map(|p| p.report(calibration.conditioning)),
+        low_dof: plan.map(|p| p.report(calibration.conditioning, setup)),
         reprojection: None,
     }
 }
@@ -603,7 +605,7 @@ fn robot_world_on_poses(
     };
     low_dof::check_determined(&options.priors, &prior, &solved.x, &x_unc, &mut warnings);
     let residual = PoseResidualSummary::of(pose_residuals(used, setup, &solved.x, &solved.target));
-    let low_dof = plan.map(|p| p.report(solved.conditioning));
+    let low_dof = plan.map(|p| p.report(solved.conditioning, setup));
     let mut report = robot_world_report(read, warnings, setup, (solved, x_unc, y_unc), residual);
     report.method = method;
     report.systematic = systematic;

@@ -386,6 +386,33 @@ pub struct FoundOffset {
     pub sigma: f64,
     /// The angular speeds' correlation, before refinement.
     pub correlated: OffsetEstimate,
+    /// How well the poses paired at `offset` agree on one X: the RMS of their per-pose rotation
+    /// residuals over the best 80% of them, degrees (infinite when they cannot be solved). Above
+    /// [`OFFSET_AGREEMENT_DEG`] the search failed ([`FoundOffset::failed`]).
+    pub agreement_deg: f64,
+}
+
+/// The largest [`FoundOffset::agreement_deg`] of an offset found. The repository's 17 streams
+/// (kinhec's 15, ethz-asl's 2) agree to 0.14–2.4° at the offset found (2.4° with planar flips
+/// among the poses); offsets of 1.5, ±3 and 10 s outside the ±1 s searched left 13.4–28.3° on
+/// three of them (docs/DECISIONS.md, "A clock offset not found is a refusal").
+pub const OFFSET_AGREEMENT_DEG: f64 = 6.0;
+
+impl FoundOffset {
+    /// Whether the search failed: no offset searched pairs the poses into an agreement on one X,
+    /// or the best lies at the edge of the offsets searched, beyond which the best may lie (the
+    /// clocks differ by more than the ±1 s searched, or the streams are not of one motion).
+    pub fn failed(&self) -> bool {
+        offset_failed(self.offset, self.agreement_deg)
+    }
+}
+
+/// [`FoundOffset::failed`] of an offset and its agreement: above [`OFFSET_AGREEMENT_DEG`], or at
+/// least 95% of the default search's ±1 s (offsets of 1.5 s and more, refined, landed at
+/// 1.015–1.043 s on ethz-asl's streams; the repository's streams are found within 0.1 s).
+pub fn offset_failed(offset: f64, agreement_deg: f64) -> bool {
+    !(agreement_deg <= OFFSET_AGREEMENT_DEG)
+        || !(offset.abs() < 0.95 * OffsetOptions::default().max_offset)
 }
 
 /// The clock offset of two streams (camera − robot, seconds) and its sigma: the angular speeds'
@@ -421,10 +448,13 @@ pub fn find_time_offset(
         search.max_offset,
         max_gap,
     );
+    let agreement_deg = offset_fit(robot, camera, setup, offset, max_gap)
+        .map_or(f64::INFINITY, |(cost, _)| cost.sqrt().to_degrees());
     Ok(FoundOffset {
         offset,
         sigma: time_offset_sigma(robot, camera, setup, offset, max_gap),
         correlated,
+        agreement_deg,
     })
 }
 

@@ -65,6 +65,10 @@ pub enum Degeneracy {
         setup: crate::model::motion::Setup,
         /// What is missing.
         missing: LowDofMissing,
+        /// How many joint angles each record gives, where the input gives them: a robot of six
+        /// or more can turn about another axis, and is told to first (`None`: nothing tells, and
+        /// the recording advice leads too).
+        joints: Option<usize>,
     },
     /// Re-solving under the data's own noise was refused too often: X is at the edge of what the
     /// motions determine.
@@ -111,6 +115,7 @@ pub(crate) fn low_dof_words(
     spread_deg: f64,
     setup: Setup,
     missing: LowDofMissing,
+    joints: Option<usize>,
 ) -> String {
     use crate::model::prior::Component;
     let frame = crate::model::findings::reference_frame(setup);
@@ -130,21 +135,23 @@ pub(crate) fn low_dof_words(
     );
     match missing {
         LowDofMissing::Prior(c) => {
-            let (measure, along) = match (setup, c) {
-                (Setup::EyeInHand, Component::Tz) => (
-                    "the camera's height above the flange",
-                    "the gripper's z axis",
-                ),
-                (Setup::EyeToHand, Component::Tz) => (
-                    "the camera's height above the robot base",
-                    "the base's z axis",
-                ),
-                (Setup::EyeInHand, _) => ("the camera's offset from the flange", "that axis"),
-                (Setup::EyeToHand, _) => ("the camera's offset from the robot base", "that axis"),
+            let measure = match setup {
+                Setup::EyeInHand => "the camera's offset from the gripper frame's origin",
+                Setup::EyeToHand => "the camera's offset from the robot base's origin",
             };
             let n = c.name();
+            // A robot that can turn about another axis is told so first; the prior is for one
+            // that cannot (its joints say so, when the records give them).
+            let lead = match joints {
+                Some(j) if j <= 5 => String::new(),
+                Some(j) => format!(
+                    "record turns about another axis: the records give {j} joint angles, a robot that can turn the camera about a second axis, and motions about two axes determine X whole. "
+                ),
+                None => "record turns about another axis, if the robot can (a 6-axis arm): motions about two axes determine X whole; a prior is for a robot that cannot. ".into(),
+            };
             format!(
-                "{what}. Such motions determine X's rotation and its translation across the axis, but never its translation along it: measure {measure} (X's {n}: the camera's position along {along}, the input's length unit) and give it as a prior, `--prior {n}=VALUE+-SIGMA` (`prior=\"{n}=VALUE+-SIGMA\"` in Python; without `+-SIGMA` the value is taken as exact)"
+                "{lead}{what}. Such motions determine X's rotation and its translation across the axis, but never its translation along it: measure {measure} along {} (X's {n}, signed: positive when the camera lies on the + side of the origin, negative on the other; the input's length unit) and give it as a prior, `--prior {n}=VALUE+-SIGMA` (`prior=\"{n}=VALUE+-SIGMA\"` in Python; without `+-SIGMA` the value is taken as exact). The data cannot check the prior, its sign included",
+                crate::model::prior::direction_words(setup, c)
             )
         }
         LowDofMissing::NotStatable => format!(
@@ -209,7 +216,8 @@ impl fmt::Display for Degeneracy {
                 spread_deg,
                 setup,
                 missing,
-            } => f.write_str(&low_dof_words(axis, *spread_deg, *setup, *missing)),
+                joints,
+            } => f.write_str(&low_dof_words(axis, *spread_deg, *setup, *missing, *joints)),
             Self::Unstable { refused, tried } => write!(
                 f,
                 "{refused} of {tried} re-solves under the data's own noise were refused: X is at the edge of what these motions determine; add motions with larger rotations about different axes"
@@ -259,8 +267,8 @@ pub enum Error {
     /// words of both faces ([`Error::remedy`] gives it typed, for a face that words it in its own
     /// terms: the OpenCV drop-in names OpenCV's arguments).
     #[error(
-        "the input looks misread: {}",
-        misread_advice(.finding, .readings, .setup, .other_setup, .frames)
+        "{}",
+        misread_message(.finding, .readings, .setup, .other_setup, .frames)
     )]
     Misread {
         /// What fits better, how well, and the other readings that fit as well, in words (no
@@ -298,7 +306,7 @@ pub enum Error {
         why: String,
     },
     /// Malformed input data, with its place.
-    #[error("{file}:{line}: field `{field}`: {message}")]
+    #[error("{}", parse_words(.file, *.line, .field, .message))]
     Parse {
         /// File name (or `-` for standard input).
         file: String,
@@ -330,6 +338,23 @@ pub enum Error {
         file: String,
         /// Underlying error.
         source: std::io::Error,
+    },
+    /// The clock offset searched pairs the poses into no agreement on one X: the clocks differ
+    /// by more than the offsets searched, or the streams are not of one motion. A solve on such
+    /// pairs is not an answer.
+    #[error(
+        "the clock offset was not found: the best offset searched within ±{searched:.0} s, {offset:.3} s, {}, the poses paired there disagree on X by {agreement_deg:.1}° RMS (the best 80% of them; under {limit_deg:.0}° when paired right): the camera's and the robot's clocks probably differ by more than {searched:.0} s; give the offset, `--time-offset SECONDS` (camera clock minus robot clock; `time_offset=SECONDS` in Python)",
+        if offset.abs() >= 0.95 * searched { "lies at the edge of the search" } else { "is no answer" }
+    )]
+    OffsetNotFound {
+        /// The best offset searched, seconds (camera clock minus robot clock).
+        offset: f64,
+        /// How well the poses paired at it agree on one X, degrees RMS.
+        agreement_deg: f64,
+        /// The offsets searched, ± seconds.
+        searched: f64,
+        /// The most the poses of a found offset disagree, degrees.
+        limit_deg: f64,
     },
     /// The clock offset of two streams could not be found (`auto`): which streams, and why.
     #[error("time offset `auto` on {streams}: {source}")]
@@ -407,19 +432,7 @@ pub(crate) fn misread_advice(
         return frames_advice(finding, readings, *setup, *other_setup);
     }
     if *other_setup {
-        let other = setup.other();
-        let mirror = readings
-            .iter()
-            .copied()
-            .find(|&r| r != Reading::RobotInverted)
-            .unwrap_or(better);
-        return format!(
-            "{finding}: the poses cannot tell these apart, but you can: if {}, {}; if {}, correct the input, or {}",
-            camera_in_words(other),
-            Remedy::Setup(other).in_words(),
-            camera_in_words(*setup),
-            Remedy::Fix(mirror).in_words()
-        );
+        return other_setup_advice(finding, readings, *setup);
     }
     let mut text = format!(
         "{finding}: correct the input, or {}",
@@ -432,6 +445,52 @@ pub(crate) fn misread_advice(
         ));
     }
     text
+}
+
+/// The message of [`Error::Misread`]: "the input looks misread" and its advice; a recording that
+/// looks like the other setup's (the commonest mistake, a forgotten `--setup`) leads with that
+/// setup instead, in its first words.
+fn misread_message(
+    finding: &str,
+    readings: &[Reading],
+    setup: &Setup,
+    other_setup: &bool,
+    frames: &bool,
+) -> String {
+    let advice = misread_advice(finding, readings, setup, other_setup, frames);
+    if *other_setup && !*frames {
+        advice
+    } else {
+        format!("the input looks misread: {advice}")
+    }
+}
+
+/// [`misread_advice`] when the poses may be the other setup's: that setup first (its remedy in the
+/// first line), then the one mirror reading that means this setup with its camera poses inverted,
+/// and the fit's numbers last.
+fn other_setup_advice(finding: &str, readings: &[Reading], setup: Setup) -> String {
+    let other = setup.other();
+    let mirror = readings
+        .iter()
+        .copied()
+        .find(|&r| r != Reading::RobotInverted)
+        .unwrap_or(Reading::CameraInverted);
+    // The fit's numbers, "(median residual … as given)", from the finding.
+    let numbers = finding
+        .find("(median residual")
+        .and_then(|start| {
+            let rest = &finding[start..];
+            rest.find(')').map(|end| &rest[1..end])
+        })
+        .unwrap_or("");
+    format!(
+        "the poses look like a recording of the {} setup: if {}, {}. They fit far better read that way ({numbers}); if {} instead, its camera poses are inverted: correct the input, or {}",
+        other.name(),
+        camera_in_words(other),
+        Remedy::Setup(other).in_words(),
+        camera_in_words(setup),
+        Remedy::Fix(mirror).in_words()
+    )
 }
 
 /// [`misread_advice`] for poses looked up between named frames, whose directions are right as
@@ -517,6 +576,20 @@ fn untrusted_advice(refusal: &Option<Box<Error>>, why: &[Warning]) -> String {
     });
     parts.extend(others.iter().map(|w| w.to_string()));
     parts.join("; ")
+}
+
+/// The words of [`Error::Parse`]: `file:line: field `f`: message`, or, for the whole file (line
+/// 0, no field), `file: message`; an empty file is said to be empty.
+fn parse_words(file: &str, line: usize, field: &str, message: &str) -> String {
+    if line > 0 || field != "-" {
+        return format!("{file}:{line}: field `{field}`: {message}");
+    }
+    let empty = std::fs::metadata(file).is_ok_and(|m| m.is_file() && m.len() == 0);
+    if empty {
+        format!("{file}: the file is empty ({message})")
+    } else {
+        format!("{file}: {message}")
+    }
 }
 
 /// Result alias of the library.
