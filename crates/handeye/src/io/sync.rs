@@ -411,8 +411,10 @@ impl FoundOffset {
 /// least 95% of the default search's ±1 s (offsets of 1.5 s and more, refined, landed at
 /// 1.015–1.043 s on ethz-asl's streams; the repository's streams are found within 0.1 s).
 pub fn offset_failed(offset: f64, agreement_deg: f64) -> bool {
-    !(agreement_deg <= OFFSET_AGREEMENT_DEG)
-        || !(offset.abs() < 0.95 * OffsetOptions::default().max_offset)
+    // Written so that a NaN fails: a comparison with NaN is false.
+    let agrees = agreement_deg <= OFFSET_AGREEMENT_DEG;
+    let inside = offset.abs() < 0.95 * OffsetOptions::default().max_offset;
+    !agrees || !inside
 }
 
 /// The clock offset of two streams (camera − robot, seconds) and its sigma: the angular speeds'

@@ -117,7 +117,6 @@ pub(crate) fn low_dof_words(
     missing: LowDofMissing,
     joints: Option<usize>,
 ) -> String {
-    use crate::model::prior::Component;
     let frame = crate::model::findings::reference_frame(setup);
     // No "-0.000".
     let [x, y, z] = axis.map(|v| if v.abs() < 5e-4 { 0.0 } else { v });
