@@ -150,7 +150,7 @@ pub struct Recording {
     /// Its one-sigma, seconds, when it was estimated.
     pub time_offset_sigma: Option<f64>,
     /// When it was estimated: how well the poses paired at it agree on one X
-    /// ([`FoundOffset::agreement_deg`](crate::io::FoundOffset::agreement_deg)), degrees.
+    /// ([`FoundOffset::agreement_deg`](crate::io::sync::FoundOffset::agreement_deg)), degrees.
     pub time_offset_agreement_deg: Option<f64>,
     /// With `auto`: the angular speeds' correlation at each offset searched,
     /// `[offset s, correlation]`.
