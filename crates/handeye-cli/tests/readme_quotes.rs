@@ -85,10 +85,10 @@ const QUOTES: &[Quote] = &[
         exit: 3,
     },
     Quote {
-        readme: "\"if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand` …; if the camera rides on the gripper (eye-in-hand), correct the input, or pass `--fix camera-inverted`\"",
+        readme: "\"if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand` …; if the camera rides on the gripper (eye-in-hand) instead, its camera poses are inverted: correct the input, or pass `--fix camera-inverted`\"",
         parts: &[
             "if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand`",
-            "; if the camera rides on the gripper (eye-in-hand), correct the input, or pass `--fix camera-inverted`",
+            "; if the camera rides on the gripper (eye-in-hand) instead, its camera poses are inverted: correct the input, or pass `--fix camera-inverted`",
         ],
         args: &["calibrate", "kinhec/pairs/nominal_stations_eth_s1.jsonl"],
         exit: 3,
