@@ -172,15 +172,8 @@ pub fn run(args: Args) -> Result<()> {
                 robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
                 ..options
             };
-            calibrate(&recording.poses, setup, &options)
-                // The readings checked (a misread input disagrees at every offset, and is said
-                // as itself), a searched offset that pairs the poses into no agreement on one X
-                // is the cause: a solve on its pairs, or its refusal, says nothing of the motions.
-                .map_err(|e| match recording.failed_offset() {
-                    Some(offset) if !matches!(e, Error::Misread { .. }) => offset,
-                    _ => e,
-                })
-                .and_then(|report| recording.failed_offset().map_or(Ok(report), Err))
+            recording
+                .offset_checked(calibrate(&recording.poses, setup, &options))
                 .map_err(|e| refused(&args, e, face, &recording.poses, setup))?
         }
         Recorded::Pixels {

@@ -779,16 +779,15 @@ fn low_dof_lines(
 
 /// A length in the input's unit, with millimetres beside metres ("0.1075 m (107.5 mm)").
 fn with_unit(v: f64, u: &str) -> String {
-    if u == "m" {
-        format!("{v} m ({:.1} mm)", v * 1000.0)
-    } else {
-        format!("{v} {u}")
-    }
+    with_unit_sign(v, u, "")
 }
 
-/// [`with_unit`] with its sign always written.
+/// [`with_unit`] with its sign always written ("+0.1075 m (+107.5 mm)").
 fn with_unit_signed(v: f64, u: &str) -> String {
-    let sign = if v >= 0.0 { "+" } else { "" };
+    with_unit_sign(v, u, if v >= 0.0 { "+" } else { "" })
+}
+
+fn with_unit_sign(v: f64, u: &str, sign: &str) -> String {
     if u == "m" {
         format!("{sign}{v} m ({sign}{:.1} mm)", v * 1000.0)
     } else {

@@ -107,7 +107,7 @@ pub fn run(mut args: Args) -> Result<()> {
     if method == Method::Reprojection {
         return run_pixels(&args, &saved, face);
     }
-    let recording = read_all(&args.input, fix.reading())?;
+    let mut recording = read_all(&args.input, fix.reading())?;
     let options = Options {
         problem: handeye::Problem::HandEye(method),
         pairing: args.pairs,
@@ -116,13 +116,13 @@ pub fn run(mut args: Args) -> Result<()> {
         replicates: args.bootstrap,
         pose_names: recording.names.clone(),
         written: recording.written,
-        joints: recording.joints,
+        joints: std::mem::take(&mut recording.joints),
         priors: args.prior,
         ..Options::default()
     };
     let setup = args.input.setup();
     let v = tolerated(
-        handeye::verify(&saved, &recording.poses, setup, &options)?,
+        recording.offset_checked(handeye::verify(&saved, &recording.poses, setup, &options))?,
         args.tolerance,
     )?;
     show(&v, face)?;

@@ -143,7 +143,7 @@ const QUOTES: &[Quote] = &[
     },
     Quote {
         readme: "exits 3 with `no X to publish from N pose(s): <why>`",
-        parts: &["no X to publish from 40 pose(s): every motion rotates about the same axis"],
+        parts: &["no X to publish from 40 pose(s): record turns about another axis"],
         args: &[
             "online",
             "kinhec/pairs/degenerate_single_joint_continuous_eih_s0.jsonl",

@@ -107,22 +107,6 @@ fn slip(deg: f64, length: f64, rng: &mut Xoshiro256PlusPlus) -> Transform {
     )
 }
 
-/// `poses` with camera_from_target ← D⁻¹ · camera_from_target from pose `at` on.
-fn slipped(poses: &[PosePair], at: usize, d: &Transform) -> Vec<PosePair> {
-    poses
-        .iter()
-        .enumerate()
-        .map(|(i, p)| PosePair {
-            camera_from_target: if i >= at {
-                d.inverse() * p.camera_from_target
-            } else {
-                p.camera_from_target
-            },
-            ..*p
-        })
-        .collect()
-}
-
 fn methods() -> Vec<(&'static str, Problem)> {
     vec![
         ("default", Problem::default()),
@@ -158,7 +142,8 @@ fn grid(sizes: &[(f64, f64)], problem: &Problem, seed: u64, noise: &str) -> [usi
             for &(deg, mm) in sizes {
                 let d = slip(deg, mm / 1000.0, &mut rng);
                 counts[1] += 1;
-                let Some((w, good)) = change_found(&slipped(&poses, at, &d), setup, &options)
+                let Some((w, good)) =
+                    change_found(&handeye::sim::slipped(&poses, at, &d), setup, &options)
                 else {
                     continue;
                 };

@@ -201,13 +201,9 @@ fn a_recording_about_one_joint_cannot_tell() {
     }
 }
 
-#[test]
-fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
-    let e = &entries("nominal_stations")[0];
-    let (first, second) = halves(e);
-    let mut s = saved(&first, setup(e));
-    s.unit = Some(LengthUnit::Metre);
-    let mm: Vec<PosePair> = second
+/// The poses with both translations in millimetres (the recording's in metres).
+fn in_millimetres(poses: &[PosePair]) -> Vec<PosePair> {
+    poses
         .iter()
         .map(|p| {
             let mut p = *p;
@@ -215,7 +211,16 @@ fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
             p.camera_from_target.translation.vector *= 1e3;
             p
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
+    let e = &entries("nominal_stations")[0];
+    let (first, second) = halves(e);
+    let mut s = saved(&first, setup(e));
+    s.unit = Some(LengthUnit::Metre);
+    let mm = in_millimetres(&second);
     let v = verify(&s, &mm, setup(e), &options()).unwrap();
     show("metres against millimetres", &v);
     assert_eq!(v.verdict, Consistency::Consistent);
@@ -705,15 +710,7 @@ fn detectable_and_the_tolerance_on_unit_mixups_outliers_setups_and_degenerate_re
     // In millimetres against a saved X in metres: a thousand times the metres' one.
     let mut s = saved(&first, setup(e));
     s.unit = Some(LengthUnit::Metre);
-    let mm: Vec<PosePair> = second
-        .iter()
-        .map(|p| {
-            let mut p = *p;
-            p.base_from_gripper.translation.vector *= 1e3;
-            p.camera_from_target.translation.vector *= 1e3;
-            p
-        })
-        .collect();
+    let mm = in_millimetres(&second);
     let v = verify(&s, &mm, setup(e), &options()).unwrap();
     let ratio = v.detectable.translation / d.translation;
     assert!((ratio - 1000.0).abs() < 100.0, "{ratio}");

@@ -563,9 +563,8 @@ fn judged(
         (
             Consistency::Consistent,
             format!(
-                "the saved X fits this recording: it differs by {:.3}° and {}, {distance:.1} sigmas (at most {limit:.2} for the same rig); {}",
-                difference.rotation_deg,
-                len(difference.translation),
+                "{}; {}",
+                fits_words(difference, distance, limit, unit),
                 unseen_words(detectable, unit)
             ),
         )
@@ -699,6 +698,16 @@ fn detectable(cov: &Matrix6<f64>, limit: f64, sigma: &Sizes, poses: usize) -> Si
     d
 }
 
+/// "the saved X fits this recording: it differs by 0.012° and 0.31 mm, 1.2 sigmas (at most 4.74
+/// for the same rig)".
+fn fits_words(difference: &Sizes, distance: f64, limit: f64, unit: Option<LengthUnit>) -> String {
+    format!(
+        "the saved X fits this recording: it differs by {:.3}° and {}, {distance:.1} sigmas (at most {limit:.2} for the same rig)",
+        difference.rotation_deg,
+        length_words(difference.translation, unit)
+    )
+}
+
 /// "no change larger than 0.40° / 9.00 mm; smaller ones cannot be seen in this recording".
 fn unseen_words(detectable: &Sizes, unit: Option<LengthUnit>) -> String {
     format!(
@@ -728,11 +737,7 @@ impl Verification {
                 ),
             });
         }
-        let unit = match self.length_unit.as_str() {
-            "m" => Some(LengthUnit::Metre),
-            "mm" => Some(LengthUnit::Millimetre),
-            _ => None,
-        };
+        let unit = LengthUnit::from_suffix(&self.length_unit);
         let asked = format!(
             "{:.2}° / {}",
             tolerance.rotation_deg,
@@ -753,9 +758,12 @@ impl Verification {
             Consistency::Consistent => {
                 self.message = format!(
                     "{}; no change larger than your tolerance of {asked} (this recording sees changes larger than {:.2}° / {})",
-                    self.message
-                        .split_once("; no change larger")
-                        .map_or(self.message.as_str(), |(head, _)| head),
+                    fits_words(
+                        &self.difference,
+                        self.distance_sigmas,
+                        self.limit_sigmas,
+                        unit
+                    ),
                     self.detectable.rotation_deg,
                     length_words(self.detectable.translation, unit)
                 );
@@ -788,11 +796,7 @@ fn inconsistent_words(d: &Sizes, distance: f64, length: f64, unit: Option<Length
 }
 
 fn unit_name(unit: Option<LengthUnit>) -> &'static str {
-    match unit {
-        Some(LengthUnit::Metre) => "m",
-        Some(LengthUnit::Millimetre) => "mm",
-        _ => "unknown",
-    }
+    unit.map_or("unknown", LengthUnit::suffix)
 }
 
 /// A length in millimetres when the recording's unit is known, else in its own unit.

@@ -305,18 +305,7 @@ mod tests {
             ),
             &(Vector3::new(-1.0, 1.0, 2.0).normalize() * mm),
         );
-        poses
-            .iter()
-            .enumerate()
-            .map(|(i, p)| PosePair {
-                camera_from_target: if i >= at {
-                    d.inverse() * p.camera_from_target
-                } else {
-                    p.camera_from_target
-                },
-                ..*p
-            })
-            .collect()
+        crate::sim::slipped(poses, at, &d)
     }
 
     fn run(poses: &[PosePair]) -> OrderChange {

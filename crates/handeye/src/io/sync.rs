@@ -413,8 +413,14 @@ impl FoundOffset {
 pub fn offset_failed(offset: f64, agreement_deg: f64) -> bool {
     // Written so that a NaN fails: a comparison with NaN is false.
     let agrees = agreement_deg <= OFFSET_AGREEMENT_DEG;
+    !agrees || at_search_edge(offset)
+}
+
+/// Whether an offset found lies at the edge of the default search's ±1 s (within 5 % of it, or
+/// not a number), beyond which the best may lie.
+pub fn at_search_edge(offset: f64) -> bool {
     let inside = offset.abs() < 0.95 * OffsetOptions::default().max_offset;
-    !agrees || !inside
+    !inside
 }
 
 /// The clock offset of two streams (camera − robot, seconds) and its sigma: the angular speeds'
@@ -450,13 +456,16 @@ pub fn find_time_offset(
         search.max_offset,
         max_gap,
     );
-    let agreement_deg = offset_fit(robot, camera, setup, offset, max_gap)
-        .map_or(f64::INFINITY, |(cost, _)| cost.sqrt().to_degrees());
+    // The pairing at the offset found, fitted once: its cost is the agreement, and the centre of
+    // the parabola the sigma is read from.
+    let at = offset_fit(robot, camera, setup, offset, max_gap);
     Ok(FoundOffset {
         offset,
-        sigma: time_offset_sigma(robot, camera, setup, offset, max_gap),
+        sigma: at.map_or(f64::INFINITY, |at| {
+            sigma_at(robot, camera, setup, (offset, at), max_gap)
+        }),
         correlated,
-        agreement_deg,
+        agreement_deg: at.map_or(f64::INFINITY, |(cost, _)| cost.sqrt().to_degrees()),
     })
 }
 
@@ -476,19 +485,35 @@ pub fn time_offset_sigma(
     offset: f64,
     max_gap: f64,
 ) -> f64 {
+    offset_fit(robot, camera, setup, offset, max_gap).map_or(f64::INFINITY, |at| {
+        sigma_at(robot, camera, setup, (offset, at), max_gap)
+    })
+}
+
+/// [`time_offset_sigma`] with the fit at the offset, `(cost, poses kept)`, given.
+fn sigma_at(
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+    setup: crate::model::motion::Setup,
+    (offset, (c0, kept)): (f64, (f64, usize)),
+    max_gap: f64,
+) -> f64 {
     let period = median_period(camera);
-    let Some((c0, kept)) = offset_fit(robot, camera, setup, offset, max_gap) else {
-        return f64::INFINITY;
-    };
     if !(period.is_finite() && period > 0.0) {
         return f64::INFINITY;
     }
-    // Least-squares parabola C(o + d) ≈ a + b d + c d² over symmetric points d_k.
+    // Least-squares parabola C(o + d) ≈ a + b d + c d² over symmetric points d_k (the middle
+    // one the fit given).
     const POINTS: usize = 9;
     let half = 0.5 * period;
     let samples: Vec<(f64, f64)> = (0..POINTS)
-        .map(|k| -half + 2.0 * half * k as f64 / (POINTS - 1) as f64)
-        .filter_map(|d| offset_fit(robot, camera, setup, offset + d, max_gap).map(|(c, _)| (d, c)))
+        .filter_map(|k| {
+            if k == POINTS / 2 {
+                return Some((0.0, c0));
+            }
+            let d = -half + 2.0 * half * k as f64 / (POINTS - 1) as f64;
+            offset_fit(robot, camera, setup, offset + d, max_gap).map(|(c, _)| (d, c))
+        })
         .collect();
     if samples.len() < 5 {
         return f64::INFINITY;

@@ -71,6 +71,13 @@ impl LengthUnit {
         }
     }
 
+    /// The unit of a suffix, `m` or `mm` ([`LengthUnit::suffix`]'s inverse).
+    pub fn from_suffix(suffix: &str) -> Option<Self> {
+        [Self::Metre, Self::Millimetre]
+            .into_iter()
+            .find(|u| u.suffix() == suffix)
+    }
+
     /// Metres per this unit.
     pub fn metres(self) -> f64 {
         match self {

@@ -399,6 +399,7 @@ impl fmt::Display for Pending {
                     "the poses fit far better read as {}",
                     reading.meaning_in_frames(*setup)
                 ),
+                "",
                 &[*reading],
                 setup,
                 other_setup,

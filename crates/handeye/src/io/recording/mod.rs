@@ -178,10 +178,24 @@ impl Recording {
         let (offset, agreement_deg) = (self.time_offset?, self.time_offset_agreement_deg?);
         crate::io::sync::offset_failed(offset, agreement_deg).then_some(Error::OffsetNotFound {
             offset,
+            at_edge: crate::io::sync::at_search_edge(offset),
             agreement_deg,
             searched: crate::io::sync::OffsetOptions::default().max_offset,
             limit_deg: crate::io::sync::OFFSET_AGREEMENT_DEG,
         })
+    }
+
+    /// `result`, a job's answer on these poses, judged by the clock offset searched: when the
+    /// search failed ([`Recording::failed_offset`]) the answer, or a refusal of it, is replaced by
+    /// [`Error::OffsetNotFound`] (a solve on pairs no offset agrees on says nothing of the
+    /// motions), except a misreading, which disagrees at every offset and is said as itself.
+    /// Every job on a recording of two streams (`calibrate`, `verify`, `advise`) passes its
+    /// answer through here.
+    pub fn offset_checked<T>(&self, result: Result<T>) -> Result<T> {
+        match (self.failed_offset(), result) {
+            (None, result) | (Some(_), result @ Err(Error::Misread { .. })) => result,
+            (Some(failed), _) => Err(failed),
+        }
     }
 
     /// Reads `source` whole.
