@@ -328,7 +328,8 @@ struct Tally {
 }
 
 /// Messages of the problems that concern a whole file, the only ones reported at line 0.
-const WHOLE_FILE: [&str; 9] = [
+const WHOLE_FILE: [&str; 10] = [
+    "the file is empty",
     "at least 2",
     "missing (moveit_calibration's samples",
     "missing (easy_handeye2's samples",
