@@ -5,7 +5,7 @@
 //! source that words it.
 
 mod common;
-use common::testdata;
+use common::{shared, testdata};
 
 /// Runs `handeye` in `testdata/` and returns (exit code, stdout, stderr).
 fn run(args: &[&str]) -> (i32, String, String) {
@@ -252,9 +252,12 @@ fn the_low_dof_verify_note_is_printed_as_quoted() {
 /// tag 0.1 m from the gripper) and no size caution.
 #[test]
 fn the_camodocal_row_is_what_the_tool_advises() {
-    let row = "`handeye calibrate TransformPairsInput.yml --setup eye-to-hand --fix both-inverted`";
+    let row = "`handeye calibrate ../shared/data/camodocal/TransformPairsInput.yml --setup eye-to-hand --fix both-inverted`";
     assert!(readme().contains(row), "not in the README: {row}");
-    let file = "real/camodocal/TransformPairsInput.yml";
+    let Some(file) = shared("camodocal/TransformPairsInput.yml") else {
+        return;
+    };
+    let file = file.to_str().unwrap();
     let (code, out, err) = run(&[
         "calibrate",
         file,
