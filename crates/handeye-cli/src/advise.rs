@@ -31,13 +31,18 @@ pub struct Args {
 /// Runs the command: the advice as JSON on stdout, in words on stderr.
 pub fn run(args: Args) -> Result<()> {
     let recording = read_all(&args.input, handeye::Reading::AsGiven)?;
-    let poses = recording.poses;
     let options = AdviseOptions {
         count: args.count,
         priors: args.prior,
         goal: args.goal,
     };
-    let advice = advise(&poses, args.input.setup(), recording.written, &options)?;
+    let advice = recording.offset_checked(advise(
+        &recording.poses,
+        args.input.setup(),
+        recording.written,
+        &options,
+    ))?;
+    let poses = recording.poses;
     eprint!(
         "{}",
         crate::output::escaped_text(&in_words(&advice, faces::length_unit(&poses)))

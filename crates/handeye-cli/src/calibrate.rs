@@ -172,7 +172,8 @@ pub fn run(args: Args) -> Result<()> {
                 robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
                 ..options
             };
-            calibrate(&recording.poses, setup, &options)
+            recording
+                .offset_checked(calibrate(&recording.poses, setup, &options))
                 .map_err(|e| refused(&args, e, face, &recording.poses, setup))?
         }
         Recorded::Pixels {
@@ -445,9 +446,11 @@ fn refused_on_pixels(e: Error, face: Face) -> anyhow::Error {
                 | Error::Misread { .. }
                 | Error::PixelsUnfit { .. }
         )
-        && let Err(printed) = print_text(&faces::refused(&e))
     {
-        return printed;
+        if let Err(printed) = print_text(&faces::refused(&e)) {
+            return printed;
+        }
+        return crate::output::said(&e.into());
     }
     e.into()
 }
@@ -631,26 +634,32 @@ fn refused(args: &Args, e: Error, face: Face, poses: &[PosePair], setup: Setup) 
             | Error::TooFewMotions { .. }
             | Error::Misread { .. }
             | Error::Untrusted { .. }
+            | Error::OffsetNotFound { .. }
     );
+    let misread = matches!(e, Error::Misread { .. });
+    let said = refusal && face == Face::Text;
+    let e = anyhow::Error::from(e);
+    let e = if misread && carries_detections(&args.input) {
+        e.context(
+            "these records carry `detections`: the PnP poses of a planar target flip (the planar ambiguity), which the pose-based check can take for inverted poses; calibrate on the pixels, where the reading is checked on the detections: --method reprojection --intrinsics FILE",
+        )
+    } else {
+        e
+    };
     if refusal {
-        if face == Face::Text
-            && let Err(printed) = print_text(&faces::refused(&e))
-        {
+        let words = faces::refused_message(&crate::output::error_message(&e));
+        if said && let Err(printed) = print_text(&words) {
             return printed;
         }
         if let Some(path) = &args.report {
-            match crate::report::write_refused(path, poses, setup, &faces::refused(&e)) {
+            match crate::report::write_refused(path, poses, setup, &words) {
                 Ok(()) => crate::tell!("wrote {}", path.display()),
                 Err(written) => crate::tell!("{written:#}"),
             }
         }
     }
-    let misread = matches!(e, Error::Misread { .. });
-    let e = anyhow::Error::from(e);
-    if misread && carries_detections(&args.input) {
-        return e.context(
-            "these records carry `detections`: the PnP poses of a planar target flip (the planar ambiguity), which the pose-based check can take for inverted poses; calibrate on the pixels, where the reading is checked on the detections: --method reprojection --intrinsics FILE",
-        );
+    if said {
+        return crate::output::said(&e);
     }
     e
 }

@@ -755,16 +755,43 @@ fn low_dof_lines(
         );
     }
     for (name, p) in prior {
-        let _ = writeln!(
-            s,
-            "Prior: {name} = {} {u}{}",
-            p.value,
-            if p.sigma > 0.0 {
-                format!(" +- {} {u}", p.sigma)
-            } else {
-                " (exact)".into()
+        let sigma = if p.sigma > 0.0 {
+            format!(" +- {}", with_unit(p.sigma, u))
+        } else {
+            " (exact)".into()
+        };
+        match low_dof.filter(|low| low.unchecked.iter().any(|c| c.name() == name)) {
+            // The component the data leave free: its sign and direction said, never checked.
+            Some(low) => {
+                let _ = writeln!(
+                    s,
+                    "Prior: {name} = {}{sigma} from your prior, along {}; the data cannot check it (unchecked, its sign included)",
+                    with_unit_signed(p.value, u),
+                    low.direction
+                );
             }
-        );
+            None => {
+                let _ = writeln!(s, "Prior: {name} = {}{sigma}", with_unit(p.value, u));
+            }
+        }
+    }
+}
+
+/// A length in the input's unit, with millimetres beside metres ("0.1075 m (107.5 mm)").
+fn with_unit(v: f64, u: &str) -> String {
+    with_unit_sign(v, u, "")
+}
+
+/// [`with_unit`] with its sign always written ("+0.1075 m (+107.5 mm)").
+fn with_unit_signed(v: f64, u: &str) -> String {
+    with_unit_sign(v, u, if v >= 0.0 { "+" } else { "" })
+}
+
+fn with_unit_sign(v: f64, u: &str, sign: &str) -> String {
+    if u == "m" {
+        format!("{sign}{v} m ({sign}{:.1} mm)", v * 1000.0)
+    } else {
+        format!("{sign}{v} {u}")
     }
 }
 
@@ -832,7 +859,12 @@ pub fn target_frames(setup: Setup, f: &Frames) -> (String, String) {
 
 /// A refusal as the text face gives it: the verdict, the reason and what to do.
 pub fn refused(e: &Error) -> String {
-    format!("Verdict: refused\n  - {e}\n\nNext:\n  the reason above says what to do\n")
+    refused_message(&e.to_string())
+}
+
+/// [`refused`] of a refusal's message (with its context).
+pub fn refused_message(message: &str) -> String {
+    format!("Verdict: refused\n  - {message}\n\nNext:\n  the reason above says what to do\n")
 }
 
 /// A length to four significant digits.

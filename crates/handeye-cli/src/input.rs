@@ -109,9 +109,10 @@ pub struct InputArgs {
         help_heading = BAG_HEADING
     )]
     pub camera_info_topic: Option<String>,
-    /// Camera on the gripper (X = gripper_from_camera) or fixed (X = base_from_camera).
-    #[arg(long, default_value_t = Setup::EyeInHand, value_parser = crate::values::named::<Setup>())]
-    pub setup: Setup,
+    /// Camera on the gripper (X = gripper_from_camera) or fixed (X = base_from_camera)
+    /// [default: eye-in-hand]
+    #[arg(long, value_parser = crate::values::named::<Setup>())]
+    pub setup: Option<Setup>,
     /// How the input writes rotations, where its numbers cannot say: the --robot/--camera
     /// streams (`t x y z` and the convention's numbers) and CSV columns (`<frame>_x, _y, _z` and
     /// the convention's, e.g. `_a, _b, _c` for kuka-abc); JSON fields name their own
@@ -128,8 +129,13 @@ pub struct InputArgs {
 }
 
 impl InputArgs {
-    /// The setup.
+    /// The setup: the one given, else eye-in-hand.
     pub fn setup(&self) -> Setup {
+        self.setup.unwrap_or_default()
+    }
+
+    /// The setup given with `--setup`, if any (`verify` takes the saved X's otherwise).
+    pub fn given_setup(&self) -> Option<Setup> {
         self.setup
     }
 

@@ -255,6 +255,15 @@ fn end(
     if calibrator.poses() == 0 {
         return Err(no_pose(source, print.bad_lines.count(), print.on_pixels).into());
     }
+    // A misread input gives no estimate: the same refusal, and exit code, as `calibrate`'s; its
+    // reason is the summary's, said once.
+    if last.is_none() && matches!(calibrator.pending(), Some(handeye::Pending::Misread { .. })) {
+        return Err(crate::output::Verdict {
+            code: crate::output::DEGENERATE,
+            message: "refused: the input looks misread (the summary above says how)".into(),
+        }
+        .into());
+    }
     if let Some((frames, mount, face)) = published {
         let Some(report) = &last else {
             let (poses, why) = (calibrator.poses(), no_estimate(calibrator));

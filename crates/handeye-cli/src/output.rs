@@ -47,6 +47,16 @@ impl std::fmt::Display for Questionable {
 
 impl std::error::Error for Questionable {}
 
+/// A refusal the text face has printed on stdout: its exit code, and one short line for stderr
+/// (the reason is said once).
+pub fn said(e: &anyhow::Error) -> anyhow::Error {
+    Verdict {
+        code: exit_code(e),
+        message: "refused: the reason is printed above".into(),
+    }
+    .into()
+}
+
 /// The exit code for an error: 2 for bad input, 3 for degenerate data, 5 for a questionable
 /// verdict under `--strict`, 1 otherwise.
 pub fn exit_code(e: &anyhow::Error) -> u8 {
@@ -63,6 +73,7 @@ pub fn exit_code(e: &anyhow::Error) -> u8 {
             | Error::Misread { .. }
             | Error::Untrusted { .. }
             | Error::NoEstimate { .. }
+            | Error::OffsetNotFound { .. }
             | Error::PixelsUnfit { .. },
         ) => DEGENERATE,
         Some(_) => BAD_INPUT,

@@ -213,11 +213,22 @@ pub fn point(s: &str) -> Result<[f64; 3], String> {
 
 /// `--goal DEGREES,LENGTH`: two positive sizes, a one-sigma rotation and translation.
 pub fn goal(s: &str) -> Result<handeye::Sizes, String> {
+    sizes(s, "a one-sigma rotation and translation")
+}
+
+/// `--tolerance DEGREES,LENGTH`: two positive sizes, the change of X that matters.
+pub fn tolerance(s: &str) -> Result<handeye::Sizes, String> {
+    sizes(
+        s,
+        "the change of X that matters: a rotation and a translation in the recording's unit",
+    )
+}
+
+/// `DEGREES,LENGTH`: two positive sizes, `what` they are saying in the error.
+fn sizes(s: &str, what: &str) -> Result<handeye::Sizes, String> {
     let parts: Vec<&str> = s.split(',').collect();
     if parts.len() != 2 {
-        return Err(format!(
-            "expected DEGREES,LENGTH (a one-sigma rotation and translation), got `{s}`"
-        ));
+        return Err(format!("expected DEGREES,LENGTH ({what}), got `{s}`"));
     }
     Ok(handeye::Sizes {
         rotation_deg: positive(parts[0])?,

@@ -18,7 +18,8 @@ use crate::values;
 #[derive(ClapArgs, Debug)]
 pub struct Args {
     /// The saved X: what `calibrate --output json` or `--output yaml` wrote (or easy_handeye2's
-    /// calibration file).
+    /// calibration file). The setup it declares (`setup` or `frame` in the JSON,
+    /// `calibration_type` in the YAML) is the recording's unless --setup is given, which must agree.
     #[arg(long = "x", value_name = "SAVED")]
     saved: PathBuf,
     #[command(flatten)]
@@ -48,6 +49,11 @@ pub struct Args {
     /// recording leaves free is taken from the saved X and the rest is checked. Repeatable.
     #[arg(long, value_name = "NAME=VALUE[+-SIGMA]", value_parser = values::prior)]
     prior: Vec<handeye::Prior>,
+    /// The change that matters to you: a rotation in degrees and a translation in the recording's
+    /// unit. A consistent X whose recording could not have seen a change of that size (`detectable`
+    /// beyond it) is undetermined (exit 3).
+    #[arg(long, value_name = "DEGREES,LENGTH", value_parser = values::tolerance)]
+    tolerance: Option<handeye::Sizes>,
     /// Exit 5 when the saved X is consistent but the recording's own calibration is questionable.
     #[arg(long)]
     strict: bool,
@@ -62,7 +68,7 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(mut args: Args) -> Result<()> {
     let face = match Face::chosen(args.output) {
         f @ (Face::Json | Face::Text) => f,
         other => {
@@ -77,6 +83,8 @@ pub fn run(args: Args) -> Result<()> {
         crate::report::check_writable(path)?;
     }
     let saved = handeye::SavedX::read(&args.saved)?;
+    // The setup the saved file declares, unless --setup says otherwise (then an error naming both).
+    args.input.setup = Some(saved.setup_for(args.input.given_setup())?);
     let fix = args.fix.unwrap_or_default();
     let method = match (args.method, &args.intrinsics) {
         (None | Some(Method::Reprojection), Some(_)) => Method::Reprojection,
@@ -99,7 +107,7 @@ pub fn run(args: Args) -> Result<()> {
     if method == Method::Reprojection {
         return run_pixels(&args, &saved, face);
     }
-    let recording = read_all(&args.input, fix.reading())?;
+    let mut recording = read_all(&args.input, fix.reading())?;
     let options = Options {
         problem: handeye::Problem::HandEye(method),
         pairing: args.pairs,
@@ -108,12 +116,15 @@ pub fn run(args: Args) -> Result<()> {
         replicates: args.bootstrap,
         pose_names: recording.names.clone(),
         written: recording.written,
-        joints: recording.joints,
+        joints: std::mem::take(&mut recording.joints),
         priors: args.prior,
         ..Options::default()
     };
     let setup = args.input.setup();
-    let v = handeye::verify(&saved, &recording.poses, setup, &options)?;
+    let v = tolerated(
+        recording.offset_checked(handeye::verify(&saved, &recording.poses, setup, &options))?,
+        args.tolerance,
+    )?;
     show(&v, face)?;
     // After the result: a report that cannot be written loses nothing computed.
     if let Some(path) = &args.report {
@@ -134,6 +145,17 @@ pub fn run(args: Args) -> Result<()> {
         crate::tell!("wrote {}", path.display());
     }
     exit(v, args.strict)
+}
+
+/// The verification judged against `--tolerance`, when given.
+fn tolerated(
+    v: handeye::Verification,
+    tolerance: Option<handeye::Sizes>,
+) -> Result<handeye::Verification> {
+    Ok(match tolerance {
+        Some(t) => v.within(t)?,
+        None => v,
+    })
 }
 
 fn invalid(name: &'static str, message: &str) -> anyhow::Error {
@@ -162,7 +184,10 @@ fn run_pixels(args: &Args, saved: &handeye::SavedX, face: Face) -> Result<()> {
         frames: &frames_read,
         camera: &camera,
     };
-    let v = handeye::verify(saved, input, setup, &options)?;
+    let v = tolerated(
+        handeye::verify(saved, input, setup, &options)?,
+        args.tolerance,
+    )?;
     show(&v, face)?;
     if let Some(report) = &args.report {
         let poses = handeye::calibrate::problem::pixels::pose_pairs(&frames_read, &v.start_poses);
@@ -239,6 +264,12 @@ fn text(v: &handeye::Verification) -> String {
             faces::short(v.sigma.translation),
             v.distance_sigmas,
             v.limit_sigmas
+        );
+        let _ = writeln!(
+            s,
+            "Smallest change this recording sees: rotation {:.4}°, translation {} {u}",
+            v.detectable.rotation_deg,
+            faces::short(v.detectable.translation)
         );
     }
     if let Some(p) = &v.pixels {

@@ -216,7 +216,6 @@ fn bad_input_exits_2_naming_file_line_and_field() {
             "2",
             "camera_from_target",
         ),
-        ("one.jsonl", format!("{}\n", good_line(0)), "0", "-"),
     ];
     for (name, text, line, field) in cases {
         let path = dir.path().join(name);
@@ -225,6 +224,20 @@ fn bad_input_exits_2_naming_file_line_and_field() {
         assert_eq!(code, 2, "{name}: {err}");
         assert!(
             err.contains(name) && err.contains(&format!(":{line}:")) && err.contains(field),
+            "{name}: {err}"
+        );
+    }
+    // A whole file's fault names the file, not "line 0, field -"; an empty file is said empty.
+    for (name, text, words) in [
+        ("one.jsonl", format!("{}\n", good_line(0)), "1 pose pair(s)"),
+        ("empty.jsonl", String::new(), "the file is empty"),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let (code, _, err) = run(handeye().args(["calibrate", path.to_str().unwrap()]));
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(
+            err.contains(&format!("{name}: ")) && err.contains(words) && !err.contains(":0:"),
             "{name}: {err}"
         );
     }

@@ -123,7 +123,7 @@ fn the_same_numbers_from_inverted_camera_poses_name_both_fixes() {
     assert_eq!(code, 3, "{err}");
     for words in [
         "if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand`",
-        "if the camera rides on the gripper (eye-in-hand), correct the input, or pass `--fix camera-inverted`",
+        "if the camera rides on the gripper (eye-in-hand) instead, its camera poses are inverted: correct the input, or pass `--fix camera-inverted`",
     ] {
         assert!(err.contains(words), "no `{words}`: {err}");
     }

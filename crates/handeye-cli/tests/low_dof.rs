@@ -70,12 +70,14 @@ fn scara_without_a_prior_is_refused_naming_it() {
         assert!(err.contains("--prior tz="), "{err}");
         assert!(err.contains("SCARA"), "{err}");
         assert!(!err.contains("rotate about the gripper x"), "{err}");
-        let height = if setup == "eye-in-hand" {
-            "height above the flange"
+        // Which way the prior's axis points, and that its sign is unchecked (issue 52 item 3).
+        let direction = if setup == "eye-in-hand" {
+            "along the gripper frame's +z"
         } else {
-            "height above the robot base"
+            "along the robot base's +z"
         };
-        assert!(err.contains(height), "{err}");
+        assert!(err.contains(direction), "{err}");
+        assert!(err.contains("its sign included"), "{err}");
     }
 }
 

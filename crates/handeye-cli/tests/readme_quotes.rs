@@ -36,6 +36,21 @@ struct Quote {
 
 const QUOTES: &[Quote] = &[
     Quote {
+        readme: "\"no change larger than 0.15° / 3.80 mm; smaller ones cannot be seen in this recording\"",
+        parts: &[
+            "no change larger than 0.15° / 3.80 mm; smaller ones cannot be seen in this recording",
+        ],
+        args: &[
+            "verify",
+            "--x",
+            "golden/saved_nominal_stations_eih_s0.calib",
+            "kinhec/pairs/nominal_stations_eih_s0.jsonl",
+            "--output",
+            "json",
+        ],
+        exit: 0,
+    },
+    Quote {
         readme: "\"you are done\" when X's one-sigma is within 0.1° and 1 mm",
         parts: &["you are done: X is within your goal"],
         args: &[
@@ -72,10 +87,10 @@ const QUOTES: &[Quote] = &[
         exit: 3,
     },
     Quote {
-        readme: "\"if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand` …; if the camera rides on the gripper (eye-in-hand), correct the input, or pass `--fix camera-inverted`\"",
+        readme: "\"if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand` …; if the camera rides on the gripper (eye-in-hand) instead, its camera poses are inverted: correct the input, or pass `--fix camera-inverted`\"",
         parts: &[
             "if the camera is fixed (eye-to-hand), pass `--setup eye-to-hand`",
-            "; if the camera rides on the gripper (eye-in-hand), correct the input, or pass `--fix camera-inverted`",
+            "; if the camera rides on the gripper (eye-in-hand) instead, its camera poses are inverted: correct the input, or pass `--fix camera-inverted`",
         ],
         args: &["calibrate", "kinhec/pairs/nominal_stations_eth_s1.jsonl"],
         exit: 3,
@@ -130,7 +145,7 @@ const QUOTES: &[Quote] = &[
     },
     Quote {
         readme: "exits 3 with `no X to publish from N pose(s): <why>`",
-        parts: &["no X to publish from 40 pose(s): every motion rotates about the same axis"],
+        parts: &["no X to publish from 40 pose(s): record turns about another axis"],
         args: &[
             "online",
             "kinhec/pairs/degenerate_single_joint_continuous_eih_s0.jsonl",

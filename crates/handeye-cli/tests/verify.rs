@@ -176,12 +176,14 @@ fn two_different_real_rigs_are_inconsistent() {
     assert_eq!(code, 4, "{v} {err}");
     assert_eq!(v["verdict"], "inconsistent");
     assert!(err.contains("a different rig"), "{err}");
-    // camodocal's eye-to-hand rig against the PrimeSense recording: the note names the setups.
+    // camodocal's eye-to-hand rig against the PrimeSense recording read as eye-in-hand: an
+    // error naming both setups (X is another transform in each).
     let saved = save(dir.path(), camodocal, "eye-to-hand", "json");
     let prime: Vec<&str> = prime.iter().map(String::as_str).collect();
-    let (code, v, err) = verify(&saved, &prime, &[]);
-    assert_eq!(code, 4, "{v} {err}");
+    let (code, v, err) = verify(&saved, &prime, &["--setup", "eye-in-hand"]);
+    assert_eq!(code, 2, "{v} {err}");
     assert!(err.contains("the saved X is for eye-to-hand"), "{err}");
+    assert!(err.contains("--setup eye-in-hand"), "{err}");
 }
 
 #[test]
@@ -393,4 +395,149 @@ fn strict_exits_5_when_the_saved_x_fits_a_questionable_recording() {
     assert!(codes.contains(&"outliers"), "{codes:?}");
     let (code, _, err) = verify(&saved, &[bad_arg], &["--strict"]);
     assert_eq!(code, 5, "{err}");
+}
+
+/// easy_handeye2's calibration file for X (metres, the rotation as a quaternion): `eye_on_base`
+/// or `eye_in_hand`.
+fn easy_handeye2(x: &Value, kind: &str) -> String {
+    let t = &x["translation"];
+    let q = &x["quaternion_xyzw"];
+    format!(
+        "parameters:\n  calibration_type: {kind}\n  robot_base_frame: base_link\n  tracking_base_frame: camera\ntransform:\n  translation:\n    x: {}\n    y: {}\n    z: {}\n  rotation:\n    x: {}\n    y: {}\n    z: {}\n    w: {}\n",
+        t[0], t[1], t[2], q[0], q[1], q[2], q[3]
+    )
+}
+
+#[test]
+fn the_setup_is_read_from_the_saved_file_and_a_conflicting_one_is_an_error_naming_both() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = halves(dir.path(), "nominal_stations_eth_s0.jsonl");
+    let json = save(dir.path(), &a, "eye-to-hand", "json");
+    let x: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // easy_handeye2's own .calib (eye_on_base) and a JSON with only X's frame name and matrix.
+    let calib = dir.path().join("eye_on_base.calib");
+    std::fs::write(&calib, easy_handeye2(&x, "eye_on_base")).unwrap();
+    let framed = dir.path().join("framed.json");
+    let plain = serde_json::json!({"frame": "base_from_camera", "matrix": x["matrix"]});
+    std::fs::write(&framed, plain.to_string()).unwrap();
+    for saved in [&json, &calib, &framed] {
+        // No --setup: the file's.
+        let (code, v, err) = verify(saved, &[b.to_str().unwrap()], &[]);
+        assert_eq!(code, 0, "{}: {v} {err}", saved.display());
+        assert_eq!(v["verdict"], "consistent");
+        assert_eq!(v["recording"]["frame"], "base_from_camera");
+        // The same setup given: the same answer.
+        let (code, _, err) = verify(saved, &[b.to_str().unwrap(), "--setup", "eye-to-hand"], &[]);
+        assert_eq!(code, 0, "{err}");
+        // The other one: an error naming both, before anything is calibrated.
+        let (code, v, err) = verify(saved, &[b.to_str().unwrap(), "--setup", "eye-in-hand"], &[]);
+        assert_eq!(code, 2, "{}: {v} {err}", saved.display());
+        assert!(
+            err.contains("--setup eye-in-hand") && err.contains("saved X is for eye-to-hand"),
+            "{err}"
+        );
+    }
+    // An eye-in-hand .calib against the eye-to-hand recording read as its file says: not a
+    // silent eye-to-hand comparison.
+    let wrong = dir.path().join("eye_in_hand.calib");
+    std::fs::write(&wrong, easy_handeye2(&x, "eye_in_hand")).unwrap();
+    let (code, v, err) = verify(&wrong, &[b.to_str().unwrap()], &[]);
+    assert_ne!(code, 0, "{v} {err}");
+    assert_ne!(v["verdict"], "consistent", "{v}");
+}
+
+#[test]
+fn verify_says_the_smallest_change_it_sees_and_a_tolerance_it_cannot_resolve_is_undetermined() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = halves(dir.path(), "nominal_stations_eih_s1.jsonl");
+    let saved = save(dir.path(), &a, "eye-in-hand", "json");
+    let b = b.to_str().unwrap();
+    let (code, v, err) = verify(&saved, &[b], &[]);
+    assert_eq!(code, 0, "{v} {err}");
+    let detectable = |v: &Value| {
+        (
+            v["detectable"]["rotation_deg"].as_f64().unwrap(),
+            v["detectable"]["translation"].as_f64().unwrap(),
+        )
+    };
+    let (rot, trans) = detectable(&v);
+    // At least the limit times the one-sigma's largest direction: more than the sizes' average.
+    let limit = v["limit_sigmas"].as_f64().unwrap();
+    assert!(
+        rot >= limit * v["sigma"]["rotation_deg"].as_f64().unwrap() / 3f64.sqrt(),
+        "{v}"
+    );
+    assert!(
+        trans >= limit * v["sigma"]["translation"].as_f64().unwrap() / 3f64.sqrt(),
+        "{v}"
+    );
+    let message = v["message"].as_str().unwrap();
+    assert!(
+        message.contains("no change larger than")
+            && message.contains("smaller ones cannot be seen in this recording"),
+        "{message}"
+    );
+    // A tolerance below what the recording sees: undetermined, exit 3, saying both sizes.
+    let tight = format!("{},{}", rot / 2.0, trans / 2.0);
+    let (code, v, err) = verify(&saved, &[b], &["--tolerance", &tight]);
+    assert_eq!(code, 3, "{v} {err}");
+    assert_eq!(v["verdict"], "undetermined");
+    assert!(err.contains("within your tolerance"), "{err}");
+    assert_eq!(v["tolerance"]["rotation_deg"].as_f64().unwrap(), rot / 2.0);
+    // One it resolves: consistent, within it.
+    let loose = format!("{},{}", rot * 2.0, trans * 2.0);
+    let (code, v, err) = verify(&saved, &[b], &["--tolerance", &loose]);
+    assert_eq!(code, 0, "{v} {err}");
+    assert!(
+        v["message"]
+            .as_str()
+            .unwrap()
+            .contains("no change larger than your tolerance")
+    );
+    // A tolerance that is not two positive sizes is refused by name.
+    let (code, _, err) = verify(&saved, &[b], &["--tolerance", "0.5,-1"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--tolerance"), "{err}");
+    // A recording that cannot tell at all: no size it can see, and a tolerance changes nothing.
+    let degenerate = testdata("kinhec/pairs/degenerate_single_joint_continuous_eih_s0.jsonl");
+    let (code, v, _) = verify(
+        &saved,
+        &[degenerate.to_str().unwrap()],
+        &["--tolerance", &loose],
+    );
+    assert_eq!(code, 3);
+    assert!(v["detectable"]["rotation_deg"].is_null(), "{v}");
+}
+
+#[test]
+fn a_shift_below_what_a_small_recording_sees_is_not_called_a_fit_under_a_tolerance() {
+    // The first 12 stations of a recording, and its own X shifted 3 mm: within what 12
+    // stations see, so `consistent` says how large a change could hide, and a 1 mm tolerance
+    // is undetermined rather than a fit.
+    let dir = tempfile::tempdir().unwrap();
+    let text =
+        std::fs::read_to_string(testdata("kinhec/pairs/nominal_stations_eih_s0.jsonl")).unwrap();
+    let small = dir.path().join("small.jsonl");
+    std::fs::write(&small, text.lines().take(12).collect::<Vec<_>>().join("\n")).unwrap();
+    let saved = save(dir.path(), &small, "eye-in-hand", "json");
+    let mut x: Value = serde_json::from_str(&std::fs::read_to_string(&saved).unwrap()).unwrap();
+    let obj = x.as_object_mut().unwrap();
+    let mut m: Vec<Vec<f64>> = serde_json::from_value(obj["matrix"].clone()).unwrap();
+    m[0][3] += 0.003;
+    obj.insert("matrix".into(), serde_json::to_value(&m).unwrap());
+    obj.remove("quaternion_xyzw");
+    obj.remove("translation");
+    obj.remove("uncertainty");
+    std::fs::write(&saved, x.to_string()).unwrap();
+    let small = small.to_str().unwrap();
+    let (code, v, err) = verify(&saved, &[small], &[]);
+    assert_eq!(code, 0, "{v} {err}");
+    let trans = v["detectable"]["translation"].as_f64().unwrap();
+    assert!(trans > 0.003, "{v}");
+    let (code, v, err) = verify(&saved, &[small], &["--tolerance", "0.1,0.001"]);
+    assert_eq!(code, 3, "{v} {err}");
+    assert!(
+        err.contains("cannot tell whether the saved X is within your tolerance of 0.10° / 1.00 mm"),
+        "{err}"
+    );
 }

@@ -661,18 +661,19 @@ fn pixel_recording(
 /// ([`handeye::verify`] on [`handeye::Input::Pixels`]): its result as JSON, the same object `handeye verify --x SAVED
 /// FILE --intrinsics I` prints.
 #[pyfunction]
-#[pyo3(signature = (saved, path, intrinsics, setup="eye-in-hand", fix=None))]
+#[pyo3(signature = (saved, path, intrinsics, setup=None, fix=None, tolerance=None))]
 fn verify_pixels_report(
     py: Python<'_>,
     saved: PathBuf,
     path: PathBuf,
     intrinsics: PathBuf,
-    setup: &str,
+    setup: Option<&str>,
     fix: Option<&str>,
+    tolerance: Option<(f64, f64)>,
 ) -> PyResult<String> {
-    let setup = parse_setup(setup)?;
     let fix = parse_fix(fix)?;
     let saved = handeye::SavedX::read(&saved).map_err(value_error)?;
+    let setup = saved_setup(&saved, setup)?;
     let bag = TagBag {
         frames: [None, None, None],
         target_topic: None,
@@ -698,6 +699,7 @@ fn verify_pixels_report(
             handeye::verify(&saved, input, setup, &options)
         })
         .map_err(value_error)?;
+    let v = within(v, tolerance)?;
     serde_json::to_string(&v).map_err(value_error)
 }
 
@@ -757,14 +759,14 @@ fn priors(prior: Option<Vec<String>>) -> PyResult<Vec<handeye::Prior>> {
 /// Whether a saved X still fits a new recording (`handeye verify`): the library's
 /// `Verification` as JSON text, the same object the command line prints.
 #[pyfunction]
-#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup="eye-in-hand", method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::Options::default().replicates, joints=None, prior=None, fix=None))]
+#[pyo3(signature = (saved, base_from_gripper, camera_from_target, setup=None, method="andreff", pairs="all", reject_outliers=false, bootstrap=handeye::Options::default().replicates, joints=None, prior=None, fix=None, tolerance=None))]
 #[allow(clippy::too_many_arguments)]
 fn verify_report<'py>(
     py: Python<'py>,
     saved: &str,
     base_from_gripper: PyReadonlyArray3<'py, f64>,
     camera_from_target: PyReadonlyArray3<'py, f64>,
-    setup: &str,
+    setup: Option<&str>,
     method: &str,
     pairs: &str,
     reject_outliers: bool,
@@ -772,8 +774,10 @@ fn verify_report<'py>(
     joints: Option<Vec<Vec<f64>>>,
     prior: Option<Vec<String>>,
     fix: Option<&str>,
+    tolerance: Option<(f64, f64)>,
 ) -> PyResult<String> {
     let saved = handeye::SavedX::read(saved).map_err(value_error)?;
+    let setup = saved_setup(&saved, setup)?;
     let options = handeye::Options {
         joints: checked_joints(joints)?,
         priors: priors(prior)?,
@@ -782,12 +786,36 @@ fn verify_report<'py>(
         replicates: bootstrap,
         ..calibration_options(method, pairs, false)?
     };
-    let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let verification = py
         .allow_threads(|| handeye::verify(&saved, &poses, setup, &options))
         .map_err(value_error)?;
+    let verification = within(verification, tolerance)?;
     serde_json::to_string(&verification).map_err(value_error)
+}
+
+/// The setup to verify in: `setup` when given (it must be the saved file's, when the file says),
+/// else the file's, else eye-in-hand ([`handeye::SavedX::setup_for`]).
+fn saved_setup(saved: &handeye::SavedX, setup: Option<&str>) -> PyResult<handeye::Setup> {
+    let given = setup.map(parse_setup).transpose()?;
+    saved.setup_for(given).map_err(value_error)
+}
+
+/// The verification against `tolerance` (degrees, the recording's length unit), when given
+/// ([`handeye::Verification::within`]).
+fn within(
+    v: handeye::Verification,
+    tolerance: Option<(f64, f64)>,
+) -> PyResult<handeye::Verification> {
+    match tolerance {
+        Some((rotation_deg, translation)) => v
+            .within(handeye::Sizes {
+                rotation_deg,
+                translation,
+            })
+            .map_err(value_error),
+        None => Ok(v),
+    }
 }
 
 /// What to record next (`handeye advise`): the library's `Advice` as JSON text.

@@ -59,12 +59,21 @@ pub fn error(e: &Error, setup: Option<Setup>, d: DropIn) -> String {
         Error::Degenerate { reason, .. } => degenerate(e, reason, d),
         // What makes X untrusted, each part in the drop-in's terms (the outliers' remedy is to
         // leave them out of the arrays, or `handeye.calibrate(..., reject_outliers=True)`).
+        // The order is the library's (`Warning::leads`): what one option fixes first, then "as
+        // the input is:" what the motions lack, then the rest.
         Error::Untrusted { refusal, why } => {
-            let parts: Vec<String> = refusal
-                .iter()
-                .map(|r| error(r, setup, d))
-                .chain(why.iter().map(|w| warning(w, setup, d)))
-                .collect();
+            let (first, others): (Vec<&Warning>, Vec<&Warning>) =
+                why.iter().partition(|w| w.leads());
+            let mut parts: Vec<String> = first.iter().map(|w| warning(w, setup, d)).collect();
+            if let Some(r) = refusal {
+                let r = error(r, setup, d);
+                parts.push(if parts.is_empty() {
+                    r
+                } else {
+                    format!("as the input is: {r}")
+                });
+            }
+            parts.extend(others.iter().map(|w| warning(w, setup, d)));
             format!("X cannot be trusted: {}", parts.join("; "))
         }
         _ => e.to_string(),

@@ -16,7 +16,7 @@ use handeye::check::readings::check_readings;
 use handeye::io::{BagFrames, Format, Recording, RecordingOptions, Source};
 use handeye::model::pose::rotation_angle_between;
 use handeye::track::{TrackOptions, Tracker};
-use handeye::{Assessment, Error, Pairing, PosePair, Reading, Setup, Transform, Warning, Written};
+use handeye::{Assessment, Error, Pairing, Reading, Setup, Warning, Written};
 use handeye::{Options, calibrate};
 
 fn testdata() -> PathBuf {
@@ -176,17 +176,6 @@ fn the_tracker_never_reports_from_swapped_frames() {
     assert!(!why.contains("--fix"), "{why}");
 }
 
-/// The recording as it is after the camera moved on its mount by `delta` (X becomes X·delta).
-fn bumped(poses: &[PosePair], delta: &Transform) -> Vec<PosePair> {
-    poses
-        .iter()
-        .map(|p| PosePair {
-            base_from_gripper: p.base_from_gripper,
-            camera_from_target: delta.inverse() * p.camera_from_target,
-        })
-        .collect()
-}
-
 #[test]
 fn a_change_withdraws_the_estimate_from_before_it() {
     // Two recordings of the same robot, the second after the camera moved by 8° and 40 mm.
@@ -209,7 +198,8 @@ fn a_change_withdraws_the_estimate_from_before_it() {
         &handeye::model::pose::exp_so3(&nalgebra::Vector3::new(0.0, 0.14, 0.0)),
         &nalgebra::Vector3::new(0.04, 0.0, 0.0),
     );
-    let after = bumped(&before, &delta);
+    // The camera moved on its mount by `delta` before the second recording.
+    let after = handeye::sim::slipped(&before, 0, &delta);
     let mut tracker = Tracker::new(Setup::EyeInHand, TrackOptions::default());
     let mut first = None;
     for pose in &before {

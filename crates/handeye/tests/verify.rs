@@ -201,13 +201,9 @@ fn a_recording_about_one_joint_cannot_tell() {
     }
 }
 
-#[test]
-fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
-    let e = &entries("nominal_stations")[0];
-    let (first, second) = halves(e);
-    let mut s = saved(&first, setup(e));
-    s.unit = Some(LengthUnit::Metre);
-    let mm: Vec<PosePair> = second
+/// The poses with both translations in millimetres (the recording's in metres).
+fn in_millimetres(poses: &[PosePair]) -> Vec<PosePair> {
+    poses
         .iter()
         .map(|p| {
             let mut p = *p;
@@ -215,7 +211,16 @@ fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
             p.camera_from_target.translation.vector *= 1e3;
             p
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn a_saved_x_in_metres_is_converted_for_a_recording_in_millimetres() {
+    let e = &entries("nominal_stations")[0];
+    let (first, second) = halves(e);
+    let mut s = saved(&first, setup(e));
+    s.unit = Some(LengthUnit::Metre);
+    let mm = in_millimetres(&second);
     let v = verify(&s, &mm, setup(e), &options()).unwrap();
     show("metres against millimetres", &v);
     assert_eq!(v.verdict, Consistency::Consistent);
@@ -685,4 +690,86 @@ fn the_robot_world_problem_is_refused_by_name() {
         ),
         "{e}"
     );
+}
+
+/// `detectable` and a tolerance on the inputs that go wrong: a unit mix-up (saved in metres, the
+/// recording in millimetres: `detectable` and the tolerance in millimetres), outliers kept (a
+/// tolerance never turns their verdict into a fit), a setup the file contradicts (refused by name),
+/// a degenerate recording (nothing detectable).
+#[test]
+fn detectable_and_the_tolerance_on_unit_mixups_outliers_setups_and_degenerate_recordings() {
+    let e = &entries("nominal_stations")[0];
+    let (first, second) = halves(e);
+    let same = verify(&saved(&first, setup(e)), &second, setup(e), &options()).unwrap();
+    assert_eq!(same.verdict, Consistency::Consistent);
+    let d = same.detectable;
+    // The limit times the largest one-sigma: at least the sizes' RMS over the three axes.
+    assert!(d.rotation_deg >= same.limit_sigmas * same.sigma.rotation_deg / 3f64.sqrt());
+    assert!(d.translation >= same.limit_sigmas * same.sigma.translation / 3f64.sqrt());
+    assert!(d.rotation_deg <= same.limit_sigmas * same.sigma.rotation_deg);
+    // In millimetres against a saved X in metres: a thousand times the metres' one.
+    let mut s = saved(&first, setup(e));
+    s.unit = Some(LengthUnit::Metre);
+    let mm = in_millimetres(&second);
+    let v = verify(&s, &mm, setup(e), &options()).unwrap();
+    let ratio = v.detectable.translation / d.translation;
+    assert!((ratio - 1000.0).abs() < 100.0, "{ratio}");
+    let tight = handeye::Sizes {
+        rotation_deg: d.rotation_deg * 2.0,
+        translation: d.translation * 1e3 / 4.0,
+    };
+    let v = v.within(tight).unwrap();
+    assert_eq!(v.verdict, Consistency::Undetermined, "{}", v.message);
+    assert!(v.message.contains("within your tolerance"), "{}", v.message);
+    assert!(
+        same.clone()
+            .within(handeye::Sizes {
+                rotation_deg: -1.0,
+                translation: 1.0
+            })
+            .is_err()
+    );
+    // The other setup than the file's: refused, naming both.
+    let err = verify(
+        &saved(&first, setup(e)),
+        &second,
+        setup(e).other(),
+        &options(),
+    )
+    .unwrap_err();
+    let words = err.to_string();
+    assert!(
+        words.contains(setup(e).name()) && words.contains(setup(e).other().name()),
+        "{words}"
+    );
+    // Outliers kept: a tolerance does not make their verdict a fit.
+    for o in entries("outliers_gross") {
+        let s = SavedX {
+            x: transform_from_json(&o["x"]).unwrap(),
+            setup: Some(setup(&o)),
+            covariance: None,
+            unit: None,
+        };
+        let v = verify(&s, &poses(&o), setup(&o), &options()).unwrap();
+        assert!(v.detectable.rotation_deg > 0.0 && v.detectable.translation > 0.0);
+        let loose = handeye::Sizes {
+            rotation_deg: 1e3,
+            translation: 1e3,
+        };
+        assert_ne!(v.within(loose).unwrap().verdict, Consistency::Consistent);
+    }
+    // A recording about one joint: it cannot tell, and sees nothing.
+    let one = &entries("degenerate_single_joint")
+        .into_iter()
+        .find(|o| setup(o) == setup(e))
+        .unwrap();
+    let v = verify(
+        &saved(&first, setup(e)),
+        &poses(one),
+        setup(one),
+        &options(),
+    )
+    .unwrap();
+    assert_eq!(v.verdict, Consistency::Undetermined);
+    assert!(v.detectable.rotation_deg.is_infinite());
 }

@@ -308,7 +308,7 @@ def _point(point):
     return [float(v) for v in p]
 
 
-def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand", method=None, pairs=None, reject_outliers=False, bootstrap=40, joints=None, prior=None, fix=None):
+def verify(saved, base_from_gripper, camera_from_target, *, setup=None, method=None, pairs=None, reject_outliers=False, bootstrap=40, joints=None, prior=None, fix=None, tolerance=None):
     """Whether a saved X still fits a new recording, as ``handeye verify --x SAVED`` decides it.
     ``saved`` is the path of what ``handeye calibrate --output json`` or ``--output yaml`` wrote
     (easy_handeye2's calibration file too; metres converted to the recording's millimetres when
@@ -322,7 +322,12 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
     what to do) and ``notes``. A recording that cannot be read or solved at all raises ValueError.
     ``prior`` is ``calibrate``'s; without one, the component of X a low-DOF recording leaves free
     is taken from the saved X and the rest is checked (a note says so). ``fix`` reads the new
-    recording another way, as ``calibrate``'s (``verify --fix``)."""
+    recording another way, as ``calibrate``'s (``verify --fix``). ``setup`` is the saved file's
+    when it declares one (a different one raises ValueError naming both), else eye-in-hand.
+    ``detectable`` (``rotation_deg``, ``translation``) is the smallest change of X the recording
+    would call inconsistent; ``tolerance=(degrees, length)`` (the recording's unit, as
+    ``verify --tolerance``) makes a consistent X whose recording could not see a change of that
+    size ``undetermined``."""
     g, c = _transforms(base_from_gripper, camera_from_target)
     result = json.loads(
         _verify_report(
@@ -337,6 +342,7 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
             joints=joints,
             prior=_priors(prior),
             fix=fix,
+            tolerance=_tolerance(tolerance),
         )
     )
     result["saved"]["matrix"] = np.array(result["saved"]["matrix"], dtype=np.float64)
@@ -345,14 +351,24 @@ def verify(saved, base_from_gripper, camera_from_target, *, setup="eye-in-hand",
     return result
 
 
-def verify_on_pixels(saved, path, intrinsics, *, setup="eye-in-hand", fix=None) -> dict:
+def _tolerance(tolerance):
+    """A tolerance as two floats (degrees, length), or None."""
+    if tolerance is None:
+        return None
+    t = [float(v) for v in tolerance]
+    if len(t) != 2:
+        raise ValueError(f"tolerance: expected (degrees, length), got {tolerance!r}")
+    return (t[0], t[1])
+
+
+def verify_on_pixels(saved, path, intrinsics, *, setup=None, fix=None, tolerance=None) -> dict:
     """Whether a saved X still fits a new recording with detections, checked on its pixels as
     ``handeye verify --x SAVED PATH --intrinsics INTRINSICS`` does: the recording calibrated on
     the pixels (``calibrate_on_pixels``) and its X compared with the saved one by ``verify``'s test
     and words. The dict is ``verify``'s plus ``pixels``: ``saved_rms_px`` and ``own_rms_px`` (the
     reprojection RMS of the recording's detections with the saved X and with its own, the target's
     pose fitted to each) and ``per_frame`` (``name``, ``saved_px``, ``own_px``)."""
-    result = json.loads(_verify_pixels_report(str(saved), str(path), str(intrinsics), setup=setup, fix=fix))
+    result = json.loads(_verify_pixels_report(str(saved), str(path), str(intrinsics), setup=setup, fix=fix, tolerance=_tolerance(tolerance)))
     result["saved"]["matrix"] = np.array(result["saved"]["matrix"], dtype=np.float64)
     if isinstance(result.get("recording"), dict) and "matrix" in result["recording"]:
         result["recording"]["matrix"] = np.array(result["recording"]["matrix"], dtype=np.float64)

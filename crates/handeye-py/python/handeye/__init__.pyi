@@ -69,7 +69,7 @@ def verify(
     base_from_gripper: npt.ArrayLike,
     camera_from_target: npt.ArrayLike,
     *,
-    setup: str = "eye-in-hand",
+    setup: Optional[str] = None,
     method: Optional[str] = None,
     pairs: Optional[str] = None,
     reject_outliers: bool = False,
@@ -77,6 +77,7 @@ def verify(
     joints: Optional[Sequence[Sequence[float]]] = None,
     prior: Optional[Union[str, Sequence[str], Mapping[str, Union[float, tuple[float, float]]]]] = None,
     fix: Optional[str] = None,
+    tolerance: Optional[tuple[float, float]] = None,
 ) -> dict[str, Any]: ...
 
 def calibrate_on_pixels(
@@ -104,8 +105,9 @@ def verify_on_pixels(
     path: Union[str, "os.PathLike[str]"],
     intrinsics: Union[str, "os.PathLike[str]"],
     *,
-    setup: str = "eye-in-hand",
+    setup: Optional[str] = None,
     fix: Optional[str] = None,
+    tolerance: Optional[tuple[float, float]] = None,
 ) -> dict[str, Any]: ...
 
 def read_recording(

@@ -38,6 +38,11 @@ pub struct LowDofReport {
     /// Conditioning of the translation system that fixes X's rotation about the axis and its
     /// translation across it (1 is ideal); the report's `conditioning` gives the same.
     pub conditioning: f64,
+    /// The components of X taken from the prior, which the data cannot check (its sign
+    /// included): `["tz"]` for a SCARA.
+    pub unchecked: Vec<Component>,
+    /// Which way the free component's axis points, in words (a prior is signed along it).
+    pub direction: String,
 }
 
 /// A low-DOF recording with the prior that covers its free direction.
@@ -62,12 +67,14 @@ impl Plan {
     }
 
     /// The report's `low_dof`.
-    pub(crate) fn report(&self, conditioning: f64) -> LowDofReport {
+    pub(crate) fn report(&self, conditioning: f64, setup: Setup) -> LowDofReport {
         LowDofReport {
             axis: self.axis(),
             spread_deg: self.axis.spread.to_degrees(),
             free: self.prior.component,
             conditioning,
+            unchecked: vec![self.prior.component],
+            direction: crate::model::prior::direction_words(setup, self.prior.component),
         }
     }
 }
@@ -135,8 +142,37 @@ pub(crate) fn refusal(axis: &CommonAxis, setup: Setup, missing: LowDofMissing) -
             spread_deg: axis.spread.to_degrees(),
             setup,
             missing,
+            joints: None,
         },
         conditioning: 0.0,
+    }
+}
+
+/// A low-DOF refusal with the number of joint angles the records give (which tells a 6-axis arm
+/// from a SCARA); any other error as it is.
+pub(crate) fn with_joints(e: Error, joints: &[Vec<f64>]) -> Error {
+    match e {
+        Error::Degenerate {
+            reason:
+                Degeneracy::LowDof {
+                    axis,
+                    spread_deg,
+                    setup,
+                    missing,
+                    ..
+                },
+            conditioning,
+        } => Error::Degenerate {
+            reason: Degeneracy::LowDof {
+                axis,
+                spread_deg,
+                setup,
+                missing,
+                joints: joints.first().map(Vec::len).filter(|&n| n > 0),
+            },
+            conditioning,
+        },
+        e => e,
     }
 }
 

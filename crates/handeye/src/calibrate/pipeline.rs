@@ -35,6 +35,7 @@ use crate::calibrate::report::hand_eye::{
 use crate::calibrate::report::pixels::{CornerResidual, FrameRms, ReprojectionSummary};
 use crate::calibrate::report::robot_world::{PoseResidualSummary, RobotWorldReport, TargetReport};
 use crate::check::holdout::{HeldOutCheck, leave_one_out};
+use crate::check::order::order_change;
 use crate::check::outliers::{PoseOutliers, PoseResiduals, translation_scale, working_distance};
 use crate::check::quality::quality_report;
 use crate::check::systematic::{Systematic, systematic_test, widened_for_systematic};
@@ -102,9 +103,9 @@ pub fn calibrate<'a>(
     options: &Options,
 ) -> Result<Report> {
     match (input.into(), options.problem) {
-        (Input::Poses(poses), Problem::HandEye(_)) => {
-            hand_eye_on_poses(poses, setup, options).map(Report::HandEye)
-        }
+        (Input::Poses(poses), Problem::HandEye(_)) => hand_eye_on_poses(poses, setup, options)
+            .map(Report::HandEye)
+            .map_err(|e| with_shifted_pairing(e, poses, setup, options)),
         (Input::Poses(poses), Problem::RobotWorld(method)) => {
             robot_world_on_poses(poses, setup, options, method).map(Report::RobotWorld)
         }
@@ -112,6 +113,80 @@ pub fn calibrate<'a>(
             on_pixels(frames, camera, setup, options, problem)
         }
     }
+}
+
+/// A refusal of the motions (degenerate, undetermined) led by a pairing off by a record, where
+/// the camera poses shifted by one or two records fit far better ([`shifted_pairing`]).
+fn with_shifted_pairing(e: Error, poses: &[PosePair], setup: Setup, options: &Options) -> Error {
+    let of_motions = match &e {
+        Error::Degenerate { .. } => true,
+        Error::Untrusted { refusal, .. } => refusal
+            .as_deref()
+            .is_some_and(|r| matches!(r, Error::Degenerate { .. })),
+        _ => false,
+    };
+    if !of_motions {
+        return e;
+    }
+    let Some(shifted) = shifted_pairing(poses, setup, options) else {
+        return e;
+    };
+    match e {
+        Error::Untrusted { refusal, mut why } => {
+            why.insert(0, shifted);
+            Error::Untrusted { refusal, why }
+        }
+        e => Error::Untrusted {
+            refusal: Some(Box::new(e)),
+            why: vec![shifted],
+        },
+    }
+}
+
+/// How much smaller the median rotation residual of a shifted pairing must be than as paired.
+const SHIFT_BETTER: f64 = 5.0;
+
+/// The shift of the camera records (±1, ±2) under which the hand–eye calibration answers and the
+/// median rotation residual is [`SHIFT_BETTER`] times smaller than as paired, if any: the best.
+fn shifted_pairing(poses: &[PosePair], setup: Setup, options: &Options) -> Option<Warning> {
+    let residual =
+        |p: &[PosePair], x: &Transform| PoseResiduals::at(p, setup, x).median_rotation_deg();
+    let given = options
+        .solve(poses, setup)
+        .map_or(f64::INFINITY, |c| residual(poses, &c.x));
+    [1i64, -1, 2, -2]
+        .into_iter()
+        .filter_map(|shift| {
+            let n = poses.len();
+            let s = shift.unsigned_abs() as usize;
+            if n < s + 3 {
+                return None;
+            }
+            // Robot record i with camera record i + shift, named by the robot's record.
+            let robot = if shift > 0 { 0..n - s } else { s..n };
+            let shifted: Vec<PosePair> = robot
+                .clone()
+                .map(|i| PosePair {
+                    camera_from_target: poses[(i as i64 + shift) as usize].camera_from_target,
+                    ..poses[i]
+                })
+                .collect();
+            let names = robot.map(|i| pose_name(options, i)).collect();
+            let shifted_options = Options {
+                pose_names: names,
+                joints: Vec::new(),
+                ..options.clone()
+            };
+            let report = hand_eye_on_poses(&shifted, setup, &shifted_options).ok()?;
+            let r = residual(&shifted, &report.transform);
+            (r * SHIFT_BETTER < given).then_some((shift, r))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(shift, r)| Warning::ShiftedPairing {
+            shift,
+            residual_deg: r,
+            given_residual_deg: given,
+        })
 }
 
 /// The pose pairs as the first steps left them (the reading, the outliers), for every problem.
@@ -190,7 +265,9 @@ fn plan_of(
     (pairing, lacking): (Pairing, &Options),
     name_outliers: bool,
 ) -> Result<Option<Plan>> {
-    match low_dof::plan(&read.used, setup, pairing, &read.options.priors) {
+    let plan = low_dof::plan(&read.used, setup, pairing, &read.options.priors)
+        .map_err(|e| low_dof::with_joints(e, &read.options.joints));
+    match plan {
         Err(e) if low_dof::wants_prior(&e).is_some() => {
             Err(first_what_motions_lack(poses, setup, lacking, e))
         }
@@ -223,6 +300,29 @@ fn systematic_of(
         solve_x,
         scene,
     )
+}
+
+/// A change of X over the recording's order (`check::order`), worded: where (the first pose
+/// after it, by its name), X before and after, their difference with its one-sigma.
+fn order_change_of(
+    read: &Read,
+    setup: Setup,
+    x: &Transform,
+    solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
+    scene: f64,
+) -> Option<Warning> {
+    let found = order_change(&read.used, setup, x, solve_x, scene).filter(|c| c.flagged)?;
+    Some(Warning::OrderChange {
+        first: pose_name(&read.options, *read.kept.get(found.at)?),
+        poses: [found.at, read.used.len() - found.at],
+        before: Box::new((&found.before?).into()),
+        after: Box::new((&found.after?).into()),
+        rotation_deg: found.rotation_deg,
+        translation: found.translation,
+        rotation_sigma_deg: found.sigma_rotation_deg,
+        translation_sigma: found.sigma_translation,
+        p_value: found.p_value,
+    })
 }
 
 /// What the hand–eye problem's solve and checks found, before the words.
@@ -289,6 +389,7 @@ pub(crate) fn hand_eye_on_poses(
         },
     );
     let systematic = systematic_of(&read, setup, &calibration.x, &solve_x, scene);
+    let change = order_change_of(&read, setup, &calibration.x, &solve_x, scene);
     // The motions' part is judged on its own: a low-DOF recording by what it determines (the
     // prior's sigma is the user's to give), any other by every check of the motions.
     let explain = |e| explained(e, &warnings, read.kept_outliers.as_ref());
@@ -309,6 +410,9 @@ pub(crate) fn hand_eye_on_poses(
         &solve_x,
         (options.replicates, scene),
     );
+    // A change over the order is named before an error that follows the configuration: a slip
+    // leaves residuals that the configuration seems to explain too.
+    warnings.extend(change);
     warnings.extend(caution);
     let point = options.point.unwrap_or_else(|| median_target(used));
     uncertainty.at_point = Some(uncertainty.place(&calibration.x, point));
@@ -413,7 +517,7 @@ fn hand_eye_report(
         held_out,
         systematic,
         prior,
-        low_dof: plan.map(|p| p.report(calibration.conditioning)),
+        low_dof: plan.map(|p| p.report(calibration.conditioning, setup)),
         reprojection: None,
     }
 }
@@ -472,6 +576,7 @@ fn robot_world_on_poses(
     // As in the hand–eye calibration: the test waits for kept outliers, and a flagged result's
     // uncertainty is resampled by workspace region and covers the halves' disagreement.
     let systematic = systematic_of(&read, setup, &solved.x, &solve_x, scene);
+    let change = order_change_of(&read, setup, &solved.x, &solve_x, scene);
     let (x_unc, systematic_found) = widened_for_systematic(
         x_unc,
         systematic.as_ref(),
@@ -490,6 +595,7 @@ fn robot_world_on_poses(
             })
             .map_err(explain)?;
     }
+    warnings.extend(change);
     warnings.extend(systematic_found);
     warnings.extend(solved.warnings.iter().cloned());
     warn_weak(&x_unc, setup, plan.as_ref().map(Plan::axis), &mut warnings);
@@ -499,7 +605,7 @@ fn robot_world_on_poses(
     };
     low_dof::check_determined(&options.priors, &prior, &solved.x, &x_unc, &mut warnings);
     let residual = PoseResidualSummary::of(pose_residuals(used, setup, &solved.x, &solved.target));
-    let low_dof = plan.map(|p| p.report(solved.conditioning));
+    let low_dof = plan.map(|p| p.report(solved.conditioning, setup));
     let mut report = robot_world_report(read, warnings, setup, (solved, x_unc, y_unc), residual);
     report.method = method;
     report.systematic = systematic;

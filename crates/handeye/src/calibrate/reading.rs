@@ -77,6 +77,7 @@ pub(crate) fn choose_reading(
         }
         _ => Err(Error::Misread {
             finding,
+            fit: check.fit_words().unwrap_or_default(),
             readings: check.fitting_better(),
             setup,
             other_setup: check.other_setup(setup),

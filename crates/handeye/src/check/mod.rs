@@ -3,6 +3,7 @@
 
 pub mod holdout;
 pub mod identification;
+pub mod order;
 pub mod outliers;
 pub mod precision;
 pub mod quality;

@@ -148,7 +148,7 @@ impl ReadingCheck {
     /// The finding in words, when a reading fits far better: what fits, how well, and the other
     /// readings that fit as well (no face's spelling of the fix: see [`ReadingCheck::advice`]).
     pub fn finding(&self, setup: Setup) -> Option<String> {
-        let (given, better) = (self.as_given?, self.better?);
+        let better = self.better?;
         let meaning = |r: Reading| {
             if self.frames {
                 r.meaning_in_frames(setup)
@@ -157,12 +157,9 @@ impl ReadingCheck {
             }
         };
         let mut text = format!(
-            "the poses fit far better read as {} (median residual {:.2}° and {:.1}% of the motion range, against {:.2}° and {:.1}% as given)",
+            "the poses fit far better read as {} ({})",
             meaning(better.reading),
-            better.rotation_deg,
-            100.0 * better.translation_rel,
-            given.rotation_deg,
-            100.0 * given.translation_rel,
+            self.fit_words()?
         );
         for other in &self.also {
             text.push_str(&format!(
@@ -184,11 +181,25 @@ impl ReadingCheck {
         Some(text)
     }
 
+    /// How much better the better reading fits, in numbers: "median residual 0.17° and 0.4% of
+    /// the motion range, against 29.45° and 15.0% as given".
+    pub fn fit_words(&self) -> Option<String> {
+        let (given, better) = (self.as_given?, self.better?);
+        Some(format!(
+            "median residual {:.2}° and {:.1}% of the motion range, against {:.2}° and {:.1}% as given",
+            better.rotation_deg,
+            100.0 * better.translation_rel,
+            given.rotation_deg,
+            100.0 * given.translation_rel,
+        ))
+    }
+
     /// The refusal of the input as given when a reading fits far better
     /// ([`crate::model::error::Error::Misread`]): the finding and the readings, typed.
     pub fn misread(&self, setup: Setup) -> Option<Error> {
         Some(Error::Misread {
             finding: self.finding(setup)?,
+            fit: self.fit_words()?,
             readings: self.fitting_better(),
             setup,
             other_setup: self.other_setup(setup),
@@ -215,6 +226,7 @@ impl ReadingCheck {
     pub fn advice(&self, setup: Setup) -> Option<String> {
         Some(misread_advice(
             &self.finding(setup)?,
+            &self.fit_words()?,
             &self.fitting_better(),
             &setup,
             &self.other_setup(setup),

@@ -8,7 +8,7 @@ use crate::io::jsonl::parse_frame_record;
 use crate::io::lines::Lines;
 use crate::io::parse_error;
 use crate::model::camera::Frame;
-use crate::model::error::{Error, Result};
+use crate::model::error::Result;
 
 /// The frames of a recording on the pixels, with the line of each.
 #[derive(Debug, Clone, PartialEq)]
@@ -20,18 +20,14 @@ pub struct FrameSeries {
 }
 
 /// Reads the frames of a JSON Lines file (`-` for standard input); blank lines and `#` comments
-/// are skipped. The first bad record ends the reading with its [`Error::Parse`] (file, line,
+/// are skipped. The first bad record ends the reading with its [`Error::Parse`](crate::Error::Parse) (file, line,
 /// field): a calibration on a recording with a bad record is refused, not made without it.
 pub fn read_frames(path: &Path) -> Result<FrameSeries> {
     let source = path.display().to_string();
     if source == "-" {
         return frames_of(std::io::stdin().lock(), &source);
     }
-    let file = std::fs::File::open(path).map_err(|e| Error::Io {
-        file: source.clone(),
-        source: e,
-    })?;
-    frames_of(std::io::BufReader::new(file), &source)
+    frames_of(crate::io::open(path)?, &source)
 }
 
 /// [`read_frames`] on any input, named `source` in messages.
@@ -81,6 +77,7 @@ pub(crate) fn frame_records<R: BufRead>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::error::Error;
 
     const Q: &str =
         r#""base_from_gripper": {"translation": [0.1, 0, 0.3], "quaternion_xyzw": [0, 0, 0, 1]}"#;

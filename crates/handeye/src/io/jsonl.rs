@@ -170,11 +170,28 @@ pub fn parse_pose_line(text: &str, source: &str, line: usize) -> Result<StampedP
     }
 }
 
+/// The words of a JSON syntax error on a one-line record: a `NaN` or `Infinity` where it stopped
+/// (Python's `json.dumps` writes them, JSON has no such number) is named as itself.
+pub(crate) fn malformed(text: &str, e: &serde_json::Error) -> String {
+    let at = text.get(e.column().saturating_sub(1)..).unwrap_or("");
+    let word = ["NaN", "-NaN", "Infinity", "-Infinity"]
+        .into_iter()
+        .filter(|w| at.starts_with(w))
+        .max_by_key(|w| w.len());
+    match word {
+        Some(w) => format!(
+            "{w} at column {}: a number that is not finite (JSON has no {w}; a pose with one cannot be solved)",
+            e.column()
+        ),
+        None => format!("malformed JSON: {e}"),
+    }
+}
+
 /// One JSON Lines record as an object: malformed JSON, another value, or a key given twice is
 /// refused with the line (and the repeated key's path).
 fn json_object(text: &str, source: &str, line: usize) -> Result<Map<String, Value>> {
     let value: Value = serde_json::from_str(text)
-        .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
+        .map_err(|e| parse_error(source, line, "-", malformed(text, &e)))?;
     let Value::Object(object) = value else {
         return Err(parse_error(
             source,
@@ -261,7 +278,7 @@ pub fn read_joints(text: &str, source: &str) -> Result<Option<Vec<Vec<f64>>>> {
             continue;
         }
         let value: Value = serde_json::from_str(trimmed)
-            .map_err(|e| parse_error(source, line, "-", format!("malformed JSON: {e}")))?;
+            .map_err(|e| parse_error(source, line, "-", malformed(trimmed, &e)))?;
         joints.push((line, Some(joint_angles(&value["joints"], source, line)?)));
     }
     if joints.iter().all(|(_, q)| q.is_none()) {

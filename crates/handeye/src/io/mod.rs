@@ -169,6 +169,7 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
     };
     let meta = std::fs::metadata(path).map_err(io_error)?;
     whole_file_kind(&meta, &file)?;
+    not_empty(&meta, &file)?;
     File::open(path)
         .map_err(io_error)
         .and_then(|f| read_whole(f, &file))
@@ -286,12 +287,25 @@ pub(crate) fn utf16(head: &[u8], file: &str) -> Option<Error> {
     ))
 }
 
-/// Opens a file for reading, naming it in the error.
+/// Opens a file for reading, naming it in the error; an empty regular file is refused as such.
 pub(crate) fn open(path: &Path) -> Result<BufReader<File>> {
-    File::open(path).map(BufReader::new).map_err(|e| Error::Io {
-        file: path.display().to_string(),
+    let file = path.display().to_string();
+    let io_error = |e| Error::Io {
+        file: file.clone(),
         source: e,
-    })
+    };
+    let opened = File::open(path).map_err(io_error)?;
+    not_empty(&opened.metadata().map_err(io_error)?, &file)?;
+    Ok(BufReader::new(opened))
+}
+
+/// An empty regular file is refused before it is read: "FILE: the file is empty" (a pipe's size
+/// says nothing, and is read).
+fn not_empty(meta: &std::fs::Metadata, file: &str) -> Result<()> {
+    if meta.is_file() && meta.len() == 0 {
+        return Err(parse_error(file, 0, "-", "the file is empty"));
+    }
+    Ok(())
 }
 
 /// An input whose head was read to tell its format, and is read again before the rest.

@@ -63,7 +63,28 @@ fn parse_json(text: &str, file: &str) -> Result<SavedX> {
             ),
         )
     })?;
-    let setup = match value.get("setup") {
+    let setup = json_setup(&value, text, file)?;
+    let covariance = match value.get("uncertainty").and_then(|u| u.get("covariance")) {
+        None => None,
+        Some(c) => Some(covariance(c).map_err(|(field, message)| {
+            let field = format!("uncertainty.covariance{field}");
+            parse_error(file, line(&field), field, message)
+        })?),
+    };
+    Ok(SavedX {
+        x,
+        setup,
+        covariance,
+        unit: None,
+    })
+}
+
+/// The setup a saved JSON declares: its `setup` (`eye-in-hand` or `eye-to-hand`) or its `frame`
+/// (X's frame name: `gripper_from_camera` or `base_from_camera`, as `calibrate --output json`
+/// writes both); the two must agree.
+fn json_setup(value: &Value, text: &str, file: &str) -> Result<Option<Setup>> {
+    let line = |field: &str| line_of_field(text, field);
+    let named = match value.get("setup") {
         None => None,
         Some(Value::String(s)) => Some(
             s.parse::<Setup>()
@@ -78,19 +99,39 @@ fn parse_json(text: &str, file: &str) -> Result<SavedX> {
             ));
         }
     };
-    let covariance = match value.get("uncertainty").and_then(|u| u.get("covariance")) {
+    let framed = match value.get("frame") {
         None => None,
-        Some(c) => Some(covariance(c).map_err(|(field, message)| {
-            let field = format!("uncertainty.covariance{field}");
-            parse_error(file, line(&field), field, message)
-        })?),
+        Some(frame) => Some(
+            [Setup::EyeInHand, Setup::EyeToHand]
+                .into_iter()
+                .find(|s| frame.as_str() == Some(s.x_frame()))
+                .ok_or_else(|| {
+                    parse_error(
+                        file,
+                        line("frame"),
+                        "frame",
+                        format!(
+                            "`{}`: expected X's frame, gripper_from_camera (eye-in-hand) or base_from_camera (eye-to-hand)",
+                            frame.as_str().map_or_else(|| frame.to_string(), str::to_string)
+                        ),
+                    )
+                })?,
+        ),
     };
-    Ok(SavedX {
-        x,
-        setup,
-        covariance,
-        unit: None,
-    })
+    match (named, framed) {
+        (Some(a), Some(b)) if a != b => Err(parse_error(
+            file,
+            line("frame"),
+            "frame",
+            format!(
+                "`{}` is X of {}, but `setup` says {}",
+                b.x_frame(),
+                b.name(),
+                a.name()
+            ),
+        )),
+        (a, b) => Ok(a.or(b)),
+    }
 }
 
 /// A 6×6 covariance: finite, symmetric, with a non-negative diagonal.
@@ -154,7 +195,10 @@ fn parse_yaml(text: &str, file: &str) -> Result<SavedX> {
     }
     let tree = YamlTree::parse(text, file)?;
     let x = yaml_transform(&tree, "transform", file)?;
-    let setup = declared_setup(&tree, file)?.map(|d| d.setup);
+    let setup = match declared_setup(&tree, file)? {
+        Some(d) => Some(d.setup),
+        None => eye_on_hand(&tree, file)?,
+    };
     let covariance = sigma.map(|(rotation_deg, translation)| {
         let mut c = [[0.0; 6]; 6];
         for (i, row) in c.iter_mut().enumerate() {
@@ -172,6 +216,23 @@ fn parse_yaml(text: &str, file: &str) -> Result<SavedX> {
         covariance,
         unit,
     })
+}
+
+/// easy_handeye's (ROS 1) `parameters.eye_on_hand: true|false`, when there.
+fn eye_on_hand(tree: &YamlTree, file: &str) -> Result<Option<Setup>> {
+    let Some((value, line)) = tree.text("parameters.eye_on_hand") else {
+        return Ok(None);
+    };
+    match value.trim() {
+        "true" | "True" => Ok(Some(Setup::EyeInHand)),
+        "false" | "False" => Ok(Some(Setup::EyeToHand)),
+        other => Err(parse_error(
+            file,
+            line,
+            "parameters.eye_on_hand",
+            format!("`{other}`: expected true (eye-in-hand) or false (eye-on-base)"),
+        )),
+    }
 }
 
 /// `rotation_deg R, translation T[ m]` → (R, T), `None` when not so.
@@ -225,5 +286,55 @@ mod tests {
             place(&block.replace("eye_on_base", "eye_on_wrist")),
             (2, "parameters.calibration_type".to_string())
         );
+        let ros1 = flow.replace("transform:", "parameters: {eye_on_hand: false}\ntransform:");
+        assert_eq!(
+            parse_saved_x(&ros1, "d.yaml").unwrap().setup,
+            Some(Setup::EyeToHand)
+        );
+        assert_eq!(
+            place(&ros1.replace("false", "maybe")),
+            (1, "parameters.eye_on_hand".to_string())
+        );
+    }
+
+    #[test]
+    fn a_saved_json_declares_its_setup_by_setup_or_by_frame_and_they_must_agree() {
+        let x = r#""matrix": [[1,0,0,0.1],[0,1,0,0],[0,0,1,0.05],[0,0,0,1]]"#;
+        let json = |fields: &str| format!("{{{fields},\n{x}}}");
+        let setup = |text: &str| parse_saved_x(text, "x.json").map(|s| s.setup);
+        assert_eq!(
+            setup(&json(r#""frame": "base_from_camera""#)).unwrap(),
+            Some(Setup::EyeToHand)
+        );
+        assert_eq!(
+            setup(&json(r#""frame": "gripper_from_camera""#)).unwrap(),
+            Some(Setup::EyeInHand)
+        );
+        assert_eq!(
+            setup(&json(r#""setup": "eye-to-hand""#)).unwrap(),
+            Some(Setup::EyeToHand)
+        );
+        assert_eq!(setup(&format!("{{{x}}}")).unwrap(), None);
+        match setup(&json(
+            "\"setup\": \"eye-in-hand\",\n\"frame\": \"base_from_camera\"",
+        )) {
+            Err(Error::Parse {
+                line,
+                field,
+                message,
+                ..
+            }) => {
+                assert_eq!((line, field.as_str()), (2, "frame"));
+                assert!(
+                    message.contains("eye-to-hand") && message.contains("eye-in-hand"),
+                    "{message}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+        match setup(&json(r#""frame": "camera_from_gripper""#)) {
+            Err(Error::Parse { field, .. }) => assert_eq!(field, "frame"),
+            other => panic!("{other:?}"),
+        }
     }
 }

@@ -62,6 +62,10 @@ impl PoseSeries {
     }
 }
 
+/// The least deviation from orthonormality a note names ([`Projections::note`]): rounding to 6
+/// decimals (about 1e-6) is worth saying, to 10 is not.
+pub const NOTED_DEVIATION: f64 = 1e-6;
+
 /// The rotation matrices of one input that were orthonormal only to the precision they were
 /// printed with (between `KEEP_AS_GIVEN_TOL` and
 /// `ORTHONORMAL_TOL`) and were projected onto the nearest rotation.
@@ -93,7 +97,9 @@ impl Projections {
     /// );
     /// ```
     pub fn note(&self) -> Option<String> {
-        (self.count > 0).then(|| {
+        // Matrices orthonormal to 1e-10 (printed with 10 digits) are projected without a word:
+        // a note on them is noise.
+        (self.count > 0 && self.largest_deviation > NOTED_DEVIATION).then(|| {
             format!(
                 "{} rotation {} orthonormal only to {:.0e} (rounded when printed): projected onto the nearest rotation",
                 self.count,

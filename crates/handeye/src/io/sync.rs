@@ -386,6 +386,41 @@ pub struct FoundOffset {
     pub sigma: f64,
     /// The angular speeds' correlation, before refinement.
     pub correlated: OffsetEstimate,
+    /// How well the poses paired at `offset` agree on one X: the RMS of their per-pose rotation
+    /// residuals over the best 80% of them, degrees (infinite when they cannot be solved). Above
+    /// [`OFFSET_AGREEMENT_DEG`] the search failed ([`FoundOffset::failed`]).
+    pub agreement_deg: f64,
+}
+
+/// The largest [`FoundOffset::agreement_deg`] of an offset found. The repository's 17 streams
+/// (kinhec's 15, ethz-asl's 2) agree to 0.14–2.4° at the offset found (2.4° with planar flips
+/// among the poses); offsets of 1.5, ±3 and 10 s outside the ±1 s searched left 13.4–28.3° on
+/// three of them (docs/DECISIONS.md, "A clock offset not found is a refusal").
+pub const OFFSET_AGREEMENT_DEG: f64 = 6.0;
+
+impl FoundOffset {
+    /// Whether the search failed: no offset searched pairs the poses into an agreement on one X,
+    /// or the best lies at the edge of the offsets searched, beyond which the best may lie (the
+    /// clocks differ by more than the ±1 s searched, or the streams are not of one motion).
+    pub fn failed(&self) -> bool {
+        offset_failed(self.offset, self.agreement_deg)
+    }
+}
+
+/// [`FoundOffset::failed`] of an offset and its agreement: above [`OFFSET_AGREEMENT_DEG`], or at
+/// least 95% of the default search's ±1 s (offsets of 1.5 s and more, refined, landed at
+/// 1.015–1.043 s on ethz-asl's streams; the repository's streams are found within 0.1 s).
+pub fn offset_failed(offset: f64, agreement_deg: f64) -> bool {
+    // Written so that a NaN fails: a comparison with NaN is false.
+    let agrees = agreement_deg <= OFFSET_AGREEMENT_DEG;
+    !agrees || at_search_edge(offset)
+}
+
+/// Whether an offset found lies at the edge of the default search's ±1 s (within 5 % of it, or
+/// not a number), beyond which the best may lie.
+pub fn at_search_edge(offset: f64) -> bool {
+    let inside = offset.abs() < 0.95 * OffsetOptions::default().max_offset;
+    !inside
 }
 
 /// The clock offset of two streams (camera − robot, seconds) and its sigma: the angular speeds'
@@ -421,10 +456,16 @@ pub fn find_time_offset(
         search.max_offset,
         max_gap,
     );
+    // The pairing at the offset found, fitted once: its cost is the agreement, and the centre of
+    // the parabola the sigma is read from.
+    let at = offset_fit(robot, camera, setup, offset, max_gap);
     Ok(FoundOffset {
         offset,
-        sigma: time_offset_sigma(robot, camera, setup, offset, max_gap),
+        sigma: at.map_or(f64::INFINITY, |at| {
+            sigma_at(robot, camera, setup, (offset, at), max_gap)
+        }),
         correlated,
+        agreement_deg: at.map_or(f64::INFINITY, |(cost, _)| cost.sqrt().to_degrees()),
     })
 }
 
@@ -444,19 +485,35 @@ pub fn time_offset_sigma(
     offset: f64,
     max_gap: f64,
 ) -> f64 {
+    offset_fit(robot, camera, setup, offset, max_gap).map_or(f64::INFINITY, |at| {
+        sigma_at(robot, camera, setup, (offset, at), max_gap)
+    })
+}
+
+/// [`time_offset_sigma`] with the fit at the offset, `(cost, poses kept)`, given.
+fn sigma_at(
+    robot: &[StampedPose],
+    camera: &[StampedPose],
+    setup: crate::model::motion::Setup,
+    (offset, (c0, kept)): (f64, (f64, usize)),
+    max_gap: f64,
+) -> f64 {
     let period = median_period(camera);
-    let Some((c0, kept)) = offset_fit(robot, camera, setup, offset, max_gap) else {
-        return f64::INFINITY;
-    };
     if !(period.is_finite() && period > 0.0) {
         return f64::INFINITY;
     }
-    // Least-squares parabola C(o + d) ≈ a + b d + c d² over symmetric points d_k.
+    // Least-squares parabola C(o + d) ≈ a + b d + c d² over symmetric points d_k (the middle
+    // one the fit given).
     const POINTS: usize = 9;
     let half = 0.5 * period;
     let samples: Vec<(f64, f64)> = (0..POINTS)
-        .map(|k| -half + 2.0 * half * k as f64 / (POINTS - 1) as f64)
-        .filter_map(|d| offset_fit(robot, camera, setup, offset + d, max_gap).map(|(c, _)| (d, c)))
+        .filter_map(|k| {
+            if k == POINTS / 2 {
+                return Some((0.0, c0));
+            }
+            let d = -half + 2.0 * half * k as f64 / (POINTS - 1) as f64;
+            offset_fit(robot, camera, setup, offset + d, max_gap).map(|(c, _)| (d, c))
+        })
         .collect();
     if samples.len() < 5 {
         return f64::INFINITY;

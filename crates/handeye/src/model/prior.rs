@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::model::error::{Error, Result};
+use crate::model::motion::Setup;
 
 /// A prior on a coordinate component of X's translation can state the free direction of a
 /// low-DOF robot only when that direction is within this many degrees of the coordinate axis.
@@ -70,6 +71,13 @@ impl LengthUnit {
         }
     }
 
+    /// The unit of a suffix, `m` or `mm` ([`LengthUnit::suffix`]'s inverse).
+    pub fn from_suffix(suffix: &str) -> Option<Self> {
+        [Self::Metre, Self::Millimetre]
+            .into_iter()
+            .find(|u| u.suffix() == suffix)
+    }
+
     /// Metres per this unit.
     pub fn metres(self) -> f64 {
         match self {
@@ -106,6 +114,23 @@ pub struct PriorValue {
 
 /// The components of X that came from a prior, by name.
 pub type PriorsUsed = BTreeMap<String, PriorValue>;
+
+/// Which way a component of X's translation points, in words: the positive direction of its axis
+/// in X's parent frame (the gripper's eye-in-hand, the robot base's eye-to-hand), as a prior on it
+/// is to be signed.
+pub fn direction_words(setup: Setup, component: Component) -> String {
+    let axis = ["x", "y", "z"][component.index()];
+    match (setup, component) {
+        (Setup::EyeInHand, Component::Tz) => {
+            "the gripper frame's +z (for a flange frame, out of the flange towards the tool)".into()
+        }
+        (Setup::EyeToHand, Component::Tz) => {
+            "the robot base's +z (up, for a robot standing on the floor)".into()
+        }
+        (Setup::EyeInHand, _) => format!("the gripper frame's +{axis}"),
+        (Setup::EyeToHand, _) => format!("the robot base's +{axis}"),
+    }
+}
 
 impl Prior {
     /// Checks the numbers: finite value, finite non-negative sigma.

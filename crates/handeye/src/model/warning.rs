@@ -123,6 +123,41 @@ pub enum Warning {
         /// The setup.
         setup: Setup,
     },
+    /// Said with a refusal: the camera poses fit far better paired with the robot pose `shift`
+    /// records away (camera record i + shift with robot record i), and so paired X is determined:
+    /// the motions are fine, the pairing is off (an export or a time pairing off by a record).
+    ShiftedPairing {
+        /// The shift of the camera records that fits, in records (+1: each robot pose with the
+        /// next record's camera pose).
+        shift: i64,
+        /// The median rotation residual so paired, degrees.
+        residual_deg: f64,
+        /// The same as paired in the input.
+        given_residual_deg: f64,
+    },
+    /// X changed over the recording's order (`check::order`): the poses from `first` on agree with
+    /// another X than those before it, beyond what the noise allows: the camera slipped on its
+    /// mount, or the target was bumped, during the recording. The X of the whole is neither.
+    OrderChange {
+        /// The first pose after the change, by its name (`file:line`).
+        first: String,
+        /// Poses before it and from it on.
+        poses: [usize; 2],
+        /// X of the poses before the change.
+        before: Box<crate::model::pose::TransformJson>,
+        /// X of the poses from the change on.
+        after: Box<crate::model::pose::TransformJson>,
+        /// The angle between the two, degrees.
+        rotation_deg: f64,
+        /// The distance between their translations, input units.
+        translation: f64,
+        /// The one-sigma of the angle (the two sides' bootstraps in quadrature), degrees.
+        rotation_sigma_deg: f64,
+        /// The one-sigma of the distance, input units.
+        translation_sigma: f64,
+        /// The share of random orders of the poses whose residuals change as sharply.
+        p_value: f64,
+    },
     /// The residuals follow the robot's configuration: an error of the robot's kinematic model,
     /// the TCP or flange offset, or the camera's intrinsics, which more poses do not average out.
     SystematicError {
@@ -289,11 +324,19 @@ impl Warning {
             Self::KeptAsGiven { .. } => "kept_as_given",
             Self::SwappedSizes { .. } => "swapped_sizes",
             Self::SystematicError { .. } => "systematic_error",
+            Self::OrderChange { .. } => "order_change",
+            Self::ShiftedPairing { .. } => "shifted_pairing",
             Self::ReadingsAlike { .. } => "readings_alike",
             Self::PriorDisagrees { .. } => "prior_disagrees",
             Self::IntrinsicsDisagree { .. } => "intrinsics_disagree",
             Self::DistortionDisagrees { .. } => "distortion_disagrees",
         }
+    }
+
+    /// Whether a refusal names it first: a fault of the input one option fixes, or a pairing off
+    /// by a record; what the motions lack comes after it.
+    pub fn leads(&self) -> bool {
+        self.remedy().is_some() || matches!(self, Self::ShiftedPairing { .. })
     }
 
     /// The option that would fix it, if one would.
@@ -463,6 +506,47 @@ impl fmt::Display for Warning {
                     100.0 * fit[1],
                     given[0],
                     100.0 * given[1],
+                )
+            }
+            Self::ShiftedPairing {
+                shift,
+                residual_deg,
+                given_residual_deg,
+            } => {
+                let n = shift.unsigned_abs();
+                let records = if n == 1 {
+                    "one record".to_string()
+                } else {
+                    format!("{n} records")
+                };
+                let way = if *shift > 0 { "after" } else { "before" };
+                write!(
+                    f,
+                    "the camera poses look shifted by {records}: each robot pose fits the camera pose {records} {way} its own (median rotation residual {residual_deg:.2}° against {given_residual_deg:.2}° as paired), and so paired the motions determine X: the motions are fine, the pairing is not; pair each camera pose with its own robot pose (check the export or the time stamps)"
+                )
+            }
+            Self::OrderChange {
+                first,
+                poses,
+                before,
+                after,
+                rotation_deg,
+                translation,
+                rotation_sigma_deg,
+                translation_sigma,
+                p_value,
+            } => {
+                let angle = |q: &[f64; 4]| 2.0 * q[3].clamp(-1.0, 1.0).acos().to_degrees();
+                let t = |v: &[f64; 3]| format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2]);
+                write!(
+                    f,
+                    "X changed during the recording, from {first} on (the {} poses before it and the {} from it on agree with two X {rotation_deg:.2}° ± {rotation_sigma_deg:.2}° and {translation:.4} ± {translation_sigma:.4} (input unit) apart; p = {p_value:.1e} over random orders): the camera most likely moved on its mount there (or the target was bumped); X before: translation {}, rotation {:.2}°; from {first} on: translation {}, rotation {:.2}°; the X of the whole recording is neither: calibrate the poses after the change alone (or record again with the camera fixed)",
+                    poses[0],
+                    poses[1],
+                    t(&before.translation),
+                    angle(&before.quaternion_xyzw),
+                    t(&after.translation),
+                    angle(&after.quaternion_xyzw),
                 )
             }
             Self::SystematicError {
@@ -660,6 +744,22 @@ mod tests {
                 given: [0.18, 0.010],
                 frames: true,
                 setup: Setup::EyeInHand,
+            },
+            Warning::ShiftedPairing {
+                shift: 1,
+                residual_deg: 0.1,
+                given_residual_deg: 9.0,
+            },
+            Warning::OrderChange {
+                first: "a.jsonl:22".into(),
+                poses: [21, 19],
+                before: Box::new((&crate::model::pose::Transform::identity()).into()),
+                after: Box::new((&crate::model::pose::Transform::identity()).into()),
+                rotation_deg: 1.0,
+                translation: 0.004,
+                rotation_sigma_deg: 0.1,
+                translation_sigma: 0.001,
+                p_value: 5e-4,
             },
             Warning::SystematicError {
                 p_value: 1e-5,

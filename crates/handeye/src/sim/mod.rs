@@ -100,6 +100,25 @@ impl SimConfig {
 
 pub use series::SimSeries;
 
+/// `poses` as they are when the camera slipped on its mount at pose `at` (from 0; 0 for a camera
+/// moved before the recording): X becomes X·`slip`, so from then on each `camera_from_target` is
+/// `slip⁻¹ · camera_from_target` (the target stays where it was), in either setup.
+pub fn slipped(poses: &[PosePair], at: usize, slip: &Transform) -> Vec<PosePair> {
+    let moved = slip.inverse();
+    poses
+        .iter()
+        .enumerate()
+        .map(|(i, p)| PosePair {
+            camera_from_target: if i >= at {
+                moved * p.camera_from_target
+            } else {
+                p.camera_from_target
+            },
+            ..*p
+        })
+        .collect()
+}
+
 mod series {
     use serde::{Deserialize, Serialize};
 

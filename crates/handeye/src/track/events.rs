@@ -383,6 +383,7 @@ impl fmt::Display for Pending {
                     Some(c) => crate::model::error::LowDofMissing::Prior(*c),
                     None => crate::model::error::LowDofMissing::NotStatable,
                 },
+                None,
             )),
             Self::ReadingsUnchecked => write!(
                 f,
@@ -398,6 +399,7 @@ impl fmt::Display for Pending {
                     "the poses fit far better read as {}",
                     reading.meaning_in_frames(*setup)
                 ),
+                "",
                 &[*reading],
                 setup,
                 other_setup,
@@ -428,8 +430,8 @@ impl fmt::Display for Pending {
                 ..
             } => write!(
                 f,
-                "the poses fit far better read as {}, and as well read the other way round: if the camera is {}, pass `--setup {}`; if it is {}, correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",
-                reading.meaning(*setup),
+                "the poses look like a recording of the {} setup: if the camera is {}, pass `--setup {}`; if it is {}, its camera poses are inverted: correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",
+                setup.other().name(),
                 where_camera(setup.other()),
                 setup.other().name(),
                 where_camera(*setup),

@@ -374,11 +374,15 @@ fn checked_reading(
             if fix == Fix::Auto {
                 return Ok((Reading::RobotInverted, f, text));
             }
+            let fit = format!(
+                "reprojection sigma {:.2} px instead of {as_given_sigma:.2} px",
+                f.sigma_px
+            );
             Err(Error::Misread {
                 finding: format!(
-                    "the detections fit far better with the robot poses inverted (reprojection sigma {:.2} px instead of {as_given_sigma:.2} px)",
-                    f.sigma_px
+                    "the detections fit far better with the robot poses inverted ({fit})"
                 ),
+                fit,
                 readings: vec![Reading::RobotInverted],
                 setup,
                 other_setup: false,

@@ -115,6 +115,7 @@ pub(super) fn read_bag(
         names: pairs.names,
         time_offset: Some(time_offset),
         time_offset_sigma: found.as_ref().map(|f| f.sigma),
+        time_offset_agreement_deg: found.as_ref().map(|f| f.agreement_deg),
         offset_curve: found.map(|f| f.correlated.curve),
         target_source: Some(pairs.target_source),
         camera_mount: pairs.camera_mount,

@@ -116,6 +116,7 @@ pub(super) fn check_named(
     };
     Err(Error::Misread {
         finding: finding(source, named, read_as, (&given, &fit)),
+        fit: String::new(),
         readings: Vec::new(),
         setup: options.setup,
         other_setup: false,

@@ -149,6 +149,9 @@ pub struct Recording {
     pub time_offset: Option<f64>,
     /// Its one-sigma, seconds, when it was estimated.
     pub time_offset_sigma: Option<f64>,
+    /// When it was estimated: how well the poses paired at it agree on one X
+    /// ([`FoundOffset::agreement_deg`](crate::io::sync::FoundOffset::agreement_deg)), degrees.
+    pub time_offset_agreement_deg: Option<f64>,
     /// With `auto`: the angular speeds' correlation at each offset searched,
     /// `[offset s, correlation]`.
     pub offset_curve: Option<Vec<[f64; 2]>>,
@@ -168,6 +171,33 @@ pub struct Recording {
 }
 
 impl Recording {
+    /// The refusal of an offset searched that pairs the poses into no agreement on one X
+    /// ([`Error::OffsetNotFound`]): a solve on such pairs is not an answer. Asked after the
+    /// readings are checked (a misread input disagrees at every offset, and is said as itself).
+    pub fn failed_offset(&self) -> Option<Error> {
+        let (offset, agreement_deg) = (self.time_offset?, self.time_offset_agreement_deg?);
+        crate::io::sync::offset_failed(offset, agreement_deg).then_some(Error::OffsetNotFound {
+            offset,
+            at_edge: crate::io::sync::at_search_edge(offset),
+            agreement_deg,
+            searched: crate::io::sync::OffsetOptions::default().max_offset,
+            limit_deg: crate::io::sync::OFFSET_AGREEMENT_DEG,
+        })
+    }
+
+    /// `result`, a job's answer on these poses, judged by the clock offset searched: when the
+    /// search failed ([`Recording::failed_offset`]) the answer, or a refusal of it, is replaced by
+    /// [`Error::OffsetNotFound`] (a solve on pairs no offset agrees on says nothing of the
+    /// motions), except a misreading, which disagrees at every offset and is said as itself.
+    /// Every job on a recording of two streams (`calibrate`, `verify`, `advise`) passes its
+    /// answer through here.
+    pub fn offset_checked<T>(&self, result: Result<T>) -> Result<T> {
+        match (self.failed_offset(), result) {
+            (None, result) | (Some(_), result @ Err(Error::Misread { .. })) => result,
+            (Some(failed), _) => Err(failed),
+        }
+    }
+
     /// Reads `source` whole.
     ///
     /// Errors: the reader's own (file, line and field named); fewer than 2 pose pairs in a pose
@@ -324,7 +354,7 @@ impl Notes<'_> {
 
     /// Rotation matrices projected, if any.
     fn projections(&mut self, source: &str, projections: Projections) {
-        if projections.count > 0 {
+        if projections.note().is_some() {
             self.add(Note::Projections {
                 source: source.to_string(),
                 projections,
@@ -507,6 +537,7 @@ fn read_streams(
         poses: s.pairs,
         time_offset: Some(pairing.time_offset),
         time_offset_sigma: pairing.correlated.as_ref().map(|f| f.sigma),
+        time_offset_agreement_deg: pairing.correlated.as_ref().map(|f| f.agreement_deg),
         offset_curve: pairing.correlated.map(|f| f.correlated.curve),
         // A camera stream holds `target_from_camera`.
         written: Written {
