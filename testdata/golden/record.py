@@ -9,11 +9,18 @@ testdata/golden/outputs.jsonl: one JSON object per command, in order,
 {"args": [...], "exit": N, "stdout": "...", "stderr": "..."}. crates/handeye-cli/tests/golden.rs
 replays the same commands and compares.
 
-Masking (the same in golden.rs), and nothing else: the one wall-clock timing in the outputs, the
-`"seconds": <number>` field of `online`'s events and of their `optimal` transform, is replaced by
-`"seconds":"*"` (whatever the spacing after the colon, kept as it was); and in `online`'s stderr
-the note on rotation matrices projected onto SO(3), which its reader thread prints at a moment
-that races with the other thread's messages, is moved to the end (see PROJECTED below).
+Other projects' data is read in place from the shared folder (testdata/shared_data.py: ../shared/data
+beside the repository, or $HANDEYE_SHARED_DATA). A command names it `{shared}`; it runs with the
+folder's path in its place, and its outputs name the folder `{shared}` again, so that the baseline
+does not depend on where the folder is. Recording needs every set the commands read; `--check`
+skips the commands whose set is missing, saying so on one line (HANDEYE_SHARED_REQUIRED=1: exit 1).
+
+Masking (the same in golden.rs), and nothing else: the shared folder's path is written `{shared}`
+(above); the one wall-clock timing in the outputs, the `"seconds": <number>` field of `online`'s
+events and of their `optimal` transform, is replaced by `"seconds":"*"` (whatever the spacing after
+the colon, kept as it was); and in `online`'s stderr the note on rotation matrices projected onto
+SO(3), which its reader thread prints at a moment that races with the other thread's messages, is
+moved to the end (see PROJECTED below).
 
 The commands run with an empty environment (no RUST_BACKTRACE, CLICOLOR_FORCE, …) and argv[0]
 `handeye`, as in the test, so that clap's usage lines name `handeye` whatever the binary's file
@@ -31,6 +38,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.dirname(HERE))
+import shared_data  # noqa: E402  (testdata/shared_data.py: the shared folder's one rule)
 COMMANDS = os.path.join(HERE, "commands.txt")
 OUTPUTS = os.path.join(HERE, "outputs.jsonl")
 
@@ -73,9 +82,16 @@ def read_commands(path):
     return commands
 
 
+def sets_missing(args):
+    """The shared sets a command reads (`{shared}/SET/...`) that are missing."""
+    prefix = shared_data.PLACEHOLDER + "/"
+    sets = {w.split(prefix, 1)[1].split("/", 1)[0] for w in args if prefix in w}
+    return sorted(s for s in sets if shared_data.missing(s))
+
+
 def run(binary, args):
     done = subprocess.run(
-        ["handeye", *args],
+        ["handeye", *[shared_data.unmasked(w) for w in args]],
         executable=binary,
         cwd=ROOT,
         env={},
@@ -86,8 +102,8 @@ def run(binary, args):
         "args": args,
         # Killed by a signal: -1, as in golden.rs.
         "exit": done.returncode if done.returncode >= 0 else -1,
-        "stdout": mask(done.stdout.decode("utf-8")),
-        "stderr": normalize_stderr(args, mask(done.stderr.decode("utf-8"))),
+        "stdout": mask(shared_data.masked(done.stdout.decode("utf-8"))),
+        "stderr": normalize_stderr(args, mask(shared_data.masked(done.stderr.decode("utf-8")))),
     }
 
 
@@ -119,13 +135,13 @@ def first_difference(expected, actual):
     return None
 
 
-def check(records, path):
+def check(records, path, commands):
     try:
         with open(path, encoding="utf-8") as f:
             baseline = [json.loads(line) for line in f if line.strip()]
     except FileNotFoundError:
         sys.exit(f"{path} does not exist: record it first (without --check)")
-    if [r["args"] for r in baseline] != [r["args"] for r in records]:
+    if [r["args"] for r in baseline] != commands:
         print(f"{path} does not hold the commands of commands.txt (stale): re-record it")
     by_args = {json.dumps(r["args"]): r for r in baseline}
     differing = 0
@@ -162,14 +178,22 @@ def main():
     binary = os.path.abspath(a.bin)
     if not os.access(binary, os.X_OK):
         sys.exit(f"{a.bin}: not an executable")
-    commands = read_commands(a.commands)
+    commands = all_commands = read_commands(a.commands)
+    missing = sorted({s for args in commands for s in sets_missing(args)})
+    if missing:
+        skipped = [args for args in commands if sets_missing(args)]
+        why = shared_data.why(f"{len(skipped)} of {len(commands)} command(s), which read " + ", ".join(missing))
+        if not a.check or shared_data.required():
+            sys.exit(f"cannot run {why}")
+        print(f"skipped {why}")
+        commands = [args for args in commands if not sets_missing(args)]
     with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         records = list(pool.map(lambda args: run(binary, args), commands))
     for r in records:
         if "panicked" in r["stderr"]:
             print(f"warning: handeye {shlex.join(r['args'])} panicked", file=sys.stderr)
     if a.check:
-        sys.exit(0 if check(records, a.outputs) else 1)
+        sys.exit(0 if check(records, a.outputs, all_commands) else 1)
     with open(a.outputs, "w", encoding="utf-8", newline="\n") as f:
         for r in records:
             f.write(json.dumps(r, ensure_ascii=False) + "\n")

@@ -33,7 +33,12 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-ETHZ = os.path.join(ROOT, "testdata", "real", "ethz-asl")
+sys.path.insert(0, os.path.dirname(HERE))
+import shared_data  # noqa: E402  (testdata/shared_data.py: other projects' data, read in place)
+
+# ethz-asl's recordings are other projects' data, read from the shared folder; the JSON names them
+# `{shared}/ethz-asl/...`.
+ETHZ = os.path.join(shared_data.shared_dir(), "ethz-asl")
 SUBSAMPLE = 100
 LAST_OUT_OF_ORDER = 0
 
@@ -216,6 +221,12 @@ def mat_list(T):
 
 # ---------------------------------------------------------------- streams
 
+def repo_name(path):
+    """A stream's path as the JSON names it: `{shared}/...` in the shared folder, else from the root."""
+    masked = shared_data.masked(os.path.abspath(path))
+    return masked if masked.startswith(shared_data.PLACEHOLDER) else os.path.relpath(path, ROOT)
+
+
 def process(name, robot_path, camera_path, setup, offset, truth=None, target=None, report=None,
             outlier_rows=None):
     eth = setup == "eye-to-hand"
@@ -231,8 +242,8 @@ def process(name, robot_path, camera_path, setup, offset, truth=None, target=Non
     entry = {
         "setup": setup,
         "frame": "base_from_camera" if eth else "gripper_from_camera",
-        "robot_file": os.path.relpath(robot_path, ROOT),
-        "camera_file": os.path.relpath(camera_path, ROOT),
+        "robot_file": repo_name(robot_path),
+        "camera_file": repo_name(camera_path),
         "offset_s": offset,
         "offset_source": "manifest.json time_offset_s (true)" if truth is not None else "none (0)",
         "robot_samples": int(len(robot[0])),
@@ -285,8 +296,8 @@ def compare_handeye(binary, out):
     import subprocess
     for name, e in out["streams"].items():
         for m in ("park", "daniilidis"):
-            cmd = [binary, "calibrate", "--robot", os.path.join(ROOT, e["robot_file"]),
-                   "--camera", os.path.join(ROOT, e["camera_file"]), f"--time-offset={e['offset_s']}",
+            cmd = [binary, "calibrate", "--robot", os.path.join(ROOT, shared_data.unmasked(e["robot_file"])),
+                   "--camera", os.path.join(ROOT, shared_data.unmasked(e["camera_file"])), f"--time-offset={e['offset_s']}",
                    "--pairs", "all", "--method", m, "--setup", e["setup"]]
             r = subprocess.run(cmd, capture_output=True, text=True)
             if r.returncode != 0 or not r.stdout.strip():
@@ -360,7 +371,7 @@ def main():
         "opencv_version": cv2.__version__,
         "numpy_version": np.__version__,
         "generator": "testdata/kinhec/opencv_streams.py",
-        "licence_note": "numbers computed with OpenCV (Apache-2.0) cv2.calibrateHandEye; data: kinhec streams (MIT, see LICENSE) and ethz-asl/hand_eye_calibration recordings (BSD-3-Clause, testdata/real/ethz-asl/LICENSE)",
+        "licence_note": "numbers computed with OpenCV (Apache-2.0) cv2.calibrateHandEye; data: kinhec streams (MIT, see LICENSE) and ethz-asl/hand_eye_calibration recordings (BSD-3-Clause, the LICENSE beside them in the shared folder)",
         "subsample": SUBSAMPLE,
         "subsample_rule": "frames paired[floor(k*(n-1)/99 + 0.5)], k = 0..99",
         "pairing": "slerp at camera stamp minus true offset",

@@ -1,7 +1,13 @@
 #!/usr/bin/env python3
-"""Converts other projects' hand-eye data sets into handeye's formats (testdata/peers/<set>/).
+"""Converts other projects' hand-eye data sets into handeye's formats (OUT/<set>/).
 
-    python3 testdata/peers/make_peers.py --visp VISP_GIT_DIR --industrial-calibration IC_GIT_DIR [--out DIR]
+    python3 testdata/peers/make_peers.py --visp VISP_GIT_DIR --industrial-calibration IC_GIT_DIR --out DIR
+
+The converted sets are other projects' data: they are not committed to this repository, but kept in
+the shared folder beside it (../shared/data/peers, made by this script), where the tests read them
+in place (testdata/shared_data.py). To make them elsewhere, pass --out SOMEWHERE/peers and point
+HANDEYE_SHARED_DATA at SOMEWHERE (which needs the shared folder's other sets too for the rest of
+the tests). Each set's README.md (testdata/peers/<set>/README.md) cites its source.
 
 Each source is a git directory (a clone, or a bare copy) of the upstream repository at the commit
 pinned below; files are read with `git show COMMIT:PATH`, so no work tree is needed. Needs numpy and
@@ -427,7 +433,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--visp", help="git directory of lagadic/visp")
     ap.add_argument("--industrial-calibration", help="git directory of ros-industrial/industrial_calibration")
-    ap.add_argument("--out", default=os.path.dirname(os.path.abspath(__file__)))
+    ap.add_argument("--out", required=True,
+                    help="where to write the sets (one folder each); not inside the repository")
     a = ap.parse_args()
     if a.visp:
         visp_sets(a.visp, a.out)

@@ -3,7 +3,7 @@
 //! transform of the JSON, and the text summary on a terminal.
 
 mod common;
-use common::{run, testdata};
+use common::{run, shared, testdata};
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -335,18 +335,19 @@ fn attribute(text: &str, name: &str) -> Vec<f64> {
 fn ros2_yaml_and_urdf_parse_back_to_the_transform() {
     let f = testdata(NOISY);
     let f = f.to_str().unwrap();
-    let camodocal = testdata("real/camodocal/TransformPairsInput.yml");
-    let camodocal = camodocal.to_str().unwrap();
-    for (input, setup, parent, frames) in [
-        (f, "eye-in-hand", "gripper", vec![]),
-        (camodocal, "eye-to-hand", "base", vec![]),
-        (
+    let camodocal = shared("camodocal/TransformPairsInput.yml");
+    let camodocal = camodocal.as_deref().map(|p| p.to_str().unwrap());
+    let faces = [
+        Some((f, "eye-in-hand", "gripper", vec![])),
+        camodocal.map(|c| (c, "eye-to-hand", "base", vec![])),
+        Some((
             f,
             "eye-in-hand",
             "tool0",
             vec!["--parent-frame", "tool0", "--child-frame", "camera_optical"],
-        ),
-    ] {
+        )),
+    ];
+    for (input, setup, parent, frames) in faces.into_iter().flatten() {
         let child = if frames.is_empty() {
             "camera"
         } else {

@@ -11,6 +11,12 @@
 //! the input ends at a moment that races with the calibrating thread's messages, is moved to the
 //! end. The commands run from the repository root with an empty environment.
 //!
+//! Other projects' data is read in place from the shared folder (`../shared/data`, or
+//! `$HANDEYE_SHARED_DATA`; `crates/handeye/tests/shared_data`): a command names it `{shared}`,
+//! runs with the folder's path in its place, and its outputs name it `{shared}` again before they
+//! are compared, so that the baseline does not depend on where the folder is. The commands whose
+//! set is missing are skipped, said on one line (a failure with `HANDEYE_SHARED_REQUIRED=1`).
+//!
 //! A change meant to change an output re-records the baseline in the same commit:
 //!
 //! ```sh
@@ -25,6 +31,9 @@ use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde_json::Value;
+
+mod common;
+use common::shared_data;
 
 /// How to re-record the baseline, for the failure messages.
 const RERECORD: &str = "cargo build --release -p handeye-cli && python3 testdata/golden/record.py --bin target/release/handeye";
@@ -209,9 +218,23 @@ fn normalize_stderr(args: &[String], text: String) -> String {
     others.join("\n")
 }
 
+/// The shared sets a command reads (`{shared}/SET/...`) that are missing.
+fn sets_missing(args: &[String]) -> Vec<&str> {
+    let prefix = format!("{}/", shared_data::PLACEHOLDER);
+    let mut sets: Vec<&str> = args
+        .iter()
+        .filter_map(|w| w.split_once(&prefix))
+        .map(|(_, rest)| rest.split('/').next().unwrap_or(rest))
+        .collect();
+    sets.sort_unstable();
+    sets.dedup();
+    sets.retain(|set| shared_data::missing(set));
+    sets
+}
+
 fn run(args: &[String]) -> Outcome {
     let out = Command::new(env!("CARGO_BIN_EXE_handeye"))
-        .args(args)
+        .args(args.iter().map(|w| shared_data::unmasked(w)))
         .current_dir(root())
         .env_clear()
         .stdin(Stdio::null())
@@ -222,16 +245,17 @@ fn run(args: &[String]) -> Outcome {
     };
     Outcome {
         exit: out.status.code().map_or(-1, i64::from),
-        stdout: mask(&text(out.stdout)),
-        stderr: normalize_stderr(args, mask(&text(out.stderr))),
+        stdout: mask(&shared_data::masked(&text(out.stdout))),
+        stderr: normalize_stderr(args, mask(&shared_data::masked(&text(out.stderr)))),
     }
 }
 
-/// Every command run on 2 to 4 threads; the outcomes in the commands' order.
-fn run_all(commands: &[Vec<String>]) -> Vec<Outcome> {
+/// Every command run on 2 to 4 threads; the outcomes in the commands' order (`None`: skipped,
+/// its shared set missing).
+fn run_all(commands: &[Vec<String>]) -> Vec<Option<Outcome>> {
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get().clamp(2, 4));
     let next = AtomicUsize::new(0);
-    let mut done: Vec<(usize, Outcome)> = std::thread::scope(|s| {
+    let mut done: Vec<(usize, Option<Outcome>)> = std::thread::scope(|s| {
         let workers: Vec<_> = (0..threads)
             .map(|_| {
                 s.spawn(|| {
@@ -241,7 +265,8 @@ fn run_all(commands: &[Vec<String>]) -> Vec<Outcome> {
                         let Some(args) = commands.get(k) else {
                             return mine;
                         };
-                        mine.push((k, run(args)));
+                        let outcome = sets_missing(args).is_empty().then(|| run(args));
+                        mine.push((k, outcome));
                     }
                 })
             })
@@ -349,18 +374,35 @@ fn outputs_are_byte_identical_to_the_recorded_ones() {
         );
     }
 
+    // Other projects' data missing: its commands are skipped, said once.
+    let mut missing: Vec<&str> = commands.iter().flat_map(|a| sets_missing(a)).collect();
+    missing.sort_unstable();
+    missing.dedup();
+    if !missing.is_empty() {
+        let skipped = commands
+            .iter()
+            .filter(|a| !sets_missing(a).is_empty())
+            .count();
+        shared_data::skip(&format!(
+            "{skipped} of {} golden command(s), which read {}",
+            commands.len(),
+            missing.join(", ")
+        ));
+    }
+
     let started = std::time::Instant::now();
     let outcomes = run_all(&commands);
     let failures: Vec<String> = recorded
         .iter()
         .zip(&outcomes)
         .filter_map(|((args, expected), actual)| {
+            let actual = actual.as_ref()?;
             differences(expected, actual).map(|d| format!("handeye {}\n{d}", args.join(" ")))
         })
         .collect();
     println!(
         "{} golden command(s) run in {:.1} s, {} differ",
-        commands.len(),
+        outcomes.iter().flatten().count(),
         started.elapsed().as_secs_f64(),
         failures.len()
     );

@@ -1,49 +1,51 @@
-//! Other projects' real pose sets (testdata/peers, made by `testdata/peers/make_peers.py` from
-//! their repositories; each set's README and LICENSE say where from and under which licence),
-//! calibrated through the command line and held against what those projects published or
-//! asserted:
+//! Other projects' real pose sets, calibrated through the command line and held against what those
+//! projects published or asserted. The sets are read in place from the shared folder
+//! (`../shared/data/peers/<set>`, or `$HANDEYE_SHARED_DATA/peers/<set>`), where
+//! `testdata/peers/make_peers.py` made them from the upstream repositories; the LICENSE beside
+//! each and `testdata/peers/<set>/README.md` say where from and under which licence.
 //!
-//! - ViSP's eye-in-hand and eye-to-hand tutorial data (8 poses each): X, and the target's pose with
-//!   `--robot-world`, within one reported sigma of ViSP's published eMc / rMc and rMo / eMo.
+//! - ViSP's eye-in-hand and eye-to-hand tutorial data (8 poses each): X within half a reported
+//!   sigma of ViSP's published eMc / rMc (measured: 0.495 sigma at most, eye-to-hand's rotation),
+//!   and the target's pose with `--robot-world` within one sigma of its rMo / eMo (at most 0.83).
 //! - industrial_calibration's two hand–eye examples (15 images each): `--method reprojection` within
 //!   the bounds of the upstream test (`examples/extrinsic_hand_eye.cpp`), computed as it computes
 //!   them: √(final cost per residual) over every detection (Ceres' cost ½Σr², two residuals a
 //!   detection: the per-detection RMS over 2), and per image the fitted camera-from-target pose
 //!   against that image's own PnP (the mean position and orientation differences).
 //!
-//! industrial_calibration's sets (Apache-2.0) are kept in the repository and always run. ViSP's
-//! (GPL-2.0-or-later) are made from the upstream repository by make_peers.py; absent, they are
-//! skipped with a message, and `HANDEYE_PEERS_REQUIRED=1` makes an absent set fail.
+//! A set that is not in the shared folder is skipped, said on one line; `HANDEYE_SHARED_REQUIRED=1`
+//! (CI) makes it a failure.
 
 mod common;
 
 use std::path::PathBuf;
 
-use common::{run, testdata};
+use common::run;
+use common::shared_data::{shared, shared_each};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde_json::Value;
 
-/// The sets kept in the repository (Apache-2.0): never skipped.
-const COMMITTED: [&str; 2] = ["ic_circle_grid_eye_in_hand", "ic_charuco_eye_to_hand"];
+/// How many of its own sigmas ViSP's published X may be from ours (rotation and translation each).
+const X_SIGMAS: f64 = 0.5;
 
-/// The directory of a converted set, or `None` (with a message) when it was not made here.
+/// How many of its own sigmas ViSP's published target pose may be from ours.
+const TARGET_SIGMAS: f64 = 1.0;
+
+/// The folder of a converted set in the shared folder, or `None` (after one line saying why).
 fn set(name: &str) -> Option<PathBuf> {
-    let dir = testdata(&format!("peers/{name}"));
-    if dir.join("poses.jsonl").exists() && dir.join("peer.json").exists() {
-        return Some(dir);
-    }
-    assert!(
-        !COMMITTED.contains(&name),
-        "{name}: testdata/peers/{name} is kept in the repository, but its poses.jsonl/peer.json are missing"
-    );
-    assert!(
-        std::env::var_os("HANDEYE_PEERS_REQUIRED").is_none(),
-        "{name}: testdata/peers/{name} has no poses.jsonl/peer.json (make them with make_peers.py)"
-    );
-    eprintln!(
-        "skipped {name}: testdata/peers/{name} not made (python3 testdata/peers/make_peers.py --help)"
-    );
-    None
+    shared(&format!("peers/{name}"))
+}
+
+/// The converted sets of `names` that are in the shared folder, with their folders (one line
+/// names those that are not).
+fn sets<'a>(names: &[&'a str]) -> Vec<(&'a str, PathBuf)> {
+    let rels: Vec<String> = names.iter().map(|n| format!("peers/{n}")).collect();
+    let rels: Vec<&str> = rels.iter().map(String::as_str).collect();
+    names
+        .iter()
+        .zip(shared_each(&rels))
+        .filter_map(|(name, dir)| Some((*name, dir?)))
+        .collect()
 }
 
 fn peer(dir: &std::path::Path) -> Value {
@@ -104,9 +106,8 @@ fn sigmas(got: &Value, published: &Value) -> (f64, f64) {
 }
 
 #[test]
-fn visp_x_is_within_one_sigma_of_visps_published_x() {
-    for name in ["visp_eye_in_hand", "visp_eye_to_hand"] {
-        let Some(dir) = set(name) else { continue };
+fn visp_x_is_within_half_a_sigma_of_visps_published_x() {
+    for (name, dir) in sets(&["visp_eye_in_hand", "visp_eye_to_hand"]) {
         let p = peer(&dir);
         let setup = p["setup"].as_str().unwrap();
         // The pose path, as ViSP calibrates (its PnP poses, all pairs): Andreff, and the default.
@@ -116,26 +117,27 @@ fn visp_x_is_within_one_sigma_of_visps_published_x() {
             assert_eq!(report["verdict"], "good", "{name} {args:?}: {report}");
             let (r, t) = sigmas(&report, &p["x"]);
             eprintln!(
-                "{name} {args:?}: X is {r:.2} sigma (rotation), {t:.2} sigma (translation) from ViSP's"
+                "{name} {args:?}: X is {r:.3} sigma (rotation), {t:.3} sigma (translation) from ViSP's"
             );
             assert!(
-                r < 1.0 && t < 1.0,
-                "{name} {args:?}: {r:.2}, {t:.2} sigma from ViSP's X"
+                r < X_SIGMAS && t < X_SIGMAS,
+                "{name} {args:?}: {r:.3}, {t:.3} sigma from ViSP's X"
             );
         }
         // Robot-world: X and the target's pose (ViSP's rMo eye-in-hand, eMo eye-to-hand).
         let (code, report, err) = calibrate(&dir, setup, &["--robot-world"]);
         let report = report.unwrap_or_else(|| panic!("{name} --robot-world: exit {code}: {err}"));
         let (r, t) = sigmas(&report, &p["x"]);
+        eprintln!("{name} --robot-world: X is {r:.2}, {t:.2} sigma from ViSP's");
         assert!(
-            r < 1.0 && t < 1.0,
-            "{name} robot-world X: {r:.2}, {t:.2} sigma"
+            r < X_SIGMAS && t < X_SIGMAS,
+            "{name} robot-world X: {r:.3}, {t:.3} sigma"
         );
         let (r, t) = sigmas(&report["target"], &p["target"]);
         eprintln!("{name} --robot-world: the target is {r:.2}, {t:.2} sigma from ViSP's");
         assert!(
-            r < 1.0 && t < 1.0,
-            "{name} robot-world target: {r:.2}, {t:.2} sigma from ViSP's"
+            r < TARGET_SIGMAS && t < TARGET_SIGMAS,
+            "{name} robot-world target: {r:.3}, {t:.3} sigma from ViSP's"
         );
         assert_eq!(
             report["target"]["frame"],
@@ -183,8 +185,7 @@ fn visp_pixels_of_eight_frames_are_refused() {
     // with the factor F/(F − 12): it needs more than 12 frames, and ViSP's sets have 8. The run
     // refuses (exit 3) by count, before the solve, rather than answer without an uncertainty (it
     // used to solve, then say "the rotation system is too ill-conditioned", which was not why).
-    for name in ["visp_eye_in_hand", "visp_eye_to_hand"] {
-        let Some(dir) = set(name) else { continue };
+    for (name, dir) in sets(&["visp_eye_in_hand", "visp_eye_to_hand"]) {
         let p = peer(&dir);
         let k = dir.join("intrinsics.yml");
         let (code, _, err) = calibrate(

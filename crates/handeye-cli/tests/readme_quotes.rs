@@ -2,10 +2,12 @@
 //! (issue 33 item 14): each quote is found in the README (whitespace aside), and its command,
 //! run on the repository's data, prints every part of it (in order, the README's "…" eliding the
 //! rest) and exits as the README says. A message no shipped file provokes is checked against the
-//! source that words it.
+//! source that words it. The quick start is checked whole: each of its commands runs as written
+//! (from the repository's root, on the repository's own files) and exits as its `# exit N` comment
+//! says, and each output it shows is an excerpt of what that command prints.
 
 mod common;
-use common::testdata;
+use common::{shared, testdata};
 
 /// Runs `handeye` in `testdata/` and returns (exit code, stdout, stderr).
 fn run(args: &[&str]) -> (i32, String, String) {
@@ -267,9 +269,12 @@ fn the_low_dof_verify_note_is_printed_as_quoted() {
 /// tag 0.1 m from the gripper) and no size caution.
 #[test]
 fn the_camodocal_row_is_what_the_tool_advises() {
-    let row = "`handeye calibrate TransformPairsInput.yml --setup eye-to-hand --fix both-inverted`";
+    let row = "`handeye calibrate ../shared/data/camodocal/TransformPairsInput.yml --setup eye-to-hand --fix both-inverted`";
     assert!(readme().contains(row), "not in the README: {row}");
-    let file = "real/camodocal/TransformPairsInput.yml";
+    let Some(file) = shared("camodocal/TransformPairsInput.yml") else {
+        return;
+    };
+    let file = file.to_str().unwrap();
     let (code, out, err) = run(&[
         "calibrate",
         file,
@@ -314,4 +319,161 @@ fn the_camodocal_row_is_what_the_tool_advises() {
         .collect();
     let distance = t.iter().map(|v| v * v).sum::<f64>().sqrt();
     assert!((1.0..2.5).contains(&distance), "{distance}");
+}
+
+/// One command of the quick start: its words after `handeye`, the file its stdout is redirected to
+/// (`> FILE`), and the exit code its `# exit N` comment says.
+struct Step {
+    args: Vec<String>,
+    into: Option<String>,
+    exit: i32,
+}
+
+/// The `sh` blocks of the README's quick start, each with the `text` block that follows it (the
+/// excerpt of its last command's output), if any.
+fn quick_start() -> Vec<(Vec<Step>, Option<String>)> {
+    let text =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
+    let start = text
+        .find("\n## Quick start\n")
+        .expect("a quick start in the README");
+    let section = &text[start + 1..];
+    let section = &section[..section[3..].find("\n## ").map_or(section.len(), |e| e + 3)];
+    let mut lines = section.lines().peekable();
+    let mut blocks = Vec::new();
+    let block = |lines: &mut std::iter::Peekable<std::str::Lines>| {
+        let mut body = Vec::new();
+        for line in lines.by_ref() {
+            if line == "```" {
+                break;
+            }
+            body.push(line);
+        }
+        body.join("\n")
+    };
+    while let Some(line) = lines.next() {
+        if line != "```sh" {
+            continue;
+        }
+        let commands = block(&mut lines).replace("\\\n", " ");
+        let steps = commands
+            .lines()
+            .filter(|l| !l.trim().is_empty())
+            .map(|l| {
+                let (command, comment) = l
+                    .split_once('#')
+                    .unwrap_or_else(|| panic!("no `# exit N` after {l:?}"));
+                let exit = comment
+                    .trim()
+                    .strip_prefix("exit ")
+                    .and_then(|n| n.parse().ok())
+                    .unwrap_or_else(|| panic!("no `# exit N` after {l:?}"));
+                let (command, into) = match command.split_once(" > ") {
+                    Some((c, file)) => (c, Some(file.trim().to_string())),
+                    None => (command, None),
+                };
+                assert!(
+                    !command.contains(['\'', '"', '|', '<', '$']),
+                    "a quick-start command is plain words: {l:?}"
+                );
+                let mut words = command.split_whitespace().map(String::from);
+                assert_eq!(words.next().as_deref(), Some("handeye"), "{l:?}");
+                Step {
+                    args: words.collect(),
+                    into,
+                    exit,
+                }
+            })
+            .collect();
+        let excerpt = (lines.peek() == Some(&"```text")).then(|| {
+            lines.next();
+            block(&mut lines)
+        });
+        blocks.push((steps, excerpt));
+    }
+    blocks
+}
+
+/// The README's quick start: every command of its `sh` blocks runs from the repository's root
+/// and exits as its `# exit N` comment says; the `text` block after a `sh` block is an excerpt of
+/// the block's last command's output: its lines, in order, in stdout then stderr (whitespace
+/// aside; a line `...` leaves lines out, a `…` part of a line). Its inputs are the repository's own
+/// files (no other project's data); a `> FILE` goes to a scratch folder.
+#[test]
+fn the_quick_start_prints_what_it_shows() {
+    let blocks = quick_start();
+    let jobs = [
+        "calibrate",
+        "verify",
+        "--prior",
+        "--intrinsics",
+        "online",
+        "--base-frame",
+    ];
+    for job in jobs {
+        assert!(
+            blocks.iter().any(|(steps, text)| text.is_some()
+                && steps.iter().any(|s| s.args.iter().any(|a| a == job))),
+            "the quick start shows no `{job}` with its output"
+        );
+    }
+    let root = testdata("..");
+    let scratch = tempfile::tempdir().unwrap();
+    for (steps, excerpt) in &blocks {
+        let mut printed = String::new();
+        for step in steps {
+            let args: Vec<String> = step
+                .args
+                .iter()
+                .map(|a| {
+                    let made = scratch.path().join(a);
+                    if made.exists() {
+                        return made.to_str().unwrap().to_string();
+                    }
+                    assert!(
+                        !a.starts_with("../")
+                            && (!a.starts_with("testdata/") || root.join(a).exists()),
+                        "the quick start reads {a}, not a file of the repository's testdata"
+                    );
+                    a.clone()
+                })
+                .collect();
+            let out = std::process::Command::new(env!("CARGO_BIN_EXE_handeye"))
+                .current_dir(&root)
+                .args(&args)
+                .output()
+                .unwrap();
+            let (stdout, stderr) = (
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr),
+            );
+            assert_eq!(
+                out.status.code(),
+                Some(step.exit),
+                "handeye {}: {stderr}",
+                step.args.join(" ")
+            );
+            if let Some(file) = &step.into {
+                std::fs::write(scratch.path().join(file), stdout.as_bytes()).unwrap();
+            }
+            printed = flat(&format!("{stdout}\n{stderr}"));
+        }
+        let Some(excerpt) = excerpt else { continue };
+        let mut from = 0;
+        let parts = excerpt
+            .lines()
+            .filter(|l| l.trim() != "...")
+            .flat_map(|l| l.split('…'))
+            .map(flat)
+            .filter(|p| !p.is_empty());
+        for part in parts {
+            let Some(at) = printed[from..].find(&part) else {
+                panic!(
+                    "the quick start's excerpt of `handeye {}` says {part:?}, not printed (in order):\n{printed}",
+                    steps.last().unwrap().args.join(" ")
+                );
+            };
+            from += at + part.len();
+        }
+    }
 }

@@ -1,18 +1,13 @@
-//! Real recordings (testdata/real, see the licences there): the ethz-asl streams and the
-//! camodocal OpenCV-YAML pairs, end to end.
+//! Real recordings of other projects, read in place from the shared folder (`ethz-asl/`,
+//! `camodocal/`, each with its licence; skipped, one line each, where the folder is not):
+//! the ethz-asl streams and the camodocal OpenCV-YAML pairs, end to end.
 
 mod common;
-use common::run;
+use common::{run, shared};
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde_json::Value;
-
-fn real(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../testdata/real")
-        .join(rel)
-}
 
 fn calibrate(args: &[&str]) -> Value {
     let mut all = vec!["calibrate"];
@@ -24,8 +19,11 @@ fn calibrate(args: &[&str]) -> Value {
 
 #[test]
 fn ethz_streams_calibrate_and_run_online() {
-    let robot = real("ethz-asl/robot_arm_sim_B_H.csv");
-    let camera = real("ethz-asl/robot_arm_sim_W_E.csv");
+    let Some(ethz) = shared("ethz-asl") else {
+        return;
+    };
+    let robot = ethz.join("robot_arm_sim_B_H.csv");
+    let camera = ethz.join("robot_arm_sim_W_E.csv");
     let (r, c) = (robot.to_str().unwrap(), camera.to_str().unwrap());
     let v = calibrate(&["--robot", r, "--camera", c, "--method", "refine"]);
     assert!(v["motions"].as_u64().unwrap() > 1000);
@@ -94,8 +92,12 @@ fn the_accumulating_estimators_reports_carry_the_clock_offset_found() {
 
 #[test]
 fn a_known_clock_offset_is_recovered_within_a_camera_period() {
-    let robot = real("ethz-asl/robot_arm_sim_B_H.csv");
-    let camera_text = std::fs::read_to_string(real("ethz-asl/robot_arm_sim_W_E.csv")).unwrap();
+    let Some(ethz) = shared("ethz-asl") else {
+        return;
+    };
+    let robot = ethz.join("robot_arm_sim_B_H.csv");
+    let camera = ethz.join("robot_arm_sim_W_E.csv");
+    let camera_text = std::fs::read_to_string(&camera).unwrap();
     let stamps: Vec<f64> = camera_text
         .lines()
         .filter_map(|l| l.split(',').next()?.trim().parse().ok())
@@ -109,7 +111,7 @@ fn a_known_clock_offset_is_recovered_within_a_camera_period() {
         "--robot",
         robot.to_str().unwrap(),
         "--camera",
-        real("ethz-asl/robot_arm_sim_W_E.csv").to_str().unwrap(),
+        camera.to_str().unwrap(),
         "--time-offset",
         "auto",
     ]);
@@ -143,7 +145,9 @@ fn a_known_clock_offset_is_recovered_within_a_camera_period() {
 
 #[test]
 fn camodocal_outliers_are_found_and_rejecting_them_lowers_the_residuals() {
-    let file = real("camodocal/TransformPairsInput.yml");
+    let Some(file) = shared("camodocal/TransformPairsInput.yml") else {
+        return;
+    };
     let f = file.to_str().unwrap();
     let with = calibrate(&[f, "--setup", "eye-to-hand"]);
     let without = calibrate(&[f, "--setup", "eye-to-hand", "--reject-outliers"]);
@@ -214,9 +218,12 @@ fn camodocal_outliers_are_found_and_rejecting_them_lowers_the_residuals() {
 
 #[test]
 fn results_can_be_written_as_ros_yaml() {
+    let Some(file) = shared("camodocal/TransformPairsInput.yml") else {
+        return;
+    };
     let (code, out, err) = run(&[
         "calibrate",
-        real("camodocal/TransformPairsInput.yml").to_str().unwrap(),
+        file.to_str().unwrap(),
         "--setup",
         "eye-to-hand",
         "--output",

@@ -325,8 +325,8 @@ fn small_cases_have_the_right_words_and_exit_codes() {
     }
     // An offset of 1e308 printed its 309 digits, and an error "at line 0".
     let (robot, camera) = (
-        testdata("real/ethz-asl/prime_sense_1_W_E.csv"),
-        testdata("real/ethz-asl/prime_sense_1_B_H.csv"),
+        testdata("kinhec/streams/temporal_10hz_eih_s0_robot.txt"),
+        testdata("kinhec/streams/temporal_10hz_eih_s0_camera.txt"),
     );
     for offset in ["1e308", "-1e308"] {
         let (code, _, err) = run(&[

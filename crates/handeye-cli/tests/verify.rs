@@ -6,6 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use common::shared_data::shared_each;
 use common::{run, testdata};
 use serde_json::Value;
 
@@ -132,10 +133,10 @@ fn a_turned_saved_x_is_inconsistent_in_degrees_and_millimetres() {
     assert!(err.contains("the camera moved on its mount"), "{err}");
 }
 
-/// `--robot R --camera C` of an ethz-asl recording.
-fn ethz(name: &str) -> [String; 4] {
+/// `--robot R --camera C` of an ethz-asl recording (in the shared folder `ethz`).
+fn ethz(ethz: &Path, name: &str) -> [String; 4] {
     let file = |side: &str| {
-        testdata(&format!("real/ethz-asl/{name}_{side}.csv"))
+        ethz.join(format!("{name}_{side}.csv"))
             .to_str()
             .unwrap()
             .to_string()
@@ -150,9 +151,13 @@ fn ethz(name: &str) -> [String; 4] {
 
 #[test]
 fn two_different_real_rigs_are_inconsistent() {
+    let found = shared_each(&["ethz-asl", "camodocal/TransformPairsInput.yml"]);
+    let [Some(ethz_asl), Some(camodocal)] = [&found[0], &found[1]] else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     // ethz-asl's PrimeSense recording (eye-in-hand) against its robot-arm recording.
-    let prime = ethz("prime_sense_1");
+    let prime = ethz(ethz_asl, "prime_sense_1");
     let (code, out, err) = run(&[
         "calibrate",
         &prime[0],
@@ -165,7 +170,7 @@ fn two_different_real_rigs_are_inconsistent() {
     assert_eq!(code, 0, "{err}");
     let saved = dir.path().join("prime_sense.json");
     std::fs::write(&saved, out).unwrap();
-    let arm = ethz("robot_arm_sim");
+    let arm = ethz(ethz_asl, "robot_arm_sim");
     let arm: Vec<&str> = arm.iter().map(String::as_str).collect();
     let (code, v, err) = verify(&saved, &arm, &[]);
     assert_eq!(code, 4, "{v} {err}");
@@ -173,8 +178,7 @@ fn two_different_real_rigs_are_inconsistent() {
     assert!(err.contains("a different rig"), "{err}");
     // camodocal's eye-to-hand rig against the PrimeSense recording read as eye-in-hand: an
     // error naming both setups (X is another transform in each).
-    let camodocal = testdata("real/camodocal/TransformPairsInput.yml");
-    let saved = save(dir.path(), &camodocal, "eye-to-hand", "json");
+    let saved = save(dir.path(), camodocal, "eye-to-hand", "json");
     let prime: Vec<&str> = prime.iter().map(String::as_str).collect();
     let (code, v, err) = verify(&saved, &prime, &["--setup", "eye-in-hand"]);
     assert_eq!(code, 2, "{v} {err}");

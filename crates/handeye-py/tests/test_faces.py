@@ -1,7 +1,8 @@
-"""One verdict in every face: every real and realistic pose set in testdata, every method, through
-the command line (`handeye calibrate --method M --pairs all`), Python's `calibrate(...,
-pairs="all")` and the OpenCV drop-in `calibrate_hand_eye(..., method=M, setup=...)` gives one
-decision (answer, warn, refuse), one X (to 1e-9), one sigma and the same words.
+"""One verdict in every face: every real and realistic pose set (testdata's, and other projects' in
+the shared folder), every method, through the command line (`handeye calibrate --method M --pairs
+all`), Python's `calibrate(..., pairs="all")` and the OpenCV drop-in `calibrate_hand_eye(...,
+method=M, setup=...)` gives one decision (answer, warn, refuse), one X (to 1e-9), one sigma and the
+same words.
 
 The drop-in's OpenCV constant for Tsai is the command line's `--method tsai --tsai-opencv-filter`.
 The faces name poses in their own vocabulary (the command line `file:line`, Python `pose i`), and
@@ -19,6 +20,7 @@ import numpy as np
 import pytest
 
 import handeye
+from conftest import shared_path
 
 REPO = pathlib.Path(__file__).resolve().parents[3]
 TESTDATA = REPO / "testdata"
@@ -29,27 +31,32 @@ METHODS = [("andreff", False), ("tsai", False), ("tsai", True), ("park", False),
            ("andreff-joint", False), ("daniilidis", False), ("refine", False)]
 
 
+#: The peers' sets converted by testdata/peers/make_peers.py, in the shared folder, with their setup
+#: (their peer.json says it too).
+PEERS = {"visp_eye_in_hand": "eye-in-hand", "visp_eye_to_hand": "eye-to-hand",
+         "ic_circle_grid_eye_in_hand": "eye-in-hand", "ic_charuco_eye_to_hand": "eye-to-hand"}
+
+
 def _sets():
-    """(id, CLI input arguments, read_recording keywords, setup) of every real and realistic set."""
+    """(id, CLI input arguments, read_recording keywords, setup, the shared set it reads or None) of
+    every real and realistic set."""
     sets = []
     for path in sorted((TESTDATA / "kinhec" / "pairs").glob("*.jsonl")):
         setup = "eye-to-hand" if "_eth_" in path.name else "eye-in-hand"
-        sets.append((f"kinhec/{path.stem}", [str(path)], {"path": str(path)}, setup))
+        sets.append((f"kinhec/{path.stem}", [str(path)], {"path": str(path)}, setup, None))
     for path in sorted((TESTDATA / "opencv").glob("*.jsonl")):
         setup = "eye-to-hand" if "eye-to-hand" in path.name else "eye-in-hand"
-        sets.append((f"opencv/{path.stem}", [str(path)], {"path": str(path)}, setup))
-    camodocal = TESTDATA / "real" / "camodocal" / "TransformPairsInput.yml"
-    sets.append(("real/camodocal", [str(camodocal)], {"path": str(camodocal)}, "eye-in-hand"))
+        sets.append((f"opencv/{path.stem}", [str(path)], {"path": str(path)}, setup, None))
+    # Other projects' data, read in place from the shared folder (conftest.py).
+    camodocal = shared_path("camodocal/TransformPairsInput.yml")
+    sets.append(("camodocal", [str(camodocal)], {"path": str(camodocal)}, "eye-in-hand", "camodocal"))
     for name in ("robot_arm_sim", "prime_sense_1"):
-        robot, camera = (TESTDATA / "real" / "ethz-asl" / f"{name}_{s}.csv" for s in ("B_H", "W_E"))
-        sets.append((f"real/ethz-asl/{name}", ["--robot", str(robot), "--camera", str(camera)],
-                     {"robot": str(robot), "camera": str(camera)}, "eye-in-hand"))
-    # Other projects' data (testdata/peers, made by make_peers.py): the setup is the one their
-    # peer.json gives.
-    for peer in sorted((TESTDATA / "peers").glob("*/peer.json")):
-        setup = json.loads(peer.read_text())["setup"]
-        for path in sorted(peer.parent.glob("*.jsonl")):
-            sets.append((f"peers/{peer.parent.name}/{path.stem}", [str(path)], {"path": str(path)}, setup))
+        robot, camera = (shared_path(f"ethz-asl/{name}_{s}.csv") for s in ("B_H", "W_E"))
+        sets.append((f"ethz-asl/{name}", ["--robot", str(robot), "--camera", str(camera)],
+                     {"robot": str(robot), "camera": str(camera)}, "eye-in-hand", "ethz-asl"))
+    for name, setup in PEERS.items():
+        path = shared_path(f"peers/{name}/poses.jsonl")
+        sets.append((f"peers/{name}", [str(path)], {"path": str(path)}, setup, f"peers/{name}"))
     return sets
 
 
@@ -120,8 +127,12 @@ def _close(a, b, what, tolerance=1e-9):
     assert a.shape == b.shape and np.allclose(a, b, rtol=tolerance, atol=tolerance), f"{what}: {a} != {b}"
 
 
-@pytest.mark.parametrize("name, args, source, setup", SETS, ids=[s[0] for s in SETS])
-def test_every_face_gives_one_verdict(name, args, source, setup):
+@pytest.mark.parametrize("name, args, source, setup, needs", SETS, ids=[s[0] for s in SETS])
+def test_every_face_gives_one_verdict(name, args, source, setup, needs, shared):
+    if needs:
+        shared(needs)
+    if needs and needs.startswith("peers/"):
+        assert json.loads((shared(needs) / "peer.json").read_text())["setup"] == setup, name
     read = handeye.read_recording(**source, setup=setup)
     g, c = read["base_from_gripper"], read["camera_from_target"]
     for method, opencv_filter in METHODS:
@@ -195,11 +206,39 @@ def test_the_weighted_solvers_give_opencvs_answer_in_the_datas_own_unit(path):
         assert np.abs(r_in - r_cv).max() > 1e-6, name
 
 
-def test_millimetres_and_metres_give_one_x_in_every_face():
+def _sigmas(result, published):
+    """How many of `result`'s own sigmas its transform is from `published`: (rotation, translation)."""
+    a, b = np.asarray(result["matrix"]), np.asarray(published)
+    angle = np.degrees(np.arccos(np.clip((np.trace(a[:3, :3].T @ b[:3, :3]) - 1) / 2, -1, 1)))
+    u = result["uncertainty"]
+    return angle / u["rotation_deg"], np.linalg.norm(a[:3, 3] - b[:3, 3]) / u["translation"]
+
+
+@pytest.mark.parametrize("name", ["visp_eye_in_hand", "visp_eye_to_hand"])
+def test_peers_python_gives_visps_published_answer(name, shared):
+    """Python's `calibrate` on ViSP's sets (in the shared folder), as tests/peers.rs holds the command
+    line: X within half a sigma of ViSP's published eMc / rMc (measured 0.495 at most: eye-to-hand's
+    rotation), by the hand–eye default and by robot-world, and the target within one sigma of its
+    published rMo / eMo (0.83 at most)."""
+    folder = shared(f"peers/{name}")
+    peer = json.loads((folder / "peer.json").read_text())
+    read = handeye.read_recording(folder / "poses.jsonl", setup=peer["setup"])
+    for robot_world in (False, True):
+        got = handeye.calibrate(read["base_from_gripper"], read["camera_from_target"], setup=peer["setup"],
+                                robot_world=robot_world)
+        assert got["verdict"] == "good", (name, robot_world, got["warnings"])
+        rotation, translation = _sigmas(got, peer["x"])
+        assert rotation < 0.5 and translation < 0.5, (name, robot_world, rotation, translation)
+        if robot_world:
+            rotation, translation = _sigmas(got["target"], peer["target"])
+            assert rotation < 1.0 and translation < 1.0, (name, "target", rotation, translation)
+
+
+def test_millimetres_and_metres_give_one_x_in_every_face(shared):
     # A real recording (camodocal's, robot poses inverted as it stores them) in metres and in
     # millimetres: the same X (its translation ×1000) and sigma by every method, where
     # Daniilidis came out 26° apart.
-    read = handeye.read_recording(TESTDATA / "real" / "camodocal" / "TransformPairsInput.yml")
+    read = handeye.read_recording(shared("camodocal/TransformPairsInput.yml"))
     g, c = read["base_from_gripper"], read["camera_from_target"]
     g = np.linalg.inv(g)
     mm_g, mm_c = g.copy(), c.copy()
@@ -261,11 +300,14 @@ def _robot_world_drop_in(g, c, method):
     return "answer", (np.linalg.inv(z), np.linalg.inv(w), [str(m.message) for m in said])
 
 
-@pytest.mark.parametrize("name, args, source, setup", EYE_IN_HAND_SETS, ids=[s[0] for s in EYE_IN_HAND_SETS])
-def test_robot_world_gives_one_verdict_in_every_face(name, args, source, setup):
+@pytest.mark.parametrize("name, args, source, setup, needs", EYE_IN_HAND_SETS,
+                         ids=[s[0] for s in EYE_IN_HAND_SETS])
+def test_robot_world_gives_one_verdict_in_every_face(name, args, source, setup, needs, shared):
     """`calibrate --robot-world`, Python's `calibrate(robot_world=True)` and the drop-in for
     cv2.calibrateRobotWorldHandEye: one decision, one X and target pose (to 1e-9), one verdict,
     the same cautions."""
+    if needs:
+        shared(needs)
     read = handeye.read_recording(**source, setup=setup)
     g, c = read["base_from_gripper"], read["camera_from_target"]
     for method in ROBOT_WORLD:

@@ -604,18 +604,19 @@ def test_read_recording_of_a_jsonl_file_names_each_pose_by_line():
     assert X.shape == (4, 4)
 
 
-def test_read_recording_of_two_streams_finds_the_cli_offset():
-    robot = "real/ethz-asl/robot_arm_sim_B_H.csv"
-    camera = "real/ethz-asl/robot_arm_sim_W_E.csv"
-    entry = golden(f"calibrate --robot testdata/{robot} --camera testdata/{camera} --time-offset auto --output json")
-    r = handeye.read_recording(robot=TESTDATA / robot, camera=TESTDATA / camera, time_offset="auto")
+def test_read_recording_of_two_streams_finds_the_cli_offset(shared):
+    # ethz-asl's streams, read in place from the shared folder; the golden outputs name it {shared}.
+    robot, camera = shared("ethz-asl/robot_arm_sim_B_H.csv", "ethz-asl/robot_arm_sim_W_E.csv")
+    entry = golden(f"calibrate --robot {{shared}}/ethz-asl/{robot.name} --camera {{shared}}/ethz-asl/{camera.name} "
+                   "--time-offset auto --output json")
+    r = handeye.read_recording(robot=robot, camera=camera, time_offset="auto")
     report = json.loads(entry["stdout"])
     assert r["time_offset"] == report["time_offset_s"]
     assert len(r["names"]) == report["poses"] == r["camera_from_target"].shape[0]
-    notes = [line.replace("testdata/", f"{TESTDATA}/") for line in entry["stderr"].splitlines()[:3]]
+    notes = [line.replace("{shared}", str(robot.parent.parent)) for line in entry["stderr"].splitlines()[:3]]
     assert r["notes"] == notes
     assert r["offset_curve"].shape[1] == 2
-    assert r["names"][0] == f"{TESTDATA / camera} at t = {r['stamps'][0]:.3f} s"
+    assert r["names"][0] == f"{camera} at t = {r['stamps'][0]:.3f} s"
 
 
 def test_read_recording_of_a_ros2_bag_with_auto_offset():

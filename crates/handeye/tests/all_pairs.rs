@@ -3,6 +3,8 @@
 //! in a `Vec` (which they go through one by one), on the kinhec suite, the camodocal recording and
 //! simulated series, both setups, with and without noise.
 
+mod shared_data;
+
 use std::path::Path;
 
 use handeye::check::quality::quality_report;
@@ -42,12 +44,13 @@ fn datasets() -> Vec<(String, Vec<PosePair>, Setup)> {
             setup,
         ));
     }
-    let camodocal = root.join("real/camodocal/TransformPairsInput.yml");
-    out.push((
-        "camodocal".into(),
-        read_pose_file(&camodocal, Format::Auto).unwrap().pairs,
-        Setup::EyeInHand,
-    ));
+    if let Some(camodocal) = shared_data::shared("camodocal/TransformPairsInput.yml") {
+        out.push((
+            "camodocal".into(),
+            read_pose_file(&camodocal, Format::Auto).unwrap().pairs,
+            Setup::EyeInHand,
+        ));
+    }
     for (poses, seed) in [(30, 1), (120, 2)] {
         let config = handeye::sim::SimConfig {
             poses,

@@ -8,7 +8,7 @@
 //! them: "fits far better"), and the estimate's drift term compared it with checkpoints whose own
 //! estimates rested on the still and one-axis poses.
 
-use std::path::{Path, PathBuf};
+mod shared_data;
 
 use handeye::check::readings::check_readings;
 use handeye::io::sync::{TimeOffset, pair_stream_files};
@@ -16,13 +16,11 @@ use handeye::model::pose::rotation_angle_between;
 use handeye::track::{TrackOptions, Tracker};
 use handeye::{Options, Pairing, Setup, calibrate};
 
-fn testdata() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata")
-}
-
 #[test]
 fn online_and_batch_give_one_answer_on_the_ethz_simulation() {
-    let dir = testdata().join("real/ethz-asl");
+    let Some(dir) = shared_data::shared("ethz-asl") else {
+        return;
+    };
     // As both faces read it by default: no clock offset.
     let pairing = pair_stream_files(
         &dir.join("robot_arm_sim_B_H.csv"),
@@ -118,7 +116,9 @@ fn online_and_batch_give_one_answer_on_the_ethz_simulation() {
 /// The still start alone: no reading is judged from a robot that has not turned.
 #[test]
 fn a_still_robot_is_not_judged_misread() {
-    let dir = testdata().join("real/ethz-asl");
+    let Some(dir) = shared_data::shared("ethz-asl") else {
+        return;
+    };
     let pairing = pair_stream_files(
         &dir.join("robot_arm_sim_B_H.csv"),
         &dir.join("robot_arm_sim_W_E.csv"),

@@ -2,6 +2,8 @@
 //! notes the command line shows (checked against its golden outputs, `testdata/golden`), and a
 //! clear error, never a panic, on bad input.
 
+mod shared_data;
+
 use std::path::{Path, PathBuf};
 
 use handeye::io::{
@@ -33,14 +35,15 @@ fn golden(args: &str) -> Value {
         .unwrap_or_else(|| panic!("no golden output for `{args}`"))
 }
 
-/// The first `n` lines the CLI printed on stderr, paths as the tests see them.
+/// The first `n` lines the CLI printed on stderr, paths as the tests see them (the shared
+/// folder's in place of `{shared}`).
 fn golden_notes(entry: &Value, n: usize) -> Vec<String> {
     entry["stderr"]
         .as_str()
         .unwrap()
         .lines()
         .take(n)
-        .map(|l| l.replace("testdata/", "../../testdata/"))
+        .map(|l| shared_data::unmasked(&l.replace("testdata/", "../../testdata/")))
         .collect()
 }
 
@@ -48,11 +51,16 @@ fn texts(notes: &[Note]) -> Vec<String> {
     notes.iter().map(Note::to_string).collect()
 }
 
-fn streams(robot: &str, camera: &str) -> Source {
-    Source::Streams {
-        robot: repo(robot),
-        camera: repo(camera),
-    }
+/// ethz-asl's two streams `name` (`robot_arm_sim`, `prime_sense_1`) in the shared folder, and
+/// their paths in the golden commands; `None` when the folder has no ethz-asl.
+fn ethz(name: &str) -> Option<(Source, String, String)> {
+    let dir = shared_data::shared("ethz-asl")?;
+    let source = Source::Streams {
+        robot: dir.join(format!("{name}_B_H.csv")),
+        camera: dir.join(format!("{name}_W_E.csv")),
+    };
+    let golden = |side: &str| format!("{}/ethz-asl/{name}_{side}.csv", shared_data::PLACEHOLDER);
+    Some((source, golden("B_H"), golden("W_E")))
 }
 
 fn auto() -> RecordingOptions {
@@ -89,16 +97,14 @@ fn a_jsonl_file_gives_its_pairs_named_by_line() {
 
 #[test]
 fn two_streams_with_auto_give_the_cli_offset_notes_and_names() {
-    let robot = "testdata/real/ethz-asl/robot_arm_sim_B_H.csv";
-    let camera = "testdata/real/ethz-asl/robot_arm_sim_W_E.csv";
+    let Some((source, robot, camera)) = ethz("robot_arm_sim") else {
+        return;
+    };
     let entry = golden(&format!(
         "calibrate --robot {robot} --camera {camera} --time-offset auto --output json"
     ));
     let mut told = Vec::new();
-    let r = Recording::read_telling(&streams(robot, camera), &auto(), &mut |n| {
-        told.push(n.to_string())
-    })
-    .unwrap();
+    let r = Recording::read_telling(&source, &auto(), &mut |n| told.push(n.to_string())).unwrap();
     assert_eq!(told, golden_notes(&entry, 3));
     assert_eq!(texts(&r.notes), told);
     let report: Value = serde_json::from_str(entry["stdout"].as_str().unwrap()).unwrap();
@@ -106,7 +112,10 @@ fn two_streams_with_auto_give_the_cli_offset_notes_and_names() {
     assert_eq!(r.poses.len() as u64, report["poses"].as_u64().unwrap());
     assert_eq!(r.names.len(), r.poses.len());
     let stamp = r.stamps[0].unwrap();
-    assert_eq!(r.names[0], format!("../../{camera} at t = {stamp:.3} s"));
+    assert_eq!(
+        r.names[0],
+        format!("{} at t = {stamp:.3} s", shared_data::unmasked(&camera))
+    );
     assert_eq!(r.lines[..3], [1, 2, 3]);
     let curve = r.offset_curve.as_ref().unwrap();
     let best = curve
@@ -119,9 +128,10 @@ fn two_streams_with_auto_give_the_cli_offset_notes_and_names() {
 
 #[test]
 fn two_streams_without_an_offset_flag_are_searched_by_default_with_its_sigma() {
-    let robot = "testdata/real/ethz-asl/prime_sense_1_B_H.csv";
-    let camera = "testdata/real/ethz-asl/prime_sense_1_W_E.csv";
-    let r = Recording::read(&streams(robot, camera), &RecordingOptions::default()).unwrap();
+    let Some((source, robot, camera)) = ethz("prime_sense_1") else {
+        return;
+    };
+    let r = Recording::read(&source, &RecordingOptions::default()).unwrap();
     let entry = golden(&format!(
         "calibrate --robot {robot} --camera {camera} --output json"
     ));
@@ -138,7 +148,7 @@ fn two_streams_without_an_offset_flag_are_searched_by_default_with_its_sigma() {
         time_offset: Some(TimeOffset::Fixed(0.0)),
         ..RecordingOptions::default()
     };
-    let r = Recording::read(&streams(robot, camera), &zero).unwrap();
+    let r = Recording::read(&source, &zero).unwrap();
     assert_eq!(r.time_offset, Some(0.0));
     assert!(r.time_offset_sigma.is_none() && r.offset_curve.is_none());
 }
@@ -210,7 +220,10 @@ fn a_missing_file_names_it() {
         Err(Error::Io { file, .. }) => assert_eq!(file, path.display().to_string()),
         other => panic!("expected an Io error, got {other:?}"),
     }
-    let missing = streams("testdata/no_such_robot.txt", "testdata/no_such_camera.txt");
+    let missing = Source::Streams {
+        robot: repo("testdata/no_such_robot.txt"),
+        camera: repo("testdata/no_such_camera.txt"),
+    };
     let e = Recording::read(&missing, &RecordingOptions::default()).unwrap_err();
     assert!(e.to_string().contains("no_such_robot.txt"), "{e}");
 }

@@ -3,6 +3,8 @@
 //! outlier models), against the batch answer, the truth and OpenCV on 100 subsampled frames
 //! (`testdata/kinhec/opencv_streams.json`, made by `opencv_streams.py`).
 
+mod shared_data;
+
 use std::path::{Path, PathBuf};
 
 use handeye::io::sync::{StreamPairing, TimeOffset, pair_stream_files};
@@ -71,8 +73,10 @@ fn worst_ratio(reports: &[Report], reference: &Transform) -> f64 {
 
 #[test]
 fn the_ethz_recordings_raise_no_alarm_and_end_at_the_batch_answer() {
+    let Some(dir) = shared_data::shared("ethz-asl") else {
+        return;
+    };
     for name in ["robot_arm_sim", "prime_sense_1"] {
-        let dir = testdata().join("real/ethz-asl");
         let pairing = pair_stream_files(
             &dir.join(format!("{name}_B_H.csv")),
             &dir.join(format!("{name}_W_E.csv")),
@@ -120,7 +124,9 @@ fn the_ethz_recordings_raise_no_alarm_and_end_at_the_batch_answer() {
 /// recording.
 #[test]
 fn a_dense_stream_s_early_reports_hold_within_their_uncertainty() {
-    let dir = testdata().join("real/ethz-asl");
+    let Some(dir) = shared_data::shared("ethz-asl") else {
+        return;
+    };
     let pairing = pair_stream_files(
         &dir.join("robot_arm_sim_B_H.csv"),
         &dir.join("robot_arm_sim_W_E.csv"),

@@ -3,6 +3,12 @@
 
 use std::path::{Path, PathBuf};
 
+/// Other projects' data, read in place from the shared folder: the one rule every test follows.
+#[path = "../../../handeye/tests/shared_data/mod.rs"]
+pub mod shared_data;
+#[allow(unused_imports)] // Not every test binary reads the shared folder.
+pub use shared_data::shared;
+
 /// A file or directory under the repository's `testdata/`.
 pub fn testdata(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -299,9 +299,15 @@ mod tests {
                 }
             }
         }
-        let camodocal = root.join("real/camodocal/TransformPairsInput.yml");
-        let camodocal = read_camodocal(&camodocal);
-        out.push(("camodocal".into(), camodocal, Setup::EyeInHand));
+        if let Some(camodocal) =
+            crate::model::shared_data::shared("camodocal/TransformPairsInput.yml")
+        {
+            out.push((
+                "camodocal".into(),
+                read_camodocal(&camodocal),
+                Setup::EyeInHand,
+            ));
+        }
         for (poses, seed) in [(4, 1), (5, 2), (17, 3), (120, 4), (300, 5)] {
             let config = SimConfig {
                 poses,

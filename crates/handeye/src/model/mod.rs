@@ -13,3 +13,9 @@ pub mod rotation;
 pub mod saved;
 pub(crate) mod station;
 pub mod warning;
+
+/// Other projects' data, read in place from the shared folder: the tests' one rule, here at the
+/// bottom layer so that every layer's unit tests may use it (`tests/shared_data/mod.rs`).
+#[cfg(test)]
+#[path = "../../tests/shared_data/mod.rs"]
+pub(crate) mod shared_data;
