@@ -620,7 +620,7 @@ pub fn text(r: &HandEyeReport, f: &Frames, unit: Option<Unit>) -> String {
 
 /// A transform's lines in the text face: its translation (and in millimetres when it is in
 /// metres), its roll, pitch, yaw and its quaternion.
-fn transform_lines(s: &mut String, x: &handeye::Transform, unit: Option<Unit>) {
+pub fn transform_lines(s: &mut String, x: &handeye::Transform, unit: Option<Unit>) {
     let u = unit_name(unit);
     let json = handeye::TransformJson::from(x);
     let [tx, ty, tz] = json.translation;
