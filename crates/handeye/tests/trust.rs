@@ -12,9 +12,7 @@ use handeye::check::quality::errors_against_truth;
 use handeye::io::{Format, read_pose_file, transform_from_json};
 use handeye::model::findings::Reading;
 use handeye::model::warning::Remedy;
-use handeye::{
-    Degeneracy, Error, LowDofMissing, Method, Pairing, Problem, Setup, Transform, Warning,
-};
+use handeye::{Degeneracy, Error, LowDofMissing, Method, Pairing, Problem, Setup, Transform};
 use handeye::{Fix, HandEyeReport as Report, Options, calibrate};
 use serde_json::Value;
 
