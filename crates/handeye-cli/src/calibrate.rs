@@ -117,6 +117,11 @@ pub struct Args {
     /// then seen at 1 mm. Refused (exit 2) when it does not turn the hand as the poses do.
     #[arg(long, value_name = "FILE")]
     robot_model: Option<std::path::PathBuf>,
+    /// The uncertainty you need: a one-sigma rotation in degrees and a translation in the input's
+    /// unit (`0.2,0.001`), as `advise --goal` takes it. An X whose one-sigma uncertainty is above
+    /// it in either is not `good`: the verdict says whether it is met (JSON `goal.met`).
+    #[arg(long, value_name = "DEGREES,LENGTH", value_parser = values::goal)]
+    goal: Option<handeye::Sizes>,
 }
 
 /// Refuses the flags of the calibration on the pixels without `--method reprojection` (exit 2).
@@ -709,6 +714,7 @@ fn options(args: &Args) -> Result<Options> {
         replicates: args.bootstrap,
         point: args.point,
         priors: args.prior.clone(),
+        goal: args.goal,
         ..Options::default()
     })
 }

@@ -558,7 +558,7 @@ pub fn text(r: &HandEyeReport, f: &Frames, unit: Option<Unit>) -> String {
     transform_lines(&mut s, &r.transform, unit);
     verdict_lines(
         &mut s,
-        r.verdict,
+        (r.verdict, r.goal.as_ref(), u),
         &r.warnings,
         (r.outliers.poses.len(), r.outliers.rejected),
     );
@@ -620,7 +620,7 @@ pub fn text(r: &HandEyeReport, f: &Frames, unit: Option<Unit>) -> String {
 
 /// A transform's lines in the text face: its translation (and in millimetres when it is in
 /// metres), its roll, pitch, yaw and its quaternion.
-fn transform_lines(s: &mut String, x: &handeye::Transform, unit: Option<Unit>) {
+pub fn transform_lines(s: &mut String, x: &handeye::Transform, unit: Option<Unit>) {
     let u = unit_name(unit);
     let json = handeye::TransformJson::from(x);
     let [tx, ty, tz] = json.translation;
@@ -645,11 +645,16 @@ fn transform_lines(s: &mut String, x: &handeye::Transform, unit: Option<Unit>) {
 /// The verdict, its cautions and the poses that disagree.
 fn verdict_lines(
     s: &mut String,
-    verdict: handeye::Assessment,
+    (verdict, goal, u): (handeye::Assessment, Option<&handeye::GoalCheck>, &str),
     warnings: &[handeye::Warning],
     (disagree, rejected): (usize, bool),
 ) {
-    let _ = writeln!(s, "\nVerdict: {}", verdict.name());
+    let _ = writeln!(
+        s,
+        "\nVerdict: {}{}",
+        verdict.name(),
+        good_means(verdict, goal, u)
+    );
     for w in warnings {
         let _ = writeln!(s, "  - {}", warning(w));
     }
@@ -659,6 +664,21 @@ fn verdict_lines(
             "  - {disagree} pose(s) disagree with the others{}",
             if rejected { " and were left out" } else { "" }
         );
+    }
+}
+
+/// What a `good` verdict means, after it: X within the user's goal (`--goal`), or else within the
+/// uncertainty printed with it; nothing after `questionable` (its cautions follow).
+fn good_means(verdict: handeye::Assessment, goal: Option<&handeye::GoalCheck>, u: &str) -> String {
+    if verdict != handeye::Assessment::Good {
+        return String::new();
+    }
+    match goal {
+        Some(g) => format!(
+            " (within your goal of {}° and {} {u}, one sigma)",
+            g.goal.rotation_deg, g.goal.translation
+        ),
+        None => " (trust X to the uncertainty printed below, one sigma)".into(),
     }
 }
 
@@ -683,7 +703,7 @@ pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) ->
     transform_lines(&mut s, &r.target_transform, unit);
     verdict_lines(
         &mut s,
-        r.verdict,
+        (r.verdict, r.goal.as_ref(), u),
         &r.warnings,
         (r.outliers.poses.len(), r.outliers.rejected),
     );

@@ -246,6 +246,13 @@ fn end(
     let last = calibrator.last_report();
     let summary = summary(calibrator, last.as_ref(), print.bad_lines.count());
     crate::tell!("{summary}");
+    if let (Face::Text, Some(report)) = (Face::chosen(args.output), &last) {
+        print_text(&copyable(
+            report,
+            args.input.setup(),
+            calibrator.summary().unit,
+        ))?;
+    }
     if let (Some(path), Some(mut trace)) = (&args.report, print.trace) {
         trace.poses = calibrator.poses();
         trace.offset = offset;
@@ -420,6 +427,19 @@ fn publish_report(
         Face::Ros2 => faces::ros2(published, to),
         _ => faces::urdf(published, to),
     })
+}
+
+/// The estimate to use as the text face of `calibrate` prints X, to copy: its translation (and in
+/// millimetres when in metres), roll, pitch, yaw and quaternion.
+fn copyable(r: &Report, setup: handeye::Setup, unit: Unit) -> String {
+    let mut s = format!(
+        "X = {} (estimate {} from {} poses, the one to use):\n",
+        setup.x_frame(),
+        r.number,
+        r.estimate.poses
+    );
+    faces::transform_lines(&mut s, &r.estimate.x, known(unit));
+    s
 }
 
 /// A report of the accumulating estimator on stdout, in the face chosen.

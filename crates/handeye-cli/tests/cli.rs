@@ -781,3 +781,59 @@ fn advise_says_you_are_done_when_x_is_within_the_goal() {
         assert!(err.contains("--goal"), "{bad}: {err}");
     }
 }
+
+/// `calibrate --goal DEGREES,LENGTH` (issue 52): an X whose one-sigma uncertainty is above the
+/// goal is not `good`, the text face says what `good` means, JSON says whether the goal is met.
+#[test]
+fn calibrate_judges_x_against_the_goal() {
+    let file = testdata("kinhec/pairs/nominal_stations_eih_s0.jsonl");
+    let json = |goal: &str| {
+        let (code, out, _) = run(handeye()
+            .arg("calibrate")
+            .arg(&file)
+            .args(["--goal", goal, "--output", "json"]));
+        assert_eq!(code, 0, "{out}");
+        serde_json::from_str::<Value>(&out).unwrap()
+    };
+    let r = json("1,0.01");
+    let sigma = (
+        r["uncertainty"]["rotation_deg"].as_f64().unwrap(),
+        r["uncertainty"]["translation"].as_f64().unwrap(),
+    );
+    assert_eq!(r["verdict"], "good");
+    assert_eq!(r["goal"]["met"], true);
+    // A goal below X's one-sigma rotation: questionable, the warning says by how much.
+    let r = json(&format!("{},0.01", sigma.0 / 2.0));
+    assert_eq!(r["verdict"], "questionable");
+    assert_eq!(r["goal"]["met"], false);
+    let codes: Vec<&str> = r["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["code"].as_str().unwrap())
+        .collect();
+    assert_eq!(codes, ["goal_missed"]);
+    // Below the translation's alone, too.
+    assert_eq!(json(&format!("1,{}", sigma.1 / 2.0))["goal"]["met"], false);
+    // The text face: what good means, with and without a goal.
+    let text = |extra: &[&str]| {
+        let (code, out, _) = run(handeye()
+            .arg("calibrate")
+            .arg(&file)
+            .args(extra)
+            .args(["--output", "text"]));
+        assert_eq!(code, 0, "{out}");
+        out
+    };
+    assert!(
+        text(&["--goal", "0.2,0.001"])
+            .contains("Verdict: good (within your goal of 0.2° and 0.001 m, one sigma)")
+    );
+    assert!(text(&[]).contains("Verdict: good (trust X to the uncertainty printed below"));
+    // A goal that is not two positive sizes is refused when the command line is read.
+    let (code, _, err) = run(handeye()
+        .arg("calibrate")
+        .arg(&file)
+        .args(["--goal", "0,1"]));
+    assert_eq!(code, 2, "{err}");
+}

@@ -235,3 +235,36 @@ fn swapped_frame_names_publish_nothing_online() {
     assert_eq!(code, 3, "{err}");
     assert!(err.contains("the input looks misread"), "{err}");
 }
+
+/// The text face ends with the estimate to use as a transform to copy (issue 52): translation and
+/// quaternion as `calibrate --output text` prints them, the same X `--output ros2` publishes.
+#[test]
+fn the_text_face_prints_the_estimate_to_copy() {
+    let common = ["online", "--robot", ROBOT, "--camera", CAMERA, "--output"];
+    let (code, out, err) = run(&[&common[..], &["text"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let at = out
+        .find("X = gripper_from_camera (estimate ")
+        .unwrap_or_else(|| panic!("no transform in {out}"));
+    let block = &out[at..];
+    let numbers = |prefix: &str| -> Vec<f64> {
+        let line = block
+            .lines()
+            .find(|l| l.trim_start().starts_with(prefix))
+            .unwrap_or_else(|| panic!("no {prefix} in {block}"));
+        line.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+            .filter_map(|w| w.parse().ok())
+            .collect()
+    };
+    let t = numbers("translation");
+    let q = numbers("quaternion");
+    let (code, out, err) = run(&[&common[..], &["ros2"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let (tp, qp) = published(&out);
+    for k in 0..3 {
+        assert!((t[k] - tp[k]).abs() < 1e-6, "{t:?} {tp:?}");
+    }
+    // The same rotation, whatever the quaternion's sign.
+    let dot: f64 = (0..4).map(|k| q[k] * qp[k]).sum();
+    assert!(dot.abs() > 1.0 - 1e-6, "{q:?} {qp:?}");
+}

@@ -467,7 +467,7 @@ fn rodrigues(w: &Vector3<f64>) -> Matrix3<f64> {
 /// same object `handeye calibrate` prints for the same input and flags (the Python layer parses
 /// it); on the pixels the records are named as there.
 #[pyfunction]
-#[pyo3(signature = (base_from_gripper=None, camera_from_target=None, path=None, intrinsics=None, method=None, setup="eye-in-hand", robot_world=false, pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::Options::default().replicates, point=None, joints=None, prior=None, robot_model=None, refine_intrinsics=false, base_frame=None, gripper_frame=None, camera_frame=None, target_topic=None, tag_size=None, tag_id=None, camera_info_topic=None, time_offset=None, max_gap=0.1))]
+#[pyo3(signature = (base_from_gripper=None, camera_from_target=None, path=None, intrinsics=None, method=None, setup="eye-in-hand", robot_world=false, pairs="all", tsai_opencv_filter=false, reject_outliers=false, fix=None, bootstrap=handeye::Options::default().replicates, point=None, joints=None, prior=None, robot_model=None, refine_intrinsics=false, base_frame=None, gripper_frame=None, camera_frame=None, target_topic=None, tag_size=None, tag_id=None, camera_info_topic=None, time_offset=None, max_gap=0.1, goal=None))]
 #[allow(clippy::too_many_arguments)]
 fn calibrate_report<'py>(
     py: Python<'py>,
@@ -497,7 +497,12 @@ fn calibrate_report<'py>(
     camera_info_topic: Option<String>,
     time_offset: Option<&Bound<'_, PyAny>>,
     max_gap: f64,
+    goal: Option<(f64, f64)>,
 ) -> PyResult<String> {
+    let goal = goal.map(|(rotation_deg, translation)| handeye::Sizes {
+        rotation_deg,
+        translation,
+    });
     if let Some(path) = path {
         let bag = TagBag {
             frames: [base_frame, gripper_frame, camera_frame],
@@ -532,6 +537,7 @@ fn calibrate_report<'py>(
             py.allow_threads(|| pixel_recording(path, intrinsics, bag, &reading))?;
         let options = handeye::Options {
             pose_names: read.names,
+            goal,
             ..options
         };
         let input = handeye::Input::Pixels {
@@ -576,6 +582,7 @@ fn calibrate_report<'py>(
             ..calibration_options(method.unwrap_or("andreff"), pairs, tsai_opencv_filter)?
         }
     };
+    let options = handeye::Options { goal, ..options };
     let setup = parse_setup(setup)?;
     let poses = poses(&base_from_gripper, &camera_from_target)?;
     let report = py

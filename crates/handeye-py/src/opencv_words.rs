@@ -137,6 +137,17 @@ pub fn warning(w: &Warning, setup: Option<Setup>, d: DropIn) -> String {
 
 /// "the input looks misread: …" with what to pass instead, the likeliest reading first.
 fn misread(readings: &[Reading], d: DropIn) -> String {
+    if readings == [Reading::BothInverted] {
+        // Both readings fit exactly as well: the sizes and the camera poses tell (the library's
+        // `ReadingCheck::both_inverted`).
+        return format!(
+            "the input looks misread: all four arrays look inverted (X and the target have the \
+             sizes of each other, and R_{camera}, t_{camera} put the target off the camera's \
+             axis where their inverses put it in view): {}",
+            reading(Reading::BothInverted, d),
+            camera = d.camera
+        );
+    }
     let mut text = format!(
         "the input looks misread: the poses fit far better with {}",
         reading(readings[0], d)

@@ -214,14 +214,21 @@ def test_misread_inputs_raise_naming_the_arrays_to_change():
 
 def test_all_four_arrays_inverted_are_not_answered_silently():
     # Eye-in-hand with every array inverted fits exactly, with X and the target's pose swapped:
-    # X comes out half a metre from the truth. Without `setup` a fixed camera would give the same
-    # sizes, so the drop-in warns and asks; told "eye-in-hand", it says the arrays are inverted.
+    # X would come out half a metre from the truth. The sizes alone would fit a fixed camera too,
+    # but the camera arrays put the target off the camera's axis where their inverses put it in
+    # view: refused, with or without `setup` (issue 52), naming the inversion.
     args, truth = opencv_arguments(TESTDATA / "kinhec" / "mistakes" / "both_inverted__nominal_stations_eih_s0.jsonl")
-    with pytest.warns(UserWarning, match='setup="eye-to-hand" or setup="eye-in-hand"'):
-        _, t = handeye.calibrate_hand_eye(*args, method="park")
-    assert np.linalg.norm(t.ravel() - truth) > 0.3
-    with pytest.warns(UserWarning, match="all four arrays are likely inverted"):
-        handeye.calibrate_hand_eye(*args, method="park", setup="eye-in-hand")
+    for setup in (None, "eye-in-hand"):
+        with pytest.raises(ValueError, match="all four arrays look inverted"):
+            handeye.calibrate_hand_eye(*args, method="park", setup=setup)
+    # Inverted back, the arrays give the truth.
+    inverse = [np.linalg.inv(np.block([[r, t.reshape(3, 1)], [np.zeros((1, 3)), np.ones((1, 1))]]))
+               for r, t in zip(args[0] + args[2], args[1] + args[3])]
+    n = len(args[0])
+    r_g, t_g = [m[:3, :3] for m in inverse[:n]], [m[:3, 3] for m in inverse[:n]]
+    r_c, t_c = [m[:3, :3] for m in inverse[n:]], [m[:3, 3] for m in inverse[n:]]
+    _, t = handeye.calibrate_hand_eye(r_g, t_g, r_c, t_c, method="park", setup="eye-in-hand")
+    assert np.linalg.norm(t.ravel() - truth) < 0.01
 
 
 def test_outliers_are_named_not_mistaken_for_a_misread_input():

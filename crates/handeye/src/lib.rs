@@ -97,7 +97,7 @@ pub mod track;
 // Model: poses, motions, the setup, errors, warnings and what they carry.
 pub use model::camera::{Detections, Frame, Intrinsics};
 pub use model::error::{Degeneracy, Error, LowDofMissing, Result};
-pub use model::findings::{Part, Reading, Sizes, Verdict, Written, WrittenAs};
+pub use model::findings::{GoalCheck, Part, Reading, Sizes, Verdict, Written, WrittenAs};
 pub use model::kinematics::{DhConvention, Kinematics};
 pub use model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup, motion_pairs};
 pub use model::names::Named;

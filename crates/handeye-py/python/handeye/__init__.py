@@ -161,6 +161,7 @@ def calibrate(
     camera_info_topic=None,
     time_offset=None,
     max_gap=0.1,
+    goal=None,
 ) -> dict:
     """Batch calibration from (N,4,4) arrays, with its uncertainty, or a ValueError that says why
     X cannot be trusted and what to do. Returns the same object ``handeye calibrate`` prints, as a
@@ -190,6 +191,9 @@ def calibrate(
     lets the systematic-error test ask whether the residuals follow an error of the table's
     parameters (``systematic["kinematic"]``): an uncalibrated robot is then seen at 1 mm. A table
     that does not turn the hand as the poses do, or in another unit, raises a ValueError.
+    ``goal`` (``(degrees, length)``: the one-sigma rotation and translation you need, the input's
+    unit, as ``advise(goal=...)`` and ``--goal``): an X whose one-sigma uncertainty is above it in
+    either is not "good" (warning ``goal_missed``); the report's ``goal`` says whether it is met.
 
     With ``robot_world=True`` X and the target's pose are solved together from every pose once
     (A X = Z B; ``method`` "shah", "li" or "refine", the default; ``pairs`` does not apply): the same object ``handeye calibrate --robot-world`` prints,
@@ -231,6 +235,7 @@ def calibrate(
             camera_info_topic=camera_info_topic,
             time_offset=time_offset,
             max_gap=float(max_gap),
+            goal=_goal(goal),
         )
     else:
         g, c = _transforms(base_from_gripper, camera_from_target)
@@ -251,6 +256,7 @@ def calibrate(
             joints=joints,
             prior=_priors(prior),
             robot_model=robot_model,
+            goal=_goal(goal),
         )
     result = json.loads(report)
     result["matrix"] = np.array(result["matrix"], dtype=np.float64)
@@ -395,11 +401,17 @@ def advise(base_from_gripper, camera_from_target, setup="eye-in-hand", count=3, 
     is within it now (and no suggestion), else ``after``: the suggested motion after which the
     prediction is."""
     g, c = _transforms(base_from_gripper, camera_from_target)
-    if goal is not None:
-        goal = tuple(float(v) for v in goal)
-        if len(goal) != 2:
-            raise ValueError("goal: expected (degrees, length), a one-sigma rotation and translation")
-    return json.loads(_advise_report(g, c, setup=setup, count=count, prior=_priors(prior), goal=goal))
+    return json.loads(_advise_report(g, c, setup=setup, count=count, prior=_priors(prior), goal=_goal(goal)))
+
+
+def _goal(goal):
+    """``goal`` as the library takes it: ``(degrees, length)`` as two floats, or None."""
+    if goal is None:
+        return None
+    goal = tuple(float(v) for v in goal)
+    if len(goal) != 2:
+        raise ValueError("goal: expected (degrees, length), a one-sigma rotation and translation")
+    return goal
 
 
 def calibrate_on_pixels(

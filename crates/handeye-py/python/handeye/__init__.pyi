@@ -53,6 +53,7 @@ def calibrate(
     camera_info_topic: Optional[str] = None,
     time_offset: Optional[Union[float, str]] = None,
     max_gap: float = 0.1,
+    goal: Optional[tuple[float, float]] = None,
 ) -> dict[str, Any]: ...
 
 def advise(

@@ -299,7 +299,7 @@ fn turns(
 }
 
 /// Refuses a goal that is not two positive finite sizes.
-fn check_goal(goal: Option<Sizes>) -> Result<()> {
+pub(crate) fn check_goal(goal: Option<Sizes>) -> Result<()> {
     match goal {
         Some(g)
             if !(g.rotation_deg.is_finite()

@@ -171,6 +171,10 @@ pub struct Options {
     /// Refine the camera's intrinsics with X on the pixels (`--refine-intrinsics`; only with the
     /// calibration on the pixels, refused elsewhere). Default false.
     pub refine_intrinsics: bool,
+    /// The uncertainty the user needs (`--goal`): a one-sigma rotation (degrees) and translation
+    /// (input unit), as `advise` takes it. An X whose one-sigma uncertainty is above it in either
+    /// is not `good` (`Warning::GoalMissed`); the report says whether it is met. Default none.
+    pub goal: Option<crate::model::findings::Sizes>,
 }
 
 impl Options {
@@ -214,6 +218,7 @@ impl Default for Options {
             robot_model: None,
             priors: Vec::new(),
             refine_intrinsics: false,
+            goal: None,
         }
     }
 }

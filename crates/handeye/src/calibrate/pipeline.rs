@@ -19,6 +19,7 @@
 //!
 //! [`Degeneracy::Undetermined`]: crate::Degeneracy::Undetermined
 
+use crate::calibrate::advice::check_goal;
 use crate::calibrate::input::Input;
 use crate::calibrate::low_dof::{self, Plan};
 use crate::calibrate::options::{Options, Problem, check_joints, not_without_pixels};
@@ -44,7 +45,7 @@ use crate::check::uncertainty::{
 };
 use crate::model::camera::{Frame, Intrinsics};
 use crate::model::error::{Error, Result};
-use crate::model::findings::{Assessment, OutlierPose, Reading};
+use crate::model::findings::{Assessment, GoalCheck, OutlierPose, Reading, Sizes};
 use crate::model::motion::{Pairing, PosePair, Setup};
 use crate::model::pose::{MAX_TRANSLATION, Transform, TransformJson, check_translation};
 use crate::model::prior::{Prior, PriorsUsed, check_priors};
@@ -102,7 +103,8 @@ pub fn calibrate<'a>(
     setup: Setup,
     options: &Options,
 ) -> Result<Report> {
-    match (input.into(), options.problem) {
+    check_goal(options.goal)?;
+    let report = match (input.into(), options.problem) {
         (Input::Poses(poses), Problem::HandEye(_)) => hand_eye_on_poses(poses, setup, options)
             .map(Report::HandEye)
             .map_err(|e| with_shifted_pairing(e, poses, setup, options)),
@@ -112,7 +114,32 @@ pub fn calibrate<'a>(
         (Input::Pixels { frames, camera }, problem) => {
             on_pixels(frames, camera, setup, options, problem)
         }
+    }?;
+    Ok(match options.goal {
+        Some(goal) => against_goal(report, goal),
+        None => report,
+    })
+}
+
+/// The report judged against the user's goal: a one-sigma uncertainty above it in either size is
+/// a caution (`Warning::GoalMissed`, after the others), and the verdict says so.
+fn against_goal(mut report: Report, goal: Sizes) -> Report {
+    let u = report.uncertainty();
+    let sigma = Sizes {
+        rotation_deg: u.rotation_deg,
+        translation: u.translation,
+    };
+    let met = sigma.within(&goal);
+    let (warnings, verdict, check) = match &mut report {
+        Report::HandEye(r) => (&mut r.warnings, &mut r.verdict, &mut r.goal),
+        Report::RobotWorld(r) => (&mut r.warnings, &mut r.verdict, &mut r.goal),
+    };
+    if !met {
+        warnings.push(Warning::GoalMissed { goal, sigma });
     }
+    *verdict = Assessment::of(warnings);
+    *check = Some(GoalCheck { goal, met });
+    report
 }
 
 /// A refusal of the motions (degenerate, undetermined) led by a pairing off by a record, where
@@ -491,6 +518,7 @@ fn hand_eye_report(
     // reading's `--fix`), the others after them, each group in the order found.
     warnings.sort_by_key(|w| w.remedy().is_none());
     HandEyeReport {
+        goal: None,
         verdict: Assessment::of(&warnings),
         method: options.hand_eye_method(),
         setup,
@@ -625,6 +653,7 @@ fn robot_world_report(
 ) -> RobotWorldReport {
     warnings.extend(read.kept_outliers);
     RobotWorldReport {
+        goal: None,
         verdict: Assessment::of(&warnings),
         method: solved.method,
         setup,
@@ -714,6 +743,7 @@ pub(crate) fn hand_eye_on_pixels(
     let summary = reprojection_summary(frames, setup, &solution, reading_check, (options, choice));
     warnings.sort_by_key(|w| w.remedy().is_none());
     Ok(HandEyeReport {
+        goal: None,
         verdict: Assessment::of(&warnings),
         method: Method::Reprojection,
         setup,
@@ -857,6 +887,7 @@ fn robot_world_on_pixels(
         pixels::target_uncertainty(&poses, setup, target_covariance, conditioning)?;
     let residual = PoseResidualSummary::of(pose_residuals(&poses, setup, &transform, &target));
     Ok(RobotWorldReport {
+        goal: None,
         verdict,
         method: RobotWorldMethod::Reprojection,
         setup,

@@ -56,9 +56,7 @@ pub(crate) fn choose_reading(
     }
     let check = check_readings(poses, setup, written);
     let (Some(finding), Some(better)) = (check.finding(setup), check.better) else {
-        warnings.extend(check.size_warning(setup));
-        warnings.extend(check.alike_warning(setup));
-        return Ok((Reading::AsGiven, Some(check)));
+        return both_inverted(check, setup, fix, warnings);
     };
     match fix {
         Fix::Auto if check.unambiguous() => {
@@ -84,6 +82,33 @@ pub(crate) fn choose_reading(
             frames: check.frames,
         }),
     }
+}
+
+/// The reading to solve under when no reading fits better: as given, unless both inputs look
+/// inverted ([`ReadingCheck::both_inverted`]), which is refused (`--fix as-given` keeps the
+/// input, with the warning on the sizes) or, under `--fix auto`, read so.
+fn both_inverted(
+    check: ReadingCheck,
+    setup: Setup,
+    fix: Fix,
+    warnings: &mut Vec<Warning>,
+) -> Result<(Reading, Option<ReadingCheck>)> {
+    if let Some(refusal) = check.both_inverted_misread(setup) {
+        match (fix, refusal) {
+            (Fix::Read(_), _) => {}
+            (Fix::Auto, Error::Misread { finding, .. }) if !check.frames => {
+                warnings.push(Warning::ReadAs {
+                    reading: Reading::BothInverted,
+                    finding,
+                });
+                return Ok((Reading::BothInverted, Some(check)));
+            }
+            (_, refusal) => return Err(refusal),
+        }
+    }
+    warnings.extend(check.size_warning(setup));
+    warnings.extend(check.alike_warning(setup));
+    Ok((Reading::AsGiven, Some(check)))
 }
 
 /// The poses without the outliers.

@@ -50,6 +50,16 @@ const POOR_TRANSLATION: f64 = 0.02;
 /// X and Y sizes must differ by this factor for [`ReadingFit::plausible`] to tell.
 const SIZE_RATIO: f64 = 2.0;
 
+/// A camera sees a target only in front of it, within its field of view: the widest angle
+/// (degrees) between the optical axis (+z) and the direction of the target's origin that a camera
+/// pose may put it at. Half the diagonal field of view of a 90° lens is 45°; the kinhec suite's
+/// clean recordings put it at 33.5° at most (75 files, outliers left out), the peers' real ones at
+/// 34.4°, camodocal's at 45.5°.
+const IN_VIEW_DEG: f64 = 60.0;
+/// The camera poses look inverted when, inverted, they put the target this many times nearer the
+/// optical axis (median angle) than as given, and all of it in view ([`IN_VIEW_DEG`]).
+const NEARER_AXIS: f64 = 2.0;
+
 /// How well one reading fits.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ReadingFit {
@@ -142,6 +152,59 @@ pub struct ReadingCheck {
     /// reading means frame names swapped.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub frames: bool,
+    /// Where the camera poses put the target, as given and inverted, when the as-given sizes are
+    /// implausible ([`Self::size_warning`]): what tells a recording with both inputs inverted
+    /// ([`Self::both_inverted`]) from one whose rig just has unusual sizes.
+    #[serde(skip)]
+    pub view: Option<TargetInView>,
+}
+
+/// Where the camera poses put the target's origin: how far off the camera's optical axis (+z).
+/// A camera sees the target in front of it, near its axis; a camera pose inverted (the camera in
+/// the target's frame) puts it wherever the camera stood around the target.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TargetInView {
+    /// The median angle between the optical axis and the target, degrees, the poses as given.
+    pub as_given_deg: f64,
+    /// The same, the camera poses inverted.
+    pub inverted_deg: f64,
+    /// The widest such angle, the camera poses inverted (above 90° when a target is behind).
+    pub inverted_widest_deg: f64,
+}
+
+impl TargetInView {
+    /// The angles of `poses` (`None` for no pose).
+    pub fn of(poses: &[PosePair]) -> Option<Self> {
+        let off_axis = |t: &nalgebra::Vector3<f64>| {
+            let n = t.norm();
+            if n > 0.0 {
+                (t.z / n).clamp(-1.0, 1.0).acos().to_degrees()
+            } else {
+                180.0
+            }
+        };
+        let given: Vec<f64> = poses
+            .iter()
+            .map(|p| off_axis(&p.camera_from_target.translation.vector))
+            .collect();
+        let inverted: Vec<f64> = poses
+            .iter()
+            .map(|p| off_axis(&p.camera_from_target.inverse().translation.vector))
+            .collect();
+        let widest = inverted.iter().copied().reduce(f64::max)?;
+        Some(Self {
+            as_given_deg: median(given),
+            inverted_deg: median(inverted),
+            inverted_widest_deg: widest,
+        })
+    }
+
+    /// Whether the camera poses look inverted: inverted, they put every target in view
+    /// ([`IN_VIEW_DEG`]) and [`NEARER_AXIS`] times nearer the axis than as given.
+    pub fn says_inverted(&self) -> bool {
+        self.inverted_widest_deg <= IN_VIEW_DEG
+            && NEARER_AXIS * self.inverted_deg <= self.as_given_deg
+    }
 }
 
 impl ReadingCheck {
@@ -197,6 +260,9 @@ impl ReadingCheck {
     /// The refusal of the input as given when a reading fits far better
     /// ([`crate::model::error::Error::Misread`]): the finding and the readings, typed.
     pub fn misread(&self, setup: Setup) -> Option<Error> {
+        if self.better.is_none() {
+            return self.both_inverted_misread(setup);
+        }
         Some(Error::Misread {
             finding: self.finding(setup)?,
             fit: self.fit_words()?,
@@ -251,6 +317,40 @@ impl ReadingCheck {
             && !(self.frames && self.better.is_some_and(|b| b.reading.inverts()))
     }
 
+    /// Whether both inputs look inverted, decisively: X and the target have the sizes the setup
+    /// makes unlikely ([`Self::size_warning`]), and the camera poses, inverted, put the target in
+    /// view and near the optical axis where as given they do not ([`TargetInView::says_inverted`]).
+    /// Both readings fit exactly as well (X and the target's pose swapped); only these tell.
+    pub fn both_inverted(&self, setup: Setup) -> bool {
+        self.size_warning(setup).is_some() && self.view.is_some_and(|v| v.says_inverted())
+    }
+
+    /// The refusal of a recording whose both inputs look inverted ([`Self::both_inverted`]).
+    pub fn both_inverted_misread(&self, setup: Setup) -> Option<Error> {
+        if !self.both_inverted(setup) {
+            return None;
+        }
+        let (given, view) = (self.as_given?, self.view?);
+        let (x_is, y_is) = setup.distances_in_words();
+        let fit = format!(
+            "the camera poses put the target {:.1}° off the camera's optical axis (median), against {:.1}° inverted",
+            view.as_given_deg, view.inverted_deg
+        );
+        Some(Error::Misread {
+            finding: format!(
+                "both inputs look inverted (each gives the inverse of the transform it names): as given, X puts {x_is} at {:.3} and {y_is} at {:.3}, the reverse of what the {} setup has, and {fit}; both readings fit the poses exactly as well (X and the target's pose swapped)",
+                given.x_translation,
+                given.y_translation,
+                setup.name(),
+            ),
+            fit,
+            readings: vec![Reading::BothInverted],
+            setup,
+            other_setup: false,
+            frames: self.frames,
+        })
+    }
+
     /// A warning when another reading fits about as well as the as-given one ([`Self::alike`]).
     pub fn alike_warning(&self, setup: Setup) -> Option<Warning> {
         let (given, best) = (self.as_given?, self.alike.first()?);
@@ -300,6 +400,7 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         also: Vec::new(),
         alike: Vec::new(),
         frames: written.frames,
+        view: None,
     };
     let Some(given) = judged_fit(&sample, setup) else {
         return none(None);
@@ -338,6 +439,9 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         alike.sort_by(|a, b| a.score(&given).total_cmp(&b.score(&given)));
         return ReadingCheck {
             alike,
+            view: (given.plausible(setup) == Some(false))
+                .then(|| TargetInView::of(&sample))
+                .flatten(),
             ..none(Some(given))
         };
     }
@@ -357,6 +461,7 @@ pub fn check_readings(poses: &[PosePair], setup: Setup, written: Written) -> Rea
         also: candidates.collect(),
         alike: Vec::new(),
         frames: written.frames,
+        view: None,
     }
 }
 

@@ -42,6 +42,16 @@ pub struct Sizes {
     pub translation: f64,
 }
 
+/// X's uncertainty against the user's goal (`Options::goal`, `--goal`): a one-sigma rotation and
+/// translation, as `advise --goal` takes it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GoalCheck {
+    /// The goal: one-sigma rotation (degrees) and translation (input unit).
+    pub goal: Sizes,
+    /// Whether X's one-sigma uncertainty is within it in both.
+    pub met: bool,
+}
+
 impl Sizes {
     /// Within `goal` in both sizes.
     pub fn within(&self, goal: &Sizes) -> bool {

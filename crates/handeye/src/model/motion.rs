@@ -34,6 +34,22 @@ impl Setup {
         }
     }
 
+    /// What X's and the target pose's translations measure, in words: the camera's distance from
+    /// the gripper and the target's from the robot base (eye-in-hand), or the camera's from the
+    /// base and the target's from the gripper (eye-to-hand).
+    pub fn distances_in_words(self) -> (&'static str, &'static str) {
+        match self {
+            Self::EyeInHand => (
+                "the camera's distance from the gripper",
+                "the target's distance from the robot base",
+            ),
+            Self::EyeToHand => (
+                "the camera's distance from the robot base",
+                "the target's distance from the gripper",
+            ),
+        }
+    }
+
     /// The paper's Q for this setup: `base_from_gripper` itself (eye-in-hand) or its inverse
     /// `gripper_from_base` (eye-to-hand).
     pub fn hand_pose(self, base_from_gripper: &Transform) -> Transform {

@@ -229,6 +229,14 @@ pub enum Warning {
         /// The difference over the combined one-sigma (the data's and the prior's).
         sigmas: f64,
     },
+    /// X's one-sigma uncertainty exceeds the goal the user gave (`--goal`, the same one-sigma
+    /// goal as `advise --goal`).
+    GoalMissed {
+        /// The goal: one-sigma rotation (degrees) and translation (input unit).
+        goal: crate::model::findings::Sizes,
+        /// X's one-sigma uncertainty.
+        sigma: crate::model::findings::Sizes,
+    },
 }
 
 /// The one option of the call that would fix what a [`Warning`] describes.
@@ -328,6 +336,7 @@ impl Warning {
             Self::ShiftedPairing { .. } => "shifted_pairing",
             Self::ReadingsAlike { .. } => "readings_alike",
             Self::PriorDisagrees { .. } => "prior_disagrees",
+            Self::GoalMissed { .. } => "goal_missed",
             Self::IntrinsicsDisagree { .. } => "intrinsics_disagree",
             Self::DistortionDisagrees { .. } => "distortion_disagrees",
         }
@@ -457,21 +466,22 @@ impl fmt::Display for Warning {
                 f,
                 "the prior {component}={prior} disagrees with the value the motions determine ({data:.6}) by {sigmas:.1} sigma: the data's value is kept; check the measurement behind the prior, and its unit (the input's)"
             ),
+            Self::GoalMissed { goal, sigma } => write!(
+                f,
+                "X's uncertainty (one sigma: rotation {}°, translation {}) is above your goal ({}° and {}, one sigma): record more motions (`handeye advise --goal {},{}` suggests which), then calibrate again",
+                four_digits(sigma.rotation_deg),
+                four_digits(sigma.translation),
+                goal.rotation_deg,
+                goal.translation,
+                goal.rotation_deg,
+                goal.translation,
+            ),
             Self::SwappedSizes {
                 x_translation,
                 y_translation,
                 setup,
             } => {
-                let (x_is, y_is) = match setup {
-                    Setup::EyeInHand => (
-                        "the camera's distance from the gripper",
-                        "the target's distance from the robot base",
-                    ),
-                    Setup::EyeToHand => (
-                        "the camera's distance from the robot base",
-                        "the target's distance from the gripper",
-                    ),
-                };
+                let (x_is, y_is) = setup.distances_in_words();
                 write!(
                     f,
                     "X puts {x_is} at {x_translation:.3} and {y_is} at {y_translation:.3}, the reverse of what the {} setup usually has: if both inputs give the inverse of the transform they name, the same data fit exactly with X and the target's pose swapped; check the directions",
@@ -617,6 +627,15 @@ fn systematic_words(
 }
 
 /// " and N more" when a list shows fewer than it has.
+/// A size with four significant digits (`0.0007029`, `0.03350`, `12.35`).
+fn four_digits(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.digits$}")
+}
+
 fn more(count: usize, shown: usize) -> String {
     match count.saturating_sub(shown) {
         0 => String::new(),

@@ -437,6 +437,15 @@ impl fmt::Display for Pending {
                 where_camera(*setup),
                 reading.name()
             ),
+            Self::Misread {
+                reading: Reading::BothInverted,
+                setup,
+                ..
+            } => write!(
+                f,
+                "both inputs look inverted: X and the target have the sizes of each other for the {} setup, and the camera poses put the target off the camera's axis where, inverted, they put it in view (both readings fit the poses as well): correct the input (with `handeye calibrate`, `--fix both-inverted` reads it that way)",
+                setup.name()
+            ),
             Self::Misread { reading, setup, .. } => write!(
                 f,
                 "the poses fit far better read as {}: correct the input (with `handeye calibrate`, `--fix {}` reads it that way)",

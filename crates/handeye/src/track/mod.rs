@@ -676,6 +676,13 @@ impl Tracker {
             self.last = None;
             return;
         }
+        // Both inputs inverted fit as well as given: the sizes and the camera poses tell.
+        if readings.both_inverted(self.setup) {
+            self.misread = Some((Reading::BothInverted, false));
+            self.readings_judged = true;
+            self.last = None;
+            return;
+        }
         if let Some(alike) = readings.alike.first() {
             if !self.readings_judged {
                 self.alike = Some(alike.reading);

@@ -133,6 +133,9 @@ pub struct HandEyeReport {
     /// The fit on the pixels (`--method reprojection`); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reprojection: Option<ReprojectionSummary>,
+    /// X's uncertainty against the goal given (`Options::goal`); absent without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal: Option<crate::model::findings::GoalCheck>,
 }
 
 /// The held-out check in a [`HandEyeReport`].

@@ -164,4 +164,7 @@ pub struct RobotWorldReport {
     /// A low-DOF recording, as in the hand–eye report; absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub low_dof: Option<LowDofReport>,
+    /// X's uncertainty against the goal given, as in the hand–eye report; absent without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal: Option<crate::model::findings::GoalCheck>,
 }
