@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Reading, Written};
-use crate::model::motion::Pairing;
+use crate::model::motion::{Pairing, PosePair};
 use crate::model::prior::Prior;
 use crate::solve::{Method, RobotWorldMethod, TsaiOptions};
 
@@ -230,6 +230,37 @@ pub(crate) fn not_without_pixels(refine_intrinsics: bool) -> Result<()> {
             name: "refine_intrinsics",
             message: "the intrinsics are refined on the pixels only: --method reprojection with a JSON Lines file with `detections` and --intrinsics FILE".into(),
         });
+    }
+    Ok(())
+}
+
+/// The farthest `point` (`--point`) from the camera, in working distances (the median of the
+/// camera's translations to the target): a point the camera sees lies within a few of them, and
+/// the error there is a first-order image of X's covariance, meaningless a thousand times out.
+pub const POINT_WORKING_DISTANCES: f64 = 100.0;
+
+/// A point given to place the uncertainty at is finite and within [`POINT_WORKING_DISTANCES`]
+/// working distances of the camera, or refused naming it.
+pub(crate) fn check_point(point: Option<[f64; 3]>, poses: &[PosePair]) -> Result<()> {
+    let Some(p) = point else {
+        return Ok(());
+    };
+    let refuse = |message: String| {
+        Err(Error::InvalidParameter {
+            name: "point",
+            message,
+        })
+    };
+    if p.iter().any(|c| !c.is_finite()) {
+        return refuse(format!("{p:?}: every coordinate must be a finite number"));
+    }
+    let distance = p[0].hypot(p[1]).hypot(p[2]);
+    let working = crate::check::outliers::working_distance(poses);
+    if distance.is_nan() || distance > POINT_WORKING_DISTANCES * working {
+        return refuse(format!(
+            "({:e}, {:e}, {:e}) is {distance:e} from the camera, more than {POINT_WORKING_DISTANCES} times the recording's working distance ({working:.4}, the input's length unit): give a point the camera sees, in the camera frame and the input's unit",
+            p[0], p[1], p[2]
+        ));
     }
     Ok(())
 }

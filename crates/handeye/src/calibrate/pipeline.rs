@@ -22,7 +22,7 @@
 use crate::calibrate::advice::check_goal;
 use crate::calibrate::input::Input;
 use crate::calibrate::low_dof::{self, Plan};
-use crate::calibrate::options::{Options, Problem, check_joints, not_without_pixels};
+use crate::calibrate::options::{Options, Problem, check_joints, check_point, not_without_pixels};
 use crate::calibrate::problem::motions::{
     self, method_at_fault, motions_determine, quality_of, refuse_if_undetermined,
 };
@@ -242,6 +242,7 @@ fn read_input(poses: &[PosePair], setup: Setup, options: &Options) -> Result<(Re
     not_without_pixels(options.refine_intrinsics)?;
     check_replicates(options.replicates)?;
     check_joints(&options.joints, poses.len())?;
+    check_point(options.point, poses)?;
     check_priors(&options.priors)?;
     let options = Options {
         priors: crate::check::units::in_poses_unit(&options.priors, poses)?,
@@ -724,6 +725,7 @@ pub(crate) fn hand_eye_on_pixels(
 ) -> Result<HandEyeReport> {
     let x = solution.calibration.x;
     let poses = pose_pairs(frames, &solution.start_poses);
+    check_point(options.point, &poses)?;
     let uncertainty = pixels::uncertainty(&poses, setup, options.point, &solution)?;
     let mut warnings = solution.calibration.warnings.clone();
     warn_weak(&uncertainty, setup, None, &mut warnings);

@@ -505,7 +505,19 @@ fn judged(
     let shape_reliable = j.poses >= SHAPE_POSES;
     // What the recording's detections prefer (in words), and how far that moves its own X.
     let intrinsics = preferred_intrinsics(report);
-    if distance > limit
+    if !bounded(sigma, distance, length) {
+        // The invariant: never consistent (nor inconsistent) on a sigma that is infinite, missing
+        // or larger than the rig itself.
+        (
+            Consistency::Undetermined,
+            format!(
+                "this recording cannot tell: the uncertainty of the comparison (one sigma {:.3}° and {}) is as large as the rig itself ({}), so no difference would show; check the saved X's covariance",
+                sigma.rotation_deg,
+                len(sigma.translation),
+                len(length)
+            ),
+        )
+    } else if distance > limit
         && (shape_reliable || sizes > SIZE_LIMIT)
         && let Some((preferred, rotation_deg, translation, sigmas)) = intrinsics
     {
@@ -569,6 +581,15 @@ fn judged(
             ),
         )
     }
+}
+
+/// Whether a comparison's sigma and distance can mean something: finite, the rotation's one sigma
+/// at most 180° and the translation's at most the comparison's `length`.
+fn bounded(sigma: &Sizes, distance: f64, length: f64) -> bool {
+    distance.is_finite()
+        && sigma.rotation_deg <= 180.0
+        && sigma.translation <= length
+        && sigma.translation.is_finite()
 }
 
 /// The largest ratio of a difference's size to its one sigma (√trace of its block) that the same

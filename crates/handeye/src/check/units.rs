@@ -89,12 +89,21 @@ fn in_unit(prior: &Prior, size: f64, poses_unit: Option<LengthUnit>) -> Result<P
             ));
         };
         let factor = unit.metres() / poses_unit.metres();
-        return Ok(Prior {
+        let converted = Prior {
             value: prior.value * factor,
             sigma: prior.sigma * factor,
             unit: None,
             ..*prior
-        });
+        };
+        // Converted, it is judged as one given in the poses' unit: by the same bounds.
+        if converted.value.abs() > PRIOR_SIZE_RATIO * size {
+            return refuse(format!(
+                "{prior} is {:.0} times the size of the poses' translations (median {size:.4} {}): not a length of this recording",
+                converted.value.abs() / size.max(f64::MIN_POSITIVE),
+                poses_unit.suffix()
+            ));
+        }
+        return loose(&converted, prior, size).map_or(Ok(converted), refuse);
     }
     let value = prior.value.abs();
     let with_unit = |unit: &str| {
@@ -124,5 +133,17 @@ fn in_unit(prior: &Prior, size: f64, poses_unit: Option<LengthUnit>) -> Result<P
             with_unit("mm")
         ));
     }
-    Ok(*prior)
+    loose(prior, prior, size).map_or(Ok(*prior), refuse)
+}
+
+/// Why a prior (`converted` to the poses' unit, `given` as written) is too loose to mean anything:
+/// a one-sigma larger than the poses' size (median translation `size`) determines no component of
+/// X (the motions of a 0.5 m robot say more), and its uncertainty would be reported as if it did.
+fn loose(converted: &Prior, given: &Prior, size: f64) -> Option<String> {
+    (converted.sigma > size).then(|| {
+        format!(
+            "{given}: a sigma of {} is larger than the poses' translations themselves (median {size:.4}): such a prior determines nothing; measure the component to better than the size of the robot's motions, or give it exact",
+            converted.sigma
+        )
+    })
 }

@@ -17,6 +17,7 @@ use crate::io::{
 use crate::model::camera::{Detections, Frame, MIN_DETECTIONS};
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Written, WrittenAs};
+use crate::model::kinematics::MAX_JOINTS;
 use crate::model::motion::PosePair;
 use crate::model::pose::ReadTransform;
 use crate::model::rotation::{RotationConvention, Rotations};
@@ -33,6 +34,9 @@ pub struct JsonlPairs<R: BufRead> {
     projections: Projections,
     conventions: Conventions,
     degrees: DegreeAngles,
+    /// How many joint angles the first record gave (0: none), and its line: every later record
+    /// gives as many.
+    first_joints: Option<(usize, usize)>,
 }
 
 impl<R: BufRead> JsonlPairs<R> {
@@ -51,7 +55,30 @@ impl<R: BufRead> JsonlPairs<R> {
             projections: Projections::default(),
             conventions,
             degrees: DegreeAngles::default(),
+            first_joints: None,
         }
+    }
+
+    /// `record` when its joint angles agree with the first record's (as many, or none when it
+    /// gave none); otherwise the error naming its line and `joints`. The same rule in batch and
+    /// online: the reader applies it as it reads, in one pass over any input.
+    fn same_joints(&mut self, record: StampedPosePair) -> Result<StampedPosePair> {
+        let (count, first) = *self
+            .first_joints
+            .get_or_insert((record.joint_count, record.line));
+        if record.joint_count == count {
+            return Ok(record);
+        }
+        let message = match (count, record.joint_count) {
+            (0, n) => format!(
+                "{n} joint angles, and the first record (line {first}) gives none: give them on every record or on none"
+            ),
+            (c, 0) => format!(
+                "missing: the first record (line {first}) gives {c} joint angles, so every record must"
+            ),
+            (c, n) => format!("{n} joint angles, the first record (line {first}) gives {c}"),
+        };
+        Err(parse_error(&self.source, record.line, "joints", message))
     }
 
     /// The rotation matrices projected onto SO(3) so far (see [`Projections`]).
@@ -94,18 +121,21 @@ impl<R: BufRead> Iterator for JsonlPairs<R> {
                 && xyzw(self.conventions.named.camera)
                 && let Some(record) = fast_record(text, number, &mut self.projections)
             {
-                return Some(Ok(record));
+                return Some(self.same_joints(record));
             }
             let text = text.trim();
             if text.is_empty() || text.starts_with('#') {
                 continue;
             }
-            return Some(parse_record(
-                text,
-                (&self.source, number),
-                self.conventions,
-                (&mut self.projections, &mut self.degrees),
-            ));
+            return Some(
+                parse_record(
+                    text,
+                    (&self.source, number),
+                    self.conventions,
+                    (&mut self.projections, &mut self.degrees),
+                )
+                .and_then(|record| self.same_joints(record)),
+            );
         }
     }
 }
@@ -261,60 +291,8 @@ fn parse_record(
     .with_joints(&joints))
 }
 
-/// The `joints` of every record of a JSON Lines pose file (radians, the robot's joint order), in
-/// record order: `None` when no record gives them. A record without them, a value that is not a
-/// finite number, or a count that differs from the first record's is refused with the file, the
-/// line and the field (`joints[k]`).
-pub fn read_joints(text: &str, source: &str) -> Result<Option<Vec<Vec<f64>>>> {
-    let mut joints: Vec<(usize, Option<Vec<f64>>)> = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let line = i + 1;
-        let trimmed = raw.trim();
-        if trimmed.is_empty() || trimmed.starts_with('#') {
-            continue;
-        }
-        if !trimmed.contains("\"joints\"") {
-            joints.push((line, None));
-            continue;
-        }
-        let value: Value = serde_json::from_str(trimmed)
-            .map_err(|e| parse_error(source, line, "-", malformed(trimmed, &e)))?;
-        joints.push((line, Some(joint_angles(&value["joints"], source, line)?)));
-    }
-    if joints.iter().all(|(_, q)| q.is_none()) {
-        return Ok(None);
-    }
-    let mut count = None;
-    joints
-        .into_iter()
-        .map(|(line, q)| {
-            let q = q.ok_or_else(|| {
-                parse_error(
-                    source,
-                    line,
-                    "joints",
-                    "missing: other records give joint angles, so every record must",
-                )
-            })?;
-            match count {
-                None => count = Some(q.len()),
-                Some(c) if c != q.len() => {
-                    return Err(parse_error(
-                        source,
-                        line,
-                        "joints",
-                        format!("{} joint angles, the first record gives {c}", q.len()),
-                    ));
-                }
-                _ => {}
-            }
-            Ok(q)
-        })
-        .collect::<Result<Vec<_>>>()
-        .map(Some)
-}
-
-/// The joint angles of one record: a non-empty list of finite numbers (radians).
+/// The joint angles of one record: a non-empty list of at most
+/// [`MAX_JOINTS`](crate::model::kinematics::MAX_JOINTS) finite numbers (radians).
 fn joint_angles(v: &Value, source: &str, line: usize) -> Result<Vec<f64>> {
     let list = v.as_array().filter(|a| !a.is_empty()).ok_or_else(|| {
         parse_error(
@@ -324,6 +302,17 @@ fn joint_angles(v: &Value, source: &str, line: usize) -> Result<Vec<f64>> {
             format!("expected a list of joint angles in radians, found {v}"),
         )
     })?;
+    if list.len() > MAX_JOINTS {
+        return Err(parse_error(
+            source,
+            line,
+            "joints",
+            format!(
+                "{} joint angles: at most {MAX_JOINTS} (the most joints a DH table has)",
+                list.len()
+            ),
+        ));
+    }
     list.iter()
         .enumerate()
         .map(|(k, q)| {
@@ -556,11 +545,50 @@ mod tests {
             rec(", \"joints\": [0.1, -2]"),
             rec(", \"joints\": [0.3, 0.4]")
         );
+        let joints = |text: &str| -> Result<Vec<Vec<f64>>> {
+            JsonlPairs::new(text.as_bytes(), "f.jsonl")
+                .map(|r| r.map(|r| r.joints[..r.joint_count].to_vec()))
+                .collect()
+        };
         assert_eq!(
-            read_joints(&text, "f").unwrap(),
-            Some(vec![vec![0.1, -2.0], vec![0.3, 0.4]])
+            joints(&text).unwrap(),
+            vec![vec![0.1, -2.0], vec![0.3, 0.4]]
         );
-        assert_eq!(read_joints(&format!("{}\n", rec("")), "f").unwrap(), None);
+        // A value "joints" is no joint angles; the key written with an escape is the key.
+        let text = format!(
+            "{}\n{}\n",
+            rec(", \"note\": \"joints\""),
+            rec(", \"\\u006aoints\": [0.5]")
+        );
+        let read: Vec<_> = JsonlPairs::new(text.as_bytes(), "f.jsonl").collect();
+        assert_eq!(read[0].as_ref().unwrap().joint_count, 0);
+        assert!(
+            matches!(&read[1], Err(crate::model::error::Error::Parse { line: 2, field, .. }) if field == "joints"),
+            "{:?}",
+            read[1]
+        );
+        let escaped = rec(", \"\\u006aoints\": [0.5]");
+        assert_eq!(
+            joints(&format!("{escaped}\n{escaped}\n")).unwrap(),
+            vec![vec![0.5]; 2]
+        );
+        let many = format!("[{}]", vec!["0.1"; MAX_JOINTS].join(","));
+        let text = format!(
+            "{}\n{}\n",
+            rec(&format!(", \"joints\": {many}")),
+            rec(&format!(", \"joints\": {many}"))
+        );
+        assert!(joints(&text).unwrap().iter().all(|q| q.len() == MAX_JOINTS));
+        let more = format!(
+            "{}\n",
+            rec(&format!(", \"joints\": [0.1,{}]", &many[1..many.len() - 1]))
+        );
+        assert!(
+            joints(&more)
+                .unwrap_err()
+                .to_string()
+                .contains("at most 64")
+        );
         for (second, field) in [
             (rec(", \"joints\": [0.3, \"x\"]"), "joints[1]"),
             (rec(", \"joints\": [0.3]"), "joints"),
@@ -568,7 +596,7 @@ mod tests {
             (rec(", \"joints\": 3"), "joints"),
         ] {
             let text = format!("{}\n{second}\n", rec(", \"joints\": [0.1, 0.2]"));
-            match read_joints(&text, "f.jsonl") {
+            match joints(&text) {
                 Err(crate::model::error::Error::Parse { line, field: f, .. }) => {
                     assert_eq!((line, f.as_str()), (2, field), "{second}");
                 }

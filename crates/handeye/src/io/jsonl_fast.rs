@@ -40,7 +40,7 @@ enum Key {
     Robot(bool),
     /// A camera pose, inverted when `true` (`target_from_camera`).
     Camera(bool),
-    /// The robot's joint angles, read by their own pass (`io::read_joints`): passed over here
+    /// The robot's joint angles, read by the general parser (`jsonl::parse_record`): passed over here
     /// when they are a list of numbers.
     Joints,
 }

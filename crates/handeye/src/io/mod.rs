@@ -54,7 +54,8 @@ pub use stream::PoseStream;
 // The pose-file readers behind `PoseStream` and `Recording`.
 pub use format::Format;
 pub use pose_reader::{
-    DegreeAngles, PoseInput, PoseReader, Preamble, open_pose_stream, open_poses, read_pose_file,
+    DegreeAngles, PoseInput, PoseReader, Preamble, open_pose_stream, open_poses, read_joints,
+    read_pose_file,
 };
 pub(crate) use pose_reader::{at_least_two_pairs, open_poses_as, read_records};
 pub use series::{DeclaredSetup, PoseSeries, Projections};
@@ -71,7 +72,6 @@ pub use {
     frames::frames_of,
     intrinsics::parse_intrinsics,
     jsonl::parse_pose_line,
-    jsonl::read_joints,
     lines::MAX_LINE,
     saved::parse_saved_x,
     stamped::{StampedStream, read_camera_stream, read_stamped_poses},
@@ -108,15 +108,16 @@ pub struct StampedPosePair {
     pub written: Written,
     /// The robot's joint angles at the pose (radians, its joint order), where the record gives
     /// them (JSON Lines `joints`, a ROS 2 recording's `/joint_states`): the first `joint_count`
-    /// numbers (at most 16; a record of more joints keeps none here). Inline, so that a record
-    /// stays `Copy` and a stream allocates nothing for it.
+    /// numbers (at most [`MAX_JOINTS`](crate::model::kinematics::MAX_JOINTS), as many as a DH
+    /// table has; a JSON Lines record of more is refused, a bag's message of more keeps none
+    /// here). Inline, so that a record stays `Copy` and a stream allocates nothing for it.
     pub joints: [f64; RECORD_JOINTS],
     /// How many of `joints` the record gives (0: none).
     pub joint_count: usize,
 }
 
 /// The most joint angles a [`StampedPosePair`] holds.
-pub(crate) const RECORD_JOINTS: usize = 16;
+pub(crate) const RECORD_JOINTS: usize = crate::model::kinematics::MAX_JOINTS;
 
 impl StampedPosePair {
     /// A record without joint angles.
@@ -173,17 +174,6 @@ pub(crate) fn read_text(path: &Path) -> Result<String> {
     File::open(path)
         .map_err(io_error)
         .and_then(|f| read_whole(f, &file))
-}
-
-/// A file read once already as a stream (its JSON Lines records), read again whole for another
-/// pass (its joint angles): its size is what the first pass read.
-pub(crate) fn reread_text(path: &Path) -> Result<String> {
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| Error::Io {
-        file: file.clone(),
-        source: e,
-    })?;
-    text_of(bytes, &file)
 }
 
 /// Refuses what cannot be read whole: anything but a regular file or a pipe, or a regular file

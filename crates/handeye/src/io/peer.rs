@@ -720,6 +720,7 @@ fn series_at(
         pairs,
         stamps: vec![None; n],
         lines,
+        joints: Vec::new(),
         projections,
         written: Written::NAMED,
         setup: None,

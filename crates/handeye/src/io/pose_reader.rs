@@ -424,6 +424,7 @@ pub(crate) fn read_records<R: BufRead>(reader: &mut PoseReader<R>) -> Result<Pos
         pairs: Vec::new(),
         stamps: Vec::new(),
         lines: Vec::new(),
+        joints: Vec::new(),
         projections: Projections::default(),
         written: Written::NAMED,
         setup: None,
@@ -438,8 +439,29 @@ pub(crate) fn read_records<R: BufRead>(reader: &mut PoseReader<R>) -> Result<Pos
         series.pairs.push(record.pose);
         series.stamps.push(record.stamp);
         series.lines.push(record.line);
+        if record.joint_count > 0 {
+            series
+                .joints
+                .push(record.joints[..record.joint_count].to_vec());
+        }
     }
     Ok(series)
+}
+
+/// The `joints` of every record of a JSON Lines pose file's text (radians, the robot's joint
+/// order), in record order: `None` when no record gives them. Read as the pose reader reads the
+/// records, in the same pass as their poses and by the same rules (a record without them when the
+/// first gives them, another count, more than 64 or a value that is not a finite number is
+/// refused with the file, the line and the field, `joints[k]`).
+pub fn read_joints(text: &str, source: &str) -> Result<Option<Vec<Vec<f64>>>> {
+    let mut reader = PoseReader::with_conventions(
+        text.as_bytes(),
+        source,
+        Format::Jsonl,
+        Conventions::default(),
+    )?;
+    let series = read_records(&mut reader)?;
+    Ok((!series.joints.is_empty()).then_some(series.joints))
 }
 
 /// Refuses a file of fewer than 2 pose pairs (no motion), naming it.

@@ -134,7 +134,13 @@ fn json_setup(value: &Value, text: &str, file: &str) -> Result<Option<Setup>> {
     }
 }
 
-/// A 6×6 covariance: finite, symmetric, with a non-negative diagonal.
+/// The most negative eigenvalue a saved covariance may have, as a fraction of its largest: the
+/// rounding of 16 printed digits, not a direction of negative variance.
+const PSD_TOLERANCE: f64 = 1e-9;
+
+/// A 6×6 covariance: finite, symmetric, positive semi-definite (to [`PSD_TOLERANCE`]), its
+/// rotation one-sigmas at most π radians and its translation ones at most
+/// [`MAX_TRANSLATION`](crate::model::pose::MAX_TRANSLATION): what a covariance can mean.
 fn covariance(v: &Value) -> std::result::Result<[[f64; 6]; 6], (String, String)> {
     let rows = v
         .as_array()
@@ -171,6 +177,31 @@ fn covariance(v: &Value) -> std::result::Result<[[f64; 6]; 6], (String, String)>
                 ));
             }
         }
+        let (bound, what) = if i < 3 {
+            (std::f64::consts::PI, "a rotation one-sigma above π radians")
+        } else {
+            (
+                crate::model::pose::MAX_TRANSLATION,
+                "a translation one-sigma above 1e9",
+            )
+        };
+        if c[i][i].sqrt() > bound {
+            return Err((
+                format!("[{i}][{i}]"),
+                format!("{what} ({:e}) is no uncertainty of X", c[i][i].sqrt()),
+            ));
+        }
+    }
+    let eigen = nalgebra::SymmetricEigen::new(nalgebra::Matrix6::from_fn(|i, j| c[i][j]));
+    let largest = eigen.eigenvalues.max().max(0.0);
+    let least = eigen.eigenvalues.min();
+    if !largest.is_finite() || least.is_nan() || least < -PSD_TOLERANCE * largest {
+        return Err((
+            String::new(),
+            format!(
+                "not a covariance: an eigenvalue of {least:e} (the largest {largest:e}), a direction of negative variance"
+            ),
+        ));
     }
     Ok(c)
 }

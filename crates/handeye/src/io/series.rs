@@ -16,6 +16,9 @@ pub struct PoseSeries {
     pub stamps: Vec<Option<f64>>,
     /// Their line numbers.
     pub lines: Vec<usize>,
+    /// The robot's joint angles at each pair, where the records give them (every record as many,
+    /// the reader's rule); empty when they do not.
+    pub joints: Vec<Vec<f64>>,
     /// The rotation matrices that were orthonormal only to the precision they were printed with
     /// and were projected onto the nearest rotation.
     pub projections: Projections,

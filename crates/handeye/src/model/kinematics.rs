@@ -48,6 +48,10 @@ pub struct Kinematics {
     pub tool: Option<[[f64; 4]; 4]>,
 }
 
+/// The most joints a table has, and the most joint angles a record gives (JSON Lines `joints`):
+/// the same bound in batch and online.
+pub const MAX_JOINTS: usize = 64;
+
 impl Kinematics {
     /// The joints of the table.
     pub fn dof(&self) -> usize {
@@ -70,8 +74,8 @@ impl Kinematics {
                 "`a` is empty: a table needs at least one joint".into(),
             );
         }
-        if n > 64 {
-            return problem("a".into(), format!("{n} joints: at most 64"));
+        if n > MAX_JOINTS {
+            return problem("a".into(), format!("{n} joints: at most {MAX_JOINTS}"));
         }
         let columns = [
             ("d", &self.d),

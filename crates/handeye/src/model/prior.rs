@@ -133,8 +133,19 @@ pub fn direction_words(setup: Setup, component: Component) -> String {
 }
 
 impl Prior {
-    /// Checks the numbers: finite value, finite non-negative sigma.
+    /// Checks the numbers: finite value, finite non-negative sigma, each at most
+    /// [`MAX_TRANSLATION`](crate::model::pose::MAX_TRANSLATION) in size (no length of a recording
+    /// is larger, and the sigma's square stays finite).
     pub fn validate(&self) -> Result<()> {
+        let bound = crate::model::pose::MAX_TRANSLATION;
+        if self.value.abs() > bound || self.sigma > bound {
+            return Err(invalid(format!(
+                "{}: {:e} +- {:e} is not a plausible length in any unit (more than {bound:e} in size)",
+                self.component.name(),
+                self.value,
+                self.sigma
+            )));
+        }
         if !self.value.is_finite() || !self.sigma.is_finite() || self.sigma < 0.0 {
             return Err(invalid(format!(
                 "{}: the value must be finite and the sigma finite and not negative (got {} +- {})",
@@ -290,6 +301,8 @@ mod tests {
             "tz=0.1+-",
             "tz=0.1+--1",
             "tz=nan",
+            "tz=0.12+-1e160",
+            "tz=1e308m",
             "=1",
         ] {
             let e = bad.parse::<Prior>().unwrap_err();

@@ -10,8 +10,7 @@ use std::path::{Path, PathBuf};
 use crate::io::sync::{MAX_TIME_OFFSET, TimeOffset, pair_stream_files};
 use crate::io::{
     Conventions, DegreeAngles, Format, PoseInput, PoseReader, PoseSeries, Projections,
-    StampedPosePair, at_least_two_pairs, open_poses_as, parse_error, read_joints, read_records,
-    reread_text,
+    StampedPosePair, at_least_two_pairs, open_poses_as, parse_error, read_records,
 };
 use crate::model::error::{Error, Result};
 use crate::model::findings::{Reading, Written, WrittenAs};
@@ -384,21 +383,8 @@ fn read_file(
                 notes.projections(&source, series.projections);
                 return Ok(file_recording(series, &source));
             }
-            PoseInput::Stream(reader) => {
-                let jsonl = reader.format() == Format::Jsonl;
-                let series = read_stream(reader, &source, notes)?;
-                at_least_two_pairs(series.pairs.len(), source.clone())?;
-                // Joint angles are not part of a pose pair: read by their own pass over the text.
-                let joints = if jsonl {
-                    read_joints(&reread_text(path)?, &source)?.unwrap_or_default()
-                } else {
-                    Vec::new()
-                };
-                return Ok(Recording {
-                    joints,
-                    ..file_recording(series, &source)
-                });
-            }
+            // The joint angles come with the pairs, in the same single pass (a pipe is read once).
+            PoseInput::Stream(reader) => read_stream(reader, &source, notes)?,
         }
     };
     at_least_two_pairs(series.pairs.len(), source.clone())?;
@@ -430,6 +416,7 @@ fn file_recording(series: PoseSeries, source: &str) -> Recording {
         lines: series.lines,
         stamps: series.stamps,
         written: series.written,
+        joints: series.joints,
         ..Recording::default()
     }
 }
