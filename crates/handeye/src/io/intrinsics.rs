@@ -517,7 +517,7 @@ mod visp_xml_tests {
     #[test]
     fn bad_visp_xml_names_the_line_and_field() {
         let e = parse_intrinsics(&XML.replace("<px>610.5", "<px>six"), "c.xml").unwrap_err();
-        assert!(e.to_string().contains("c.xml:17"), "{e}");
+        assert!(e.to_string().contains("c.xml:16"), "{e}");
         assert!(e.to_string().contains("px"), "{e}");
         let e = parse_intrinsics(&XML.replace("<kud>-0.125</kud>", ""), "c.xml").unwrap_err();
         assert!(e.to_string().contains("kud"), "{e}");
