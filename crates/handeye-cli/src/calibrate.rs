@@ -122,6 +122,13 @@ pub struct Args {
     /// it in either is not `good`: the verdict says whether it is met (JSON `goal.met`).
     #[arg(long, value_name = "DEGREES,LENGTH", value_parser = values::goal)]
     goal: Option<handeye::Sizes>,
+    /// Calibrate from images: INPUT is a ViSP folder of images and robot poses, in which the
+    /// target is found as `handeye detect --target SPEC` finds it (`chessboard:COLSxROWS:SQUARE`
+    /// or `apriltag36h11:SIZE`), with --intrinsics FILE; then the pose path on each image's pose
+    /// of the target, or the pixel path with --method reprojection. The records found are written
+    /// to a file in the temporary folder, named on stderr (messages name its lines).
+    #[arg(long, value_name = "SPEC", value_parser = crate::detect::parse_target)]
+    target: Option<handeye::detect::Target>,
 }
 
 /// Refuses the flags of the calibration on the pixels without `--method reprojection` (exit 2).
@@ -162,7 +169,10 @@ fn any_method() -> PossibleValuesParser {
 /// Runs the command: one path for every problem and input kind. The input is read (pose pairs,
 /// or the target's detections with the camera's intrinsics for `--method reprojection`), one
 /// [`Options`] built, one [`calibrate`] called, and its report printed in the face asked.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(mut args: Args) -> Result<()> {
+    if let Some(target) = args.target.take() {
+        args = from_images(args, target)?;
+    }
     let options = options(&args)?;
     let setup = args.input.setup();
     let recorded = read(&args, &options)?;
@@ -220,6 +230,41 @@ enum Recorded {
         frames: Vec<Frame>,
         names: Vec<String>,
     },
+}
+
+/// `args` with the input made from the images of its ViSP folder (`--target`): the records with
+/// detections and camera poses written to a file in the temporary folder, which becomes the input;
+/// `--intrinsics` kept for the pixel path only (the pose path has used it for the poses).
+fn from_images(mut args: Args, target: handeye::detect::Target) -> Result<Args> {
+    let Some(intrinsics) = args.intrinsics.clone() else {
+        return Err(Error::InvalidParameter {
+            name: "target",
+            message: "--target finds the target in the images, whose poses need the camera's intrinsics: give --intrinsics FILE".into(),
+        }
+        .into());
+    };
+    let Some(folder) = args.input.input.clone() else {
+        return Err(Error::InvalidParameter {
+            name: "target",
+            message: "--target reads a folder of images: give it as INPUT".into(),
+        }
+        .into());
+    };
+    let found = crate::detect::TargetArgs {
+        target,
+        intrinsics: Some(intrinsics),
+    };
+    let lines = crate::detect::detected(&folder, &found)?;
+    let path =
+        std::env::temp_dir().join(format!("handeye-detections-{}.jsonl", std::process::id()));
+    std::fs::write(&path, lines.join("\n") + "\n")
+        .map_err(|e| anyhow::anyhow!("{}: cannot write the detections: {e}", path.display()))?;
+    crate::tell!("the detections: {}", path.display());
+    if !on_pixels(&options(&args)?) {
+        args.intrinsics = None;
+    }
+    args.input.input = Some(path);
+    Ok(args)
 }
 
 /// Whether the options ask for the fit on the pixels (`--method reprojection`).

@@ -8,6 +8,7 @@ mod advise;
 mod bench;
 mod calibrate;
 mod demo;
+mod detect;
 mod experiment;
 mod faces;
 mod figures;
@@ -48,6 +49,10 @@ enum Command {
     /// List the topics, types, counts and tf tree of a ROS 2 recording, to choose its frames.
     #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Inspect(inspect::Args),
+    /// Find a chessboard's or an AprilTag's corners in a recording's images and write the
+    /// records with `detections` (JSON Lines) that `calibrate` reads.
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
+    Detect(detect::Args),
     /// Say what to record next: the least determined directions of X and the motions that
     /// would shrink its uncertainty most.
     #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
@@ -78,6 +83,7 @@ impl Command {
             Self::Calibrate(_) => "calibrate",
             Self::Online(_) => "online",
             Self::Inspect(_) => "inspect",
+            Self::Detect(_) => "detect",
             Self::Advise(_) => "advise",
             Self::Verify(_) => "verify",
             Self::Simulate(_) => "simulate",
@@ -96,6 +102,7 @@ fn main() -> ExitCode {
         Command::Calibrate(a) => calibrate::run(a),
         Command::Online(a) => online::run(a),
         Command::Inspect(a) => inspect::run(a),
+        Command::Detect(a) => detect::run(a),
         Command::Advise(a) => advise::run(a),
         Command::Verify(a) => verify::run(a),
         Command::Simulate(a) => simulate::run(a),

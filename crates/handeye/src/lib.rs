@@ -85,6 +85,7 @@
 // are the jobs and the types every face receives.
 pub mod calibrate;
 pub mod check;
+pub mod detect;
 pub mod experiment;
 pub mod io;
 pub mod model;

@@ -2,7 +2,9 @@
 //! (`camera_matrix`, `distortion_coefficients` k1 k2 p1 p2 k3, `image_width`, `image_height`; a
 //! `%YAML:1.0` first line and `!!opencv-matrix` mappings with `rows`, `cols`, `dt`, `data`), the
 //! same names as ROS's `camera_calibration_parsers` writes them, or a ROS `camera_info` message
-//! (`k`/`K`, `d`/`D`, `width`, `height`, `distortion_model`).
+//! (`k`/`K`, `d`/`D`, `width`, `height`, `distortion_model`), or ViSP's camera XML
+//! (`vpXmlParserCamera`: one `<camera>`, its `<model>` `px py u0 v0` and, for
+//! `perspectiveProjWithDistortion`, `kud`, which is OpenCV's k1).
 //!
 //! Parsed by the readers' YAML tree (`yaml-rust2`'s event parser, every value with its line), so
 //! errors name the line. OpenCV's `%YAML:1.0` is not a valid YAML directive (YAML writes
@@ -44,6 +46,9 @@ impl Intrinsics {
 /// # Ok::<(), handeye::Error>(())
 /// ```
 pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
+    if text.trim_start().starts_with('<') {
+        return parse_visp_xml(text, file);
+    }
     let tree = YamlTree::parse(&opencv_header_blanked(text), file)?;
     let err = |field: &str, message: String| {
         parse_error(file, tree.line(field).unwrap_or(0), field, message)
@@ -319,5 +324,205 @@ mod tests {
             field(&format!("{OPENCV}distortion_model: equidistant\n")),
             "distortion_model"
         );
+    }
+}
+
+/// One `<model>` of ViSP's camera XML: its type and its numbers by name, each with its line.
+#[derive(Default)]
+struct VispModel {
+    kind: String,
+    values: Vec<(String, f64, usize)>,
+}
+
+/// ViSP's camera XML (`vpXmlParserCamera`): one `<camera>` with `image_width`, `image_height` and
+/// its `<model>`s; `perspectiveProjWithDistortion` (k1 = `kud`) is taken when given, else
+/// `perspectiveProjWithoutDistortion`.
+fn parse_visp_xml(text: &str, file: &str) -> Result<Intrinsics> {
+    use quick_xml::events::Event;
+    let line_at = |pos: u64| {
+        let pos = usize::try_from(pos).unwrap_or(usize::MAX).min(text.len());
+        text.as_bytes()[..pos]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1
+    };
+    let mut reader = quick_xml::Reader::from_str(text);
+    let (mut path, mut models, mut cameras) = (Vec::<String>::new(), Vec::<VispModel>::new(), 0);
+    let mut size: [Option<u32>; 2] = [None, None];
+    loop {
+        let at = line_at(reader.buffer_position());
+        match reader.read_event() {
+            Err(e) => return Err(parse_error(file, at, "xml", e.to_string())),
+            Ok(Event::Eof) => break,
+            Ok(Event::Start(tag)) => {
+                let name = tag.name().as_ref().to_owned();
+                if name == "camera" {
+                    cameras += 1;
+                } else if name == "model" {
+                    models.push(VispModel::default());
+                }
+                if path.len() > 16 {
+                    return Err(parse_error(
+                        file,
+                        at,
+                        name,
+                        "nested too deep for a camera file",
+                    ));
+                }
+                path.push(name);
+            }
+            Ok(Event::End(_)) => {
+                path.pop();
+            }
+            Ok(Event::Text(t)) => {
+                let value = t.xml10_content();
+                let value = value.trim();
+                let Some(field) = path.last().cloned() else {
+                    continue;
+                };
+                let in_model = path.iter().any(|p| p == "model");
+                let number = || {
+                    value.parse::<f64>().map_err(|_| {
+                        parse_error(
+                            file,
+                            at,
+                            field.as_str(),
+                            format!("`{value}` is not a number"),
+                        )
+                    })
+                };
+                match (in_model, field.as_str()) {
+                    (true, "type") => {
+                        if let Some(m) = models.last_mut() {
+                            m.kind = value.to_owned();
+                        }
+                    }
+                    (true, "px" | "py" | "u0" | "v0" | "kud") => {
+                        let v = number()?;
+                        if let Some(m) = models.last_mut() {
+                            m.values.push((field.clone(), v, at));
+                        }
+                    }
+                    (false, "image_width" | "image_height") => {
+                        let v = value.parse::<u32>().map_err(|_| {
+                            parse_error(
+                                file,
+                                at,
+                                field.as_str(),
+                                format!("expected a size in pixels, got `{value}`"),
+                            )
+                        })?;
+                        size[usize::from(field == "image_height")] = Some(v);
+                    }
+                    _ => {}
+                }
+            }
+            Ok(_) => {}
+        }
+    }
+    if cameras != 1 {
+        return Err(parse_error(
+            file,
+            0,
+            "camera",
+            format!("{cameras} <camera> entries: the intrinsics are one camera's (keep one)"),
+        ));
+    }
+    let with = models
+        .iter()
+        .find(|m| m.kind == "perspectiveProjWithDistortion");
+    let model = with
+        .or_else(|| models.iter().find(|m| m.kind == "perspectiveProjWithoutDistortion"))
+        .ok_or_else(|| {
+            parse_error(
+                file,
+                0,
+                "model",
+                "no <model> of type perspectiveProjWithDistortion or perspectiveProjWithoutDistortion",
+            )
+        })?;
+    let get = |name: &str| -> Result<f64> {
+        model
+            .values
+            .iter()
+            .find(|(n, _, _)| n == name)
+            .map(|(_, v, _)| *v)
+            .ok_or_else(|| parse_error(file, 0, format!("model.{name}"), "missing"))
+    };
+    let k1 = if with.is_some() { get("kud")? } else { 0.0 };
+    let k = [
+        get("px")?,
+        0.0,
+        get("u0")?,
+        0.0,
+        get("py")?,
+        get("v0")?,
+        0.0,
+        0.0,
+        1.0,
+    ];
+    let intrinsics = pinhole(
+        &k,
+        [k1, 0.0, 0.0, 0.0, 0.0],
+        (size[0].unwrap_or(0), size[1].unwrap_or(0)),
+    );
+    intrinsics
+        .check()
+        .map_err(|(field, message)| parse_error(file, 0, format!("model.{field}"), message))?;
+    Ok(intrinsics)
+}
+
+#[cfg(test)]
+mod visp_xml_tests {
+    use super::parse_intrinsics;
+
+    const XML: &str = r#"<?xml version="1.0"?>
+<root>
+  <camera>
+    <name>Camera</name>
+    <image_width>640</image_width>
+    <image_height>480</image_height>
+    <model>
+      <type>perspectiveProjWithoutDistortion</type>
+      <px>600.5</px>
+      <py>601.5</py>
+      <u0>320.25</u0>
+      <v0>240.75</v0>
+    </model>
+    <model>
+      <type>perspectiveProjWithDistortion</type>
+      <px>610.5</px>
+      <py>611.5</py>
+      <u0>321.25</u0>
+      <v0>241.75</v0>
+      <kud>-0.125</kud>
+      <kdu>0.13</kdu>
+    </model>
+  </camera>
+</root>
+"#;
+
+    #[test]
+    fn visp_xml_gives_the_model_with_distortion() {
+        let k = parse_intrinsics(XML, "camera.xml").unwrap();
+        assert_eq!((k.fx, k.fy, k.cx, k.cy), (610.5, 611.5, 321.25, 241.75));
+        assert_eq!(k.distortion, [-0.125, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!((k.width, k.height), (640, 480));
+        let plain = XML.replace("perspectiveProjWithDistortion", "other");
+        let k = parse_intrinsics(&plain, "camera.xml").unwrap();
+        assert_eq!((k.fx, k.distortion[0]), (600.5, 0.0));
+    }
+
+    #[test]
+    fn bad_visp_xml_names_the_line_and_field() {
+        let e = parse_intrinsics(&XML.replace("<px>610.5", "<px>six"), "c.xml").unwrap_err();
+        assert!(e.to_string().contains("c.xml:16"), "{e}");
+        assert!(e.to_string().contains("px"), "{e}");
+        let e = parse_intrinsics(&XML.replace("<kud>-0.125</kud>", ""), "c.xml").unwrap_err();
+        assert!(e.to_string().contains("kud"), "{e}");
+        let two = XML.replace("</root>", "<camera></camera></root>");
+        let e = parse_intrinsics(&two, "c.xml").unwrap_err();
+        assert!(e.to_string().contains("2 <camera>"), "{e}");
     }
 }
