@@ -200,7 +200,7 @@ impl TargetInView {
     }
 
     /// Whether the camera poses look inverted: inverted, they put every target in view
-    /// ([`IN_VIEW_DEG`]) and [`NEARER_AXIS`] times nearer the axis than as given.
+    /// (within `IN_VIEW_DEG`) and `NEARER_AXIS` times nearer the axis than as given.
     pub fn says_inverted(&self) -> bool {
         self.inverted_widest_deg <= IN_VIEW_DEG
             && NEARER_AXIS * self.inverted_deg <= self.as_given_deg

@@ -1,6 +1,6 @@
 //! From images to detections (issue 54): the target a recording's images show ([`Target`],
 //! `--target`), a ViSP recording of images and robot poses ([`read_visp_images`]), the target's
-//! points found in one image ([`detect`], feature `images`) and the camera's pose of them
+//! points found in one image (`detect`, feature `images`) and the camera's pose of them
 //! ([`camera_from_target`]). The detections are what the pixel path reads (`Frame`,
 //! `Detections`); docs/SPEC.md sec. 7 (`detect`) says the command that writes them.
 
