@@ -53,6 +53,7 @@
 //! | 5 | `calibrate/` | the batch jobs: poses and pixels, robot-world, verify and advice |
 //! | 6 | `online/` | the online calibrator both faces drive: the paper's selection, the accumulating estimator, the pixels on a doubling schedule |
 //! | 7 | [`io`], [`experiment`] | files, two streams and their clock, ROS 2 recordings, truth files; the simulated studies (the paper's experiments, tracking, the advice's closed loop) |
+//! | 8 | [`detect`] | from images to detections: the target's spec, ViSP's image folders, the points found in an image (feature `images`) and the camera's pose of them |
 //!
 //! # The paper in the code
 //! Zhang, Shi, Liu, "Adaptive motion selection for online hand–eye calibration":

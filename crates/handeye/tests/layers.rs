@@ -18,6 +18,7 @@ const LAYERS: &[(&str, usize)] = &[
     ("online", 6),
     ("io", 7),
     ("experiment", 7),
+    ("detect", 8),
 ];
 
 fn rank(layer: &str) -> Option<usize> {

@@ -28,7 +28,7 @@ pub const MAX_IMAGE_BYTES: u64 = 512 << 20;
 /// in which the target is not found whole, is an error naming the file (`file: what`) and
 /// saying what was found.
 #[cfg(feature = "images")]
-pub fn detect(path: &std::path::Path, target: &Target) -> crate::Result<Detections> {
+pub fn detect(path: &std::path::Path, target: &Target) -> crate::model::error::Result<Detections> {
     let file = path.display().to_string();
     let fail = |message: String| crate::io::parse_error(&file, 0, "-", message);
     let gray = decode(path).map_err(fail)?;
@@ -85,7 +85,10 @@ pub fn camera_from_target(detections: &Detections, camera: &Intrinsics) -> Optio
 
 /// [`detect`] on every image of `records`, in parallel (rayon), in their order.
 #[cfg(feature = "images")]
-pub fn detect_all(records: &[ImageRecord], target: &Target) -> Vec<crate::Result<Detections>> {
+pub fn detect_all(
+    records: &[ImageRecord],
+    target: &Target,
+) -> Vec<crate::model::error::Result<Detections>> {
     use rayon::prelude::*;
     records
         .par_iter()
