@@ -125,8 +125,8 @@ pub struct Args {
     /// Calibrate from images: INPUT is a ViSP folder of images and robot poses, in which the
     /// target is found as `handeye detect --target SPEC` finds it (`chessboard:COLSxROWS:SQUARE`
     /// or `apriltag36h11:SIZE`), with --intrinsics FILE; then the pose path on each image's pose
-    /// of the target, or the pixel path with --method reprojection. The records found are written
-    /// to a file in the temporary folder, named on stderr (messages name its lines).
+    /// of the target, or the pixel path with --method reprojection. Messages name each pose by its
+    /// image; `handeye detect` writes the records found.
     #[arg(long, value_name = "SPEC", value_parser = crate::detect::parse_target)]
     target: Option<handeye::detect::Target>,
 }
@@ -136,7 +136,8 @@ fn pixels_only(args: &Args) -> Result<()> {
     for (flag, given, words) in [
         (
             "intrinsics",
-            args.intrinsics.is_some(),
+            // With --target, the intrinsics find each image's pose of the target.
+            args.intrinsics.is_some() && args.target.is_none(),
             "--intrinsics is read by",
         ),
         (
@@ -169,10 +170,7 @@ fn any_method() -> PossibleValuesParser {
 /// Runs the command: one path for every problem and input kind. The input is read (pose pairs,
 /// or the target's detections with the camera's intrinsics for `--method reprojection`), one
 /// [`Options`] built, one [`calibrate`] called, and its report printed in the face asked.
-pub fn run(mut args: Args) -> Result<()> {
-    if let Some(target) = args.target.take() {
-        args = from_images(args, target)?;
-    }
+pub fn run(args: Args) -> Result<()> {
     let options = options(&args)?;
     let setup = args.input.setup();
     let recorded = read(&args, &options)?;
@@ -232,39 +230,65 @@ enum Recorded {
     },
 }
 
-/// `args` with the input made from the images of its ViSP folder (`--target`): the records with
-/// detections and camera poses written to a file in the temporary folder, which becomes the input;
-/// `--intrinsics` kept for the pixel path only (the pose path has used it for the poses).
-fn from_images(mut args: Args, target: handeye::detect::Target) -> Result<Args> {
-    let Some(intrinsics) = args.intrinsics.clone() else {
-        return Err(Error::InvalidParameter {
+/// The frames of the images of a ViSP folder (`--target`), found in the images with the camera of
+/// `--intrinsics`: each named by its image, as the pose pairs (each image's pose of the target
+/// as the robot's motion tells it) or, for `--method reprojection`, the frames themselves.
+fn from_images(
+    args: &Args,
+    target: &handeye::detect::Target,
+    options: &Options,
+) -> Result<Recorded> {
+    let refuse = |message: &str| -> anyhow::Error {
+        Error::InvalidParameter {
             name: "target",
-            message: "--target finds the target in the images, whose poses need the camera's intrinsics: give --intrinsics FILE".into(),
+            message: message.into(),
         }
-        .into());
+        .into()
     };
-    let Some(folder) = args.input.input.clone() else {
-        return Err(Error::InvalidParameter {
-            name: "target",
-            message: "--target reads a folder of images: give it as INPUT".into(),
-        }
-        .into());
+    let Some(intrinsics) = &args.intrinsics else {
+        return Err(refuse(
+            "--target finds the target in the images, whose poses need the camera's intrinsics: give --intrinsics FILE",
+        ));
     };
-    let found = crate::detect::TargetArgs {
-        target,
-        intrinsics: Some(intrinsics),
+    let Some(folder) = &args.input.input else {
+        return Err(refuse(
+            "--target reads a folder of images: give it as INPUT",
+        ));
     };
-    let lines = crate::detect::detected(&folder, &found)?;
-    let path =
-        std::env::temp_dir().join(format!("handeye-detections-{}.jsonl", std::process::id()));
-    std::fs::write(&path, lines.join("\n") + "\n")
-        .map_err(|e| anyhow::anyhow!("{}: cannot write the detections: {e}", path.display()))?;
-    crate::tell!("the detections: {}", path.display());
-    if !on_pixels(&options(&args)?) {
-        args.intrinsics = None;
+    output_frames(args)?;
+    if let Some(path) = &args.report {
+        crate::report::check_writable(path)?;
     }
-    args.input.input = Some(path);
-    Ok(args)
+    let camera = Intrinsics::read(intrinsics)?;
+    let found = crate::detect::detected(folder, target, Some(&camera), args.input.setup())?;
+    let names = found
+        .iter()
+        .map(|(record, _)| record.image.display().to_string())
+        .collect();
+    let frames: Vec<Frame> = found.into_iter().map(|(_, frame)| frame).collect();
+    if on_pixels(options) {
+        return Ok(Recorded::Pixels {
+            camera,
+            frames,
+            names,
+        });
+    }
+    let poses: Vec<handeye::PosePair> = frames
+        .iter()
+        .filter_map(|f| {
+            Some(handeye::PosePair {
+                base_from_gripper: f.base_from_gripper,
+                camera_from_target: f.camera_from_target?,
+            })
+        })
+        .collect();
+    pixels_only(args)?;
+    enough_for(args, options, poses.len())?;
+    Ok(Recorded::Poses(Recording {
+        poses,
+        names,
+        ..Recording::default()
+    }))
 }
 
 /// Whether the options ask for the fit on the pixels (`--method reprojection`).
@@ -280,6 +304,9 @@ fn on_pixels(options: &Options) -> bool {
 /// pixels, the frame names, `--report`'s path): pose pairs (enough of them for the problem), or
 /// the records with detections and the intrinsics.
 fn read(args: &Args, options: &Options) -> Result<Recorded> {
+    if let Some(target) = &args.target {
+        return from_images(args, target, options);
+    }
     if on_pixels(options) {
         let (camera, frames, names) =
             pixel_input(&args.input, args.intrinsics.as_ref(), args.report.as_ref())?;
@@ -298,12 +325,17 @@ fn read(args: &Args, options: &Options) -> Result<Recorded> {
         crate::report::check_writable(path)?;
     }
     let recording = read_all(&args.input, options.fix.reading())?;
+    enough_for(args, options, recording.poses.len())?;
+    Ok(Recorded::Poses(recording))
+}
+
+/// Refuses fewer pose pairs than the problem needs.
+fn enough_for(args: &Args, options: &Options, poses: usize) -> Result<()> {
     let (need, what) = match options.problem {
         Problem::HandEye(_) => (2, "to make a motion"),
         Problem::RobotWorld(_) => (3, "to determine X and the target's pose"),
     };
-    enough(&args.input, recording.poses.len(), need, what)?;
-    Ok(Recorded::Poses(recording))
+    enough(&args.input, poses, need, what)
 }
 
 /// Prints a hand–eye result on pose pairs in the face asked for, writes `--report`, and sets the

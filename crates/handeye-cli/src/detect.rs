@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args as ClapArgs;
-use handeye::detect::{ImageRecord, Target, camera_from_target, detect_all, read_visp_images};
-use handeye::{Detections, Error, Intrinsics};
+use handeye::detect::{ImageRecord, Target, frames, read_visp_images};
+use handeye::{Error, Frame, Intrinsics, Setup};
 use serde_json::{Value, json};
 
 /// Options of `handeye detect`.
@@ -21,6 +21,10 @@ pub struct Args {
     input: PathBuf,
     #[command(flatten)]
     target: TargetArgs,
+    /// Camera on the gripper or fixed: with --intrinsics, the robot's motion tells each image's
+    /// pose of the target from its mirror image, by the setup's equation [default: eye-in-hand]
+    #[arg(long, value_parser = crate::values::named::<Setup>())]
+    setup: Option<Setup>,
 }
 
 /// The target and the camera, shared with `calibrate --target`.
@@ -32,7 +36,7 @@ pub struct TargetArgs {
     #[arg(long, value_name = "SPEC", value_parser = parse_target)]
     pub target: Target,
     /// The camera's intrinsics (OpenCV YAML, ROS camera_info or ViSP's camera XML): each image's
-    /// `camera_from_target` is added, the pose of the target that fits its pixels best.
+    /// `camera_from_target` is added, the pose of the target the robot's motion agrees with.
     #[arg(long, value_name = "FILE")]
     pub intrinsics: Option<PathBuf>,
 }
@@ -44,80 +48,80 @@ pub fn parse_target(spec: &str) -> std::result::Result<Target, String> {
 
 /// Runs the command: the records on stdout.
 pub fn run(args: Args) -> Result<()> {
-    let lines = detected(&args.input, &args.target)?;
+    let camera = args
+        .target
+        .intrinsics
+        .as_ref()
+        .map(Intrinsics::read)
+        .transpose()?;
+    let setup = args.setup.unwrap_or_default();
+    let found = detected(&args.input, &args.target.target, camera.as_ref(), setup)?;
     let mut out = std::io::stdout().lock();
-    for line in lines {
-        writeln!(out, "{line}")?;
+    for (record, frame) in &found {
+        writeln!(out, "{}", record_line(record, frame))?;
     }
     out.flush()?;
     Ok(())
 }
 
-/// The JSON Lines records of the images of `folder` where the target is found whole, each line
-/// told on stderr (`<image>: 54 points`, or why not); refused when no image shows it.
-pub fn detected(folder: &Path, args: &TargetArgs) -> Result<Vec<String>> {
-    let camera = args.intrinsics.as_ref().map(Intrinsics::read).transpose()?;
+/// The images of `folder` where the target is found whole, each with its frame (and, with the
+/// `camera`, its pose of the target), each image told on stderr (`<image>: 54 points`, or why
+/// not); refused when no image shows it.
+pub fn detected(
+    folder: &Path,
+    target: &Target,
+    camera: Option<&Intrinsics>,
+    setup: Setup,
+) -> Result<Vec<(ImageRecord, Frame)>> {
     let records = read_visp_images(folder)?;
-    let found = detect_all(&records, &args.target);
-    let mut lines = Vec::with_capacity(records.len());
-    for (record, found) in records.iter().zip(found) {
-        let name = record.image.display();
-        match found {
-            Ok(d) => {
-                let line = record_line(record, &d, camera.as_ref());
-                match line {
-                    Some(line) => {
-                        crate::tell!("{name}: {} points of {}", d.pixels.len(), args.target);
-                        lines.push(line.to_string());
-                    }
-                    None => crate::tell!(
-                        "{name}: left out: the {} points give no pose of the target",
-                        d.pixels.len()
-                    ),
-                }
+    let total = records.len();
+    let mut found = Vec::with_capacity(total);
+    for (record, frame) in records.iter().zip(frames(&records, target, camera, setup)) {
+        match frame {
+            Ok(frame) => {
+                crate::tell!(
+                    "{}: {} points of {target}",
+                    record.image.display(),
+                    frame.detections.pixels.len()
+                );
+                found.push((record.clone(), frame));
             }
             Err(e) => crate::tell!("{e}: left out"),
         }
     }
     crate::tell!(
-        "{} of {} image(s) with the target ({})",
-        lines.len(),
-        records.len(),
-        args.target
+        "{} of {total} image(s) with the target ({target})",
+        found.len()
     );
-    if lines.is_empty() {
+    if found.is_empty() {
         return Err(Error::InvalidParameter {
             name: "target",
             message: format!(
-                "no image of {} shows the whole target {}",
-                folder.display(),
-                args.target
+                "no image of {} shows the whole target {target}",
+                folder.display()
             ),
         }
         .into());
     }
-    Ok(lines)
+    Ok(found)
 }
 
 /// One record: the image, the robot's pose, the camera's pose (with intrinsics) and the
-/// detections; `None` when the intrinsics are given and no pose fits the pixels.
-fn record_line(record: &ImageRecord, d: &Detections, camera: Option<&Intrinsics>) -> Option<Value> {
+/// detections.
+fn record_line(record: &ImageRecord, frame: &Frame) -> Value {
     let mut line = json!({
         "image": record.image.display().to_string(),
-        "base_from_gripper": matrix(&record.base_from_gripper),
+        "base_from_gripper": matrix(&frame.base_from_gripper),
     });
-    if let Some(camera) = camera {
-        line["camera_from_target"] = matrix(&camera_from_target(d, camera)?);
+    if let Some(pose) = &frame.camera_from_target {
+        line["camera_from_target"] = matrix(pose);
     }
+    let d = &frame.detections;
     line["detections"] = json!({ "target": d.target, "pixels": d.pixels });
-    Some(line)
+    line
 }
 
+/// The 4×4 matrix, row-major, as the pose readers read it.
 fn matrix(t: &handeye::Transform) -> Value {
-    let m = t.to_homogeneous();
-    Value::from(
-        (0..4)
-            .map(|r| (0..4).map(|c| m[(r, c)]).collect::<Vec<f64>>())
-            .collect::<Vec<_>>(),
-    )
+    json!(handeye::TransformJson::from(t).matrix)
 }

@@ -20,9 +20,8 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::run;
 use common::shared_data::shared_each;
-use nalgebra::{Matrix3, Matrix4, Vector3};
+use common::{apart, matrix, run};
 use serde_json::Value;
 
 /// The two recordings: (the images' folder, the converted peer set, the setup, the target).
@@ -55,10 +54,6 @@ fn records(text: &str) -> Vec<Value> {
     text.lines()
         .map(|l| serde_json::from_str(l).unwrap())
         .collect()
-}
-
-fn matrix(v: &Value) -> Matrix4<f64> {
-    Matrix4::from_fn(|r, c| v[r][c].as_f64().unwrap())
 }
 
 fn points(v: &Value) -> Vec<Vec<f64>> {
@@ -134,16 +129,6 @@ fn corners_found_are_opencvs() {
             "{err}"
         );
     }
-}
-
-/// The angle (degrees) and translation distance between two rigid transforms.
-fn apart(a: &Matrix4<f64>, b: &Matrix4<f64>) -> (f64, f64) {
-    let ra: Matrix3<f64> = a.fixed_view::<3, 3>(0, 0).into_owned();
-    let rb: Matrix3<f64> = b.fixed_view::<3, 3>(0, 0).into_owned();
-    let cos = (((ra.transpose() * rb).trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
-    let ta: Vector3<f64> = a.fixed_view::<3, 1>(0, 3).into_owned();
-    let tb: Vector3<f64> = b.fixed_view::<3, 1>(0, 3).into_owned();
-    (cos.acos().to_degrees(), (ta - tb).norm())
 }
 
 fn calibrate(args: &[&str]) -> Value {

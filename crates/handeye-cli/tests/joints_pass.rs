@@ -5,12 +5,9 @@
 
 mod common;
 
-use std::io::Write;
 use std::path::Path;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
 
-use common::testdata;
+use common::{run_fed, run_on_fifo, testdata, with_input};
 
 /// The kinhec UR10 recording (32 records, each with its 6 joint angles) and its DH table.
 fn ur10() -> (String, String) {
@@ -19,103 +16,6 @@ fn ur10() -> (String, String) {
         p("kinhec/systematic/dh1_ur10_eth_s0.jsonl"),
         p("kinhec/robots/ur10.json"),
     )
-}
-
-/// Runs `handeye ARGS` with `stdin` written from another thread; a run longer than a minute (a
-/// pipe waited on) is killed and fails the test. Returns (exit code, stdout, stderr).
-fn run_fed(args: &[&str], stdin: Vec<u8>) -> (i32, String, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_handeye"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut pipe = child.stdin.take().unwrap();
-    let writer = std::thread::spawn(move || {
-        let _ = pipe.write_all(&stdin);
-    });
-    let drain = |mut r: Box<dyn std::io::Read + Send>| {
-        std::thread::spawn(move || {
-            let mut bytes = Vec::new();
-            let _ = r.read_to_end(&mut bytes);
-            bytes
-        })
-    };
-    let stdout = drain(Box::new(child.stdout.take().unwrap()));
-    let stderr = drain(Box::new(child.stderr.take().unwrap()));
-    let start = Instant::now();
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if start.elapsed() > Duration::from_secs(60) {
-            child.kill().unwrap();
-            let _ = child.wait();
-            panic!("{args:?} still running after a minute: a pipe waited on");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    writer.join().unwrap();
-    let out = std::process::Output {
-        status,
-        stdout: stdout.join().unwrap(),
-        stderr: stderr.join().unwrap(),
-    };
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr,
-    )
-}
-
-/// `handeye ARGS` with INPUT (`{}` in `args`) a FIFO fed with `bytes`; `None` without `mkfifo`.
-#[cfg(unix)]
-fn run_on_fifo(args: &[&str], bytes: &[u8]) -> Option<(i32, String, String)> {
-    use std::os::unix::fs::OpenOptionsExt;
-    let dir = tempfile::tempdir().unwrap();
-    let fifo = dir.path().join("poses.jsonl");
-    if !Command::new("mkfifo")
-        .arg(&fifo)
-        .status()
-        .is_ok_and(|s| s.success())
-    {
-        eprintln!("mkfifo is missing: FIFO case skipped");
-        return None;
-    }
-    let (bytes, path) = (bytes.to_vec(), fifo.clone());
-    let writer = std::thread::spawn(move || {
-        if let Ok(mut f) = std::fs::OpenOptions::new().write(true).open(&path) {
-            let _ = f.write_all(&bytes);
-        }
-    });
-    let name = fifo.to_str().unwrap();
-    let args: Vec<&str> = args
-        .iter()
-        .map(|a| if *a == "{}" { name } else { a })
-        .collect();
-    let result = run_fed(&args, Vec::new());
-    // Should the command have ended without opening the FIFO, let the writer go.
-    let _ = std::fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(0o4000) // O_NONBLOCK
-        .open(&fifo);
-    writer.join().unwrap();
-    Some(result)
-}
-
-#[cfg(not(unix))]
-fn run_on_fifo(_: &[&str], _: &[u8]) -> Option<(i32, String, String)> {
-    None
-}
-
-/// `args` with INPUT (`{}`) replaced by `input`.
-fn with_input<'a>(args: &[&'a str], input: &'a str) -> Vec<&'a str> {
-    args.iter()
-        .map(|a| if *a == "{}" { input } else { a })
-        .collect()
 }
 
 /// The report's numbers and structure, its words left out (they name the input, which differs

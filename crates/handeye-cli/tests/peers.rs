@@ -20,8 +20,8 @@ mod common;
 
 use std::path::PathBuf;
 
-use common::run;
 use common::shared_data::{shared, shared_each};
+use common::{apart, matrix, run};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde_json::Value;
 
@@ -68,21 +68,6 @@ fn calibrate(dir: &std::path::Path, setup: &str, args: &[&str]) -> (i32, Option<
     let (code, out, err) = run(&all);
     let report = (code == 0).then(|| serde_json::from_str(&out).unwrap());
     (code, report, err)
-}
-
-fn matrix(v: &Value) -> Matrix4<f64> {
-    let rows = v.as_array().expect("a 4×4 matrix");
-    Matrix4::from_fn(|r, c| rows[r][c].as_f64().unwrap())
-}
-
-/// The angle (degrees) and translation distance between two rigid transforms.
-fn apart(a: &Matrix4<f64>, b: &Matrix4<f64>) -> (f64, f64) {
-    let ra: Matrix3<f64> = a.fixed_view::<3, 3>(0, 0).into_owned();
-    let rb: Matrix3<f64> = b.fixed_view::<3, 3>(0, 0).into_owned();
-    let cos = (((ra.transpose() * rb).trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
-    let ta: Vector3<f64> = a.fixed_view::<3, 1>(0, 3).into_owned();
-    let tb: Vector3<f64> = b.fixed_view::<3, 1>(0, 3).into_owned();
-    (cos.acos().to_degrees(), (ta - tb).norm())
 }
 
 fn rigid_inverse(m: &Matrix4<f64>) -> Matrix4<f64> {

@@ -3,84 +3,31 @@
 //! or an overflowing value in one line, through stdin and through a FIFO; an endless bad stream
 //! is read with bounded memory, each bad line counted.
 
+mod common;
+
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
+
+use common::{run_fed, run_on_fifo, testdata};
 
 use handeye::io::{Format, PoseStream};
 use serde_json::Value;
 
-fn testdata(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../testdata")
-        .join(rel)
-}
-
-fn handeye() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_handeye"))
-}
-
-/// Runs `handeye online INPUT --d-max 100 --estimator paper` (the paper's estimator prints an
-/// event per calibration, which these tests of streaming count) with `stdin` fed from another
-/// thread; returns (exit code, stdout, stderr).
+/// `handeye online INPUT --d-max 100 --estimator paper` (the paper's estimator prints an event
+/// per calibration, which these tests of streaming count) with `stdin` fed from another thread;
+/// returns (exit code, stdout, stderr).
 fn online(input: &Path, stdin: Vec<u8>) -> (i32, String, String) {
-    let mut child = handeye()
-        .arg("online")
-        .arg(input)
-        .args(["--d-max", "100", "--estimator", "paper"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut pipe = child.stdin.take().unwrap();
-    let writer = std::thread::spawn(move || {
-        // The reader may stop early; a broken pipe is its business.
-        let _ = pipe.write_all(&stdin);
-    });
-    let out = child.wait_with_output().unwrap();
-    writer.join().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "panic: {stderr}");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr,
-    )
+    run_fed(&online_args(input.to_str().unwrap()), stdin)
 }
 
-/// Runs `online` on a FIFO fed with `bytes`, or `None` where `mkfifo` is missing.
-#[cfg(unix)]
+/// [`online`] on a FIFO fed with `bytes`, or `None` where `mkfifo` is missing.
 fn online_fifo(bytes: &[u8]) -> Option<(i32, String, String)> {
-    use std::os::unix::fs::OpenOptionsExt;
-    let dir = tempfile::tempdir().unwrap();
-    let fifo = dir.path().join("poses");
-    let made = Command::new("mkfifo").arg(&fifo).status();
-    if !made.is_ok_and(|s| s.success()) {
-        eprintln!("mkfifo is missing: FIFO case skipped");
-        return None;
-    }
-    let bytes = bytes.to_vec();
-    let path = fifo.clone();
-    let writer = std::thread::spawn(move || {
-        if let Ok(mut f) = std::fs::OpenOptions::new().write(true).open(&path) {
-            let _ = f.write_all(&bytes);
-        }
-    });
-    let result = online(&fifo, Vec::new());
-    // Should the command have ended without opening the FIFO, open it (without blocking) so that
-    // the writer is not left waiting.
-    let _ = std::fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(0o4000) // O_NONBLOCK
-        .open(&fifo);
-    writer.join().unwrap();
-    Some(result)
+    run_on_fifo(&online_args("{}"), bytes)
 }
 
-#[cfg(not(unix))]
-fn online_fifo(_: &[u8]) -> Option<(i32, String, String)> {
-    None
+fn online_args(input: &str) -> [&str; 6] {
+    ["online", input, "--d-max", "100", "--estimator", "paper"]
 }
 
 /// The events of `online`, without their timing.
@@ -252,7 +199,7 @@ fn events_come_out_before_the_next_pose_is_awaited() {
     assert_eq!(code, 0, "{err}");
     let all = events(&out);
     assert!(all.len() > 3, "{out}");
-    let mut child = handeye()
+    let mut child = Command::new(env!("CARGO_BIN_EXE_handeye"))
         .args([
             "online",
             "-",

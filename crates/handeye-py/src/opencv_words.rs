@@ -61,21 +61,14 @@ pub fn error(e: &Error, setup: Option<Setup>, d: DropIn) -> String {
         // leave them out of the arrays, or `handeye.calibrate(..., reject_outliers=True)`).
         // The order is the library's (`Warning::leads`): what one option fixes first, then "as
         // the input is:" what the motions lack, then the rest.
-        Error::Untrusted { refusal, why } => {
-            let (first, others): (Vec<&Warning>, Vec<&Warning>) =
-                why.iter().partition(|w| w.leads());
-            let mut parts: Vec<String> = first.iter().map(|w| warning(w, setup, d)).collect();
-            if let Some(r) = refusal {
-                let r = error(r, setup, d);
-                parts.push(if parts.is_empty() {
-                    r
-                } else {
-                    format!("as the input is: {r}")
-                });
-            }
-            parts.extend(others.iter().map(|w| warning(w, setup, d)));
-            format!("X cannot be trusted: {}", parts.join("; "))
-        }
+        Error::Untrusted { refusal, why } => format!(
+            "X cannot be trusted: {}",
+            handeye::model::error::untrusted_in_order(
+                refusal.as_ref().map(|r| error(r, setup, d)),
+                why,
+                |w, _| warning(w, setup, d),
+            )
+        ),
         _ => e.to_string(),
     }
 }

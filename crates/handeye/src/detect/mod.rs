@@ -1,7 +1,7 @@
 //! From images to detections (issue 54): the target a recording's images show ([`Target`],
-//! `--target`), a ViSP recording of images and robot poses ([`read_visp_images`]), the target's
-//! points found in one image (`detect`, feature `images`) and the camera's pose of them
-//! ([`camera_from_target`]). The detections are what the pixel path reads (`Frame`,
+//! `--target`), a ViSP recording of images and robot poses ([`read_visp_images`], read by `io`),
+//! the target's points found in one image (`detect`, feature `images`) and each image's frame
+//! with the camera's pose of them (`frames`). The frames are what the pixel path reads (`Frame`,
 //! `Detections`); docs/SPEC.md sec. 7 (`detect`) says the command that writes them.
 
 #[cfg(feature = "images")]
@@ -9,13 +9,16 @@ mod apriltag;
 #[cfg(feature = "images")]
 mod chessboard;
 mod target;
-mod visp;
 
+pub use crate::io::{ImageRecord, read_visp_images};
 pub use target::{MAX_SIDE, TAG_CORNERS, Target};
-pub use visp::{ImageRecord, read_visp_images};
 
-use crate::model::camera::{Detections, Intrinsics};
-use crate::model::pose::Transform;
+#[cfg(feature = "images")]
+use crate::model::camera::{Detections, Frame, Intrinsics};
+#[cfg(feature = "images")]
+use crate::model::error::Result;
+#[cfg(feature = "images")]
+use crate::model::motion::Setup;
 
 /// The largest image side decoded, pixels, and the most bytes a decoded image may take: an
 /// image's header cannot ask for more.
@@ -28,7 +31,7 @@ pub const MAX_IMAGE_BYTES: u64 = 512 << 20;
 /// in which the target is not found whole, is an error naming the file (`file: what`) and
 /// saying what was found.
 #[cfg(feature = "images")]
-pub fn detect(path: &std::path::Path, target: &Target) -> crate::model::error::Result<Detections> {
+pub fn detect(path: &std::path::Path, target: &Target) -> Result<Detections> {
     let file = path.display().to_string();
     let fail = |message: String| crate::io::parse_error(&file, 0, "-", message);
     let gray = decode(path).map_err(fail)?;
@@ -62,36 +65,60 @@ fn decode(path: &std::path::Path) -> Result<image::GrayImage, String> {
     Ok(image.to_luma8())
 }
 
-/// The camera's pose of the target from its detections (the planar target's two poses that fit
-/// the pixels, refined on them; the one with the smaller pixel error), or `None` when the
-/// detections do not determine one.
-pub fn camera_from_target(detections: &Detections, camera: &Intrinsics) -> Option<Transform> {
-    let points: Vec<nalgebra::Vector3<f64>> = detections
-        .target
-        .iter()
-        .map(|p| nalgebra::Vector3::from(*p))
-        .collect();
-    let pixels: Vec<nalgebra::Vector2<f64>> = detections
-        .pixels
-        .iter()
-        .map(|p| nalgebra::Vector2::from(*p))
-        .collect();
-    crate::solve::reprojection::planar_poses(&points, &pixels, camera)
-        .ok()?
-        .into_iter()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(pose, _)| pose)
-}
-
 /// [`detect`] on every image of `records`, in parallel (rayon), in their order.
 #[cfg(feature = "images")]
-pub fn detect_all(
-    records: &[ImageRecord],
-    target: &Target,
-) -> Vec<crate::model::error::Result<Detections>> {
+pub fn detect_all(records: &[ImageRecord], target: &Target) -> Vec<Result<Detections>> {
     use rayon::prelude::*;
     records
         .par_iter()
         .map(|r| detect(&r.image, target))
         .collect()
+}
+
+/// Each image's frame: the target's points found ([`detect_all`]) with the robot's pose and,
+/// given the camera's intrinsics, the camera's pose of the target as the pixel path starts from
+/// it ([`start_camera_poses`]): of the planar target's two poses that fit its pixels, the one the
+/// robot's motion agrees with (a single tag's four corners often fit both alike). An image whose
+/// target is not found whole, or whose points give no pose, is its error (`file: why`).
+///
+/// [`start_camera_poses`]: crate::solve::reprojection::start_camera_poses
+#[cfg(feature = "images")]
+pub fn frames(
+    records: &[ImageRecord],
+    target: &Target,
+    camera: Option<&Intrinsics>,
+    setup: Setup,
+) -> Vec<Result<Frame>> {
+    use crate::solve::reprojection::{candidates, start_camera_poses};
+    let mut frames: Vec<Result<Frame>> = detect_all(records, target)
+        .into_iter()
+        .zip(records)
+        .map(|(found, record)| {
+            let frame = Frame {
+                base_from_gripper: record.base_from_gripper,
+                camera_from_target: None,
+                detections: found?,
+            };
+            match camera.map(|c| candidates(&frame, c)) {
+                Some(Err(why)) => Err(crate::io::parse_error(
+                    &record.image.display().to_string(),
+                    0,
+                    "-",
+                    format!(
+                        "the {} points give no pose of the target ({why})",
+                        frame.detections.pixels.len()
+                    ),
+                )),
+                _ => Ok(frame),
+            }
+        })
+        .collect();
+    if let Some(camera) = camera {
+        let found: Vec<Frame> = frames.iter().flatten().cloned().collect();
+        let poses = start_camera_poses(&found, camera, setup);
+        for (frame, pose) in frames.iter_mut().flatten().zip(poses) {
+            frame.camera_from_target = Some(pose);
+        }
+    }
+    frames
 }

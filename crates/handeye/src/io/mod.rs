@@ -53,7 +53,7 @@ pub use recording::{
 pub use stream::PoseStream;
 // The pose-file readers behind `PoseStream` and `Recording`.
 pub use format::Format;
-pub(crate) use peer::read_visp_pose;
+pub use peer::{ImageRecord, read_visp_images};
 pub use pose_reader::{
     DegreeAngles, PoseInput, PoseReader, Preamble, open_pose_stream, open_poses, read_joints,
     read_pose_file,

@@ -465,24 +465,9 @@ fn brief(v: &Value) -> String {
 /// twice (`pose_fPe_03.yaml` beside `pose_fPe_3.yaml`), a file of either kind without its partner,
 /// or an index that is not a number is refused, naming the files.
 pub fn read_visp_dir(dir: &Path) -> Result<PoseSeries> {
-    let name = dir.display().to_string();
-    let io_error = |e| Error::Io {
-        file: name.clone(),
-        source: e,
-    };
-    let mut files: Vec<String> = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(io_error)? {
-        files.push(
-            entry
-                .map_err(io_error)?
-                .file_name()
-                .to_string_lossy()
-                .into_owned(),
-        );
-    }
-    files.sort();
-    let (robot_stem, robot) = visp_indices(&files, &VISP_ROBOT, &name)?;
-    let (camera_stem, camera) = visp_indices(&files, &[VISP_CAMERA], &name)?;
+    let (name, files) = visp_files(dir)?;
+    let (robot_stem, robot) = visp_indices(&files, &VISP_ROBOT, &[".yaml"], &name)?;
+    let (camera_stem, camera) = visp_indices(&files, &[VISP_CAMERA], &[".yaml"], &name)?;
     if robot.is_empty() {
         return Err(parse_error(
             &name,
@@ -551,18 +536,43 @@ const VISP_ROBOT: [&str; 2] = ["pose_rPe_", "pose_fPe_"];
 /// File-name marker of ViSP camera poses (`camera_from_target`).
 const VISP_CAMERA: &str = "pose_cPo_";
 
-/// The files `<prefix><marker><index>.yaml` among `files` (sorted), by index, with the naming
-/// (`<prefix><marker>`) they share; an index that is not a number, one given twice, or two
-/// namings are refused.
+/// The file names of a ViSP folder, sorted, with the folder's name for errors.
+fn visp_files(dir: &Path) -> Result<(String, Vec<String>)> {
+    let name = dir.display().to_string();
+    let io_error = |e| Error::Io {
+        file: name.clone(),
+        source: e,
+    };
+    let mut files: Vec<String> = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(io_error)? {
+        files.push(
+            entry
+                .map_err(io_error)?
+                .file_name()
+                .to_string_lossy()
+                .into_owned(),
+        );
+    }
+    files.sort();
+    Ok((name, files))
+}
+
+/// The files `<prefix><marker><index><extension>` among `files` (sorted; the extension in any
+/// case), by index, with the naming (`<prefix><marker>`) they share; an index that is not a
+/// number, one given twice, or two namings are refused.
 fn visp_indices(
     files: &[String],
     markers: &[&str],
+    extensions: &[&str],
     dir: &str,
 ) -> Result<(Option<String>, BTreeMap<usize, String>)> {
     let mut out: BTreeMap<usize, String> = BTreeMap::new();
     let mut naming: Option<String> = None;
     for file in files {
-        let Some(stem) = file.strip_suffix(".yaml") else {
+        let Some((stem, extension)) = extensions
+            .iter()
+            .find_map(|ext| without_extension(file, ext).map(|stem| (stem, *ext)))
+        else {
             continue;
         };
         let Some((at, marker)) = markers
@@ -581,7 +591,7 @@ fn visp_indices(
                     0,
                     file.as_str(),
                     format!(
-                        "two ViSP namings in one directory, `{first}<i>.yaml` and `{stem}<i>.yaml`: keep one recording per directory"
+                        "two ViSP namings in one directory, `{first}<i>{extension}` and `{stem}<i>{extension}`: keep one recording per directory"
                     ),
                 ));
             }
@@ -597,7 +607,9 @@ fn visp_indices(
                     dir,
                     0,
                     file.as_str(),
-                    format!("expected `{stem}<number>.yaml`: `{digits}` is not a pose number"),
+                    format!(
+                        "expected `{stem}<number>{extension}`: `{digits}` is not a pose number"
+                    ),
                 )
             })?;
         if let Some(first) = out.insert(index, file.clone()) {
@@ -612,6 +624,71 @@ fn visp_indices(
         }
     }
     Ok((naming, out))
+}
+
+/// `file` without `extension`, compared in any case (`.PNG` is `.png`).
+fn without_extension<'a>(file: &'a str, extension: &str) -> Option<&'a str> {
+    let at = file.len().checked_sub(extension.len())?;
+    (file.is_char_boundary(at) && file[at..].eq_ignore_ascii_case(extension)).then(|| &file[..at])
+}
+
+/// One image of a recording and the robot's pose when it was taken.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageRecord {
+    /// The image file.
+    pub image: std::path::PathBuf,
+    /// Q, the robot's pose (`base_from_gripper`).
+    pub base_from_gripper: Transform,
+}
+
+/// File-name marker of the images of a ViSP recording of images (its hand-eye acquisition app's
+/// `<prefix>image-<i>.png`).
+const VISP_IMAGE: &str = "image-";
+/// The image files read.
+const VISP_IMAGE_EXTENSIONS: [&str; 3] = [".png", ".jpg", ".jpeg"];
+
+/// Reads a ViSP recording of images: in one folder, `<prefix>image-<i>.png` (or `.jpg`, `.jpeg`)
+/// and the robot's pose at each, `<prefix>pose_rPe_<i>.yaml` (or the older `pose_fPe_`), paired
+/// by index as the ViSP pose folders are (`Format::Visp`), by the same rules (one naming of each
+/// kind, an index once, each file with its partner, regular files only).
+pub fn read_visp_images(dir: &Path) -> Result<Vec<ImageRecord>> {
+    let (name, files) = visp_files(dir)?;
+    let (_, images) = visp_indices(&files, &[VISP_IMAGE], &VISP_IMAGE_EXTENSIONS, &name)?;
+    let (robot_stem, robot) = visp_indices(&files, &VISP_ROBOT, &[".yaml"], &name)?;
+    if images.is_empty() {
+        return Err(parse_error(
+            &name,
+            0,
+            "image-*.png",
+            "no ViSP images in this folder (expected `<prefix>image-<i>.png`, each with its `<prefix>pose_rPe_<i>.yaml`)",
+        ));
+    }
+    let robot_stem = robot_stem.unwrap_or_else(|| VISP_ROBOT[0].to_owned());
+    if let Some((index, file)) = robot.iter().find(|(i, _)| !images.contains_key(i)) {
+        return Err(parse_error(
+            &name,
+            0,
+            file.as_str(),
+            format!("no `<prefix>image-{index}.png` to pair it with"),
+        ));
+    }
+    images
+        .iter()
+        .map(|(index, image)| {
+            let pose = robot.get(index).ok_or_else(|| {
+                parse_error(
+                    &name,
+                    0,
+                    image.as_str(),
+                    format!("no `{robot_stem}{index}.yaml` to pair it with"),
+                )
+            })?;
+            Ok(ImageRecord {
+                image: regular(dir, image)?,
+                base_from_gripper: read_visp_pose(&regular(dir, pose)?)?,
+            })
+        })
+        .collect()
 }
 
 /// One ViSP pose file: `data:` followed by six numbers, as `- [v]` lines or one `[…]` list.

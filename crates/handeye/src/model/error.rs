@@ -559,23 +559,35 @@ fn untrusted_advice(refusal: &Option<Box<Error>>, why: &[Warning]) -> String {
             .collect::<Vec<_>>()
             .join("; ");
     };
-    // What the input shows that one option fixes (poses that disagree, by their lines; a reading
-    // that fits far better) or a pairing off by a record is the likelier cause, and comes first: a ×1000 typo on one line
-    // leaves X undetermined too, and "add larger rotations" would send the user the wrong way.
+    untrusted_in_order(Some(refusal.to_string()), why, |w, leads| {
+        match (leads, w.remedy()) {
+            (true, Some(remedy)) => format!("{w}; {}", remedy.in_words()),
+            _ => w.to_string(),
+        }
+    })
+}
+
+/// The parts of an [`Error::Untrusted`] in the order every face says them: what the input shows
+/// that one option fixes (poses that disagree, by their lines; a reading that fits far better; a
+/// pairing off by a record: [`Warning::leads`]) first, being the likelier cause (a ×1000 typo on
+/// one line leaves X undetermined too, and "add larger rotations" would send the user the wrong
+/// way); then the `refusal`, "as the input is: …" after them; then the other warnings. Each
+/// warning in the face's `words` (told whether it leads), joined with "; ".
+pub fn untrusted_in_order(
+    refusal: Option<String>,
+    why: &[Warning],
+    words: impl Fn(&Warning, bool) -> String,
+) -> String {
     let (first, others): (Vec<&Warning>, Vec<&Warning>) = why.iter().partition(|w| w.leads());
-    let mut parts: Vec<String> = first
-        .iter()
-        .map(|w| match w.remedy() {
-            Some(remedy) => format!("{w}; {}", remedy.in_words()),
-            None => w.to_string(),
-        })
-        .collect();
-    parts.push(if parts.is_empty() {
-        refusal.to_string()
-    } else {
-        format!("as the input is: {refusal}")
-    });
-    parts.extend(others.iter().map(|w| w.to_string()));
+    let mut parts: Vec<String> = first.iter().map(|w| words(w, true)).collect();
+    if let Some(refusal) = refusal {
+        parts.push(if parts.is_empty() {
+            refusal
+        } else {
+            format!("as the input is: {refusal}")
+        });
+    }
+    parts.extend(others.iter().map(|w| words(w, false)));
     parts.join("; ")
 }
 

@@ -626,7 +626,6 @@ fn systematic_words(
     )
 }
 
-/// " and N more" when a list shows fewer than it has.
 /// A size with four significant digits (`0.0007029`, `0.03350`, `12.35`).
 fn four_digits(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
@@ -636,6 +635,7 @@ fn four_digits(v: f64) -> String {
     format!("{v:.digits$}")
 }
 
+/// " and N more" when a list shows fewer than it has.
 fn more(count: usize, shown: usize) -> String {
     match count.saturating_sub(shown) {
         0 => String::new(),

@@ -614,7 +614,10 @@ fn solve_start(
 
 /// The camera poses a frame may have: the recording's own, and the two poses of a planar target
 /// that fit its pixels, each with its pixel cost ½Σ|r|².
-fn candidates(
+/// The camera's candidate poses of a frame's target, each with its pixel cost: the recording's own
+/// `camera_from_target` if any, and the planar target's two poses that fit its pixels
+/// ([`planar_poses`]); an error when none can be had.
+pub fn candidates(
     frame: &Frame,
     camera: &Intrinsics,
 ) -> std::result::Result<Vec<(Transform, f64)>, String> {
