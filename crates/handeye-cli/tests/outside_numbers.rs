@@ -25,7 +25,7 @@ fn a_prior_beyond_any_length_or_looser_than_the_recording_is_refused_by_name() {
         "tz=-0.1075+-2000mm",
     ] {
         let (code, out, err) = run(&["calibrate", &scara, "--prior", prior, "--strict"]);
-        assert_ne!(code, 0, "{prior}: {out}");
+        assert_eq!(code, 2, "{prior}: {out}");
         assert!(err.contains("prior"), "{prior}: {err}");
         assert!(out.is_empty(), "{prior}: no verdict is printed: {out}");
     }
@@ -48,8 +48,21 @@ fn a_point_beyond_the_recording_is_refused_on_both_paths() {
             "--point",
             point,
         ]);
-        assert_ne!(code, 0, "{point}");
+        assert_eq!(code, 2, "{point}: {err}");
         assert!(err.contains("point"), "{point}: {err}");
+        // The pixel path, on a simulated tag recording.
+        let (code, _, err) = run(&[
+            "calibrate",
+            &file("pixels/tag_eih.jsonl"),
+            "--method",
+            "reprojection",
+            "--intrinsics",
+            &file("pixels/tag_eih.intrinsics.yml"),
+            "--point",
+            point,
+        ]);
+        assert_eq!(code, 2, "pixels, {point}: {err}");
+        assert!(err.contains("parameter `point`"), "pixels, {point}: {err}");
     }
     let (code, out, err) = run(&[
         "calibrate",
