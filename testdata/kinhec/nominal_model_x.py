@@ -19,7 +19,8 @@ manifest entry:
 * ``configuration_dependent_m``: the RMS translation of the rest, metres.
 
 Run: ``/tmp/venv-k/bin/python testdata/kinhec/nominal_model_x.py [DIR]`` (kinhec 1.1.0, scipy;
-DIR the directory holding ``systematic/``, by default this one; deterministic).
+DIR the directory holding ``systematic/``, by default this one, or a suite directory itself such as
+``systematic_b/`` (set B, issue 57), or its ``manifest.json``; deterministic).
 """
 
 import json
@@ -78,8 +79,14 @@ def nominal_model_x(root, entry):
 
 
 def main():
-    root = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parent
-    path = root / "systematic" / "manifest.json"
+    arg = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parent
+    if arg.is_file():  # a suite's manifest
+        path = arg
+    elif (arg / "systematic" / "manifest.json").exists():  # the directory holding systematic/
+        path = arg / "systematic" / "manifest.json"
+    else:  # a suite directory itself (systematic_b/)
+        path = arg / "manifest.json"
+    root = path.parent.parent  # the manifest's file names are relative to it
     manifest = json.loads(path.read_text())
     for entry in manifest["files"]:
         if not entry.get("true_dh"):
