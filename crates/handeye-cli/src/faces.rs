@@ -597,6 +597,11 @@ pub fn text(r: &HandEyeReport, f: &Frames, unit: Option<Unit>) -> String {
         r.quality.axis_spread_deg,
         r.conditioning
     );
+    systematic_line(
+        &mut s,
+        r.systematic.as_ref(),
+        r.systematic_untested.as_deref(),
+    );
     let _ = writeln!(s, "\nNext:");
     if r.warnings.is_empty() {
         let _ = writeln!(
@@ -743,6 +748,11 @@ pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) ->
         short(r.residual.translation_rms),
         short(r.residual.translation_max)
     );
+    systematic_line(
+        &mut s,
+        r.systematic.as_ref(),
+        r.systematic_untested.as_deref(),
+    );
     let _ = writeln!(s, "\nNext:");
     if r.warnings.is_empty() {
         let _ = writeln!(
@@ -756,6 +766,28 @@ pub fn robot_world_text(r: &RobotWorldReport, f: &Frames, unit: Option<Unit>) ->
         );
     }
     s
+}
+
+/// The systematic-error test's line: what it found on how many stations (a dense stream's
+/// stretches), or why it did not run.
+fn systematic_line(s: &mut String, found: Option<&handeye::Systematic>, untested: Option<&str>) {
+    let line = match (found, untested) {
+        (Some(f), _) => {
+            let on = match f.stream_poses {
+                Some(m) => format!("{} stretches of the robot's motion over {m} poses", f.poses),
+                None => format!("{} robot stations", f.poses),
+            };
+            let what = if f.flagged {
+                "the residuals follow the robot's configuration (the caution above)"
+            } else {
+                "none found"
+            };
+            format!("{what}; p {:.2e} on {on}", f.p_value)
+        }
+        (None, Some(why)) => format!("not run: {why}"),
+        (None, None) => return,
+    };
+    let _ = writeln!(s, "Systematic-error test: {line}");
 }
 
 /// Which component of X came from the prior (a low-DOF robot), and the prior itself.

@@ -116,6 +116,7 @@ pub use check::holdout::leave_one_out;
 pub use check::outliers::PoseResiduals;
 pub use check::quality::errors_against_truth;
 pub use check::stream::StreamReading;
+pub use check::systematic::{Systematic, Untested};
 pub use check::uncertainty::Uncertainty;
 // The jobs: batch, robot-world, advice.
 pub use calibrate::advice::{Advice, AdviseOptions, Pivot, advise};

@@ -24,7 +24,9 @@ fn suite() -> PathBuf {
 
 fn root(path: &str) -> PathBuf {
     match std::env::var_os("HANDEYE_KINHEC_SUITE") {
-        Some(dir) if path.starts_with("systematic/") => PathBuf::from(dir),
+        Some(dir) if path.starts_with("systematic/") || path.starts_with("systematic_b/") => {
+            PathBuf::from(dir)
+        }
         _ => suite(),
     }
 }
@@ -73,17 +75,35 @@ fn run(e: &Value, options: &Options) -> handeye::Result<Report> {
 }
 
 fn methods() -> [(&'static str, Options); 2] {
+    [("default", Options::default()), all_refine()]
+}
+
+/// The methods on a dense stream: the CLI's default there (Andreff on all pairs) and refine. The
+/// library's default, consecutive pairs, solves a dense stream's X from motions of a frame each:
+/// X's own error then follows the pose, and the test flags 7 of set B's 12 controls (covered:
+/// all within 3 sigma).
+fn dense_methods() -> [(&'static str, Options); 2] {
     [
-        ("default", Options::default()),
         (
-            "all-refine",
+            "all-pairs",
             Options {
-                problem: Problem::HandEye(Method::Refine),
                 pairing: Pairing::All,
                 ..Options::default()
             },
         ),
+        all_refine(),
     ]
+}
+
+fn all_refine() -> (&'static str, Options) {
+    (
+        "all-refine",
+        Options {
+            problem: Problem::HandEye(Method::Refine),
+            pairing: Pairing::All,
+            ..Options::default()
+        },
+    )
 }
 
 fn flagged(r: &Report) -> bool {
@@ -130,13 +150,23 @@ fn robot_model(e: &Value) -> Kinematics {
 
 /// Each run of `kinds`, by both methods; with `--robot-model` where `with_model`.
 fn rows(kinds: &[&str], with_model: bool) -> Vec<Row> {
+    rows_of("systematic", kinds, with_model)
+}
+
+/// [`rows`] of the suite in `testdata/kinhec/<suite>`.
+fn rows_of(suite: &str, kinds: &[&str], with_model: bool) -> Vec<Row> {
     let mut out = Vec::new();
-    for e in manifest("systematic/manifest.json") {
+    for e in manifest(&format!("{suite}/manifest.json")) {
         let kind = e["kind"].as_str().unwrap();
         if !kinds.contains(&kind) {
             continue;
         }
-        for (method, options) in methods() {
+        let methods = if suite == "systematic" {
+            methods()
+        } else {
+            dense_methods()
+        };
+        for (method, options) in methods {
             let options = Options {
                 robot_model: with_model.then(|| robot_model(&e)),
                 ..options
@@ -145,7 +175,10 @@ fn rows(kinds: &[&str], with_model: bool) -> Vec<Row> {
                 panic!("{} {method}: refused: {err}", e["file"]);
             });
             let row = Row {
-                file: e["file"].as_str().unwrap().replace("systematic/", ""),
+                file: e["file"]
+                    .as_str()
+                    .unwrap()
+                    .replace(&format!("{suite}/"), ""),
                 level: kind.into(),
                 method,
                 flagged: flagged(&r),
@@ -283,6 +316,67 @@ fn random_errors_are_not_flagged_and_stay_covered() {
         }
     }
     assert_control_bars(&rows, "controls");
+}
+
+/// Set B (issue 57, `testdata/kinhec/systematic_b`): dense streams (15 Hz, 60 s, every frame
+/// that sees the target) of four robots in both setups, DH errors at three levels and the three
+/// controls. The test runs on the stretches of the robot's motion (`check::systematic`), where
+/// it used to skip a dense stream. Judged against the X the nominal model needs, on the 1 and
+/// 2 mm levels: at least 75 % flagged and at most one run in twelve silently beyond 3 sigma of
+/// it; without the table and with it. The 0.5 mm level is printed, not asserted: its eye-to-hand
+/// runs are 6–7 sigma from that X and unflagged (the issue's next step: the uncertainty against
+/// the X the robot needs; docs/DECISIONS.md).
+#[test]
+fn a_dense_stream_s_uncalibrated_robot_is_flagged_and_covered() {
+    for with_model in [false, true] {
+        let rows = rows_of("systematic_b", &["dh05", "dh1", "dh2"], with_model);
+        assert_eq!(rows.len(), 24);
+        let beyond = |r: &&Row| !r.flagged && r.nominal_ratio.unwrap() > 3.0;
+        let (large, small): (Vec<&Row>, Vec<&Row>) = rows.iter().partition(|r| r.level != "dh05");
+        let share_of = |rows: &[&Row], f: &dyn Fn(&&Row) -> bool| {
+            rows.iter().filter(|r| f(r)).count() as f64 / rows.len() as f64
+        };
+        let large_flagged = share_of(&large, &|r| r.flagged);
+        let large_silent = share_of(&large, &beyond);
+        let summary = format!(
+            "dense DH streams{}: {} runs; 1 and 2 mm flagged {:.0}%, silently beyond 3 sigma of the nominal model's X {:.1}%; 0.5 mm flagged {:.0}%, silently beyond {:.1}%",
+            if with_model {
+                ", with the robot's model"
+            } else {
+                ""
+            },
+            rows.len(),
+            100.0 * large_flagged,
+            100.0 * large_silent,
+            100.0 * share_of(&small, &|r| r.flagged),
+            100.0 * share_of(&small, &beyond),
+        );
+        println!("{summary}");
+        assert!(large_silent <= 1.0 / 12.0, "{summary}");
+        assert!(large_flagged >= 0.75, "{summary}");
+    }
+}
+
+/// Set B's controls (random robot noise, encoder noise, PnP noise on the same dense motions): at
+/// most 10 % flagged, at least 90 % within 3 sigma of the truth.
+#[test]
+fn a_dense_stream_s_random_errors_are_not_flagged_and_stay_covered() {
+    for with_model in [false, true] {
+        let rows = rows_of(
+            "systematic_b",
+            &["ctl_robot", "ctl_encoder", "ctl_pnp"],
+            with_model,
+        );
+        assert_eq!(rows.len(), 24);
+        assert_control_bars(
+            &rows,
+            if with_model {
+                "dense controls, with the robot's model"
+            } else {
+                "dense controls"
+            },
+        );
+    }
 }
 
 #[test]

@@ -39,7 +39,7 @@ use crate::check::holdout::{HeldOutCheck, leave_one_out};
 use crate::check::order::order_change;
 use crate::check::outliers::{PoseOutliers, PoseResiduals, translation_scale, working_distance};
 use crate::check::quality::quality_report;
-use crate::check::systematic::{Systematic, systematic_test, widened_for_systematic};
+use crate::check::systematic::{Systematic, Untested, systematic_test, widened_for_systematic};
 use crate::check::uncertainty::{
     Uncertainty, bootstrap, check_replicates, median_target, warn_weak,
 };
@@ -312,14 +312,17 @@ fn scene_of(used: &[PosePair], setup: Setup) -> f64 {
     translation_scale(used, setup).max(working_distance(used))
 }
 
-/// The systematic-error test of X on the poses used (absent with outliers kept).
+/// Why the pixel path has no systematic-error test: the test orders the poses' residuals.
+const ON_THE_PIXELS: &str = "it runs on the poses' residuals, not on the pixels (calibrate without --method reprojection for it)";
+
+/// The systematic-error test of X on the poses used, or why it did not run.
 fn systematic_of(
     read: &Read,
     setup: Setup,
     x: &Transform,
     solve_x: &(dyn Fn(&[PosePair]) -> Result<Transform> + Sync),
     scene: f64,
-) -> Option<Systematic> {
+) -> std::result::Result<Systematic, Untested> {
     systematic_test(
         (&read.used, setup, x),
         (&read.options.joints, &read.kept, read.input),
@@ -364,7 +367,7 @@ struct HandEyeSolved {
     quality: crate::check::quality::QualityReport,
     residuals: PoseResiduals,
     held_out: Option<HeldOutCheck>,
-    systematic: Option<Systematic>,
+    systematic: std::result::Result<Systematic, Untested>,
     scene: f64,
 }
 
@@ -433,7 +436,7 @@ pub(crate) fn hand_eye_on_poses(
     }
     let (mut uncertainty, caution) = widened_for_systematic(
         uncertainty,
-        systematic.as_ref(),
+        systematic.as_ref().ok(),
         (used, setup, &calibration.x),
         &solve_x,
         (options.replicates, scene),
@@ -544,7 +547,8 @@ fn hand_eye_report(
         units: Units::default(),
         transform: calibration.x,
         held_out,
-        systematic,
+        systematic_untested: systematic.as_ref().err().map(Untested::to_string),
+        systematic: systematic.ok(),
         prior,
         low_dof: plan.map(|p| p.report(calibration.conditioning, setup)),
         reprojection: None,
@@ -608,7 +612,7 @@ fn robot_world_on_poses(
     let change = order_change_of(&read, setup, &solved.x, &solve_x, scene);
     let (x_unc, systematic_found) = widened_for_systematic(
         x_unc,
-        systematic.as_ref(),
+        systematic.as_ref().ok(),
         (used, setup, &solved.x),
         &solve_x,
         (options.replicates, scene),
@@ -637,7 +641,8 @@ fn robot_world_on_poses(
     let low_dof = plan.map(|p| p.report(solved.conditioning, setup));
     let mut report = robot_world_report(read, warnings, setup, (solved, x_unc, y_unc), residual);
     report.method = method;
-    report.systematic = systematic;
+    report.systematic_untested = systematic.as_ref().err().map(Untested::to_string);
+    report.systematic = systematic.ok();
     report.prior = prior;
     report.low_dof = low_dof;
     Ok(report)
@@ -676,6 +681,7 @@ fn robot_world_report(
         units: Units::default(),
         transform: solved.x,
         systematic: None,
+        systematic_untested: None,
         target_transform: solved.target,
         reprojection: None,
         prior: PriorsUsed::new(),
@@ -774,6 +780,7 @@ pub(crate) fn hand_eye_on_pixels(
         held_out: None,
         reprojection: Some(summary),
         systematic: None,
+        systematic_untested: Some(ON_THE_PIXELS.into()),
         prior: Default::default(),
         low_dof: None,
     })
@@ -912,6 +919,7 @@ fn robot_world_on_pixels(
         transform,
         target_transform: target,
         systematic: None,
+        systematic_untested: Some(ON_THE_PIXELS.into()),
         reprojection,
         prior: Default::default(),
         low_dof: None,

@@ -10,9 +10,9 @@
 //! is made and the segment has doubled since the last test (at 12, 24, 48, … poses; so about
 //! log₂ n times over a stream of n poses, each on at most [`SAMPLE`] poses), and at the end of the
 //! stream. Between two tests, each report carries the last test's finding and widening: an error
-//! that follows the configuration does not shrink as poses of the same kind come. A dense stream
-//! (judged on the poses at full resolution, before the sample is first thinned) is not tested, as
-//! the batch does not test it.
+//! that follows the configuration does not shrink as poses of the same kind come. A sample that is
+//! still a dense stream is thinned into stretches of the robot's motion, as the batch's is
+//! (`check::systematic::test_stations`, in the test itself).
 //!
 //! **Repeated tests: a flag is confirmed.** About log₂ n tests of one stream, each at P_FLAG,
 //! would flag a stream of random errors far more often than P_FLAG (measured on 100,000 simulated
@@ -33,9 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::check::identification::check_model;
 use crate::check::outliers::{translation_scale, working_distance};
-use crate::check::systematic::{
-    Systematic, dense_stream, systematic_test, systematic_warning, widen_by,
-};
+use crate::check::systematic::{Systematic, systematic_test, systematic_warning, widen_by};
 use crate::check::uncertainty::{
     REPLICATES, Uncertainty, bootstrap, bootstrap_by_region, point_sigma, stations_of, summarise,
 };
@@ -118,11 +116,6 @@ pub(super) struct Watch {
     next: usize,
     /// Accepted poses at the last test.
     tested: usize,
-    /// Whether the segment is a dense stream (`check::systematic::dense_stream`), judged on its
-    /// poses at full resolution before the sample is first thinned (a thinned sample of a dense
-    /// stream no longer looks dense, and the test's random orders do not model it).
-    #[serde(default)]
-    dense: Option<bool>,
     /// Whether the last test's p-value was below the threshold (confirmed or not).
     #[serde(default)]
     below: bool,
@@ -139,7 +132,6 @@ impl Default for Watch {
             seen: 0,
             next: crate::check::systematic::MIN_POSES,
             tested: 0,
-            dense: None,
             below: false,
             found: None,
         }
@@ -167,9 +159,6 @@ impl Watch {
         self.poses.push(*pose);
         if self.poses.len() < SAMPLE {
             return;
-        }
-        if self.dense.is_none() {
-            self.dense = Some(dense_stream(&self.poses));
         }
         // Full. Repeats of a robot pose go first (the test counts a station once: a robot
         // program touring 40 poses would otherwise leave, by every other pose, 20 of them); then,
@@ -233,12 +222,6 @@ impl Watch {
     ) -> Option<String> {
         self.tested = self.seen;
         self.next = 2 * self.seen.max(1);
-        // A dense stream is not tested, as the batch does not test it (judged at full resolution).
-        if self.stride > 1 && self.dense == Some(true) {
-            self.found = None;
-            self.below = false;
-            return None;
-        }
         let poses = &self.poses;
         let n = poses.len();
         let joints: Vec<Vec<f64>> = match self.dim {
@@ -262,7 +245,8 @@ impl Watch {
             false,
             &solve,
             scene,
-        );
+        )
+        .ok();
         // Confirmation (module documentation): a flag before the end stands when the previous
         // test flagged too; the end's stands alone.
         let confirmed = at_end || self.below;

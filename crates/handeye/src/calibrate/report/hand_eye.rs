@@ -119,9 +119,13 @@ pub struct HandEyeReport {
     /// (`crate::holdout`); `None` with fewer than four poses.
     pub held_out: Option<HeldOutSummary>,
     /// The test for an error that follows the robot's configuration (`check::systematic`);
-    /// absent with fewer than 12 poses.
+    /// absent where it did not run (`systematic_untested` says why).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub systematic: Option<Systematic>,
+    /// Why the systematic-error test did not run (`check::systematic::Untested`, in words);
+    /// absent where it ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub systematic_untested: Option<String>,
     /// The components of X's translation that came from a prior, not from the data (`"prior":
     /// {"tz": {"value", "sigma"}}`); absent when none did.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]

@@ -153,6 +153,10 @@ pub struct RobotWorldReport {
     /// The test for an error that follows the robot's configuration, as in the hand–eye report.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub systematic: Option<Systematic>,
+    /// Why the systematic-error test did not run (`check::systematic::Untested`, in words);
+    /// absent where it ran.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub systematic_untested: Option<String>,
     /// The fit on the pixels, when X and the target were solved on the detections
     /// ([`Input::Pixels`](crate::Input::Pixels)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
