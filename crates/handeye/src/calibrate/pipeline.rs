@@ -44,7 +44,7 @@ use crate::check::uncertainty::{
     Uncertainty, bootstrap, check_replicates, median_target, warn_weak,
 };
 use crate::model::camera::{Frame, Intrinsics};
-use crate::model::error::{Error, Result};
+use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::findings::{Assessment, GoalCheck, OutlierPose, Reading, Sizes};
 use crate::model::motion::{Pairing, PosePair, Setup};
 use crate::model::pose::{MAX_TRANSLATION, Transform, TransformJson, check_translation};
@@ -115,10 +115,41 @@ pub fn calibrate<'a>(
             on_pixels(frames, camera, setup, options, problem)
         }
     }?;
+    let report = finite_or_refused(report)?;
     Ok(match options.goal {
         Some(goal) => against_goal(report, goal),
         None => report,
     })
+}
+
+/// The invariant under every verdict (issue 59): an X, or a target, whose one-sigma uncertainty
+/// is not a finite number is no answer, whatever path made it. The bounds on what comes in (a
+/// prior's sigma, a point, a saved covariance) keep such a sigma out; this says so where the
+/// verdict is decided, so that no later path can call an unbounded X `good`.
+fn finite_or_refused(report: Report) -> Result<Report> {
+    let (sizes, conditioning) = match &report {
+        Report::HandEye(r) => (
+            vec![r.uncertainty.rotation_deg, r.uncertainty.translation],
+            r.conditioning,
+        ),
+        Report::RobotWorld(r) => (
+            vec![
+                r.uncertainty.rotation_deg,
+                r.uncertainty.translation,
+                r.target.uncertainty.rotation_deg,
+                r.target.uncertainty.translation,
+            ],
+            r.conditioning,
+        ),
+    };
+    if sizes.iter().all(|s| s.is_finite()) {
+        Ok(report)
+    } else {
+        Err(Error::Degenerate {
+            reason: Degeneracy::IllConditioned,
+            conditioning,
+        })
+    }
 }
 
 /// The report judged against the user's goal: a one-sigma uncertainty above it in either size is
@@ -1032,6 +1063,41 @@ mod tests {
     use crate::model::pose::Transform;
     use crate::sim::pixels::{PixelSimConfig, simulate_pixels};
     use crate::solve::reprojection::start_camera_poses;
+
+    /// The invariant under the verdict: a report whose X or target has an unbounded one-sigma is
+    /// refused, the hand–eye and the robot-world report alike; a finite one passes as it is.
+    #[test]
+    fn an_unbounded_uncertainty_is_never_an_answer() {
+        use crate::calibrate::options::Problem;
+        use crate::model::error::{Degeneracy, Error};
+        use crate::sim::{SimConfig, simulate};
+        let poses = simulate(&SimConfig::default(), 5, 0).poses;
+        for problem in [
+            Problem::default(),
+            Problem::RobotWorld(crate::solve::RobotWorldMethod::Shah),
+        ] {
+            let options = Options {
+                problem,
+                ..Options::default()
+            };
+            let report = super::calibrate(&poses[..], Setup::EyeInHand, &options).unwrap();
+            assert!(super::finite_or_refused(report.clone()).is_ok());
+            for size in [f64::INFINITY, f64::NAN] {
+                let mut bad = report.clone();
+                match &mut bad {
+                    super::Report::HandEye(r) => r.uncertainty.translation = size,
+                    super::Report::RobotWorld(r) => r.target.uncertainty.rotation_deg = size,
+                }
+                assert!(matches!(
+                    super::finite_or_refused(bad),
+                    Err(Error::Degenerate {
+                        reason: Degeneracy::IllConditioned,
+                        ..
+                    })
+                ));
+            }
+        }
+    }
 
     #[test]
     fn the_start_poses_are_every_input_frames_under_the_reading_applied() {
