@@ -201,12 +201,7 @@ impl Configurations {
     /// The hand pose of each pose: position over its RMS spread, and the rotation vector of the
     /// rotation relative to the first pose's, radians.
     pub fn of_hand_poses(poses: &[PosePair]) -> Self {
-        let n = poses.len().max(1) as f64;
-        let centre: Vector3<f64> = poses
-            .iter()
-            .map(|p| p.base_from_gripper.translation.vector)
-            .sum::<Vector3<f64>>()
-            / n;
+        let centre = hand_centre(poses);
         let spread = hand_spread(poses);
         let reference = poses
             .first()
@@ -684,11 +679,7 @@ const MAX_STEPS: usize = 80;
 /// number): the length the hand's moves are measured in.
 fn hand_spread(poses: &[PosePair]) -> f64 {
     let n = poses.len().max(1) as f64;
-    let centre: Vector3<f64> = poses
-        .iter()
-        .map(|p| p.base_from_gripper.translation.vector)
-        .sum::<Vector3<f64>>()
-        / n;
+    let centre = hand_centre(poses);
     (poses
         .iter()
         .map(|p| (p.base_from_gripper.translation.vector - centre).norm_squared())
@@ -696,6 +687,16 @@ fn hand_spread(poses: &[PosePair]) -> f64 {
         / n)
         .sqrt()
         .max(f64::MIN_POSITIVE)
+}
+
+/// The mean of the hand's positions (the origin for no poses).
+fn hand_centre(poses: &[PosePair]) -> Vector3<f64> {
+    let n = poses.len().max(1) as f64;
+    poses
+        .iter()
+        .map(|p| p.base_from_gripper.translation.vector)
+        .sum::<Vector3<f64>>()
+        / n
 }
 
 /// How far the hand moves from `a` to `b`: √(θ² + (d / spread)²), θ the turn (radians) and d the
