@@ -197,6 +197,8 @@ pub fn run(args: Args) -> Result<()> {
             let options = Options {
                 pose_names: names.clone(),
                 refine_intrinsics: args.refine_intrinsics,
+                // Refused on the pixels by the library, after it is read.
+                robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
                 ..options
             };
             let input = handeye::Input::Pixels { frames, camera };
@@ -676,7 +678,11 @@ fn print_robot_world(
     match face {
         Face::Text => print_text(&summary)?,
         // The YAML lists X, the target, their one-sigma and the residuals.
-        Face::Yaml => print_text(&robot_world_yaml(report))?,
+        Face::Yaml => print_text(&faces::robot_world_yaml(
+            report,
+            &publication.frames,
+            &target_frames,
+        ))?,
         Face::Ros2 => print_text(&format!(
             "{}\n{}",
             faces::ros2(x, &publication.frames),
@@ -744,28 +750,6 @@ fn refused(args: &Args, e: Error, face: Face, poses: &[PosePair], setup: Setup) 
         return crate::output::said(&e);
     }
     e
-}
-
-/// The robot-world result as ROS-style YAML: X and the target pose.
-fn robot_world_yaml(r: &RobotWorldReport) -> String {
-    let pose = |name: &str, t: &handeye::TransformJson, u: &handeye::Uncertainty| {
-        let [tx, ty, tz] = t.translation;
-        let [qx, qy, qz, qw] = t.quaternion_xyzw;
-        format!(
-            "{name}:\n  translation: {{x: {tx}, y: {ty}, z: {tz}}}\n  rotation: {{x: {qx}, y: {qy}, z: {qz}, w: {qw}}}\n  uncertainty: {{rotation_deg: {}, translation: {}}}\n",
-            u.rotation_deg, u.translation
-        )
-    };
-    format!(
-        "# handeye calibrate --robot-world: method {}, setup {}\n{}{}residual: {{rotation_deg_rms: {}, translation_rms: {}}}\nposes: {}\n",
-        r.method,
-        r.setup.name(),
-        pose(&r.frame, &r.x, &r.uncertainty),
-        pose(&r.target.frame, &r.target.pose, &r.target.uncertainty),
-        r.residual.rotation_deg_rms,
-        r.residual.translation_rms,
-        r.poses,
-    )
 }
 
 /// The library's options from the command line: the problem (`--robot-world`) with its method

@@ -293,6 +293,75 @@ fn yaml_map<const N: usize>(entries: [(&str, Yaml); N]) -> Yaml {
     )
 }
 
+/// The robot-world result as YAML, written by the YAML emitter: X and the target's pose, each under
+/// its frame name (`base_from_camera`, `gripper_from_target`, …) with the parent and child frames
+/// it is published between (`--parent-frame`, `--child-frame`, and the target's frames), its
+/// one-sigma uncertainty, then the residuals, in the input's unit.
+pub fn robot_world_yaml(r: &RobotWorldReport, x: &Frames, target: &Frames) -> String {
+    let pose = |t: &handeye::TransformJson, u: &handeye::Uncertainty, f: &Frames| {
+        let [tx, ty, tz] = t.translation;
+        let [qx, qy, qz, qw] = t.quaternion_xyzw;
+        yaml_map([
+            ("parent_frame", Yaml::String(f.parent.clone())),
+            ("child_frame", Yaml::String(f.child.clone())),
+            (
+                "translation",
+                yaml_map([
+                    ("x", yaml_number(tx)),
+                    ("y", yaml_number(ty)),
+                    ("z", yaml_number(tz)),
+                ]),
+            ),
+            (
+                "rotation",
+                yaml_map([
+                    ("x", yaml_number(qx)),
+                    ("y", yaml_number(qy)),
+                    ("z", yaml_number(qz)),
+                    ("w", yaml_number(qw)),
+                ]),
+            ),
+            (
+                "uncertainty",
+                yaml_map([
+                    ("rotation_deg", yaml_number(u.rotation_deg)),
+                    ("translation", yaml_number(u.translation)),
+                ]),
+            ),
+        ])
+    };
+    let doc = Yaml::Hash(
+        [
+            (r.frame.as_str(), pose(&r.x, &r.uncertainty, x)),
+            (
+                r.target.frame.as_str(),
+                pose(&r.target.pose, &r.target.uncertainty, target),
+            ),
+            (
+                "residual",
+                yaml_map([
+                    ("rotation_deg_rms", yaml_number(r.residual.rotation_deg_rms)),
+                    ("translation_rms", yaml_number(r.residual.translation_rms)),
+                ]),
+            ),
+            ("poses", Yaml::Integer(r.poses as i64)),
+        ]
+        .into_iter()
+        .map(|(k, v)| (Yaml::String(k.to_string()), v))
+        .collect(),
+    );
+    let mut body = String::new();
+    YamlEmitter::new(&mut body)
+        .dump(&doc)
+        .expect("a YAML emitter writing to a String cannot fail");
+    format!(
+        "# handeye calibrate --robot-world: method {}, setup {}\n{}\n",
+        r.method,
+        r.setup.name(),
+        body.trim_start_matches("---\n")
+    )
+}
+
 /// easy_handeye2's calibration file: exactly the fields of its `HandeyeCalibration` message
 /// (`parameters` and `transform`, which its loader sets one by one, refusing any other key), in
 /// metres, written by a YAML emitter (each frame name quoted where YAML would read it otherwise).

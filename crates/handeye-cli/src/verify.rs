@@ -41,8 +41,8 @@ pub struct Args {
     #[arg(long, default_value_t = Options::default().replicates, value_parser = values::count(*Options::REPLICATES_RANGE.start() as u64, *Options::REPLICATES_RANGE.end() as u64))]
     bootstrap: usize,
     /// Output: the JSON object, or a summary for a person (`text`) [default: text on a terminal,
-    /// JSON otherwise].
-    #[arg(long, value_parser = values::named::<Face>())]
+    /// JSON otherwise]. Only these two: a saved X is checked here, not published.
+    #[arg(long, value_parser = values::named_of(&[Face::Json, Face::Text]))]
     output: Option<Face>,
     /// A prior on a component of X's translation, for a low-DOF robot (as `calibrate --prior`):
     /// NAME=VALUE or NAME=VALUE+-SIGMA, NAME one of tx, ty, tz. Without one, the component such a
@@ -69,16 +69,7 @@ pub struct Args {
 
 /// Runs the command.
 pub fn run(mut args: Args) -> Result<()> {
-    let face = match Face::chosen(args.output) {
-        f @ (Face::Json | Face::Text) => f,
-        other => {
-            return Err(handeye::Error::InvalidParameter {
-                name: "output",
-                message: format!("`{}`: verify prints json or text", other.name()),
-            }
-            .into());
-        }
-    };
+    let face = Face::chosen(args.output);
     if let Some(path) = &args.report {
         crate::report::check_writable(path)?;
     }

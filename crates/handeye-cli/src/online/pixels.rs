@@ -30,6 +30,8 @@ pub(super) fn run(args: &Args, settings: OnlineSettings, intrinsics: &Path) -> R
     let camera = handeye::Intrinsics::read(intrinsics)?;
     let mut calibrator = OnlineSettings {
         intrinsics: Some(camera),
+        // Refused on the pixels by the library, after it is read.
+        robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
         ..settings
     }
     .calibrator()?;

@@ -728,7 +728,11 @@ fn on_pixels(
     options: &Options,
     problem: Problem,
 ) -> Result<Report> {
-    pixels::not_on_pixels(options.reject_outliers, &options.priors)?;
+    pixels::not_on_pixels(
+        options.reject_outliers,
+        &options.priors,
+        options.robot_model.as_ref(),
+    )?;
     let (used, solution, applied, reading_check, choice) = pixels::solved(
         frames,
         camera,

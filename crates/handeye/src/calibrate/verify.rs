@@ -211,7 +211,11 @@ fn verify_on_pixels(
     setup: Setup,
     options: &Options,
 ) -> Result<Verification> {
-    not_on_pixels(options.reject_outliers, &options.priors)?;
+    not_on_pixels(
+        options.reject_outliers,
+        &options.priors,
+        options.robot_model.as_ref(),
+    )?;
     if options.refine_intrinsics {
         return Err(Error::InvalidParameter {
             name: "refine_intrinsics",

@@ -53,6 +53,14 @@ pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
     let err = |field: &str, message: String| {
         parse_error(file, tree.line(field).unwrap_or(0), field, message)
     };
+    for names in [
+        &["camera_matrix", "k", "K"][..],
+        &["distortion_coefficients", "d", "D"],
+        &["image_width", "width"],
+        &["image_height", "height"],
+    ] {
+        one_of(&tree, names, file)?;
+    }
     let k_name = first_of(&tree, &["camera_matrix", "k", "K"]).ok_or_else(|| {
         err(
             "camera_matrix",
@@ -103,9 +111,20 @@ pub fn parse_intrinsics(text: &str, file: &str) -> Result<Intrinsics> {
     };
     let width = size(&["image_width", "width"])?;
     let intrinsics = pinhole(&k, distortion, (width, size(&["image_height", "height"])?));
-    intrinsics
-        .check()
-        .map_err(|(field, message)| err(&format!("{k_name}.{field}"), message))?;
+    intrinsics.check().map_err(|(field, message)| {
+        // The field as the file names it: the camera matrix's entry, the distortion's list, the
+        // image's size.
+        let (name, path) = match field {
+            "distortion" => (d_name, d_name.to_string()),
+            "width" | "height" => {
+                let name =
+                    first_of(&tree, &[field, "image_width", "image_height"]).unwrap_or(field);
+                (name, name.to_string())
+            }
+            _ => (k_name, format!("{k_name}.{field}")),
+        };
+        parse_error(file, tree.line(name).unwrap_or(0), path, message)
+    })?;
     Ok(intrinsics)
 }
 
@@ -159,6 +178,26 @@ fn opencv_header_blanked(text: &str) -> String {
     }
 }
 
+/// Refuses a file that gives more than one of `names` (OpenCV's `camera_matrix` and ROS's `k`,
+/// say): one would be read and the other ignored, and which was meant is not known.
+fn one_of(tree: &YamlTree, names: &[&'static str], file: &str) -> Result<()> {
+    let given: Vec<(&str, usize)> = names
+        .iter()
+        .filter_map(|n| Some((*n, tree.line(n)?)))
+        .collect();
+    if let [(first, _), (second, line), ..] = given[..] {
+        return Err(parse_error(
+            file,
+            line,
+            second,
+            format!(
+                "both `{first}` and `{second}` given: one would be read and the other ignored; keep one"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The first of `names` the file gives.
 fn first_of(tree: &YamlTree, names: &[&'static str]) -> Option<&'static str> {
     names.iter().copied().find(|n| tree.line(n).is_some())
@@ -188,8 +227,19 @@ fn numbers(tree: &YamlTree, name: &str, file: &str) -> Result<Vec<f64>> {
     let mut out = Vec::with_capacity(count);
     for i in 0..count {
         let item = format!("{list}[{i}]");
-        let rows = tree.sequence(&item, "").ok();
-        let paths: Vec<String> = match rows {
+        let row = tree.sequence(&item, "").ok();
+        // A list of rows: every row as long as the first.
+        if let (Some(n), Some(first)) = (row, tree.sequence(&format!("{list}[0]"), "").ok())
+            && n != first
+        {
+            return Err(at(
+                &item,
+                format!(
+                    "`{item}`: a row of {n} numbers after a first of {first}: rows must be as long as each other"
+                ),
+            ));
+        }
+        let paths: Vec<String> = match row {
             Some(n) => (0..n).map(|j| format!("{item}[{j}]")).collect(),
             None => vec![item],
         };
@@ -200,11 +250,21 @@ fn numbers(tree: &YamlTree, name: &str, file: &str) -> Result<Vec<f64>> {
             out.push(x);
         }
     }
-    let size = |field: &str| {
-        tree.text(&format!("{name}.{field}"))
-            .and_then(|(t, _)| t.trim().parse::<usize>().ok())
+    // `rows` and `cols`, where given: counts that agree with `data`.
+    let size = |field: &str| -> Result<Option<usize>> {
+        let path = format!("{name}.{field}");
+        match tree.text(&path) {
+            None => Ok(None),
+            Some((t, _)) => match t.trim().parse::<usize>() {
+                Ok(n) if n > 0 => Ok(Some(n)),
+                _ => Err(at(
+                    &path,
+                    format!("`{path}`: `{t}` is not a count of rows or columns"),
+                )),
+            },
+        }
     };
-    if let (Some(rows), Some(cols)) = (size("rows"), size("cols"))
+    if let (Some(rows), Some(cols)) = (size("rows")?, size("cols")?)
         && rows.checked_mul(cols) != Some(out.len())
     {
         return Err(at(
@@ -324,6 +384,50 @@ mod tests {
             field(&format!("{OPENCV}distortion_model: equidistant\n")),
             "distortion_model"
         );
+    }
+
+    /// What cannot be a camera's is refused, naming the field (issue 59): two sets of one field
+    /// (OpenCV's and ROS's names), counts of rows that are not counts, ragged rows, absurd but
+    /// finite numbers, a NUL byte.
+    #[test]
+    fn a_file_that_cannot_be_one_camera_s_is_refused_at_the_field() {
+        let refused = |text: &str| match parse_intrinsics(text, "c.yml") {
+            Err(Error::Parse {
+                line,
+                field,
+                message,
+                ..
+            }) => (line, field, message),
+            other => panic!("{other:?}"),
+        };
+        let (line, field, message) =
+            refused(&format!("{OPENCV}k: [900, 0, 640, 0, 900, 360, 0, 0, 1]\n"));
+        assert_eq!((line, field.as_str()), (17, "k"), "{message}");
+        assert!(
+            message.contains("both `camera_matrix` and `k`"),
+            "{message}"
+        );
+        let (_, field, _) = refused(&format!("{OPENCV}d: [0, 0, 0, 0, 0]\n"));
+        assert_eq!(field, "d");
+        let (_, field, message) =
+            refused(&OPENCV.replace("rows: 3\n   cols: 3", "rows: x\n   cols: 3"));
+        assert_eq!(field, "camera_matrix", "{message}");
+        assert!(message.contains("`x` is not a count"), "{message}");
+        let ragged = "k: [[900, 0, 640], [0, 900], [360, 0, 0, 1]]\nd: [0, 0, 0, 0, 0]\n";
+        let (line, _, message) = refused(ragged);
+        assert_eq!(line, 1);
+        assert!(message.contains("rows must be as long"), "{message}");
+        for (from, to, field, line) in [
+            ("9.0500000000000000e+02", "1e-300", "camera_matrix.fx", 6),
+            ("6.412e+02", "1e308", "camera_matrix.cx", 6),
+            ("-2.1e-01", "1e300", "distortion_coefficients", 12),
+            ("1280", "4000000000", "image_width", 4),
+        ] {
+            let (at, got, message) = refused(&OPENCV.replace(from, to));
+            assert_eq!((got.as_str(), at), (field, line), "{message}");
+        }
+        let text = parse_intrinsics(&OPENCV.replace("9.0500000000000000e+02", "905"), "c.yml");
+        assert!(text.is_ok(), "{text:?}");
     }
 }
 

@@ -396,6 +396,13 @@ fn detections(v: &Value) -> std::result::Result<Detections, (String, String)> {
             ),
         ));
     }
+    let on_target: Vec<nalgebra::Vector3<f64>> = target.iter().map(|p| (*p).into()).collect();
+    if crate::solve::reprojection::on_one_line(&on_target) {
+        return Err((
+            ".target".into(),
+            crate::solve::reprojection::ON_ONE_LINE.into(),
+        ));
+    }
     Ok(Detections { target, pixels })
 }
 

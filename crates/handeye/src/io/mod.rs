@@ -250,6 +250,17 @@ fn text_of(bytes: Vec<u8>, file: &str) -> Result<String> {
             format!("not valid UTF-8 text (byte {column} of the line)"),
         )
     })?;
+    // A NUL is no text's: the YAML and XML parsers would stop or read past it, and keep part of
+    // the file without a word.
+    if let Some(at) = text.find('\0') {
+        let line = 1 + text[..at].matches('\n').count();
+        return Err(parse_error(
+            file,
+            line,
+            "-",
+            "a NUL byte: not a text file (or one cut by a binary write)",
+        ));
+    }
     if text.starts_with('\u{feff}') {
         text.drain(..'\u{feff}'.len_utf8());
     }

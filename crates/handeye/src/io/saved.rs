@@ -6,7 +6,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::io::json_text::line_of_field;
+use crate::io::json_text::{line_of_field, repeated_key};
 use crate::io::peer::{declared_setup, yaml_transform};
 use crate::io::yaml_tree::YamlTree;
 use crate::io::{parse_error, read_text, transform_from_json};
@@ -46,6 +46,16 @@ pub fn parse_saved_x(text: &str, file: &str) -> Result<SavedX> {
 fn parse_json(text: &str, file: &str) -> Result<SavedX> {
     let value: Value = serde_json::from_str(text)
         .map_err(|e| parse_error(file, e.line(), "-", format!("malformed JSON: {e}")))?;
+    // A key given twice (`x` twice, say): the JSON parser keeps the last, so which X was meant
+    // is not known.
+    if let Some(repeated) = repeated_key(text) {
+        return Err(parse_error(
+            file,
+            repeated.line,
+            repeated.path.clone(),
+            repeated.message(),
+        ));
+    }
     let line = |field: &str| line_of_field(text, field);
     let x = transform_from_json(&value).map_err(|p| {
         let field = if p.field.is_empty() {
@@ -215,8 +225,21 @@ fn covariance(v: &Value) -> std::result::Result<[[f64; 6]; 6], (String, String)>
 fn parse_yaml(text: &str, file: &str) -> Result<SavedX> {
     let mut sigma: Option<(f64, f64)> = None;
     let mut unit = Some(LengthUnit::Metre);
-    for comment in text.lines().filter_map(|l| l.trim().strip_prefix('#')) {
+    // handeye's comment `# frame: gripper_from_camera (…)`: X's frame name, with its line.
+    let mut framed: Option<(Setup, usize)> = None;
+    let comments = text
+        .lines()
+        .enumerate()
+        .filter_map(|(i, l)| Some((i + 1, l.trim().strip_prefix('#')?)));
+    for (line, comment) in comments {
         let comment = comment.trim();
+        if let Some(rest) = comment.strip_prefix("frame:") {
+            let name = rest.split_whitespace().next().unwrap_or("");
+            framed = framed.or(Setup::ALL
+                .into_iter()
+                .find(|s| s.x_frame() == name)
+                .map(|s| (s, line)));
+        }
         if comment.starts_with("frame:") && comment.contains("translation in the input's unit") {
             unit = None;
         }
@@ -230,6 +253,21 @@ fn parse_yaml(text: &str, file: &str) -> Result<SavedX> {
         Some(d) => Some(d.setup),
         None => eye_on_hand(&tree, file)?,
     };
+    if let (Some((named, line)), Some(declared)) = (framed, setup)
+        && named != declared
+    {
+        return Err(parse_error(
+            file,
+            line,
+            "frame",
+            format!(
+                "`{}` is X of {}, but the file's calibration type says {}: which X this is cannot be told; correct one of them",
+                named.x_frame(),
+                named.name(),
+                declared.name()
+            ),
+        ));
+    }
     let covariance = sigma.map(|(rotation_deg, translation)| {
         let mut c = [[0.0; 6]; 6];
         for (i, row) in c.iter_mut().enumerate() {
@@ -367,5 +405,40 @@ mod tests {
             Err(Error::Parse { field, .. }) => assert_eq!(field, "frame"),
             other => panic!("{other:?}"),
         }
+    }
+
+    /// A saved X that says two things is refused where the second is said (issue 59): a key
+    /// given twice in the JSON, a second YAML document, handeye's `# frame:` comment against the
+    /// file's calibration type.
+    #[test]
+    fn a_saved_x_that_contradicts_itself_is_refused_where() {
+        let place = |text: &str, file: &str| match parse_saved_x(text, file) {
+            Err(Error::Parse {
+                line,
+                field,
+                message,
+                ..
+            }) => (line, field, message),
+            other => panic!("{other:?}"),
+        };
+        let x = r#""x": {"translation": [0.1, 0, 0.05], "quaternion_xyzw": [0, 0, 0, 1]}"#;
+        let twice = format!("{{{x},\n\"setup\": \"eye-in-hand\",\n\"setup\": \"eye-in-hand\"}}");
+        let (line, field, message) = place(&twice, "x.json");
+        assert_eq!((line, field.as_str()), (3, "setup"), "{message}");
+        assert!(message.contains("given twice"), "{message}");
+        let yaml = "parameters:\n  calibration_type: eye_on_base\ntransform:\n  translation: {x: 0.1, y: 0, z: 0.05}\n  rotation: {x: 0, y: 0, z: 0, w: 1}\n";
+        assert!(parse_saved_x(yaml, "x.calib").is_ok());
+        let (line, _, message) = place(&format!("{yaml}---\n{yaml}"), "x.calib");
+        assert_eq!(line, 6, "{message}");
+        assert!(message.contains("second YAML document"), "{message}");
+        let framed =
+            |name: &str| format!("# frame: {name} (a -> b); translation in metres\n{yaml}");
+        assert!(parse_saved_x(&framed("base_from_camera"), "x.calib").is_ok());
+        let (line, field, message) = place(&framed("gripper_from_camera"), "x.calib");
+        assert_eq!((line, field.as_str()), (1, "frame"), "{message}");
+        assert!(
+            message.contains("eye-in-hand") && message.contains("eye-to-hand"),
+            "{message}"
+        );
     }
 }

@@ -2,7 +2,7 @@
 //! flattened to their scalars, each with its field path (`samples[2].robot.translation.x`,
 //! `[0].effector_wrt_world[5]`) and its line, so that every error names both.
 //!
-//! Only what pose files use is accepted: one document of mappings, sequences and scalars. An alias
+//! Only what pose files use is accepted: one document (a second is refused) of mappings, sequences and scalars. An alias
 //! (`*a`) or a key that is not a scalar is refused, and so is a key given twice in one mapping (as
 //! in JSON, the second would silently replace the first).
 
@@ -36,7 +36,8 @@ impl YamlTree {
             ..Flattener::default()
         };
         let mut parser = Parser::new_from_str(text);
-        parser.load(&mut flattener, false).map_err(|e| {
+        // Every document is read, so that a second one is refused rather than ignored.
+        parser.load(&mut flattener, true).map_err(|e| {
             parse_error(
                 file,
                 e.marker().line().clamp(1, last_line),
@@ -148,6 +149,8 @@ struct Flattener {
     problem: Option<(usize, String, String)>,
     /// The text's last line.
     last_line: usize,
+    /// The documents begun so far.
+    documents: usize,
 }
 
 impl Flattener {
@@ -248,11 +251,17 @@ impl MarkedEventReceiver for Flattener {
                     "a YAML alias (`*name`): write the values out".into(),
                 ));
             }
-            Event::Nothing
-            | Event::StreamStart
-            | Event::StreamEnd
-            | Event::DocumentStart
-            | Event::DocumentEnd => {}
+            Event::DocumentStart => {
+                self.documents += 1;
+                if self.documents > 1 {
+                    self.problem = Some((
+                        line,
+                        "-".into(),
+                        "a second YAML document (after `---`): one is read, and which was meant is not known; keep one".into(),
+                    ));
+                }
+            }
+            Event::Nothing | Event::StreamStart | Event::StreamEnd | Event::DocumentEnd => {}
         }
     }
 }
@@ -308,5 +317,18 @@ mod tests {
         let (line, field, message) = place(t.number("s[0].r.y", "a number").unwrap_err());
         assert_eq!((line, field.as_str()), (2, "s[0].r.y"));
         assert!(message.contains("missing (a number)"), "{message}");
+    }
+
+    /// A second document is refused at its `---`, not ignored; one document after a directive
+    /// (OpenCV's `%YAML:1.0` then `---`) is one document.
+    #[test]
+    fn a_second_document_is_refused_where_it_starts() {
+        let (line, _, message) = place(YamlTree::parse("a: 1\n---\na: 2\n", "f.yaml").unwrap_err());
+        assert_eq!(line, 2);
+        assert!(message.contains("second YAML document"), "{message}");
+        let t = YamlTree::parse("%YAML 1.2\n---\na: 1\n", "f.yaml").unwrap();
+        assert_eq!(t.number("a", "").unwrap(), 1.0);
+        let t = YamlTree::parse("---\na: 1\n...\n", "f.yaml").unwrap();
+        assert_eq!(t.number("a", "").unwrap(), 1.0);
     }
 }

@@ -148,6 +148,19 @@ impl Intrinsics {
         xy
     }
 
+    /// Whether a detection at `pixel` could be one of this camera's: finite, within a million
+    /// pixels, and, where the image's size is known, within one image's size of the image (the
+    /// corners of a board partly out of view are extrapolated a little beyond it). A detection
+    /// beyond is a mis-detection, left out by name: no camera saw it.
+    pub fn could_see(&self, pixel: &[f64; 2]) -> bool {
+        let within = |v: f64, size: u32| {
+            v.is_finite()
+                && v.abs() <= MAX_PIXEL
+                && (size == 0 || (-f64::from(size)..=2.0 * f64::from(size)).contains(&v))
+        };
+        within(pixel[0], self.width) && within(pixel[1], self.height)
+    }
+
     /// Refuses intrinsics that cannot describe a camera: a focal length that is not a finite
     /// positive number, a principal point or a coefficient that is not finite. The message names
     /// the field.
@@ -156,18 +169,57 @@ impl Intrinsics {
             if !(f.is_finite() && f > 0.0) {
                 return Err((name, format!("a focal length must be positive, got {f}")));
             }
+            if !(MIN_FOCAL_PX..=MAX_PIXEL).contains(&f) {
+                return Err((
+                    name,
+                    format!(
+                        "{f:e} pixels is no camera's focal length (between {MIN_FOCAL_PX} and {MAX_PIXEL:e} pixels): check the file's units and fields"
+                    ),
+                ));
+            }
         }
         for (name, c) in [("cx", self.cx), ("cy", self.cy)] {
             if !c.is_finite() {
                 return Err((name, format!("must be finite, got {c}")));
             }
+            if c.abs() > MAX_PIXEL {
+                return Err((
+                    name,
+                    format!(
+                        "{c:e} pixels is no image's principal point (at most {MAX_PIXEL:e} in size)"
+                    ),
+                ));
+            }
         }
         if let Some(k) = self.distortion.iter().find(|k| !k.is_finite()) {
             return Err(("distortion", format!("must be finite, got {k}")));
         }
+        if let Some(k) = self.distortion.iter().find(|k| k.abs() > MAX_DISTORTION) {
+            return Err((
+                "distortion",
+                format!("a coefficient of {k:e} is no lens's (at most {MAX_DISTORTION} in size)"),
+            ));
+        }
+        for (name, size) in [("width", self.width), ("height", self.height)] {
+            if f64::from(size) > MAX_PIXEL {
+                return Err((name, format!("{size} pixels is no image's size")));
+            }
+        }
         Ok(())
     }
 }
+
+/// The largest pixel coordinate, focal length, principal point or image size a camera has, in
+/// pixels: a million (sensors are some ten thousand pixels a side; a telephoto's focal length some
+/// tens of thousands).
+pub const MAX_PIXEL: f64 = 1e6;
+
+/// The smallest focal length a camera has, pixels.
+pub const MIN_FOCAL_PX: f64 = 1.0;
+
+/// The largest distortion coefficient in size a lens of the plumb-bob model has (fisheye lenses'
+/// are of order one; fitted rational models' of order ten).
+pub const MAX_DISTORTION: f64 = 1e3;
 
 /// Gauss–Newton steps of [`Intrinsics::normalised`].
 const UNDISTORT_ITERATIONS: usize = 20;

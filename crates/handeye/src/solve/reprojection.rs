@@ -289,13 +289,15 @@ fn solution(frames: &[Frame], data: &Data, start: Start, unit: f64, fit: Fitted)
         .zip(&vectors)
         .filter_map(|(&(f, k), r)| r.map(|r| (f, k, [r.x, r.y])))
         .collect();
-    let outliers = data
+    let mut outliers: Vec<(usize, usize)> = data
         .index
         .iter()
         .zip(&keep)
         .filter(|(_, k)| !**k)
         .map(|(i, _)| *i)
+        .chain(data.unseeable.iter().copied())
         .collect();
+    outliers.sort_unstable();
     let (covariance, target_covariance) = match covariance {
         Some((x, y)) => (Some(in_unit(x, unit)), Some(in_unit(y, unit))),
         None => (None, None),
@@ -621,9 +623,23 @@ pub fn candidates(
     frame: &Frame,
     camera: &Intrinsics,
 ) -> std::result::Result<Vec<(Transform, f64)>, String> {
-    let d = &frame.detections;
-    let points: Vec<Vector3<f64>> = d.target.iter().map(|p| Vector3::from(*p)).collect();
-    let pixels: Vec<Vector2<f64>> = d.pixels.iter().map(|p| Vector2::from(*p)).collect();
+    // The detections a camera could have made: a pixel beyond is a mis-detection, which the
+    // bundle leaves out too.
+    let (points, pixels): (Vec<Vector3<f64>>, Vec<Vector2<f64>>) = frame
+        .detections
+        .target
+        .iter()
+        .zip(&frame.detections.pixels)
+        .filter(|(_, u)| camera.could_see(u))
+        .map(|(p, u)| (Vector3::from(*p), Vector2::from(*u)))
+        .unzip();
+    if points.len() < MIN_DETECTIONS && frame.camera_from_target.is_none() {
+        return Err(format!(
+            "{} of its {} detections within the image, at least {MIN_DETECTIONS} needed",
+            points.len(),
+            frame.detections.pixels.len()
+        ));
+    }
     let mut out = Vec::new();
     if let Some(given) = frame.camera_from_target {
         out.push((given, pose_cost(&given, &points, &pixels, camera)));
@@ -659,6 +675,36 @@ fn pose_cost(
 /// Smallest over largest singular value of the target's centred points below which it is planar.
 const PLANAR: f64 = 1e-3;
 
+/// Why a target whose points are on one line has no pose.
+pub(crate) const ON_ONE_LINE: &str =
+    "the target's points are all on one line: a pose needs points that span a plane";
+
+/// The centre of the points, the eigen-decomposition of their scatter, and its eigenvalues'
+/// order, largest first.
+fn spread(
+    points: &[Vector3<f64>],
+) -> (Vector3<f64>, SymmetricEigen<f64, nalgebra::U3>, [usize; 3]) {
+    let n = points.len().max(1) as f64;
+    let centre = points.iter().fold(Vector3::zeros(), |a, p| a + p) / n;
+    let mut scatter = Matrix3::zeros();
+    for p in points {
+        let d = p - centre;
+        scatter += d * d.transpose();
+    }
+    let eigen = SymmetricEigen::new(scatter);
+    let mut order = [0, 1, 2];
+    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
+    (centre, eigen, order)
+}
+
+/// Whether the target's points are all on one line (or one point), so that no pose fits them:
+/// the second singular value of the centred points below [`PLANAR`] of the first.
+pub(crate) fn on_one_line(points: &[Vector3<f64>]) -> bool {
+    let (_, eigen, order) = spread(points);
+    let largest = eigen.eigenvalues[order[0]];
+    largest.is_nan() || largest <= 0.0 || eigen.eigenvalues[order[1]] <= PLANAR * PLANAR * largest
+}
+
 /// The two poses of a planar target that fit the pixels (the planar ambiguity), each refined on
 /// the pixels, with its cost.
 ///
@@ -672,19 +718,10 @@ pub fn planar_poses(
     pixels: &[Vector2<f64>],
     camera: &Intrinsics,
 ) -> std::result::Result<Vec<(Transform, f64)>, String> {
-    let n = points.len() as f64;
-    let centre = points.iter().fold(Vector3::zeros(), |a, p| a + p) / n;
-    let mut scatter = Matrix3::zeros();
-    for p in points {
-        let d = p - centre;
-        scatter += d * d.transpose();
-    }
-    let eigen = SymmetricEigen::new(scatter);
-    let mut order = [0, 1, 2];
-    order.sort_by(|&a, &b| eigen.eigenvalues[b].total_cmp(&eigen.eigenvalues[a]));
+    let (centre, eigen, order) = spread(points);
     let (largest, smallest) = (eigen.eigenvalues[order[0]], eigen.eigenvalues[order[2]]);
-    if largest <= 0.0 || eigen.eigenvalues[order[1]] <= PLANAR * PLANAR * largest {
-        return Err("the target's points are all on one line".into());
+    if on_one_line(points) {
+        return Err(ON_ONE_LINE.into());
     }
     if smallest.max(0.0).sqrt() > PLANAR * largest.sqrt() {
         return Err(
@@ -888,6 +925,9 @@ struct Data<'a> {
     pixels: Vec<Vector2<f64>>,
     /// (frame, point within the frame) of each detection.
     index: Vec<(usize, usize)>,
+    /// (frame, point) of the detections no camera could have made ([`Intrinsics::could_see`]):
+    /// not in the fit, listed with its outliers.
+    unseeable: Vec<(usize, usize)>,
     /// The robot pose of each frame ([`Stations`]): frames at one pose share its error.
     stations: Stations,
 }
@@ -922,6 +962,7 @@ impl<'a> Data<'a> {
             points: Vec::with_capacity(total),
             pixels: Vec::with_capacity(total),
             index: Vec::with_capacity(total),
+            unseeable: Vec::new(),
             stations: Stations {
                 of: Vec::new(),
                 count: 0,
@@ -939,6 +980,10 @@ impl<'a> Data<'a> {
                 .zip(&f.detections.pixels)
                 .enumerate()
             {
+                if !camera.could_see(u) {
+                    data.unseeable.push((i, k));
+                    continue;
+                }
                 data.points.push(Vector3::from(*p) / unit);
                 data.pixels.push(Vector2::from(*u));
                 data.index.push((i, k));

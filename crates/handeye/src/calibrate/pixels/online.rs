@@ -169,7 +169,11 @@ impl OnlinePixels {
     /// Errors: [`Error::InvalidParameter`] for unusable intrinsics, a prior or
     /// `reject_outliers`.
     pub fn new(camera: Intrinsics, setup: Setup, options: Options) -> Result<Self> {
-        not_on_pixels(options.reject_outliers, &options.priors)?;
+        not_on_pixels(
+            options.reject_outliers,
+            &options.priors,
+            options.robot_model.as_ref(),
+        )?;
         camera
             .check()
             .map_err(|(field, message)| Error::InvalidParameter {

@@ -45,7 +45,14 @@ pub(crate) const PIXEL_PARAMETERS: usize = 12;
 pub(crate) fn not_on_pixels(
     reject_outliers: bool,
     priors: &[crate::model::prior::Prior],
+    robot_model: Option<&crate::model::kinematics::Kinematics>,
 ) -> Result<()> {
+    if robot_model.is_some() {
+        return Err(Error::InvalidParameter {
+            name: "robot-model",
+            message: "the robot's table feeds the systematic-error test, which runs on the poses' residuals, not on the pixels: calibrate without `--method reprojection` for it".into(),
+        });
+    }
     if reject_outliers {
         return Err(Error::InvalidParameter {
             name: "reject_outliers",
