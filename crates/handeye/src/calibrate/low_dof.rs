@@ -17,7 +17,9 @@ use crate::model::motion::{Pairing, PosePair, Setup, motion_pairs};
 use crate::model::pose::Transform;
 use crate::model::prior::{Component, Prior, PriorsUsed};
 use crate::model::warning::Warning;
-use crate::solve::low_dof::{CommonAxis, common_axis, solve_low_dof, with_component};
+use crate::solve::low_dof::{
+    CommonAxis, axes_surely_apart, common_axis, solve_low_dof, with_component,
+};
 use crate::solve::motions::{AllPairs, MotionSource};
 use crate::solve::{Calibration, Method, RefineOptions, refine_unchecked};
 
@@ -87,6 +89,11 @@ pub(crate) fn plan(
     pairing: Pairing,
     priors: &[Prior],
 ) -> Result<Option<Plan>> {
+    // Most recordings turn about many axes: two witnesses tell it in O(n), where the common axis
+    // over every pair would take the axis of each of the n(n − 1)/2 motions.
+    if pairing == Pairing::All && axes_surely_apart(&AllPairs::new(poses, setup)) {
+        return Ok(None);
+    }
     let Some(axis) = on_motions(poses, setup, pairing, common_axis) else {
         return Ok(None);
     };

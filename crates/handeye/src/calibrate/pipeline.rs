@@ -573,6 +573,7 @@ fn hand_eye_report(
             rotation_range_deg: quality.rotation_range_deg,
             per_motion: (quality.per_motion.len() == calibration.motions)
                 .then_some(quality.per_motion),
+            sampled_poses: quality.sampled_poses,
         },
         warnings,
         units: Units::default(),
@@ -808,6 +809,7 @@ pub(crate) fn hand_eye_on_pixels(
             axis_spread_deg: quality.axis_spread_deg,
             rotation_range_deg: quality.rotation_range_deg,
             per_motion: None,
+            sampled_poses: quality.sampled_poses,
         },
         warnings,
         units: Units::default(),

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::model::pose::{Transform, rotation_angle_between, rotation_matrix};
 use crate::model::warning::Warning;
-use crate::solve::motions::{AllPairs, MotionSource};
+use crate::solve::motions::{AllPairs, MotionSource, count_pairs};
 
 use crate::solve::residual::{MIN_NORM, PoseUnderX, poses_under};
 
@@ -131,12 +131,31 @@ pub struct QualityReport {
     /// Cautions about the motions and the fit.
     #[serde(serialize_with = "crate::model::warning::described")]
     pub warnings: Vec<Warning>,
+    /// Over every pair of more than [`EXACT_POSES`] poses: the poses, spread evenly over the
+    /// recording, whose pairs the largest residuals, the range of rotation angles and the axis
+    /// spread were taken over ([`SAMPLE_POSES`] of them). Those are then the sample's: its largest
+    /// residuals and angle at most the values over every pair, its smallest angle at least the
+    /// value, its axis spread about its own dominant axis; the RMS residuals are over every pair
+    /// all the same. Absent where every motion was gone through.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sampled_poses: Option<usize>,
 }
 
 /// Axis spread below which the report warns, degrees.
 pub const WARN_AXIS_SPREAD_DEG: f64 = 8.0;
 /// Rotation residual RMS above which the report warns about frame directions, degrees.
 pub const WARN_RESIDUAL_DEG: f64 = 5.0;
+/// Every pair of up to this many poses is gone through one by one for the largest residuals, the
+/// range of rotation angles and the axis spread of [`quality_report`] (the RMS residuals come from
+/// per-pose sums, O(n), at any size). Above, the pairs of [`SAMPLE_POSES`] poses spread evenly
+/// over the recording stand for them: bounded work (about 2 million pairs, 20 ms on one core)
+/// whatever the poses. Every recording of the repository's tests and golden outputs has at most
+/// 3,488 poses; the largest pass is then 6 million pairs.
+pub const EXACT_POSES: usize = 4096;
+
+/// Poses whose pairs stand for every pair above [`EXACT_POSES`].
+pub const SAMPLE_POSES: usize = 2048;
+
 /// Default floor of the per-pose outlier test on the median |θ_A − θ_B| of a pose's motions, degrees.
 pub const OUTLIER_DEG: f64 = 3.0;
 
@@ -149,17 +168,18 @@ pub fn quality_report(
     max_per_motion: usize,
 ) -> QualityReport {
     let keep = motions.count() <= max_per_motion;
-    let (residual, per_motion, axis_spread, rotation_range_deg) = match motions.all_pairs() {
-        Some(pairs) if !keep => {
-            let (residual, spread, range) = pairs_quality(pairs, motions, x);
-            (residual, Vec::new(), spread, range)
-        }
-        _ => {
-            let (residual, per_motion, range) = motion_quality(motions, x, keep);
-            let spread = crate::solve::motions::axis_spread(motions);
-            (residual, per_motion, spread, range)
-        }
-    };
+    let (residual, per_motion, axis_spread, rotation_range_deg, sampled_poses) =
+        match motions.all_pairs() {
+            Some(pairs) if !keep => {
+                let (residual, spread, range, sampled) = pairs_quality(pairs, motions, x);
+                (residual, Vec::new(), spread, range, sampled)
+            }
+            _ => {
+                let (residual, per_motion, range) = motion_quality(motions, x, keep);
+                let spread = crate::solve::motions::axis_spread(motions);
+                (residual, per_motion, spread, range, None)
+            }
+        };
     let axis_spread_deg = axis_spread.to_degrees();
     let mut warnings = Vec::new();
     if axis_spread_deg < WARN_AXIS_SPREAD_DEG {
@@ -176,6 +196,7 @@ pub fn quality_report(
         axis_spread_deg,
         rotation_range_deg,
         warnings,
+        sampled_poses,
     }
 }
 
@@ -233,12 +254,27 @@ fn motion_quality(
 ///   vector part sin(θ/2) k gives the axis and θ² k kᵀ with one branch-free arc tangent, near π
 ///   too); the per-pose data are laid out by component so that the loops over the later poses
 ///   vectorise; parallel blocks of rows are combined in a fixed order (the result does not
-///   depend on the number of threads).
+///   depend on the number of threads). Above [`EXACT_POSES`] poses, over the pairs of
+///   [`SAMPLE_POSES`] poses spread evenly over the recording (the last return value, their
+///   number), and the RMS angle where the warning may fire from the same sums with the sample's
+///   ratio of the mean squared angle to the mean chordal residual (exact when every pair has the
+///   same residual; within the bracket above in any case).
 fn pairs_quality(
     pairs: &AllPairs,
     motions: &(impl MotionSource + ?Sized),
     x: &Transform,
-) -> (ResidualSummary, f64, [f64; 2]) {
+) -> (ResidualSummary, f64, [f64; 2], Option<usize>) {
+    pairs_quality_over(pairs, motions, x, (EXACT_POSES, SAMPLE_POSES))
+}
+
+/// [`pairs_quality`] with every pair gone through up to `exact` poses, and above, the pairs of
+/// `sample` poses spread evenly over the recording.
+fn pairs_quality_over(
+    pairs: &AllPairs,
+    motions: &(impl MotionSource + ?Sized),
+    x: &Transform,
+    (exact, sample): (usize, usize),
+) -> (ResidualSummary, f64, [f64; 2], Option<usize>) {
     let poses = poses_under(pairs, &rotation_matrix(x), &x.translation.vector);
     let n = poses.len();
     let count = motions.count().max(1) as f64;
@@ -265,7 +301,13 @@ fn pairs_quality(
     // ‖ΔR‖²_F = ‖W_i − W_j‖²_F = ‖D_i − D_j‖²_F.
     // Rows i of the pairs in fixed blocks, in parallel; the blocks' results are combined in
     // block order, so that the sums do not depend on the number of threads.
-    let columns = PoseColumns::new(&poses);
+    let sampled = (n > exact && sample >= 2).then_some(sample.min(n));
+    let rows_of: Vec<usize> = match sampled {
+        Some(m) => (0..m).map(|k| k * (n - 1) / (m - 1)).collect(),
+        None => (0..n).collect(),
+    };
+    let columns = PoseColumns::new(&poses, &rows_of);
+    let n = rows_of.len();
     let blocks: Vec<usize> = (0..n).step_by(PAIR_ROWS).collect();
     let rows = |start: usize| start..(start + PAIR_ROWS).min(n);
     let passes: Vec<PairPass> = blocks
@@ -306,7 +348,17 @@ fn pairs_quality(
     };
     let upper = (ratio * chordal_mean).sqrt().to_degrees();
     if WARN_RESIDUAL_DEG < upper {
-        rotation_rms = motion_quality(motions, x, false).0.rotation_deg_rms;
+        rotation_rms = match sampled {
+            None => motion_quality(motions, x, false).0.rotation_deg_rms,
+            Some(_) => {
+                let (angles, chordal) = columns.squared_angles_and_residuals();
+                if chordal > 0.0 {
+                    (chordal_mean * angles / chordal).sqrt().to_degrees()
+                } else {
+                    0.0
+                }
+            }
+        };
     }
     let residual = ResidualSummary {
         rotation_deg_rms: rotation_rms,
@@ -318,6 +370,7 @@ fn pairs_quality(
         residual,
         spread,
         [smallest.to_degrees(), largest.to_degrees()],
+        sampled,
     )
 }
 
@@ -365,8 +418,11 @@ struct Later<'a> {
 }
 
 impl PoseColumns {
-    fn new(poses: &[PoseUnderX]) -> Self {
-        let column = |f: &dyn Fn(&PoseUnderX) -> f64| poses.iter().map(f).collect::<Vec<f64>>();
+    /// The columns of `poses[rows]`, in that order.
+    fn new(poses: &[PoseUnderX], rows: &[usize]) -> Self {
+        let poses: Vec<&PoseUnderX> = rows.iter().map(|&k| &poses[k]).collect();
+        let column =
+            |f: &dyn Fn(&PoseUnderX) -> f64| poses.iter().map(|p| f(p)).collect::<Vec<f64>>();
         let quaternions: Vec<[f64; 4]> = poses
             .iter()
             .map(|p| {
@@ -376,7 +432,7 @@ impl PoseColumns {
                 [q.w, q.i, q.j, q.k]
             })
             .collect();
-        let g: Vec<Vector3<f64>> = poses.iter().map(PoseUnderX::g).collect();
+        let g: Vec<Vector3<f64>> = poses.iter().map(|p| p.g()).collect();
         Self {
             d: std::array::from_fn(|k| column(&|p| p.d[(k / 3, k % 3)])),
             e: std::array::from_fn(|k| column(&|p| p.e[k])),
@@ -384,6 +440,23 @@ impl PoseColumns {
             g: std::array::from_fn(|k| g.iter().map(|g| g[k]).collect()),
             q: std::array::from_fn(|k| quaternions.iter().map(|q| q[k]).collect()),
         }
+    }
+
+    /// Σ θ² and Σ ‖ΔR‖²_F over the pairs of these poses, θ each pair's residual angle: one by
+    /// one (an arc sine each).
+    fn squared_angles_and_residuals(&self) -> (f64, f64) {
+        let n = self.d[0].len();
+        count_pairs(n * n.saturating_sub(1) / 2);
+        let (mut angles, mut chordal) = (0.0, 0.0);
+        for i in 0..n {
+            for j in i + 1..n {
+                let u: f64 = (0..9).map(|c| (self.d[c][i] - self.d[c][j]).powi(2)).sum();
+                let theta = 2.0 * (u / 8.0).clamp(0.0, 1.0).sqrt().asin();
+                angles += theta * theta;
+                chordal += u;
+            }
+        }
+        (angles, chordal)
     }
 
     fn row(&self, i: usize) -> RowPose {
@@ -536,6 +609,7 @@ impl Default for PairPass {
 impl PairPass {
     /// The pairs of pose i and every later pose.
     fn add_row(&mut self, poses: &PoseColumns, i: usize, n: usize) {
+        count_pairs(n - i - 1);
         let p = poses.row(i);
         let mut start = i + 1;
         let (mut u, mut t, mut angle) = ([0.0; CHUNK], [0.0; CHUNK], [0.0; CHUNK]);
@@ -625,6 +699,7 @@ impl PairPass {
 /// an axis): |v · dominant| / ‖v‖ with v = sin(θ/2) k, for the motions with θ ≥
 /// [`crate::model::pose::NO_AXIS_ANGLE`].
 fn closest_axis(poses: &PoseColumns, i: usize, n: usize, dominant: &Vector3<f64>) -> f64 {
+    count_pairs(n - i - 1);
     let p = poses.row(i);
     let mut closest = [1.0_f64; LANES];
     let mut cos = [0.0; CHUNK];
@@ -718,6 +793,54 @@ mod tests {
     }
 
     #[test]
+    fn above_the_exact_size_a_sample_of_poses_stands_for_every_pair() {
+        let poses = simulate(
+            &SimConfig {
+                poses: 300,
+                ..SimConfig::default()
+            },
+            5,
+            0,
+        )
+        .poses;
+        let pairs = AllPairs::new(&poses, Setup::EyeInHand);
+        let x = crate::solve::andreff(&pairs).unwrap().x;
+        let (all, all_spread, all_range, none) =
+            pairs_quality_over(&pairs, &pairs, &x, (usize::MAX, 0));
+        assert_eq!(none, None);
+        // The exact pass is the default's below EXACT_POSES, to the last digit.
+        assert_eq!(pairs_quality(&pairs, &pairs, &x).0, all);
+        let (part, spread, range, sampled) = pairs_quality_over(&pairs, &pairs, &x, (100, 60));
+        assert_eq!(sampled, Some(60));
+        // The RMS values come from every pair either way.
+        assert_eq!(part.translation_rms, all.translation_rms);
+        assert_eq!(part.rotation_deg_rms, all.rotation_deg_rms);
+        // The sample's maxima bound those over every pair from below, its smallest angle from
+        // above; on a random walk 60 of 300 poses come within 30 % of the largest (the largest
+        // motions are between poses far apart in the walk, which an even spread keeps); the
+        // smallest angle, a closest pair, is the sample's own (here 0.98° against 0.075°).
+        assert!(part.rotation_deg_max <= all.rotation_deg_max);
+        assert!(part.translation_max <= all.translation_max);
+        assert!(range[1] <= all_range[1] && range[0] >= all_range[0]);
+        assert!(
+            part.rotation_deg_max > 0.7 * all.rotation_deg_max,
+            "{part:?} {all:?}"
+        );
+        assert!(
+            part.translation_max > 0.7 * all.translation_max,
+            "{part:?} {all:?}"
+        );
+        assert!(range[1] > 0.7 * all_range[1], "{range:?} {all_range:?}");
+        assert!(
+            (spread - all_spread).abs() < 0.2 * all_spread,
+            "{spread} {all_spread}"
+        );
+        // The whole report says so.
+        let report = quality_report(&pairs, &x, 0);
+        assert_eq!(report.sampled_poses, None);
+    }
+
+    #[test]
     fn the_pair_pass_equals_the_motion_by_motion_quality() {
         for setup in [Setup::EyeInHand, Setup::EyeToHand] {
             for seed in [1, 2] {
@@ -725,7 +848,8 @@ mod tests {
                 let pairs = AllPairs::new(&poses, setup);
                 let stored = motion_pairs(&poses, Pairing::All, setup);
                 let x = crate::solve::andreff(&stored).unwrap().x;
-                let (residual, spread, range) = pairs_quality(&pairs, &pairs, &x);
+                let (residual, spread, range, sampled) = pairs_quality(&pairs, &pairs, &x);
+                assert_eq!(sampled, None);
                 let (by_motion, _, by_motion_range) = motion_quality(&stored, &x, false);
                 let by_motion_spread = crate::solve::motions::axis_spread(&stored);
                 let what = format!("{setup:?} seed {seed}");

@@ -26,7 +26,7 @@ use crate::model::error::{Degeneracy, Error, Result};
 use crate::model::motion::{MotionFeatures, MotionPair};
 use crate::model::pose::{Transform, transform_from_parts};
 use crate::model::prior::{Component, PRIOR_AXIS_DEG};
-use crate::solve::motions::MotionSource;
+use crate::solve::motions::{AllPairs, MotionSource, count_pairs};
 
 /// Motions that rotate less than this (degrees) are left out of the axis estimate (their axes are
 /// noise), though their translations still fix θ.
@@ -117,6 +117,44 @@ pub fn common_axis(motions: &(impl MotionSource + ?Sized)) -> Option<CommonAxis>
         spread,
         rotating,
     })
+}
+
+/// Whether the motions of every pair of `pairs` certainly do not rotate about one axis: whether
+/// [`common_axis`] over them would find a spread above [`LOW_DOF_SPREAD_DEG`] (or no axis), told
+/// in O(n) from 2n − 3 of the motions.
+///
+/// The spread is the largest angle between a rotating motion's axis (as a line) and the dominant
+/// axis; two rotating motions whose axes are more than twice [`LOW_DOF_SPREAD_DEG`] apart cannot
+/// both be within it of any axis (the angle between lines obeys the triangle inequality). The
+/// witnesses are the motions from pose 0 to every pose and between consecutive poses, made and
+/// judged exactly as [`common_axis`] makes and judges them (rotating at least
+/// [`LOW_DOF_MIN_ANGLE_DEG`], both axes defined), each against the first rotating one. `false`
+/// means only that these motions do not tell: [`common_axis`] then goes through all of them
+/// (as on a low-DOF robot's recording, where every axis is alike).
+pub(crate) fn axes_surely_apart(pairs: &AllPairs) -> bool {
+    let n = pairs.poses();
+    let min = LOW_DOF_MIN_ANGLE_DEG.to_radians();
+    // Twice the spread, and a margin far above the rounding of the angles (1e-15 rad at 4°).
+    let apart = 2.0 * LOW_DOF_SPREAD_DEG.to_radians() + 1e-9;
+    let witnesses = (1..n).map(|j| (0, j)).chain((2..n).map(|j| (j - 1, j)));
+    count_pairs(2 * n.saturating_sub(1));
+    let mut first: Option<Vector3<f64>> = None;
+    for (i, j) in witnesses {
+        let m = pairs.motion(i, j);
+        let fa = MotionFeatures::of(&m.a);
+        let (Some(k), true) = (fa.axis, fa.angle >= min) else {
+            continue;
+        };
+        if MotionFeatures::of(&m.b).axis.is_none() {
+            continue;
+        }
+        match first {
+            None => first = Some(k),
+            Some(f) if f.dot(&k).abs().min(1.0).acos() > apart => return true,
+            Some(_) => {}
+        }
+    }
+    false
 }
 
 /// A low-DOF solution: X and the conditioning of its translation system.
@@ -266,4 +304,60 @@ pub(crate) fn scaled_conditioning(normal: &Matrix4<f64>) -> f64 {
         return 0.0;
     }
     eigen.min().max(0.0) / max
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::motion::{PosePair, Setup};
+    use rand::{RngExt, SeedableRng};
+    use rand_xoshiro::Xoshiro256PlusPlus;
+
+    /// Noise-free poses of a robot turning about the z axis tilted by up to `wobble` radians
+    /// (another tilt at each pose), X and the fixed frame given.
+    fn wobbling(n: usize, wobble: f64, seed: u64) -> Vec<PosePair> {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let x = Transform::new(Vector3::new(0.03, -0.02, 0.1), Vector3::new(0.2, -0.1, 0.7));
+        let y = Transform::new(Vector3::new(0.4, -0.2, 0.1), Vector3::new(0.3, 2.0, -0.4));
+        (0..n)
+            .map(|_| {
+                let mut r = || rng.random_range(-1.0..1.0);
+                let axis = Vector3::new(wobble * r(), wobble * r(), 1.0).normalize();
+                let q = Transform::new(
+                    Vector3::new(0.3 * r(), 0.3 * r(), 0.05 * r()),
+                    axis * 3.0 * r(),
+                );
+                PosePair {
+                    base_from_gripper: q,
+                    camera_from_target: x.inverse() * q.inverse() * y,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn axes_told_apart_by_the_witnesses_are_never_one_axis() {
+        let (mut apart, mut undecided) = (0, 0);
+        for seed in 0..6 {
+            for wobble in [0.0, 0.005, 0.01, 0.02, 0.03, 0.05, 0.2] {
+                let poses = wobbling(40, wobble, seed);
+                let pairs = AllPairs::new(&poses, Setup::EyeInHand);
+                let low_dof = common_axis(&pairs).is_some_and(|a| a.is_low_dof());
+                if axes_surely_apart(&pairs) {
+                    assert!(!low_dof, "seed {seed}, wobble {wobble}");
+                    apart += 1;
+                } else {
+                    undecided += 1;
+                }
+                if wobble == 0.0 {
+                    assert!(low_dof && !axes_surely_apart(&pairs));
+                }
+                if wobble == 0.2 {
+                    assert!(axes_surely_apart(&pairs), "seed {seed}");
+                }
+            }
+        }
+        // Near the limit (a tilt of 1–2°) some are told apart and some left to every pair.
+        assert!(apart >= 12 && undecided >= 6, "{apart} {undecided}");
+    }
 }

@@ -3,6 +3,7 @@
 //! the solvers work in O(n)).
 
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use nalgebra::{Matrix3, SVector, Vector3};
 
@@ -10,6 +11,23 @@ use crate::model::motion::{MotionFeatures, MotionPair, Pairing, PosePair, Setup}
 use crate::model::pose::{Transform, rotation_matrix};
 use crate::solve::accumulate::PairSums;
 use crate::solve::rotation_system::StackedRows;
+
+/// Pairs of poses gone through one by one so far in this process ([`pair_work`]).
+static PAIR_WORK: AtomicU64 = AtomicU64::new(0);
+
+/// Counts `n` pairs of poses gone through one by one.
+pub(crate) fn count_pairs(n: usize) {
+    PAIR_WORK.fetch_add(n as u64, Ordering::Relaxed);
+}
+
+/// The pairs of poses gone through one by one so far in this process, on every thread: every
+/// motion [`AllPairs`] made on the fly, and every pair the checks visited pair by pair (the quality
+/// check's pass over the pairs, the low-DOF check's witnesses). The solvers and checks that work
+/// from per-pose sums add nothing. For tests that show the work of a calibration linear in the
+/// poses (ten times the poses, about ten times the pairs, where every pair would be a hundred).
+pub fn pair_work() -> u64 {
+    PAIR_WORK.load(Ordering::Relaxed)
+}
 
 /// A set of motion pairs that the solvers can go through as often as they need, without
 /// necessarily storing them: a slice of [`MotionPair`]s, or [`AllPairs`], which makes the
@@ -130,6 +148,16 @@ impl AllPairs {
         self.hand.len()
     }
 
+    /// The motion of the pair (i, j), i < j, exactly as [`MotionSource::for_each_motion`] makes
+    /// it: from pose j to pose i, A = Q_j⁻¹ Q_i, B = P_j⁻¹ P_i.
+    #[inline(always)]
+    pub(crate) fn motion(&self, i: usize, j: usize) -> MotionPair {
+        MotionPair {
+            a: self.hand[j].1 * self.hand[i].0,
+            b: self.camera[j].0 * self.camera[i].1,
+        }
+    }
+
     /// Q_k (the setup's hand pose, [`Setup::hand_pose`]) and C_k = `camera_from_target` of pose k.
     pub(crate) fn pose(&self, k: usize) -> (&Transform, &Transform) {
         (&self.hand[k].0, &self.camera[k].0)
@@ -159,13 +187,10 @@ impl MotionSource for AllPairs {
     }
 
     fn for_each_motion(&self, mut f: impl FnMut(&MotionPair)) {
+        count_pairs(self.count());
         for i in 0..self.hand.len() {
             for j in i + 1..self.hand.len() {
-                // From pose j to pose i: A = Q_j⁻¹ Q_i, B = P_j⁻¹ P_i.
-                f(&MotionPair {
-                    a: self.hand[j].1 * self.hand[i].0,
-                    b: self.camera[j].0 * self.camera[i].1,
-                });
+                f(&self.motion(i, j));
             }
         }
     }

@@ -49,6 +49,12 @@ pub struct Spread {
     pub rotation_range_deg: [f64; 2],
     /// Per motion pair, in order (absent above 10,000 motions).
     pub per_motion: Option<Vec<MotionQuality>>,
+    /// Over every pair of more than [`crate::check::quality::EXACT_POSES`] poses, the poses whose
+    /// pairs the spread, the range and the largest residuals were taken over
+    /// ([`crate::check::quality::QualityReport::sampled_poses`]); absent where every motion was
+    /// gone through.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sampled_poses: Option<usize>,
 }
 
 /// The units of a [`HandEyeReport`]'s numbers.
