@@ -45,7 +45,7 @@ pub struct LiveTransform<'a> {
 pub enum LiveOutcome {
     /// Paired with the robot's pose at its stamp: a pose pair of the calibration (`line` is the
     /// observation's number, from 1; `stamp` its header stamp, seconds).
-    Pair(StampedPosePair),
+    Pair(Box<StampedPosePair>),
     /// Dropped, and why (the robot's pose at its stamp is unknown, a frame is missing, …).
     Dropped {
         /// The observation's number, from 1.
@@ -386,7 +386,7 @@ impl LivePairs {
         let robot = self.tf.lookup(robot_path, robot_t, self.max_gap_ns);
         match (robot, camera_from_target) {
             (Lookup::Pose(base_from_gripper), Lookup::Pose(camera_from_target)) => {
-                LiveOutcome::Pair(StampedPosePair::new(
+                LiveOutcome::Pair(Box::new(StampedPosePair::new(
                     o.number,
                     Some(seconds(o.stamp_ns)),
                     PosePair {
@@ -394,7 +394,7 @@ impl LivePairs {
                         camera_from_target,
                     },
                     Written::NAMED,
-                ))
+                )))
             }
             (Lookup::Gap, _) | (_, Lookup::Gap) => dropped(format!(
                 "a transform it needs has a gap longer than {} s at its stamp",
