@@ -14,6 +14,8 @@ mod faces;
 mod figures;
 mod input;
 mod inspect;
+#[cfg(feature = "ros2")]
+mod node;
 mod online;
 mod output;
 mod publish;
@@ -74,6 +76,11 @@ enum Command {
     /// Time every solver and the online calibrator in-process.
     #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
     Bench(bench::Args),
+    /// A live ROS 2 node: calibrate online from /tf and the target's pose topic, publish X on
+    /// /tf_static and every estimate on /handeye/status.
+    #[cfg(feature = "ros2")]
+    #[command(after_help = EXIT_CODES, allow_negative_numbers = true)]
+    Node(node::Args),
 }
 
 impl Command {
@@ -90,6 +97,8 @@ impl Command {
             Self::Experiment(_) => "experiment",
             Self::Demo(_) => "demo",
             Self::Bench(_) => "bench",
+            #[cfg(feature = "ros2")]
+            Self::Node(_) => "node",
         }
     }
 }
@@ -109,6 +118,8 @@ fn main() -> ExitCode {
         Command::Experiment(a) => experiment::run(a),
         Command::Demo(a) => demo::run(a),
         Command::Bench(a) => bench::run(a),
+        #[cfg(feature = "ros2")]
+        Command::Node(a) => node::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

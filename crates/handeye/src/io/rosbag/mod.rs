@@ -18,6 +18,7 @@
 
 mod cdr;
 mod joints;
+mod live;
 mod mount;
 mod msg;
 mod pairs;
@@ -35,6 +36,7 @@ use crate::model::pose::{Transform, transform_from_xyz_quat_xyzw};
 
 pub(crate) use msg::{POSE_STAMPED, TF_MESSAGE, TRANSFORM_STAMPED};
 // Read through `io::Recording`, and on their own.
+pub use live::{LiveOutcome, LivePairs, LiveTransform};
 pub use pairs::{BagOptions, BagPairs, read_bag_pairs};
 pub use storage::Storage;
 pub(crate) use tags::read_bag_tags;

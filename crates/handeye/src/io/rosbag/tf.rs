@@ -297,6 +297,28 @@ impl TfBuffer {
         }
     }
 
+    /// Drops the samples of every dynamic edge older than `before_ns`, keeping the last one
+    /// before it (a lookup at `before_ns` still interpolates): the bound of a live buffer, as
+    /// tf2's cache keeps its last seconds. Call after [`TfBuffer::finish`].
+    pub fn prune(&mut self, before_ns: i64) {
+        for edge in self.edges.values_mut() {
+            if let EdgeKind::Dynamic(samples) = &mut edge.kind {
+                let k = samples.partition_point(|s| s.0 < before_ns);
+                if k > 1 {
+                    samples.drain(..k - 1);
+                }
+            }
+        }
+    }
+
+    /// The newest stamp of the dynamic edge whose child is `child`.
+    pub fn newest(&self, child: &str) -> Option<i64> {
+        match self.edges.get(child).map(|e| &e.kind) {
+            Some(EdgeKind::Dynamic(s)) => s.iter().map(|s| s.0).max(),
+            _ => None,
+        }
+    }
+
     /// Samples of the dynamic edge whose child is `child` dropped by [`TfBuffer::finish`] for a
     /// stamp an earlier sample has.
     pub fn repeated(&self, child: &str) -> usize {
