@@ -94,7 +94,7 @@ fn noisy(t: &Transform, (sr, st): (f64, f64), rng: &mut Xoshiro256PlusPlus) -> T
     let nt = Normal::new(0.0, st).expect("sigma");
     let w = Vector3::new(nr.sample(rng), nr.sample(rng), nr.sample(rng));
     let d = Vector3::new(nt.sample(rng), nt.sample(rng), nt.sample(rng));
-    Transform::from_parts(Translation3::from(d), Rotation3::new(w).into()) * t
+    Transform::from_parts(Translation3::from(d), Rotation3::new(w)) * t
 }
 
 impl Sim {

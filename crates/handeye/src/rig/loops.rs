@@ -53,6 +53,9 @@ pub const MIN_SEGMENT: usize = 3;
 /// ‖v‖² below it half the time.
 const MEDIAN_CHI2_3: f64 = 2.365_973_884_375_91;
 
+/// One pose's closure error: its rotation vector (radians) and its translation.
+type Closure = (Vector3<f64>, Vector3<f64>);
+
 /// One loop's closure.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LoopClosure {
@@ -92,7 +95,7 @@ fn by_pose(graph: &Graph, recording: &RigRecording, e: usize) -> BTreeMap<usize,
 }
 
 /// The (rotation vector, translation) of a transform.
-fn split(t: &Transform) -> (Vector3<f64>, Vector3<f64>) {
+fn split(t: &Transform) -> Closure {
     (log_so3(&rotation_matrix(t)), t.translation.vector)
 }
 
@@ -138,7 +141,7 @@ pub fn closures(
             };
             let solved_parts: Vec<Transform> =
                 (0..graph.nodes.len()).map(|n| solution.pose(n)).collect();
-            let closure: Vec<(Vector3<f64>, Vector3<f64>)> = common
+            let closure: Vec<Closure> = common
                 .iter()
                 .map(|&(p, k1, k2)| {
                     let c1 = recording.observations[k1].camera_from_target;
@@ -151,12 +154,12 @@ pub fn closures(
                 })
                 .collect();
             let n = closure.len() as f64;
-            let rms = |f: &dyn Fn(&(Vector3<f64>, Vector3<f64>)) -> f64| {
+            let rms = |f: &dyn Fn(&Closure) -> f64| {
                 (closure.iter().map(|c| f(c).powi(2)).sum::<f64>() / n).sqrt()
             };
             let rms_r = rms(&|c| c.0.norm()).to_degrees();
             let rms_t = rms(&|c| c.1.norm());
-            let noise = |f: &dyn Fn(&(Vector3<f64>, Vector3<f64>)) -> Vector3<f64>| {
+            let noise = |f: &dyn Fn(&Closure) -> Vector3<f64>| {
                 let d: Vec<f64> = closure
                     .windows(2)
                     .map(|w| (f(&w[1]) - f(&w[0])).norm_squared())
@@ -225,7 +228,7 @@ pub fn closures(
 /// error of a median of n normal values is √(π/2) σ/√n; for heavier tails it is smaller, so the
 /// test is conservative there. `floor`: the noise (rotation radians, translation) below which
 /// differences are rounding.
-fn change(closure: &[(Vector3<f64>, Vector3<f64>)], floor: [f64; 2]) -> (f64, usize) {
+fn change(closure: &[Closure], floor: [f64; 2]) -> (f64, usize) {
     let n = closure.len();
     if n < 2 * MIN_SEGMENT {
         return (0.0, 0);
@@ -233,7 +236,7 @@ fn change(closure: &[(Vector3<f64>, Vector3<f64>)], floor: [f64; 2]) -> (f64, us
     let median = crate::check::outliers::median;
     let mut best = (0.0, 0);
     for (part, &floor) in floor.iter().enumerate() {
-        let value = |c: &(Vector3<f64>, Vector3<f64>), j: usize| {
+        let value = |c: &Closure, j: usize| {
             if part == 0 { c.0[j] } else { c.1[j] }
         };
         let sigma: [f64; 3] = std::array::from_fn(|j| {
