@@ -51,6 +51,7 @@
 //! | 3 | `check/` | readings, outliers, the bootstrap uncertainty, held-out poses, the motions' quality |
 //! | 4 | `track/` | the accumulating estimator on a stream: gating, change detection, reports |
 //! | 5 | `calibrate/` | the batch jobs: poses and pixels, robot-world, verify and advice |
+//! | 5 | [`rig`] | several cameras and targets in one calibration: the pose graph, what it determines, the joint solve, the loops |
 //! | 6 | `online/` | the online calibrator both faces drive: the paper's selection, the accumulating estimator, the pixels on a doubling schedule |
 //! | 7 | [`io`], [`experiment`] | files, two streams and their clock, ROS 2 recordings, truth files; the simulated studies (the paper's experiments, tracking, the advice's closed loop) |
 //! | 8 | [`detect`] | from images to detections: the target's spec, ViSP's image folders, the points found in an image (feature `images`) and the camera's pose of them |
@@ -91,6 +92,7 @@ pub mod experiment;
 pub mod io;
 pub mod model;
 pub mod online;
+pub mod rig;
 pub mod sim;
 pub mod solve;
 pub mod track;

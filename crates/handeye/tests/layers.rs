@@ -15,6 +15,7 @@ const LAYERS: &[(&str, usize)] = &[
     ("check", 3),
     ("track", 4),
     ("calibrate", 5),
+    ("rig", 5),
     ("online", 6),
     ("io", 7),
     ("experiment", 7),

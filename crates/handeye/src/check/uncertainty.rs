@@ -440,7 +440,7 @@ fn block_length(residuals: &[PoseResidual]) -> usize {
 const AUTOCORRELATION: f64 = 0.3;
 
 /// The error of a replicate: (log(R_b R̂ᵀ), t_b − t̂).
-fn error_of(xb: &Transform, x: &Transform) -> Vector6<f64> {
+pub(crate) fn error_of(xb: &Transform, x: &Transform) -> Vector6<f64> {
     let dr = log_so3(&(xb.rotation.matrix() * x.rotation.matrix().transpose()));
     let dt = xb.translation.vector - x.translation.vector;
     Vector6::new(dr.x, dr.y, dr.z, dt.x, dt.y, dt.z)

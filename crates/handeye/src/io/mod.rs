@@ -17,6 +17,7 @@ mod lines;
 mod peer;
 mod pose_reader;
 mod recording;
+mod rig;
 #[cfg(feature = "rosbag")]
 pub mod rosbag;
 mod saved;
@@ -59,6 +60,7 @@ pub use pose_reader::{
     read_pose_file,
 };
 pub(crate) use pose_reader::{at_least_two_pairs, open_poses_as, read_records};
+pub use rig::{is_rig_file, is_rig_text, parse_rig, read_rig};
 pub use series::{DeclaredSetup, PoseSeries, Projections};
 pub use sync::TimeOffset;
 pub(crate) use transform::Conventions;

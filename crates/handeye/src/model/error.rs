@@ -384,6 +384,28 @@ pub enum Error {
         /// What to check, in words.
         hint: String,
     },
+    /// One camera's observations of a rig fit far better read another way (inverted, another
+    /// quaternion order, another length unit): the rig's solve would be wrong.
+    #[error(
+        "camera `{camera}` seeing `{target}`: {finding}; correct that camera's observations in the recording (a rig is read as given)"
+    )]
+    RigMisread {
+        /// The camera.
+        camera: String,
+        /// The target it sees.
+        target: String,
+        /// What fits better, in words.
+        finding: String,
+    },
+    /// Nothing of a rig is determined by its observations.
+    #[error(
+        "no camera or target of the rig is determined: {}; record poses in which each camera sees a target on the other part (gripper or base) while the robot turns about two different axes",
+        .parts.join("; ")
+    )]
+    RigUndetermined {
+        /// Each part with its reason, in words.
+        parts: Vec<String>,
+    },
     /// A parameter out of its valid range.
     #[error("parameter `{name}`: {message}")]
     InvalidParameter {

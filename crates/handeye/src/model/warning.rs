@@ -237,6 +237,30 @@ pub enum Warning {
         /// X's one-sigma uncertainty.
         sigma: crate::model::findings::Sizes,
     },
+    /// A camera or target of a rig that the data cannot determine: it is given no number.
+    Undetermined {
+        /// Its name.
+        part: String,
+        /// `camera`, `target`, or `camera or target` (mounted, never observed).
+        kind: String,
+        /// Why, in words.
+        reason: String,
+    },
+    /// Loops of a rig that do not close: a part does not fit the rest (it moved during the
+    /// recording, or its observations are misread).
+    LoopMisfit {
+        /// The part to blame, or, when none can be singled out, the parts of the failing loops.
+        parts: Vec<String>,
+        /// Whether `parts` is one part singled out (its every loop fails, the others close).
+        singled_out: bool,
+        /// The failing loops, each the two parts it compares.
+        loops: Vec<String>,
+        /// The largest RMS closure over what the noise explains, among them.
+        worst_ratio: f64,
+        /// The largest change of a closure between the poses before one pose and those after,
+        /// among them, in standard errors.
+        change_sigmas: f64,
+    },
 }
 
 /// The one option of the call that would fix what a [`Warning`] describes.
@@ -339,6 +363,8 @@ impl Warning {
             Self::GoalMissed { .. } => "goal_missed",
             Self::IntrinsicsDisagree { .. } => "intrinsics_disagree",
             Self::DistortionDisagrees { .. } => "distortion_disagrees",
+            Self::Undetermined { .. } => "undetermined",
+            Self::LoopMisfit { .. } => "loop_misfit",
         }
     }
 
@@ -457,6 +483,33 @@ impl fmt::Display for Warning {
                 f,
                 "the detections and the robot's motions agree better with the radial distortion k1 = {k1_best:.4} than with the {k1:.4} given (reprojection sigma {refit_sigma_px:.2} px instead of {sigma_px:.2} px), and X moves by {rotation_deg:.3}° and {translation:.4} between the two fits ({sigmas:.1} sigma): X's uncertainty, which takes the intrinsics as exact, does not cover this; check that the distortion coefficients are this camera's at this resolution, zoom and focus (calibrate them again; refining them with X needs a board that spans the image)"
             ),
+            Self::Undetermined { part, kind, reason } => write!(
+                f,
+                "{kind} `{part}` is undetermined and given no number: {reason}; record poses in which it is seen while the robot turns about two different axes, or in which it sees (or is seen with) a part that is determined"
+            ),
+            Self::LoopMisfit {
+                parts,
+                singled_out,
+                loops,
+                worst_ratio,
+                change_sigmas,
+            } => {
+                let names: Vec<String> = parts.iter().map(|p| format!("`{p}`")).collect();
+                let who = if *singled_out {
+                    format!("{} does not fit the rest of the rig", names.join(", "))
+                } else {
+                    format!(
+                        "one of {} does not fit the rest of the rig",
+                        names.join(", ")
+                    )
+                };
+                write!(
+                    f,
+                    "{who}: {} loop(s) do not close ({}; their RMS closure up to {worst_ratio:.1} times what the noise and the parts' uncertainty explain, their mean changing by up to {change_sigmas:.1} standard errors between the poses before one pose and those after): a camera or target moved during the recording, or its observations are misread; calibrate it again on a recording in which it did not move",
+                    loops.len(),
+                    loops.join(", ")
+                )
+            }
             Self::PriorDisagrees {
                 component,
                 prior,

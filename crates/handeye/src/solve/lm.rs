@@ -162,3 +162,95 @@ fn damped_step<const N: usize>(lin: &Linearisation<N>, damping: f64) -> Option<S
     }
     lhs.cholesky().map(|c| -c.solve(&lin.jtr))
 }
+
+/// Normal equations of the weighted residuals at one iterate, for a number of parameters known
+/// only at run time (a rig's cameras and targets, six each).
+pub(crate) struct DynLinearisation {
+    /// JᵀJ.
+    pub(crate) jtj: nalgebra::DMatrix<f64>,
+    /// Jᵀr.
+    pub(crate) jtr: nalgebra::DVector<f64>,
+    /// ½Σr².
+    pub(crate) cost: f64,
+}
+
+/// [`LeastSquares`] for a number of parameters known only at run time.
+pub(crate) trait DynLeastSquares {
+    /// An iterate.
+    type State;
+    /// JᵀJ, Jᵀr and ½Σr² at `s`.
+    fn linearise(&self, s: &Self::State) -> DynLinearisation;
+    /// The iterate a step δ leads to from `s`.
+    fn step(&self, s: &Self::State, delta: &nalgebra::DVector<f64>) -> Self::State;
+    /// ½Σr² at `s`.
+    fn cost(&self, s: &Self::State) -> f64;
+    /// The size a step is measured against: 1 plus the norms of the translations.
+    fn size(&self, s: &Self::State) -> f64;
+}
+
+/// [`levenberg_marquardt`] on a problem whose size is known at run time: the same damping
+/// (Nielsen's update), the same stopping rules, the same guarantee (never a higher cost than the
+/// start).
+pub(crate) fn levenberg_marquardt_dyn<P: DynLeastSquares>(
+    problem: &P,
+    start: P::State,
+    options: &RefineOptions,
+) -> Minimum<P::State> {
+    let mut s = start;
+    let mut lin = problem.linearise(&s);
+    let initial_cost = lin.cost;
+    let mut damping = options.initial_damping * lin.jtj.diagonal().max();
+    let mut growth = 2.0;
+    let mut termination = Termination::MaxIterations;
+    let mut iterations = 0;
+    while iterations < options.max_iterations {
+        if lin.jtr.amax() <= options.gradient_tolerance {
+            termination = Termination::GradientSmall;
+            break;
+        }
+        iterations += 1;
+        let mut lhs = lin.jtj.clone();
+        for d in 0..lhs.nrows() {
+            lhs[(d, d)] += damping;
+        }
+        let Some(step) = lhs.cholesky().map(|c| -c.solve(&lin.jtr)) else {
+            damping *= growth;
+            growth *= 2.0;
+            continue;
+        };
+        let next = problem.step(&s, &step);
+        let drop = lin.cost - problem.cost(&next);
+        let predicted = 0.5 * step.dot(&(&step * damping - &lin.jtr));
+        let gain = drop / predicted.max(f64::MIN_POSITIVE);
+        let step_size = step.norm() / problem.size(&s);
+        if drop > 0.0 && gain > 0.0 {
+            let relative_drop = drop / lin.cost.max(f64::MIN_POSITIVE);
+            s = next;
+            lin = problem.linearise(&s);
+            damping *= (1.0_f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
+            growth = 2.0;
+            if step_size <= options.step_tolerance {
+                termination = Termination::StepSmall;
+                break;
+            }
+            if relative_drop <= options.cost_tolerance {
+                termination = Termination::CostConverged;
+                break;
+            }
+        } else {
+            damping *= growth;
+            growth *= 2.0;
+            if step_size <= options.step_tolerance {
+                termination = Termination::StepSmall;
+                break;
+            }
+        }
+    }
+    Minimum {
+        state: s,
+        initial_cost,
+        final_cost: lin.cost,
+        iterations,
+        termination,
+    }
+}

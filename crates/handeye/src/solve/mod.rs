@@ -12,7 +12,7 @@ mod andreff_joint;
 mod daniilidis;
 mod horaud;
 mod least_squares;
-mod lm;
+pub(crate) mod lm;
 pub mod low_dof;
 pub mod low_dof_accumulate;
 pub mod motions;

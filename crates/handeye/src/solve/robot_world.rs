@@ -360,7 +360,7 @@ stacked_items!(least_squares_24, 12, 24);
 
 /// The data's length unit: the RMS translation of the A_i and B_i (1 when all are 0), so that the
 /// solution does not depend on the input's unit.
-fn pose_length_scale(ab: &[(Transform, Transform)]) -> f64 {
+pub(crate) fn pose_length_scale(ab: &[(Transform, Transform)]) -> f64 {
     weighting_from_scale(pose_rms(ab))
 }
 
