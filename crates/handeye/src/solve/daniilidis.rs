@@ -42,11 +42,11 @@ pub fn daniilidis(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration>
     // The rows of Eq. (31) mix the real parts (order 1) with the dual parts (order the data's
     // lengths): in the input's unit the eigenvectors lose digits as lengths grow or shrink (1e-2
     // at lengths ×1e8 on exact data), and on noisy data the answer depends on the unit (26° in
-    // millimetres from the answer in metres, on a real recording). It is solved in a unit of the
-    // data's own, the ratio of its translation noise to its rotation noise (`dual_unit`), where
-    // both kinds of rows weigh as their noise whatever the input's unit, and t_x scaled back.
+    // millimetres from the answer in metres, on a real recording). It is solved in units of the
+    // data's own RMS length, where both are of order 1 whatever the input's unit, and t_x scaled
+    // back (see `weighting_unit`).
+    let unit = weighting_unit(motions);
     let r_x0 = check.andreff_rotation;
-    let unit = dual_unit(motions, &r_x0);
     let normal = match motions
         .all_pairs()
         .and_then(|p| pairs_normal(p, unit, &r_x0))
@@ -110,37 +110,6 @@ pub fn daniilidis(motions: &(impl MotionSource + ?Sized)) -> Result<Calibration>
         &r_x,
         &t_x,
     ))
-}
-
-/// How far (a factor either way) [`dual_unit`] may be from [`weighting_unit`].
-const DUAL_UNIT_RANGE: f64 = 1e3;
-
-/// The length unit Eq. (31) is solved in: the RMS translation residual over the RMS rotation
-/// residual (Frobenius) of the motions at Andreff's solution (`r_x0` and its least-squares
-/// translation), so that the translation rows weigh as much as their noise, relative to the
-/// rotation rows, allows; [`weighting_unit`] where that ratio is not a positive finite number
-/// (noise-free data, where every unit gives X exactly), and never more than [`DUAL_UNIT_RANGE`]
-/// times from it (rotations read with far more digits than the translations would otherwise make
-/// the dual rows vanish to rounding).
-///
-/// [`weighting_unit`] (the data's RMS camera translation) made the solve unit-free but weighed
-/// the translation rows far above their worth: on the paper's series (mm) X's rotation came out
-/// 0.44–0.79° from the truth where Andreff's is 0.010–0.045°; in this unit 0.015–0.056°, and it
-/// changes little further either way (a third of it or ten times it: 0.012–0.056°). Both
-/// residuals scale with the input's length unit as they should (the rotation's not at all), so
-/// the solve stays unit-free. Over all pairs both sums come from the per-pose sums, O(n).
-fn dual_unit(motions: &(impl MotionSource + ?Sized), r_x0: &Matrix3<f64>) -> f64 {
-    let noise = crate::solve::translation_least_squares(motions, r_x0).map(|t| {
-        let sums = crate::solve::residual::block_sums(motions, r_x0, &t);
-        (sums.translation / sums.rotation).sqrt()
-    });
-    let data = weighting_unit(motions);
-    match noise {
-        Some(unit) if unit.is_finite() && unit > 0.0 => {
-            unit.clamp(data / DUAL_UNIT_RANGE, data * DUAL_UNIT_RANGE)
-        }
-        _ => data,
-    }
 }
 
 /// The real and dual halves of an 8-vector.
@@ -384,10 +353,8 @@ mod tests {
         let pairs = AllPairs::new(&s.poses, Setup::EyeInHand);
         let r_x0 = check_motions(&pairs).unwrap().andreff_rotation;
         assert!(pairs_normal(&pairs, 1.0, &r_x0).is_none());
-        // The same motions summed one by one; only the unit differs, by rounding: the residuals'
-        // sums at Andreff's solution (`dual_unit`) from the per-pose sums on one side, motion by
-        // motion on the other (1.9e-14 and 2.2e-14 measured; 1e-14 held while the unit was the
-        // camera motions' RMS length, a sum of fewer terms).
+        // The same motions summed one by one; only the unit differs, by rounding: the camera
+        // motions' RMS length from the per-pose sums on one side, motion by motion on the other.
         let (fast, slow) = both(&s.poses, Setup::EyeInHand);
         let rotation = (fast.rotation.matrix() - slow.rotation.matrix())
             .abs()
@@ -395,7 +362,7 @@ mod tests {
         let translation = (fast.translation.vector - slow.translation.vector).norm()
             / slow.translation.vector.norm();
         assert!(
-            rotation < 1e-13 && translation < 1e-13,
+            rotation < 1e-14 && translation < 1e-14,
             "{rotation:e} {translation:e}"
         );
     }

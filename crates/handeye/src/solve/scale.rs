@@ -47,8 +47,7 @@ pub(crate) fn rms_length(motions: &(impl MotionSource + ?Sized)) -> Option<f64> 
 
 /// The unit for least-squares systems whose rows weigh rotation equations (order 1) against
 /// translation equations (order the data's lengths): Eq. (10) of `andreff-joint` and Eq. (31) of
-/// `daniilidis` (there a fallback: `daniilidis::dual_unit` weighs the rows by their noise), and
-/// Li's robot-world system.
+/// `daniilidis`, and Li's robot-world system.
 ///
 /// On noisy data the answer of such a system depends on the unit, which is the relative weight of
 /// the two kinds of rows. Solved in the input's unit (as OpenCV solves it), the answer depends on
