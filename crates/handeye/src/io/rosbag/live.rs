@@ -83,7 +83,6 @@ struct Observation {
 ///     base_frame: "base_link".into(),
 ///     gripper_frame: "tool0".into(),
 ///     camera_frame: "camera".into(),
-///     target_frame: Some("board".into()),
 ///     target_topic: Some("/board_pose".into()),
 ///     ..BagOptions::default()
 /// })?;
@@ -95,11 +94,11 @@ struct Observation {
 ///     quaternion_xyzw: [0.0, 0.0, 0.0, 1.0],
 /// };
 /// live.transform(robot(0, 0.0), false).unwrap();
-/// live.observation("camera", None, 500_000_000, [0.0, 0.0, 0.4], [0.0, 0.0, 0.0, 1.0]).unwrap();
-/// assert!(live.ready().is_empty()); // the robot's transforms have not reached t = 0.5 s
-/// live.transform(robot(1_000_000_000, 0.1), false).unwrap();
+/// live.observation("camera", None, 40_000_000, [0.0, 0.0, 0.4], [0.0, 0.0, 0.0, 1.0]).unwrap();
+/// assert!(live.ready().is_empty()); // the robot's transforms have not reached t = 0.04 s
+/// live.transform(robot(80_000_000, 0.1), false).unwrap();
 /// let ready = live.ready();
-/// let LiveOutcome::Pair(pair) = &ready[0] else { panic!() };
+/// let LiveOutcome::Pair(pair) = &ready[0] else { panic!("{ready:?}") };
 /// assert!((pair.pose.base_from_gripper.translation.vector.x - 0.05).abs() < 1e-12);
 /// # Ok::<(), handeye::Error>(())
 /// ```
