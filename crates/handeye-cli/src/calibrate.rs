@@ -171,7 +171,11 @@ fn any_method() -> PossibleValuesParser {
 /// or the target's detections with the camera's intrinsics for `--method reprojection`), one
 /// [`Options`] built, one [`calibrate`] called, and its report printed in the face asked.
 pub fn run(args: Args) -> Result<()> {
-    let options = options(&args)?;
+    let options = Options {
+        // On the pixels the library refuses it, after it is read.
+        robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
+        ..options(&args)?
+    };
     let setup = args.input.setup();
     let recorded = read(&args, &options)?;
     let face = Face::chosen(args.output);
@@ -182,7 +186,6 @@ pub fn run(args: Args) -> Result<()> {
                 pose_names: recording.names.clone(),
                 written: recording.written,
                 joints: recording.joints.clone(),
-                robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
                 ..options
             };
             recording
@@ -197,8 +200,6 @@ pub fn run(args: Args) -> Result<()> {
             let options = Options {
                 pose_names: names.clone(),
                 refine_intrinsics: args.refine_intrinsics,
-                // Refused on the pixels by the library, after it is read.
-                robot_model: crate::input::robot_model(args.robot_model.as_deref())?,
                 ..options
             };
             let input = handeye::Input::Pixels { frames, camera };

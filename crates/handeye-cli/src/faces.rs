@@ -283,6 +283,25 @@ fn yaml_number(v: f64) -> Yaml {
     }
 }
 
+/// A translation as geometry_msgs writes it: `{x, y, z}`.
+fn yaml_translation([x, y, z]: [f64; 3]) -> Yaml {
+    yaml_map([
+        ("x", yaml_number(x)),
+        ("y", yaml_number(y)),
+        ("z", yaml_number(z)),
+    ])
+}
+
+/// A rotation as geometry_msgs writes it: the quaternion `{x, y, z, w}`.
+fn yaml_rotation([x, y, z, w]: [f64; 4]) -> Yaml {
+    yaml_map([
+        ("x", yaml_number(x)),
+        ("y", yaml_number(y)),
+        ("z", yaml_number(z)),
+        ("w", yaml_number(w)),
+    ])
+}
+
 /// A YAML mapping of `(key, value)` in order.
 fn yaml_map<const N: usize>(entries: [(&str, Yaml); N]) -> Yaml {
     Yaml::Hash(
@@ -299,28 +318,11 @@ fn yaml_map<const N: usize>(entries: [(&str, Yaml); N]) -> Yaml {
 /// one-sigma uncertainty, then the residuals, in the input's unit.
 pub fn robot_world_yaml(r: &RobotWorldReport, x: &Frames, target: &Frames) -> String {
     let pose = |t: &handeye::TransformJson, u: &handeye::Uncertainty, f: &Frames| {
-        let [tx, ty, tz] = t.translation;
-        let [qx, qy, qz, qw] = t.quaternion_xyzw;
         yaml_map([
             ("parent_frame", Yaml::String(f.parent.clone())),
             ("child_frame", Yaml::String(f.child.clone())),
-            (
-                "translation",
-                yaml_map([
-                    ("x", yaml_number(tx)),
-                    ("y", yaml_number(ty)),
-                    ("z", yaml_number(tz)),
-                ]),
-            ),
-            (
-                "rotation",
-                yaml_map([
-                    ("x", yaml_number(qx)),
-                    ("y", yaml_number(qy)),
-                    ("z", yaml_number(qz)),
-                    ("w", yaml_number(qw)),
-                ]),
-            ),
+            ("translation", yaml_translation(t.translation)),
+            ("rotation", yaml_rotation(t.quaternion_xyzw)),
             (
                 "uncertainty",
                 yaml_map([
@@ -368,8 +370,6 @@ pub fn robot_world_yaml(r: &RobotWorldReport, x: &Frames, target: &Frames) -> St
 /// handeye's own fields (X's frame name, the parent and child frames, and for a batch result its
 /// uncertainty, residuals and motions) are comments above it.
 pub fn yaml(p: Published<'_>, f: &Frames, batch: Option<&HandEyeReport>) -> String {
-    let [tx, ty, tz] = p.translation();
-    let [qx, qy, qz, qw] = p.quaternion_xyzw();
     let kind = match p.setup {
         Setup::EyeInHand => "eye_in_hand",
         Setup::EyeToHand => "eye_on_base",
@@ -394,23 +394,8 @@ pub fn yaml(p: Published<'_>, f: &Frames, batch: Option<&HandEyeReport>) -> Stri
         (
             "transform",
             yaml_map([
-                (
-                    "translation",
-                    yaml_map([
-                        ("x", yaml_number(tx)),
-                        ("y", yaml_number(ty)),
-                        ("z", yaml_number(tz)),
-                    ]),
-                ),
-                (
-                    "rotation",
-                    yaml_map([
-                        ("x", yaml_number(qx)),
-                        ("y", yaml_number(qy)),
-                        ("z", yaml_number(qz)),
-                        ("w", yaml_number(qw)),
-                    ]),
-                ),
+                ("translation", yaml_translation(p.translation())),
+                ("rotation", yaml_rotation(p.quaternion_xyzw())),
             ]),
         ),
     ]);

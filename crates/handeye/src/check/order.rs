@@ -337,6 +337,18 @@ mod tests {
         crate::sim::slipped(poses, at, &d)
     }
 
+    /// The paper's simulation, a random walk (a dense stream), 40 poses taken in a random order,
+    /// as a station recording is.
+    fn walk_in_random_order(seed: u64) -> Vec<PosePair> {
+        let config = SimConfig {
+            poses: 40,
+            ..SimConfig::default()
+        };
+        let mut poses = simulate(&config, seed, 0).poses;
+        poses.shuffle(&mut Xoshiro256PlusPlus::seed_from_u64(seed));
+        poses
+    }
+
     fn run(poses: &[PosePair]) -> OrderChange {
         let x = all_pairs(poses).unwrap();
         order_change(poses, Setup::EyeInHand, &x, &all_pairs, 300.0).unwrap()
@@ -346,16 +358,7 @@ mod tests {
     fn the_stopped_permutations_give_the_full_run_s_verdict() {
         let (mut stopped_early, mut flagged) = (0, 0);
         for seed in 0..8 {
-            let mut poses = simulate(
-                &SimConfig {
-                    poses: 40,
-                    ..SimConfig::default()
-                },
-                seed,
-                0,
-            )
-            .poses;
-            poses.shuffle(&mut Xoshiro256PlusPlus::seed_from_u64(seed));
+            let poses = walk_in_random_order(seed);
             for poses in [
                 poses.clone(),
                 slipped(&poses, 21, 0.3 * seed as f64, seed as f64),
@@ -389,18 +392,7 @@ mod tests {
     fn a_slip_is_found_where_it_happened_and_noise_is_not() {
         let mut quiet = 0;
         for seed in 0..6 {
-            // The paper's simulation is a random walk, a dense stream: taken in a random order,
-            // as a station recording is.
-            let mut poses = simulate(
-                &SimConfig {
-                    poses: 40,
-                    ..SimConfig::default()
-                },
-                seed,
-                0,
-            )
-            .poses;
-            poses.shuffle(&mut Xoshiro256PlusPlus::seed_from_u64(seed));
+            let poses = walk_in_random_order(seed);
             quiet += usize::from(run(&poses).flagged);
             let found = run(&slipped(&poses, 21, 2.0, 6.0));
             assert!(found.flagged, "{found:?}");

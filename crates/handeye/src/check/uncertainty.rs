@@ -339,16 +339,7 @@ fn resample(
     let errors: Vec<Option<Vector6<f64>>> = (0..replicates)
         .into_par_iter()
         .map(|b| {
-            let mut rng = Xoshiro256PlusPlus::seed_from_u64(SEED ^ b as u64);
-            let signs: Vec<f64> = (0..count)
-                .map(|_| {
-                    if rng.next_u64() & 1 == 0 {
-                        inflate
-                    } else {
-                        -inflate
-                    }
-                })
-                .collect();
+            let signs = wild_signs(SEED ^ b as u64, count, inflate);
             let resampled: Vec<PosePair> = poses
                 .iter()
                 .zip(&residuals.residuals)
@@ -438,6 +429,22 @@ fn block_length(residuals: &[PoseResidual]) -> usize {
 
 /// See [`block_length`].
 const AUTOCORRELATION: f64 = 0.3;
+
+/// The signs of one wild-bootstrap replicate (Rademacher weights scaled by `inflate`): ±`inflate`
+/// with equal odds for each of `count` groups of residuals that share one error (a station, a
+/// robot pose), drawn from `seed`, the replicate's own.
+pub(crate) fn wild_signs(seed: u64, count: usize, inflate: f64) -> Vec<f64> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    (0..count)
+        .map(|_| {
+            if rng.next_u64() & 1 == 0 {
+                inflate
+            } else {
+                -inflate
+            }
+        })
+        .collect()
+}
 
 /// The error of a replicate: (log(R_b R̂ᵀ), t_b − t̂).
 pub(crate) fn error_of(xb: &Transform, x: &Transform) -> Vector6<f64> {

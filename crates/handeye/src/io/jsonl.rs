@@ -219,7 +219,7 @@ pub(crate) fn malformed(text: &str, e: &serde_json::Error) -> String {
 
 /// One JSON Lines record as an object: malformed JSON, another value, or a key given twice is
 /// refused with the line (and the repeated key's path).
-fn json_object(text: &str, source: &str, line: usize) -> Result<Map<String, Value>> {
+pub(crate) fn json_object(text: &str, source: &str, line: usize) -> Result<Map<String, Value>> {
     let value: Value = serde_json::from_str(text)
         .map_err(|e| parse_error(source, line, "-", malformed(text, &e)))?;
     let Value::Object(object) = value else {
@@ -452,7 +452,7 @@ fn points<const N: usize>(
 /// Reads the one transform of a pair of alternative names, inverting when the file gives the
 /// other direction, with the direction the file wrote; its rotation in the convention
 /// `conventions` names for this side (the robot's when `robot`), if one is.
-fn frame(
+pub(crate) fn frame(
     object: &Map<String, Value>,
     (names, robot): (&[(&str, bool); 2], bool),
     (source, line): (&str, usize),

@@ -12,9 +12,9 @@ use std::path::Path;
 
 use serde_json::{Map, Value};
 
-use crate::io::json_text::repeated_key;
-use crate::io::transform::{Conventions, read_transform_json_as};
-use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, parse_error};
+use crate::io::jsonl::{frame, json_object};
+use crate::io::transform::Conventions;
+use crate::io::{CAMERA_FRAMES, ROBOT_FRAMES, parse_error, read_text};
 use crate::model::error::{Error, Result};
 use crate::model::pose::Transform;
 use crate::rig::{Observation, RigRecording};
@@ -49,14 +49,10 @@ pub fn is_rig_file(path: &Path) -> bool {
     first.is_some_and(is_rig_text)
 }
 
-/// Reads a rig recording from a file.
+/// Reads a rig recording from a file, read as every whole file is (a regular file or a pipe,
+/// bounded in size, UTF-8 text without a NUL).
 pub fn read_rig(path: &Path) -> Result<RigRecording> {
-    let source = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        file: source.clone(),
-        source: e,
-    })?;
-    parse_rig(&text, &source)
+    parse_rig(&read_text(path)?, &path.display().to_string())
 }
 
 /// Reads a rig recording from its text, named `source` in messages: every bad record is refused
@@ -69,7 +65,7 @@ pub fn parse_rig(text: &str, source: &str) -> Result<RigRecording> {
         if t.is_empty() || t.starts_with('#') {
             continue;
         }
-        let object = object(t, source, line)?;
+        let object = json_object(t, source, line)?;
         let q = transform(&object, &ROBOT_FRAMES, (source, line), "", true)?;
         let pose = recording.poses.len();
         let Some(list) = object.get("observations") else {
@@ -159,31 +155,8 @@ pub fn parse_rig(text: &str, source: &str) -> Result<RigRecording> {
     Ok(recording)
 }
 
-/// One record as an object (malformed JSON, another value, a key given twice refused).
-fn object(text: &str, source: &str, line: usize) -> Result<Map<String, Value>> {
-    let value: Value = serde_json::from_str(text)
-        .map_err(|e| parse_error(source, line, "-", crate::io::jsonl::malformed(text, &e)))?;
-    let Value::Object(object) = value else {
-        return Err(parse_error(
-            source,
-            line,
-            "-",
-            "expected a JSON object per line",
-        ));
-    };
-    if let Some(repeated) = repeated_key(text) {
-        return Err(parse_error(
-            source,
-            line,
-            repeated.path.clone(),
-            repeated.message(),
-        ));
-    }
-    Ok(object)
-}
-
-/// The transform of one of two alternative names (inverted when the second), its fields named
-/// under `at` in messages.
+/// The transform of one of two alternative names (inverted when the second), read as a pose
+/// record's ([`crate::io::jsonl`]'s reader), its fields named under `at` in messages.
 fn transform(
     object: &Map<String, Value>,
     names: &[(&str, bool); 2],
@@ -191,42 +164,28 @@ fn transform(
     at: &str,
     robot: bool,
 ) -> Result<Transform> {
-    let under = |name: &str| {
-        if at.is_empty() {
-            name.to_string()
-        } else {
-            format!("{at}.{name}")
-        }
-    };
-    let present: Vec<_> = names
-        .iter()
-        .filter(|(n, _)| object.contains_key(*n))
-        .collect();
-    let &&(name, inverted) = match present.as_slice() {
-        [one] => one,
-        [] => {
-            return Err(parse_error(
-                source,
-                line,
-                under(&format!("{}|{}", names[0].0, names[1].0)),
-                format!("missing: give `{}` or `{}`", names[0].0, names[1].0),
-            ));
-        }
-        _ => {
-            return Err(parse_error(
-                source,
-                line,
-                under(names[0].0),
-                format!("both `{}` and `{}` given: give one", names[0].0, names[1].0),
-            ));
-        }
-    };
-    let read = read_transform_json_as(&object[name], (robot, Conventions::default()))
-        .map_err(|p| parse_error(source, line, under(&p.path_under(name)), p.message))?;
-    Ok(if inverted {
-        read.transform.inverse()
-    } else {
-        read.transform
+    frame(
+        object,
+        (names, robot),
+        (source, line),
+        Conventions::default(),
+    )
+    .map(|(read, _)| read.transform)
+    .map_err(|e| match e {
+        Error::Parse {
+            file,
+            line,
+            field,
+            message,
+            ..
+        } if !at.is_empty() => Error::Parse {
+            file,
+            line,
+            field: format!("{at}.{field}"),
+            message,
+            remedy: None,
+        },
+        other => other,
     })
 }
 

@@ -2,12 +2,10 @@
 //! Levenberg–Marquardt refinement over every observation, and each part's bootstrap uncertainty.
 
 use nalgebra::{DMatrix, DVector, Matrix3, SMatrix, SVector, Vector3, Vector6};
-use rand::{Rng, SeedableRng};
-use rand_xoshiro::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 
 use crate::check::outliers::{median, translation_scale};
-use crate::check::uncertainty::{Uncertainty, few_poses_factor, summarise};
+use crate::check::uncertainty::{Uncertainty, few_poses_factor, summarise, wild_signs};
 use crate::model::error::Result;
 use crate::model::motion::{PosePair, Setup};
 use crate::model::pose::{
@@ -387,16 +385,7 @@ pub fn solve(
     let replicates: Vec<Vec<Transform>> = (0..options.replicates)
         .into_par_iter()
         .map(|b| {
-            let mut rng = Xoshiro256PlusPlus::seed_from_u64(SEED ^ b as u64);
-            let signs: Vec<f64> = (0..recording.poses.len())
-                .map(|_| {
-                    if rng.next_u64() & 1 == 0 {
-                        inflate
-                    } else {
-                        -inflate
-                    }
-                })
-                .collect();
+            let signs = wild_signs(SEED ^ b as u64, recording.poses.len(), inflate);
             let terms: Vec<Term> = problem
                 .terms
                 .iter()

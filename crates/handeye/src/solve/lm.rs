@@ -97,34 +97,123 @@ pub(crate) fn levenberg_marquardt<const N: usize, P: LeastSquares<N>>(
     start: P::State,
     options: &RefineOptions,
 ) -> Minimum<P::State> {
+    minimise(
+        start,
+        options,
+        |s: &P::State| problem.linearise(s),
+        |s, delta| problem.step(s, delta),
+        |from, to, cost| problem.cost_drop(from, to, cost),
+        |s| problem.size(s),
+    )
+}
+
+/// What the loop needs of the normal equations at an iterate, whatever their size: fixed
+/// ([`Linearisation`]) or known at run time ([`DynLinearisation`]).
+trait Normal {
+    /// A step in the parameters.
+    type Step;
+    /// ½Σr².
+    fn cost(&self) -> f64;
+    /// The largest entry of Jᵀr in size.
+    fn gradient_max(&self) -> f64;
+    /// The largest diagonal entry of JᵀJ.
+    fn diagonal_max(&self) -> f64;
+    /// δ = −(JᵀJ + λI)⁻¹ Jᵀr, by Cholesky; `None` when the damped matrix is not positive definite.
+    fn damped_step(&self, damping: f64) -> Option<Self::Step>;
+    /// The linear model's drop for `step`: −δᵀJᵀr − ½δᵀJᵀJδ = ½δᵀ(λδ − Jᵀr).
+    fn predicted(&self, step: &Self::Step, damping: f64) -> f64;
+    /// |δ|.
+    fn norm(step: &Self::Step) -> f64;
+}
+
+impl<const N: usize> Normal for Linearisation<N> {
+    type Step = SVector<f64, N>;
+    fn cost(&self) -> f64 {
+        self.cost
+    }
+    fn gradient_max(&self) -> f64 {
+        self.jtr.amax()
+    }
+    fn diagonal_max(&self) -> f64 {
+        self.jtj.diagonal().max()
+    }
+    fn damped_step(&self, damping: f64) -> Option<Self::Step> {
+        let mut lhs = self.jtj;
+        for d in 0..N {
+            lhs[(d, d)] += damping;
+        }
+        lhs.cholesky().map(|c| -c.solve(&self.jtr))
+    }
+    fn predicted(&self, step: &Self::Step, damping: f64) -> f64 {
+        0.5 * step.dot(&(step * damping - self.jtr))
+    }
+    fn norm(step: &Self::Step) -> f64 {
+        step.norm()
+    }
+}
+
+impl Normal for DynLinearisation {
+    type Step = nalgebra::DVector<f64>;
+    fn cost(&self) -> f64 {
+        self.cost
+    }
+    fn gradient_max(&self) -> f64 {
+        self.jtr.amax()
+    }
+    fn diagonal_max(&self) -> f64 {
+        self.jtj.diagonal().max()
+    }
+    fn damped_step(&self, damping: f64) -> Option<Self::Step> {
+        let mut lhs = self.jtj.clone();
+        for d in 0..lhs.nrows() {
+            lhs[(d, d)] += damping;
+        }
+        lhs.cholesky().map(|c| -c.solve(&self.jtr))
+    }
+    fn predicted(&self, step: &Self::Step, damping: f64) -> f64 {
+        0.5 * step.dot(&(step * damping - &self.jtr))
+    }
+    fn norm(step: &Self::Step) -> f64 {
+        step.norm()
+    }
+}
+
+/// The loop itself, for normal equations of any size: Nielsen's damping, the stopping rules, and
+/// never a higher cost than the start.
+fn minimise<S, L: Normal>(
+    start: S,
+    options: &RefineOptions,
+    linearise: impl Fn(&S) -> L,
+    step_from: impl Fn(&S, &L::Step) -> S,
+    cost_drop: impl Fn(&S, &S, f64) -> f64,
+    size: impl Fn(&S) -> f64,
+) -> Minimum<S> {
     let mut s = start;
-    let mut lin = problem.linearise(&s);
-    let initial_cost = lin.cost;
-    let mut damping = options.initial_damping * lin.jtj.diagonal().max();
+    let mut lin = linearise(&s);
+    let initial_cost = lin.cost();
+    let mut damping = options.initial_damping * lin.diagonal_max();
     let mut growth = 2.0;
     let mut termination = Termination::MaxIterations;
     let mut iterations = 0;
     while iterations < options.max_iterations {
-        if lin.jtr.amax() <= options.gradient_tolerance {
+        if lin.gradient_max() <= options.gradient_tolerance {
             termination = Termination::GradientSmall;
             break;
         }
         iterations += 1;
-        let Some(step) = damped_step(&lin, damping) else {
+        let Some(step) = lin.damped_step(damping) else {
             damping *= growth;
             growth *= 2.0;
             continue;
         };
-        let next = problem.step(&s, &step);
-        let drop = problem.cost_drop(&s, &next, lin.cost);
-        // Predicted reduction of the linear model: −δᵀJᵀr − ½δᵀJᵀJδ = ½δᵀ(λδ − Jᵀr).
-        let predicted = 0.5 * step.dot(&(step * damping - lin.jtr));
-        let gain = drop / predicted.max(f64::MIN_POSITIVE);
-        let step_size = step.norm() / problem.size(&s);
+        let next = step_from(&s, &step);
+        let drop = cost_drop(&s, &next, lin.cost());
+        let gain = drop / lin.predicted(&step, damping).max(f64::MIN_POSITIVE);
+        let step_size = L::norm(&step) / size(&s);
         if drop > 0.0 && gain > 0.0 {
-            let relative_drop = drop / lin.cost.max(f64::MIN_POSITIVE);
+            let relative_drop = drop / lin.cost().max(f64::MIN_POSITIVE);
             s = next;
-            lin = problem.linearise(&s);
+            lin = linearise(&s);
             damping *= (1.0_f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
             growth = 2.0;
             if step_size <= options.step_tolerance {
@@ -147,20 +236,10 @@ pub(crate) fn levenberg_marquardt<const N: usize, P: LeastSquares<N>>(
     Minimum {
         state: s,
         initial_cost,
-        final_cost: lin.cost,
+        final_cost: lin.cost(),
         iterations,
         termination,
     }
-}
-
-/// The damped Gauss–Newton step δ = −(JᵀJ + λI)⁻¹ Jᵀr (Marquardt's form with the identity), by
-/// Cholesky; `None` when the damped matrix is not positive definite.
-fn damped_step<const N: usize>(lin: &Linearisation<N>, damping: f64) -> Option<SVector<f64, N>> {
-    let mut lhs = lin.jtj;
-    for d in 0..N {
-        lhs[(d, d)] += damping;
-    }
-    lhs.cholesky().map(|c| -c.solve(&lin.jtr))
 }
 
 /// Normal equations of the weighted residuals at one iterate, for a number of parameters known
@@ -196,61 +275,12 @@ pub(crate) fn levenberg_marquardt_dyn<P: DynLeastSquares>(
     start: P::State,
     options: &RefineOptions,
 ) -> Minimum<P::State> {
-    let mut s = start;
-    let mut lin = problem.linearise(&s);
-    let initial_cost = lin.cost;
-    let mut damping = options.initial_damping * lin.jtj.diagonal().max();
-    let mut growth = 2.0;
-    let mut termination = Termination::MaxIterations;
-    let mut iterations = 0;
-    while iterations < options.max_iterations {
-        if lin.jtr.amax() <= options.gradient_tolerance {
-            termination = Termination::GradientSmall;
-            break;
-        }
-        iterations += 1;
-        let mut lhs = lin.jtj.clone();
-        for d in 0..lhs.nrows() {
-            lhs[(d, d)] += damping;
-        }
-        let Some(step) = lhs.cholesky().map(|c| -c.solve(&lin.jtr)) else {
-            damping *= growth;
-            growth *= 2.0;
-            continue;
-        };
-        let next = problem.step(&s, &step);
-        let drop = lin.cost - problem.cost(&next);
-        let predicted = 0.5 * step.dot(&(&step * damping - &lin.jtr));
-        let gain = drop / predicted.max(f64::MIN_POSITIVE);
-        let step_size = step.norm() / problem.size(&s);
-        if drop > 0.0 && gain > 0.0 {
-            let relative_drop = drop / lin.cost.max(f64::MIN_POSITIVE);
-            s = next;
-            lin = problem.linearise(&s);
-            damping *= (1.0_f64 / 3.0).max(1.0 - (2.0 * gain - 1.0).powi(3));
-            growth = 2.0;
-            if step_size <= options.step_tolerance {
-                termination = Termination::StepSmall;
-                break;
-            }
-            if relative_drop <= options.cost_tolerance {
-                termination = Termination::CostConverged;
-                break;
-            }
-        } else {
-            damping *= growth;
-            growth *= 2.0;
-            if step_size <= options.step_tolerance {
-                termination = Termination::StepSmall;
-                break;
-            }
-        }
-    }
-    Minimum {
-        state: s,
-        initial_cost,
-        final_cost: lin.cost,
-        iterations,
-        termination,
-    }
+    minimise(
+        start,
+        options,
+        |s: &P::State| problem.linearise(s),
+        |s, delta| problem.step(s, delta),
+        |_, to, cost| cost - problem.cost(to),
+        |s| problem.size(s),
+    )
 }

@@ -125,7 +125,9 @@ pub(super) fn check_span(
     }
     let (w, h) = image_size(camera);
     let mut hit = [false; CORNER_CELLS];
-    for u in frames.iter().flat_map(|f| &f.detections.pixels) {
+    // The detections a camera could have made (a pixel beyond is left out of the fit too).
+    let seen = frames.iter().flat_map(|f| &f.detections.pixels);
+    for u in seen.filter(|u| camera.could_see(u)) {
         let (i, j) = ((3.0 * u[0] / w).floor(), (3.0 * u[1] / h).floor());
         let corner = match (i as i64, j as i64) {
             (0, 0) => Some(0),
